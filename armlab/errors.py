@@ -1,0 +1,38 @@
+"""The few shared error types of the library; the server maps them to HTTP in one place."""
+
+from __future__ import annotations
+
+
+class DeviceNotConnectedError(ConnectionError):
+    """A device method was called before connect() (or after close())."""
+
+    def __init__(self, message: str = "device is not connected: call connect() first") -> None:
+        super().__init__(message)
+
+
+class DeviceAlreadyConnectedError(ConnectionError):
+    """connect() was called on a device that is already connected."""
+
+    def __init__(self, message: str = "device is already connected: call close() before connecting again") -> None:
+        super().__init__(message)
+
+
+class ConfigError(ValueError):
+    """A configuration file or field is invalid; the message names the file and the field."""
+
+
+class CommandRefused(RuntimeError):
+    """A station command is not allowed in the current state.
+
+    Attributes:
+        state: the state the station is in.
+        allowed: the commands that state accepts.
+    """
+
+    def __init__(self, command: str, state: str, allowed: list[str] | tuple[str, ...]) -> None:
+        self.command = command
+        self.state = state
+        self.allowed = list(allowed)
+        super().__init__(
+            f"command '{command}' is not allowed in state '{state}'; allowed: {', '.join(self.allowed) or 'none'}"
+        )

@@ -1,0 +1,1 @@
+"""Autonomous jobs (sort, stack, line up, tower) and the competition scorer."""

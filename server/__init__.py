@@ -1,0 +1,1 @@
+"""The FastAPI server: thin routes over the station (armlab.station)."""
