@@ -1,0 +1,128 @@
+"""Pure camera geometry: rigid 3-D fits, back-projection, ray-plane intersection, projection.
+
+Frames follow the names: T_world_camera maps camera coordinates (OpenCV axes: x right, y down,
+z forward) to world coordinates. Depth is along the optical axis, as RGB-D cameras report it.
+"""
+
+from __future__ import annotations
+
+import cv2
+import numpy as np
+
+
+def as_points(points: np.ndarray, dim: int, name: str = "points") -> np.ndarray:
+    """Points as a finite float (N, dim) array; ValueError on the wrong shape or NaN/inf."""
+    arr = np.asarray(points, dtype=np.float64)
+    if arr.ndim == 1 and arr.shape[0] == dim:
+        arr = arr[None, :]
+    if arr.ndim != 2 or arr.shape[1] != dim:
+        raise ValueError(f"{name} must have shape (N, {dim}), got {np.shape(points)}")
+    if not np.all(np.isfinite(arr)):
+        raise ValueError(f"{name} contains NaN or infinity")
+    return arr
+
+
+def rigid_transform_3d(points_src: np.ndarray, points_dst: np.ndarray) -> np.ndarray:
+    """The 4x4 rigid transform T minimising sum |T src_i - dst_i|^2 (Kabsch/SVD, reflection fixed).
+
+    With src in the camera frame and dst in the world frame, the result is T_world_camera.
+    """
+    src = as_points(points_src, 3, "points_src")
+    dst = as_points(points_dst, 3, "points_dst")
+    if src.shape != dst.shape:
+        raise ValueError(f"point sets differ in shape: {src.shape} vs {dst.shape}")
+    if src.shape[0] < 3:
+        raise ValueError(f"a rigid fit needs at least 3 points, got {src.shape[0]}")
+    mu_src, mu_dst = src.mean(axis=0), dst.mean(axis=0)
+    src_c, dst_c = src - mu_src, dst - mu_dst
+    if np.linalg.matrix_rank(src_c, tol=1e-9) < 2 or np.linalg.matrix_rank(dst_c, tol=1e-9) < 2:
+        raise ValueError("points are collinear: the rotation is not determined")
+    u, _, vt = np.linalg.svd(src_c.T @ dst_c)
+    d = np.sign(np.linalg.det(vt.T @ u.T)) or 1.0
+    rotation = vt.T @ np.diag([1.0, 1.0, d]) @ u.T
+    transform = np.eye(4)
+    transform[:3, :3] = rotation
+    transform[:3, 3] = mu_dst - rotation @ mu_src
+    return transform
+
+
+def transform_points(T: np.ndarray, points: np.ndarray) -> np.ndarray:
+    """Apply a 4x4 transform to (N, 3) points."""
+    pts = as_points(points, 3)
+    return pts @ T[:3, :3].T + T[:3, 3]
+
+
+def invert_transform(T: np.ndarray) -> np.ndarray:
+    """Inverse of a rigid 4x4 transform."""
+    inv = np.eye(4)
+    inv[:3, :3] = T[:3, :3].T
+    inv[:3, 3] = -T[:3, :3].T @ T[:3, 3]
+    return inv
+
+
+def normalized_rays(pixels: np.ndarray, K: np.ndarray, dist: np.ndarray) -> np.ndarray:
+    """Undistorted normalised image coordinates (N, 3) = (x, y, 1) for pixels (N, 2)."""
+    px = as_points(pixels, 2, "pixels")
+    if np.any(np.asarray(dist) != 0.0):
+        xy = cv2.undistortPoints(px.reshape(-1, 1, 2), K, np.asarray(dist, dtype=np.float64)).reshape(-1, 2)
+    else:
+        xy = (px - K[:2, 2]) / np.array([K[0, 0], K[1, 1]])
+    return np.hstack([xy, np.ones((xy.shape[0], 1))])
+
+
+def backproject(pixels: np.ndarray, depth_m: np.ndarray, K: np.ndarray, dist: np.ndarray) -> np.ndarray:
+    """Camera-frame points (N, 3) for pixels (N, 2) with depth along the optical axis (N,) in metres."""
+    depth = np.asarray(depth_m, dtype=np.float64).reshape(-1)
+    rays = normalized_rays(pixels, K, dist)
+    if depth.shape[0] != rays.shape[0]:
+        raise ValueError(f"{rays.shape[0]} pixels but {depth.shape[0]} depths")
+    return rays * depth[:, None]
+
+
+def intersect_rays_with_plane(T_world_camera: np.ndarray, rays_camera: np.ndarray, plane_z_m: float) -> np.ndarray:
+    """World points (N, 3) where camera rays (N, 3) meet the horizontal plane z = plane_z_m.
+
+    ValueError if a ray is parallel to the plane or meets it behind the camera.
+    """
+    origin = T_world_camera[:3, 3]
+    directions = rays_camera @ T_world_camera[:3, :3].T
+    dz = directions[:, 2]
+    if np.any(np.abs(dz) < 1e-9):
+        raise ValueError("a viewing ray is parallel to the plane")
+    s = (plane_z_m - origin[2]) / dz
+    if np.any(s <= 0):
+        raise ValueError(f"the plane z = {plane_z_m} m is behind the camera for this pixel")
+    return origin + directions * s[:, None]
+
+
+def project_points(T_world_camera: np.ndarray, K: np.ndarray, dist: np.ndarray, points_m: np.ndarray) -> np.ndarray:
+    """Pixels (N, 2) of world points (N, 3) through the camera (with lens distortion)."""
+    pts = as_points(points_m, 3, "points_m")
+    T_camera_world = invert_transform(T_world_camera)
+    rvec, _ = cv2.Rodrigues(T_camera_world[:3, :3])
+    pixels, _ = cv2.projectPoints(pts.reshape(-1, 1, 3), rvec, T_camera_world[:3, 3], K, np.asarray(dist, dtype=np.float64))
+    return pixels.reshape(-1, 2)
+
+
+def board_homography(T_world_camera: np.ndarray, K: np.ndarray) -> np.ndarray:
+    """3x3 H mapping board-plane points (x, y, 1) at z = 0 (metres) to undistorted pixels (u, v, 1)."""
+    T_camera_world = invert_transform(T_world_camera)
+    H = K @ np.column_stack([T_camera_world[:3, 0], T_camera_world[:3, 1], T_camera_world[:3, 3]])
+    return H / H[2, 2]
+
+
+def height_map_m(depth_m: np.ndarray, K: np.ndarray, T_world_camera: np.ndarray, step: int = 1) -> np.ndarray:
+    """World z (metres) of every `step`-th pixel of a depth image (metres, 0 = none -> NaN).
+
+    z = depth * (r3 . K^-1 [u, v, 1]) + t_z, computed separably so it costs a few operations per pixel.
+    Lens distortion is ignored here (it is applied exactly where a position is reported).
+    """
+    d = np.asarray(depth_m, dtype=np.float32)[::step, ::step]
+    h, w = d.shape
+    us = (np.arange(w, dtype=np.float32) * step - K[0, 2]) / K[0, 0]
+    vs = (np.arange(h, dtype=np.float32) * step - K[1, 2]) / K[1, 1]
+    r3 = T_world_camera[2, :3].astype(np.float32)
+    coef = r3[0] * us[None, :] + (r3[1] * vs[:, None] + r3[2])
+    z = d * coef + np.float32(T_world_camera[2, 3])
+    z[d <= 0] = np.nan
+    return z
