@@ -1,0 +1,107 @@
+// REST client for the station: carries the control token and turns error bodies into ApiError.
+// The token is read from the page URL once, kept in sessionStorage and removed from the address bar.
+
+const TOKEN_KEY = "armlab.token";
+
+/** An HTTP error with the server's code and human message (see the wire protocol's error body). */
+export class ApiError extends Error {
+  constructor(status, code, message, allowed) {
+    super(message);
+    this.name = "ApiError";
+    this.status = status;
+    this.code = code;
+    this.allowed = allowed || [];
+  }
+}
+
+/** Take `token` from the URL (then strip it from the address bar), else from sessionStorage. */
+export function adoptToken(win = window) {
+  const url = new URL(win.location.href);
+  const fromUrl = url.searchParams.get("token");
+  if (fromUrl) {
+    win.sessionStorage.setItem(TOKEN_KEY, fromUrl);
+    url.searchParams.delete("token");
+    win.history.replaceState(null, "", url.pathname + url.search + url.hash);
+  }
+  return win.sessionStorage.getItem(TOKEN_KEY) || null;
+}
+
+/** Parse an error response into an ApiError, tolerating bodies that are not the documented shape. */
+async function toApiError(response) {
+  let body = null;
+  try {
+    body = await response.json();
+  } catch {
+    body = null;
+  }
+  const err = body && typeof body === "object" ? body.error || body : {};
+  let message = err.message || (typeof err.detail === "string" ? err.detail : "");
+  if (!message && Array.isArray(err.detail)) {
+    message = err.detail.map((d) => `${(d.loc || []).join(".")}: ${d.msg}`).join("; ");
+  }
+  if (!message) message = `${response.status} ${response.statusText}`;
+  return new ApiError(response.status, err.code || String(response.status), message, err.allowed);
+}
+
+/** A small REST client bound to one token; every method returns parsed JSON or throws ApiError. */
+export class Api {
+  constructor(token, base = "") {
+    this.token = token;
+    this.base = base;
+  }
+
+  get canControl() {
+    return Boolean(this.token);
+  }
+
+  async request(method, path, body) {
+    const headers = { Accept: "application/json" };
+    if (this.token) headers.Authorization = `Bearer ${this.token}`;
+    const init = { method, headers };
+    if (body !== undefined) {
+      headers["Content-Type"] = "application/json";
+      init.body = JSON.stringify(body);
+    }
+    let response;
+    try {
+      response = await fetch(this.base + path, init);
+    } catch (e) {
+      throw new ApiError(0, "network", `Server unreachable (${e.message})`);
+    }
+    if (!response.ok) throw await toApiError(response);
+    if (response.status === 204) return null;
+    const text = await response.text();
+    return text ? JSON.parse(text) : null;
+  }
+
+  get(path) { return this.request("GET", path); }
+  post(path, body) { return this.request("POST", path, body === undefined ? {} : body); }
+
+  status() { return this.get("/api/status"); }
+  calibration() { return this.get("/api/calibration"); }
+  programs() { return this.get("/api/programs"); }
+  estop() { return this.post("/api/estop"); }
+  reset() { return this.post("/api/reset"); }
+  home() { return this.post("/api/arm/home"); }
+  sleep() { return this.post("/api/arm/sleep"); }
+  joints(qRad, movingTimeS) { return this.post("/api/arm/joints", { q_rad: qRad, moving_time_s: movingTimeS }); }
+  pose(positionM, pitchRad, yawRad) {
+    const body = { position_m: positionM };
+    if (Number.isFinite(pitchRad)) body.pitch_rad = pitchRad;
+    if (Number.isFinite(yawRad)) body.yaw_rad = yawRad;
+    return this.post("/api/arm/pose", body);
+  }
+  gripper(action) { return this.post("/api/gripper", { action }); }
+  calibrate() { return this.post("/api/calibrate"); }
+  pixelToWorld(u, v) { return this.post("/api/pixel-to-world", { u, v }); }
+  grab(target) { return this.post("/api/grab", target); }
+  drop(target) { return this.post("/api/drop", target); }
+  teachStart() { return this.post("/api/teach/start"); }
+  teachRecord() { return this.post("/api/teach/record"); }
+  teachStop(name) { return this.post("/api/teach/stop", { name }); }
+  repeat(programId, cycles) {
+    return this.post(`/api/programs/${encodeURIComponent(programId)}/repeat`, { cycles });
+  }
+  cancelJob() { return this.post("/api/jobs/cancel"); }
+  simScene(event, level, seed) { return this.post("/api/sim/scene", { event, level, seed }); }
+}

@@ -1,0 +1,354 @@
+// Page controller: connects the stream, the REST client and the panels; one dispatch on message type.
+
+import { Api, adoptToken } from "./api.js";
+import { LiveView } from "./liveview.js";
+import { EventLog } from "./log.js";
+import {
+  DEFAULT_JOINT_NAMES,
+  JointSliders,
+  applyAllowed,
+  highlightDetectionRow,
+  renderCalibration,
+  renderDetections,
+  renderPrograms,
+  renderReadouts,
+  renderStatus,
+} from "./panels.js";
+import { JointPlot } from "./plot.js";
+import { RateMeter, Stream } from "./stream.js";
+
+const $ = (id) => document.getElementById(id);
+const ESTOP_REST_FALLBACK_MS = 300;
+const TERMINAL_JOB_STATES = new Set(["succeeded", "failed", "cancelled"]);
+
+class App {
+  constructor() {
+    this.api = new Api(adoptToken());
+    this.log = new EventLog($("event-log"), $("toasts"));
+    this.status = null;
+    this.connected = false;
+    this.canControl = false;
+    this.helloSeen = false;
+    this.view = "color";
+    this.layers = ["tags", "detections"];
+    this.fps = new RateMeter(2.0);
+    this.latencyMs = [];
+    this.reportedJobs = new Set();
+    this.trackedJob = null;
+    this.detections = [];
+    this.hoverDetection = -1;
+    this.detectionsKey = "";
+    this.sliders = new JointSliders($("joint-sliders"), (q) => this.sendJoints(q));
+    this.sliders.build(DEFAULT_JOINT_NAMES);
+    this.plot = new JointPlot($("joint-plot"));
+    this.live = new LiveView({
+      canvas: $("live"),
+      wrap: $("view-wrap"),
+      placeholder: $("view-placeholder"),
+      hoverLabel: $("hover-world"),
+      api: this.api,
+      onTarget: (t) => this.clickTarget(t),
+      onHoverDetection: (i) => {
+        this.hoverDetection = i;
+        highlightDetectionRow(i);
+      },
+    });
+    this.stream = new Stream({
+      token: this.api.token,
+      handlers: {
+        onOpen: () => this.onOpen(),
+        onClose: () => this.onClose(),
+        onFrame: ({ header, bitmap }) => this.onFrame(header, bitmap),
+        onMessage: (msg) => this.onMessage(msg),
+        onError: (e) => this.log.add("warn", `stream: ${e.message}`),
+      },
+    });
+    window.armlab = this; // handle for operators' devtools and the browser tests
+  }
+
+  start() {
+    this.bindControls();
+    this.stream.setView(this.view, this.layers);
+    this.stream.connect();
+    this.refreshAllowed();
+    this.api.calibration().then((c) => renderCalibration(c)).catch(() => {});
+    this.refreshPrograms();
+    setInterval(() => this.updateIndicators(), 500);
+    $("control-mode").textContent = this.api.canControl ? "control" : "view only";
+    this.log.add("info", this.api.canControl ? "page loaded with a control token" : "page loaded view-only (no token)");
+  }
+
+  // ---- stream -------------------------------------------------------------------------------
+  onOpen() {
+    this.connected = true;
+    this.log.add("info", "connected to the station");
+    this.updateIndicators();
+  }
+
+  onClose() {
+    if (this.connected) this.log.add("warn", "connection lost; reconnecting…");
+    this.connected = false;
+    this.updateIndicators();
+    this.refreshAllowed();
+  }
+
+  onFrame(header, bitmap) {
+    this.live.drawFrame(header, bitmap);
+    const nowS = performance.now() / 1000;
+    this.fps.tick(nowS);
+    if (Number.isFinite(header.capture_time_s)) {
+      this.latencyMs.push((this.stream.serverNowS() - header.capture_time_s) * 1000);
+      if (this.latencyMs.length > 30) this.latencyMs.shift();
+    }
+  }
+
+  onMessage(msg) {
+    switch (msg.type) {
+      case "hello":
+        this.helloSeen = true;
+        this.canControl = Boolean(msg.can_control) && this.api.canControl;
+        $("control-mode").textContent = this.canControl ? "control" : "view only";
+        $("sim-panel").hidden = msg.backend !== "sim";
+        this.refreshAllowed();
+        break;
+      case "telemetry":
+        this.onTelemetry(msg);
+        break;
+      case "event":
+        this.log.add(msg.level || "info", msg.message || "", msg.time_s);
+        break;
+      case "calibration":
+        renderCalibration(msg);
+        break;
+      case "error":
+        this.log.error("command", msg.error || msg);
+        break;
+      default:
+        break;
+    }
+  }
+
+  onTelemetry(s) {
+    const previous = this.status;
+    this.status = s;
+    renderStatus(s);
+    renderReadouts(s);
+    if (!previous || (previous.joint_names || []).join() !== (s.joint_names || []).join()) {
+      if (s.joint_names) this.sliders.build(s.joint_names, s.joint_limits_rad);
+      this.sliders.follow(s.joints_rad, true);
+    } else {
+      this.sliders.follow(s.joints_rad);
+    }
+    this.plot.push(s.time_s, s.joints_rad);
+    $("sim-panel").hidden = s.backend !== "sim";
+    if (previous && previous.state !== s.state) {
+      this.log.add(s.state === "estop" || s.state === "fault" ? "error" : "info", `state: ${previous.state} → ${s.state}`);
+    }
+    if (previous && previous.calibrated !== s.calibrated && s.calibrated) {
+      this.api.calibration().then((c) => renderCalibration(c)).catch(() => {});
+    }
+    if (Array.isArray(s.detections)) this.setDetections(s.detections);
+    this.watchJob(s.job);
+    this.refreshAllowed();
+  }
+
+  setDetections(detections) {
+    this.detections = detections;
+    this.live.setDetections(detections);
+    const key = JSON.stringify(detections.map((d) => [d.id, d.color, d.size, d.position_m?.map((v) => Math.round(v * 1000))]));
+    if (key === this.detectionsKey) return;
+    this.detectionsKey = key;
+    renderDetections(detections, this.hoverDetection, (d) => this.detectionClicked(d));
+  }
+
+  /** Report a job's end once, and move the click mode along grab → drop → grab. */
+  watchJob(job) {
+    if (!job) {
+      this.trackedJob = null;
+      return;
+    }
+    if (job.state === "running") {
+      this.trackedJob = job.id;
+      return;
+    }
+    if (!TERMINAL_JOB_STATES.has(job.state) || this.reportedJobs.has(job.id)) return;
+    this.reportedJobs.add(job.id);
+    const wasOurs = this.trackedJob === job.id;
+    this.trackedJob = null;
+    if (!wasOurs) return;
+    const text = `${job.name} ${job.state}${job.message ? ": " + job.message : ""}`;
+    if (job.state === "failed") this.log.toast("error", `${job.name} failed`, job.message || "failed");
+    else this.log.add(job.state === "succeeded" ? "info" : "warn", text);
+    if (job.state === "succeeded" && job.name === "grab" && this.live.mode === "grab") this.setMode("drop");
+    else if (job.state === "succeeded" && job.name === "drop" && this.live.mode === "drop") this.setMode("grab");
+    if (job.state === "succeeded" && job.name === "repeat") this.refreshPrograms();
+    if (job.state === "succeeded") this.live.clearMarker();
+  }
+
+  refreshAllowed() {
+    const allowed = this.connected && this.status ? this.status.allowed_commands : [];
+    const control = this.connected && this.api.canControl && (this.helloSeen ? this.canControl : true);
+    applyAllowed(document, allowed, control);
+    this.sliders.setDisabled(!control || !(allowed || []).includes("move_joints"));
+    // E-stop is never disabled: without a connection it goes over REST.
+    $("btn-estop").disabled = false;
+  }
+
+  updateIndicators() {
+    $("ind-conn").dataset.ok = String(this.connected);
+    $("conn-text").textContent = this.connected ? "connected" : "reconnecting";
+    const fps = this.fps.rate(performance.now() / 1000);
+    $("fps").textContent = fps.toFixed(1);
+    if (this.latencyMs.length) {
+      const sorted = [...this.latencyMs].sort((a, b) => a - b);
+      $("latency").textContent = Math.max(0, sorted[Math.floor(sorted.length / 2)]).toFixed(0);
+    } else {
+      $("latency").textContent = "—";
+    }
+  }
+
+  // ---- commands ----------------------------------------------------------------------------
+  /** Run a REST call, log it, toast the server's message on failure; returns the result or null. */
+  async run(action, call) {
+    try {
+      const result = await call();
+      if (result && result.job) {
+        this.trackedJob = result.job.id;
+        this.log.add("info", `${action}: job ${result.job.name || ""} started`);
+      } else {
+        this.log.add("info", `${action}: ok`);
+      }
+      return result;
+    } catch (e) {
+      this.log.error(action, e);
+      return null;
+    }
+  }
+
+  estop() {
+    const sentOverWs = this.stream.send({ type: "command", name: "estop" });
+    this.log.add("error", `E-STOP pressed (${sentOverWs ? "websocket" : "REST"})`);
+    const viaRest = () => this.api.estop().catch((e) => this.log.error("e-stop", e));
+    if (!sentOverWs) {
+      viaRest();
+      return;
+    }
+    setTimeout(() => {
+      if (!this.status || this.status.state !== "estop") viaRest();
+    }, ESTOP_REST_FALLBACK_MS);
+  }
+
+  sendJoints(qRad) {
+    const movingTimeS = Number($("jog-time").value);
+    return this.run("move joints", () => this.api.joints(qRad, Number.isFinite(movingTimeS) ? movingTimeS : undefined));
+  }
+
+  jogCartesian(axis, sign) {
+    const gp = this.status && this.status.gripper_pose;
+    if (!gp || !Array.isArray(gp.position_m)) {
+      this.log.toast("error", "jog", "no gripper pose from the station yet");
+      return;
+    }
+    const stepM = Number($("jog-step").value);
+    const target = [...gp.position_m];
+    target["xyz".indexOf(axis)] += sign * stepM;
+    this.run(`jog ${axis}${sign > 0 ? "+" : "−"}`, () => this.api.pose(target, gp.pitch_rad, gp.yaw_rad));
+  }
+
+  setMode(mode) {
+    this.live.setMode(mode);
+    document.querySelectorAll("#click-mode button").forEach((b) => b.classList.toggle("on", b.dataset.mode === mode));
+    $("live").dataset.mode = mode;
+  }
+
+  setView(view) {
+    this.view = view;
+    document.querySelectorAll("#view-select button").forEach((b) => b.classList.toggle("on", b.dataset.view === view));
+    this.stream.setView(this.view, this.layers);
+  }
+
+  setLayers() {
+    this.layers = [...document.querySelectorAll("[data-layer]")].filter((c) => c.checked).map((c) => c.dataset.layer);
+    this.stream.setView(this.view, this.layers);
+  }
+
+  clickTarget(t) {
+    const body = t.positionM ? { position_m: t.positionM } : { u: t.u, v: t.v };
+    const where = t.positionM ? t.positionM.map((v) => Math.round(v * 1000)).join(", ") + " mm" : `pixel (${t.u.toFixed(0)}, ${t.v.toFixed(0)})`;
+    if (t.mode === "grab") this.run(`grab at ${where}`, () => this.api.grab(body));
+    else if (t.mode === "drop") this.run(`drop at ${where}`, () => this.api.drop(body));
+  }
+
+  detectionClicked(d) {
+    if (this.live.mode === "grab" && Array.isArray(d.position_m)) {
+      this.run(`grab ${d.color || ""} block ${d.id ?? ""}`, () => this.api.grab({ position_m: d.position_m }));
+    }
+  }
+
+  refreshPrograms() {
+    this.api.programs()
+      .then((p) => {
+        renderPrograms(p, (prog) => this.repeatProgram(prog));
+        this.refreshAllowed();
+      })
+      .catch(() => renderPrograms([], () => {}));
+  }
+
+  repeatProgram(prog) {
+    const cycles = Math.max(1, Math.round(Number($("repeat-cycles").value) || 1));
+    this.run(`repeat ${prog.name || prog.id}`, () => this.api.repeat(prog.id ?? prog.name, cycles));
+  }
+
+  bindControls() {
+    const on = (id, fn) => $(id).addEventListener("click", fn);
+    on("btn-estop", () => this.estop());
+    document.addEventListener("keydown", (e) => {
+      if (e.key === "Escape") {
+        e.preventDefault();
+        this.estop();
+      }
+    });
+    on("btn-home", () => this.run("home", () => this.api.home()));
+    on("btn-sleep", () => this.run("sleep", () => this.api.sleep()));
+    on("btn-open", () => this.run("gripper open", () => this.api.gripper("release")));
+    on("btn-close", () => this.run("gripper close", () => this.api.gripper("grasp")));
+    on("btn-reset", () => this.run("reset", () => this.api.reset()));
+    on("btn-torque", () => {
+      const enable = $("btn-torque").dataset.off === "true";
+      this.run(`torque ${enable ? "on" : "off"}`, () => this.api.post("/api/arm/torque", { enabled: enable })).then((r) => {
+        if (r === null) return;
+        $("btn-torque").dataset.off = String(!enable);
+        $("btn-torque").textContent = enable ? "Torque off" : "Torque on";
+      });
+    });
+    on("btn-calibrate", () => this.run("calibrate", () => this.api.calibrate()));
+    on("btn-cancel-job", () => this.run("cancel job", () => this.api.cancelJob()));
+    on("btn-send-joints", () => this.sendJoints(this.sliders.valuesRad()));
+    on("btn-sliders-from-arm", () => this.status && this.sliders.follow(this.status.joints_rad, true));
+    document.querySelectorAll("[data-jog]").forEach((b) =>
+      b.addEventListener("click", () => this.jogCartesian(b.dataset.jog[0], b.dataset.jog[1] === "+" ? 1 : -1)));
+    document.querySelectorAll("#click-mode button").forEach((b) => b.addEventListener("click", () => this.setMode(b.dataset.mode)));
+    document.querySelectorAll("#view-select button").forEach((b) => b.addEventListener("click", () => this.setView(b.dataset.view)));
+    document.querySelectorAll("[data-layer]").forEach((c) => c.addEventListener("change", () => this.setLayers()));
+    on("btn-teach-start", () => this.run("teach start", () => this.api.teachStart()));
+    on("btn-teach-record", () => this.run("record waypoint", () => this.api.teachRecord()));
+    on("btn-teach-stop", async () => {
+      const name = $("teach-name").value.trim();
+      if (!name) {
+        this.log.toast("error", "teach", "give the program a name first");
+        return;
+      }
+      if (await this.run(`save program '${name}'`, () => this.api.teachStop(name))) this.refreshPrograms();
+    });
+    on("btn-programs-refresh", () => this.refreshPrograms());
+    on("btn-sim-scene", () => {
+      const event = $("sim-event").value;
+      const level = Number($("sim-level").value);
+      const seed = Math.round(Number($("sim-seed").value) || 0);
+      this.run(`scene ${event} L${level} seed ${seed}`, () => this.api.simScene(event, level, seed));
+    });
+    on("btn-clear-log", () => this.log.clear());
+  }
+}
+
+new App().start();

@@ -1,0 +1,219 @@
+// Rendering of the side panels from server data: status line, joint and gripper readouts, joint
+// sliders, detections table, calibration result, programs list, and command-button enabling.
+
+import { fmtDeg, fmtMm } from "./geometry.js";
+
+const $ = (id) => document.getElementById(id);
+
+/** Default joint limits (deg) of the RX200 (DESIGN §4), used when the status carries none. */
+export const DEFAULT_LIMITS_DEG = {
+  waist: [-180, 180],
+  shoulder: [-108, 113],
+  elbow: [-108, 93],
+  wrist_angle: [-100, 123],
+  wrist_rotate: [-180, 180],
+};
+export const DEFAULT_JOINT_NAMES = Object.keys(DEFAULT_LIMITS_DEG);
+
+const SWATCH = {
+  red: "#e5484d", orange: "#f08c2e", yellow: "#f2d13c", green: "#2fbf71", blue: "#3d8bfd", violet: "#9b6bff",
+  purple: "#9b6bff",
+};
+
+/** Enable exactly the [data-command] buttons whose command the station allows now (and that we may send). */
+export function applyAllowed(root, allowed, canControl) {
+  const set = new Set(allowed || []);
+  root.querySelectorAll("[data-command]").forEach((el) => {
+    const name = el.dataset.command;
+    el.disabled = !canControl || !set.has(name);
+  });
+}
+
+export function renderStatus(s) {
+  const badge = $("state-badge");
+  badge.textContent = s.state || "—";
+  badge.dataset.state = s.state || "unknown";
+  $("status-detail").textContent = s.detail || (s.state === "idle" ? "ready" : "");
+  const job = s.job;
+  const line = $("job-line");
+  if (job && job.state === "running") {
+    line.hidden = false;
+    $("job-name").textContent = `${job.name}${job.message ? ": " + job.message : ""}`;
+    $("job-progress").value = Number.isFinite(job.progress) ? job.progress : 0;
+  } else {
+    line.hidden = true;
+  }
+  $("backend").textContent = s.backend ? `backend: ${s.backend}` : "—";
+}
+
+/** Joint table (deg) and the gripper pose/width readout. */
+export function renderReadouts(s) {
+  const names = s.joint_names || DEFAULT_JOINT_NAMES;
+  const table = $("joint-readout");
+  if (table.rows.length !== names.length) {
+    table.replaceChildren();
+    names.forEach((n) => {
+      const tr = table.insertRow();
+      tr.insertCell().textContent = n;
+      tr.insertCell().textContent = "—";
+    });
+  }
+  (s.joints_rad || []).forEach((q, i) => {
+    if (table.rows[i]) table.rows[i].cells[1].textContent = `${fmtDeg(q)}°`;
+  });
+  const gp = s.gripper_pose;
+  const g = s.gripper || {};
+  const parts = [];
+  if (gp && Array.isArray(gp.position_m)) {
+    parts.push(`xyz ${gp.position_m.map(fmtMm).join(" ")} mm`);
+    parts.push(`pitch ${fmtDeg(gp.pitch_rad, 0)}° yaw ${fmtDeg(gp.yaw_rad, 0)}°`);
+  }
+  if (Number.isFinite(g.width_m)) parts.push(`width ${(g.width_m * 1000).toFixed(1)} mm`);
+  if (g.holding !== undefined) parts.push(g.holding ? "holding" : "empty");
+  $("pose-readout").textContent = parts.length ? parts.join(" · ") : "gripper —";
+  $("pose-readout").dataset.holding = String(Boolean(g.holding));
+}
+
+/** Joint sliders; they follow the arm unless the operator touched one in the last 3 s. */
+export class JointSliders {
+  constructor(container, onRelease) {
+    this.container = container;
+    this.onRelease = onRelease;
+    this.inputs = [];
+    this.touchedMs = 0;
+    this.names = [];
+  }
+
+  build(names, limitsRad) {
+    this.names = names;
+    this.container.replaceChildren();
+    this.inputs = names.map((name, i) => {
+      const lim = limitsRad && limitsRad[i]
+        ? limitsRad[i].map((r) => (r * 180) / Math.PI)
+        : DEFAULT_LIMITS_DEG[name] || [-180, 180];
+      const label = document.createElement("label");
+      label.textContent = name;
+      const input = document.createElement("input");
+      Object.assign(input, { type: "range", min: lim[0], max: lim[1], step: 0.5, value: 0 });
+      input.id = `slider-${name}`;
+      label.htmlFor = input.id;
+      const out = document.createElement("output");
+      out.textContent = "0.0°";
+      input.addEventListener("input", () => {
+        this.touchedMs = performance.now();
+        out.textContent = `${Number(input.value).toFixed(1)}°`;
+      });
+      input.addEventListener("change", () => {
+        this.touchedMs = performance.now();
+        this.onRelease(this.valuesRad());
+      });
+      this.container.append(label, input, out);
+      return { input, out };
+    });
+  }
+
+  follow(jointsRad, force = false) {
+    if (!Array.isArray(jointsRad)) return;
+    if (!force && performance.now() - this.touchedMs < 3000) return;
+    this.inputs.forEach(({ input, out }, i) => {
+      if (!Number.isFinite(jointsRad[i]) || (!force && document.activeElement === input)) return;
+      const deg = (jointsRad[i] * 180) / Math.PI;
+      input.value = deg;
+      out.textContent = `${deg.toFixed(1)}°`;
+    });
+  }
+
+  valuesRad() {
+    return this.inputs.map(({ input }) => (Number(input.value) * Math.PI) / 180);
+  }
+
+  setDisabled(disabled) {
+    this.inputs.forEach(({ input }) => { input.disabled = disabled; });
+  }
+}
+
+/** Detections table; rows carry data-index so hovering on the canvas can highlight one. */
+export function renderDetections(detections, hoverIndex, onRowClick) {
+  const body = $("det-body");
+  const list = Array.isArray(detections) ? detections : [];
+  $("det-count").textContent = String(list.length);
+  const rows = list.map((d, i) => {
+    const tr = document.createElement("tr");
+    tr.dataset.index = String(i);
+    if (i === hoverIndex) tr.className = "hover";
+    const p = d.position_m || [];
+    const sw = `<span class="swatch" style="background:${SWATCH[d.color] || "#888"}"></span>`;
+    const size = d.size || (d.is_cube === false ? "other" : "");
+    const level = d.stack_level > 0 ? ` L${d.stack_level}` : "";
+    const cells = [String(d.id ?? i), `${sw}${escapeHtml(d.color || "?")}`, escapeHtml(size + level),
+      fmtMm(p[0]), fmtMm(p[1]), fmtMm(p[2]), fmtDeg(d.yaw_rad, 0)];
+    tr.innerHTML = cells.map((c) => `<td>${c}</td>`).join("");
+    tr.addEventListener("click", () => onRowClick(d, i));
+    return tr;
+  });
+  body.replaceChildren(...rows);
+}
+
+export function highlightDetectionRow(index) {
+  document.querySelectorAll("#det-body tr").forEach((tr) => {
+    tr.classList.toggle("hover", Number(tr.dataset.index) === index);
+  });
+}
+
+/** Calibration badge and the key figures of the latest calibration. */
+export function renderCalibration(c) {
+  const badge = $("calib-badge");
+  const ok = Boolean(c && c.calibrated);
+  badge.dataset.ok = String(ok);
+  badge.textContent = ok ? "calibrated" : "not calibrated";
+  const dl = $("calib-result");
+  dl.replaceChildren();
+  if (!ok) return;
+  const rows = [];
+  if (Number.isFinite(c.reprojection_error_px)) rows.push(["reprojection", `${c.reprojection_error_px.toFixed(2)} px`]);
+  if (Array.isArray(c.camera_position_m)) rows.push(["camera at", `${c.camera_position_m.map(fmtMm).join(" ")} mm`]);
+  if (Number.isFinite(c.depth_check_error_m)) rows.push(["depth check", `${(c.depth_check_error_m * 1000).toFixed(1)} mm`]);
+  if (Array.isArray(c.tags)) rows.push(["tags", String(c.tags.length)]);
+  if (Array.isArray(c.grid_points_px)) rows.push(["grid points", String(c.grid_points_px.length)]);
+  if (c.time) rows.push(["at", typeof c.time === "number" ? new Date(c.time * 1000).toTimeString().slice(0, 8) : String(c.time)]);
+  rows.forEach(([k, v]) => {
+    const dt = document.createElement("dt");
+    dt.textContent = k;
+    const dd = document.createElement("dd");
+    dd.textContent = v;
+    dd.dataset.key = k;
+    dl.append(dt, dd);
+  });
+}
+
+/** Programs list with a Repeat button each (enabled by the "repeat" command). */
+export function renderPrograms(payload, onRepeat) {
+  const list = Array.isArray(payload) ? payload : payload?.data || payload?.programs || [];
+  const ul = $("program-list");
+  if (!list.length) {
+    const li = document.createElement("li");
+    li.innerHTML = "<small>no programs yet</small>";
+    ul.replaceChildren(li);
+    return;
+  }
+  ul.replaceChildren(...list.map((p) => {
+    const li = document.createElement("li");
+    const name = document.createElement("span");
+    name.textContent = p.name || String(p.id);
+    const n = p.waypoints?.length ?? p.waypoint_count ?? p.n_waypoints;
+    const small = document.createElement("small");
+    small.textContent = n !== undefined ? `${n} wp` : "";
+    const btn = document.createElement("button");
+    btn.className = "btn small";
+    btn.type = "button";
+    btn.dataset.command = "repeat";
+    btn.textContent = "Repeat";
+    btn.addEventListener("click", () => onRepeat(p));
+    li.append(name, small, btn);
+    return li;
+  }));
+}
+
+function escapeHtml(s) {
+  return String(s).replace(/[&<>"']/g, (c) => ({ "&": "&amp;", "<": "&lt;", ">": "&gt;", '"': "&quot;", "'": "&#39;" })[c]);
+}
