@@ -1,0 +1,37 @@
+"""MotionConfig: pick/place heights, vertical-segment speeds and safety clearance (config/motion.yaml)."""
+
+from __future__ import annotations
+
+import math
+from pathlib import Path
+
+from pydantic import Field, model_validator
+
+from armlab.config import StrictModel, config_dir, load_config
+
+
+class MotionConfig(StrictModel):
+    """Validated motion settings; all lengths in metres of the gripper point, world frame."""
+
+    approach_height_m: float = Field(0.08, gt=0.0, le=0.3)
+    lift_height_m: float = Field(0.08, gt=0.0, le=0.3)
+    grasp_depth_m: float = Field(0.015, ge=0.0, le=0.05)
+    place_clearance_m: float = Field(0.005, ge=0.0, le=0.05)
+    board_clearance_m: float = Field(0.003, ge=0.0, le=0.05)
+    vertical_speed_m_s: float = Field(0.10, gt=0.0, le=1.0)
+    vertical_accel_m_s2: float = Field(0.40, gt=0.0, le=10.0)
+    sample_rate_hz: float = Field(100.0, ge=100.0, le=1000.0)
+    move_time_s: float | None = Field(None, gt=0.0, le=30.0)
+    accel_time_s: float | None = Field(None, gt=0.0, le=15.0)
+    top_down_pitch_rad: float = Field(math.pi / 2, ge=0.0, le=math.pi / 2 + 1e-9)
+
+    @model_validator(mode="after")
+    def _accel_within_move(self) -> "MotionConfig":
+        if self.move_time_s is not None and self.accel_time_s is not None and self.accel_time_s > self.move_time_s / 2:
+            raise ValueError(f"accel_time_s ({self.accel_time_s}) must be at most half of move_time_s ({self.move_time_s})")
+        return self
+
+
+def load_motion_config(path: str | Path | None = None) -> MotionConfig:
+    """Load config/motion.yaml (or `path`); ConfigError naming the file and field when invalid."""
+    return load_config(Path(path) if path is not None else config_dir() / "motion.yaml", MotionConfig)

@@ -1,0 +1,109 @@
+"""The last check before a plan reaches the arm: joint limits, speed limits and the board surface.
+
+check_trajectory rejects any trajectory in which a joint leaves its position limits, exceeds its
+velocity or acceleration limit (finite differences of the samples), or any link point (each joint
+origin and the gripper point, world frame) goes below the board surface plus a clearance. Links are
+straight segments between those points, so checking the points checks the links. Pure: no device calls.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from armlab.devices.arm import JointTrajectory
+
+# Relative tolerance on velocity/acceleration limits (finite differences of a plan exactly at the limit).
+LIMIT_RTOL = 1e-6
+# Absolute tolerance on position limits, radians (a measured start may sit a hair outside).
+POSITION_TOL_RAD = 1e-9
+
+
+class UnsafeTrajectory(ValueError):
+    """A trajectory violates a joint limit or goes below the board; the message names joint/point and time."""
+
+
+def _joint_name(arm, index: int) -> str:
+    names = getattr(arm, "joint_names", None)
+    return names[index] if names is not None and index < len(names) else f"joint {index}"
+
+
+def _point_name(arm, index: int, point_count: int) -> str:
+    if index == point_count - 1:
+        return "gripper point"
+    return f"{_joint_name(arm, index)} origin"
+
+
+def finite_difference_rates(trajectory: JointTrajectory) -> tuple[np.ndarray, np.ndarray]:
+    """Velocity (N-1, dof) between samples and acceleration (N-2, dof) at interior samples."""
+    times, positions = trajectory.times_s, trajectory.positions_rad
+    dt = np.diff(times)
+    velocity = np.diff(positions, axis=0) / dt[:, None]
+    if positions.shape[0] < 3:
+        return velocity, np.zeros((0, positions.shape[1]))
+    mid_dt = 0.5 * (dt[1:] + dt[:-1])
+    accel = np.diff(velocity, axis=0) / mid_dt[:, None]
+    return velocity, accel
+
+
+def check_trajectory(
+    arm,
+    trajectory: JointTrajectory,
+    clearance_m: float = 0.0,
+    board_z_m: float = 0.0,
+    check_rates: bool = True,
+) -> None:
+    """Raise UnsafeTrajectory if the trajectory is not safe to send to `arm`; return None if it is.
+
+    arm: a kinematics model (lower_rad, upper_rad, velocity_limit_rad_s, accel_limit_rad_s2, dof,
+    joint_frames(q) -> (dof+1, 4, 4) world frames). clearance_m: how far above the board (z =
+    board_z_m in the world frame) every link point must stay. check_rates: also check velocity and
+    acceleration by finite differences (off for trajectories that do not start/end at rest on purpose).
+    """
+    positions = trajectory.positions_rad
+    times = trajectory.times_s
+    dof = int(arm.dof)
+    if positions.shape[1] != dof:
+        raise UnsafeTrajectory(f"trajectory has {positions.shape[1]} joints, the arm has {dof}")
+    if not np.isfinite(clearance_m) or not np.isfinite(board_z_m):
+        raise ValueError("clearance_m and board_z_m must be finite")
+
+    lower, upper = np.asarray(arm.lower_rad, float), np.asarray(arm.upper_rad, float)
+    below = positions < lower[None, :] - POSITION_TOL_RAD
+    above = positions > upper[None, :] + POSITION_TOL_RAD
+    bad = np.argwhere(below | above)
+    if bad.size:
+        sample, joint = (int(v) for v in bad[0])
+        raise UnsafeTrajectory(
+            f"{_joint_name(arm, joint)} = {positions[sample, joint]:.4f} rad at t = {times[sample]:.3f} s is outside "
+            f"its limits [{lower[joint]:.4f}, {upper[joint]:.4f}]"
+        )
+
+    if check_rates:
+        velocity, accel = finite_difference_rates(trajectory)
+        velocity_limit = np.asarray(arm.velocity_limit_rad_s, float)
+        accel_limit = np.asarray(arm.accel_limit_rad_s2, float)
+        too_fast = np.argwhere(np.abs(velocity) > velocity_limit[None, :] * (1.0 + LIMIT_RTOL))
+        if too_fast.size:
+            sample, joint = (int(v) for v in too_fast[0])
+            raise UnsafeTrajectory(
+                f"{_joint_name(arm, joint)} moves at {abs(velocity[sample, joint]):.3f} rad/s at t = {times[sample]:.3f} s, "
+                f"above its velocity limit {velocity_limit[joint]:.3f} rad/s"
+            )
+        too_sharp = np.argwhere(np.abs(accel) > accel_limit[None, :] * (1.0 + LIMIT_RTOL))
+        if too_sharp.size:
+            sample, joint = (int(v) for v in too_sharp[0])
+            raise UnsafeTrajectory(
+                f"{_joint_name(arm, joint)} accelerates at {abs(accel[sample, joint]):.3f} rad/s² at "
+                f"t = {times[sample + 1]:.3f} s, above its acceleration limit {accel_limit[joint]:.3f} rad/s²"
+            )
+
+    floor_z = board_z_m + clearance_m
+    for sample, q in enumerate(positions):
+        frames = np.asarray(arm.joint_frames(q))
+        heights = frames[:, 2, 3]
+        lowest = int(np.argmin(heights))
+        if heights[lowest] < floor_z:
+            raise UnsafeTrajectory(
+                f"{_point_name(arm, lowest, frames.shape[0])} at z = {heights[lowest] * 1000:.1f} mm at "
+                f"t = {times[sample]:.3f} s is below the board surface + clearance ({floor_z * 1000:.1f} mm)"
+            )
