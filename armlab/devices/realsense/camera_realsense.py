@@ -1,0 +1,166 @@
+"""RealSenseCamera: colour + aligned depth from pyrealsense2 behind the Camera interface.
+
+pyrealsense2 is an optional extra (`pip install 'armlab[realsense]'`); it is imported inside connect()
+so nothing else pulls it in. The reader thread, buffering and error contract are the OpenCV backend's
+(FrameBuffer): only the device calls below are RealSense-specific, and they are kept thin because no
+test machine has the hardware.
+"""
+
+from __future__ import annotations
+
+import time
+
+import numpy as np
+
+from armlab.devices.camera import Camera, Frame, Intrinsics
+from armlab.devices.opencv.frame_buffer import FrameBuffer, ReaderThread
+from armlab.devices.realsense.configuration_realsense import RealSenseCameraConfig
+from armlab.errors import DeviceAlreadyConnectedError, DeviceNotConnectedError
+
+
+class RealSenseNotInstalledError(ImportError):
+    """pyrealsense2 is missing; the message says how to install it."""
+
+
+def import_pyrealsense2(owner: str = "RealSenseCamera"):
+    """The pyrealsense2 module, or RealSenseNotInstalledError (message prefixed by owner) saying what to install."""
+    try:
+        import pyrealsense2
+    except ImportError as error:
+        raise RealSenseNotInstalledError(
+            f"{owner}: needs pyrealsense2: install it with `pip install 'armlab[realsense]'` "
+            "(or `pip install pyrealsense2`; on ARM boards build librealsense with its Python bindings)"
+        ) from error
+    return pyrealsense2
+
+
+class RealSenseCamera(Camera):
+    """A RealSense camera streaming colour (BGR8) and, optionally, depth aligned to colour (mm)."""
+
+    def __init__(self, config: RealSenseCameraConfig) -> None:
+        self.config = config
+        self._rs = None
+        self._pipeline = None
+        self._align = None
+        self._depth_scale_mm = 1.0
+        self._reader: ReaderThread | None = None
+        self._buffer = FrameBuffer(str(self))
+        self._intrinsics: Intrinsics | None = None
+        self._sequence = 0
+        self._failures = 0
+
+    def __str__(self) -> str:
+        return f"RealSenseCamera({self.config.serial or 'first'})"
+
+    @property
+    def is_connected(self) -> bool:
+        return self._reader is not None
+
+    @property
+    def intrinsics(self) -> Intrinsics:
+        if self._intrinsics is None:
+            raise DeviceNotConnectedError(f"{self}: not connected: call connect() first")
+        return self._intrinsics
+
+    def connect(self) -> None:
+        """Start the pipeline, read the factory intrinsics, start the reader; all-or-nothing."""
+        if self.is_connected:
+            raise DeviceAlreadyConnectedError(f"{self}: already connected; call close() before connecting again")
+        rs = import_pyrealsense2(str(self))
+        try:
+            self._rs = rs
+            rs_config = rs.config()
+            if self.config.serial:
+                rs_config.enable_device(self.config.serial)
+            cfg = self.config
+            rs_config.enable_stream(rs.stream.color, cfg.width, cfg.height, rs.format.bgr8, cfg.fps)
+            if cfg.use_depth:
+                rs_config.enable_stream(rs.stream.depth, cfg.depth_width, cfg.depth_height, rs.format.z16, cfg.fps)
+            self._pipeline = rs.pipeline()
+            profile = self._pipeline.start(rs_config)
+            if cfg.use_depth:
+                self._align = rs.align(rs.stream.color)
+                depth_scale_m = profile.get_device().first_depth_sensor().get_depth_scale()
+                self._depth_scale_mm = depth_scale_m * 1000.0
+            stream = profile.get_stream(rs.stream.color).as_video_stream_profile().get_intrinsics()
+            self._intrinsics = Intrinsics(
+                stream.width, stream.height, stream.fx, stream.fy, stream.ppx, stream.ppy, tuple(stream.coeffs[:5])
+            )
+            self._buffer.reset()
+            self._sequence = 0
+            self._failures = 0
+            self._reader = ReaderThread(f"{self}-reader", self._step)
+            self._reader.start()
+            self._buffer.wait_for_first(cfg.warmup_timeout_s)
+        except BaseException as error:
+            self._teardown()
+            if isinstance(error, TimeoutError):
+                raise ConnectionError(f"{self}: no frame within {self.config.warmup_timeout_s:.0f} s") from error
+            if isinstance(error, RuntimeError):  # pyrealsense2 reports device problems as RuntimeError
+                raise ConnectionError(f"{self}: {error}") from error
+            raise
+
+    def close(self) -> None:
+        """Stop the reader and the pipeline. Safe to call twice."""
+        self._teardown()
+
+    def _teardown(self) -> None:
+        if self._reader is not None:
+            self._reader.stop()
+            self._reader = None
+        if self._pipeline is not None:
+            try:
+                self._pipeline.stop()
+            except RuntimeError:
+                pass  # never started
+            self._pipeline = None
+        self._align = None
+        self._intrinsics = None
+
+    def _step(self, stop) -> bool:
+        try:
+            frames = self._pipeline.wait_for_frames(self.config.frame_timeout_ms)
+            if self._align is not None:
+                frames = self._align.process(frames)
+            color = frames.get_color_frame()
+            depth = frames.get_depth_frame() if self._align is not None else None
+            if not color or (self._align is not None and not depth):
+                raise RuntimeError("incomplete frame set")
+        except RuntimeError as error:
+            self._failures += 1
+            if self._failures >= self.config.max_consecutive_failures:
+                self._buffer.end(ConnectionError(f"{self}: {self._failures} consecutive failed reads: {error}"))
+                return False
+            return True
+        self._failures = 0
+        depth_mm = None
+        if depth is not None:
+            raw = np.asanyarray(depth.get_data())
+            depth_mm = np.clip(np.rint(raw * self._depth_scale_mm), 0, 65535).astype(np.uint16)
+        self._sequence += 1
+        self._buffer.publish(
+            Frame(
+                color_bgr=np.array(np.asanyarray(color.get_data()), copy=True),
+                depth_mm=depth_mm,
+                timestamp_s=time.time(),
+                sequence=self._sequence,
+                intrinsics=self._intrinsics,
+            )
+        )
+        return True
+
+    def _require_connected(self) -> None:
+        if not self.is_connected:
+            raise DeviceNotConnectedError(f"{self}: not connected: call connect() first")
+
+    def read(self) -> Frame:
+        self._require_connected()
+        return self._buffer.read(self.config.read_timeout_s)
+
+    def async_read(self, timeout_ms: float = 200.0) -> Frame:
+        self._require_connected()
+        return self._buffer.async_read(timeout_ms)
+
+    def read_latest(self, max_age_ms: float = 500.0) -> Frame:
+        self._require_connected()
+        return self._buffer.read_latest(max_age_ms)
