@@ -23,9 +23,10 @@ class TagConfig(StrictModel):
     dictionary: str = "DICT_APRILTAG_36h11"
     board_tag_size_m: float = Field(0.025, gt=0.0, lt=1.0)
     board_tags: dict[int, tuple[float, float]]
+    block_tag_dictionary: str = "DICT_4X4_250"
     block_tags: dict[int, BlockTagEntry] = {}
 
-    @field_validator("dictionary")
+    @field_validator("dictionary", "block_tag_dictionary")
     @classmethod
     def _known_dictionary(cls, name: str) -> str:
         if not name.startswith("DICT_") or not hasattr(cv2.aruco, name):
@@ -37,7 +38,7 @@ class TagConfig(StrictModel):
         if len(self.board_tags) < 3:
             raise ValueError("board_tags needs at least 3 tags for a calibration")
         overlap = set(self.board_tags) & set(self.block_tags)
-        if overlap:
+        if overlap and self.dictionary == self.block_tag_dictionary:
             raise ValueError(f"ids {sorted(overlap)} are both board tags and block tags")
         return self
 

@@ -1,0 +1,123 @@
+"""Overlay drawing for the live stream (tags, detections with labels and yaw arrows, projected board
+grid; each layer switchable) and the top-down board view through the board homography."""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import cv2
+import numpy as np
+
+from armlab.vision.blocks import Block
+from armlab.vision.calibration import Calibration
+from armlab.vision.geometry import project_points
+from armlab.vision.tags import Tag, check_color_image
+
+# Drawing colours (BGR) per colour class; unknown names are drawn white.
+DRAW_BGR = {
+    "red": (40, 40, 230),
+    "orange": (0, 140, 255),
+    "yellow": (0, 230, 255),
+    "green": (60, 200, 60),
+    "blue": (230, 120, 30),
+    "violet": (200, 60, 160),
+}
+DEFAULT_BOARD_X_M = (-0.5, 0.5)
+DEFAULT_BOARD_Y_M = (-0.175, 0.475)
+
+
+@dataclass(frozen=True)
+class OverlayLayers:
+    """Which layers draw_overlay paints."""
+
+    tags: bool = True
+    detections: bool = True
+    grid: bool = True
+    labels: bool = True
+
+
+def default_grid_points_m() -> np.ndarray:
+    """DESIGN §3 grid: x -450..450, y -175..475 mm every 50 mm, z = 0."""
+    gx, gy = np.meshgrid(np.arange(-0.45, 0.451, 0.05), np.arange(-0.175, 0.476, 0.05))
+    return np.stack([gx.ravel(), gy.ravel(), np.zeros(gx.size)], axis=1)
+
+
+def draw_overlay(
+    color_bgr: np.ndarray,
+    tags: list[Tag] | None = None,
+    blocks: list[Block] | None = None,
+    calibration: Calibration | None = None,
+    layers: OverlayLayers = OverlayLayers(),
+    grid_points_m: np.ndarray | None = None,
+) -> np.ndarray:
+    """A copy of the image with the enabled layers drawn; the input is never modified."""
+    check_color_image(color_bgr)
+    out = color_bgr.copy() if color_bgr.ndim == 3 else cv2.cvtColor(color_bgr, cv2.COLOR_GRAY2BGR)
+    if layers.grid and calibration is not None:
+        pts = grid_points_m if grid_points_m is not None else default_grid_points_m()
+        for u, v in project_points(calibration.T_world_camera, calibration.K, calibration.dist, pts):
+            if 0 <= u < out.shape[1] and 0 <= v < out.shape[0]:
+                cv2.circle(out, (int(round(u)), int(round(v))), 2, (255, 255, 0), -1, cv2.LINE_AA)
+    if layers.tags and tags:
+        for tag in tags:
+            corners = np.round(tag.corners_px).astype(np.int32)
+            cv2.polylines(out, [corners], True, (0, 255, 0), 1, cv2.LINE_AA)
+            cv2.circle(out, tuple(corners[0]), 3, (0, 0, 255), -1)  # first corner marks orientation
+            if layers.labels:
+                c = tuple(np.round(tag.center_px).astype(int) + np.array([-6, -14]))
+                cv2.putText(out, str(tag.id), c, cv2.FONT_HERSHEY_SIMPLEX, 0.5, (0, 255, 0), 1, cv2.LINE_AA)
+    if layers.detections and blocks:
+        for block in blocks:
+            _draw_block(out, block, calibration, layers.labels)
+    return out
+
+
+def _draw_block(out: np.ndarray, block: Block, cal: Calibration | None, labels: bool) -> None:
+    colour = DRAW_BGR.get(block.color, (255, 255, 255)) if block.is_cube else (160, 160, 160)
+    cv2.drawContours(out, [np.round(block.contour_px).astype(np.int32)], -1, colour, 2, cv2.LINE_AA)
+    centre = tuple(int(round(x)) for x in block.center_px)
+    cv2.circle(out, centre, 3, (255, 255, 255), -1)
+    if cal is not None:
+        half = 0.6 * block.side_m if block.side_m > 0 else 0.02
+        tip_world = block.position_m + np.array([half * math.cos(block.yaw_rad), half * math.sin(block.yaw_rad), 0.0])
+        tip = project_points(cal.T_world_camera, cal.K, cal.dist, tip_world)[0]
+        cv2.arrowedLine(out, centre, (int(round(tip[0])), int(round(tip[1]))), (255, 255, 255), 1, cv2.LINE_AA, tipLength=0.3)
+    if labels:
+        text = f"{block.color} {block.size}" if block.is_cube else f"not cube ({block.color})"
+        if block.stack_level > 1:
+            text += f" L{block.stack_level}"
+        if block.aruco_id is not None:
+            text += f" #{block.aruco_id}"
+        if block.occluded:
+            text += " (occluded)"
+        origin = (centre[0] + 8, centre[1] - 8)
+        cv2.putText(out, text, origin, cv2.FONT_HERSHEY_SIMPLEX, 0.4, (0, 0, 0), 3, cv2.LINE_AA)
+        cv2.putText(out, text, origin, cv2.FONT_HERSHEY_SIMPLEX, 0.4, colour, 1, cv2.LINE_AA)
+
+
+def top_down_view(
+    color_bgr: np.ndarray,
+    cal: Calibration,
+    mm_per_px: float = 1.0,
+    x_range_m: tuple[float, float] = DEFAULT_BOARD_X_M,
+    y_range_m: tuple[float, float] = DEFAULT_BOARD_Y_M,
+) -> np.ndarray:
+    """The board seen from straight above (row 0 = +y edge, column 0 = -x edge), mm_per_px per pixel.
+
+    Uses the board-plane homography, so only the board surface (z = 0) is geometrically exact.
+    """
+    check_color_image(color_bgr)
+    if not (math.isfinite(mm_per_px) and mm_per_px > 0):
+        raise ValueError(f"mm_per_px must be a positive number, got {mm_per_px}")
+    s = mm_per_px / 1000.0
+    width = int(round((x_range_m[1] - x_range_m[0]) / s))
+    height = int(round((y_range_m[1] - y_range_m[0]) / s))
+    if width * height > 16_000_000:
+        raise ValueError(f"top-down view of {width}x{height} px is too large: raise mm_per_px")
+    board_from_view = np.array([[s, 0, x_range_m[0] + s / 2], [0, -s, y_range_m[1] - s / 2], [0, 0, 1.0]])
+    H = cal.H_image_board @ board_from_view
+    src = color_bgr
+    if np.any(cal.dist != 0):
+        src = cv2.undistort(color_bgr, cal.K, cal.dist)
+    return cv2.warpPerspective(src, H, (width, height), flags=cv2.INTER_LINEAR | cv2.WARP_INVERSE_MAP)
