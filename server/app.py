@@ -1,18 +1,82 @@
-"""create_app(): the FastAPI application factory. No module-level app or state."""
+"""create_app(): the FastAPI application factory. No module-level app or state.
+
+The station comes from `station_factory()` (default: the real-time simulation), started in the
+lifespan and closed at shutdown; the routes are thin calls into it. web/ is served at /.
+"""
 
 from __future__ import annotations
 
+import logging
+from collections.abc import Callable
+from contextlib import asynccontextmanager
+from pathlib import Path
+from typing import Any
+
 from fastapi import FastAPI
+from fastapi.staticfiles import StaticFiles
 
 import armlab
+from server.auth import resolve_token
+from server.errors import install_error_handlers
+from server.routes import arm, calibration, detections, jobs, programs, sim, station, stream
+from server.stream import StreamHub
+
+log = logging.getLogger(__name__)
+
+WEB_DIR = Path(__file__).resolve().parents[1] / "web"
 
 
-def create_app() -> FastAPI:
-    app = FastAPI(title="ArmLab Control Station", version=armlab.__version__)
+def default_station_factory():
+    """The simulated workcell with the station of config/station.yaml."""
+    from armlab.station import load_station_config
+    from armlab.station.factory import make_sim_station
+
+    return make_sim_station(load_station_config())
+
+
+def _open_station(factory: Callable[[], Any]):
+    """(station, closer): a factory may return a Station or a handle with .station and .close()."""
+    made = factory()
+    station = getattr(made, "station", made)
+    return station, made.close
+
+
+def create_app(
+    station_factory: Callable[[], Any] | None = None, token: str | None = None, web_dir: str | Path | None = WEB_DIR
+) -> FastAPI:
+    """The app. token: the control token (default: $ARMLAB_TOKEN, else generated: read app.state.token)."""
+    factory = station_factory or default_station_factory
+
+    @asynccontextmanager
+    async def lifespan(app: FastAPI):
+        station_obj, close = _open_station(factory)
+        app.state.station = station_obj
+        app.state.hub = StreamHub(station_obj, station_obj.config.jpeg_quality)
+        app.state.hub.start()
+        try:
+            yield
+        finally:
+            app.state.hub.stop()
+            app.state.station = None
+            close()
+
+    app = FastAPI(
+        title="ArmLab Control Station",
+        version=armlab.__version__,
+        lifespan=lifespan,
+        description="REST API of the ArmLab control station. SI units; mutating calls need 'Authorization: Bearer <token>'.",
+    )
+    app.state.token = resolve_token(token)[0]
+    app.state.station = None
+    install_error_handlers(app)
 
     @app.get("/api/health", tags=["station"])
     def read_health() -> dict:
         """Liveness check."""
         return {"status": "ok", "version": armlab.__version__}
 
+    for module in (station, arm, calibration, detections, jobs, programs, sim, stream):
+        app.include_router(module.router)
+    if web_dir is not None and Path(web_dir, "index.html").exists():
+        app.mount("/", StaticFiles(directory=str(web_dir), html=True), name="web")
     return app

@@ -1,0 +1,306 @@
+"""The station's long actions: calibrate, click-grab, click-drop, repeat a program, run a task.
+
+Each public function validates and plans first (bad input, unreachable target, no calibration:
+an exception before anything moves), then starts a job on the station whose steps are executed
+through the station's guarded run_trajectory/run_gripper.
+"""
+
+from __future__ import annotations
+
+import math
+import time
+from collections.abc import Callable, Sequence
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+
+from armlab.station.core import NotCalibrated, Station
+from armlab.station.jobs import Job, JobContext
+from armlab.station.telemetry import block_to_dict, tag_to_dict
+
+BLOCK_HEIGHTS_M = {"large": 0.038, "small": 0.025}
+
+
+@dataclass(frozen=True)
+class Step:
+    """One step of a pick or place: a joint goal ('move') or a gripper action ('grasp'|'release')."""
+
+    kind: str
+    q_goal_rad: np.ndarray | None = None
+    label: str = ""
+
+
+# Frames and clicks -------------------------------------------------------------------------------
+
+
+def newest_frame(station: Station, timeout_s: float = 2.0):
+    """The newest camera frame the station has seen (waits for the first one); TimeoutError if none."""
+    frame, _ = station.frames.get()
+    if frame is None:
+        frame, _ = station.frames.wait_newer(0, timeout_s)
+    if frame is None:
+        raise TimeoutError(f"no camera frame within {timeout_s} s")
+    return frame
+
+
+def _finite_pixel(u, v) -> tuple[float, float]:
+    try:
+        u, v = float(u), float(v)
+    except (TypeError, ValueError) as error:
+        raise ValueError(f"pixel must be two numbers, got ({u!r}, {v!r})") from error
+    if not (math.isfinite(u) and math.isfinite(v)):
+        raise ValueError("pixel (u, v) must be finite")
+    return u, v
+
+
+def pixel_to_world(station: Station, u: float, v: float) -> dict:
+    """{position_m, on}: the world point under pixel (u, v); 'depth' from the depth image, else 'board' (z = 0)."""
+    from armlab.vision import pixel_to_world as vision_pixel_to_world
+
+    u, v = _finite_pixel(u, v)
+    calibration = station.calibration
+    if calibration is None:
+        raise NotCalibrated("pixel-to-world")
+    frame, _ = station.frames.get()
+    if frame is not None and frame.depth_mm is not None:
+        try:
+            point = vision_pixel_to_world(calibration, u, v, depth_mm=frame.depth_mm)
+            return {"position_m": [float(x) for x in point], "on": "depth"}
+        except ValueError as error:
+            if "outside" in str(error):
+                raise
+    point = vision_pixel_to_world(calibration, u, v)
+    return {"position_m": [float(x) for x in point], "on": "board"}
+
+
+def _checked_position(position_m) -> np.ndarray:
+    position = np.asarray(position_m, dtype=float) if position_m is not None else None
+    if position is None or position.shape != (3,) or not np.all(np.isfinite(position)):
+        raise ValueError(f"position_m must be 3 finite numbers (x, y, z in metres), got {position_m!r}")
+    return position
+
+
+def _target_point(station: Station, position_m, pixel) -> tuple[np.ndarray, str]:
+    """The clicked world point from position_m or pixel=(u, v) (exactly one of them)."""
+    if (position_m is None) == (pixel is None):
+        raise ValueError("give either position_m or a pixel (u, v), not both or neither")
+    if pixel is not None:
+        result = pixel_to_world(station, *pixel)
+        return np.asarray(result["position_m"]), result["on"]
+    return _checked_position(position_m), "given"
+
+
+def block_near(station: Station, point_m: np.ndarray) -> dict | None:
+    """The detected block whose top centre is nearest `point_m` in x-y, within click_snap_radius_m."""
+    best, best_distance = None, station.config.click_snap_radius_m
+    for block in station.detections()["data"]:
+        distance = math.dist(block["position_m"][:2], point_m[:2])
+        if distance <= best_distance:
+            best, best_distance = block, distance
+    return best
+
+
+# Planning ------------------------------------------------------------------------------------------
+
+
+def _motion_config(station: Station):
+    if station.motion_config is None:
+        from armlab.motion.config import load_motion_config
+
+        station.motion_config = load_motion_config()
+    return station.motion_config
+
+
+def _ik_chain(station: Station, points: Sequence[tuple[np.ndarray, str]], yaw_rad: float | None) -> list[np.ndarray]:
+    """IK for each point with one pitch (the steepest reachable at the lowest point), seeded along the chain."""
+    q_seed = np.asarray(station.arm.read_joint_state().position_rad, dtype=float)
+    lowest = min(points, key=lambda item: item[0][2])[0]
+    q_low = station.model.ik(lowest, pitch=None, yaw=yaw_rad, q_seed=q_seed)
+    pitch = _pitch_of(station, q_low)
+    chain = []
+    for point, _label in points:
+        try:
+            q = station.model.ik(point, pitch=pitch, yaw=yaw_rad, q_seed=q_low)
+        except ValueError:
+            q = station.model.ik(point, pitch=None, yaw=yaw_rad, q_seed=q_low)
+        chain.append(np.asarray(q, dtype=float))
+    return chain
+
+
+def _pitch_of(station: Station, q_rad: np.ndarray) -> float:
+    approach = station.model.fk(q_rad)[:3, 0]
+    return math.asin(max(-1.0, min(1.0, -float(approach[2]))))
+
+
+def plan_pick_steps(station: Station, top_center_m: np.ndarray, yaw_rad: float | None, height_m: float) -> list[Step]:
+    """Open, above the block, down to grasp depth, close, lift. Unreachable (ValueError) before moving."""
+    config = _motion_config(station)
+    grasp_z = max(top_center_m[2] - min(config.grasp_depth_m, height_m / 2), config.board_clearance_m + 0.005)
+    above = np.array([top_center_m[0], top_center_m[1], top_center_m[2] + config.approach_height_m])
+    grasp = np.array([top_center_m[0], top_center_m[1], grasp_z])
+    lift = np.array([top_center_m[0], top_center_m[1], top_center_m[2] + config.lift_height_m])
+    q_above, q_grasp, q_lift = _ik_chain(station, [(above, "above"), (grasp, "grasp"), (lift, "lift")], yaw_rad)
+    return [
+        Step("release", label="open the gripper"),
+        Step("move", q_above, "above the block"),
+        Step("move", q_grasp, "down to the block"),
+        Step("grasp", label="grasp"),
+        Step("move", q_lift, "lift"),
+    ]
+
+
+def plan_place_steps(station: Station, surface_m: np.ndarray, yaw_rad: float | None, held_height_m: float) -> list[Step]:
+    """Above the spot, down until the held block rests on the surface, open, up."""
+    config = _motion_config(station)
+    grip_below_top = min(config.grasp_depth_m, held_height_m / 2)
+    release_z = surface_m[2] + held_height_m - grip_below_top + config.place_clearance_m
+    above = np.array([surface_m[0], surface_m[1], surface_m[2] + held_height_m + config.approach_height_m])
+    place = np.array([surface_m[0], surface_m[1], release_z])
+    q_above, q_place, q_up = _ik_chain(station, [(above, "above"), (place, "place"), (above, "up")], yaw_rad)
+    return [
+        Step("move", q_above, "above the drop spot"),
+        Step("move", q_place, "down to the surface"),
+        Step("release", label="release"),
+        Step("move", q_up, "up"),
+    ]
+
+
+def run_steps(station: Station, ctx: JobContext, steps: Sequence[Step], start: float = 0.0, span: float = 1.0) -> None:
+    """Execute steps through the station's guards, reporting progress from start to start+span."""
+    for index, step in enumerate(steps):
+        ctx.progress(start + span * index / len(steps), step.label or step.kind)
+        if step.kind == "move":
+            station.move_in_job(ctx, step.q_goal_rad)
+        else:
+            station.run_gripper(ctx, step.kind)
+    ctx.progress(start + span, "done")
+
+
+# Jobs ----------------------------------------------------------------------------------------------
+
+
+def calibrate(station: Station, source: str | None = None) -> Job:
+    """Start the calibration job: tags → extrinsics (+ depth cross-check) → saved and installed."""
+    from armlab.vision import calibrate_extrinsics, detect_tags
+    from armlab.vision.calibration import project_grid
+
+    def run(ctx: JobContext) -> dict:
+        ctx.progress(0.1, "finding the board tags")
+        frame = newest_frame(station)
+        intrinsics = frame.intrinsics or station.camera.intrinsics
+        tags = detect_tags(frame.color_bgr, station.perception_config)
+        ctx.progress(0.4, f"{len(tags)} tags found; solving the camera pose")
+        calibration = calibrate_extrinsics(frame.color_bgr, intrinsics, station.perception_config, frame.depth_mm, tags=tags)
+        info = calibration_summary(calibration, tags, project_grid(calibration, station.perception_config))
+        ctx.check()
+        station.store.save_calibration({"calibration": calibration.to_dict(), "info": info})
+        station.set_calibration(calibration, info)
+        ctx.job.update(message=f"calibrated: reprojection error {calibration.reprojection_error_px:.2f} px")
+        return info
+
+    return station.start_job("calibrate", "calibrate", run, source=source)
+
+
+def calibration_summary(calibration: Any, tags: Sequence, grid_px: np.ndarray) -> dict:
+    """The wire dict of GET /api/calibration (without 'calibrated')."""
+    depth_error = calibration.depth_check_error_m
+    return {
+        "reprojection_error_px": float(calibration.reprojection_error_px),
+        "camera_position_m": [float(x) for x in calibration.camera_position_m],
+        "T_world_camera": np.asarray(calibration.T_world_camera, dtype=float).tolist(),
+        "K": np.asarray(calibration.K, dtype=float).tolist(),
+        "dist": np.asarray(calibration.dist, dtype=float).ravel().tolist(),
+        "width": int(calibration.width),
+        "height": int(calibration.height),
+        "depth_check_error_m": None if depth_error is None else float(depth_error),
+        "grid_points_px": np.asarray(grid_px, dtype=float).round(2).tolist(),
+        "tags": [tag_to_dict(tag) for tag in tags],
+        "time": time.time(),
+    }
+
+
+def grab(station: Station, position_m=None, pixel=None, source: str | None = None) -> Job:
+    """Pick the detected block under the click (its centre, top and yaw), else at the clicked world point."""
+    station.allowed_or_raise("grab")
+    point, on = _target_point(station, position_m, pixel)
+    block = block_near(station, point) if station.calibration is not None else None
+    if block is not None:
+        top = np.asarray(block["position_m"], dtype=float)
+        yaw, height = block["yaw_rad"], BLOCK_HEIGHTS_M.get(block["size"], station.config.default_block_height_m)
+        detail = f"{block['size']} {block['color']} block at ({top[0] * 1000:.0f}, {top[1] * 1000:.0f}) mm"
+    else:
+        top, yaw, height = point, None, station.config.default_block_height_m
+        detail = f"point ({top[0] * 1000:.0f}, {top[1] * 1000:.0f}, {top[2] * 1000:.0f}) mm ({on})"
+    steps = plan_pick_steps(station, top, yaw, height)
+
+    def run(ctx: JobContext) -> dict:
+        run_steps(station, ctx, steps)
+        holding = bool(station.gripper.read_state().holding)
+        station.held_block = {**(block or {}), "height_m": height, "yaw_rad": yaw} if holding else None
+        ctx.job.update(message="holding the block" if holding else "nothing in the gripper")
+        return {"target_m": [float(x) for x in top], "yaw_rad": yaw, "block": block, "holding": holding}
+
+    return station.start_job("grab", "grab", run, detail=detail, source=source)
+
+
+def drop(station: Station, position_m=None, pixel=None, source: str | None = None) -> Job:
+    """Place the held block at the clicked spot, on whatever is there (board or the top of a stack)."""
+    station.allowed_or_raise("drop")
+    point, on = _target_point(station, position_m, pixel)
+    surface = point.copy()
+    yaw = None
+    below = block_near(station, point) if station.calibration is not None else None
+    if below is not None:  # stack on it: centre on its top face, align with its yaw
+        surface = np.asarray(below["position_m"], dtype=float)
+        yaw = below["yaw_rad"]
+        on = f"{below['color']} block"
+    elif on == "given" and station.calibration is None:
+        surface[2] = max(0.0, surface[2])
+    surface[2] = max(0.0, surface[2]) if surface[2] > 0.006 else 0.0  # depth noise on the board reads as board
+    held = station.held_block or {}
+    height = float(held.get("height_m", station.config.default_block_height_m))
+    steps = plan_place_steps(station, surface, yaw, height)
+    detail = f"onto {on} at ({surface[0] * 1000:.0f}, {surface[1] * 1000:.0f}, {surface[2] * 1000:.0f}) mm"
+
+    def run(ctx: JobContext) -> dict:
+        run_steps(station, ctx, steps)
+        station.held_block = None
+        return {"target_m": [float(x) for x in surface], "on": on}
+
+    return station.start_job("drop", "drop", run, detail=detail, source=source)
+
+
+def repeat(station: Station, program_id: int, cycles: int = 1, source: str | None = None) -> Job:
+    """Play a saved program `cycles` times: joint moves between waypoints, gripper changes where taught."""
+    if not isinstance(cycles, int) or not 1 <= cycles <= 100:
+        raise ValueError(f"cycles must be an integer from 1 to 100, got {cycles!r}")
+    program = station.store.get_program(program_id)
+    for waypoint in program.waypoints:
+        station._checked_joints(waypoint.joints_rad)
+
+    def run(ctx: JobContext) -> dict:
+        total = cycles * len(program.waypoints)
+        done = 0
+        for cycle in range(cycles):
+            for index, waypoint in enumerate(program.waypoints):
+                ctx.progress(done / total, f"cycle {cycle + 1}/{cycles}, waypoint {index + 1}/{len(program.waypoints)}")
+                station.move_in_job(ctx, waypoint.joints_rad)
+                if station.gripper.read_state().command != waypoint.gripper:
+                    station.run_gripper(ctx, waypoint.gripper)
+                done += 1
+        return {"program_id": program.id, "cycles": cycles}
+
+    return station.start_job("repeat", "repeat", run, detail=f"program '{program.name}' × {cycles}", source=source)
+
+
+def run_task(station: Station, name: str, function: Callable[[Station, JobContext], Any], source: str | None = None) -> Job:
+    """Run an autonomous task (sort, stack, ...) as the auto_sort job; function(station, ctx) uses
+    station.move_in_job / run_gripper / plan_pick_steps so e-stop and cancel apply to it too."""
+    return station.start_job("auto", name, lambda ctx: function(station, ctx), detail=name, source=source)
+
+
+def detections_now(station: Station) -> list[dict]:
+    """The newest detections as wire dicts (convenience for tasks)."""
+    perception, _ = station.perception.get()
+    return [] if perception is None else [block_to_dict(i, b) for i, b in enumerate(perception.blocks)]

@@ -1,0 +1,47 @@
+"""Building a Station on the simulated workcell (the default backend of `armlab serve`)."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+from armlab.station.config import StationConfig
+from armlab.station.core import Station
+from armlab.store import Store
+
+
+class SimStation:
+    """A Station plus the SimWorkcell it runs on; close() stops both (station first)."""
+
+    def __init__(self, station: Station, cell) -> None:
+        self.station = station
+        self.cell = cell
+
+    def close(self) -> None:
+        try:
+            self.station.close()
+        finally:
+            self.cell.close()
+
+
+def make_sim_station(config: StationConfig | None = None, db_path: str | Path | None = None) -> SimStation:
+    """Start a real-time SimWorkcell (seed and starting scene from config.sim) and a started Station on it."""
+    from armlab.devices.sim import SimWorkcell, SimWorkcellConfig
+    from armlab.kinematics import load_arm
+
+    config = config or StationConfig()
+    cell = SimWorkcell(SimWorkcellConfig(realtime=True, seed=config.sim.seed, camera_fps=config.sim.camera_fps))
+    cell.start()
+    try:
+        if config.sim.event:
+            from armlab.scene import generate_scene
+
+            cell.set_scene(generate_scene(config.sim.event, level=config.sim.level, seed=config.sim.scene_seed))
+        store = Store(db_path if db_path is not None else config.database_file())
+        station = Station(
+            cell.arm, cell.gripper, cell.camera, model=load_arm(config.arm), config=config, store=store, sim=cell, backend="sim"
+        )
+        station.start()
+    except BaseException:
+        cell.close()
+        raise
+    return SimStation(station, cell)

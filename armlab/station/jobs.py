@@ -1,0 +1,131 @@
+"""Cancellable long actions (calibrate, grab, drop, repeat, autonomous tasks), one at a time.
+
+A job runs its function in its own thread with a JobContext; the function reports progress and calls
+`ctx.check()` between steps, which raises JobCancelled once cancel() was called. The station decides
+what a job may do to the devices; this module only knows threads, progress and outcome.
+"""
+
+from __future__ import annotations
+
+import threading
+import time
+import uuid
+from collections.abc import Callable
+from dataclasses import dataclass, field
+from typing import Any
+
+
+class JobCancelled(Exception):
+    """Raised inside a job's thread when the job was cancelled (or the station was e-stopped)."""
+
+
+@dataclass
+class JobContext:
+    """What a running job sees: its cancel flag and a progress reporter."""
+
+    job: "Job"
+
+    def check(self) -> None:
+        """Raise JobCancelled if the job was cancelled."""
+        if self.job.cancel_event.is_set():
+            raise JobCancelled(f"job '{self.job.name}' was cancelled")
+
+    def progress(self, fraction: float, message: str | None = None) -> None:
+        """Report progress in [0, 1] with an optional human sentence; also a cancellation point."""
+        self.check()
+        self.job.update(progress=min(1.0, max(0.0, float(fraction))), message=message)
+
+    def sleep(self, duration_s: float) -> None:
+        """Sleep, waking at once (and raising JobCancelled) on cancel."""
+        if self.job.cancel_event.wait(max(0.0, duration_s)):
+            self.check()
+
+
+@dataclass
+class Job:
+    """One long action. state: running | succeeded | failed | cancelled."""
+
+    name: str
+    detail: str = ""
+    id: str = field(default_factory=lambda: uuid.uuid4().hex[:12])
+    state: str = "running"
+    progress: float = 0.0
+    message: str = ""
+    result: Any = None
+    started_s: float = field(default_factory=time.time)
+    finished_s: float | None = None
+    cancel_event: threading.Event = field(default_factory=threading.Event, repr=False)
+    done_event: threading.Event = field(default_factory=threading.Event, repr=False)
+    _lock: threading.Lock = field(default_factory=threading.Lock, repr=False)
+
+    def update(self, progress: float | None = None, message: str | None = None) -> None:
+        with self._lock:
+            if progress is not None:
+                self.progress = progress
+            if message is not None:
+                self.message = message
+
+    def finish(self, state: str, message: str, result: Any = None) -> None:
+        with self._lock:
+            self.state = state
+            self.message = message
+            self.result = result
+            self.finished_s = time.time()
+            if state == "succeeded":
+                self.progress = 1.0
+        self.done_event.set()
+
+    def cancel(self) -> None:
+        self.cancel_event.set()
+
+    @property
+    def done(self) -> bool:
+        return self.done_event.is_set()
+
+    def wait(self, timeout_s: float | None = None) -> bool:
+        """Block until the job ends; False on timeout."""
+        return self.done_event.wait(timeout_s)
+
+    def to_dict(self) -> dict:
+        with self._lock:
+            return {
+                "id": self.id,
+                "name": self.name,
+                "detail": self.detail,
+                "state": self.state,
+                "progress": round(self.progress, 4),
+                "message": self.message,
+                "started_s": self.started_s,
+                "finished_s": self.finished_s,
+                "result": self.result,
+            }
+
+
+def start_job_thread(
+    job: Job,
+    function: Callable[[JobContext], Any],
+    on_end: Callable[[Job, BaseException | None], None],
+) -> threading.Thread:
+    """Run `function(ctx)` in a daemon thread; finish the job by its outcome, then call on_end(job, error).
+
+    Outcomes: returned → succeeded (its return value is the result); JobCancelled → cancelled;
+    any other exception → failed with the exception's sentence (passed to on_end so the station can
+    tell device failures from refusals).
+    """
+
+    def run() -> None:
+        error: BaseException | None = None
+        try:
+            result = function(JobContext(job))
+        except JobCancelled as cancelled:
+            job.finish("cancelled", str(cancelled) or "cancelled")
+        except Exception as failure:  # noqa: BLE001 - a job's failure is reported, never raised into the void
+            error = failure
+            job.finish("failed", f"{type(failure).__name__}: {failure}")
+        else:
+            job.finish("succeeded", job.message or "done", result)
+        on_end(job, error)
+
+    thread = threading.Thread(target=run, name=f"job-{job.name}", daemon=True)
+    thread.start()
+    return thread

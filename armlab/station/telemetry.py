@@ -1,0 +1,85 @@
+"""Telemetry: the station's status as plain JSON-ready dicts, published at a fixed rate.
+
+Pure helpers turn library objects (detected blocks, tags, poses) into wire dicts; the
+TelemetryPublisher thread snapshots the station at `rate_hz` into a NewestSlot.
+"""
+
+from __future__ import annotations
+
+import math
+import time
+from collections.abc import Callable
+
+import numpy as np
+
+from armlab.station.perception import _Worker
+from armlab.station.slots import NewestSlot
+
+
+def _floats(values) -> list[float]:
+    return [float(value) for value in np.asarray(values, dtype=float).ravel()]
+
+
+def gripper_pose_from_matrix(T_world_gripper: np.ndarray) -> dict:
+    """Position, pitch and yaw of the gripper point from its world pose (x axis = approach axis).
+
+    pitch_rad: the approach axis' angle below the horizontal (+π/2 = pointing straight down).
+    yaw_rad: the heading of the fingers' closing axis (the pose's y axis) in the board plane,
+    measured from world +x, so it is meaningful when pointing straight down too.
+    """
+    T = np.asarray(T_world_gripper, dtype=float)
+    approach = T[:3, 0]
+    pitch = math.asin(max(-1.0, min(1.0, -float(approach[2]))))
+    closing = T[:3, 1]
+    yaw = math.atan2(float(closing[1]), float(closing[0]))
+    return {"position_m": _floats(T[:3, 3]), "pitch_rad": pitch, "yaw_rad": yaw}
+
+
+def block_to_dict(index: int, block) -> dict:
+    """A detected block (armlab.vision Block) as the wire dict of GET /api/detections."""
+    size = getattr(block, "size", None)
+    return {
+        "id": index,
+        "color": getattr(block, "color", None),
+        "size": size,
+        "position_m": _floats(block.position_m),
+        "yaw_rad": float(getattr(block, "yaw_rad", 0.0)),
+        "height_m": float(getattr(block, "height_m", 0.0) or 0.0),
+        "stack_level": int(getattr(block, "stack_level", 1) or 1),
+        "center_px": _floats(getattr(block, "center_px", (0.0, 0.0))),
+        "is_cube": bool(getattr(block, "is_cube", True)),
+        "occluded": bool(getattr(block, "occluded", False)),
+        "aruco_id": getattr(block, "aruco_id", None),
+        "destination": getattr(block, "destination", None),
+    }
+
+
+def tag_to_dict(tag) -> dict:
+    return {
+        "id": int(tag.id),
+        "center_px": _floats(tag.center_px),
+        "corners_px": np.asarray(tag.corners_px, dtype=float).round(2).tolist(),
+    }
+
+
+class TelemetryPublisher(_Worker):
+    """Publishes `snapshot()` into `slot` at `rate_hz`, on its own thread."""
+
+    name = "station-telemetry"
+
+    def __init__(self, snapshot: Callable[[], dict], slot: NewestSlot[dict], rate_hz: float) -> None:
+        super().__init__()
+        self.snapshot = snapshot
+        self.slot = slot
+        self.period_s = 1.0 / rate_hz
+
+    def _run(self) -> None:
+        next_time = time.monotonic()
+        while not self._stop.is_set():
+            self.slot.publish(self.snapshot())
+            next_time += self.period_s
+            delay = next_time - time.monotonic()
+            if delay < -self.period_s:  # fell far behind (machine busy): do not burst to catch up
+                next_time = time.monotonic()
+                delay = 0.0
+            self._stop.wait(max(0.0, delay))

@@ -1,0 +1,33 @@
+"""FastAPI dependencies: the station (StationDep) and the control-token check (ControlAuth)."""
+
+from __future__ import annotations
+
+from typing import Annotated
+
+from fastapi import Depends, Header, Request
+
+from armlab.station.core import Station
+from server.auth import bearer_token, token_matches
+from server.errors import ApiError
+
+
+def get_station(request: Request) -> Station:
+    station = getattr(request.app.state, "station", None)
+    if station is None:
+        raise ApiError(503, "device", "the station is not running")
+    return station
+
+
+def require_control(
+    request: Request,
+    authorization: Annotated[str | None, Header()] = None,
+    x_armlab_controller: Annotated[str | None, Header()] = None,
+) -> str:
+    """Check 'Authorization: Bearer <token>'; returns who controls: 'ui' (X-Armlab-Controller: ui) or 'api'."""
+    if not token_matches(request.app.state.token, bearer_token(authorization)):
+        raise ApiError(401, "unauthorized", "this command needs the control token: send 'Authorization: Bearer <token>'")
+    return "ui" if (x_armlab_controller or "").strip().lower() == "ui" else "api"
+
+
+StationDep = Annotated[Station, Depends(get_station)]
+ControlAuth = Annotated[str, Depends(require_control)]

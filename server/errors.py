@@ -1,0 +1,92 @@
+"""Library errors → HTTP, in one place. Every error body is {"error": {"code", "message", "allowed"?}}."""
+
+from __future__ import annotations
+
+import logging
+
+from fastapi import FastAPI, Request
+from fastapi.exceptions import RequestValidationError
+from fastapi.responses import JSONResponse
+from starlette.exceptions import HTTPException as StarletteHTTPException
+
+from armlab.errors import CommandRefused, DeviceNotConnectedError
+from armlab.station.core import NotCalibrated
+from armlab.store import NotFound
+
+log = logging.getLogger(__name__)
+
+_HTTP_CODES = {400: "invalid", 401: "unauthorized", 403: "unauthorized", 404: "not_found", 405: "invalid", 409: "wrong_state"}
+
+
+class ApiError(Exception):
+    """An error a route raises directly with its HTTP status and wire code."""
+
+    def __init__(self, status_code: int, code: str, message: str, allowed: list[str] | None = None) -> None:
+        super().__init__(message)
+        self.status_code, self.code, self.message, self.allowed = status_code, code, message, allowed
+
+
+def error_response(status_code: int, code: str, message: str, allowed: list[str] | None = None, headers=None) -> JSONResponse:
+    body: dict = {"code": code, "message": message}
+    if allowed is not None:
+        body["allowed"] = allowed
+    return JSONResponse({"error": body}, status_code=status_code, headers=headers)
+
+
+def _validation_message(error: RequestValidationError) -> str:
+    parts = []
+    for item in error.errors():
+        location = ".".join(str(part) for part in item.get("loc", ()) if part != "body")
+        if item.get("type") == "json_invalid":
+            return f"the request body is not valid JSON: {item.get('ctx', {}).get('error', item.get('msg'))}"
+        parts.append(f"{location or 'body'}: {item.get('msg')}")
+    return "invalid request: " + "; ".join(parts)
+
+
+def _classify(error: Exception) -> tuple[int, str]:
+    """HTTP status and wire code for a library exception (the most specific class wins)."""
+    from armlab.motion.safety import UnsafeTrajectory
+
+    try:
+        from armlab.kinematics import Unreachable
+    except ImportError:  # kinematics not installed: nothing can raise it
+        Unreachable = ()  # type: ignore[assignment]  # noqa: N806
+    if isinstance(error, CommandRefused):
+        return 409, "wrong_state"
+    if isinstance(error, NotCalibrated):
+        return 409, "not_calibrated"
+    if isinstance(error, NotFound):
+        return 404, "not_found"
+    if Unreachable and isinstance(error, Unreachable):
+        return 422, "unreachable"
+    if isinstance(error, UnsafeTrajectory):
+        return 422, "unsafe"
+    if isinstance(error, (DeviceNotConnectedError, ConnectionError, TimeoutError)):
+        return 503, "device"
+    if isinstance(error, ValueError):
+        return 422, "invalid"
+    return 500, "internal"
+
+
+def install_error_handlers(app: FastAPI) -> None:
+    @app.exception_handler(ApiError)
+    async def _api_error(_: Request, error: ApiError) -> JSONResponse:
+        return error_response(error.status_code, error.code, error.message, error.allowed)
+
+    @app.exception_handler(RequestValidationError)
+    async def _invalid(_: Request, error: RequestValidationError) -> JSONResponse:
+        return error_response(422, "invalid", _validation_message(error))
+
+    @app.exception_handler(StarletteHTTPException)
+    async def _http(_: Request, error: StarletteHTTPException) -> JSONResponse:
+        code = _HTTP_CODES.get(error.status_code, "invalid")
+        return error_response(error.status_code, code, str(error.detail), headers=getattr(error, "headers", None))
+
+    @app.exception_handler(Exception)
+    async def _library(_: Request, error: Exception) -> JSONResponse:
+        status_code, code = _classify(error)
+        if status_code == 500:
+            log.exception("internal error", exc_info=error)
+            return error_response(500, code, f"internal error: {type(error).__name__}: {error}")
+        allowed = error.allowed if isinstance(error, CommandRefused) else None
+        return error_response(status_code, code, str(error), allowed)

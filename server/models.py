@@ -1,0 +1,314 @@
+"""Pydantic models of the wire protocol: REST bodies and responses, websocket messages.
+
+Field names carry their units (SI). Requests forbid unknown fields and NaN/infinity, so malformed
+input is refused with a clear 422 before the station sees it. web/js/wire_types.js is generated from
+these models (server/gen_wire_types.py).
+"""
+
+from __future__ import annotations
+
+from typing import Any, Literal
+
+from pydantic import BaseModel, ConfigDict, Field, model_validator
+
+Vector3 = list[float]
+View = Literal["color", "depth", "topdown"]
+Layer = Literal["tags", "detections", "grid"]
+ERROR_CODES = (
+    "wrong_state",
+    "unreachable",
+    "unsafe",
+    "invalid",
+    "not_found",
+    "not_calibrated",
+    "unauthorized",
+    "device",
+    "internal",
+)
+
+
+class Request(BaseModel):
+    model_config = ConfigDict(extra="forbid", allow_inf_nan=False)
+
+
+class Wire(BaseModel):
+    model_config = ConfigDict(allow_inf_nan=True)
+
+
+# Requests -----------------------------------------------------------------------------------------
+
+
+class JointsRequest(Request):
+    q_rad: list[float] = Field(min_length=1, max_length=12, description="joint positions, radians, in joint_names order")
+    moving_time_s: float | None = Field(None, gt=0.0, description="move duration; None = as fast as the limits allow")
+
+
+class PoseRequest(Request):
+    position_m: Vector3 = Field(min_length=3, max_length=3, description="gripper point in the world (board) frame")
+    pitch_rad: float | None = Field(None, description="approach angle below horizontal; +π/2 = straight down; None = steepest")
+    yaw_rad: float | None = Field(None, description="block yaw in the world frame the fingers align with")
+    moving_time_s: float | None = Field(None, gt=0.0)
+
+
+class TorqueRequest(Request):
+    enabled: bool
+
+
+class GripperRequest(Request):
+    action: Literal["grasp", "release"]
+
+
+class PixelRequest(Request):
+    u: float = Field(description="pixel column in the colour image")
+    v: float = Field(description="pixel row in the colour image")
+
+
+class TargetRequest(Request):
+    """A grab/drop target: a world point, or a pixel of the colour image (exactly one)."""
+
+    position_m: Vector3 | None = Field(None, min_length=3, max_length=3)
+    u: float | None = None
+    v: float | None = None
+
+    @model_validator(mode="after")
+    def _one_target(self) -> "TargetRequest":
+        has_pixel = self.u is not None or self.v is not None
+        if has_pixel and (self.u is None or self.v is None):
+            raise ValueError("a pixel target needs both u and v")
+        if has_pixel == (self.position_m is not None):
+            raise ValueError("give either position_m or u and v, not both or neither")
+        return self
+
+
+class TeachStopRequest(Request):
+    name: str = Field(min_length=1, max_length=100)
+
+
+class RepeatRequest(Request):
+    cycles: int = Field(1, ge=1, le=100)
+
+
+class SceneRequest(Request):
+    """A generated competition scene (event, level, seed) or explicit objects (ground-truth format)."""
+
+    event: str | None = None
+    level: int | None = Field(None, ge=1, le=3)
+    seed: int | None = None
+    objects: list[dict[str, Any]] | None = None
+
+    @model_validator(mode="after")
+    def _one_kind(self) -> "SceneRequest":
+        if (self.event is None) == (self.objects is None):
+            raise ValueError("give either event (with level and seed) or objects")
+        return self
+
+
+# Responses ----------------------------------------------------------------------------------------
+
+
+class ErrorBody(Wire):
+    code: str
+    message: str
+    allowed: list[str] | None = None
+
+
+class ErrorResponse(Wire):
+    error: ErrorBody
+
+
+class GripperStatus(Wire):
+    width_m: float
+    holding: bool
+    command: str
+
+
+class GripperPose(Wire):
+    position_m: Vector3
+    pitch_rad: float
+    yaw_rad: float
+
+
+class JobInfo(Wire):
+    id: str
+    name: str
+    detail: str = ""
+    state: Literal["running", "succeeded", "failed", "cancelled"]
+    progress: float
+    message: str
+    started_s: float
+    finished_s: float | None = None
+    result: Any = None
+
+
+class JobResponse(Wire):
+    job: JobInfo | None
+
+
+class Status(Wire):
+    state: Literal["idle", "calibrate", "teach", "repeat", "click_grab", "click_drop", "auto_sort", "estop", "fault"]
+    detail: str
+    joints_rad: list[float]
+    joint_names: list[str]
+    gripper: GripperStatus
+    gripper_pose: GripperPose
+    moving: bool
+    calibrated: bool
+    backend: Literal["sim", "real"]
+    controller: Literal["ui", "api"] | None
+    job: JobInfo | None
+    allowed_commands: list[str]
+    time_s: float
+
+
+class Detection(Wire):
+    id: int
+    color: str | None
+    size: str | None
+    position_m: Vector3 = Field(description="top face centre, world frame")
+    yaw_rad: float
+    height_m: float
+    stack_level: int
+    center_px: list[float]
+    is_cube: bool
+    occluded: bool
+    aruco_id: int | None = None
+    destination: Any = None
+
+
+class DetectionsResponse(Wire):
+    data: list[Detection]
+    count: int
+    time_s: float
+    frame_sequence: int
+
+
+class TagInfo(Wire):
+    id: int
+    center_px: list[float]
+    corners_px: list[list[float]]
+
+
+class CalibrationInfo(Wire):
+    calibrated: bool
+    reprojection_error_px: float | None = None
+    camera_position_m: Vector3 | None = None
+    T_world_camera: list[list[float]] | None = None
+    K: list[list[float]] | None = None
+    dist: list[float] | None = None
+    width: int | None = None
+    height: int | None = None
+    depth_check_error_m: float | None = None
+    grid_points_px: list[list[float]] | None = None
+    tags: list[TagInfo] | None = None
+    time: float | None = None
+
+
+class PixelToWorldResponse(Wire):
+    position_m: Vector3
+    on: Literal["board", "depth"]
+
+
+class WaypointInfo(Wire):
+    joints_rad: list[float]
+    gripper: Literal["grasp", "release"]
+
+
+class ProgramInfo(Wire):
+    id: int
+    name: str
+    created_s: float
+    waypoints: list[WaypointInfo]
+
+
+class ProgramsResponse(Wire):
+    data: list[ProgramInfo]
+    count: int
+
+
+# Websocket messages ------------------------------------------------------------------------------
+
+
+class FrameHeader(Wire):
+    """Header of a binary frame: [uint32 LE header length N][N bytes of this JSON][JPEG bytes]."""
+
+    type: Literal["frame"] = "frame"
+    seq: int
+    capture_time_s: float = Field(description="time.time() at capture")
+    width: int
+    height: int
+    view: View
+
+
+class TelemetryMessage(Status):
+    type: Literal["telemetry"] = "telemetry"
+    detections: list[Detection]
+
+
+class EventMessage(Wire):
+    type: Literal["event"] = "event"
+    level: Literal["info", "warn", "error"]
+    message: str
+    time_s: float
+
+
+class CalibrationMessage(CalibrationInfo):
+    type: Literal["calibration"] = "calibration"
+
+
+class HelloMessage(Wire):
+    type: Literal["hello"] = "hello"
+    server_time_s: float
+    can_control: bool
+    backend: Literal["sim", "real"]
+
+
+class AckMessage(Request):
+    type: Literal["ack"]
+    seq: int
+
+
+class ViewMessage(Request):
+    type: Literal["view"]
+    view: View = "color"
+    layers: list[Layer] = []
+
+
+class CommandMessage(Request):
+    type: Literal["command"]
+    name: Literal["estop", "reset", "cancel"]
+
+
+WIRE_MODELS: tuple[type[BaseModel], ...] = (
+    ErrorBody,
+    ErrorResponse,
+    GripperStatus,
+    GripperPose,
+    JobInfo,
+    JobResponse,
+    Status,
+    Detection,
+    DetectionsResponse,
+    TagInfo,
+    CalibrationInfo,
+    PixelToWorldResponse,
+    WaypointInfo,
+    ProgramInfo,
+    ProgramsResponse,
+    JointsRequest,
+    PoseRequest,
+    TorqueRequest,
+    GripperRequest,
+    PixelRequest,
+    TargetRequest,
+    TeachStopRequest,
+    RepeatRequest,
+    SceneRequest,
+    FrameHeader,
+    TelemetryMessage,
+    EventMessage,
+    CalibrationMessage,
+    HelloMessage,
+    AckMessage,
+    ViewMessage,
+    CommandMessage,
+)

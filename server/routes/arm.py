@@ -1,0 +1,48 @@
+"""Manual arm and gripper commands. `?wait=true` blocks until the motion ends."""
+
+from __future__ import annotations
+
+from fastapi import APIRouter
+
+from server.deps import ControlAuth, StationDep
+from server.models import GripperRequest, JointsRequest, PoseRequest, Status, TorqueRequest
+
+router = APIRouter(prefix="/api", tags=["arm"])
+
+
+@router.post("/arm/home", response_model=Status)
+def post_home(station: StationDep, controller: ControlAuth, wait: bool = False) -> dict:
+    station.home(wait=wait, source=controller)
+    return station.status()
+
+
+@router.post("/arm/sleep", response_model=Status)
+def post_sleep(station: StationDep, controller: ControlAuth, wait: bool = False) -> dict:
+    station.sleep(wait=wait, source=controller)
+    return station.status()
+
+
+@router.post("/arm/joints", response_model=Status)
+def post_joints(body: JointsRequest, station: StationDep, controller: ControlAuth, wait: bool = False) -> dict:
+    """Joint move (radians); out-of-limit or malformed → 422 and nothing moves."""
+    station.move_joints(body.q_rad, body.moving_time_s, wait=wait, source=controller)
+    return station.status()
+
+
+@router.post("/arm/pose", response_model=Status)
+def post_pose(body: PoseRequest, station: StationDep, controller: ControlAuth, wait: bool = False) -> dict:
+    """Move the gripper point to a world position; unreachable → 422 'unreachable' and nothing moves."""
+    station.move_to(body.position_m, body.pitch_rad, body.yaw_rad, body.moving_time_s, wait=wait, source=controller)
+    return station.status()
+
+
+@router.post("/arm/torque", response_model=Status)
+def post_torque(body: TorqueRequest, station: StationDep, controller: ControlAuth) -> dict:
+    station.set_torque(body.enabled, source=controller)
+    return station.status()
+
+
+@router.post("/gripper", response_model=Status)
+def post_gripper(body: GripperRequest, station: StationDep, controller: ControlAuth, wait: bool = True) -> dict:
+    station.gripper_command(body.action, wait=wait, source=controller)
+    return station.status()

@@ -1,0 +1,60 @@
+"""Jobs: click-grab and click-drop (202 + job, or the final job with ?wait=true), current job, cancel."""
+
+from __future__ import annotations
+
+from fastapi import APIRouter
+from fastapi.responses import JSONResponse
+
+from armlab.station.jobs import Job
+from server.deps import ControlAuth, StationDep
+from server.models import JobResponse, TargetRequest
+
+router = APIRouter(prefix="/api", tags=["jobs"])
+
+JOB_WAIT_TIMEOUT_S = 300.0
+
+
+def job_response(job: Job, wait: bool) -> JSONResponse:
+    """202 {job} at once, or (wait) 200 {job} once it has ended."""
+    if wait:
+        job.wait(JOB_WAIT_TIMEOUT_S)
+        return JSONResponse({"job": job.to_dict()}, status_code=200)
+    return JSONResponse({"job": job.to_dict()}, status_code=202)
+
+
+def _target(body: TargetRequest) -> dict:
+    if body.position_m is not None:
+        return {"position_m": body.position_m}
+    return {"pixel": (body.u, body.v)}
+
+
+@router.post("/grab", response_model=JobResponse, status_code=202)
+def post_grab(body: TargetRequest, station: StationDep, controller: ControlAuth, wait: bool = False) -> JSONResponse:
+    """Grab the detected block under the target (centre, top, yaw), else at the target point."""
+    return job_response(station.grab(**_target(body), source=controller), wait)
+
+
+@router.post("/drop", response_model=JobResponse, status_code=202)
+def post_drop(body: TargetRequest, station: StationDep, controller: ControlAuth, wait: bool = False) -> JSONResponse:
+    """Place the held block at the target, on the board or on top of the block/stack there."""
+    return job_response(station.drop(**_target(body), source=controller), wait)
+
+
+@router.get("/jobs/current", response_model=JobResponse)
+def read_current_job(station: StationDep) -> dict:
+    """The running job, else the last finished one, else null."""
+    job = station.current_job()
+    return {"job": job.to_dict() if job is not None else None}
+
+
+@router.get("/jobs/history")
+def read_job_history(station: StationDep, limit: int = 20) -> dict:
+    """Recent job outcomes from the database."""
+    data = station.store.job_results(max(1, min(limit, 200)))
+    return {"data": data, "count": len(data)}
+
+
+@router.post("/jobs/cancel", response_model=JobResponse)
+def post_cancel(station: StationDep, controller: ControlAuth) -> dict:
+    job = station.cancel_job(source=controller)
+    return {"job": job.to_dict()}

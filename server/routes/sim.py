@@ -1,0 +1,52 @@
+"""Simulation-only: set the scene, read ground truth (for tests and scoring, never for perception)."""
+
+from __future__ import annotations
+
+from fastapi import APIRouter
+
+from armlab.station.core import Station
+from server.deps import ControlAuth, StationDep
+from server.errors import ApiError
+from server.models import SceneRequest
+
+router = APIRouter(prefix="/api/sim", tags=["sim"])
+
+
+def _cell(station: Station):
+    if station.sim is None:
+        raise ApiError(404, "not_found", "the simulation API exists only when the backend is the simulation")
+    return station.sim
+
+
+def _plain(value):
+    """numpy arrays and scalars → JSON-ready lists and floats."""
+    if hasattr(value, "tolist"):
+        return value.tolist()
+    if isinstance(value, dict):
+        return {key: _plain(item) for key, item in value.items()}
+    if isinstance(value, (list, tuple)):
+        return [_plain(item) for item in value]
+    return value
+
+
+@router.post("/scene")
+def post_scene(body: SceneRequest, station: StationDep, controller: ControlAuth) -> dict:
+    """Replace the objects: a generated event scene (event, level, seed) or explicit objects."""
+    from armlab.scene import Scene, generate_scene
+
+    cell = _cell(station)
+    station.allowed_or_raise("set_scene")
+    if body.objects is not None:
+        scene = Scene.from_dict({"objects": body.objects})
+    else:
+        scene = generate_scene(body.event, level=body.level or 1, seed=body.seed or 0)
+    cell.set_scene(scene)
+    station.held_block = None
+    station.events.add("info", f"scene set: {body.event or 'custom'} ({len(scene.objects)} objects)")
+    return {"objects": len(scene.objects), "event": body.event, "level": body.level, "seed": body.seed}
+
+
+@router.get("/truth")
+def read_truth(station: StationDep) -> dict:
+    """Ground truth: object poses, camera pose and intrinsics, gripper contacts."""
+    return _plain(_cell(station).truth())

@@ -1,0 +1,278 @@
+"""The websocket stream: one encoder thread, per-client "newest value wins" slots, ack flow control.
+
+The FrameEncoder thread encodes each new camera frame once per distinct ViewKey that some client
+watches and hands the result to the StreamHub on the event loop. Each client has one sender task that
+wakes on news and sends the newest telemetry, new events, the newest calibration and — only once the
+client acknowledged the previous frame — the newest frame of its view. Nothing queues per client, so
+a slow or stalled client holds at most one frame in flight and never slows anyone else.
+"""
+
+from __future__ import annotations
+
+import asyncio
+import json
+import logging
+import struct
+import threading
+import time
+from collections import Counter
+from dataclasses import dataclass, field
+
+from starlette.websockets import WebSocket, WebSocketDisconnect
+
+from armlab.station.core import Station
+from armlab.station.perception import _Worker
+from server.views import ViewKey, compose_view, encode_jpeg
+
+log = logging.getLogger(__name__)
+
+
+@dataclass(frozen=True)
+class EncodedFrame:
+    """A ready-to-send binary message: [uint32 LE header length][JSON header][JPEG]."""
+
+    key: ViewKey
+    seq: int
+    capture_time_s: float
+    message: bytes
+
+
+def pack_frame(header: dict, jpeg: bytes) -> bytes:
+    header_bytes = json.dumps(header, separators=(",", ":")).encode()
+    return struct.pack("<I", len(header_bytes)) + header_bytes + jpeg
+
+
+def unpack_frame(message: bytes) -> tuple[dict, bytes]:
+    """(header, jpeg) of a binary frame message (used by the Python client and tests)."""
+    (length,) = struct.unpack_from("<I", message, 0)
+    return json.loads(message[4 : 4 + length]), message[4 + length :]
+
+
+class FrameEncoder(_Worker):
+    """Encodes each new frame once per watched ViewKey; `on_frame(EncodedFrame)` gets the result."""
+
+    name = "stream-encoder"
+
+    def __init__(self, station: Station, on_frame, quality: int) -> None:
+        super().__init__()
+        self.station = station
+        self.on_frame = on_frame
+        self.quality = quality
+        self._watched: Counter[ViewKey] = Counter()
+        self._watch_lock = threading.Lock()
+        self._changed = threading.Event()
+
+    def watch(self, key: ViewKey) -> None:
+        with self._watch_lock:
+            self._watched[key] += 1
+        self._changed.set()
+
+    def unwatch(self, key: ViewKey) -> None:
+        with self._watch_lock:
+            self._watched[key] -= 1
+            if self._watched[key] <= 0:
+                del self._watched[key]
+
+    def watched(self) -> list[ViewKey]:
+        with self._watch_lock:
+            return list(self._watched)
+
+    def _run(self) -> None:
+        version = 0
+        while not self._stop.is_set():
+            frame, version = self.station.frames.wait_newer(version, timeout_s=0.5)
+            keys = self.watched()
+            if frame is None or not keys:
+                continue
+            perception, _ = self.station.perception.get()
+            calibration = self.station.calibration
+            for key in keys:
+                image = compose_view(frame, key, perception, calibration, self.station.perception_config)
+                header = {
+                    "type": "frame",
+                    "seq": int(frame.sequence),
+                    "capture_time_s": float(frame.timestamp_s),
+                    "width": int(image.shape[1]),
+                    "height": int(image.shape[0]),
+                    "view": key.view,
+                }
+                message = pack_frame(header, encode_jpeg(image, self.quality))
+                self.on_frame(EncodedFrame(key, int(frame.sequence), float(frame.timestamp_s), message))
+
+
+@dataclass(eq=False)
+class ClientSession:
+    """One websocket client's slots: what it watches, what it was last sent, what it has acknowledged."""
+
+    websocket: WebSocket
+    can_control: bool
+    key: ViewKey = field(default_factory=ViewKey)
+    wake: asyncio.Event = field(default_factory=asyncio.Event)
+    awaiting_ack: int | None = None
+    last_frame_seq: int = -1
+    telemetry_version: int = 0
+    calibration_version: int = 0
+    event_seq: int = 0
+    frames_sent: int = 0
+
+
+class StreamHub:
+    """Lives on the event loop; threads hand it news through call_soon_threadsafe."""
+
+    def __init__(self, station: Station, jpeg_quality: int) -> None:
+        self.station = station
+        self.loop: asyncio.AbstractEventLoop | None = None
+        self.clients: set[ClientSession] = set()
+        self.frames: dict[ViewKey, EncodedFrame] = {}
+        self.telemetry_text: str | None = None
+        self.telemetry_version = 0
+        self.calibration_text: str | None = None
+        self.calibration_version = 0
+        self.encoder = FrameEncoder(station, self._from_thread(self._on_frame), jpeg_quality)
+
+    def _from_thread(self, callback):
+        def forward(*args) -> None:
+            loop = self.loop
+            if loop is not None and not loop.is_closed():
+                try:
+                    loop.call_soon_threadsafe(callback, *args)
+                except RuntimeError:  # loop closing
+                    pass
+
+        return forward
+
+    def start(self) -> None:
+        self.loop = asyncio.get_running_loop()
+        telemetry = self._from_thread(self._on_telemetry)
+        events = self._from_thread(self._wake_all)
+        calibration = self._from_thread(self._on_calibration)
+        self._listeners = (
+            (self.station.telemetry, lambda value, version: telemetry(json.dumps({"type": "telemetry", **value}))),
+            (self.station.events, lambda event: events()),
+            (self.station.calibration_slot, lambda value, version: calibration(json.dumps({"type": "calibration", **value}))),
+        )
+        for source, listener in self._listeners:
+            source.add_listener(listener)
+        self.encoder.start()
+
+    def stop(self) -> None:
+        for source, listener in getattr(self, "_listeners", ()):
+            source.remove_listener(listener)
+        self._listeners = ()
+        self.encoder.stop()
+        self.loop = None
+
+    # Called on the loop ---------------------------------------------------------------------------
+
+    def _on_frame(self, encoded: EncodedFrame) -> None:
+        self.frames[encoded.key] = encoded
+        for client in self.clients:
+            if client.key == encoded.key:
+                client.wake.set()
+
+    def _on_telemetry(self, text: str) -> None:
+        self.telemetry_text, self.telemetry_version = text, self.telemetry_version + 1
+        self._wake_all()
+
+    def _on_calibration(self, text: str) -> None:
+        self.calibration_text, self.calibration_version = text, self.calibration_version + 1
+        self._wake_all()
+
+    def _wake_all(self) -> None:
+        for client in self.clients:
+            client.wake.set()
+
+    # One client -----------------------------------------------------------------------------------
+
+    async def serve(self, websocket: WebSocket, can_control: bool) -> None:
+        client = ClientSession(websocket, can_control, event_seq=self.station.events.last_seq)
+        hello = {"type": "hello", "server_time_s": time.time(), "can_control": can_control, "backend": self.station.backend}
+        await websocket.send_text(json.dumps(hello))
+        calibration = self.station.calibration_info
+        await websocket.send_text(json.dumps({"type": "calibration", **calibration}))
+        client.calibration_version = self.calibration_version
+        self.clients.add(client)
+        self.encoder.watch(client.key)
+        sender = asyncio.create_task(self._send_loop(client))
+        try:
+            await self._receive_loop(client)
+        except WebSocketDisconnect:
+            pass
+        finally:
+            sender.cancel()
+            self.clients.discard(client)
+            self.encoder.unwatch(client.key)
+            try:
+                await sender
+            except (asyncio.CancelledError, Exception):  # noqa: BLE001 - the client is gone either way
+                pass
+
+    async def _send_loop(self, client: ClientSession) -> None:
+        websocket = client.websocket
+        while True:
+            await client.wake.wait()
+            client.wake.clear()
+            if self.telemetry_version > client.telemetry_version and self.telemetry_text is not None:
+                client.telemetry_version = self.telemetry_version
+                await websocket.send_text(self.telemetry_text)
+            for event in self.station.events.since(client.event_seq):
+                client.event_seq = event["seq"]
+                await websocket.send_text(json.dumps({"type": "event", **{k: v for k, v in event.items() if k != "seq"}}))
+            if self.calibration_version > client.calibration_version and self.calibration_text is not None:
+                client.calibration_version = self.calibration_version
+                await websocket.send_text(self.calibration_text)
+            encoded = self.frames.get(client.key)
+            if client.awaiting_ack is None and encoded is not None and encoded.seq != client.last_frame_seq:
+                client.awaiting_ack = client.last_frame_seq = encoded.seq
+                client.frames_sent += 1
+                await websocket.send_bytes(encoded.message)
+
+    async def _receive_loop(self, client: ClientSession) -> None:
+        while True:
+            text = await client.websocket.receive_text()
+            try:
+                message = json.loads(text)
+                kind = message.get("type") if isinstance(message, dict) else None
+            except json.JSONDecodeError:
+                kind, message = None, None
+            if kind == "ack":
+                if message.get("seq") == client.awaiting_ack:
+                    client.awaiting_ack = None
+                    client.wake.set()
+            elif kind == "view":
+                await self._change_view(client, message)
+            elif kind == "command":
+                await self._command(client, message)
+            else:
+                await self._reply_error(client, f"unknown message: expected type ack, view or command, got {text[:80]!r}")
+
+    async def _change_view(self, client: ClientSession, message: dict) -> None:
+        try:
+            key = ViewKey.make(message.get("view", "color"), message.get("layers") or [])
+        except (ValueError, TypeError) as error:
+            await self._reply_error(client, str(error))
+            return
+        if key != client.key:
+            self.encoder.watch(key)
+            self.encoder.unwatch(client.key)
+            client.key = key
+            client.awaiting_ack = None  # the old view's frame needs no ack any more
+            client.last_frame_seq = -1
+            client.wake.set()
+
+    async def _command(self, client: ClientSession, message: dict) -> None:
+        name = message.get("name")
+        if not client.can_control:
+            await self._reply_error(client, f"command '{name}' refused: this connection is view-only (no control token)")
+            return
+        actions = {"estop": self.station.estop, "reset": self.station.reset, "cancel": self.station.cancel_job}
+        if name not in actions:
+            await self._reply_error(client, f"unknown command {name!r}; the websocket accepts {', '.join(actions)}")
+            return
+        try:
+            await asyncio.to_thread(actions[name], "ui")
+        except Exception as error:  # noqa: BLE001 - reported to the client as an event
+            await self._reply_error(client, str(error))
+
+    async def _reply_error(self, client: ClientSession, message: str) -> None:
+        await client.websocket.send_text(json.dumps({"type": "event", "level": "error", "message": message, "time_s": time.time()}))
