@@ -1,0 +1,124 @@
+"""Straight vertical Cartesian segments of the gripper point (approach and lift), by IK at each sample.
+
+The gripper point moves along a vertical line at fixed x, y with a trapezoidal speed profile
+(speed/acceleration limits in m/s, m/s²), keeping its pitch and yaw; each sample is solved by IK
+seeded with the previous one. If a joint would exceed its velocity or acceleration limit (near a
+singularity), the segment is slowed down and re-solved. Pure: no device calls.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from armlab.devices.arm import JointTrajectory
+from armlab.motion.trajectory import (
+    DEFAULT_RATE_HZ,
+    LIMIT_MARGIN,
+    minimum_time,
+    retime_path,
+    sample_times,
+    trapezoid_profile,
+)
+
+# Largest joint change between two 100 Hz samples that is still one continuous IK branch (radians).
+MAX_SAMPLE_STEP_RAD = 0.25
+_MAX_RETIMES = 6
+
+
+class DiscontinuousPath(ValueError):
+    """IK switched branch along a Cartesian segment (the joints would jump); the message names the joint."""
+
+
+def gripper_position_m(arm, q_rad) -> np.ndarray:
+    """World position (3,) of the gripper point at q."""
+    return np.asarray(arm.fk(np.asarray(q_rad, float)), float)[:3, 3]
+
+
+def gripper_pitch_rad(arm, q_rad) -> float:
+    """Pitch of the approach axis (gripper x axis) below the horizontal at q; π/2 = pointing straight down."""
+    approach = np.asarray(arm.fk(np.asarray(q_rad, float)), float)[:3, 0]
+    return float(math.asin(max(-1.0, min(1.0, -approach[2]))))
+
+
+def vertical_profile_duration(distance_m: float, speed_m_s: float, accel_m_s2: float) -> float:
+    """Duration of a rest-to-rest trapezoid over distance_m with the given speed and acceleration."""
+    if distance_m <= 0.0:
+        return 0.0
+    return minimum_time(speed_m_s / distance_m, accel_m_s2 / distance_m)[0]
+
+
+def _solve_line(arm, q_start, start_m, z_goal_m, s, pitch, yaw) -> np.ndarray:
+    """IK along the line start_m → (x, y, z_goal) at path fractions s (N,), seeded sample to sample."""
+    positions = np.empty((s.size, len(q_start)))
+    positions[0] = q_start
+    previous = np.asarray(q_start, float)
+    names = getattr(arm, "joint_names", None)
+    for index in range(1, s.size):
+        target = np.array([start_m[0], start_m[1], start_m[2] + s[index] * (z_goal_m - start_m[2])])
+        q = np.asarray(arm.ik(target, pitch=pitch, yaw=yaw, q_seed=previous), float)
+        jump = np.abs(q - previous)
+        worst = int(np.argmax(jump))
+        if jump[worst] > MAX_SAMPLE_STEP_RAD:
+            joint = names[worst] if names is not None else f"joint {worst}"
+            raise DiscontinuousPath(
+                f"vertical segment to z = {z_goal_m * 1000:.1f} mm: {joint} jumps {jump[worst]:.3f} rad at "
+                f"z = {target[2] * 1000:.1f} mm (IK changed branch)"
+            )
+        positions[index] = q
+        previous = q
+    return positions
+
+
+def plan_vertical_segment(
+    arm,
+    q_start_rad,
+    z_goal_m: float,
+    pitch_rad: float | None = None,
+    yaw_rad: float | None = None,
+    speed_m_s: float = 0.1,
+    accel_m_s2: float = 0.4,
+    rate_hz: float = DEFAULT_RATE_HZ,
+) -> JointTrajectory:
+    """Joint trajectory moving the gripper point straight up/down from fk(q_start) to height z_goal_m.
+
+    pitch_rad: approach pitch below horizontal to hold (None: the start pose's). yaw_rad: the world yaw
+    passed to IK for the wrist (None: IK keeps the seed's wrist). The first sample is q_start exactly.
+    Raises ValueError for bad input, armlab.kinematics.Unreachable if a point of the line cannot be
+    reached, DiscontinuousPath if IK would jump between branches.
+    """
+    q_start = np.asarray(q_start_rad, dtype=float)
+    if q_start.shape != (int(arm.dof),) or not np.all(np.isfinite(q_start)):
+        raise ValueError(f"q_start must be {int(arm.dof)} finite joint angles, got {q_start.tolist()}")
+    for name, value in (("z_goal_m", z_goal_m), ("speed_m_s", speed_m_s), ("accel_m_s2", accel_m_s2)):
+        if not math.isfinite(value):
+            raise ValueError(f"{name} must be finite, got {value}")
+    if speed_m_s <= 0 or accel_m_s2 <= 0:
+        raise ValueError(f"speed_m_s and accel_m_s2 must be > 0, got {speed_m_s}, {accel_m_s2}")
+    start_m = gripper_position_m(arm, q_start)
+    pitch = gripper_pitch_rad(arm, q_start) if pitch_rad is None else float(pitch_rad)
+    distance_m = abs(z_goal_m - start_m[2])
+    duration_s = vertical_profile_duration(distance_m, speed_m_s, accel_m_s2)
+    if duration_s == 0.0:
+        times = sample_times(0.0, rate_hz)
+        return JointTrajectory(times_s=times, positions_rad=np.repeat(q_start[None, :], times.size, axis=0))
+
+    velocity_limit = np.asarray(arm.velocity_limit_rad_s, float) * LIMIT_MARGIN
+    accel_limit = np.asarray(arm.accel_limit_rad_s2, float) * LIMIT_MARGIN
+    ramp_s = minimum_time(speed_m_s / distance_m, accel_m_s2 / distance_m)[1]
+    for _ in range(_MAX_RETIMES):
+        times = sample_times(duration_s, rate_hz)
+        s = trapezoid_profile(times, duration_s, ramp_s)
+        positions = _solve_line(arm, q_start, start_m, z_goal_m, s, pitch, yaw_rad)
+        slow_down = retime_path(positions, times, velocity_limit, accel_limit)
+        if slow_down <= 1.0:
+            return JointTrajectory(times_s=times, positions_rad=positions)
+        # Slowing by k scales velocity by 1/k and acceleration by 1/k²: stretch both phases.
+        factor = slow_down * 1.02
+        duration_s *= factor
+        ramp_s *= factor
+    raise ValueError(
+        f"vertical segment to z = {z_goal_m * 1000:.1f} mm: joints still too fast after {_MAX_RETIMES} slow-downs "
+        f"(too close to a singularity)"
+    )
