@@ -1,4 +1,4 @@
-"""`armlab serve`: start the station and its web server."""
+"""`armlab serve`: start the station (on the simulation by default) and its web server."""
 
 from __future__ import annotations
 
@@ -10,14 +10,48 @@ def register(subparsers: argparse._SubParsersAction) -> None:
     parser.add_argument("--host", default="127.0.0.1", help="bind address (default 127.0.0.1: this machine only)")
     parser.add_argument("--port", type=int, default=8000)
     parser.add_argument("--token", default=None, help="control token (default: $ARMLAB_TOKEN, else generated)")
+    parser.add_argument("--config", default=None, help="station config file (default config/station.yaml)")
+    parser.add_argument("--db", default=None, help="SQLite file for programs/calibrations/jobs (default from the config)")
+    parser.add_argument("--seed", type=int, default=None, help="simulation seed (camera mount error, noise)")
+    parser.add_argument("--event", default=None, help="starting scene: pick_sort, pick_stack, line_up, stack_high, to_the_sky")
+    parser.add_argument("--level", type=int, default=None, help="starting scene level (1-3)")
+    parser.add_argument("--scene-seed", type=int, default=None, help="starting scene seed")
+    parser.add_argument("--log-level", default="warning", choices=("debug", "info", "warning", "error"))
     parser.set_defaults(func=run_serve)
 
 
+def build_station_config(args: argparse.Namespace):
+    """config/station.yaml (or --config) with the command-line overrides applied."""
+    from armlab.station import load_station_config
+
+    config = load_station_config(args.config)
+    sim_updates = {
+        key: value
+        for key, value in (("seed", args.seed), ("event", args.event), ("level", args.level), ("scene_seed", args.scene_seed))
+        if value is not None
+    }
+    if sim_updates:
+        config = config.model_validate({**config.model_dump(), "sim": {**config.sim.model_dump(), **sim_updates}})
+    return config
+
+
 def run_serve(args: argparse.Namespace) -> int:
+    import os
+
+    os.environ.setdefault("MUJOCO_GL", "egl")
     import uvicorn
 
+    from armlab.station.factory import make_sim_station
     from server.app import create_app
+    from server.auth import open_url, resolve_token
 
-    app = create_app()
-    uvicorn.run(app, host=args.host, port=args.port, log_level="info")
+    config = build_station_config(args)
+    token, generated = resolve_token(args.token)
+    app = create_app(station_factory=lambda: make_sim_station(config, db_path=args.db), token=token)
+    url = open_url(args.host, args.port, token)
+    origin = "generated" if generated else "given"
+    print(f"ArmLab control station ({origin} control token). Open:\n    {url}\n", flush=True)
+    if args.host not in ("127.0.0.1", "localhost", "::1"):
+        print(f"warning: listening on {args.host}: anyone who can reach it can watch; the token guards control", flush=True)
+    uvicorn.run(app, host=args.host, port=args.port, log_level=args.log_level, ws_per_message_deflate=False)
     return 0

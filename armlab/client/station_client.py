@@ -1,0 +1,261 @@
+"""StationClient: typed Python methods over the station's REST API and websocket stream.
+
+    from armlab.client import StationClient
+    station = StationClient("http://127.0.0.1:8000", token="...")
+    station.home(); station.calibrate(); station.grab(position_m=[0.1, 0.2, 0.038]); station.drop(u=640, v=400)
+
+Errors come back as StationError with the server's code ('wrong_state', 'unreachable', ...), message
+and, for a wrong state, the allowed commands.
+"""
+
+from __future__ import annotations
+
+import json
+import os
+import time
+from collections.abc import Iterator, Sequence
+from dataclasses import dataclass, field
+from urllib.parse import urlencode, urlsplit, urlunsplit
+
+import httpx
+
+
+class StationError(RuntimeError):
+    """An error answer of the station: HTTP status, wire code, the human sentence, allowed commands."""
+
+    def __init__(self, status_code: int, code: str, message: str, allowed: list[str] | None = None) -> None:
+        super().__init__(f"{code}: {message}")
+        self.status_code, self.code, self.message, self.allowed = status_code, code, message, allowed or []
+
+
+@dataclass(frozen=True)
+class StreamFrame:
+    """One streamed frame: its header (seq, capture_time_s, width, height, view) and JPEG bytes."""
+
+    header: dict
+    jpeg: bytes
+    received_time_s: float = field(default_factory=time.time)
+
+    @property
+    def seq(self) -> int:
+        return int(self.header["seq"])
+
+    @property
+    def capture_time_s(self) -> float:
+        return float(self.header["capture_time_s"])
+
+    def decode(self):
+        """The image as a BGR numpy array (needs OpenCV)."""
+        import cv2
+        import numpy as np
+
+        return cv2.imdecode(np.frombuffer(self.jpeg, np.uint8), cv2.IMREAD_COLOR)
+
+
+def unpack_frame(message: bytes) -> tuple[dict, bytes]:
+    """[uint32 LE header length N][N bytes JSON header][JPEG] → (header, jpeg)."""
+    length = int.from_bytes(message[:4], "little")
+    return json.loads(message[4 : 4 + length]), message[4 + length :]
+
+
+def _floats(values: Sequence[float], name: str) -> list[float]:
+    try:
+        return [float(value) for value in values]
+    except (TypeError, ValueError) as error:
+        raise ValueError(f"{name} must be a list of numbers, got {values!r}") from error
+
+
+class StationClient:
+    """A script's handle on a running station. token: the control token (default $ARMLAB_TOKEN)."""
+
+    def __init__(self, url: str = "http://127.0.0.1:8000", token: str | None = None, timeout_s: float = 30.0) -> None:
+        self.url = url.rstrip("/")
+        self.token = token if token is not None else os.environ.get("ARMLAB_TOKEN")
+        headers = {"Authorization": f"Bearer {self.token}"} if self.token else {}
+        self._http = httpx.Client(base_url=self.url, headers=headers, timeout=timeout_s)
+
+    def close(self) -> None:
+        self._http.close()
+
+    def __enter__(self) -> "StationClient":
+        return self
+
+    def __exit__(self, *exc) -> None:
+        self.close()
+
+    # Transport ------------------------------------------------------------------------------------
+
+    def _request(self, method: str, path: str, body: dict | None = None, params: dict | None = None, timeout_s=None):
+        kwargs = {"params": params}
+        if body is not None:
+            kwargs["json"] = body
+        if timeout_s is not None:
+            kwargs["timeout"] = timeout_s
+        response = self._http.request(method, path, **kwargs)
+        if response.status_code >= 400:
+            try:
+                error = response.json()["error"]
+            except (ValueError, KeyError, TypeError):
+                raise StationError(response.status_code, "http", response.text[:200]) from None
+            raise StationError(response.status_code, error.get("code", "error"), error.get("message", ""), error.get("allowed"))
+        if response.headers.get("content-type", "").startswith("application/json"):
+            return response.json()
+        return response.content
+
+    def _get(self, path: str, params: dict | None = None):
+        return self._request("GET", path, params=params)
+
+    def _post(self, path: str, body: dict | None = None, wait: bool | None = None, timeout_s: float | None = None):
+        params = {"wait": "true"} if wait else None
+        return self._request("POST", path, body, params, timeout_s=timeout_s if wait else None)
+
+    # Status and safety ----------------------------------------------------------------------------
+
+    def health(self) -> dict:
+        return self._get("/api/health")
+
+    def status(self) -> dict:
+        return self._get("/api/status")
+
+    def estop(self) -> dict:
+        return self._post("/api/estop")
+
+    def reset(self) -> dict:
+        return self._post("/api/reset")
+
+    # Arm and gripper ------------------------------------------------------------------------------
+
+    def home(self, wait: bool = True) -> dict:
+        return self._post("/api/arm/home", wait=wait, timeout_s=60.0)
+
+    def sleep(self, wait: bool = True) -> dict:
+        return self._post("/api/arm/sleep", wait=wait, timeout_s=60.0)
+
+    def move_joints(self, q_rad: Sequence[float], moving_time_s: float | None = None, wait: bool = True) -> dict:
+        body = {"q_rad": _floats(q_rad, "q_rad"), "moving_time_s": moving_time_s}
+        return self._post("/api/arm/joints", body, wait=wait, timeout_s=60.0)
+
+    def move_to(
+        self,
+        position_m: Sequence[float],
+        pitch_rad: float | None = None,
+        yaw_rad: float | None = None,
+        moving_time_s: float | None = None,
+        wait: bool = True,
+    ) -> dict:
+        body = {"position_m": _floats(position_m, "position_m"), "pitch_rad": pitch_rad, "yaw_rad": yaw_rad, "moving_time_s": moving_time_s}
+        return self._post("/api/arm/pose", body, wait=wait, timeout_s=60.0)
+
+    def torque(self, enabled: bool) -> dict:
+        return self._post("/api/arm/torque", {"enabled": bool(enabled)})
+
+    def grasp(self) -> dict:
+        return self._post("/api/gripper", {"action": "grasp"})
+
+    def release(self) -> dict:
+        return self._post("/api/gripper", {"action": "release"})
+
+    # Perception -----------------------------------------------------------------------------------
+
+    def calibrate(self, wait: bool = True) -> dict:
+        """Run the calibration job; with wait, the finished job (check job['state'] == 'succeeded')."""
+        return self._post("/api/calibrate", wait=wait, timeout_s=120.0)["job"]
+
+    def calibration(self) -> dict:
+        return self._get("/api/calibration")
+
+    def detections(self) -> list[dict]:
+        return self._get("/api/detections")["data"]
+
+    def pixel_to_world(self, u: float, v: float) -> dict:
+        return self._post("/api/pixel-to-world", {"u": float(u), "v": float(v)})
+
+    def frame_jpeg(self, view: str = "color", layers: Sequence[str] = ()) -> bytes:
+        return self._get("/api/frame.jpg", {"view": view, "layers": ",".join(layers)})
+
+    # Jobs -----------------------------------------------------------------------------------------
+
+    @staticmethod
+    def _target(position_m, u, v) -> dict:
+        if position_m is not None:
+            return {"position_m": _floats(position_m, "position_m")}
+        return {"u": u, "v": v}
+
+    def grab(self, position_m: Sequence[float] | None = None, u: float | None = None, v: float | None = None, wait: bool = True) -> dict:
+        """Grab the block at a world point or under a pixel; returns the job (final with wait)."""
+        return self._post("/api/grab", self._target(position_m, u, v), wait=wait, timeout_s=120.0)["job"]
+
+    def drop(self, position_m: Sequence[float] | None = None, u: float | None = None, v: float | None = None, wait: bool = True) -> dict:
+        return self._post("/api/drop", self._target(position_m, u, v), wait=wait, timeout_s=120.0)["job"]
+
+    def current_job(self) -> dict | None:
+        return self._get("/api/jobs/current")["job"]
+
+    def cancel_job(self) -> dict:
+        return self._post("/api/jobs/cancel")["job"]
+
+    def wait_job(self, timeout_s: float = 120.0, poll_s: float = 0.1) -> dict | None:
+        """Poll until the current job has ended; TimeoutError after timeout_s."""
+        deadline = time.monotonic() + timeout_s
+        while True:
+            job = self.current_job()
+            if job is None or job["state"] != "running":
+                return job
+            if time.monotonic() > deadline:
+                raise TimeoutError(f"job {job['name']} still running after {timeout_s} s")
+            time.sleep(poll_s)
+
+    # Teach and repeat -----------------------------------------------------------------------------
+
+    def teach_start(self) -> dict:
+        return self._post("/api/teach/start")
+
+    def teach_record(self) -> dict:
+        return self._post("/api/teach/record")
+
+    def teach_stop(self, name: str) -> dict:
+        return self._post("/api/teach/stop", {"name": name})
+
+    def programs(self) -> list[dict]:
+        return self._get("/api/programs")["data"]
+
+    def repeat(self, program_id: int, cycles: int = 1, wait: bool = True) -> dict:
+        return self._post(f"/api/programs/{int(program_id)}/repeat", {"cycles": int(cycles)}, wait=wait, timeout_s=600.0)["job"]
+
+    # Simulation -----------------------------------------------------------------------------------
+
+    def set_scene(self, event: str | None = None, level: int = 1, seed: int = 0, objects: list[dict] | None = None) -> dict:
+        body = {"objects": objects} if objects is not None else {"event": event, "level": level, "seed": seed}
+        return self._post("/api/sim/scene", body)
+
+    def truth(self) -> dict:
+        return self._get("/api/sim/truth")
+
+    # Stream ---------------------------------------------------------------------------------------
+
+    def ws_url(self, control: bool = False) -> str:
+        parts = urlsplit(self.url)
+        scheme = "wss" if parts.scheme == "https" else "ws"
+        query = urlencode({"token": self.token}) if control and self.token else ""
+        return urlunsplit((scheme, parts.netloc, "/ws", query, ""))
+
+    def frames(
+        self, view: str = "color", layers: Sequence[str] = (), max_frames: int | None = None, timeout_s: float = 10.0
+    ) -> Iterator[StreamFrame]:
+        """Frames from the websocket, newest first-come: each is acknowledged when the caller asks for the next.
+
+        Telemetry and events arriving in between are skipped (read status() for state).
+        """
+        from websockets.sync.client import connect
+
+        with connect(self.ws_url(), compression=None, max_size=None, open_timeout=timeout_s) as websocket:
+            websocket.send(json.dumps({"type": "view", "view": view, "layers": list(layers)}))
+            count = 0
+            while max_frames is None or count < max_frames:
+                message = websocket.recv(timeout=timeout_s)
+                if isinstance(message, str):
+                    continue
+                header, jpeg = unpack_frame(message)
+                yield StreamFrame(header, jpeg)
+                count += 1
+                websocket.send(json.dumps({"type": "ack", "seq": header["seq"]}))

@@ -1,0 +1,284 @@
+// generated, do not edit: made by `python -m server.gen_wire_types` from server/models.py.
+// The wire protocol between the station server and the browser (SI units; field names carry them).
+// Binary frames: [uint32 little-endian header length N][N bytes UTF-8 JSON FrameHeader][JPEG bytes].
+
+export const STATES = Object.freeze(["idle", "calibrate", "teach", "repeat", "click_grab", "click_drop", "auto_sort", "estop", "fault"]);
+export const COMMANDS = Object.freeze(["estop", "reset", "home", "sleep", "move_joints", "move_to", "torque", "gripper", "calibrate", "grab", "drop", "teach_start", "teach_record", "teach_stop", "repeat", "auto", "cancel", "set_scene"]);
+export const VIEWS = Object.freeze(["color", "depth", "topdown"]);
+export const LAYERS = Object.freeze(["tags", "detections", "grid"]);
+export const ERROR_CODES = Object.freeze(["wrong_state", "unreachable", "unsafe", "invalid", "not_found", "not_calibrated", "unauthorized", "device", "internal"]);
+export const SERVER_MESSAGE_TYPES = Object.freeze(["frame", "telemetry", "event", "calibration", "hello"]);
+export const CLIENT_MESSAGE_TYPES = Object.freeze(["ack", "view", "command"]);
+
+/**
+ * @typedef {Object} AckMessage
+ * @property {"ack"} type
+ * @property {number} seq
+ */
+
+/**
+ * @typedef {Object} CalibrationInfo
+ * @property {boolean} calibrated
+ * @property {(number|null)} [reprojection_error_px]
+ * @property {(Array<number>|null)} [camera_position_m]
+ * @property {(Array<Array<number>>|null)} [T_world_camera]
+ * @property {(Array<Array<number>>|null)} [K]
+ * @property {(Array<number>|null)} [dist]
+ * @property {(number|null)} [width]
+ * @property {(number|null)} [height]
+ * @property {(number|null)} [depth_check_error_m]
+ * @property {(Array<Array<number>>|null)} [grid_points_px]
+ * @property {(Array<TagInfo>|null)} [tags]
+ * @property {(number|null)} [time]
+ */
+
+/**
+ * @typedef {Object} CalibrationMessage
+ * @property {boolean} calibrated
+ * @property {(number|null)} [reprojection_error_px]
+ * @property {(Array<number>|null)} [camera_position_m]
+ * @property {(Array<Array<number>>|null)} [T_world_camera]
+ * @property {(Array<Array<number>>|null)} [K]
+ * @property {(Array<number>|null)} [dist]
+ * @property {(number|null)} [width]
+ * @property {(number|null)} [height]
+ * @property {(number|null)} [depth_check_error_m]
+ * @property {(Array<Array<number>>|null)} [grid_points_px]
+ * @property {(Array<TagInfo>|null)} [tags]
+ * @property {(number|null)} [time]
+ * @property {"calibration"} [type]
+ */
+
+/**
+ * @typedef {Object} CommandMessage
+ * @property {"command"} type
+ * @property {("estop"|"reset"|"cancel")} name
+ */
+
+/**
+ * @typedef {Object} Detection
+ * @property {number} id
+ * @property {(string|null)} color
+ * @property {(string|null)} size
+ * @property {Array<number>} position_m top face centre, world frame
+ * @property {number} yaw_rad
+ * @property {number} height_m
+ * @property {number} stack_level
+ * @property {Array<number>} center_px
+ * @property {boolean} is_cube
+ * @property {boolean} occluded
+ * @property {(number|null)} [aruco_id]
+ * @property {*} [destination]
+ */
+
+/**
+ * @typedef {Object} DetectionsResponse
+ * @property {Array<Detection>} data
+ * @property {number} count
+ * @property {number} time_s
+ * @property {number} frame_sequence
+ */
+
+/**
+ * @typedef {Object} ErrorBody
+ * @property {string} code
+ * @property {string} message
+ * @property {(Array<string>|null)} [allowed]
+ */
+
+/**
+ * @typedef {Object} ErrorResponse
+ * @property {ErrorBody} error
+ */
+
+/**
+ * @typedef {Object} EventMessage
+ * @property {"event"} [type]
+ * @property {("info"|"warn"|"error")} level
+ * @property {string} message
+ * @property {number} time_s
+ */
+
+/**
+ * Header of a binary frame: [uint32 LE header length N][N bytes of this JSON][JPEG bytes].
+ * @typedef {Object} FrameHeader
+ * @property {"frame"} [type]
+ * @property {number} seq
+ * @property {number} capture_time_s time.time() at capture
+ * @property {number} width
+ * @property {number} height
+ * @property {("color"|"depth"|"topdown")} view
+ */
+
+/**
+ * @typedef {Object} GripperPose
+ * @property {Array<number>} position_m
+ * @property {number} pitch_rad
+ * @property {number} yaw_rad
+ */
+
+/**
+ * @typedef {Object} GripperRequest
+ * @property {("grasp"|"release")} action
+ */
+
+/**
+ * @typedef {Object} GripperStatus
+ * @property {number} width_m
+ * @property {boolean} holding
+ * @property {string} command
+ */
+
+/**
+ * @typedef {Object} HelloMessage
+ * @property {"hello"} [type]
+ * @property {number} server_time_s
+ * @property {boolean} can_control
+ * @property {("sim"|"real")} backend
+ */
+
+/**
+ * @typedef {Object} JobInfo
+ * @property {string} id
+ * @property {string} name
+ * @property {string} [detail]
+ * @property {("running"|"succeeded"|"failed"|"cancelled")} state
+ * @property {number} progress
+ * @property {string} message
+ * @property {number} started_s
+ * @property {(number|null)} [finished_s]
+ * @property {*} [result]
+ */
+
+/**
+ * @typedef {Object} JobResponse
+ * @property {(JobInfo|null)} job
+ */
+
+/**
+ * @typedef {Object} JointsRequest
+ * @property {Array<number>} q_rad joint positions, radians, in joint_names order
+ * @property {(number|null)} [moving_time_s] move duration; None = as fast as the limits allow
+ */
+
+/**
+ * @typedef {Object} PixelRequest
+ * @property {number} u pixel column in the colour image
+ * @property {number} v pixel row in the colour image
+ */
+
+/**
+ * @typedef {Object} PixelToWorldResponse
+ * @property {Array<number>} position_m
+ * @property {("board"|"depth")} on
+ */
+
+/**
+ * @typedef {Object} PoseRequest
+ * @property {Array<number>} position_m gripper point in the world (board) frame
+ * @property {(number|null)} [pitch_rad] approach angle below horizontal; +π/2 = straight down; None = steepest
+ * @property {(number|null)} [yaw_rad] block yaw in the world frame the fingers align with
+ * @property {(number|null)} [moving_time_s]
+ */
+
+/**
+ * @typedef {Object} ProgramInfo
+ * @property {number} id
+ * @property {string} name
+ * @property {number} created_s
+ * @property {Array<WaypointInfo>} waypoints
+ */
+
+/**
+ * @typedef {Object} ProgramsResponse
+ * @property {Array<ProgramInfo>} data
+ * @property {number} count
+ */
+
+/**
+ * @typedef {Object} RepeatRequest
+ * @property {number} [cycles]
+ */
+
+/**
+ * A generated competition scene (event, level, seed) or explicit objects (ground-truth format).
+ * @typedef {Object} SceneRequest
+ * @property {(string|null)} [event]
+ * @property {(number|null)} [level]
+ * @property {(number|null)} [seed]
+ * @property {(Array<Object<string, *>>|null)} [objects]
+ */
+
+/**
+ * @typedef {Object} Status
+ * @property {("idle"|"calibrate"|"teach"|"repeat"|"click_grab"|"click_drop"|"auto_sort"|"estop"|"fault")} state
+ * @property {string} detail
+ * @property {Array<number>} joints_rad
+ * @property {Array<string>} joint_names
+ * @property {GripperStatus} gripper
+ * @property {GripperPose} gripper_pose
+ * @property {boolean} moving
+ * @property {boolean} calibrated
+ * @property {("sim"|"real")} backend
+ * @property {(("ui"|"api")|null)} controller
+ * @property {(JobInfo|null)} job
+ * @property {Array<string>} allowed_commands
+ * @property {number} time_s
+ */
+
+/**
+ * @typedef {Object} TagInfo
+ * @property {number} id
+ * @property {Array<number>} center_px
+ * @property {Array<Array<number>>} corners_px
+ */
+
+/**
+ * A grab/drop target: a world point, or a pixel of the colour image (exactly one).
+ * @typedef {Object} TargetRequest
+ * @property {(Array<number>|null)} [position_m]
+ * @property {(number|null)} [u]
+ * @property {(number|null)} [v]
+ */
+
+/**
+ * @typedef {Object} TeachStopRequest
+ * @property {string} name
+ */
+
+/**
+ * @typedef {Object} TelemetryMessage
+ * @property {("idle"|"calibrate"|"teach"|"repeat"|"click_grab"|"click_drop"|"auto_sort"|"estop"|"fault")} state
+ * @property {string} detail
+ * @property {Array<number>} joints_rad
+ * @property {Array<string>} joint_names
+ * @property {GripperStatus} gripper
+ * @property {GripperPose} gripper_pose
+ * @property {boolean} moving
+ * @property {boolean} calibrated
+ * @property {("sim"|"real")} backend
+ * @property {(("ui"|"api")|null)} controller
+ * @property {(JobInfo|null)} job
+ * @property {Array<string>} allowed_commands
+ * @property {number} time_s
+ * @property {"telemetry"} [type]
+ * @property {Array<Detection>} detections
+ */
+
+/**
+ * @typedef {Object} TorqueRequest
+ * @property {boolean} enabled
+ */
+
+/**
+ * @typedef {Object} ViewMessage
+ * @property {"view"} type
+ * @property {("color"|"depth"|"topdown")} [view]
+ * @property {Array<("tags"|"detections"|"grid")>} [layers]
+ */
+
+/**
+ * @typedef {Object} WaypointInfo
+ * @property {Array<number>} joints_rad
+ * @property {("grasp"|"release")} gripper
+ */
