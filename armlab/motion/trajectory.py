@@ -10,7 +10,7 @@ reports what was changed and why. Pure functions: no device calls.
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import numpy as np
 
@@ -19,6 +19,8 @@ from armlab.devices.arm import JointTrajectory
 DEFAULT_RATE_HZ = 100.0
 # Relative slack when deciding whether a requested timing already satisfies the limits.
 _FEASIBILITY_RTOL = 1e-9
+# A measured start this close outside a position limit is moved onto the limit (noted), not refused.
+START_TOLERANCE_RAD = 0.01
 # Plans use limits shrunk by this factor so rounding never lets a sampled trajectory touch the true limit.
 LIMIT_MARGIN = 1.0 - 1e-6
 
@@ -223,7 +225,10 @@ def plan_joint_move_timed(
     """Like plan_joint_move, also returning the MoveTiming (what was clamped)."""
     lower, upper = np.asarray(arm.lower_rad, float), np.asarray(arm.upper_rad, float)
     names = getattr(arm, "joint_names", None)
-    q_start = check_joint_positions("q_start", q_start_rad, lower, upper, names)
+    q_measured = check_joint_positions(
+        "q_start", q_start_rad, lower - START_TOLERANCE_RAD, upper + START_TOLERANCE_RAD, names
+    )
+    q_start = np.clip(q_measured, lower, upper)
     q_goal = check_joint_positions("q_goal", q_goal_rad, lower, upper, names)
     delta = q_goal - q_start
     timing = time_joint_move(
@@ -237,6 +242,12 @@ def plan_joint_move_timed(
     s = trapezoid_profile(times, timing.moving_time_s, timing.accel_time_s)
     positions = q_start[None, :] + s[:, None] * delta[None, :]
     positions[-1] = q_goal  # exact end point, no rounding drift
+    if np.any(q_start != q_measured):
+        moved = ", ".join(
+            f"{names[i] if names is not None else f'joint {i}'} {q_measured[i]:.4f} → {q_start[i]:.4f}"
+            for i in np.flatnonzero(q_start != q_measured)
+        )
+        timing = replace(timing, clamped=(*timing.clamped, f"start moved onto the joint limits: {moved} rad"))
     return JointTrajectory(times_s=times, positions_rad=positions), timing
 
 
