@@ -1,0 +1,157 @@
+"""SimArm: the Arm interface over the workcell's joint servos. Commands are validated (dof, finite,
+joint limits) before anything changes; the workcell calls control() at each control tick to feed the
+servos the trajectory's position and velocity."""
+
+from __future__ import annotations
+
+import time
+from typing import TYPE_CHECKING
+
+import numpy as np
+
+from armlab.devices.arm import Arm, JointState, JointTrajectory
+from armlab.errors import DeviceAlreadyConnectedError, DeviceNotConnectedError
+
+if TYPE_CHECKING:
+    from armlab.devices.sim.workcell import SimWorkcell
+
+LIMIT_TOLERANCE_RAD = 1e-6
+
+
+def sample_trajectory(trajectory: JointTrajectory, t_s: float) -> tuple[np.ndarray, np.ndarray]:
+    """(position, velocity) of a piecewise-linear trajectory at t_s (clamped; zero velocity past the end)."""
+    times = trajectory.times_s
+    positions = trajectory.positions_rad
+    if t_s <= times[0]:
+        return positions[0].copy(), np.zeros(positions.shape[1])
+    if t_s >= times[-1]:
+        return positions[-1].copy(), np.zeros(positions.shape[1])
+    i = int(np.searchsorted(times, t_s, side="right")) - 1
+    dt = times[i + 1] - times[i]
+    slope = (positions[i + 1] - positions[i]) / dt
+    return positions[i] + slope * (t_s - times[i]), slope
+
+
+class SimArm(Arm):
+    """The simulated RX200 arm (joint order = the arm config's joint_names)."""
+
+    def __init__(self, cell: SimWorkcell, joint_names: tuple[str, ...], lower_rad: np.ndarray, upper_rad: np.ndarray,
+                 settle_tolerance_rad: float, settle_timeout_s: float) -> None:
+        self._cell = cell
+        self.joint_names = tuple(joint_names)
+        self.lower_rad = np.asarray(lower_rad, dtype=float)
+        self.upper_rad = np.asarray(upper_rad, dtype=float)
+        self._settle_tolerance_rad = settle_tolerance_rad
+        self._settle_timeout_s = settle_timeout_s
+        self._connected = False
+        self._trajectory: JointTrajectory | None = None
+        self._start_s = 0.0
+        self._hold_rad: np.ndarray | None = None
+        self._torque = True
+
+    def __str__(self) -> str:
+        return "SimArm(rx200)"
+
+    @property
+    def is_connected(self) -> bool:
+        return self._connected
+
+    def connect(self) -> None:
+        if self._connected:
+            raise DeviceAlreadyConnectedError(f"{self} is already connected")
+        with self._cell.lock:
+            self._hold_rad = self._cell.arm_positions()
+            self._trajectory = None
+            self._cell.set_arm_torque(True)
+            self._torque = True
+        self._connected = True
+
+    def close(self) -> None:
+        if self._connected:
+            self.stop()
+        self._connected = False
+
+    def _require(self) -> None:
+        if not self._connected:
+            raise DeviceNotConnectedError(f"{self} is not connected: call connect() (or SimWorkcell.start()) first")
+
+    def read_joint_state(self) -> JointState:
+        self._require()
+        with self._cell.lock:
+            position, velocity = self._cell.arm_positions(), self._cell.arm_velocities()
+        return JointState(position_rad=position, velocity_rad_s=velocity, timestamp_s=time.time())
+
+    def validate_positions(self, positions_rad: np.ndarray) -> None:
+        """ValueError unless positions_rad is (N, dof), finite and inside the joint limits."""
+        positions = np.asarray(positions_rad, dtype=float)
+        dof = len(self.joint_names)
+        if positions.ndim != 2 or positions.shape[1] != dof:
+            raise ValueError(f"{self}: expected joint positions of shape (N, {dof}), got {positions.shape}")
+        if not np.all(np.isfinite(positions)):
+            raise ValueError(f"{self}: joint positions must be finite")
+        for j, name in enumerate(self.joint_names):
+            low = positions[:, j].min()
+            high = positions[:, j].max()
+            if low < self.lower_rad[j] - LIMIT_TOLERANCE_RAD or high > self.upper_rad[j] + LIMIT_TOLERANCE_RAD:
+                raise ValueError(
+                    f"{self}: joint '{name}' commanded to [{low:.4f}, {high:.4f}] rad, outside its limits "
+                    f"[{self.lower_rad[j]:.4f}, {self.upper_rad[j]:.4f}] rad"
+                )
+
+    def command_trajectory(self, trajectory: JointTrajectory, wait: bool = False) -> None:
+        self._require()
+        if not isinstance(trajectory, JointTrajectory):
+            raise ValueError(f"{self}: expected a JointTrajectory, got {type(trajectory).__name__}")
+        self.validate_positions(trajectory.positions_rad)
+        with self._cell.lock:
+            if not self._torque:
+                raise ValueError(f"{self}: torque is off; enable it before commanding motion")
+            self._trajectory = trajectory
+            self._start_s = self._cell.sim_time_s
+            self._cell.apply_arm_reference(*sample_trajectory(trajectory, 0.0))
+        if wait:
+            self.wait_until_done()
+
+    def is_moving(self) -> bool:
+        self._require()
+        with self._cell.lock:
+            return self._trajectory is not None
+
+    def wait_until_done(self, timeout_s: float | None = None) -> bool:
+        self._require()
+        with self._cell.lock:
+            remaining_s = 0.0
+            if self._trajectory is not None:
+                remaining_s = self._trajectory.duration_s - (self._cell.sim_time_s - self._start_s)
+        limit = timeout_s if timeout_s is not None else max(0.0, remaining_s) + self._settle_timeout_s + 1.0
+        return self._cell.wait_for(lambda: self._trajectory is None, limit)
+
+    def stop(self) -> None:
+        self._require()
+        with self._cell.lock:
+            self._trajectory = None
+            self._hold_rad = self._cell.arm_positions()
+            self._cell.apply_arm_reference(self._hold_rad, np.zeros_like(self._hold_rad))
+
+    def set_torque(self, enabled: bool) -> None:
+        self._require()
+        with self._cell.lock:
+            self._trajectory = None
+            self._hold_rad = self._cell.arm_positions()
+            self._cell.apply_arm_reference(self._hold_rad, np.zeros_like(self._hold_rad))
+            self._cell.set_arm_torque(bool(enabled))
+            self._torque = bool(enabled)
+
+    def control(self, sim_time_s: float) -> None:
+        """Feed the servos (called by the workcell under its lock at every control tick)."""
+        trajectory = self._trajectory
+        if trajectory is None or not self._torque:
+            return
+        t = sim_time_s - self._start_s
+        position, velocity = sample_trajectory(trajectory, t)
+        self._cell.apply_arm_reference(position, velocity)
+        if t >= trajectory.duration_s:
+            error = np.max(np.abs(self._cell.arm_positions() - position))
+            if error <= self._settle_tolerance_rad or t >= trajectory.duration_s + self._settle_timeout_s:
+                self._trajectory = None
+                self._hold_rad = position

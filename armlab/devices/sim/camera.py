@@ -1,0 +1,164 @@
+"""SimCamera: the Camera interface over the workcell's renderer, with L515-like colour and depth noise.
+
+It sees only pixels: the true camera pose and object poses stay in SimWorkcell.truth(). Noise is drawn
+from a seeded bank of precomputed noise images (cheap per frame, reproducible for a seed)."""
+
+from __future__ import annotations
+
+import threading
+import time
+from typing import TYPE_CHECKING
+
+import cv2
+import numpy as np
+
+from armlab.devices.camera import Camera, Frame, Intrinsics
+from armlab.devices.sim.config import SimCameraConfig
+from armlab.devices.sim.render import RawImages
+from armlab.errors import DeviceAlreadyConnectedError, DeviceNotConnectedError
+
+if TYPE_CHECKING:
+    from armlab.devices.sim.workcell import SimWorkcell
+
+NOISE_BANK_SIZE = 3
+
+
+class NoiseModel:
+    """Turns a clean render into a camera frame: colour noise (Gaussian, per channel) and depth noise
+    (Gaussian in mm, random dropouts, no reading outside the range)."""
+
+    def __init__(self, config: SimCameraConfig, rng: np.random.Generator, color_noise: bool, depth_noise: bool) -> None:
+        self._config = config
+        self._rng = rng
+        shape = (config.height, config.width)
+        self._color_bank = None
+        self._depth_bank = None
+        self._dropout_bank = None
+        if color_noise and config.color.noise_std > 0:
+            self._color_bank = [
+                np.clip(rng.normal(0.0, config.color.noise_std, (*shape, 3)), -127, 127).astype(np.int16)
+                for _ in range(NOISE_BANK_SIZE)
+            ]
+        if depth_noise and (config.depth.noise_std_mm > 0 or config.depth.dropout_fraction > 0):
+            self._depth_bank = [
+                rng.normal(0.0, config.depth.noise_std_mm, shape).astype(np.float32) for _ in range(NOISE_BANK_SIZE)
+            ]
+            self._dropout_bank = [rng.random(shape) < config.depth.dropout_fraction for _ in range(NOISE_BANK_SIZE)]
+
+    def _pick(self, bank: list[np.ndarray]) -> np.ndarray:
+        """A bank image rolled by a random offset, so consecutive frames differ."""
+        image = bank[int(self._rng.integers(len(bank)))]
+        return np.roll(image, int(self._rng.integers(image.shape[0])), axis=0)
+
+    def apply(self, images: RawImages) -> tuple[np.ndarray, np.ndarray]:
+        """(color_bgr uint8, depth_mm uint16) from a render."""
+        color_bgr = cv2.cvtColor(images.rgb, cv2.COLOR_RGB2BGR)
+        if self._color_bank is not None:
+            color_bgr = cv2.add(color_bgr, self._pick(self._color_bank), dtype=cv2.CV_8U)
+        depth_mm = images.depth_m * np.float32(1000.0)
+        if self._depth_bank is not None:
+            depth_mm += self._pick(self._depth_bank)
+        depth_cfg = self._config.depth
+        invalid = (images.depth_m < depth_cfg.min_range_m) | (images.depth_m > depth_cfg.max_range_m)
+        if self._dropout_bank is not None:
+            invalid |= self._pick(self._dropout_bank)
+        depth_mm = np.rint(depth_mm)
+        depth_mm[invalid] = 0.0
+        return color_bgr, np.clip(depth_mm, 0, 65535).astype(np.uint16)
+
+
+class SimCamera(Camera):
+    """The workcell's overhead RGB-D camera. In fast mode read()/async_read() advance the physics to the
+    next frame time and render; in real time a render thread publishes frames at the camera rate."""
+
+    def __init__(self, cell: SimWorkcell, config: SimCameraConfig, noise: NoiseModel, fps: float) -> None:
+        self._cell = cell
+        self._config = config
+        self._noise = noise
+        self._fps = fps
+        self._intrinsics = config.to_intrinsics()
+        self._connected = False
+        self._condition = threading.Condition()
+        self._latest: Frame | None = None
+        self._sequence = 0
+        self._last_async_sequence = 0
+
+    def __str__(self) -> str:
+        return f"SimCamera({self._config.name})"
+
+    @property
+    def fps(self) -> float:
+        return self._fps
+
+    @property
+    def is_connected(self) -> bool:
+        return self._connected
+
+    @property
+    def intrinsics(self) -> Intrinsics:
+        return self._intrinsics
+
+    def connect(self) -> None:
+        if self._connected:
+            raise DeviceAlreadyConnectedError(f"{self} is already connected")
+        self._connected = True
+
+    def close(self) -> None:
+        self._connected = False
+        with self._condition:
+            self._condition.notify_all()
+
+    def _require(self) -> None:
+        if not self._connected:
+            raise DeviceNotConnectedError(f"{self} is not connected: call connect() (or SimWorkcell.start()) first")
+
+    def publish(self, images: RawImages) -> Frame:
+        """Add noise, stamp and store a render as the newest frame (called by the workcell)."""
+        color_bgr, depth_mm = self._noise.apply(images)
+        with self._condition:
+            self._sequence += 1
+            frame = Frame(color_bgr=color_bgr, depth_mm=depth_mm, timestamp_s=time.time(),
+                          sequence=self._sequence, intrinsics=self._intrinsics)
+            self._latest = frame
+            self._condition.notify_all()
+        return frame
+
+    def _wait_for(self, after_sequence: int, timeout_s: float | None) -> Frame:
+        deadline = None if timeout_s is None else time.monotonic() + timeout_s
+        with self._condition:
+            while self._latest is None or self._latest.sequence <= after_sequence:
+                self._require()
+                remaining = None if deadline is None else deadline - time.monotonic()
+                if remaining is not None and remaining <= 0:
+                    raise TimeoutError(f"{self}: no new frame within {timeout_s * 1000:.0f} ms")
+                self._condition.wait(remaining if remaining is not None else 1.0)
+            return self._latest
+
+    def read(self) -> Frame:
+        self._require()
+        if not self._cell.realtime:
+            return self._cell.capture_next_frame()
+        with self._condition:
+            current = self._sequence
+        return self._wait_for(current, timeout_s=max(2.0, 20.0 / self._fps))
+
+    def async_read(self, timeout_ms: float = 200.0) -> Frame:
+        self._require()
+        if not self._cell.realtime:
+            frame = self._cell.capture_next_frame()
+        else:
+            frame = self._wait_for(self._last_async_sequence, timeout_s=timeout_ms / 1000.0)
+        self._last_async_sequence = frame.sequence
+        return frame
+
+    def read_latest(self, max_age_ms: float = 500.0) -> Frame:
+        self._require()
+        with self._condition:
+            frame = self._latest
+        if frame is not None and (time.time() - frame.timestamp_s) * 1000.0 <= max_age_ms:
+            return frame
+        if not self._cell.realtime:
+            return self._cell.render()
+        if frame is None:
+            raise TimeoutError(f"{self}: no frame yet")
+        raise TimeoutError(f"{self}: newest frame is {(time.time() - frame.timestamp_s) * 1000:.0f} ms old (> {max_age_ms} ms)")

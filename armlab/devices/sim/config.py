@@ -1,0 +1,189 @@
+"""Validated configuration of the simulated workcell: SimWorkcellConfig (what a caller chooses), the
+physics/servo parameters of config/sim.yaml and the camera of config/cameras/<name>.yaml, plus the pure
+pose maths for the camera mount and its seeded "bumped rig" error."""
+
+from __future__ import annotations
+
+import math
+from typing import Annotated
+
+import numpy as np
+from pydantic import Field, model_validator
+
+from armlab.config import StrictModel, load_config, resolve_config_path
+from armlab.devices.camera import Intrinsics
+
+Positive = Annotated[float, Field(gt=0.0)]
+NonNegative = Annotated[float, Field(ge=0.0)]
+
+
+class SimWorkcellConfig(StrictModel):
+    """How to run the simulation. realtime=False is the deterministic fast mode for tests/evaluations."""
+
+    realtime: bool = False
+    seed: int = 0
+    camera_pose_error: bool = True
+    color_noise: bool = True
+    depth_noise: bool = True
+    camera_fps: Positive = 30.0
+    arm: str = "rx200"
+    camera: str = "sim_l515"
+    sim: str = "sim"  # config/<sim>.yaml
+
+
+class PhysicsConfig(StrictModel):
+    timestep_s: Positive
+    control_period_s: Positive
+    impratio: Positive
+    settle_tolerance_rad: Positive
+    settle_timeout_s: NonNegative
+
+    @model_validator(mode="after")
+    def _control_not_faster_than_physics(self) -> PhysicsConfig:
+        if self.control_period_s < self.timestep_s or self.control_period_s > 0.01:
+            raise ValueError("control_period_s must be >= timestep_s and <= 0.01 (control at >= 100 Hz)")
+        return self
+
+
+class ArmServoConfig(StrictModel):
+    kp: list[Positive]
+    kv: list[NonNegative]
+    armature: list[NonNegative]
+    damping: list[NonNegative]
+    force_limit_nm: list[Positive]
+    link_masses_kg: list[Positive]
+
+    @model_validator(mode="after")
+    def _same_lengths(self) -> ArmServoConfig:
+        lengths = {len(self.kp), len(self.kv), len(self.armature), len(self.damping), len(self.force_limit_nm)}
+        if len(lengths) != 1 or len(self.link_masses_kg) != len(self.kp):
+            raise ValueError("arm: kp, kv, armature, damping, force_limit_nm, link_masses_kg need one value per joint")
+        return self
+
+
+class GripperSimConfig(StrictModel):
+    kp_n_m: Positive
+    damping_n_s_m: NonNegative
+    armature_kg: NonNegative
+    finger_mass_kg: Positive
+    pad_width_m: Positive
+    pad_length_m: Positive
+    tip_beyond_gripper_point_m: float
+    pad_friction: list[NonNegative] = Field(min_length=3, max_length=3)
+    stop_speed_m_s: Positive
+    stop_time_s: Positive
+
+
+class ObjectsConfig(StrictModel):
+    density_kg_m3: Positive
+    friction: list[NonNegative] = Field(min_length=3, max_length=3)
+    board_friction: list[NonNegative] = Field(min_length=3, max_length=3)
+
+
+class PoseErrorConfig(StrictModel):
+    position_m: NonNegative
+    rotation_deg: NonNegative
+
+
+class SimConfig(StrictModel):
+    """config/sim.yaml."""
+
+    physics: PhysicsConfig
+    arm: ArmServoConfig
+    gripper: GripperSimConfig
+    objects: ObjectsConfig
+    camera_pose_error: PoseErrorConfig
+
+
+class IntrinsicsConfig(StrictModel):
+    fx: Positive
+    fy: Positive
+    cx: float
+    cy: float
+    dist: list[float] = Field(default_factory=lambda: [0.0] * 5, min_length=5, max_length=5)
+
+
+class MountConfig(StrictModel):
+    position_m: list[float] = Field(min_length=3, max_length=3)
+    tilt_deg: Annotated[float, Field(ge=0.0, le=45.0)]
+
+
+class DepthConfig(StrictModel):
+    min_range_m: Positive
+    max_range_m: Positive
+    noise_std_mm: NonNegative
+    dropout_fraction: Annotated[float, Field(ge=0.0, le=0.5)]
+
+
+class ColorConfig(StrictModel):
+    noise_std: NonNegative
+
+
+class SimCameraConfig(StrictModel):
+    """config/cameras/<name>.yaml for a simulated camera."""
+
+    name: str
+    type: str
+    width: Annotated[int, Field(gt=0, le=4096)]
+    height: Annotated[int, Field(gt=0, le=4096)]
+    fps: Positive
+    intrinsics: IntrinsicsConfig
+    mount: MountConfig
+    depth: DepthConfig
+    color: ColorConfig
+
+    @model_validator(mode="after")
+    def _principal_point_inside(self) -> SimCameraConfig:
+        if not (0 < self.intrinsics.cx < self.width and 0 < self.intrinsics.cy < self.height):
+            raise ValueError("intrinsics: principal point must lie inside the image")
+        if self.depth.min_range_m >= self.depth.max_range_m:
+            raise ValueError("depth: min_range_m must be below max_range_m")
+        return self
+
+    def to_intrinsics(self) -> Intrinsics:
+        k = self.intrinsics
+        return Intrinsics(self.width, self.height, k.fx, k.fy, k.cx, k.cy, tuple(k.dist))
+
+
+def load_sim_config(name: str = "sim") -> SimConfig:
+    return load_config(resolve_config_path(name, "."), SimConfig)
+
+
+def load_camera_config(name: str = "sim_l515") -> SimCameraConfig:
+    return load_config(resolve_config_path(name, "cameras"), SimCameraConfig)
+
+
+def nominal_T_world_camera(mount: MountConfig) -> np.ndarray:
+    """Camera pose from the mount, OpenCV axes: x = image right = world +x, z = optical axis pointing
+    down, tilted by tilt_deg toward -y (the arm), y = image down (toward -y)."""
+    tilt = math.radians(mount.tilt_deg)
+    x_axis = np.array([1.0, 0.0, 0.0])
+    z_axis = np.array([0.0, -math.sin(tilt), -math.cos(tilt)])
+    y_axis = np.cross(z_axis, x_axis)
+    T = np.eye(4)
+    T[:3, :3] = np.column_stack([x_axis, y_axis, z_axis])
+    T[:3, 3] = mount.position_m
+    return T
+
+
+def rotation_from_rotvec(rotvec: np.ndarray) -> np.ndarray:
+    """Rodrigues' formula: the rotation matrix of a rotation vector (radians)."""
+    angle = float(np.linalg.norm(rotvec))
+    if angle < 1e-12:
+        return np.eye(3)
+    kx, ky, kz = np.asarray(rotvec, dtype=float) / angle
+    K = np.array([[0.0, -kz, ky], [kz, 0.0, -kx], [-ky, kx, 0.0]])
+    return np.eye(3) + math.sin(angle) * K + (1.0 - math.cos(angle)) * (K @ K)
+
+
+def draw_pose_error(rng: np.random.Generator, error: PoseErrorConfig) -> np.ndarray:
+    """A 4x4 perturbation (applied in the camera frame): translation uniform in +-position_m per axis,
+    rotation about a random axis by an angle uniform in +-rotation_deg."""
+    translation = rng.uniform(-error.position_m, error.position_m, size=3)
+    axis = rng.normal(size=3)
+    axis /= np.linalg.norm(axis)
+    angle = math.radians(rng.uniform(-error.rotation_deg, error.rotation_deg))
+    T = np.eye(4)
+    T[:3, :3] = rotation_from_rotvec(axis * angle)
+    T[:3, 3] = translation
+    return T

@@ -1,0 +1,109 @@
+"""SimGripper: the Gripper interface over the two finger servos. The fingers close with a force capped
+at the configured grasp effort; "holding" means they stopped on something before closing fully."""
+
+from __future__ import annotations
+
+import time
+from typing import TYPE_CHECKING
+
+from armlab.devices.gripper import Gripper, GripperState
+from armlab.errors import DeviceAlreadyConnectedError, DeviceNotConnectedError
+
+if TYPE_CHECKING:
+    from armlab.devices.sim.workcell import SimWorkcell
+
+MOTION_TIMEOUT_S = 2.0
+HOLDING_MARGIN_M = 0.001  # stopped at least this far from fully closed = holding something
+
+
+class SimGripper(Gripper):
+    """The simulated parallel gripper; width_m is the span between the pad faces."""
+
+    def __init__(self, cell: SimWorkcell, offset_min_m: float, offset_max_m: float, pad_thickness_m: float,
+                 stop_speed_m_s: float, stop_time_s: float) -> None:
+        self._cell = cell
+        self._offset_min_m = offset_min_m
+        self._offset_max_m = offset_max_m
+        self._pad_thickness_m = pad_thickness_m
+        self._stop_speed_m_s = stop_speed_m_s
+        self._stop_time_s = stop_time_s
+        self._connected = False
+        self._command = "release"
+        self._command_s = 0.0
+        self._still_since_s: float | None = None
+
+    def __str__(self) -> str:
+        return "SimGripper(rx200)"
+
+    @property
+    def is_connected(self) -> bool:
+        return self._connected
+
+    @property
+    def min_width_m(self) -> float:
+        return 2.0 * (self._offset_min_m - self._pad_thickness_m)
+
+    @property
+    def max_width_m(self) -> float:
+        return 2.0 * (self._offset_max_m - self._pad_thickness_m)
+
+    def connect(self) -> None:
+        if self._connected:
+            raise DeviceAlreadyConnectedError(f"{self} is already connected")
+        self._connected = True
+
+    def close(self) -> None:
+        self._connected = False
+
+    def _require(self) -> None:
+        if not self._connected:
+            raise DeviceNotConnectedError(f"{self} is not connected: call connect() (or SimWorkcell.start()) first")
+
+    def _set_command(self, command: str, offset_m: float) -> None:
+        with self._cell.lock:
+            self._command = command
+            self._command_s = self._cell.sim_time_s
+            self._still_since_s = None
+            self._cell.apply_finger_reference(offset_m)
+
+    def grasp(self, wait: bool = True) -> None:
+        self._require()
+        self._set_command("grasp", self._offset_min_m)
+        if wait:
+            self._cell.wait_for(self._stopped, MOTION_TIMEOUT_S)
+
+    def release(self, wait: bool = True) -> None:
+        self._require()
+        self._set_command("release", self._offset_max_m)
+        if wait:
+            self._cell.wait_for(
+                lambda: self._stopped() or min(self._cell.finger_positions()) >= self._offset_max_m - 5e-4,
+                MOTION_TIMEOUT_S,
+            )
+
+    def stop(self) -> None:
+        self._require()
+        with self._cell.lock:
+            left, right = self._cell.finger_positions()
+            self._cell.apply_finger_reference(0.5 * (left + right))
+
+    def _stopped(self) -> bool:
+        """Both fingers slower than stop_speed for stop_time (call under the lock or from wait_for)."""
+        return self._still_since_s is not None and self._cell.sim_time_s - self._still_since_s >= self._stop_time_s
+
+    def read_state(self) -> GripperState:
+        self._require()
+        with self._cell.lock:
+            left, right = self._cell.finger_positions()
+            width = left + right - 2.0 * self._pad_thickness_m
+            holding = self._command == "grasp" and self._stopped() and width > self.min_width_m + HOLDING_MARGIN_M
+            return GripperState(width_m=width, command=self._command, holding=holding, timestamp_s=time.time())
+
+    def control(self, sim_time_s: float) -> None:
+        """Track whether the fingers have stopped (called by the workcell under its lock)."""
+        speeds = self._cell.finger_velocities()
+        if max(abs(v) for v in speeds) < self._stop_speed_m_s and sim_time_s - self._command_s >= self._stop_time_s / 2:
+            if self._still_since_s is None:
+                self._still_since_s = sim_time_s
+        else:
+            self._still_since_s = None

@@ -1,0 +1,284 @@
+"""Build the MuJoCo model of the workcell (MJCF text + in-memory texture assets) from config and a
+Scene: the RX200 from its URDF joint origins, a two-finger gripper with pads, the board, the tags,
+the overhead camera and the scene's objects as free bodies. Pure: same inputs, same XML."""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+from armlab.config import read_config_file, resolve_config_path
+from armlab.devices.sim import textures
+from armlab.devices.sim.config import SimCameraConfig, SimConfig
+from armlab.scene import DISTRACTOR_DIMENSIONS_M, Scene, SceneObject
+
+TAG_CENTRES_M = {1: (-0.25, -0.025), 2: (0.25, -0.025), 3: (0.25, 0.275), 4: (-0.25, 0.275)}
+TAG_SIZE_M = 0.025
+CAMERA_NAME = "overhead"
+GRIPPER_SITE = "gripper_point"
+OBJECT_PREFIX = "obj:"
+
+COLOR_RGBA = {
+    "red": (0.80, 0.08, 0.08, 1.0),
+    "orange": (0.95, 0.45, 0.05, 1.0),
+    "yellow": (0.92, 0.82, 0.08, 1.0),
+    "green": (0.08, 0.60, 0.20, 1.0),
+    "blue": (0.08, 0.22, 0.80, 1.0),
+    "violet": (0.45, 0.18, 0.65, 1.0),
+}
+
+
+@dataclass(frozen=True)
+class ArmGeometry:
+    """The parts of config/arms/<name>.yaml the model needs (SI units, radians)."""
+
+    joint_names: tuple[str, ...]
+    origins_m: dict[str, tuple[float, float, float]]
+    lower_rad: np.ndarray
+    upper_rad: np.ndarray
+    finger_offset_min_m: float
+    finger_offset_max_m: float
+    pad_thickness_m: float
+    grasp_effort_n: float
+    T_world_base: np.ndarray
+
+    @classmethod
+    def load(cls, name: str = "rx200") -> ArmGeometry:
+        data = read_config_file(resolve_config_path(name, "arms"))
+        gripper = data["gripper"]
+        return cls(
+            joint_names=tuple(data["joint_names"]),
+            origins_m={key: tuple(float(v) for v in value) for key, value in data["urdf_origins"].items()},
+            lower_rad=np.radians(np.asarray(data["limits"]["lower_deg"], dtype=float)),
+            upper_rad=np.radians(np.asarray(data["limits"]["upper_deg"], dtype=float)),
+            finger_offset_min_m=float(gripper["finger_offset_min_m"]),
+            finger_offset_max_m=float(gripper["finger_offset_max_m"]),
+            pad_thickness_m=float(gripper["pad_thickness_m"]),
+            grasp_effort_n=float(gripper["grasp_effort_n"]),
+            T_world_base=np.asarray(data["T_world_base"], dtype=float),
+        )
+
+
+def _fmt(values) -> str:
+    return " ".join(f"{float(v):.9g}" for v in np.ravel(values))
+
+
+def quat_wxyz_from_matrix(R: np.ndarray) -> np.ndarray:
+    """Unit quaternion (w, x, y, z) of a rotation matrix."""
+    import mujoco
+
+    quat = np.zeros(4)
+    mujoco.mju_mat2Quat(quat, np.ascontiguousarray(R, dtype=float).ravel())
+    return quat
+
+
+def _arm_xml(arm: ArmGeometry, sim: SimConfig) -> str:
+    """The arm's kinematic tree. Joint axes: waist z; shoulder, elbow, wrist_angle +y (positive pitches the
+    arm forward and down); wrist_rotate +x. Fingers slide along the gripper's +-y axis."""
+    o = arm.origins_m
+    servo = sim.arm
+    g = sim.gripper
+    base_quat = quat_wxyz_from_matrix(arm.T_world_base[:3, :3])
+    lo, hi = arm.lower_rad, arm.upper_rad
+    names = arm.joint_names
+    m = servo.link_masses_kg
+
+    def joint(i: int, axis: str) -> str:
+        return (
+            f'<joint name="{names[i]}" axis="{axis}" range="{lo[i]:.9g} {hi[i]:.9g}" armature="{servo.armature[i]}" '
+            f'damping="{servo.damping[i]}" actuatorfrcrange="{-servo.force_limit_nm[i]} {servo.force_limit_nm[i]}"/>'
+        )
+
+    # Gripper geometry in the gripper link's frame (origin at the wrist_rotate joint, x = approach axis).
+    gp = o["gripper_point"][0]
+    tip = gp + g.tip_beyond_gripper_point_m
+    pad_x = tip - 0.5 * g.pad_length_m
+    finger_start = 0.025
+    finger_len = tip - finger_start
+    pad_t = arm.pad_thickness_m
+    fmax = arm.finger_offset_max_m
+    fmin = arm.finger_offset_min_m
+    arm_geom = 'contype="2" conaffinity="1" group="1"'
+
+    def finger(side: str, sign: float) -> str:
+        return f"""
+                <body name="{side}_finger" pos="0 {sign * fmax:.9g} 0" gravcomp="1">
+                  <inertial pos="{finger_start + 0.5 * finger_len:.9g} {sign * 0.004:.9g} 0" mass="{g.finger_mass_kg}" diaginertia="4e-6 4e-6 1e-6"/>
+                  <joint name="{side}_finger" type="slide" axis="0 {sign:g} 0" range="{fmin} {fmax}" ref="{fmax}"
+                         armature="{g.armature_kg}" damping="{g.damping_n_s_m}"/>
+                  <geom name="{side}_finger_link" type="box" size="{0.5 * finger_len:.9g} 0.004 {0.5 * g.pad_width_m + 0.002:.9g}"
+                        pos="{finger_start + 0.5 * finger_len:.9g} {sign * 0.004:.9g} 0" material="arm_dark" {arm_geom}/>
+                  <geom name="{side}_pad" type="box" size="{0.5 * g.pad_length_m:.9g} {0.5 * pad_t:.9g} {0.5 * g.pad_width_m:.9g}"
+                        pos="{pad_x:.9g} {-sign * 0.5 * pad_t:.9g} 0" material="pad" condim="4" friction="{_fmt(g.pad_friction)}"
+                        {arm_geom}/>
+                </body>"""
+
+    return f"""
+    <body name="base" quat="{_fmt(base_quat)}">
+      <geom name="base_link" type="box" size="0.05 0.05 0.03" pos="-0.01 0 0.03" material="arm_dark" {arm_geom}/>
+      <body name="waist_link" pos="{_fmt(o['waist'])}" gravcomp="1">
+        <inertial pos="0 0 0.02" mass="{m[0]}" diaginertia="3e-4 3e-4 3e-4"/>
+        {joint(0, "0 0 1")}
+        <geom name="waist_geom" type="cylinder" size="0.04 0.015" pos="0 0 0.017" material="arm_dark" {arm_geom}/>
+        <body name="shoulder_link" pos="{_fmt(o['shoulder'])}" gravcomp="1">
+          <inertial pos="0.025 0 0.1" mass="{m[1]}" diaginertia="1e-3 1e-3 1e-4"/>
+          {joint(1, "0 1 0")}
+          <geom name="upper_arm" type="capsule" size="0.018" fromto="0 0 0 {_fmt(o['elbow'])}" material="arm" {arm_geom}/>
+          <body name="forearm_link" pos="{_fmt(o['elbow'])}" gravcomp="1">
+            <inertial pos="0.1 0 0" mass="{m[2]}" diaginertia="1e-4 6e-4 6e-4"/>
+            {joint(2, "0 1 0")}
+            <geom name="forearm" type="capsule" size="0.016" fromto="0.02 0 0 {_fmt(o['wrist_angle'])}" material="arm" {arm_geom}/>
+            <body name="wrist_link" pos="{_fmt(o['wrist_angle'])}" gravcomp="1">
+              <inertial pos="0.03 0 0" mass="{m[3]}" diaginertia="5e-5 5e-5 5e-5"/>
+              {joint(3, "0 1 0")}
+              <geom name="wrist" type="capsule" size="0.016" fromto="0.01 0 0 {o['wrist_rotate'][0] - 0.01:.9g} 0 0" material="arm_dark" {arm_geom}/>
+              <body name="gripper_link" pos="{_fmt(o['wrist_rotate'])}" gravcomp="1">
+                <inertial pos="0.03 0 0" mass="{m[4]}" diaginertia="1e-4 1e-4 1e-4"/>
+                {joint(4, "1 0 0")}
+                <geom name="palm" type="box" size="0.0125 {fmax + 0.012:.9g} 0.018" pos="0.0125 0 0" material="arm_dark" {arm_geom}/>
+                <site name="{GRIPPER_SITE}" pos="{gp:.9g} 0 0" size="0.003" rgba="1 0 1 0.5" group="4"/>
+                {finger("left", 1.0)}
+                {finger("right", -1.0)}
+              </body>
+            </body>
+          </body>
+        </body>
+      </body>
+    </body>"""
+
+
+def _prism_vertices(outline_xy: list[tuple[float, float]], height_m: float) -> str:
+    """Vertices of a vertical prism over a convex outline (MuJoCo takes their convex hull)."""
+    points = [(x, y, z) for x, y in outline_xy for z in (-0.5 * height_m, 0.5 * height_m)]
+    return _fmt(points)
+
+
+def _object_xml(obj: SceneObject, density: float, friction: list[float]) -> tuple[str, str]:
+    """(asset xml, body xml) of one free object. Body origin = footprint bounding-box centre, mid-height."""
+    ext_x, ext_y, height = obj.dimensions_m
+    scale = ext_x / DISTRACTOR_DIMENSIONS_M[obj.type][0] if obj.type != "block" else 1.0
+    common = f'material="c_{obj.color}" density="{density}" friction="{_fmt(friction)}" contype="1" conaffinity="1"'
+    mesh_name = f"mesh_{obj.type}_{obj.id}"
+    asset = ""
+    if obj.type == "block":
+        geoms = f'<geom type="box" size="{_fmt([ext_x / 2, ext_y / 2, height / 2])}" {common}/>'
+    elif obj.type == "cylinder":
+        geoms = f'<geom type="cylinder" size="{ext_x / 2:.9g} {height / 2:.9g}" {common}/>'
+    elif obj.type == "semicircle":
+        radius = ext_x / 2
+        outline = [(radius * math.cos(a), -ext_y / 2 + radius * math.sin(a)) for a in np.linspace(0.0, math.pi, 17)]
+        asset = f'<mesh name="{mesh_name}" vertex="{_prism_vertices(outline, height)}"/>'
+        geoms = f'<geom type="mesh" mesh="{mesh_name}" {common}/>'
+    elif obj.type == "triangle":
+        outline = [(-ext_x / 2, -ext_y / 2), (ext_x / 2, -ext_y / 2), (0.0, ext_y / 2)]
+        asset = f'<mesh name="{mesh_name}" vertex="{_prism_vertices(outline, height)}"/>'
+        geoms = f'<geom type="mesh" mesh="{mesh_name}" {common}/>'
+    else:  # arch: two pillars and a lintel, with a hole underneath
+        pillar_half_x = 0.01 * scale
+        lintel_half_z = 0.005 * scale
+        pillar_half_z = height / 2 - lintel_half_z
+        geoms = "".join(
+            f'<geom type="box" size="{pillar_half_x:.9g} {ext_y / 2:.9g} {pillar_half_z:.9g}" '
+            f'pos="{sign * (ext_x / 2 - pillar_half_x):.9g} 0 {-lintel_half_z:.9g}" {common}/>'
+            for sign in (-1.0, 1.0)
+        ) + (
+            f'<geom type="box" size="{ext_x / 2:.9g} {ext_y / 2:.9g} {lintel_half_z:.9g}" '
+            f'pos="0 0 {height / 2 - lintel_half_z:.9g}" {common}/>'
+        )
+    body = (
+        f'<body name="{OBJECT_PREFIX}{obj.id}" pos="{_fmt(obj.position_m)}" quat="{_fmt(obj.quat_wxyz)}">'
+        f"<freejoint/>{geoms}</body>"
+    )
+    return asset, body
+
+
+def camera_xml_attributes(T_world_camera: np.ndarray, camera: SimCameraConfig) -> str:
+    """A MuJoCo camera (looks along its -z, y up) placed at an OpenCV-axes pose, with the intrinsics."""
+    R_world_mj = T_world_camera[:3, :3] @ np.diag([1.0, -1.0, -1.0])
+    k = camera.intrinsics
+    pixel_m = 1e-5  # any sensor pixel size: MuJoCo only uses focal/principal in pixel units with it
+    return (
+        f'pos="{_fmt(T_world_camera[:3, 3])}" quat="{_fmt(quat_wxyz_from_matrix(R_world_mj))}" '
+        f'resolution="{camera.width} {camera.height}" sensorsize="{camera.width * pixel_m:.9g} {camera.height * pixel_m:.9g}" '
+        f'focalpixel="{k.fx:.9g} {k.fy:.9g}" principalpixel="{camera.width / 2 - k.cx - 0.5:.9g} {camera.height / 2 - k.cy - 0.5:.9g}"'
+    )
+
+
+def build_model_xml(
+    arm: ArmGeometry, sim: SimConfig, camera: SimCameraConfig, T_world_camera: np.ndarray, scene: Scene
+) -> tuple[str, dict[str, bytes]]:
+    """The whole workcell as MJCF text plus the texture PNGs it references (MuJoCo in-memory assets)."""
+    assets = {"board.png": textures.encode_png(textures.board_texture())}
+    tag_cells = textures.TAG_CELLS + 2 * textures.TAG_QUIET_CELLS
+    tag_half_m = 0.5 * TAG_SIZE_M * tag_cells / textures.TAG_CELLS
+    tag_assets, tag_geoms = [], []
+    for tag_id, (x, y) in TAG_CENTRES_M.items():
+        assets[f"tag{tag_id}.png"] = textures.encode_png(textures.tag_texture(tag_id))
+        tag_assets.append(
+            f'<texture name="tag{tag_id}" type="2d" file="tag{tag_id}.png"/>'
+            f'<material name="tag{tag_id}" texture="tag{tag_id}" specular="0" shininess="0"/>'
+        )
+        tag_geoms.append(
+            f'<geom name="tag{tag_id}" type="plane" size="{tag_half_m:.9g} {tag_half_m:.9g} 0.001" '
+            f'pos="{x} {y} 0.0003" material="tag{tag_id}" contype="0" conaffinity="0"/>'
+        )
+    colors = "".join(
+        f'<material name="c_{name}" rgba="{_fmt(rgba)}" specular="0.1" shininess="0.1"/>' for name, rgba in COLOR_RGBA.items()
+    )
+    object_assets, object_bodies = [], []
+    for obj in scene.objects:
+        asset, body = _object_xml(obj, sim.objects.density_kg_m3, sim.objects.friction)
+        object_assets.append(asset)
+        object_bodies.append(body)
+    actuators = []
+    for i, name in enumerate(arm.joint_names):
+        actuators.append(
+            f'<position name="{name}_pos" joint="{name}" kp="{sim.arm.kp[i]}" '
+            f'ctrlrange="{arm.lower_rad[i]:.9g} {arm.upper_rad[i]:.9g}"/>'
+        )
+        actuators.append(f'<velocity name="{name}_vel" joint="{name}" kv="{sim.arm.kv[i]}" ctrlrange="-10 10"/>')
+    for side in ("left", "right"):
+        actuators.append(
+            f'<position name="{side}_finger" joint="{side}_finger" kp="{sim.gripper.kp_n_m}" '
+            f'ctrlrange="{arm.finger_offset_min_m} {arm.finger_offset_max_m}" '
+            f'forcerange="{-arm.grasp_effort_n} {arm.grasp_effort_n}"/>'
+        )
+    p = sim.physics
+    xml = f"""<mujoco model="armlab_workcell">
+  <compiler angle="radian" autolimits="true"/>
+  <option timestep="{p.timestep_s}" integrator="implicitfast" cone="elliptic" impratio="{p.impratio}"/>
+  <statistic extent="1" center="0 0.15 0.2"/>
+  <visual>
+    <global offwidth="{camera.width}" offheight="{camera.height}"/>
+    <quality shadowsize="0" offsamples="4"/>
+    <map znear="0.05" zfar="20"/>
+    <headlight ambient="0.35 0.35 0.35" diffuse="0.35 0.35 0.35" specular="0 0 0"/>
+  </visual>
+  <asset>
+    <texture name="board" type="2d" file="board.png"/>
+    <material name="board" texture="board" texrepeat="1 1" texuniform="false" specular="0" shininess="0"/>
+    {''.join(tag_assets)}
+    <material name="table" rgba="0.32 0.24 0.17 1" specular="0" shininess="0"/>
+    <material name="arm" rgba="0.15 0.15 0.17 1" specular="0.2"/>
+    <material name="arm_dark" rgba="0.08 0.08 0.09 1" specular="0.2"/>
+    <material name="pad" rgba="0.2 0.2 0.2 1" specular="0"/>
+    {colors}
+    {''.join(object_assets)}
+  </asset>
+  <worldbody>
+    <light name="sun" directional="true" pos="0.2 0.3 2" dir="-0.1 -0.15 -1" castshadow="false" diffuse="0.55 0.55 0.55" specular="0 0 0"/>
+    <geom name="board" type="plane" size="0.5 0.325 0.05" pos="0 0.15 0" material="board"
+          friction="{_fmt(sim.objects.board_friction)}" contype="1" conaffinity="1"/>
+    <geom name="table" type="plane" size="1.5 1.5 0.05" pos="0 0.15 -0.003" material="table" contype="0" conaffinity="0"/>
+    {''.join(tag_geoms)}
+    <camera name="{CAMERA_NAME}" mode="fixed" {camera_xml_attributes(T_world_camera, camera)}/>
+    {_arm_xml(arm, sim)}
+    {''.join(object_bodies)}
+  </worldbody>
+  <actuator>
+    {''.join(actuators)}
+  </actuator>
+</mujoco>"""
+    return xml, assets

@@ -1,0 +1,198 @@
+"""Offscreen rendering of the workcell camera: one GL context in one thread (EGL on a CPU-only machine),
+one render pass per frame whose colour and depth buffers are read together. The scene geometry is
+copied from MjData under the simulation lock (cheap); the expensive rasterisation runs outside it."""
+
+from __future__ import annotations
+
+import logging
+import os
+import queue
+import threading
+from collections.abc import Callable
+from dataclasses import dataclass
+
+import mujoco
+import numpy as np
+
+logger = logging.getLogger(__name__)
+
+
+@dataclass(frozen=True)
+class RawImages:
+    """One render: rgb (H, W, 3) uint8 in RGB order, depth_m (H, W) float32 along the optical axis."""
+
+    rgb: np.ndarray
+    depth_m: np.ndarray
+    sim_time_s: float
+
+
+def depth_from_buffer(buffer: np.ndarray, znear_m: float, zfar_m: float) -> np.ndarray:
+    """Metric depth from MuJoCo's reversed-Z depth buffer (mjDEPTH_ZEROFAR), as mujoco.Renderer does."""
+    zfar = np.float32(zfar_m)
+    znear = np.float32(znear_m)
+    c_coef = -(zfar + znear) / (zfar - znear)
+    d_coef = -(np.float32(2) * zfar * znear) / (zfar - znear)
+    c_coef = np.float32(-0.5) * c_coef - np.float32(0.5)
+    d_coef = np.float32(-0.5) * d_coef
+    return (d_coef / (buffer + c_coef)).astype(np.float32)
+
+
+class _GLRenderer:
+    """Owns the GL and MuJoCo render contexts; used only from the render thread."""
+
+    def __init__(self, model: mujoco.MjModel, camera_name: str, width: int, height: int) -> None:
+        from mujoco import gl_context
+
+        self.width, self.height = width, height
+        self._gl = gl_context.GLContext(width, height)
+        self._gl.make_current()
+        self.backend = os.environ.get("MUJOCO_GL", "default")
+        try:
+            from OpenGL import GL
+
+            vendor = GL.glGetString(GL.GL_RENDERER)
+            self.gl_renderer = vendor.decode() if isinstance(vendor, bytes) else str(vendor)
+        except Exception:  # noqa: BLE001 - only for the log line
+            self.gl_renderer = "unknown"
+        self._context = None
+        self._model = None
+        self.set_model(model, camera_name)
+
+    def set_model(self, model: mujoco.MjModel, camera_name: str) -> None:
+        self._gl.make_current()
+        if self._context is not None:
+            self._context.free()
+        self._model = model
+        self._scene = mujoco.MjvScene(model, maxgeom=2000)
+        self._option = mujoco.MjvOption()
+        self._camera = mujoco.MjvCamera()
+        self._camera.type = mujoco.mjtCamera.mjCAMERA_FIXED
+        self._camera.fixedcamid = mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_CAMERA, camera_name)
+        self._context = mujoco.MjrContext(model, mujoco.mjtFontScale.mjFONTSCALE_50)
+        mujoco.mjr_setBuffer(mujoco.mjtFramebuffer.mjFB_OFFSCREEN, self._context)
+        self._context.readDepthMap = mujoco.mjtDepthMap.mjDEPTH_ZEROFAR
+        self._rect = mujoco.MjrRect(0, 0, self.width, self.height)
+        extent = model.stat.extent
+        self._znear_m = model.vis.map.znear * extent
+        self._zfar_m = model.vis.map.zfar * extent
+        self._rgb = np.empty((self.height, self.width, 3), dtype=np.uint8)
+        self._depth = np.empty((self.height, self.width), dtype=np.float32)
+
+    @property
+    def model(self) -> mujoco.MjModel:
+        return self._model
+
+    def update_scene(self, model: mujoco.MjModel, data: mujoco.MjData) -> None:
+        """Copy the geometry to draw (call under the simulation lock)."""
+        mujoco.mjv_updateScene(model, data, self._option, None, self._camera, mujoco.mjtCatBit.mjCAT_ALL, self._scene)
+
+    def draw(self) -> tuple[np.ndarray, np.ndarray]:
+        """Rasterise the last updated scene; returns (rgb, depth_m), top row first."""
+        self._gl.make_current()
+        mujoco.mjr_render(self._rect, self._scene, self._context)
+        mujoco.mjr_readPixels(self._rgb, self._depth, self._rect, self._context)
+        rgb = np.flipud(self._rgb).copy()
+        depth = depth_from_buffer(np.flipud(self._depth), self._znear_m, self._zfar_m)
+        return rgb, depth
+
+    def close(self) -> None:
+        if self._context is not None:
+            self._gl.make_current()
+            self._context.free()
+            self._context = None
+        self._gl.free()
+
+
+class RenderThread:
+    """A thread that owns the GL context and renders on request (fast mode) or on a period (real time).
+
+    snapshot(renderer) is called in the render thread and must lock the simulation, switch the renderer
+    to the current model if it changed (renderer.model / renderer.set_model), call
+    renderer.update_scene(model, data) and return the simulation time; publish(RawImages) receives each
+    periodic frame.
+    """
+
+    def __init__(self, model: mujoco.MjModel, camera_name: str, width: int, height: int,
+                 snapshot: Callable[[_GLRenderer], float]) -> None:
+        self._snapshot = snapshot
+        self._requests: queue.Queue = queue.Queue()
+        self._stop = threading.Event()
+        self._ready = threading.Event()
+        self._error: BaseException | None = None
+        self._period_s: float | None = None
+        self._publish: Callable[[RawImages], None] | None = None
+        self._args = (model, camera_name, width, height)
+        self._thread = threading.Thread(target=self._run, name="sim-render", daemon=True)
+        self._thread.start()
+        self._ready.wait(30.0)
+        if self._error is not None:
+            raise RuntimeError(f"sim camera: cannot create an offscreen GL context: {self._error}") from self._error
+
+    def start_periodic(self, period_s: float, publish: Callable[[RawImages], None]) -> None:
+        self._publish = publish
+        self._period_s = period_s
+        self._requests.put(("wake", None, None))
+
+    def render(self, timeout_s: float = 30.0) -> RawImages:
+        """Render one frame now (blocks the caller, not the physics)."""
+        done = threading.Event()
+        box: dict = {}
+        self._requests.put(("render", done, box))
+        if not done.wait(timeout_s):
+            raise TimeoutError("sim camera: render timed out")
+        if "error" in box:
+            raise RuntimeError(f"sim camera: render failed: {box['error']}") from box["error"]
+        return box["images"]
+
+    def close(self) -> None:
+        self._stop.set()
+        self._requests.put(("stop", None, None))
+        self._thread.join(timeout=10.0)
+
+    def _render_once(self, renderer: _GLRenderer) -> RawImages:
+        sim_time_s = self._snapshot(renderer)
+        rgb, depth = renderer.draw()
+        return RawImages(rgb=rgb, depth_m=depth, sim_time_s=sim_time_s)
+
+    def _run(self) -> None:
+        import time
+
+        try:
+            renderer = _GLRenderer(*self._args)
+        except BaseException as error:  # noqa: BLE001 - reported to the constructor
+            self._error = error
+            self._ready.set()
+            return
+        logger.info("sim camera: rendering offscreen with MUJOCO_GL=%s (%s)", renderer.backend, renderer.gl_renderer)
+        self._ready.set()
+        next_due = time.monotonic()
+        try:
+            while not self._stop.is_set():
+                timeout = None
+                if self._period_s is not None:
+                    timeout = max(0.0, next_due - time.monotonic())
+                try:
+                    request = self._requests.get(timeout=timeout)
+                except queue.Empty:
+                    request = None
+                if request is None:  # a periodic frame is due
+                    next_due = max(next_due + self._period_s, time.monotonic() - self._period_s)
+                    try:
+                        self._publish(self._render_once(renderer))
+                    except Exception:  # noqa: BLE001 - keep the camera alive, log the failure
+                        logger.exception("sim camera: periodic render failed")
+                    continue
+                kind = request[0]
+                if kind == "stop":
+                    break
+                if kind == "wake":
+                    next_due = time.monotonic()
+                    continue
+                done, box = request[1], request[2]
+                try:
+                    box["images"] = self._render_once(renderer)
+                except Exception as error:  # noqa: BLE001 - handed to the caller
+                    box["error"] = error
+                done.set()
+        finally:
+            renderer.close()

@@ -1,0 +1,359 @@
+"""SimWorkcell: the MuJoCo workcell that owns the model, its lock, the clock (real-time threads or
+deterministic fast stepping) and the ground truth, and hands out the sim Arm, Gripper and Camera.
+
+Fast mode (realtime=False): physics advances only in step() and in blocking device calls, so a seed and
+a sequence of calls always give the same result. Real-time mode: a physics thread paced to the wall
+clock (servo references updated every control period) and a render thread at the camera rate."""
+
+from __future__ import annotations
+
+import logging
+import math
+import threading
+import time
+from collections.abc import Callable
+
+import mujoco
+import numpy as np
+
+from armlab.devices.camera import Frame
+from armlab.devices.sim.arm import SimArm
+from armlab.devices.sim.camera import NoiseModel, SimCamera
+from armlab.devices.sim.config import (
+    SimWorkcellConfig,
+    draw_pose_error,
+    load_camera_config,
+    load_sim_config,
+    nominal_T_world_camera,
+)
+from armlab.devices.sim.gripper import SimGripper
+from armlab.devices.sim.mjcf import CAMERA_NAME, GRIPPER_SITE, OBJECT_PREFIX, ArmGeometry, build_model_xml
+from armlab.devices.sim.render import RawImages, RenderThread
+from armlab.scene import Scene, SceneObject, yaw_from_quat
+
+logger = logging.getLogger(__name__)
+
+MAX_CATCH_UP_S = 0.1  # real time: if physics falls this far behind the wall clock, it drops the backlog
+PAD_GEOMS = ("left_pad", "right_pad")
+
+
+class SimWorkcell:
+    """The simulated RX200 workcell. See the module docstring for the clock semantics."""
+
+    def __init__(self, config: SimWorkcellConfig | None = None, scene: Scene | None = None) -> None:
+        self.config = config or SimWorkcellConfig()
+        self.lock = threading.RLock()
+        self._geometry = ArmGeometry.load(self.config.arm)
+        self._sim = load_sim_config(self.config.sim)
+        self._camera_config = load_camera_config(self.config.camera)
+        pose_rng, noise_rng = (np.random.default_rng(s) for s in np.random.SeedSequence(self.config.seed).spawn(2))
+        T_nominal = nominal_T_world_camera(self._camera_config.mount)
+        self._T_world_camera = (
+            T_nominal @ draw_pose_error(pose_rng, self._sim.camera_pose_error) if self.config.camera_pose_error else T_nominal
+        )
+        self._scene = scene or Scene()
+        self._model: mujoco.MjModel | None = None
+        self._data: mujoco.MjData | None = None
+        self._build(self._scene, previous=None)
+        physics = self._sim.physics
+        self.arm = SimArm(self, self._geometry.joint_names, self._geometry.lower_rad, self._geometry.upper_rad,
+                          physics.settle_tolerance_rad, physics.settle_timeout_s)
+        self.gripper = SimGripper(self, self._geometry.finger_offset_min_m, self._geometry.finger_offset_max_m,
+                                  self._geometry.pad_thickness_m, self._sim.gripper.stop_speed_m_s,
+                                  self._sim.gripper.stop_time_s)
+        noise = NoiseModel(self._camera_config, noise_rng, self.config.color_noise, self.config.depth_noise)
+        self.camera = SimCamera(self, self._camera_config, noise, self.config.camera_fps)
+        self._render_thread: RenderThread | None = None
+        self._physics_thread: threading.Thread | None = None
+        self._stop_event = threading.Event()
+        self._started = False
+        self._closed = False
+
+    # ------------------------------------------------------------------ model
+    def _build(self, scene: Scene, previous: dict | None) -> None:
+        """(Re)build model and data for a scene; `previous` carries the arm/gripper state across."""
+        xml, assets = build_model_xml(self._geometry, self._sim, self._camera_config, self._T_world_camera, scene)
+        model = mujoco.MjModel.from_xml_string(xml, assets)
+        data = mujoco.MjData(model)
+        self._arm_qpos = np.array([model.jnt_qposadr[model.joint(n).id] for n in self._geometry.joint_names])
+        self._arm_qvel = np.array([model.jnt_dofadr[model.joint(n).id] for n in self._geometry.joint_names])
+        self._finger_qpos = np.array([model.jnt_qposadr[model.joint(f"{s}_finger").id] for s in ("left", "right")])
+        self._finger_qvel = np.array([model.jnt_dofadr[model.joint(f"{s}_finger").id] for s in ("left", "right")])
+        self._pos_act = np.array([model.actuator(f"{n}_pos").id for n in self._geometry.joint_names])
+        self._vel_act = np.array([model.actuator(f"{n}_vel").id for n in self._geometry.joint_names])
+        self._finger_act = np.array([model.actuator(f"{s}_finger").id for s in ("left", "right")])
+        self._arm_gains = (model.actuator_gainprm[self._pos_act, 0].copy(), model.actuator_gainprm[self._vel_act, 0].copy())
+        self._arm_body_ids = np.flatnonzero(model.body_gravcomp > 0)
+        self._gripper_site = model.site(GRIPPER_SITE).id
+        self._pad_geoms = {model.geom(name).id: name for name in PAD_GEOMS}
+        self._object_bodies = {obj.id: model.body(OBJECT_PREFIX + obj.id).id for obj in scene.objects}
+        self._body_to_object = {body: obj_id for obj_id, body in self._object_bodies.items()}
+        if previous is None:
+            sleep = np.array([0.0, -1.80, 1.55, 0.8, 0.0])
+            data.qpos[self._arm_qpos] = np.clip(sleep, self._geometry.lower_rad, self._geometry.upper_rad)
+            data.qpos[self._finger_qpos] = self._geometry.finger_offset_max_m
+            data.ctrl[self._pos_act] = data.qpos[self._arm_qpos]
+            data.ctrl[self._finger_act] = self._geometry.finger_offset_max_m
+            self._next_control_s = 0.0
+        else:
+            data.time = previous["time"]
+            data.qpos[self._arm_qpos] = previous["arm_qpos"]
+            data.qvel[self._arm_qvel] = previous["arm_qvel"]
+            data.qpos[self._finger_qpos] = previous["finger_qpos"]
+            data.qvel[self._finger_qvel] = previous["finger_qvel"]
+            data.ctrl[self._pos_act] = previous["pos_ctrl"]
+            data.ctrl[self._vel_act] = previous["vel_ctrl"]
+            data.ctrl[self._finger_act] = previous["finger_ctrl"]
+            if not previous["torque"]:
+                self._apply_torque(model, False)
+        mujoco.mj_forward(model, data)
+        self._model, self._data, self._scene = model, data, scene
+        self._torque = True if previous is None else previous["torque"]
+
+    def set_scene(self, scene: Scene) -> None:
+        """Replace all objects (thread-safe; the arm and gripper keep their state)."""
+        if not isinstance(scene, Scene):
+            raise ValueError(f"set_scene expects a Scene, got {type(scene).__name__}")
+        with self.lock:
+            data = self._data
+            previous = {
+                "time": data.time,
+                "arm_qpos": data.qpos[self._arm_qpos].copy(),
+                "arm_qvel": data.qvel[self._arm_qvel].copy(),
+                "finger_qpos": data.qpos[self._finger_qpos].copy(),
+                "finger_qvel": data.qvel[self._finger_qvel].copy(),
+                "pos_ctrl": data.ctrl[self._pos_act].copy(),
+                "vel_ctrl": data.ctrl[self._vel_act].copy(),
+                "finger_ctrl": data.ctrl[self._finger_act].copy(),
+                "torque": self._torque,
+            }
+            self._build(scene, previous)
+
+    @property
+    def scene(self) -> Scene:
+        return self._scene
+
+    @property
+    def model(self) -> mujoco.MjModel:
+        return self._model
+
+    @property
+    def realtime(self) -> bool:
+        return self.config.realtime
+
+    @property
+    def sim_time_s(self) -> float:
+        return float(self._data.time)
+
+    # ------------------------------------------------------------ device hooks (call under self.lock)
+    def arm_positions(self) -> np.ndarray:
+        return self._data.qpos[self._arm_qpos].copy()
+
+    def arm_velocities(self) -> np.ndarray:
+        return self._data.qvel[self._arm_qvel].copy()
+
+    def finger_positions(self) -> tuple[float, float]:
+        left, right = self._data.qpos[self._finger_qpos]
+        return float(left), float(right)
+
+    def finger_velocities(self) -> tuple[float, float]:
+        left, right = self._data.qvel[self._finger_qvel]
+        return float(left), float(right)
+
+    def apply_arm_reference(self, position_rad: np.ndarray, velocity_rad_s: np.ndarray) -> None:
+        self._data.ctrl[self._pos_act] = position_rad
+        self._data.ctrl[self._vel_act] = np.clip(velocity_rad_s, -10.0, 10.0)
+
+    def apply_finger_reference(self, offset_m: float) -> None:
+        self._data.ctrl[self._finger_act] = offset_m
+
+    def _apply_torque(self, model: mujoco.MjModel, enabled: bool) -> None:
+        kp, kv = self._arm_gains if enabled else (np.zeros(len(self._pos_act)), np.zeros(len(self._vel_act)))
+        model.actuator_gainprm[self._pos_act, 0] = kp
+        model.actuator_biasprm[self._pos_act, 1] = -kp
+        model.actuator_gainprm[self._vel_act, 0] = kv
+        model.actuator_biasprm[self._vel_act, 2] = -kv
+        model.body_gravcomp[self._arm_body_ids] = 1.0 if enabled else 0.0
+
+    def set_arm_torque(self, enabled: bool) -> None:
+        self._apply_torque(self._model, enabled)
+        self._torque = enabled
+
+    # ------------------------------------------------------------------ clock
+    def _step_once(self) -> None:
+        data = self._data
+        if data.time + 1e-9 >= self._next_control_s:
+            self._next_control_s = data.time + self._sim.physics.control_period_s
+            if self.arm.is_connected:
+                self.arm.control(data.time)
+            self.gripper.control(data.time)
+        mujoco.mj_step(self._model, data)
+
+    def _advance(self, duration_s: float) -> None:
+        steps = int(round(duration_s / self._model.opt.timestep))
+        with self.lock:
+            for _ in range(steps):
+                self._step_once()
+
+    def step(self, duration_s: float) -> None:
+        """Fast mode: advance the physics by duration_s of simulated time, as fast as possible."""
+        if self.realtime:
+            raise RuntimeError("SimWorkcell.step() is for fast mode; in real time the physics thread advances it")
+        if not (isinstance(duration_s, (int, float)) and math.isfinite(duration_s) and 0.0 <= duration_s <= 3600.0):
+            raise ValueError(f"step: duration_s must be finite and in [0, 3600], got {duration_s!r}")
+        self._advance(float(duration_s))
+
+    def wait_for(self, predicate: Callable[[], bool], timeout_s: float) -> bool:
+        """Block until predicate() (checked under the lock) holds; fast mode steps the physics meanwhile.
+        timeout_s is simulated time in fast mode and wall time in real time. Returns predicate()."""
+        chunk_s = self._sim.physics.control_period_s
+        if not self.realtime:
+            elapsed = 0.0
+            while True:
+                with self.lock:
+                    if predicate():
+                        return True
+                if elapsed >= timeout_s:
+                    return False
+                self._advance(chunk_s)
+                elapsed += chunk_s
+        deadline = time.monotonic() + timeout_s
+        while True:
+            with self.lock:
+                if predicate():
+                    return True
+            if time.monotonic() >= deadline:
+                return False
+            time.sleep(0.002)
+
+    def _physics_loop(self) -> None:
+        wall0 = time.monotonic()
+        sim0 = self.sim_time_s
+        timestep = self._model.opt.timestep
+        while not self._stop_event.is_set():
+            with self.lock:
+                target = sim0 + (time.monotonic() - wall0)
+                steps = 0
+                while self._data.time < target and steps < int(MAX_CATCH_UP_S / timestep):
+                    self._step_once()
+                    steps += 1
+                if self._data.time < target - MAX_CATCH_UP_S:
+                    wall0, sim0 = time.monotonic(), self._data.time
+            time.sleep(0.001)
+
+    # ---------------------------------------------------------------- camera
+    def _snapshot(self, renderer) -> float:
+        with self.lock:
+            if renderer.model is not self._model:
+                renderer.set_model(self._model, CAMERA_NAME)
+            renderer.update_scene(self._model, self._data)
+            return float(self._data.time)
+
+    def _renderer(self) -> RenderThread:
+        if self._render_thread is None:
+            cam = self._camera_config
+            self._render_thread = RenderThread(self._model, CAMERA_NAME, cam.width, cam.height, self._snapshot)
+        return self._render_thread
+
+    def render_raw(self) -> RawImages:
+        """A clean render (no noise) now; for tests and tools."""
+        return self._renderer().render()
+
+    def render(self) -> Frame:
+        """Render one frame now without advancing the physics (noise applied as configured)."""
+        if self._closed:
+            raise RuntimeError("SimWorkcell is closed")
+        return self.camera.publish(self._renderer().render())
+
+    def capture_next_frame(self) -> Frame:
+        """Fast mode: advance the physics to the next frame time of the camera clock and render."""
+        period = 1.0 / self.camera.fps
+        with self.lock:
+            next_frame_s = (math.floor(self.sim_time_s / period + 1e-6) + 1) * period
+            self._advance(next_frame_s - self.sim_time_s)
+        return self.render()
+
+    # -------------------------------------------------------------- lifecycle
+    def start(self) -> None:
+        """Connect the devices; in real time also start the physics and camera threads."""
+        if self._started:
+            return
+        for device in (self.arm, self.gripper, self.camera):
+            if not device.is_connected:
+                device.connect()
+        self._started = True
+        if self.realtime:
+            self._stop_event.clear()
+            self._physics_thread = threading.Thread(target=self._physics_loop, name="sim-physics", daemon=True)
+            self._physics_thread.start()
+            self._renderer().start_periodic(1.0 / self.camera.fps, self.camera.publish)
+
+    def close(self) -> None:
+        """Stop the threads and release the devices. Safe to call twice."""
+        if self._closed:
+            return
+        self._closed = True
+        self._stop_event.set()
+        if self._physics_thread is not None:
+            self._physics_thread.join(timeout=5.0)
+        if self._render_thread is not None:
+            self._render_thread.close()
+        for device in (self.arm, self.gripper, self.camera):
+            if device.is_connected:
+                device.close()
+
+    def __enter__(self) -> SimWorkcell:
+        self.start()
+        return self
+
+    def __exit__(self, *exc) -> None:
+        self.close()
+
+    # ----------------------------------------------------------- ground truth
+    def gripper_point_m(self) -> np.ndarray:
+        """True world position of the gripper point (for tests and scorers)."""
+        with self.lock:
+            return self._data.site_xpos[self._gripper_site].copy()
+
+    def truth(self) -> dict:
+        """Ground truth: camera (K, size, true T_world_camera), objects (pose), gripper contacts, arm."""
+        with self.lock:
+            data = self._data
+            objects = []
+            for obj in self._scene.objects:
+                body = self._object_bodies[obj.id]
+                quat = data.xquat[body].copy()
+                entry = SceneObject(obj.id, obj.type, obj.color, obj.size, tuple(data.xpos[body]), tuple(quat),
+                                    obj.aruco_id).to_dict()
+                objects.append(entry)
+            contacts = {"left_pad": set(), "right_pad": set()}
+            for contact in data.contact[: data.ncon]:
+                for pad_geom, other_geom in ((contact.geom1, contact.geom2), (contact.geom2, contact.geom1)):
+                    pad = self._pad_geoms.get(int(pad_geom))
+                    obj_id = self._body_to_object.get(int(self._model.geom_bodyid[other_geom]))
+                    if pad is not None and obj_id is not None:
+                        contacts[pad].add(obj_id)
+            both = sorted(contacts["left_pad"] & contacts["right_pad"])
+            left, right = self.finger_positions()
+            state = {
+                "left_contacts": sorted(contacts["left_pad"]),
+                "right_contacts": sorted(contacts["right_pad"]),
+                "holding_id": both[0] if both and self.gripper._command == "grasp" else None,
+                "width_m": left + right - 2.0 * self._geometry.pad_thickness_m,
+                "position_m": data.site_xpos[self._gripper_site].tolist(),
+            }
+            arm = {"joint_names": list(self._geometry.joint_names), "position_rad": self.arm_positions().tolist()}
+            sim_time = float(data.time)
+        K = self.camera.intrinsics.K
+        return {
+            "camera": {
+                "K": K.tolist(),
+                "width": self.camera.intrinsics.width,
+                "height": self.camera.intrinsics.height,
+                "T_world_camera": self._T_world_camera.tolist(),
+            },
+            "objects": objects,
+            "gripper": state,
+            "arm": arm,
+            "time_s": sim_time,
+        }
