@@ -48,10 +48,7 @@ def make_detector(dictionary: str) -> cv2.aruco.ArucoDetector:
     params.adaptiveThreshWinSizeMax = 35
     params.adaptiveThreshWinSizeStep = 10
     params.polygonalApproxAccuracyRate = 0.05
-    params.cornerRefinementMethod = cv2.aruco.CORNER_REFINE_SUBPIX
-    params.cornerRefinementWinSize = 3
-    params.cornerRefinementMinAccuracy = 0.01
-    params.cornerRefinementMaxIterations = 50
+    params.cornerRefinementMethod = cv2.aruco.CORNER_REFINE_NONE  # refined in detect_tags, sized to the tag
     params.perspectiveRemovePixelPerCell = 8
     params.perspectiveRemoveIgnoredMarginPerCell = 0.2
     return cv2.aruco.ArucoDetector(cv2.aruco.getPredefinedDictionary(getattr(cv2.aruco, dictionary)), params)
@@ -76,7 +73,12 @@ def detect_tags(
     if ids is None:
         return []
     tags = []
+    criteria = (cv2.TERM_CRITERIA_EPS + cv2.TERM_CRITERIA_COUNT, 40, 0.001)
     for tag_corners, tag_id in zip(corners, ids.ravel()):
-        pts = np.asarray(tag_corners, dtype=np.float64).reshape(4, 2)
+        pts = np.asarray(tag_corners, dtype=np.float32).reshape(4, 1, 2)
+        side_px = float(np.min(np.linalg.norm(pts[:, 0] - np.roll(pts[:, 0], 1, axis=0), axis=1)))
+        half_window = int(np.clip(side_px / 10.0, 2, 5))  # ~1/10 of the tag: on the corner, off the code cells
+        pts = cv2.cornerSubPix(grey, pts, (half_window, half_window), (-1, -1), criteria)
+        pts = pts.reshape(4, 2).astype(np.float64)
         tags.append(Tag(id=int(tag_id), corners_px=pts, center_px=pts.mean(axis=0)))
     return sorted(tags, key=lambda tag: tag.id)

@@ -1,0 +1,131 @@
+"""`armlab tags | calibrate-intrinsics | calibrate-extrinsics | detect`: perception on image files,
+for offline use and scripts. Output is JSON on stdout; errors are one sentence on stderr, exit 2."""
+
+from __future__ import annotations
+
+import argparse
+import json
+import sys
+from pathlib import Path
+
+
+def register(subparsers: argparse._SubParsersAction) -> None:
+    tags = subparsers.add_parser("tags", help="detect fiducial tags in an image (JSON list of id + corners)")
+    tags.add_argument("image")
+    tags.add_argument("--dict", default=None, help="OpenCV dictionary name (default from config/vision.yaml: DICT_APRILTAG_36h11)")
+    tags.set_defaults(func=run_tags)
+
+    intr = subparsers.add_parser("calibrate-intrinsics", help="camera intrinsics from checkerboard images")
+    intr.add_argument("images", nargs="+")
+    intr.add_argument("--pattern", default="9x6", help="inner corners, columns x rows (default 9x6)")
+    intr.add_argument("--square", type=float, default=0.025, help="square size in metres (default 0.025)")
+    intr.add_argument("--free-aspect", action="store_true", help="do not fix fx/fy (OpenCV's CALIB_FIX_ASPECT_RATIO is the default)")
+    intr.set_defaults(func=run_calibrate_intrinsics)
+
+    extr = subparsers.add_parser("calibrate-extrinsics", help="camera pose from the board tags (and depth cross-check)")
+    extr.add_argument("color")
+    extr.add_argument("--depth", default=None, help="16-bit PNG depth in mm, aligned to colour")
+    extr.add_argument("--out", required=True, help="calibration JSON to write")
+    extr.add_argument("--intrinsics", default=None, help="camera YAML (config/cameras format) or intrinsics JSON (default sim_l515)")
+    extr.set_defaults(func=run_calibrate_extrinsics)
+
+    det = subparsers.add_parser("detect", help="blocks in a colour + depth frame (JSON)")
+    det.add_argument("color")
+    det.add_argument("--depth", required=True, help="16-bit PNG depth in mm, aligned to colour")
+    det.add_argument("--calibration", required=True, help="calibration JSON from calibrate-extrinsics")
+    det.add_argument("--all", action="store_true", help="include non-cubes (distractors) and every field")
+    det.set_defaults(func=run_detect)
+
+
+def _fail(message: str) -> int:
+    print(f"error: {message}", file=sys.stderr)
+    return 2
+
+
+def _read_color(path: str):
+    import cv2
+
+    image = cv2.imread(path, cv2.IMREAD_COLOR)
+    if image is None:
+        raise ValueError(f"cannot read image {path}")
+    return image
+
+
+def _read_depth(path: str):
+    import cv2
+    import numpy as np
+
+    depth = cv2.imread(path, cv2.IMREAD_UNCHANGED)
+    if depth is None:
+        raise ValueError(f"cannot read depth image {path}")
+    if depth.ndim != 2 or depth.dtype != np.uint16:
+        raise ValueError(f"depth image {path} must be single-channel 16-bit (mm), got {depth.dtype} {depth.shape}")
+    return depth
+
+
+def load_intrinsics(path: str | None):
+    """Intrinsics from a config/cameras YAML (default sim_l515) or a JSON with K, dist and image_size."""
+    from armlab.config import read_config_file, resolve_config_path
+    from armlab.devices.camera import Intrinsics
+
+    source = resolve_config_path(path or "sim_l515", "cameras")
+    data = read_config_file(source)
+    try:
+        if "K" in data:
+            K = data["K"]
+            width, height = data.get("image_size") or (data["width"], data["height"])
+            return Intrinsics(int(width), int(height), float(K[0][0]), float(K[1][1]), float(K[0][2]), float(K[1][2]), tuple(float(x) for x in data.get("dist", [0.0] * 5)))
+        k = data["intrinsics"]
+        return Intrinsics(int(data["width"]), int(data["height"]), float(k["fx"]), float(k["fy"]), float(k["cx"]), float(k["cy"]), tuple(float(x) for x in k.get("dist", [0.0] * 5)))
+    except (KeyError, TypeError, ValueError, IndexError) as error:
+        raise ValueError(f"{source}: no usable intrinsics ({error})") from error
+
+
+def run_tags(args: argparse.Namespace) -> int:
+    from armlab.vision import detect_tags, load_perception_config
+
+    try:
+        tags = detect_tags(_read_color(args.image), load_perception_config(), dictionary=args.dict)
+    except ValueError as error:
+        return _fail(str(error))
+    print(json.dumps([{"id": t.id, "corners_px": t.corners_px.round(3).tolist()} for t in tags]))
+    return 0
+
+
+def run_calibrate_intrinsics(args: argparse.Namespace) -> int:
+    from armlab.vision.intrinsics import calibrate_intrinsics, parse_pattern
+
+    try:
+        result = calibrate_intrinsics(args.images, parse_pattern(args.pattern), args.square, fix_aspect_ratio=not args.free_aspect)
+    except ValueError as error:
+        return _fail(str(error))
+    print(json.dumps(result.to_dict()))
+    return 0
+
+
+def run_calibrate_extrinsics(args: argparse.Namespace) -> int:
+    from armlab.vision import calibrate_extrinsics, load_perception_config
+
+    try:
+        color = _read_color(args.color)
+        depth = _read_depth(args.depth) if args.depth else None
+        cal = calibrate_extrinsics(color, load_intrinsics(args.intrinsics), load_perception_config(), depth_mm=depth)
+    except ValueError as error:
+        return _fail(str(error))
+    cal.save(Path(args.out))
+    print(json.dumps(cal.to_dict()))
+    return 0
+
+
+def run_detect(args: argparse.Namespace) -> int:
+    from armlab.vision import Calibration, detect_blocks, load_perception_config
+
+    try:
+        cal = Calibration.load(args.calibration)
+        blocks = detect_blocks(_read_color(args.color), _read_depth(args.depth), cal, load_perception_config())
+    except ValueError as error:
+        return _fail(str(error))
+    keys = ("color", "size", "position_m", "yaw_rad", "stack_level")
+    out = [b.to_dict() if args.all else {k: b.to_dict()[k] for k in keys} for b in blocks if args.all or b.is_cube]
+    print(json.dumps(out))
+    return 0
