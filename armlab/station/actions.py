@@ -197,7 +197,7 @@ def calibrate(station: Station, source: str | None = None) -> Job:
         station.store.save_calibration({"calibration": calibration.to_dict(), "info": info})
         station.set_calibration(calibration, info)
         ctx.job.update(message=f"calibrated: reprojection error {calibration.reprojection_error_px:.2f} px")
-        return info
+        return {key: info[key] for key in ("reprojection_error_px", "camera_position_m", "depth_check_error_m")}
 
     return station.start_job("calibrate", "calibrate", run, source=source)
 
@@ -273,6 +273,7 @@ def drop(station: Station, position_m=None, pixel=None, source: str | None = Non
 
 def repeat(station: Station, program_id: int, cycles: int = 1, source: str | None = None) -> Job:
     """Play a saved program `cycles` times: joint moves between waypoints, gripper changes where taught."""
+    station.allowed_or_raise("repeat")
     if not isinstance(cycles, int) or not 1 <= cycles <= 100:
         raise ValueError(f"cycles must be an integer from 1 to 100, got {cycles!r}")
     program = station.store.get_program(program_id)

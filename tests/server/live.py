@@ -1,0 +1,91 @@
+"""Helpers for tests over real HTTP: a simulated station shared by a module, a real uvicorn server on a
+free 127.0.0.1 port in a thread, and a factory that lets one simulation serve several app lifetimes."""
+
+from __future__ import annotations
+
+import contextlib
+import os
+import socket
+import threading
+import time
+
+os.environ.setdefault("MUJOCO_GL", "egl")
+
+import httpx
+import uvicorn
+
+from armlab.station import Station, StationConfig
+
+
+def free_port() -> int:
+    with socket.socket() as sock:
+        sock.bind(("127.0.0.1", 0))
+        return sock.getsockname()[1]
+
+
+def start_cell(seed: int = 0):
+    """A real-time SimWorkcell, started."""
+    from armlab.devices.sim import SimWorkcell, SimWorkcellConfig
+
+    cell = SimWorkcell(SimWorkcellConfig(realtime=True, seed=seed))
+    cell.start()
+    return cell
+
+
+def make_station(cell, db_path, **config_overrides) -> Station:
+    """A started Station on the shared cell, with its own database file."""
+    from armlab.kinematics import load_arm
+
+    config = StationConfig(database_path=str(db_path), **config_overrides)
+    station = Station(cell.arm, cell.gripper, cell.camera, model=load_arm("rx200"), config=config, sim=cell, backend="sim")
+    station.start()
+    return station
+
+
+class StationOnCell:
+    """What create_app's station_factory returns: a fresh Station on the shared cell; close() keeps the cell."""
+
+    def __init__(self, cell, db_path, **config_overrides) -> None:
+        self.station = make_station(cell, db_path, **config_overrides)
+
+    def close(self) -> None:
+        self.station.close()
+
+
+@contextlib.contextmanager
+def serve(app, port: int | None = None):
+    """Run `app` under a real uvicorn server on 127.0.0.1:<free port>; yields the base URL."""
+    port = port or free_port()
+    config = uvicorn.Config(app, host="127.0.0.1", port=port, log_level="warning", ws_per_message_deflate=False, lifespan="on")
+    server = uvicorn.Server(config)
+    thread = threading.Thread(target=server.run, daemon=True)
+    thread.start()
+    url = f"http://127.0.0.1:{port}"
+    deadline = time.monotonic() + 30
+    while True:
+        try:
+            if httpx.get(url + "/api/health", timeout=1.0).status_code == 200 and server.started:
+                break
+        except httpx.HTTPError:
+            pass
+        if time.monotonic() > deadline or not thread.is_alive():
+            server.should_exit = True
+            raise RuntimeError("the test server did not start")
+        time.sleep(0.05)
+    try:
+        yield url
+    finally:
+        server.should_exit = True
+        thread.join(15)
+
+
+def wait_for(predicate, timeout_s: float = 10.0, poll_s: float = 0.05):
+    """Poll until predicate() is truthy; returns its value, or raises AssertionError on timeout."""
+    deadline = time.monotonic() + timeout_s
+    while True:
+        value = predicate()
+        if value:
+            return value
+        if time.monotonic() > deadline:
+            raise AssertionError(f"condition not met within {timeout_s} s")
+        time.sleep(poll_s)
