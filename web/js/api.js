@@ -55,7 +55,7 @@ export class Api {
   }
 
   async request(method, path, body) {
-    const headers = { Accept: "application/json" };
+    const headers = { Accept: "application/json", "X-Armlab-Controller": "ui" };
     if (this.token) headers.Authorization = `Bearer ${this.token}`;
     const init = { method, headers };
     if (body !== undefined) {

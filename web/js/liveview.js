@@ -30,6 +30,7 @@ export class LiveView {
     this.onTarget = onTarget;
     this.onHoverDetection = onHoverDetection || (() => {});
     this.mode = "inspect";
+    this.calibrated = false;
     this.header = null;
     this.bitmap = null;
     this.detections = [];
@@ -84,8 +85,10 @@ export class LiveView {
     }
   }
 
+  /** The view the shown frame really is: the server falls back to colour for top-down until calibrated. */
   view() {
-    return (this.header && this.header.view) || "color";
+    const v = (this.header && this.header.view) || "color";
+    return v === "topdown" && !this.calibrated ? "color" : v;
   }
 
   /** Size of the camera image the server's pixel coordinates refer to. */

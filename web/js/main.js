@@ -147,6 +147,8 @@ class App {
     if (previous && previous.calibrated !== s.calibrated && s.calibrated) {
       this.api.calibration().then((c) => renderCalibration(c)).catch(() => {});
     }
+    this.live.calibrated = Boolean(s.calibrated);
+    $("view-select").querySelector("[data-view='topdown']").disabled = !s.calibrated;
     if (Array.isArray(s.detections)) this.setDetections(s.detections);
     this.watchJob(s.job);
     this.refreshAllowed();

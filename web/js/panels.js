@@ -33,7 +33,10 @@ export function renderStatus(s) {
   const badge = $("state-badge");
   badge.textContent = s.state || "—";
   badge.dataset.state = s.state || "unknown";
-  $("status-detail").textContent = s.detail || (s.state === "idle" ? "ready" : "");
+  let detail = s.detail || (s.state === "idle" ? "ready" : "");
+  if (s.moving) detail += detail ? " · moving" : "moving";
+  if (s.controller) detail += ` · by ${s.controller}`;
+  $("status-detail").textContent = detail;
   const job = s.job;
   const line = $("job-line");
   if (job && job.state === "running") {
@@ -44,6 +47,7 @@ export function renderStatus(s) {
     line.hidden = true;
   }
   $("backend").textContent = s.backend ? `backend: ${s.backend}` : "—";
+  $("backend").title = s.controller ? `last commanded by: ${s.controller}` : "Device backend";
 }
 
 /** Joint table (deg) and the gripper pose/width readout. */
@@ -144,7 +148,7 @@ export function renderDetections(detections, hoverIndex, onRowClick) {
     const p = d.position_m || [];
     const sw = `<span class="swatch" style="background:${SWATCH[d.color] || "#888"}"></span>`;
     const size = d.size || (d.is_cube === false ? "other" : "");
-    const level = d.stack_level > 0 ? ` L${d.stack_level}` : "";
+    const level = d.stack_level > 1 ? ` L${d.stack_level}` : "";
     const cells = [String(d.id ?? i), `${sw}${escapeHtml(d.color || "?")}`, escapeHtml(size + level),
       fmtMm(p[0]), fmtMm(p[1]), fmtMm(p[2]), fmtDeg(d.yaw_rad, 0)];
     tr.innerHTML = cells.map((c) => `<td>${c}</td>`).join("");

@@ -1,0 +1,141 @@
+"""Browser-test fixtures: the real `armlab serve` (simulated workcell) as a subprocess on a free port,
+real Chromium (Debian's /usr/bin/chromium) driven by Playwright, and a small REST helper."""
+
+from __future__ import annotations
+
+import os
+import secrets
+import shutil
+import socket
+import subprocess
+import sys
+import time
+from collections.abc import Iterator
+from dataclasses import dataclass
+from pathlib import Path
+
+import httpx
+import pytest
+
+REPO = Path(__file__).resolve().parents[2]
+CHROMIUM = "/usr/bin/chromium"
+CHROMIUM_ARGS = [
+    "--headless",
+    "--no-sandbox",
+    "--disable-gpu",
+    "--no-first-run",
+    "--disable-background-networking",
+    "--disable-component-update",
+    "--disable-sync",
+]
+SERVER_START_TIMEOUT_S = 90.0
+# A fixed scene: three large cubes (R, G, B) in reach in the positive half-plane.
+SCENE_ARGS = ["--event", "pick_sort", "--level", "1", "--scene-seed", "3", "--seed", "1"]
+
+
+def free_port() -> int:
+    with socket.socket() as sock:
+        sock.bind(("127.0.0.1", 0))
+        return sock.getsockname()[1]
+
+
+def armlab_command() -> list[str]:
+    """The venv's console script when present, else the module form with this interpreter."""
+    script = REPO / ".venv" / "bin" / "armlab"
+    if script.exists():
+        return [str(script)]
+    found = shutil.which("armlab")
+    return [found] if found else [sys.executable, "-m", "armlab.cli"]
+
+
+@dataclass
+class Server:
+    """A running `armlab serve`: base URL, its control token, and a REST helper."""
+
+    base_url: str
+    token: str
+    process: subprocess.Popen
+    log_path: Path
+
+    def request(self, method: str, path: str, json: dict | None = None, timeout_s: float = 30.0) -> httpx.Response:
+        headers = {"Authorization": f"Bearer {self.token}"}
+        return httpx.request(method, self.base_url + path, json=json, headers=headers, timeout=timeout_s)
+
+    def get(self, path: str) -> dict:
+        response = self.request("GET", path)
+        response.raise_for_status()
+        return response.json()
+
+    def post(self, path: str, json: dict | None = None, timeout_s: float = 30.0) -> dict:
+        response = self.request("POST", path, json=json if json is not None else {}, timeout_s=timeout_s)
+        assert response.status_code < 300, f"POST {path} -> {response.status_code}: {response.text}"
+        return response.json() if response.content else {}
+
+    def log_tail(self, n_chars: int = 3000) -> str:
+        try:
+            return self.log_path.read_text(errors="replace")[-n_chars:]
+        except OSError:
+            return ""
+
+    def wait_status(self, predicate, timeout_s: float, what: str) -> dict:
+        """Poll GET /api/status until predicate(status) holds; fail naming `what` otherwise."""
+        deadline = time.monotonic() + timeout_s
+        status = {}
+        while time.monotonic() < deadline:
+            status = self.get("/api/status")
+            if predicate(status):
+                return status
+            time.sleep(0.1)
+        raise AssertionError(f"timed out after {timeout_s} s waiting for {what}; last status: {status}")
+
+
+@pytest.fixture(scope="session")
+def server(tmp_path_factory) -> Iterator[Server]:
+    port = free_port()
+    token = secrets.token_urlsafe(16)
+    log_path = tmp_path_factory.mktemp("server") / "serve.log"
+    env = dict(os.environ, MUJOCO_GL=os.environ.get("MUJOCO_GL", "egl"))
+    db_path = log_path.parent / "armlab.sqlite3"  # a fresh store: no calibration or programs from earlier runs
+    with log_path.open("wb") as log:
+        process = subprocess.Popen(
+            [*armlab_command(), "serve", "--host", "127.0.0.1", "--port", str(port), "--token", token,
+             "--db", str(db_path), *SCENE_ARGS],
+            cwd=REPO,
+            env=env,
+            stdout=log,
+            stderr=subprocess.STDOUT,
+        )
+    srv = Server(f"http://127.0.0.1:{port}", token, process, log_path)
+    try:
+        deadline = time.monotonic() + SERVER_START_TIMEOUT_S
+        while True:
+            if process.poll() is not None:
+                raise RuntimeError(f"armlab serve exited with {process.returncode}:\n{srv.log_tail()}")
+            try:
+                if httpx.get(srv.base_url + "/api/health", timeout=1.0).status_code == 200:
+                    break
+            except httpx.HTTPError:
+                pass
+            if time.monotonic() > deadline:
+                raise RuntimeError(f"armlab serve not healthy after {SERVER_START_TIMEOUT_S} s:\n{srv.log_tail()}")
+            time.sleep(0.25)
+        yield srv
+    finally:
+        process.terminate()
+        try:
+            process.wait(timeout=15)
+        except subprocess.TimeoutExpired:
+            process.kill()
+            process.wait(timeout=5)
+
+
+@pytest.fixture(scope="session")
+def browser():
+    from playwright.sync_api import sync_playwright
+
+    with sync_playwright() as playwright:
+        chromium = playwright.chromium.launch(executable_path=CHROMIUM, args=CHROMIUM_ARGS)
+        try:
+            yield chromium
+        finally:
+            chromium.close()

@@ -1,0 +1,97 @@
+"""The page against the real server: it loads, frames stream in, state and buttons follow the station,
+view-only visitors cannot command, refused commands show the server's own sentence."""
+
+from __future__ import annotations
+
+import math
+
+import pytest
+
+from browser_helpers import open_page, wait_frames
+
+pytestmark = pytest.mark.browser
+
+
+@pytest.fixture()
+def page(browser, server):
+    page = open_page(browser, f"{server.base_url}/?token={server.token}")
+    yield page
+    page.close()
+
+
+def test_page_loads_streams_frames_and_mirrors_status(page, server):
+    first = wait_frames(page, 3)
+    later = wait_frames(page, first + 5)
+    assert later >= first + 5
+
+    # The token left the address bar but stays for this tab.
+    assert "token" not in page.url
+    assert page.evaluate("sessionStorage.getItem('armlab.token')") == server.token
+
+    page.wait_for_function("document.getElementById('conn-text').textContent === 'connected'")
+    page.wait_for_function("Number(document.getElementById('fps').textContent) > 0", timeout=10_000)
+    assert page.text_content("#control-mode") == "control"
+    latency_ms = float(page.text_content("#latency"))
+    assert 0 <= latency_ms < 5000
+
+    status = server.get("/api/status")
+    assert page.text_content("#state-badge") == status["state"]
+    # Joint readout shows the station's joints in degrees.
+    page.wait_for_function("window.armlab.status && window.armlab.status.joints_rad.length === 5")
+    ui_joints_rad = page.evaluate("window.armlab.status.joints_rad")
+    rows = page.eval_on_selector_all("#joint-readout tr", "rows => rows.map(r => r.cells[1].textContent)")
+    assert len(rows) == 5
+    for shown, q in zip(rows, ui_joints_rad):
+        assert math.isclose(float(shown.rstrip("°")), math.degrees(q), abs_tol=0.06)
+
+    # Exactly the allowed commands are enabled.
+    allowed = set(page.evaluate("window.armlab.status.allowed_commands"))
+    buttons = page.eval_on_selector_all(
+        "button[data-command]", "bs => bs.map(b => [b.dataset.command, b.disabled])"
+    )
+    assert buttons, "no command buttons on the page"
+    for command, disabled in buttons:
+        assert disabled == (command not in allowed), f"button for '{command}' disabled={disabled}, allowed={allowed}"
+    assert not page.is_disabled("#btn-estop")
+
+    # The joint plot has collected samples at telemetry rate.
+    page.wait_for_function("window.armlab.plot.sampleCount > 10", timeout=10_000)
+    assert page.errors == []
+
+
+def test_view_only_page_streams_but_cannot_command(browser, server):
+    page = open_page(browser, server.base_url + "/")
+    try:
+        wait_frames(page, 3)
+        page.wait_for_function("window.armlab.status !== null")
+        assert page.text_content("#control-mode") == "view only"
+        disabled = page.eval_on_selector_all("button[data-command]", "bs => bs.map(b => b.disabled)")
+        assert disabled and all(disabled)
+        assert page.errors == []
+    finally:
+        page.close()
+
+
+def test_view_toggle_changes_the_stream(page, server):
+    wait_frames(page, 2)
+    page.click("#view-select button[data-view='depth']")
+    page.wait_for_function("document.getElementById('live').dataset.view === 'depth'", timeout=15_000)
+    # Top-down needs a calibration: its button stays disabled until then.
+    assert page.is_disabled("#view-select button[data-view='topdown']") == (not server.get("/api/status")["calibrated"])
+    page.click("#view-select button[data-view='color']")
+    page.wait_for_function("document.getElementById('live').dataset.view === 'color'", timeout=15_000)
+    assert page.errors == []
+
+
+def test_refused_command_shows_the_servers_message(page, server):
+    wait_frames(page, 2)
+    page.wait_for_function("window.armlab.status && window.armlab.status.gripper_pose")
+    # A Cartesian target far out of reach: the station refuses and the toast carries its sentence.
+    response = server.request("POST", "/api/arm/pose", json={"position_m": [0.0, 0.9, 0.05]})
+    assert response.status_code == 422
+    server_message = response.json()["error"]["message"]
+    page.evaluate("window.armlab.run('far move', () => window.armlab.api.pose([0.0, 0.9, 0.05]))")
+    toast = page.locator(".toast[data-level='error']").last
+    toast.wait_for(timeout=5_000)
+    assert server_message in toast.text_content()
+    assert page.errors == []

@@ -1,0 +1,216 @@
+"""The operator's workflow in real Chromium on the simulated workcell: calibrate, click a block to
+grab it (ground truth shows it lifted), click a free spot to drop it (within 10 mm of the clicked
+world point), e-stop during a move (the arm stops, the UI shows estop). Saves docs/screenshot.png."""
+
+from __future__ import annotations
+
+import math
+import time
+
+import numpy as np
+import pytest
+
+from browser_helpers import REPO, canvas_point, open_page, wait_frames
+
+pytestmark = pytest.mark.browser
+
+SCREENSHOT = REPO / "docs" / "screenshot.png"
+JOB_TIMEOUT_S = 60.0
+
+
+@pytest.fixture(scope="module")
+def page(browser, server):
+    page = open_page(browser, f"{server.base_url}/?token={server.token}")
+    wait_frames(page, 2)
+    yield page
+    page.close()
+
+
+def truth_objects(server) -> list[dict]:
+    truth = server.get("/api/sim/truth")
+    return truth["objects"] if isinstance(truth, dict) else truth
+
+
+def wait_job_done(server, name: str) -> dict:
+    """Wait until the station is back to idle after job `name`; returns the final job dict."""
+    status = server.wait_status(
+        lambda s: s["state"] in ("idle", "fault", "estop") and (s.get("job") or {}).get("state") != "running",
+        JOB_TIMEOUT_S,
+        f"{name} job to end",
+    )
+    job = status.get("job") or server.get("/api/jobs/current").get("job") or {}
+    assert status["state"] == "idle", f"{name}: station in {status['state']}: {status.get('detail')}"
+    if job:
+        assert job.get("state") == "succeeded", f"{name} job: {job}"
+    return status
+
+
+def ensure_calibrated(page, server) -> None:
+    if not server.get("/api/calibration").get("calibrated"):
+        page.click("#btn-calibrate")
+        wait_job_done(server, "calibrate")
+    page.wait_for_function("document.getElementById('calib-badge').dataset.ok === 'true'", timeout=15_000)
+
+
+def test_calibrate_button_shows_the_result(page, server):
+    page.wait_for_function("!document.getElementById('btn-calibrate').disabled", timeout=15_000)
+    page.click("#btn-calibrate")
+    page.wait_for_function(
+        "document.getElementById('state-badge').textContent === 'calibrate' || window.armlab.status.calibrated",
+        timeout=10_000,
+    )
+    wait_job_done(server, "calibrate")
+    calibration = server.get("/api/calibration")
+    assert calibration["calibrated"] is True
+    page.wait_for_function("document.getElementById('calib-badge').dataset.ok === 'true'", timeout=15_000)
+    page.wait_for_selector("#calib-result dd[data-key='reprojection']", timeout=15_000)
+    shown = page.text_content("#calib-result dd[data-key='reprojection']")
+    assert shown == f"{calibration['reprojection_error_px']:.2f} px"
+    camera_mm = page.text_content("#calib-result dd[data-key='camera at']")
+    expected = " ".join(f"{round(v * 1000):+d}" for v in calibration["camera_position_m"])
+    assert camera_mm == f"{expected} mm"
+    assert page.errors == []
+
+
+def test_screenshot_of_calibrated_scene_with_detections(page, server):
+    ensure_calibrated(page, server)
+    page.check("#layer-grid")
+    page.wait_for_function("window.armlab.detections.length > 0", timeout=20_000)
+    page.wait_for_function("document.querySelectorAll('#det-body tr').length > 0")
+    n_rows = page.eval_on_selector_all("#det-body tr", "rows => rows.length")
+    assert n_rows == len(page.evaluate("window.armlab.detections"))
+    # Hover a detection so the hover readout and the row highlight show in the picture.
+    det = page.evaluate("window.armlab.detections[0]")
+    x, y = canvas_point(page, *det["center_px"])
+    page.mouse.move(x, y)
+    page.wait_for_function("document.getElementById('hover-world').dataset.positionM !== undefined", timeout=10_000)
+    hover_m = page.evaluate("JSON.parse(document.getElementById('hover-world').dataset.positionM)")
+    # The world point under a block's centre is on top of that block.
+    assert math.dist(hover_m[:2], det["position_m"][:2]) < 0.02
+    frames = wait_frames(page, 1)
+    wait_frames(page, frames + 3)  # frames drawn with the grid layer on
+    SCREENSHOT.parent.mkdir(parents=True, exist_ok=True)
+    page.screenshot(path=str(SCREENSHOT))
+    assert SCREENSHOT.stat().st_size > 50_000
+    page.uncheck("#layer-grid")
+
+
+def test_topdown_view_hover_maps_the_board(page, server):
+    ensure_calibrated(page, server)
+    page.click("#view-select button[data-view='topdown']")
+    page.wait_for_function("document.getElementById('live').dataset.view === 'topdown'", timeout=15_000)
+    size = page.evaluate("[document.getElementById('live').width, document.getElementById('live').height]")
+    assert abs(size[0] / size[1] - 1000 / 650) < 0.01  # the whole board, 1000 x 650 mm
+    box = page.locator("#live").bounding_box()
+    scale = min(box["width"] / size[0], box["height"] / size[1])  # object-fit: contain
+    left = box["x"] + (box["width"] - size[0] * scale) / 2
+    top = box["y"] + (box["height"] - size[1] * scale) / 2
+    # Image centre → board centre (0, 150) mm; a quarter from the left and top → (-250, 312.5) mm.
+    for fx, fy, expected in ((0.5, 0.5, (0.0, 0.15)), (0.25, 0.25, (-0.25, 0.3125))):
+        page.evaluate("delete document.getElementById('hover-world').dataset.positionM")
+        page.mouse.move(left + size[0] * scale * fx, top + size[1] * scale * fy)
+        page.wait_for_function("document.getElementById('hover-world').dataset.positionM !== undefined")
+        x_m, y_m, _ = page.evaluate("JSON.parse(document.getElementById('hover-world').dataset.positionM)")
+        assert abs(x_m - expected[0]) < 0.005 and abs(y_m - expected[1]) < 0.005, (x_m, y_m, expected)
+    page.click("#view-select button[data-view='color']")
+    page.wait_for_function("document.getElementById('live').dataset.view === 'color'", timeout=15_000)
+
+
+def nearest_truth(objects: list[dict], position_m) -> dict:
+    blocks = [o for o in objects if o.get("type", "block") == "block"]
+    return min(blocks, key=lambda o: math.dist(o["position_m"][:2], position_m[:2]))
+
+
+def pixel_for_world(server, target_xy_m, start_px=(640.0, 360.0)) -> tuple[float, float]:
+    """The camera pixel the station maps to world point target_xy_m, by Newton steps on its own
+    POST /api/pixel-to-world (so the test shares no camera model with the code under test)."""
+
+    def world(uv) -> np.ndarray:
+        return np.array(server.post("/api/pixel-to-world", {"u": float(uv[0]), "v": float(uv[1])})["position_m"][:2])
+
+    uv = np.array(start_px, dtype=float)
+    for _ in range(5):
+        w = world(uv)
+        jacobian = np.column_stack([(world(uv + [8.0, 0.0]) - w) / 8.0, (world(uv + [0.0, 8.0]) - w) / 8.0])
+        uv = uv + np.linalg.solve(jacobian, np.asarray(target_xy_m) - w)
+        if np.linalg.norm(world(uv) - target_xy_m) < 0.001:
+            break
+    return float(uv[0]), float(uv[1])
+
+
+def free_drop_pixel(server, objects: list[dict]) -> tuple[tuple[float, float], list[float]]:
+    """A camera pixel over free board within easy reach, and the world point the station maps it to."""
+    candidates_m = [(-0.15, 0.10), (0.15, 0.10), (0.0, 0.20), (-0.20, 0.20), (0.20, 0.20), (0.0, 0.12)]
+    for cx, cy in candidates_m:
+        if all(math.dist((cx, cy), o["position_m"][:2]) > 0.08 for o in objects):
+            u, v = pixel_for_world(server, (cx, cy))
+            mapped = server.post("/api/pixel-to-world", {"u": u, "v": v})["position_m"]
+            if all(math.dist(mapped[:2], o["position_m"][:2]) > 0.06 for o in objects):
+                return (u, v), mapped
+    raise AssertionError("no free drop spot found among the candidates")
+
+
+def test_click_grab_lifts_the_block_and_click_drop_places_it(page, server):
+    ensure_calibrated(page, server)
+    page.wait_for_function("window.armlab.detections.some(d => d.is_cube)", timeout=20_000)
+    status = server.get("/api/status")
+    assert not status["gripper"]["holding"]
+
+    # Aim at the cube nearest the arm's comfortable reach.
+    dets = [d for d in page.evaluate("window.armlab.detections") if d["is_cube"]]
+    det = min(dets, key=lambda d: abs(math.hypot(*d["position_m"][:2]) - 0.25))
+    before = nearest_truth(truth_objects(server), det["position_m"])
+    assert math.dist(before["position_m"][:2], det["position_m"][:2]) < 0.02
+
+    page.click("#click-mode button[data-mode='grab']")
+    x, y = canvas_point(page, *det["center_px"])
+    page.mouse.click(x, y)
+    wait_job_done(server, "grab")
+    held = next(o for o in truth_objects(server) if o["id"] == before["id"])
+    edge_m = {"large": 0.038, "small": 0.025}.get(before.get("size"), 0.038)
+    assert held["position_m"][2] > edge_m / 2 + 0.02, f"block not lifted: {held}"
+    assert server.get("/api/status")["gripper"]["holding"] is True
+    # The UI moved on to drop mode by itself.
+    page.wait_for_function("window.armlab.live.mode === 'drop'", timeout=5_000)
+
+    (u, v), target_m = free_drop_pixel(server, truth_objects(server))
+    x, y = canvas_point(page, u, v)
+    page.mouse.click(x, y)
+    wait_job_done(server, "drop")
+    time.sleep(0.5)  # let the block settle
+    placed = next(o for o in truth_objects(server) if o["id"] == before["id"])
+    error_m = math.dist(placed["position_m"][:2], target_m[:2])
+    assert error_m < 0.010, f"dropped {error_m * 1000:.1f} mm from the clicked point {target_m}: {placed}"
+    assert placed["position_m"][2] < edge_m, f"block not resting on the board: {placed}"
+    assert page.errors == []
+
+
+def test_estop_during_a_move_stops_the_arm_and_shows_estop(page, server):
+    status = server.get("/api/status")
+    assert status["state"] == "idle"
+    q_start = np.array(status["joints_rad"])
+    sleep_rad = np.array([0.0, -1.80, 1.55, 0.8, 0.0])
+    target_rad = sleep_rad if np.abs(q_start - sleep_rad).max() > 0.5 else np.zeros(5)
+    page.fill("#jog-time", "4")
+    # Send the long move through the page's own jog path, then hit Escape mid-way.
+    page.evaluate("q => window.armlab.sendJoints(q)", target_rad.tolist())
+    server.wait_status(
+        lambda s: np.abs(np.array(s["joints_rad"]) - q_start).max() > 0.1, 5.0, "the arm to start moving"
+    )
+    page.keyboard.press("Escape")
+    page.wait_for_function("document.getElementById('state-badge').textContent === 'estop'", timeout=2_000)
+    assert page.get_attribute("#state-badge", "data-state") == "estop"
+    time.sleep(0.3)
+    q_a = np.array(server.get("/api/status")["joints_rad"])
+    time.sleep(0.7)
+    q_b = np.array(server.get("/api/status")["joints_rad"])
+    assert np.abs(q_b - q_a).max() < 0.01, f"arm still moving after e-stop: {q_a} -> {q_b}"
+    assert np.abs(q_b - target_rad).max() > 0.1, "the move finished: the e-stop did not stop it"
+    # Only reset is offered now; reset returns to idle without moving.
+    page.wait_for_function("!document.getElementById('btn-reset').disabled", timeout=5_000)
+    assert page.is_disabled("#btn-home")
+    page.click("#btn-reset")
+    page.wait_for_function("document.getElementById('state-badge').textContent === 'idle'", timeout=5_000)
+    q_c = np.array(server.get("/api/status")["joints_rad"])
+    assert np.abs(q_c - q_b).max() < 0.01
+    assert page.errors == []
