@@ -70,6 +70,8 @@ class GripperSimConfig(StrictModel):
     pad_length_m: Positive
     tip_beyond_gripper_point_m: float
     pad_friction: list[NonNegative] = Field(min_length=3, max_length=3)
+    pad_solref: list[float] = Field(min_length=2, max_length=2)
+    pad_solimp: list[float] = Field(min_length=3, max_length=5)
     stop_speed_m_s: Positive
     stop_time_s: Positive
 

@@ -112,7 +112,7 @@ def _arm_xml(arm: ArmGeometry, sim: SimConfig) -> str:
                         pos="{finger_start + 0.5 * finger_len:.9g} {sign * 0.004:.9g} 0" material="arm_dark" {arm_geom}/>
                   <geom name="{side}_pad" type="box" size="{0.5 * g.pad_length_m:.9g} {0.5 * pad_t:.9g} {0.5 * g.pad_width_m:.9g}"
                         pos="{pad_x:.9g} {-sign * 0.5 * pad_t:.9g} 0" material="pad" condim="4" friction="{_fmt(g.pad_friction)}"
-                        {arm_geom}/>
+                        solref="{_fmt(g.pad_solref)}" solimp="{_fmt(g.pad_solimp)}" {arm_geom}/>
                 </body>"""
 
     return f"""

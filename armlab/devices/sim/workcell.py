@@ -85,6 +85,7 @@ class SimWorkcell:
         self._arm_gains = (model.actuator_gainprm[self._pos_act, 0].copy(), model.actuator_gainprm[self._vel_act, 0].copy())
         self._arm_body_ids = np.flatnonzero(model.body_gravcomp > 0)
         self._gripper_site = model.site(GRIPPER_SITE).id
+        self._gripper_body = model.body("gripper_link").id
         self._pad_geoms = {model.geom(name).id: name for name in PAD_GEOMS}
         self._object_bodies = {obj.id: model.body(OBJECT_PREFIX + obj.id).id for obj in scene.objects}
         self._body_to_object = {body: obj_id for obj_id, body in self._object_bodies.items()}
@@ -341,6 +342,7 @@ class SimWorkcell:
                 "holding_id": both[0] if both and self.gripper._command == "grasp" else None,
                 "width_m": left + right - 2.0 * self._geometry.pad_thickness_m,
                 "position_m": data.site_xpos[self._gripper_site].tolist(),
+                "quat_wxyz": data.xquat[self._gripper_body].tolist(),
             }
             arm = {"joint_names": list(self._geometry.joint_names), "position_rad": self.arm_positions().tolist()}
             sim_time = float(data.time)
