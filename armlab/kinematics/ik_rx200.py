@@ -1,0 +1,302 @@
+"""Closed-form inverse kinematics of the RX200 family (cylindrical reduction, wrist centre).
+
+After seeds/002 §C, extended: every solution is enumerated (waist toward the target or turned
+half a turn, elbow up or down), the ones within the joint limits and with every joint above the
+board are kept, and the one closest to the seed is returned (elbow-up solutions first). With no
+pitch given, pitch pi/2 (straight down) is tried first and then the steepest reachable pitch is
+searched, so far targets can still be picked. Failures raise Unreachable with the reason.
+
+Scalar code is plain `math` on floats (a few microseconds a call); `solve_batch` is the same maths
+vectorised over N targets with numpy.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from armlab.kinematics.errors import Unreachable
+from armlab.kinematics.rx200_geometry import (
+    HALF_PI,
+    Rx200Geometry,
+    choose_wrist_rotate,
+    wrap_angle,
+    wrist_rotate_batch,
+    wrist_rotate_candidates,
+)
+
+_TOL = 1e-9
+_ELBOW_DOWN_PENALTY = 100.0  # cost added to elbow-down solutions so elbow-up ones win when both fit
+SEARCH_STEP_RAD = math.radians(1.0)
+PITCH_MIN_RAD = -HALF_PI  # approach axis pointing straight up
+PITCH_MAX_RAD = math.pi  # approach axis horizontal, pointing back toward the base
+_REFINE_STEPS = 24
+
+# Failure ranks: a higher rank got further through the checks, so it explains the failure better.
+_RANK_REACH, _RANK_LIMIT, _RANK_TABLE = 1, 2, 3
+
+
+def _to_base(g: Rx200Geometry, x: float, y: float, z: float) -> tuple[float, float, float]:
+    """World point -> base frame (the base is level: a rotation about z and a translation)."""
+    bx, by, bz = g.base_xyz_m
+    c, s = math.cos(g.base_yaw_rad), math.sin(g.base_yaw_rad)
+    dx, dy = x - bx, y - by
+    return c * dx + s * dy, -s * dx + c * dy, z - bz
+
+
+def _solve_at_pitch(g: Rx200Geometry, xb: float, yb: float, zb: float, pitch: float, seed: tuple[float, ...]):
+    """Best (q1, q2, q3, q4) reaching base point (xb, yb, zb) at `pitch`, or (None, failure tuple)."""
+    l2, l3 = g.upper_arm_m, g.forearm_m
+    beta = g.upper_arm_elevation_rad
+    lower, upper = g.lower_rad, g.upper_rad
+    radius = math.hypot(xb, yb)
+    phi = math.atan2(yb, xb) if radius > 1e-12 else seed[0]
+    best, best_cost = None, math.inf
+    failure = (0, "", 0.0)
+    for back in (False, True):
+        if back:
+            waist, reach_r, psi = wrap_angle(phi + math.pi), -radius, math.pi - pitch
+        else:
+            waist, reach_r, psi = wrap_angle(phi), radius, pitch
+        if not lower[0] - _TOL <= waist <= upper[0] + _TOL:
+            failure = max(failure, (_RANK_LIMIT, "waist", waist))
+            continue
+        rc = reach_r - g.tool_m * math.cos(psi) - g.shoulder_x_m
+        zc = zb + g.tool_m * math.sin(psi) - g.shoulder_z_m
+        cos_bend = (rc * rc + zc * zc - l2 * l2 - l3 * l3) / (2.0 * l2 * l3)
+        if cos_bend > 1.0 + 1e-12 or cos_bend < -1.0 - 1e-12:
+            failure = max(failure, (_RANK_REACH, "reach", math.hypot(rc, zc)))
+            continue
+        bend = math.acos(min(1.0, max(-1.0, cos_bend)))
+        line = math.atan2(zc, rc)
+        for gamma in (-bend, bend):  # elbow up first
+            elevation = line - math.atan2(l3 * math.sin(gamma), l2 + l3 * math.cos(gamma))
+            q2 = wrap_angle(beta - elevation)
+            q3 = wrap_angle(-gamma - beta)
+            q4 = wrap_angle(psi - q2 - q3)
+            limit = None
+            for index, value in ((1, q2), (2, q3), (3, q4)):
+                if not lower[index] - _TOL <= value <= upper[index] + _TOL:
+                    limit = (_RANK_LIMIT, g.joint_names[index], value)
+                    break
+            if limit is not None:
+                failure = max(failure, limit)
+                continue
+            elbow_z = g.shoulder_z_m + l2 * math.sin(elevation) + g.base_xyz_m[2]
+            wrist_z = zc + g.shoulder_z_m + g.base_xyz_m[2]
+            if elbow_z < 0.0 or wrist_z < 0.0:
+                failure = max(failure, (_RANK_TABLE, "elbow" if elbow_z < 0.0 else "wrist", min(elbow_z, wrist_z)))
+                continue
+            cost = abs(waist - seed[0]) + abs(q2 - seed[1]) + abs(q3 - seed[2]) + abs(q4 - seed[3])
+            if gamma > 0.0:
+                cost += _ELBOW_DOWN_PENALTY
+            if cost < best_cost:
+                best, best_cost = (waist, q2, q3, q4), cost
+    return best, failure
+
+
+def _describe(g: Rx200Geometry, failure: tuple, target: tuple[float, float, float], pitch_text: str) -> Unreachable:
+    """Unreachable error for the highest-ranked failure."""
+    rank, what, value = failure
+    where = f"target ({target[0]:.4f}, {target[1]:.4f}, {target[2]:.4f}) m {pitch_text}"
+    if rank == _RANK_TABLE:
+        return Unreachable(f"{where}: below the table ({what} would be at z = {value:.4f} m)", "below the table")
+    if rank == _RANK_LIMIT:
+        index = g.joint_names.index(what)
+        return Unreachable(
+            f"{where}: joint limit ({what}): needs {math.degrees(value):.1f} deg, limits "
+            f"{math.degrees(g.lower_rad[index]):.1f}..{math.degrees(g.upper_rad[index]):.1f} deg",
+            f"joint limit ({what})",
+        )
+    span_min, span_max = abs(g.upper_arm_m - g.forearm_m), g.upper_arm_m + g.forearm_m
+    return Unreachable(
+        f"{where}: out of reach (wrist centre {value:.4f} m from the shoulder; the arm spans "
+        f"{span_min:.4f}..{span_max:.4f} m)",
+        "out of reach",
+    )
+
+
+def _search_pitch(g, xb, yb, zb, seed):
+    """Steepest reachable pitch: pi/2, then 1-degree steps alternating below/above, then bisection."""
+    best, failure = _solve_at_pitch(g, xb, yb, zb, HALF_PI, seed)
+    if best is not None:
+        return best, HALF_PI, failure
+    steps = int(math.ceil(math.pi / SEARCH_STEP_RAD))
+    for k in range(1, steps + 1):
+        for side in (-1.0, 1.0):
+            pitch = HALF_PI + side * k * SEARCH_STEP_RAD
+            if not PITCH_MIN_RAD - 1e-12 <= pitch <= PITCH_MAX_RAD + 1e-12:
+                continue
+            found, reason = _solve_at_pitch(g, xb, yb, zb, pitch, seed)
+            if found is None:
+                failure = max(failure, reason)
+                continue
+            good, bad = pitch, pitch - side * SEARCH_STEP_RAD
+            for _ in range(_REFINE_STEPS):
+                middle = 0.5 * (good + bad)
+                trial, _reason = _solve_at_pitch(g, xb, yb, zb, middle, seed)
+                if trial is None:
+                    bad = middle
+                else:
+                    good, found = middle, trial
+            return found, good, failure
+    return None, None, failure
+
+
+def solve(
+    g: Rx200Geometry,
+    position_m: tuple[float, float, float],
+    pitch_rad: float | None,
+    yaw_rad: float | None,
+    seed: tuple[float, ...],
+) -> tuple[tuple[float, ...], float]:
+    """Joint vector (5 floats) and the pitch used, for a world-frame gripper-point target.
+
+    Inputs are assumed finite (the ArmModel validates them). Raises Unreachable with the reason.
+    """
+    x, y, z = position_m
+    if z < 0.0:
+        raise Unreachable(f"target ({x:.4f}, {y:.4f}, {z:.4f}) m: below the table (z < 0)", "below the table")
+    xb, yb, zb = _to_base(g, x, y, z)
+    if pitch_rad is None:
+        best, pitch, failure = _search_pitch(g, xb, yb, zb, seed)
+        pitch_text = "at every pitch from -90 to 180 deg"
+    else:
+        pitch = pitch_rad
+        best, failure = _solve_at_pitch(g, xb, yb, zb, pitch, seed)
+        pitch_text = f"at pitch {math.degrees(pitch):.1f} deg"
+    if best is None:
+        raise _describe(g, failure, (x, y, z), pitch_text)
+    waist, q2, q3, q4 = best
+    if yaw_rad is None:
+        wrist = seed[4]
+        if not g.lower_rad[4] <= wrist <= g.upper_rad[4]:
+            wrist = 0.0
+    else:
+        options = wrist_rotate_candidates(waist, q2 + q3 + q4, yaw_rad, g.base_yaw_rad)
+        wrist = choose_wrist_rotate(options, seed[4], g.lower_rad[4], g.upper_rad[4])
+        if wrist is None:
+            raise Unreachable(
+                f"target ({x:.4f}, {y:.4f}, {z:.4f}) m: joint limit (wrist_rotate): no rotation within the limits "
+                f"aligns the fingers with yaw {math.degrees(yaw_rad):.1f} deg",
+                "joint limit (wrist_rotate)",
+            )
+    return (waist, q2, q3, q4, wrist), pitch
+
+
+# ----------------------------------------------------------------------------------------------
+# Batch (vectorised) version
+
+
+def _wrap_array(angles: np.ndarray) -> np.ndarray:
+    return np.mod(angles + np.pi, 2.0 * np.pi) - np.pi
+
+
+def _batch_at_pitch(g: Rx200Geometry, base_xyz: np.ndarray, pitch: np.ndarray, seed: np.ndarray):
+    """Vectorised _solve_at_pitch: base points (N, 3), pitch (N,), seed (N, 5) -> (q4 (N, 4), ok (N,))."""
+    l2, l3, beta = g.upper_arm_m, g.forearm_m, g.upper_arm_elevation_rad
+    lower, upper = np.asarray(g.lower_rad), np.asarray(g.upper_rad)
+    xb, yb, zb = base_xyz[:, 0], base_xyz[:, 1], base_xyz[:, 2]
+    radius = np.hypot(xb, yb)
+    phi = np.where(radius > 1e-12, np.arctan2(yb, xb), seed[:, 0])
+    # axis 0: (front, back)
+    waist = _wrap_array(np.stack([phi, phi + np.pi]))
+    reach_r = np.stack([radius, -radius])
+    psi = np.stack([pitch, np.pi - pitch])
+    rc = reach_r - g.tool_m * np.cos(psi) - g.shoulder_x_m
+    zc = zb[None, :] + g.tool_m * np.sin(psi) - g.shoulder_z_m
+    cos_bend = (rc * rc + zc * zc - l2 * l2 - l3 * l3) / (2.0 * l2 * l3)
+    reachable = (cos_bend <= 1.0 + 1e-12) & (cos_bend >= -1.0 - 1e-12)
+    bend = np.arccos(np.clip(cos_bend, -1.0, 1.0))
+    line = np.arctan2(zc, rc)
+    # axis 0 now: (front-up, back-up, front-down, back-down)
+    gamma = np.concatenate([-bend, bend])
+    line4, zc4, psi4 = np.tile(line, (2, 1)), np.tile(zc, (2, 1)), np.tile(psi, (2, 1))
+    waist4, reach4 = np.tile(waist, (2, 1)), np.tile(reachable, (2, 1))
+    elevation = line4 - np.arctan2(l3 * np.sin(gamma), l2 + l3 * np.cos(gamma))
+    q2 = _wrap_array(beta - elevation)
+    q3 = _wrap_array(-gamma - beta)
+    q4 = _wrap_array(psi4 - q2 - q3)
+    joints = np.stack([waist4, q2, q3, q4], axis=-1)  # (4, N, 4)
+    within = np.all((joints >= lower[:4] - _TOL) & (joints <= upper[:4] + _TOL), axis=-1)
+    elbow_z = g.shoulder_z_m + l2 * np.sin(elevation) + g.base_xyz_m[2]
+    wrist_z = zc4 + g.shoulder_z_m + g.base_xyz_m[2]
+    valid = reach4 & within & (elbow_z >= 0.0) & (wrist_z >= 0.0)
+    cost = np.sum(np.abs(joints - seed[None, :, :4]), axis=-1)
+    cost[2:] += _ELBOW_DOWN_PENALTY
+    cost = np.where(valid, cost, np.inf)
+    pick = np.argmin(cost, axis=0)
+    columns = np.arange(base_xyz.shape[0])
+    return joints[pick, columns], valid[pick, columns]
+
+
+def _batch_search(g, base_xyz, seed, q_out, ok_out, pitch_out, todo):
+    """Steepest reachable pitch for the targets `todo` (indices), vectorised; fills the outputs."""
+    offsets = []
+    for k in range(1, int(math.ceil(math.pi / SEARCH_STEP_RAD)) + 1):
+        for side in (-1.0, 1.0):
+            pitch = HALF_PI + side * k * SEARCH_STEP_RAD
+            if PITCH_MIN_RAD - 1e-12 <= pitch <= PITCH_MAX_RAD + 1e-12:
+                offsets.append((pitch, pitch - side * SEARCH_STEP_RAD))
+    chunk = 16
+    for start in range(0, len(offsets), chunk):
+        if todo.size == 0:
+            return
+        block = offsets[start : start + chunk]
+        pitches = np.array([p for p, _ in block])
+        count = todo.size
+        tiled_xyz = np.tile(base_xyz[todo], (len(block), 1))
+        tiled_seed = np.tile(seed[todo], (len(block), 1))
+        tiled_pitch = np.repeat(pitches, count)
+        _q, ok = _batch_at_pitch(g, tiled_xyz, tiled_pitch, tiled_seed)
+        ok = ok.reshape(len(block), count)
+        found = ok.any(axis=0)
+        if not found.any():
+            continue
+        first = np.argmax(ok, axis=0)[found]
+        targets = todo[found]
+        good = pitches[first]
+        bad = np.array([b for _, b in block])[first]
+        for _ in range(_REFINE_STEPS):
+            middle = 0.5 * (good + bad)
+            _q, mid_ok = _batch_at_pitch(g, base_xyz[targets], middle, seed[targets])
+            good = np.where(mid_ok, middle, good)
+            bad = np.where(mid_ok, bad, middle)
+        q_found, ok_found = _batch_at_pitch(g, base_xyz[targets], good, seed[targets])
+        q_out[targets] = q_found
+        ok_out[targets] = ok_found
+        pitch_out[targets] = good
+        todo = todo[~found]
+
+
+def solve_batch(
+    g: Rx200Geometry,
+    positions_m: np.ndarray,
+    pitch_rad: np.ndarray | None,
+    yaw_rad: np.ndarray | None,
+    seed: np.ndarray,
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Vectorised `solve`: positions (N, 3) world, pitch (N,) or None (search), yaw (N,) or None,
+    seed (N, 5) -> (q (N, 5), ok (N,), pitch used (N,)). Rows that fail have ok False (q is NaN)."""
+    count = positions_m.shape[0]
+    c, s = math.cos(g.base_yaw_rad), math.sin(g.base_yaw_rad)
+    delta = positions_m - np.asarray(g.base_xyz_m)
+    base_xyz = np.stack([c * delta[:, 0] + s * delta[:, 1], -s * delta[:, 0] + c * delta[:, 1], delta[:, 2]], -1)
+    above = positions_m[:, 2] >= 0.0
+    pitch_used = np.full(count, HALF_PI) if pitch_rad is None else np.asarray(pitch_rad, dtype=float).copy()
+    q4, ok = _batch_at_pitch(g, base_xyz, pitch_used, seed)
+    if pitch_rad is None:
+        _batch_search(g, base_xyz, seed, q4, ok, pitch_used, np.flatnonzero(~ok & above))
+    ok &= above
+    if yaw_rad is None:
+        wrist = np.where((seed[:, 4] >= g.lower_rad[4]) & (seed[:, 4] <= g.upper_rad[4]), seed[:, 4], 0.0)
+    else:
+        arm_pitch = q4[:, 1] + q4[:, 2] + q4[:, 3]
+        wrist, wrist_ok = wrist_rotate_batch(
+            q4[:, 0], arm_pitch, np.asarray(yaw_rad, dtype=float), g.base_yaw_rad, seed[:, 4], g.lower_rad[4], g.upper_rad[4]
+        )
+        ok &= wrist_ok
+    q = np.concatenate([q4, wrist[:, None]], axis=1)
+    q[~ok] = np.nan
+    return q, ok, pitch_used
