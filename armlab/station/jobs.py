@@ -73,7 +73,6 @@ class Job:
             self.finished_s = time.time()
             if state == "succeeded":
                 self.progress = 1.0
-        self.done_event.set()
 
     def cancel(self) -> None:
         self.cancel_event.set()
@@ -106,7 +105,7 @@ def start_job_thread(
     function: Callable[[JobContext], Any],
     on_end: Callable[[Job, BaseException | None], None],
 ) -> threading.Thread:
-    """Run `function(ctx)` in a daemon thread; finish the job by its outcome, then call on_end(job, error).
+    """Run `function(ctx)` in a daemon thread; finish the job by its outcome, call on_end(job, error), then mark it done.
 
     Outcomes: returned → succeeded (its return value is the result); JobCancelled → cancelled;
     any other exception → failed with the exception's sentence (passed to on_end so the station can
@@ -124,7 +123,10 @@ def start_job_thread(
             job.finish("failed", f"{type(failure).__name__}: {failure}")
         else:
             job.finish("succeeded", job.message or "done", result)
-        on_end(job, error)
+        try:
+            on_end(job, error)
+        finally:
+            job.done_event.set()  # after the station's transition, so a waiter sees the final state
 
     thread = threading.Thread(target=run, name=f"job-{job.name}", daemon=True)
     thread.start()
