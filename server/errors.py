@@ -82,7 +82,6 @@ def install_error_handlers(app: FastAPI) -> None:
         code = _HTTP_CODES.get(error.status_code, "invalid")
         return error_response(error.status_code, code, str(error.detail), headers=getattr(error, "headers", None))
 
-    @app.exception_handler(Exception)
     async def _library(_: Request, error: Exception) -> JSONResponse:
         status_code, code = _classify(error)
         if status_code == 500:
@@ -90,3 +89,8 @@ def install_error_handlers(app: FastAPI) -> None:
             return error_response(500, code, f"internal error: {type(error).__name__}: {error}")
         allowed = error.allowed if isinstance(error, CommandRefused) else None
         return error_response(status_code, code, str(error), allowed)
+
+    # Registered per base class so they are handled inside the app (a bare Exception handler runs in
+    # Starlette's outermost middleware, which logs and re-raises).
+    for error_class in (CommandRefused, NotCalibrated, NotFound, ValueError, ConnectionError, TimeoutError, Exception):
+        app.add_exception_handler(error_class, _library)
