@@ -98,12 +98,20 @@ def check_trajectory(
             )
 
     floor_z = board_z_m + clearance_m
-    for sample, q in enumerate(positions):
-        frames = np.asarray(arm.joint_frames(q))
-        heights = frames[:, 2, 3]
-        lowest = int(np.argmin(heights))
-        if heights[lowest] < floor_z:
-            raise UnsafeTrajectory(
-                f"{_point_name(arm, lowest, frames.shape[0])} at z = {heights[lowest] * 1000:.1f} mm at "
-                f"t = {times[sample]:.3f} s is below the board surface + clearance ({floor_z * 1000:.1f} mm)"
-            )
+    heights = _link_point_heights(arm, positions)  # (N, points)
+    sample, point = np.unravel_index(int(np.argmin(heights)), heights.shape)
+    if heights[sample, point] < floor_z:
+        first = int(np.flatnonzero(np.min(heights, axis=1) < floor_z)[0])  # earliest offending sample
+        point = int(np.argmin(heights[first]))
+        raise UnsafeTrajectory(
+            f"{_point_name(arm, point, heights.shape[1])} at z = {heights[first, point] * 1000:.1f} mm at "
+            f"t = {times[first]:.3f} s is below the board surface + clearance ({floor_z * 1000:.1f} mm)"
+        )
+
+
+def _link_point_heights(arm, positions: np.ndarray) -> np.ndarray:
+    """World z (N, dof+1) of every joint origin and the gripper point at each sample (batched when the model can)."""
+    frames = np.asarray(arm.joint_frames(positions))
+    if frames.ndim == 4 and frames.shape[0] == positions.shape[0]:
+        return frames[:, :, 2, 3]
+    return np.array([np.asarray(arm.joint_frames(q))[:, 2, 3] for q in positions])

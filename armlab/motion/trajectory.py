@@ -178,7 +178,7 @@ def trapezoid_profile(t_s: np.ndarray, moving_time_s: float, accel_time_s: float
     total, ramp = moving_time_s, accel_time_s
     if total <= 0.0:
         return np.ones_like(t)
-    if ramp <= 0.0:
+    if ramp <= 1e-9 * total:  # no ramp (only used for moves that do not move)
         return t / total
     peak_velocity = 1.0 / (total - ramp)
     accel = peak_velocity / ramp
