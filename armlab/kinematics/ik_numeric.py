@@ -20,6 +20,12 @@ from armlab.kinematics.screws import fk_space, jacobian_space, matrix_log3, so3_
 
 Flat = tuple[float, ...]  # a rigid transform as 12 floats, row-major 3x4
 
+# Damping lambda = gain * error energy + minimum (Sugihara's rule, scaled: 0.1 converged fastest on
+# UR3 and RX200 random poses, median ~10 iterations); joint steps are capped at 1 rad (norm).
+_DAMPING_GAIN = 0.1
+_DAMPING_MIN = 1e-6
+_MAX_STEP_RAD = 1.0
+
 
 @dataclass(frozen=True)
 class DhKinematics:
@@ -176,10 +182,10 @@ def solve_pose(
             previous_energy = min(previous_energy, energy)
             jac = np.array(columns).T[:rows]
             err = np.array(error)
-            step = np.linalg.solve(jac.T @ jac + (energy + 1e-6) * identity, jac.T @ err)
+            step = np.linalg.solve(jac.T @ jac + (_DAMPING_GAIN * energy + _DAMPING_MIN) * identity, jac.T @ err)
             norm = float(np.sqrt(step @ step))
-            if norm > 0.6:
-                step *= 0.6 / norm
+            if norm > _MAX_STEP_RAD:
+                step *= _MAX_STEP_RAD / norm
             q = [value + float(delta) for value, delta in zip(q, step)]
             _fit_limits(q, lower, upper)
         if best.position_error_m <= tight_pos * 100 and best.rotation_error_rad <= tight_rot * 100:

@@ -53,20 +53,21 @@ def _solve_at_pitch(g: Rx200Geometry, xb: float, yb: float, zb: float, pitch: fl
     radius = math.hypot(xb, yb)
     phi = math.atan2(yb, xb) if radius > 1e-12 else seed[0]
     best, best_cost = None, math.inf
-    failure = (0, "", 0.0)
+    failure = (0, 0.0, "", 0.0)  # (rank, key: larger = nearer miss, what, value)
     for back in (False, True):
         if back:
             waist, reach_r, psi = wrap_angle(phi + math.pi), -radius, math.pi - pitch
         else:
             waist, reach_r, psi = wrap_angle(phi), radius, pitch
         if not lower[0] - _TOL <= waist <= upper[0] + _TOL:
-            failure = max(failure, (_RANK_LIMIT, "waist", waist))
+            failure = max(failure, (_RANK_LIMIT, -_excess(waist, lower[0], upper[0]), "waist", waist))
             continue
         rc = reach_r - g.tool_m * math.cos(psi) - g.shoulder_x_m
         zc = zb + g.tool_m * math.sin(psi) - g.shoulder_z_m
         cos_bend = (rc * rc + zc * zc - l2 * l2 - l3 * l3) / (2.0 * l2 * l3)
         if cos_bend > 1.0 + 1e-12 or cos_bend < -1.0 - 1e-12:
-            failure = max(failure, (_RANK_REACH, "reach", math.hypot(rc, zc)))
+            distance = math.hypot(rc, zc)  # the key (third item) makes max() keep the nearest miss
+            failure = max(failure, (_RANK_REACH, -abs(distance - _span_middle(g)), "reach", distance))
             continue
         bend = math.acos(min(1.0, max(-1.0, cos_bend)))
         line = math.atan2(zc, rc)
@@ -78,7 +79,7 @@ def _solve_at_pitch(g: Rx200Geometry, xb: float, yb: float, zb: float, pitch: fl
             limit = None
             for index, value in ((1, q2), (2, q3), (3, q4)):
                 if not lower[index] - _TOL <= value <= upper[index] + _TOL:
-                    limit = (_RANK_LIMIT, g.joint_names[index], value)
+                    limit = (_RANK_LIMIT, -_excess(value, lower[index], upper[index]), g.joint_names[index], value)
                     break
             if limit is not None:
                 failure = max(failure, limit)
@@ -86,7 +87,8 @@ def _solve_at_pitch(g: Rx200Geometry, xb: float, yb: float, zb: float, pitch: fl
             elbow_z = g.shoulder_z_m + l2 * math.sin(elevation) + g.base_xyz_m[2]
             wrist_z = zc + g.shoulder_z_m + g.base_xyz_m[2]
             if elbow_z < 0.0 or wrist_z < 0.0:
-                failure = max(failure, (_RANK_TABLE, "elbow" if elbow_z < 0.0 else "wrist", min(elbow_z, wrist_z)))
+                lowest = min(elbow_z, wrist_z)
+                failure = max(failure, (_RANK_TABLE, lowest, "elbow" if elbow_z < 0.0 else "wrist", lowest))
                 continue
             cost = abs(waist - seed[0]) + abs(q2 - seed[1]) + abs(q3 - seed[2]) + abs(q4 - seed[3])
             if gamma > 0.0:
@@ -96,9 +98,19 @@ def _solve_at_pitch(g: Rx200Geometry, xb: float, yb: float, zb: float, pitch: fl
     return best, failure
 
 
+def _excess(value: float, lower: float, upper: float) -> float:
+    """How far (rad) a joint value lies outside [lower, upper]."""
+    return max(lower - value, value - upper, 0.0)
+
+
+def _span_middle(g: Rx200Geometry) -> float:
+    """Middle of the shoulder-to-wrist distances the arm can span."""
+    return 0.5 * (abs(g.upper_arm_m - g.forearm_m) + g.upper_arm_m + g.forearm_m)
+
+
 def _describe(g: Rx200Geometry, failure: tuple, target: tuple[float, float, float], pitch_text: str) -> Unreachable:
     """Unreachable error for the highest-ranked failure."""
-    rank, what, value = failure
+    rank, _key, what, value = failure
     where = f"target ({target[0]:.4f}, {target[1]:.4f}, {target[2]:.4f}) m {pitch_text}"
     if rank == _RANK_TABLE:
         return Unreachable(f"{where}: below the table ({what} would be at z = {value:.4f} m)", "below the table")
