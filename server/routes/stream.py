@@ -39,8 +39,8 @@ def read_frame(
 async def websocket_stream(websocket: WebSocket, token: str | None = None) -> None:
     """Frames (binary, after ack), telemetry, events, calibration; control messages need ?token=."""
     app = websocket.app
-    if token is not None and not token_matches(app.state.token, token):
+    await websocket.accept()
+    if token is not None and not token_matches(app.state.token, token):  # accepted first so the page sees the code
         await websocket.close(code=4401, reason="wrong control token")
         return
-    await websocket.accept()
     await app.state.hub.serve(websocket, can_control=token is not None)

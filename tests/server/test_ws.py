@@ -1,0 +1,166 @@
+"""The websocket stream over a real server with a real `websockets` client: hello, telemetry, frames
+with headers, ack flow control (at most one frame in flight), views, control messages and auth."""
+
+from __future__ import annotations
+
+import json
+import time
+
+import cv2
+import numpy as np
+import pytest
+from websockets.exceptions import ConnectionClosed
+from websockets.sync.client import connect
+
+import live
+from armlab.client import unpack_frame
+from server.app import create_app
+
+TOKEN = "ws-token"
+
+
+@pytest.fixture(scope="module")
+def cell():
+    cell = live.start_cell(seed=1)
+    yield cell
+    cell.close()
+
+
+@pytest.fixture(scope="module")
+def url(cell, tmp_path_factory):
+    db = tmp_path_factory.mktemp("ws") / "station.sqlite3"
+    app = create_app(station_factory=lambda: live.StationOnCell(cell, db), token=TOKEN)
+    with live.serve(app) as base_url:
+        yield base_url.replace("http://", "ws://") + "/ws"
+
+
+def _open(url: str, token: str | None = None):
+    return connect(url + (f"?token={token}" if token else ""), compression=None, max_size=None, open_timeout=10)
+
+
+def _next(ws, kind: str, timeout_s: float = 5.0):
+    """The next message of `kind` ('frame' for binary), skipping others."""
+    deadline = time.monotonic() + timeout_s
+    while True:
+        message = ws.recv(timeout=max(0.01, deadline - time.monotonic()))
+        if isinstance(message, bytes):
+            if kind == "frame":
+                return unpack_frame(message)
+        elif json.loads(message)["type"] == kind:
+            return json.loads(message)
+
+
+def _collect(ws, duration_s: float) -> tuple[list, list]:
+    """(frames, texts) received during duration_s, without acknowledging anything."""
+    frames, texts = [], []
+    deadline = time.monotonic() + duration_s
+    while True:
+        remaining = deadline - time.monotonic()
+        if remaining <= 0:
+            return frames, texts
+        try:
+            message = ws.recv(timeout=remaining)
+        except TimeoutError:
+            return frames, texts
+        (frames if isinstance(message, bytes) else texts).append(message)
+
+
+def test_hello_calibration_and_telemetry(url):
+    with _open(url, TOKEN) as ws:
+        hello = json.loads(ws.recv(timeout=5))
+        assert hello["type"] == "hello" and hello["can_control"] is True and hello["backend"] == "sim"
+        assert abs(hello["server_time_s"] - time.time()) < 5
+        calibration = json.loads(ws.recv(timeout=5))
+        assert calibration["type"] == "calibration" and "calibrated" in calibration
+        first = _next(ws, "telemetry")
+        for field in ("state", "joints_rad", "gripper", "gripper_pose", "allowed_commands", "detections", "job", "time_s"):
+            assert field in first
+        started = time.monotonic()
+        count = 0
+        while time.monotonic() - started < 1.0:
+            _next(ws, "telemetry")
+            count += 1
+        assert count >= 15  # published at 30 Hz; the bench prints the measured rate
+
+
+def test_frames_carry_headers_and_decode(url):
+    with _open(url) as ws:
+        header, jpeg = _next(ws, "frame")
+        assert header["type"] == "frame" and header["view"] == "color"
+        assert (header["width"], header["height"]) == (1280, 720)
+        assert isinstance(header["seq"], int) and 0 <= time.time() - header["capture_time_s"] < 2.0
+        image = cv2.imdecode(np.frombuffer(jpeg, np.uint8), cv2.IMREAD_COLOR)
+        assert image.shape == (720, 1280, 3)
+        ws.send(json.dumps({"type": "ack", "seq": header["seq"]}))
+        second, _ = _next(ws, "frame")
+        assert second["seq"] > header["seq"] and second["capture_time_s"] > header["capture_time_s"]
+
+
+def test_a_client_that_never_acks_gets_one_frame_in_flight(url):
+    with _open(url) as ws:
+        frames, texts = _collect(ws, 1.5)
+        assert len(frames) == 1, f"{len(frames)} frames sent without an ack"
+        assert sum(json.loads(t)["type"] == "telemetry" for t in texts) >= 10  # telemetry keeps flowing
+        header, _ = unpack_frame(frames[0])
+        ws.send(json.dumps({"type": "ack", "seq": header["seq"] + 1000}))  # an ack for another frame releases nothing
+        frames, _ = _collect(ws, 0.5)
+        assert frames == []
+        ws.send(json.dumps({"type": "ack", "seq": header["seq"]}))
+        frames, _ = _collect(ws, 1.0)
+        assert len(frames) == 1
+        newer, _ = unpack_frame(frames[0])
+        assert newer["seq"] > header["seq"] + 1, "the next frame is the newest, not the one after the acked one"
+
+
+def test_acking_client_streams_while_a_stalled_client_is_connected(url):
+    with _open(url) as stalled, _open(url) as reader:
+        _next(stalled, "frame")  # the stalled client holds its one frame and never acks
+        sequences = []
+        deadline = time.monotonic() + 2.0
+        while time.monotonic() < deadline:
+            header, _ = _next(reader, "frame")
+            sequences.append(header["seq"])
+            reader.send(json.dumps({"type": "ack", "seq": header["seq"]}))
+        assert len(sequences) >= 10 and sequences == sorted(set(sequences))
+
+
+def test_view_switch_and_layers(url):
+    with _open(url) as ws:
+        header, _ = _next(ws, "frame")
+        ws.send(json.dumps({"type": "view", "view": "depth", "layers": ["grid", "tags"]}))
+        ws.send(json.dumps({"type": "ack", "seq": header["seq"]}))
+        deadline = time.monotonic() + 5
+        while True:
+            header, jpeg = _next(ws, "frame")
+            ws.send(json.dumps({"type": "ack", "seq": header["seq"]}))
+            if header["view"] == "depth":
+                break
+            assert time.monotonic() < deadline
+        assert cv2.imdecode(np.frombuffer(jpeg, np.uint8), cv2.IMREAD_COLOR).shape == (720, 1280, 3)
+        ws.send(json.dumps({"type": "view", "view": "xray"}))
+        error = _next(ws, "event")
+        assert error["level"] == "error" and "view" in error["message"]
+
+
+def test_control_needs_the_token(url):
+    with _open(url) as viewer:
+        assert json.loads(viewer.recv(timeout=5))["can_control"] is False
+        viewer.send(json.dumps({"type": "command", "name": "estop"}))
+        event = _next(viewer, "event")
+        assert event["level"] == "error" and "view-only" in event["message"]
+        assert _next(viewer, "telemetry")["state"] == "idle"
+    with _open(url, TOKEN) as controller:
+        controller.send(json.dumps({"type": "command", "name": "estop"}))
+        deadline = time.monotonic() + 5
+        while _next(controller, "telemetry")["state"] != "estop":
+            assert time.monotonic() < deadline
+        controller.send(json.dumps({"type": "command", "name": "reset"}))
+        while _next(controller, "telemetry")["state"] != "idle":
+            assert time.monotonic() < deadline
+        assert _next(controller, "telemetry")["controller"] == "ui"
+
+
+def test_wrong_token_is_rejected(url):
+    with pytest.raises(ConnectionClosed) as closed, _open(url, "not-the-token") as ws:
+        ws.recv(timeout=5)
+    assert closed.value.rcvd.code == 4401
