@@ -7,6 +7,7 @@ from armlab.vision.config import PerceptionConfig, load_perception_config
 from armlab.vision.intrinsics import IntrinsicCalibration, calibrate_intrinsics
 from armlab.vision.objects import DepthObject, detect_objects_from_depth
 from armlab.vision.overlay import OverlayLayers, draw_overlay, top_down_view
+from armlab.vision.pipeline import PerceptionPipeline, PerceptionResult
 from armlab.vision.pixel_world import pixel_to_world, world_to_pixel
 from armlab.vision.tags import Tag, detect_tags
 
@@ -18,6 +19,8 @@ __all__ = [
     "IntrinsicCalibration",
     "OverlayLayers",
     "PerceptionConfig",
+    "PerceptionPipeline",
+    "PerceptionResult",
     "Tag",
     "calibrate_extrinsics",
     "calibrate_intrinsics",

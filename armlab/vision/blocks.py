@@ -80,21 +80,55 @@ def color_classes(hsv: np.ndarray, cfg: PerceptionConfig, lut: np.ndarray) -> np
     return classes
 
 
-def stack_from_height(top_m: float, top_size: str, cfg: PerceptionConfig) -> tuple[int, tuple[str, ...], float]:
-    """(stack level, sizes bottom..top, height mismatch m) for a top face at top_m with the given top block.
+def stack_candidates(top_m: float, top_size: str, cfg: PerceptionConfig) -> list[tuple[float, tuple[str, ...]]]:
+    """(height mismatch m, sizes bottom..top) of every pile explaining a top face at top_m, best first.
 
     Piles hold large blocks below small ones, so the blocks under a large block are large.
     """
     large, small = cfg.blocks.large_size_m, cfg.blocks.small_size_m
-    top_edge = large if top_size == "large" else small
-    below = top_m - top_edge
-    best = (1, (top_size,), abs(below))
+    below = top_m - (large if top_size == "large" else small)
+    out = []
     for n_large in range(0, 12):
         for n_small in range(0, 12 if top_size == "small" else 1):
             err = abs(below - n_large * large - n_small * small)
-            if err < best[2] - 1e-9:
-                best = (1 + n_large + n_small, ("large",) * n_large + ("small",) * n_small + (top_size,), err)
-    return best
+            out.append((err, ("large",) * n_large + ("small",) * n_small + (top_size,)))
+    return sorted(out)
+
+
+def stack_from_height(top_m: float, top_size: str, cfg: PerceptionConfig) -> tuple[int, tuple[str, ...], float]:
+    """(stack level, sizes bottom..top, height mismatch m) of the pile that best explains the top height."""
+    err, sizes = stack_candidates(top_m, top_size, cfg)[0]
+    return len(sizes), sizes, err
+
+
+def _transition_m(sizes: tuple[str, ...], cfg: PerceptionConfig) -> float | None:
+    """Height of the last large block's top when small blocks sit on it (an exposed ring), else None."""
+    if "large" not in sizes or sizes[-1] == "large":
+        return None
+    return sizes.count("large") * cfg.blocks.large_size_m
+
+
+def choose_stack(top_m: float, top_size: str, cfg: PerceptionConfig, z_roi: np.ndarray | None, ring_px: float) -> tuple[str, ...]:
+    """The pile (sizes bottom..top) for a top face: by height, and where two piles fit about equally
+    (e.g. 2 large + 1 small vs 4 small under a small top), by whether a large block's ring shows."""
+    candidates = stack_candidates(top_m, top_size, cfg)
+    best_err = candidates[0][0]
+    close = [c for c in candidates if c[0] <= best_err + 0.0025][:4]
+    if len(close) == 1 or z_roi is None:
+        return close[0][1]
+
+    def ring_seen(height_m: float) -> bool:
+        with np.errstate(invalid="ignore"):
+            return int(np.count_nonzero(np.abs(z_roi - height_m) < 0.0015)) >= ring_px
+
+    transitions = {c[1]: _transition_m(c[1], cfg) for c in close}
+    seen = {h: ring_seen(h) for h in transitions.values() if h is not None}
+    for err, sizes in close:
+        h = transitions[sizes]
+        consistent = seen[h] if h is not None else not any(seen.values())
+        if consistent:
+            return sizes
+    return close[0][1]
 
 
 @dataclass
@@ -233,28 +267,28 @@ def detect_blocks(
     if not isinstance(depth_mm, np.ndarray) or depth_mm.shape != (h, w) or depth_mm.dtype != np.uint16:
         raise ValueError(f"depth must be a uint16 (H, W) = ({h}, {w}) image in mm, got {getattr(depth_mm, 'shape', None)}")
     bc = cfg.blocks
-    step = 2
-    z_half = height_map_m(depth_mm[::step, ::step].astype(np.float32) / 1000.0, cal.K / np.array([[step], [step], [1]]), cal.T_world_camera)
+    step = 4  # candidates at quarter resolution (a small cube's top is still ~6x6 px); measured at full
+    z_small = height_map_m(depth_mm[::step, ::step].astype(np.float32) / 1000.0, cal.K / np.array([[step], [step], [1]]), cal.T_world_camera)
     with np.errstate(invalid="ignore"):
-        raised = (z_half > bc.min_height_m) & (z_half < bc.max_height_m)
-    hsv_half = cv2.cvtColor(color_bgr[::step, ::step], cv2.COLOR_BGR2HSV)
+        raised = (z_small > bc.min_height_m) & (z_small < bc.max_height_m)
     lut, names = hue_lut(cfg)
-    classes = color_classes(hsv_half, cfg, lut)
+    classes = color_classes(cv2.cvtColor(color_bgr[::step, ::step], cv2.COLOR_BGR2HSV), cfg, lut)
     classes[~raised] = 0
+    n, labels, stats, _ = cv2.connectedComponentsWithStats((classes > 0).astype(np.uint8), connectivity=8)
     detector = tag_detector
     blocks: list[Block] = []
-    for ci, name in enumerate(names, start=1):
-        mask = (classes == ci).astype(np.uint8)
-        if not mask.any():
+    for k in range(1, n):
+        x, y, bw, bh, area = stats[k]
+        if area < 4:
             continue
-        n, labels, stats, _ = cv2.connectedComponentsWithStats(mask, connectivity=8)
-        for k in range(1, n):
-            if stats[k, cv2.CC_STAT_AREA] < 12:
-                continue
-            top_m = float(np.nanpercentile(z_half[labels == k], 90))
-            x, y, bw, bh = stats[k, :4]
-            roi = (max(0, x * step - 8), max(0, y * step - 8), min(w, (x + bw) * step + 8), min(h, (y + bh) * step + 8))
-            for block in _blocks_from_region(color_bgr, depth_mm, cal, cfg, roi, top_m, name, ci, lut, z_half, step):
+        sel = labels[y : y + bh, x : x + bw] == k
+        comp_classes = classes[y : y + bh, x : x + bw][sel]
+        comp_z = z_small[y : y + bh, x : x + bw][sel]
+        counts = np.bincount(comp_classes, minlength=len(names) + 1)
+        roi = (max(0, x * step - 8), max(0, y * step - 8), min(w, (x + bw) * step + 8), min(h, (y + bh) * step + 8))
+        for ci in np.nonzero(counts >= max(3, 0.1 * area))[0]:
+            top_m = float(np.nanpercentile(comp_z[comp_classes == ci], 90))
+            for block in _blocks_from_region(color_bgr, depth_mm, cal, cfg, roi, top_m, names[ci - 1], int(ci), lut, z_small, step):
                 if block.aruco_id is None and _face_looks_tagged(color_bgr, block):
                     detector = detector or make_detector(cfg.tags.block_tag_dictionary)
                     block = _with_tag(block, color_bgr, roi, detector, cfg)
@@ -282,7 +316,7 @@ def _blocks_from_region(color_bgr, depth_mm, cal, cfg, roi, top_m, name, ci, lut
     if (classes[pixels[:, 1].astype(int) - y0, pixels[:, 0].astype(int) - x0] == ci).mean() < 0.15:
         return []  # the face is mostly another object's colourless top
     parts = [face] if _classify_face(face, cfg)[3] else _split_touching(face, cfg)
-    return [_make_block(part, name, cal, cfg, z_half, step) for part in parts]
+    return [_make_block(part, name, cal, cfg, z_half, step, z) for part in parts]
 
 
 def _covered(face: _Face, cal: Calibration, z: np.ndarray, roi) -> bool:
@@ -323,9 +357,11 @@ def _with_tag(block: Block, color_bgr: np.ndarray, roi, detector, cfg: Perceptio
     return block
 
 
-def _make_block(face: _Face, color: str, cal, cfg, z_half, step) -> Block:
+def _make_block(face: _Face, color: str, cal, cfg, z_half, step, z_roi=None) -> Block:
     size, side, yaw, is_cube, centre_xy = _classify_face(face, cfg)
-    level, sizes, _ = stack_from_height(face.top_m, size, cfg)
+    ring_m2 = cfg.blocks.large_size_m**2 - cfg.blocks.small_size_m**2
+    sizes = choose_stack(face.top_m, size, cfg, z_roi, 0.3 * ring_m2 / face.pixel_area_m2)
+    level = len(sizes)
     occluded = _is_occluded(face, size, cfg, z_half, step)
     position = np.array([centre_xy[0], centre_xy[1], face.top_m])
     return Block(

@@ -15,7 +15,8 @@ from armlab.vision.geometry import transform_points
 
 @dataclass(frozen=True)
 class DepthObject:
-    """A cluster of points above the table: world centroid (m), world axis-aligned extent (m), height above the plane."""
+    """A cluster of points above the table: world centroid (m), world axis-aligned extent (m), and its
+    height above the plane (95th percentile of the points, robust to depth noise)."""
 
     centroid_m: np.ndarray
     extent_m: np.ndarray
@@ -86,7 +87,8 @@ def detect_objects_from_depth(
         raise ValueError(f"depth must be an (H, W) = ({cal.height}, {cal.width}) image in mm")
     oc = cfg.objects
     step = 2
-    pts, valid = depth_to_points(depth_mm, cal.K, step)
+    smoothed = cv2.medianBlur(np.ascontiguousarray(depth_mm, dtype=np.uint16), 5)  # depth noise, edges kept
+    pts, valid = depth_to_points(smoothed, cal.K, step)
     if np.count_nonzero(valid) < 100:
         raise ValueError("the depth image has too few valid readings for a plane fit")
     sample = pts[::4, ::4][valid[::4, ::4]]
@@ -109,7 +111,7 @@ def detect_objects_from_depth(
             DepthObject(
                 centroid_m=world.mean(axis=0),
                 extent_m=world.max(axis=0) - world.min(axis=0),
-                height_m=float(height[sel].max()),
+                height_m=float(np.percentile(height[sel], 95)),
                 point_count=int(np.count_nonzero(sel)),
                 bbox_px=(int(x * step), int(y * step), int(bw * step), int(bh * step)),
             )

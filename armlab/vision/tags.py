@@ -44,9 +44,9 @@ def make_detector(dictionary: str) -> cv2.aruco.ArucoDetector:
         raise ValueError(f"unknown OpenCV ArUco dictionary '{dictionary}'")
     params = cv2.aruco.DetectorParameters()
     params.minMarkerPerimeterRate = 0.01
-    params.adaptiveThreshWinSizeMin = 5
-    params.adaptiveThreshWinSizeMax = 35
-    params.adaptiveThreshWinSizeStep = 10
+    params.adaptiveThreshWinSizeMin = 7  # two threshold scales: small tags and shaded ones
+    params.adaptiveThreshWinSizeMax = 23
+    params.adaptiveThreshWinSizeStep = 16
     params.polygonalApproxAccuracyRate = 0.05
     params.cornerRefinementMethod = cv2.aruco.CORNER_REFINE_NONE  # refined in detect_tags, sized to the tag
     params.perspectiveRemovePixelPerCell = 8
@@ -82,3 +82,27 @@ def detect_tags(
         pts = pts.reshape(4, 2).astype(np.float64)
         tags.append(Tag(id=int(tag_id), corners_px=pts, center_px=pts.mean(axis=0)))
     return sorted(tags, key=lambda tag: tag.id)
+
+
+def detect_tags_near(
+    color_bgr: np.ndarray, centers_px: np.ndarray, half_size_px: int, detector: cv2.aruco.ArucoDetector
+) -> list[Tag]:
+    """Tags searched only in square windows around expected centres (tracking known tags cheaply).
+
+    Each window is searched separately; a tag is kept once (the first window that sees it).
+    """
+    check_color_image(color_bgr)
+    h, w = color_bgr.shape[:2]
+    found: dict[int, Tag] = {}
+    for u, v in np.asarray(centers_px, dtype=np.float64).reshape(-1, 2):
+        if not (np.isfinite(u) and np.isfinite(v)):
+            continue
+        x0, y0 = max(0, int(u) - half_size_px), max(0, int(v) - half_size_px)
+        x1, y1 = min(w, int(u) + half_size_px), min(h, int(v) + half_size_px)
+        if x1 - x0 < 16 or y1 - y0 < 16:
+            continue
+        for tag in detect_tags(color_bgr[y0:y1, x0:x1], detector=detector):
+            if tag.id not in found:
+                offset = np.array([x0, y0], dtype=np.float64)
+                found[tag.id] = Tag(tag.id, tag.corners_px + offset, tag.center_px + offset)
+    return sorted(found.values(), key=lambda tag: tag.id)

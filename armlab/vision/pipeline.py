@@ -1,0 +1,55 @@
+"""One perception pass per frame for the live stream: board tags tracked near where the calibration
+puts them (full search when uncalibrated), blocks, and the overlay. Holds its detectors so a
+per-frame call builds nothing."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from armlab.vision.blocks import Block, detect_blocks
+from armlab.vision.calibration import Calibration
+from armlab.vision.config import PerceptionConfig
+from armlab.vision.geometry import project_points
+from armlab.vision.overlay import OverlayLayers, draw_overlay
+from armlab.vision.tags import Tag, detect_tags, detect_tags_near, make_detector
+
+
+@dataclass(frozen=True)
+class PerceptionResult:
+    tags: list[Tag]
+    blocks: list[Block]
+    overlay_bgr: np.ndarray | None
+
+
+class PerceptionPipeline:
+    """Reusable per-frame perception (not thread-safe: one per perception thread)."""
+
+    def __init__(self, cfg: PerceptionConfig) -> None:
+        self.cfg = cfg
+        self._board_detector = make_detector(cfg.tags.dictionary)
+        self._block_detector = make_detector(cfg.tags.block_tag_dictionary)
+        self._grid_m = cfg.board.grid_points_m()
+        self._tag_centres_m = np.array([[x, y, 0.0] for x, y in cfg.tags.board_tags.values()])
+
+    def find_tags(self, color_bgr: np.ndarray, cal: Calibration | None) -> list[Tag]:
+        """Board tags: searched in windows around their calibrated image positions, else everywhere."""
+        if cal is None:
+            return detect_tags(color_bgr, detector=self._board_detector)
+        centres = project_points(cal.T_world_camera, cal.K, cal.dist, self._tag_centres_m)
+        return detect_tags_near(color_bgr, centres, 40, self._board_detector)
+
+    def process(
+        self, color_bgr: np.ndarray, depth_mm: np.ndarray | None, cal: Calibration | None,
+        layers: OverlayLayers | None = OverlayLayers(),
+    ) -> PerceptionResult:
+        """Tags, blocks (needs depth and a calibration) and, unless layers is None, the overlay image."""
+        tags = self.find_tags(color_bgr, cal)
+        blocks = []
+        if cal is not None and depth_mm is not None:
+            blocks = detect_blocks(color_bgr, depth_mm, cal, self.cfg, tag_detector=self._block_detector)
+        overlay = None
+        if layers is not None:
+            overlay = draw_overlay(color_bgr, tags=tags, blocks=blocks, calibration=cal, layers=layers, grid_points_m=self._grid_m)
+        return PerceptionResult(tags, blocks, overlay)
