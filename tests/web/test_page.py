@@ -95,3 +95,31 @@ def test_refused_command_shows_the_servers_message(page, server):
     toast.wait_for(timeout=5_000)
     assert server_message in toast.text_content()
     assert page.errors == []
+
+
+def test_page_reconnects_by_itself(page, server):
+    wait_frames(page, 2)
+    page.wait_for_function("document.getElementById('conn-text').textContent === 'connected'")
+    # Drop the websocket as a network failure would (not a user close): the page must come back.
+    page.evaluate("window.armlab.stream.ws.close()")
+    page.wait_for_function("document.getElementById('conn-text').textContent === 'reconnecting'", timeout=5_000)
+    page.wait_for_function("document.getElementById('conn-text').textContent === 'connected'", timeout=10_000)
+    frames = wait_frames(page, 1)
+    wait_frames(page, frames + 3)  # frames flow again (acks resumed on the new connection)
+    log = page.text_content("#event-log")
+    assert "connection lost" in log
+    assert page.errors == []
+
+
+def test_estop_button_falls_back_to_rest_without_the_websocket(page, server):
+    wait_frames(page, 2)
+    page.wait_for_function("window.armlab.status && window.armlab.status.state === 'idle'")
+    page.evaluate("window.armlab.stream.close()")  # websocket down for good
+    page.wait_for_function("document.getElementById('conn-text').textContent === 'reconnecting'")
+    page.click("#btn-estop")
+    status = server.wait_status(lambda s: s["state"] == "estop", 3.0, "e-stop over REST")
+    assert status["state"] == "estop"
+    assert "E-STOP pressed (REST)" in page.text_content("#event-log")
+    server.post("/api/reset")
+    server.wait_status(lambda s: s["state"] == "idle", 3.0, "reset")
+    assert page.errors == []

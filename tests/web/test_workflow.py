@@ -72,29 +72,6 @@ def test_calibrate_button_shows_the_result(page, server):
     assert page.errors == []
 
 
-def test_screenshot_of_calibrated_scene_with_detections(page, server):
-    ensure_calibrated(page, server)
-    page.check("#layer-grid")
-    page.wait_for_function("window.armlab.detections.length > 0", timeout=20_000)
-    page.wait_for_function("document.querySelectorAll('#det-body tr').length > 0")
-    n_rows = page.eval_on_selector_all("#det-body tr", "rows => rows.length")
-    assert n_rows == len(page.evaluate("window.armlab.detections"))
-    # Hover a detection so the hover readout and the row highlight show in the picture.
-    det = page.evaluate("window.armlab.detections[0]")
-    x, y = canvas_point(page, *det["center_px"])
-    page.mouse.move(x, y)
-    page.wait_for_function("document.getElementById('hover-world').dataset.positionM !== undefined", timeout=10_000)
-    hover_m = page.evaluate("JSON.parse(document.getElementById('hover-world').dataset.positionM)")
-    # The world point under a block's centre is on top of that block.
-    assert math.dist(hover_m[:2], det["position_m"][:2]) < 0.02
-    frames = wait_frames(page, 1)
-    wait_frames(page, frames + 3)  # frames drawn with the grid layer on
-    SCREENSHOT.parent.mkdir(parents=True, exist_ok=True)
-    page.screenshot(path=str(SCREENSHOT))
-    assert SCREENSHOT.stat().st_size > 50_000
-    page.uncheck("#layer-grid")
-
-
 def test_topdown_view_hover_maps_the_board(page, server):
     ensure_calibrated(page, server)
     page.click("#view-select button[data-view='topdown']")
@@ -185,6 +162,34 @@ def test_click_grab_lifts_the_block_and_click_drop_places_it(page, server):
     assert page.errors == []
 
 
+def test_screenshot_of_calibrated_scene_with_detections(page, server):
+    ensure_calibrated(page, server)
+    # Park the arm out of the camera's way so every block is seen whole.
+    page.click("#btn-sleep")
+    server.wait_status(lambda s: s["state"] == "idle" and not s["moving"], 20.0, "the arm to reach sleep")
+    page.check("#layer-grid")
+    page.wait_for_function(
+        "window.armlab.detections.length > 0 && window.armlab.detections.every(d => !d.occluded)", timeout=20_000
+    )
+    page.wait_for_function("document.querySelectorAll('#det-body tr').length > 0")
+    n_rows = page.eval_on_selector_all("#det-body tr", "rows => rows.length")
+    assert n_rows == len(page.evaluate("window.armlab.detections"))
+    # Hover a detection so the hover readout and the row highlight show in the picture.
+    det = page.evaluate("window.armlab.detections[0]")
+    x, y = canvas_point(page, *det["center_px"])
+    page.mouse.move(x, y)
+    page.wait_for_function("document.getElementById('hover-world').dataset.positionM !== undefined", timeout=10_000)
+    hover_m = page.evaluate("JSON.parse(document.getElementById('hover-world').dataset.positionM)")
+    # The world point under a block's centre is on top of that block.
+    assert math.dist(hover_m[:2], det["position_m"][:2]) < 0.02
+    frames = wait_frames(page, 1)
+    wait_frames(page, frames + 3)  # frames drawn with the grid layer on
+    SCREENSHOT.parent.mkdir(parents=True, exist_ok=True)
+    page.screenshot(path=str(SCREENSHOT))
+    assert SCREENSHOT.stat().st_size > 50_000
+    page.uncheck("#layer-grid")
+
+
 def test_estop_during_a_move_stops_the_arm_and_shows_estop(page, server):
     status = server.get("/api/status")
     assert status["state"] == "idle"
@@ -213,4 +218,24 @@ def test_estop_during_a_move_stops_the_arm_and_shows_estop(page, server):
     page.wait_for_function("document.getElementById('state-badge').textContent === 'idle'", timeout=5_000)
     q_c = np.array(server.get("/api/status")["joints_rad"])
     assert np.abs(q_c - q_b).max() < 0.01
+    assert page.errors == []
+
+
+def test_sim_scene_panel_sets_a_new_scene(page, server):
+    status = server.get("/api/status")
+    assert status["state"] == "idle" and status["backend"] == "sim"
+    page.wait_for_selector("#sim-panel:not([hidden])", timeout=5_000)
+    page.select_option("#sim-event", "pick_sort")
+    page.select_option("#sim-level", "2")
+    page.fill("#sim-seed", "11")
+    page.click("#btn-sim-scene")
+    page.wait_for_function(
+        "[...document.querySelectorAll('#event-log li')].some(li => li.textContent.includes('scene set: pick_sort'))",
+        timeout=10_000,
+    )
+    objects = truth_objects(server)
+    assert len(objects) == 6  # pick_sort level 2: 3 large + 3 small cubes
+    assert sorted(o["size"] for o in objects) == ["large"] * 3 + ["small"] * 3
+    # The detections list follows the new scene.
+    page.wait_for_function("document.querySelectorAll('#det-body tr').length === 6", timeout=20_000)
     assert page.errors == []

@@ -33,8 +33,8 @@ export class EventLog {
     this.list.replaceChildren();
   }
 
-  /** Show a toast (errors stay until clicked or for 6 s) and log it. */
-  toast(level, title, message) {
+  /** Show a toast (it goes on click or after 6 s) and, unless logged already, log it. */
+  toast(level, title, message, alsoLog = true) {
     const div = document.createElement("div");
     div.className = "toast";
     div.dataset.level = level;
@@ -47,7 +47,7 @@ export class EventLog {
     div.addEventListener("click", () => div.remove());
     this.toastBox.append(div);
     setTimeout(() => div.remove(), TOAST_TIME_MS);
-    this.add(level, `${title}: ${message}`);
+    if (alsoLog) this.add(level, `${title}: ${message}`);
   }
 
   /** Toast an ApiError (or any Error) with the server's own message. */

@@ -178,9 +178,8 @@ class App {
     const wasOurs = this.trackedJob === job.id;
     this.trackedJob = null;
     if (!wasOurs) return;
-    const text = `${job.name} ${job.state}${job.message ? ": " + job.message : ""}`;
-    if (job.state === "failed") this.log.toast("error", `${job.name} failed`, job.message || "failed");
-    else this.log.add(job.state === "succeeded" ? "info" : "warn", text);
+    // The station's own event already put the outcome in the log; a failure also gets a toast.
+    if (job.state === "failed") this.log.toast("error", `${job.name} failed`, job.message || "failed", false);
     if (job.state === "succeeded" && job.name === "grab" && this.live.mode === "grab") this.setMode("drop");
     else if (job.state === "succeeded" && job.name === "drop" && this.live.mode === "drop") this.setMode("grab");
     if (job.state === "succeeded" && job.name === "repeat") this.refreshPrograms();
@@ -215,8 +214,7 @@ class App {
     try {
       const result = await call();
       if (result && result.job) {
-        this.trackedJob = result.job.id;
-        this.log.add("info", `${action}: job ${result.job.name || ""} started`);
+        this.trackedJob = result.job.id; // the station logs the job's start and end itself
       } else {
         this.log.add("info", `${action}: ok`);
       }

@@ -32,7 +32,12 @@ export class JointPlot {
       cursor: { drag: { x: false, y: false } },
       scales: { x: { time: false }, y: { auto: true } },
       axes: [
-        { stroke: "#8a96a6", grid: { stroke: "#232933" }, values: (u, ticks) => ticks.map((t) => `${t.toFixed(0)}s`) },
+        {
+          stroke: "#8a96a6",
+          grid: { stroke: "#232933" },
+          incrs: [1, 2, 5, 10],
+          values: (u, ticks) => ticks.map((t) => `${t.toFixed(0)}s`),
+        },
         { stroke: "#8a96a6", grid: { stroke: "#232933" }, size: 44 },
       ],
       series: [{ label: "t" }, ...this.jointNames.map((name, i) => ({ label: name, stroke: COLORS[i % COLORS.length], width: 1.5 }))],

@@ -50,7 +50,7 @@ export class Stream {
     this.retryS = RECONNECT_MIN_S;
     this.closedByUser = false;
     this.viewMessage = null;
-    this.clockOffsetS = 0; // server_time - local_time, from the hello message
+    this.clockOffsetS = null; // server_time − local_time, see observeServerTime()
     this.timer = null;
   }
 
@@ -120,9 +120,18 @@ export class Stream {
     this.send(this.viewMessage);
   }
 
+  /**
+   * Track server_time − local_time. Each sample (server send time − local receive time) is at most
+   * the true offset (transit takes ≥ 0 s), so the largest sample since the hello is the tightest.
+   */
+  observeServerTime(serverTimeS, restart) {
+    const sample = serverTimeS - Date.now() / 1000;
+    this.clockOffsetS = restart || this.clockOffsetS === null ? sample : Math.max(this.clockOffsetS, sample);
+  }
+
   /** Local estimate of the server clock, for capture-to-screen latency. */
   serverNowS() {
-    return Date.now() / 1000 + this.clockOffsetS;
+    return Date.now() / 1000 + (this.clockOffsetS ?? 0);
   }
 
   async dispatch(data) {
@@ -133,9 +142,8 @@ export class Stream {
       } catch {
         return;
       }
-      if (msg.type === "hello" && Number.isFinite(msg.server_time_s)) {
-        this.clockOffsetS = msg.server_time_s - Date.now() / 1000;
-      }
+      const sentS = msg.type === "hello" ? msg.server_time_s : msg.type === "telemetry" ? msg.time_s : undefined;
+      if (Number.isFinite(sentS)) this.observeServerTime(sentS, msg.type === "hello");
       this.handlers.onMessage?.(msg);
       return;
     }
