@@ -5,7 +5,7 @@ pose maths for the camera mount and its seeded "bumped rig" error."""
 from __future__ import annotations
 
 import math
-from typing import Annotated
+from typing import Annotated, Literal
 
 import numpy as np
 from pydantic import Field, model_validator
@@ -35,6 +35,8 @@ class PhysicsConfig(StrictModel):
     timestep_s: Positive
     control_period_s: Positive
     impratio: Positive
+    noslip_iterations: Annotated[int, Field(ge=0, le=50)] = 0
+    cone: Literal["elliptic", "pyramidal"] = "elliptic"
     settle_tolerance_rad: Positive
     settle_timeout_s: NonNegative
 
@@ -80,6 +82,7 @@ class ObjectsConfig(StrictModel):
     density_kg_m3: Positive
     friction: list[NonNegative] = Field(min_length=3, max_length=3)
     board_friction: list[NonNegative] = Field(min_length=3, max_length=3)
+    solref: list[float] = Field(min_length=2, max_length=2)
 
 
 class PoseErrorConfig(StrictModel):

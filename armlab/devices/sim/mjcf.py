@@ -112,7 +112,7 @@ def _arm_xml(arm: ArmGeometry, sim: SimConfig) -> str:
                         pos="{finger_start + 0.5 * finger_len:.9g} {sign * 0.004:.9g} 0" material="arm_dark" {arm_geom}/>
                   <geom name="{side}_pad" type="box" size="{0.5 * g.pad_length_m:.9g} {0.5 * pad_t:.9g} {0.5 * g.pad_width_m:.9g}"
                         pos="{pad_x:.9g} {-sign * 0.5 * pad_t:.9g} 0" material="pad" condim="4" friction="{_fmt(g.pad_friction)}"
-                        solref="{_fmt(g.pad_solref)}" solimp="{_fmt(g.pad_solimp)}" {arm_geom}/>
+                        solref="{_fmt(g.pad_solref)}" solimp="{_fmt(g.pad_solimp)}" solmix="1000" {arm_geom}/>
                 </body>"""
 
     return f"""
@@ -155,11 +155,11 @@ def _prism_vertices(outline_xy: list[tuple[float, float]], height_m: float) -> s
     return _fmt(points)
 
 
-def _object_xml(obj: SceneObject, density: float, friction: list[float]) -> tuple[str, str]:
+def _object_xml(obj: SceneObject, density: float, friction: list[float], solref: list[float]) -> tuple[str, str]:
     """(asset xml, body xml) of one free object. Body origin = footprint bounding-box centre, mid-height."""
     ext_x, ext_y, height = obj.dimensions_m
     scale = ext_x / DISTRACTOR_DIMENSIONS_M[obj.type][0] if obj.type != "block" else 1.0
-    common = f'material="c_{obj.color}" density="{density}" friction="{_fmt(friction)}" contype="1" conaffinity="1"'
+    common = f'material="c_{obj.color}" density="{density}" friction="{_fmt(friction)}" solref="{_fmt(solref)}" contype="1" conaffinity="1"'
     mesh_name = f"mesh_{obj.type}_{obj.id}"
     asset = ""
     if obj.type == "block":
@@ -229,7 +229,7 @@ def build_model_xml(
     )
     object_assets, object_bodies = [], []
     for obj in scene.objects:
-        asset, body = _object_xml(obj, sim.objects.density_kg_m3, sim.objects.friction)
+        asset, body = _object_xml(obj, sim.objects.density_kg_m3, sim.objects.friction, sim.objects.solref)
         object_assets.append(asset)
         object_bodies.append(body)
     actuators = []
@@ -248,7 +248,7 @@ def build_model_xml(
     p = sim.physics
     xml = f"""<mujoco model="armlab_workcell">
   <compiler angle="radian" autolimits="true"/>
-  <option timestep="{p.timestep_s}" integrator="implicitfast" cone="elliptic" impratio="{p.impratio}"/>
+  <option timestep="{p.timestep_s}" integrator="implicitfast" cone="{p.cone}" impratio="{p.impratio}" noslip_iterations="{p.noslip_iterations}"/>
   <statistic extent="1" center="0 0.15 0.2"/>
   <visual>
     <global offwidth="{camera.width}" offheight="{camera.height}"/>
@@ -270,7 +270,7 @@ def build_model_xml(
   <worldbody>
     <light name="sun" directional="true" pos="0.2 0.3 2" dir="-0.1 -0.15 -1" castshadow="false" diffuse="0.55 0.55 0.55" specular="0 0 0"/>
     <geom name="board" type="plane" size="0.5 0.325 0.05" pos="0 0.15 0" material="board"
-          friction="{_fmt(sim.objects.board_friction)}" contype="1" conaffinity="1"/>
+          friction="{_fmt(sim.objects.board_friction)}" solref="{_fmt(sim.objects.solref)}" contype="1" conaffinity="1"/>
     <geom name="table" type="plane" size="1.5 1.5 0.05" pos="0 0.15 -0.003" material="table" contype="0" conaffinity="0"/>
     {''.join(tag_geoms)}
     <camera name="{CAMERA_NAME}" mode="fixed" {camera_xml_attributes(T_world_camera, camera)}/>

@@ -27,9 +27,9 @@ def _wrist_to_point_m() -> float:
 WRIST_TO_POINT_M = _wrist_to_point_m()
 
 
-def topdown_ik(position_m, block_yaw_rad: float = 0.0) -> np.ndarray:
+def topdown_ik(position_m, block_yaw_rad: float = 0.0, wrist_seed_rad: float = 0.0) -> np.ndarray:
     """Joints putting the gripper point at position_m (world) pointing straight down, with the fingers
-    closing across the block's faces (wrist_rotate chosen modulo 90 degrees nearest zero)."""
+    closing across the block's faces (wrist_rotate chosen modulo 90 degrees nearest wrist_seed_rad)."""
     x, y, z = position_m
     xb, yb = y, -x  # world -> Interbotix base frame (T_world_base: world_x = -base_y, world_y = base_x)
     waist = math.atan2(yb, xb)
@@ -49,7 +49,7 @@ def topdown_ik(position_m, block_yaw_rad: float = 0.0) -> np.ndarray:
     # the wrist_rotate that aligns it with the block's x or y axis.
     finger_heading = waist + math.pi / 2 + math.pi / 2  # heading of gripper +y at wrist_rotate = 0
     q5 = finger_heading - block_yaw_rad
-    q5 = (q5 + math.pi / 4) % (math.pi / 2) - math.pi / 4
+    q5 = wrist_seed_rad + (q5 - wrist_seed_rad + math.pi / 4) % (math.pi / 2) - math.pi / 4
     return np.array([waist, q2, q3, q4, q5])
 
 
@@ -67,4 +67,7 @@ def move(cell: SimWorkcell, q_target, duration_s: float | None = None, speed_rad
 
 
 def move_to(cell: SimWorkcell, position_m, yaw_rad: float = 0.0, **kwargs) -> None:
-    move(cell, topdown_ik(position_m, yaw_rad), **kwargs)
+    """Top-down move keeping the wrist continuous (no 90-degree flips while holding a block)."""
+    current = cell.arm.read_joint_state().position_rad
+    seed = float(np.clip(current[4], -math.pi / 2, math.pi / 2))
+    move(cell, topdown_ik(position_m, yaw_rad, seed), **kwargs)
