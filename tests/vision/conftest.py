@@ -9,7 +9,7 @@ import pytest
 
 sys.path.insert(0, str(Path(__file__).parent))
 
-from synth import L515, look_at_pose, render_board  # noqa: E402
+from synth import L515, look_at_pose, render_board, render_sim  # noqa: E402
 
 from armlab.vision import load_perception_config  # noqa: E402
 
@@ -34,3 +34,11 @@ def board_frame(board_pose):
 @pytest.fixture(scope="session")
 def intrinsics():
     return L515
+
+
+@pytest.fixture(scope="session")
+def event_frame():
+    """line_up level 3: stacks up to 4 of mixed sizes and distractors; the rig is bumped (seed 1)."""
+    from armlab.scene import generate_scene
+
+    return render_sim(generate_scene("line_up", level=3, seed=1), seed=1)

@@ -75,3 +75,20 @@ def render_board(T_world_camera: np.ndarray, intrinsics: Intrinsics = L515, tags
     s = -T_world_camera[2, 3] / dz
     depth = np.where(s > 0, np.round(s * 1000.0), 0).astype(np.uint16)
     return color, depth
+
+
+def render_sim(scene, seed: int, arm_q=None) -> tuple:
+    """(Frame, truth) of a scene in the MuJoCo workcell with the camera rig bumped by `seed`."""
+    from armlab.devices.sim import SimWorkcell, SimWorkcellConfig
+
+    cell = SimWorkcell(SimWorkcellConfig(realtime=False, seed=seed, camera_pose_error=True))
+    cell.start()
+    try:
+        cell.set_scene(scene)
+        cell.step(0.5)
+        if arm_q is not None:
+            cell.apply_arm_reference(np.asarray(arm_q, float), np.zeros(5))
+            cell.step(3.0)
+        return cell.render(), cell.truth()
+    finally:
+        cell.close()

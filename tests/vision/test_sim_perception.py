@@ -8,10 +8,10 @@ import math
 import cv2
 import numpy as np
 import pytest
+from synth import render_sim
 
-from armlab.devices.sim import SimWorkcell, SimWorkcellConfig
 from armlab.devices.sim.textures import block_top_texture
-from armlab.scene import Scene, SceneObject, generate_scene, quat_from_yaw
+from armlab.scene import Scene, SceneObject, quat_from_yaw
 from armlab.vision import (
     calibrate_extrinsics,
     detect_blocks,
@@ -23,20 +23,6 @@ from armlab.vision import (
 )
 from armlab.vision.evaluate import click_grid_errors, expected_tops, score_blocks
 from armlab.vision.geometry import project_points
-
-
-def _render(scene: Scene, seed: int, arm_q=None) -> tuple:
-    cell = SimWorkcell(SimWorkcellConfig(realtime=False, seed=seed, camera_pose_error=True))
-    cell.start()
-    try:
-        cell.set_scene(scene)
-        cell.step(0.5)
-        if arm_q is not None:
-            cell.apply_arm_reference(np.asarray(arm_q, float), np.zeros(5))
-            cell.step(3.0)
-        return cell.render(), cell.truth()
-    finally:
-        cell.close()
 
 
 def paint_block_top_tag(image: np.ndarray, truth: dict, obj_id: str, tag_id: int, rgb) -> np.ndarray:
@@ -66,12 +52,6 @@ def _obj(oid, otype, color, size, x, y, yaw=0.0, z_base=0.0, aruco_id=None):
 
 
 @pytest.fixture(scope="module")
-def event_frame():
-    """line_up level 3: stacks up to 4 of mixed sizes and distractors; the rig is bumped (seed 1)."""
-    return _render(generate_scene("line_up", level=3, seed=1), seed=1)
-
-
-@pytest.fixture(scope="module")
 def custom_frame():
     """Tagged tops, two touching blue cubes, a cylinder, and an orange cube under the arm."""
     scene = Scene(objects=(
@@ -83,7 +63,7 @@ def custom_frame():
         _obj("hidden", "block", "orange", "large", 0.0, 0.25),
         _obj("tagsmall", "block", "blue", "small", -0.10, 0.33, aruco_id=200),
     ))
-    frame, truth = _render(scene, seed=7, arm_q=(0.0, 0.0, 0.0, 0.0, 0.0))
+    frame, truth = render_sim(scene, seed=7, arm_q=(0.0, 0.0, 0.0, 0.0, 0.0))
     color = paint_block_top_tag(frame.color_bgr, truth, "tagged", 100, (235, 209, 20))
     color = paint_block_top_tag(color, truth, "tagsmall", 200, (20, 56, 204))
     return color, frame, truth
