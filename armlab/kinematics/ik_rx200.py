@@ -59,6 +59,9 @@ def _solve_at_pitch(g: Rx200Geometry, xb: float, yb: float, zb: float, pitch: fl
             waist, reach_r, psi = wrap_angle(phi + math.pi), -radius, math.pi - pitch
         else:
             waist, reach_r, psi = wrap_angle(phi), radius, pitch
+        for shifted in (waist - 2.0 * math.pi, waist + 2.0 * math.pi):  # e.g. -pi for pi, near a -pi seed
+            if lower[0] - _TOL <= shifted <= upper[0] + _TOL and abs(shifted - seed[0]) < abs(waist - seed[0]):
+                waist = shifted
         if not lower[0] - _TOL <= waist <= upper[0] + _TOL:
             failure = max(failure, (_RANK_LIMIT, -_excess(waist, lower[0], upper[0]), "waist", waist))
             continue
@@ -214,6 +217,10 @@ def _batch_at_pitch(g: Rx200Geometry, base_xyz: np.ndarray, pitch: np.ndarray, s
     phi = np.where(radius > 1e-12, np.arctan2(yb, xb), seed[:, 0])
     # axis 0: (front, back)
     waist = _wrap_array(np.stack([phi, phi + np.pi]))
+    for shift in (-2.0 * np.pi, 2.0 * np.pi):  # the 2*pi equivalent nearer the seed, when within limits
+        shifted = waist + shift
+        better = (shifted >= lower[0] - _TOL) & (shifted <= upper[0] + _TOL) & (np.abs(shifted - seed[:, 0]) < np.abs(waist - seed[:, 0]))
+        waist = np.where(better, shifted, waist)
     reach_r = np.stack([radius, -radius])
     psi = np.stack([pitch, np.pi - pitch])
     rc = reach_r - g.tool_m * np.cos(psi) - g.shoulder_x_m

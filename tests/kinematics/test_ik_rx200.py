@@ -1,0 +1,216 @@
+"""Closed-form RX200 IK: round trips, solution choice, pitch search, yaw alignment, unreachable targets."""
+
+import math
+
+import numpy as np
+import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
+
+from armlab.kinematics import Unreachable
+
+DOWN = math.pi / 2
+
+
+def physical_pitch(arm, poses):
+    """Approach axis below the horizontal, in the vertical plane through the base axis and the target."""
+    approach = poses[:, :3, 0]
+    radial = poses[:, :2, 3] - arm.T_world_base[:2, 3]
+    radial /= np.linalg.norm(radial, axis=1, keepdims=True)
+    return np.arctan2(-approach[:, 2], np.sum(approach[:, :2] * radial, axis=1))
+
+
+def valid_random_configs(arm, count, seed):
+    """FK targets of random in-limit joints whose joints all stay above the board (z >= 0)."""
+    rng = np.random.default_rng(seed)
+    q = rng.uniform(arm.lower_rad, arm.upper_rad, size=(count, arm.dof))
+    above = np.all(arm.joint_frames(q)[:, :, 2, 3] >= 0.0, axis=1)
+    return q[above]
+
+
+def test_batch_round_trip_100000_targets(rx200):
+    q = valid_random_configs(rx200, 150_000, seed=11)[:100_000]
+    assert q.shape[0] == 100_000
+    poses = rx200.fk(q)
+    targets, pitch = poses[:, :3, 3], physical_pitch(rx200, poses)
+    solution, ok = rx200.ik_batch(targets, pitch)
+    assert ok.all(), f"{(~ok).sum()} unsolved"
+    reached = rx200.fk(solution)
+    assert np.abs(reached[:, :3, 3] - targets).max() < 1e-6
+    assert np.allclose(physical_pitch(rx200, reached), pitch, atol=1e-6)
+    assert rx200.within_limits(solution)
+    assert np.all(rx200.joint_frames(solution)[:, :, 2, 3] >= -1e-9)
+
+
+def test_scalar_matches_batch(rx200):
+    q = valid_random_configs(rx200, 400, seed=12)
+    poses = rx200.fk(q)
+    targets, pitch = poses[:, :3, 3], physical_pitch(rx200, poses)
+    batch, ok = rx200.ik_batch(targets, pitch)
+    assert ok.all()
+    for i in range(len(targets)):
+        assert np.allclose(rx200.ik(targets[i], pitch=float(pitch[i])), batch[i], atol=1e-9)
+
+
+@settings(max_examples=200, deadline=None)
+@given(st.lists(st.floats(0.0, 1.0), min_size=5, max_size=5))
+def test_seeded_with_an_elbow_up_solution_returns_it(rx200, fractions):
+    q = rx200.lower_rad + np.array(fractions) * (rx200.upper_rad - rx200.lower_rad)
+    elbow_up = q[2] > -math.atan2(0.2, 0.05)
+    above = np.all(rx200.joint_frames(q)[:, 2, 3] >= 0.0)
+    pose = rx200.fk(q)
+    radius = np.hypot(*pose[:2, 3])
+    if not (elbow_up and above and radius > 1e-3):
+        return
+    pitch = float(physical_pitch(rx200, pose[None])[0])
+    solution = rx200.ik(pose[:3, 3], pitch=pitch, q_seed=q)
+    assert np.allclose(solution, q, atol=1e-7)  # the seed itself is the closest valid solution
+
+
+def test_on_the_base_axis_the_waist_follows_the_seed(rx200):
+    # Pointing straight up above the base: every waist angle works, so the seed's is kept.
+    target = [0.0, 0.0, 0.45]
+    for waist_seed in (-2.0, 0.0, 1.0, 2.5):
+        seed = np.array([waist_seed, 0.0, 0.0, 0.0, 0.0])
+        solution = rx200.ik(target, pitch=-DOWN, q_seed=seed)
+        assert solution[0] == pytest.approx(waist_seed)
+        assert np.allclose(rx200.fk(solution)[:3, 3], target, atol=1e-9)
+
+
+def test_default_solution_is_elbow_up_and_facing_the_target(rx200):
+    solution = rx200.ik([-0.15, 0.2, 0.03])
+    assert solution[0] == pytest.approx(math.atan2(0.15, 0.2))  # waist turns toward the target
+    frames = rx200.joint_frames(solution)
+    shoulder, elbow, wrist = frames[1, :3, 3], frames[2, :3, 3], frames[3, :3, 3]
+    along = (wrist - shoulder) / np.linalg.norm(wrist - shoulder)
+    offset = (elbow - shoulder) - np.dot(elbow - shoulder, along) * along
+    assert offset[2] > 0.0  # the elbow sits above the shoulder-wrist line
+
+
+def test_pitch_none_prefers_straight_down(rx200):
+    q, pitch = rx200.ik_with_pitch([0.1, 0.25, 0.02])
+    assert pitch == DOWN
+    assert np.allclose(rx200.fk(q)[:3, 0], [0.0, 0.0, -1.0], atol=1e-9)
+
+
+@pytest.mark.parametrize("target", [[0.0, 0.45, 0.02], [0.3, 0.35, 0.04], [-0.42, -0.1, 0.0]])
+def test_pitch_none_finds_the_steepest_reachable_pitch_far_away(rx200, target):
+    with pytest.raises(Unreachable):
+        rx200.ik(target, pitch=DOWN)
+    q, pitch = rx200.ik_with_pitch(target)
+    assert pitch < DOWN
+    assert np.allclose(rx200.fk(q)[:3, 3], target, atol=1e-9)
+    assert rx200.pitch_of(q) == pytest.approx(pitch, abs=1e-9)
+    with pytest.raises(Unreachable):
+        rx200.ik(target, pitch=pitch + 1e-3)  # a little steeper is no longer reachable
+
+
+def test_batch_pitch_search_matches_scalar(rx200):
+    rng = np.random.default_rng(4)
+    targets = np.column_stack([rng.uniform(-0.5, 0.5, 300), rng.uniform(-0.175, 0.475, 300), rng.uniform(0.0, 0.1, 300)])
+    batch, ok = rx200.ik_batch(targets)
+    for i in range(len(targets)):
+        try:
+            q = rx200.ik(targets[i])
+        except Unreachable:
+            assert not ok[i]
+            continue
+        assert ok[i]
+        assert rx200.pitch_of(batch[i]) == pytest.approx(rx200.pitch_of(q), abs=1e-6)
+        assert np.allclose(rx200.fk(batch[i])[:3, 3], targets[i], atol=1e-9)
+    assert ok.mean() > 0.9  # nearly the whole board is pickable with the pitch search
+
+
+def face_angle_error(finger_axis_xy, yaw):
+    """Angle between a horizontal finger axis and the nearest block face normal (mod pi/2)."""
+    angle = math.atan2(finger_axis_xy[1], finger_axis_xy[0]) - yaw
+    return abs((angle + math.pi / 4) % (math.pi / 2) - math.pi / 4)
+
+
+@settings(max_examples=150, deadline=None)
+@given(
+    st.floats(-0.2, 0.2), st.floats(0.12, 0.3), st.floats(-math.pi, math.pi), st.floats(-3 * math.pi / 4, 3 * math.pi / 4)
+)
+def test_yaw_aligns_fingers_with_minimal_wrist_motion(rx200, x, y, yaw, wrist_seed):
+    seed = np.array([0.0, 0.0, 0.0, 0.0, wrist_seed])
+    q = rx200.ik([x, y, 0.02], pitch=DOWN, yaw=yaw, q_seed=seed)
+    finger_axis = rx200.fk(q)[:3, 1]
+    assert abs(finger_axis[2]) < 1e-9
+    assert face_angle_error(finger_axis[:2], yaw) < 1e-9
+    # documented convention: pointing down, the fingers close along world angle (waist - wrist_rotate)
+    assert face_angle_error([math.cos(q[0] - q[4]), math.sin(q[0] - q[4])], yaw) < 1e-9
+    equivalents = [q[0] - yaw + k * math.pi / 2 for k in range(-8, 9)]
+    allowed = [v for v in equivalents if rx200.lower_rad[4] <= v <= rx200.upper_rad[4]]
+    assert abs(q[4] - wrist_seed) <= min(abs(v - wrist_seed) for v in allowed) + 1e-9
+    assert abs(q[4] - wrist_seed) <= math.pi / 4 + 1e-9
+
+
+def test_yaw_with_a_tilted_gripper_aligns_the_projected_finger_axis(rx200):
+    for yaw in (0.0, 0.4, -1.0, 2.0):
+        q = rx200.ik([0.2, 0.3, 0.05], pitch=1.0, yaw=yaw)
+        finger_axis = rx200.fk(q)[:3, 1]
+        assert face_angle_error(finger_axis[:2], yaw) < 1e-9
+
+
+def test_yaw_none_keeps_the_seed_wrist(rx200):
+    seed = np.array([0.0, 0.0, 0.0, 0.0, 0.7])
+    assert rx200.ik([0.0, 0.3, 0.05], q_seed=seed)[4] == pytest.approx(0.7)
+    assert rx200.ik([0.0, 0.3, 0.05])[4] == 0.0
+
+
+def test_batch_yaw_matches_scalar(rx200):
+    rng = np.random.default_rng(9)
+    targets = np.column_stack([rng.uniform(-0.2, 0.2, 200), rng.uniform(0.1, 0.3, 200), np.full(200, 0.03)])
+    yaws = rng.uniform(-math.pi, math.pi, 200)
+    seed = np.array([0.0, 0.0, 0.0, 0.0, 1.0])
+    batch, ok = rx200.ik_batch(targets, DOWN, yaws, q_seed=seed)
+    assert ok.all()
+    for i in range(200):
+        assert np.allclose(batch[i], rx200.ik(targets[i], DOWN, yaws[i], q_seed=seed), atol=1e-9)
+
+
+@pytest.mark.parametrize(
+    "target, pitch, reason",
+    [
+        ([0.0, 0.7, 0.1], None, "out of reach"),
+        ([0.0, 0.7, 0.1], DOWN, "out of reach"),
+        ([0.0, 0.0, 0.8], None, "out of reach"),
+        ([0.0, 0.2, -0.01], None, "below the table"),
+        ([0.0, 0.35, 0.0], -0.15, "below the table"),  # the wrist would go under the board
+        ([0.0, 0.05, 0.3], DOWN, "joint limit (wrist_angle)"),
+    ],
+)
+def test_unreachable_targets_say_why(rx200, target, pitch, reason):
+    with pytest.raises(Unreachable) as error:
+        rx200.ik(target, pitch=pitch)
+    assert isinstance(error.value, ValueError)
+    assert error.value.reason == reason
+    assert reason in str(error.value)
+    _, ok = rx200.ik_batch([target], pitch)
+    assert not ok[0]
+
+
+@pytest.mark.parametrize(
+    "kwargs",
+    [
+        {"position_m": [0.0, float("nan"), 0.1]},
+        {"position_m": [0.0, 0.2]},
+        {"position_m": [0.0, 0.2, 0.1], "pitch": float("inf")},
+        {"position_m": [0.0, 0.2, 0.1], "yaw": float("nan")},
+        {"position_m": [0.0, 0.2, 0.1], "q_seed": [0.0, 0.0]},
+        {"position_m": "0 0.2 0.1"},
+    ],
+)
+def test_bad_input_is_a_clear_value_error_not_unreachable(rx200, kwargs):
+    with pytest.raises(ValueError) as error:
+        rx200.ik(**kwargs)
+    assert not isinstance(error.value, Unreachable)
+
+
+def test_batch_rejects_bad_shapes(rx200):
+    with pytest.raises(ValueError, match=r"\(N, 3\)"):
+        rx200.ik_batch(np.zeros((4, 2)))
+    with pytest.raises(ValueError, match="pitch"):
+        rx200.ik_batch(np.zeros((4, 3)), pitch=np.zeros(3))
+    with pytest.raises(ValueError, match="finite"):
+        rx200.ik_batch(np.full((2, 3), np.nan))
