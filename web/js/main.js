@@ -16,6 +16,7 @@ import {
 } from "./panels.js";
 import { JointPlot } from "./plot.js";
 import { RateMeter, Stream } from "./stream.js";
+import { COMMANDS, LAYERS, VIEWS } from "./wire_types.js";
 
 const $ = (id) => document.getElementById(id);
 const ESTOP_REST_FALLBACK_MS = 300;
@@ -63,10 +64,24 @@ class App {
         onError: (e) => this.log.add("warn", `stream: ${e.message}`),
       },
     });
+    this.unknownWireNames = App.unknownWireNames;
     window.armlab = this; // handle for operators' devtools and the browser tests
   }
 
+  /** Names in the page's markup that the wire protocol does not know (a stale page); [] when in sync. */
+  static unknownWireNames(root = document) {
+    const check = (selector, key, known) =>
+      [...root.querySelectorAll(selector)].map((el) => el.dataset[key]).filter((name) => !known.includes(name));
+    return [
+      ...check("[data-command]", "command", COMMANDS),
+      ...check("[data-view]", "view", VIEWS),
+      ...check("[data-layer]", "layer", LAYERS),
+    ];
+  }
+
   start() {
+    const unknown = App.unknownWireNames();
+    if (unknown.length) this.log.add("error", `page out of date with the server protocol: ${unknown.join(", ")}`);
     this.bindControls();
     this.stream.setView(this.view, this.layers);
     this.stream.connect();
