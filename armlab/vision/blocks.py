@@ -240,10 +240,12 @@ def _top_face_in_roi(
 def _face_from_pixels(pixels: np.ndarray, contour: np.ndarray, top_m: float, cal: Calibration) -> _Face:
     rays = normalized_rays(pixels, cal.K, cal.dist)
     world = intersect_rays_with_plane(cal.T_world_camera, rays, top_m)
-    centre = world[:, :2].mean(axis=0)
-    depth_m = float(np.linalg.norm(cal.T_world_camera[:3, 3] - np.array([centre[0], centre[1], top_m])))
-    cos_view = abs(float(cal.T_world_camera[2, 2]))  # camera z-axis vs world z: foreshortening of the face
-    pixel_area = (depth_m / cal.K[0, 0]) * (depth_m / cal.K[1, 1]) * cos_view
+    # Footprint of one pixel on the face's plane, from the local Jacobian at the face's mean pixel.
+    u, v = pixels.mean(axis=0)
+    local = intersect_rays_with_plane(
+        cal.T_world_camera, normalized_rays(np.array([[u, v], [u + 1, v], [u, v + 1]]), cal.K, cal.dist), top_m
+    )
+    pixel_area = float(abs(np.cross(local[1, :2] - local[0, :2], local[2, :2] - local[0, :2])))
     return _Face(world[:, :2], top_m, contour.astype(np.float64), pixels.mean(axis=0), pixels.shape[0], pixel_area)
 
 
@@ -292,8 +294,11 @@ def detect_blocks(
                 if block.aruco_id is None and _face_looks_tagged(color_bgr, block):
                     detector = detector or make_detector(cfg.tags.block_tag_dictionary)
                     block = _with_tag(block, color_bgr, roi, detector, cfg)
-                if not any(np.linalg.norm(block.position_m[:2] - b.position_m[:2]) < 0.01 for b in blocks):
+                twins = [b for b in blocks if np.linalg.norm(block.position_m[:2] - b.position_m[:2]) < 0.015]
+                if not twins:
                     blocks.append(block)
+                elif all(block.height_m > b.height_m + 0.01 for b in twins):  # keep a stack's top only
+                    blocks = [b for b in blocks if not any(b is twin for twin in twins)] + [block]
     return sorted(blocks, key=lambda b: (round(float(b.position_m[1]), 3), float(b.position_m[0])))
 
 
@@ -311,7 +316,7 @@ def _blocks_from_region(color_bgr, depth_mm, cal, cfg, roi, top_m, name, ci, lut
     small = cfg.blocks.small_size_m
     if face.pixel_count * face.pixel_area_m2 < 0.3 * small * small:
         return []  # a sliver: the edge of a lower stack member or noise
-    if _covered(face, cal, z, roi):
+    if _covered(face, z, roi):
         return []  # a lower member of a stack: something sits on its centre
     if (classes[pixels[:, 1].astype(int) - y0, pixels[:, 0].astype(int) - x0] == ci).mean() < 0.15:
         return []  # the face is mostly another object's colourless top
@@ -319,15 +324,15 @@ def _blocks_from_region(color_bgr, depth_mm, cal, cfg, roi, top_m, name, ci, lut
     return [_make_block(part, name, cal, cfg, z_half, step, z) for part in parts]
 
 
-def _covered(face: _Face, cal: Calibration, z: np.ndarray, roi) -> bool:
-    """True if the image point of the face's centroid shows something well above the face."""
-    centre = np.array([[*face.points_xy.mean(axis=0), face.top_m]])
-    u, v = project_points(cal.T_world_camera, cal.K, cal.dist, centre)[0]
-    ui, vi = int(round(u)) - roi[0], int(round(v)) - roi[1]
-    if not (0 <= vi < z.shape[0] and 0 <= ui < z.shape[1]):
-        return False
-    value = z[vi, ui]
-    return bool(np.isfinite(value) and value > face.top_m + 0.01)
+def _covered(face: _Face, z: np.ndarray, roi) -> bool:
+    """True for a lower member of a stack: within the face's convex hull in the image, a sizeable part
+    stands well above the face (the block on top)."""
+    hull = cv2.convexHull(np.round(face.contour_px - np.array(roi[:2])).astype(np.int32))
+    inside = np.zeros(z.shape, np.uint8)
+    cv2.fillConvexPoly(inside, hull, 1)
+    with np.errstate(invalid="ignore"):
+        above = np.count_nonzero((z > face.top_m + 0.01) & (inside > 0))
+    return above > 0.15 * max(1, np.count_nonzero(inside))
 
 
 def _face_looks_tagged(color_bgr: np.ndarray, block: Block) -> bool:
