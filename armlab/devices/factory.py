@@ -11,6 +11,7 @@ from __future__ import annotations
 
 import importlib
 from collections.abc import Mapping
+from dataclasses import dataclass
 from pathlib import Path
 
 from armlab.config import read_config_file, resolve_config_path, validate_config
@@ -96,3 +97,23 @@ def make_gripper(config, workcell=None, arm=None):
         if _config_type(mapping, source) == "interbotix":
             return _build("gripper", config, workcell, connection=connection)
     return _build("gripper", config, workcell)
+
+
+@dataclass(frozen=True)
+class Devices:
+    """The three devices a station runs on (not yet connected, unless they came from a started workcell)."""
+
+    arm: object
+    gripper: object
+    camera: object
+
+
+def make_devices(arm_config, gripper_config, camera_config, workcell=None) -> Devices:
+    """Arm, gripper and camera from three configs; an Interbotix gripper shares the Interbotix arm's node.
+
+    Backends may be mixed (e.g. the real arm with a webcam); "sim" devices come from `workcell`.
+    """
+    arm = make_arm(arm_config, workcell)
+    gripper = make_gripper(gripper_config, workcell, arm=arm)
+    camera = make_camera(camera_config, workcell)
+    return Devices(arm=arm, gripper=gripper, camera=camera)

@@ -98,3 +98,14 @@ def test_importing_the_factory_and_choosing_opencv_imports_no_vendor_sdk():
     result = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=60)
     assert result.returncode == 0, result.stderr
     assert result.stdout.strip() == "[]"
+
+
+def test_make_devices_mixes_backends_and_shares_the_interbotix_node(tmp_path):
+    from armlab.devices.factory import make_devices
+
+    devices = make_devices("interbotix_arm", "interbotix_gripper", {"type": "opencv", "source": str(tmp_path / "x.avi")})
+    assert type(devices.arm).__name__ == "InterbotixArm" and type(devices.camera).__name__ == "OpenCVCamera"
+    assert devices.gripper.connection is devices.arm.connection
+    workcell = types.SimpleNamespace(camera=object(), arm=object(), gripper=object())
+    sim = make_devices({"type": "sim"}, {"type": "sim"}, {"type": "sim"}, workcell=workcell)
+    assert (sim.arm, sim.gripper, sim.camera) == (workcell.arm, workcell.gripper, workcell.camera)
