@@ -123,3 +123,18 @@ def test_estop_button_falls_back_to_rest_without_the_websocket(page, server):
     server.post("/api/reset")
     server.wait_status(lambda s: s["state"] == "idle", 3.0, "reset")
     assert page.errors == []
+
+
+def test_wrong_token_falls_back_to_view_only_with_a_message(browser, server):
+    page = open_page(browser, f"{server.base_url}/?token=not-the-token")
+    try:
+        toast = page.locator(".toast", has_text="control token rejected")
+        toast.wait_for(timeout=10_000)
+        wait_frames(page, 3)  # the view-only stream works
+        assert page.text_content("#control-mode") == "view only"
+        assert page.evaluate("sessionStorage.getItem('armlab.token')") is None
+        disabled = page.eval_on_selector_all("button[data-command]", "bs => bs.map(b => b.disabled)")
+        assert disabled and all(disabled)
+        assert page.errors == []
+    finally:
+        page.close()

@@ -43,6 +43,11 @@ async function toApiError(response) {
   return new ApiError(response.status, err.code || String(response.status), message, err.allowed);
 }
 
+/** Forget a token the server refused, so a reload does not reuse it. */
+export function dropToken(win = window) {
+  win.sessionStorage.removeItem(TOKEN_KEY);
+}
+
 /** A small REST client bound to one token; every method returns parsed JSON or throws ApiError. */
 export class Api {
   constructor(token, base = "") {

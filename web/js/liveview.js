@@ -194,12 +194,9 @@ export class LiveView {
     this.pumpHover();
   }
 
-  /** At most one pixel-to-world request in flight; the newest pointer position wins. */
+  /** At most one pixel-to-world request in flight (read-only, no token needed); the newest pointer wins. */
   pumpHover() {
-    if (this.hoverBusy || this.hoverTimer || !this.hoverPending || !this.api.canControl) {
-      if (!this.api.canControl) this.hoverLabel.textContent = "hover needs a control token";
-      return;
-    }
+    if (this.hoverBusy || this.hoverTimer || !this.hoverPending) return;
     const { u, v } = this.hoverPending;
     this.hoverPending = null;
     this.hoverBusy = true;
@@ -207,7 +204,8 @@ export class LiveView {
       .pixelToWorld(u, v)
       .then((r) => this.showWorld(r.position_m, r.on))
       .catch((e) => {
-        this.hoverLabel.textContent = e.code === "invalid" || e.status === 422 ? "off the board" : e.message;
+        delete this.hoverLabel.dataset.positionM;
+        this.hoverLabel.textContent = e.code === "not_calibrated" ? "calibrate to read world mm" : e.message;
       })
       .finally(() => {
         this.hoverBusy = false;

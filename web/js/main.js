@@ -1,6 +1,6 @@
 // Page controller: connects the stream, the REST client and the panels; one dispatch on message type.
 
-import { Api, adoptToken } from "./api.js";
+import { Api, adoptToken, dropToken } from "./api.js";
 import { LiveView } from "./liveview.js";
 import { EventLog } from "./log.js";
 import {
@@ -62,6 +62,7 @@ class App {
         onFrame: ({ header, bitmap }) => this.onFrame(header, bitmap),
         onMessage: (msg) => this.onMessage(msg),
         onError: (e) => this.log.add("warn", `stream: ${e.message}`),
+        onTokenRejected: (reason) => this.tokenRejected(reason),
       },
     });
     this.unknownWireNames = App.unknownWireNames;
@@ -94,6 +95,15 @@ class App {
   }
 
   // ---- stream -------------------------------------------------------------------------------
+  tokenRejected(reason) {
+    this.api.token = null;
+    dropToken();
+    this.canControl = false;
+    $("control-mode").textContent = "view only";
+    this.log.toast("error", "control token rejected", `${reason || "wrong control token"}: continuing view-only`);
+    this.refreshAllowed();
+  }
+
   onOpen() {
     this.connected = true;
     this.log.add("info", "connected to the station");

@@ -3,6 +3,7 @@
 
 const RECONNECT_MIN_S = 0.5;
 const RECONNECT_MAX_S = 5.0;
+const WS_WRONG_TOKEN = 4401; // close code of /ws when ?token= does not match
 
 /** Split a binary frame message: [uint32 LE header length N][N bytes JSON header][JPEG bytes]. */
 export function parseFrameMessage(buffer) {
@@ -39,7 +40,8 @@ export class RateMeter {
 
 /**
  * One reconnecting websocket. Handlers: onOpen(), onClose(), onFrame({header, bitmap}) → Promise that
- * resolves once drawn, onMessage(msg) for JSON messages. After a frame is drawn it is acked.
+ * resolves once drawn, onMessage(msg) for JSON messages, onTokenRejected(reason) when the server
+ * refuses the control token (the stream then reconnects view-only). After a frame is drawn it is acked.
  */
 export class Stream {
   constructor({ token, handlers, win = window }) {
@@ -81,8 +83,14 @@ export class Stream {
       this.handlers.onOpen?.();
     };
     ws.onmessage = (event) => this.dispatch(event.data);
-    ws.onclose = () => {
+    ws.onclose = (event) => {
       if (this.ws === ws) this.ws = null;
+      if (event.code === WS_WRONG_TOKEN && this.token) {
+        // The server refused our token: continue as a view-only stream rather than retrying it forever.
+        this.token = null;
+        this.retryS = RECONNECT_MIN_S;
+        this.handlers.onTokenRejected?.(event.reason);
+      }
       this.handlers.onClose?.();
       if (!this.closedByUser) this.scheduleReconnect();
     };
