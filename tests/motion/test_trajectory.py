@@ -130,3 +130,12 @@ def test_no_motion_is_a_constant_trajectory():
 def test_bad_input_is_a_clear_value_error(q_start, q_goal, kwargs, message):
     with pytest.raises(ValueError, match=message):
         plan_joint_move(q_start, q_goal, ARM, **kwargs)
+
+
+def test_a_measured_start_a_hair_outside_a_limit_is_moved_onto_it_and_reported():
+    q_start = np.array([0.0, ARM.lower_rad[1] - 0.005, 0.0, 0.0, 0.0])  # the sim may sag just past a limit
+    trajectory, timing = plan_joint_move_timed(q_start, np.zeros(5), ARM)
+    assert trajectory.positions_rad[0, 1] == ARM.lower_rad[1]
+    assert any("start moved onto the joint limits: shoulder" in note for note in timing.clamped)
+    with pytest.raises(ValueError, match="q_start: shoulder"):
+        plan_joint_move(np.array([0.0, ARM.lower_rad[1] - 0.02, 0.0, 0.0, 0.0]), np.zeros(5), ARM)
