@@ -15,6 +15,8 @@ from collections.abc import Callable
 from dataclasses import dataclass, field
 from typing import Any
 
+import numpy as np
+
 from armlab.devices.camera import Camera, Frame
 from armlab.station.slots import NewestSlot
 
@@ -110,26 +112,40 @@ class PerceptionLoop(_Worker):
         self.config = config
         self.period_s = 1.0 / rate_hz
 
-    def _run(self) -> None:
-        from armlab.vision import detect_blocks, detect_tags
+    # Full tag searches this often; in between, tags are tracked in windows around their last centres.
+    FULL_TAG_SEARCH_PERIOD_S = 2.0
+    TRACK_HALF_SIZE_PX = 40
 
-        version = 0
+    def _run(self) -> None:
+        from armlab.vision import detect_blocks
+        from armlab.vision.tags import detect_tags, detect_tags_near, make_detector
+
+        detector = make_detector(self.config.tags.dictionary)
+        version, tags, last_full_s = 0, (), 0.0
         while not self._stop.is_set():
-            started = time.monotonic()
             frame, version = self.frames.wait_newer(version, timeout_s=0.5)
             if frame is None:
                 continue
-            self.out.publish(analyse_frame(frame, self.get_calibration(), self.config, detect_tags, detect_blocks))
-            self._stop.wait(max(0.0, self.period_s - (time.monotonic() - started)))
+            started = time.monotonic()
+            try:
+                if tags and started - last_full_s < self.FULL_TAG_SEARCH_PERIOD_S:
+                    centers = np.array([tag.center_px for tag in tags])
+                    tracked = tuple(detect_tags_near(frame.color_bgr, centers, self.TRACK_HALF_SIZE_PX, detector))
+                    tags = tracked if len(tracked) == len(tags) else ()
+                if not tags or started - last_full_s >= self.FULL_TAG_SEARCH_PERIOD_S:
+                    tags = tuple(detect_tags(frame.color_bgr, self.config, detector=detector))
+                    last_full_s = started
+            except ValueError as error:
+                log.debug("tag detection failed: %s", error)
+                tags = ()
+            self.out.publish(analyse_frame(frame, tags, self.get_calibration(), self.config, detect_blocks))
+            # At most the configured rate, and at most half of one core (sleep at least as long as we worked).
+            elapsed = time.monotonic() - started
+            self._stop.wait(max(self.period_s - elapsed, elapsed))
 
 
-def analyse_frame(frame: Frame, calibration: Any, config: Any, detect_tags: Callable, detect_blocks: Callable) -> Perception:
-    """Tags always; blocks only with a calibration and a depth image (a failed detection logs, returns none)."""
-    try:
-        tags = tuple(detect_tags(frame.color_bgr, config))
-    except ValueError as error:
-        log.debug("tag detection failed: %s", error)
-        tags = ()
+def analyse_frame(frame: Frame, tags: tuple, calibration: Any, config: Any, detect_blocks: Callable) -> Perception:
+    """Blocks only with a calibration and a depth image (a failed detection logs and reports none)."""
     blocks: tuple = ()
     if calibration is not None and frame.depth_mm is not None:
         try:
