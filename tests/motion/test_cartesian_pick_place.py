@@ -6,6 +6,8 @@ import math
 
 import numpy as np
 import pytest
+from hypothesis import HealthCheck, given, settings
+from hypothesis import strategies as st
 
 from armlab.config import validate_config
 from armlab.errors import ConfigError
@@ -109,3 +111,29 @@ def test_motion_config_validation():
     ]:
         with pytest.raises(ConfigError, match=field):
             validate_config(data, MotionConfig, "motion.yaml")
+
+
+@settings(max_examples=25, deadline=None, derandomize=True, suppress_health_check=[HealthCheck.too_slow])
+@given(
+    radius_m=st.floats(0.10, 0.50),
+    bearing_rad=st.floats(-math.pi, math.pi),
+    top_z_m=st.sampled_from([0.025, 0.038, 0.063, 0.076]),
+    yaw_rad=st.floats(-math.pi, math.pi),
+)
+def test_every_pick_plan_is_reachable_continuous_and_within_limits(radius_m, bearing_rad, top_z_m, yaw_rad):
+    top = np.array([radius_m * math.sin(bearing_rad), radius_m * math.cos(bearing_rad), top_z_m])
+    try:
+        steps = plan_pick(ARM, ARM.sleep_rad, top, yaw_rad, CONFIG)
+    except Unreachable:
+        assert radius_m > 0.30  # everything nearer is within reach at some pitch
+        return
+    trajectories = [step.trajectory for step in steps if isinstance(step, TrajectoryStep)]
+    q_previous = ARM.sleep_rad
+    for trajectory in trajectories:
+        np.testing.assert_allclose(trajectory.positions_rad[0], q_previous, atol=1e-9)  # no jumps between steps
+        check_trajectory(ARM, trajectory, clearance_m=CONFIG.board_clearance_m)  # limits, rates, board
+        q_previous = trajectory.positions_rad[-1]
+    grasp = top - [0.0, 0.0, CONFIG.grasp_depth_m]
+    np.testing.assert_allclose(_tip(trajectories[1].positions_rad[-1]), grasp, atol=1e-3)
+    descent_xy = np.array([_tip(q)[:2] for q in trajectories[1].positions_rad])
+    assert np.abs(descent_xy - grasp[:2]).max() < 5e-4  # straight down
