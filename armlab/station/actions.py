@@ -10,7 +10,6 @@ from __future__ import annotations
 import math
 import time
 from collections.abc import Callable, Sequence
-from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
@@ -20,15 +19,6 @@ from armlab.station.jobs import Job, JobContext
 from armlab.station.telemetry import block_to_dict, tag_to_dict
 
 BLOCK_HEIGHTS_M = {"large": 0.038, "small": 0.025}
-
-
-@dataclass(frozen=True)
-class Step:
-    """One step of a pick or place: a joint goal ('move') or a gripper action ('grasp'|'release')."""
-
-    kind: str
-    q_goal_rad: np.ndarray | None = None
-    label: str = ""
 
 
 # Frames and clicks -------------------------------------------------------------------------------
@@ -112,69 +102,45 @@ def _motion_config(station: Station):
     return station.motion_config
 
 
-def _ik_chain(station: Station, points: Sequence[tuple[np.ndarray, str]], yaw_rad: float | None) -> list[np.ndarray]:
-    """IK for each point with one pitch (the steepest reachable at the lowest point), seeded along the chain."""
-    q_seed = np.asarray(station.arm.read_joint_state().position_rad, dtype=float)
-    lowest = min(points, key=lambda item: item[0][2])[0]
-    q_low = station.model.ik(lowest, pitch=None, yaw=yaw_rad, q_seed=q_seed)
-    pitch = _pitch_of(station, q_low)
-    chain = []
-    for point, _label in points:
-        try:
-            q = station.model.ik(point, pitch=pitch, yaw=yaw_rad, q_seed=q_low)
-        except ValueError:
-            q = station.model.ik(point, pitch=None, yaw=yaw_rad, q_seed=q_low)
-        chain.append(np.asarray(q, dtype=float))
-    return chain
+def _q_now(station: Station) -> np.ndarray:
+    return np.asarray(station.arm.read_joint_state().position_rad, dtype=float)
 
 
-def _pitch_of(station: Station, q_rad: np.ndarray) -> float:
-    approach = station.model.fk(q_rad)[:3, 0]
-    return math.asin(max(-1.0, min(1.0, -float(approach[2]))))
+def plan_pick_steps(station: Station, top_center_m: np.ndarray, yaw_rad: float | None) -> list:
+    """armlab.motion's pick plan from the current joints (open, above, straight down, grasp, straight up).
+
+    Unreachable / UnsafeTrajectory / ValueError before anything moves.
+    """
+    from armlab.motion import plan_pick
+
+    return plan_pick(station.model, _q_now(station), top_center_m, 0.0 if yaw_rad is None else yaw_rad, _motion_config(station))
 
 
-def plan_pick_steps(station: Station, top_center_m: np.ndarray, yaw_rad: float | None, height_m: float) -> list[Step]:
-    """Open, above the block, down to grasp depth, close, lift. Unreachable (ValueError) before moving."""
-    config = _motion_config(station)
-    grasp_z = max(top_center_m[2] - min(config.grasp_depth_m, height_m / 2), config.board_clearance_m + 0.005)
-    above = np.array([top_center_m[0], top_center_m[1], top_center_m[2] + config.approach_height_m])
-    grasp = np.array([top_center_m[0], top_center_m[1], grasp_z])
-    lift = np.array([top_center_m[0], top_center_m[1], top_center_m[2] + config.lift_height_m])
-    q_above, q_grasp, q_lift = _ik_chain(station, [(above, "above"), (grasp, "grasp"), (lift, "lift")], yaw_rad)
-    return [
-        Step("release", label="open the gripper"),
-        Step("move", q_above, "above the block"),
-        Step("move", q_grasp, "down to the block"),
-        Step("grasp", label="grasp"),
-        Step("move", q_lift, "lift"),
-    ]
+def plan_place_steps(station: Station, surface_m: np.ndarray, yaw_rad: float | None, held_height_m: float) -> list:
+    """armlab.motion's place plan: the held block's bottom centre onto surface_m, then release and retreat."""
+    from armlab.motion import plan_place
+
+    yaw = 0.0 if yaw_rad is None else yaw_rad
+    return plan_place(station.model, _q_now(station), surface_m, yaw, _motion_config(station), held_height_m)
 
 
-def plan_place_steps(station: Station, surface_m: np.ndarray, yaw_rad: float | None, held_height_m: float) -> list[Step]:
-    """Above the spot, down until the held block rests on the surface, open, up."""
-    config = _motion_config(station)
-    grip_below_top = min(config.grasp_depth_m, held_height_m / 2)
-    release_z = surface_m[2] + held_height_m - grip_below_top + config.place_clearance_m
-    above = np.array([surface_m[0], surface_m[1], surface_m[2] + held_height_m + config.approach_height_m])
-    place = np.array([surface_m[0], surface_m[1], release_z])
-    q_above, q_place, q_up = _ik_chain(station, [(above, "above"), (place, "place"), (above, "up")], yaw_rad)
-    return [
-        Step("move", q_above, "above the drop spot"),
-        Step("move", q_place, "down to the surface"),
-        Step("release", label="release"),
-        Step("move", q_up, "up"),
-    ]
+def run_steps(station: Station, ctx: JobContext, steps: Sequence, replan: Callable[[], list] | None = None) -> None:
+    """Execute motion steps (TrajectoryStep / GripperStep) through the station's guards, with progress.
 
+    If the arm is no longer where the plan starts (it moved since planning), `replan()` plans again.
+    """
+    from armlab.motion import TrajectoryStep
 
-def run_steps(station: Station, ctx: JobContext, steps: Sequence[Step], start: float = 0.0, span: float = 1.0) -> None:
-    """Execute steps through the station's guards, reporting progress from start to start+span."""
+    first = next((step for step in steps if isinstance(step, TrajectoryStep)), None)
+    if replan is not None and first is not None and np.abs(first.trajectory.positions_rad[0] - _q_now(station)).max() > 0.01:
+        steps = replan()
     for index, step in enumerate(steps):
-        ctx.progress(start + span * index / len(steps), step.label or step.kind)
-        if step.kind == "move":
-            station.move_in_job(ctx, step.q_goal_rad)
+        ctx.progress(index / len(steps), step.name)
+        if isinstance(step, TrajectoryStep):
+            station.run_trajectory(ctx, step.trajectory)
         else:
-            station.run_gripper(ctx, step.kind)
-    ctx.progress(start + span, "done")
+            station.run_gripper(ctx, step.action)
+    ctx.progress(1.0, "done")
 
 
 # Jobs ----------------------------------------------------------------------------------------------
@@ -232,10 +198,10 @@ def grab(station: Station, position_m=None, pixel=None, source: str | None = Non
     else:
         top, yaw, height = point, None, station.config.default_block_height_m
         detail = f"point ({top[0] * 1000:.0f}, {top[1] * 1000:.0f}, {top[2] * 1000:.0f}) mm ({on})"
-    steps = plan_pick_steps(station, top, yaw, height)
+    steps = plan_pick_steps(station, top, yaw)
 
     def run(ctx: JobContext) -> dict:
-        run_steps(station, ctx, steps)
+        run_steps(station, ctx, steps, replan=lambda: plan_pick_steps(station, top, yaw))
         holding = bool(station.gripper.read_state().holding)
         station.held_block = {**(block or {}), "height_m": height, "yaw_rad": yaw} if holding else None
         ctx.job.update(message="holding the block" if holding else "nothing in the gripper")
@@ -264,7 +230,7 @@ def drop(station: Station, position_m=None, pixel=None, source: str | None = Non
     detail = f"onto {on} at ({surface[0] * 1000:.0f}, {surface[1] * 1000:.0f}, {surface[2] * 1000:.0f}) mm"
 
     def run(ctx: JobContext) -> dict:
-        run_steps(station, ctx, steps)
+        run_steps(station, ctx, steps, replan=lambda: plan_place_steps(station, surface, yaw, height))
         station.held_block = None
         return {"target_m": [float(x) for x in surface], "on": on}
 
