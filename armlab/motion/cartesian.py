@@ -50,24 +50,32 @@ def vertical_profile_duration(distance_m: float, speed_m_s: float, accel_m_s2: f
 
 
 def _solve_line(arm, q_start, start_m, z_goal_m, s, pitch, yaw) -> np.ndarray:
-    """IK along the line start_m → (x, y, z_goal) at path fractions s (N,), seeded sample to sample."""
-    positions = np.empty((s.size, len(q_start)))
-    positions[0] = q_start
-    previous = np.asarray(q_start, float)
-    names = getattr(arm, "joint_names", None)
-    for index in range(1, s.size):
-        target = np.array([start_m[0], start_m[1], start_m[2] + s[index] * (z_goal_m - start_m[2])])
-        q = np.asarray(arm.ik(target, pitch=pitch, yaw=yaw, q_seed=previous), float)
-        jump = np.abs(q - previous)
-        worst = int(np.argmax(jump))
-        if jump[worst] > MAX_SAMPLE_STEP_RAD:
-            joint = names[worst] if names is not None else f"joint {worst}"
-            raise DiscontinuousPath(
-                f"vertical segment to z = {z_goal_m * 1000:.1f} mm: {joint} jumps {jump[worst]:.3f} rad at "
-                f"z = {target[2] * 1000:.1f} mm (IK changed branch)"
-            )
-        positions[index] = q
-        previous = q
+    """IK along the line start_m → (x, y, z_goal) at path fractions s (N,); the first row is q_start.
+
+    Uses the model's vectorised ik_batch (seeded with q_start) when it solves every point, else solves
+    sample by sample, each seeded with the previous one (which also raises Unreachable with the reason).
+    """
+    targets = np.repeat(np.asarray(start_m, float)[None, :], s.size, axis=0)
+    targets[:, 2] = start_m[2] + s * (z_goal_m - start_m[2])
+    positions = None
+    if hasattr(arm, "ik_batch"):
+        solved, ok = arm.ik_batch(targets[1:], pitch=pitch, yaw=yaw, q_seed=np.asarray(q_start, float))
+        if np.all(ok):
+            positions = np.vstack([np.asarray(q_start, float)[None, :], np.asarray(solved, float)])
+    if positions is None:
+        positions = np.empty((s.size, len(q_start)))
+        positions[0] = q_start
+        for index in range(1, s.size):
+            positions[index] = arm.ik(targets[index], pitch=pitch, yaw=yaw, q_seed=positions[index - 1])
+    jumps = np.abs(np.diff(positions, axis=0))
+    sample, joint = np.unravel_index(int(np.argmax(jumps)), jumps.shape)
+    if jumps[sample, joint] > MAX_SAMPLE_STEP_RAD:
+        names = getattr(arm, "joint_names", None)
+        name = names[joint] if names is not None else f"joint {joint}"
+        raise DiscontinuousPath(
+            f"vertical segment to z = {z_goal_m * 1000:.1f} mm: {name} jumps {jumps[sample, joint]:.3f} rad at "
+            f"z = {targets[sample + 1, 2] * 1000:.1f} mm (IK changed branch)"
+        )
     return positions
 
 

@@ -146,3 +146,14 @@ def test_grasp_depth_is_at_most_half_a_small_block():
     np.testing.assert_allclose(_tip(steps[2].q_end_rad), [0.05, 0.22, 0.010], atol=1e-3)
     with pytest.raises(ValueError, match="block_height_m must be > 0"):
         plan_pick(ARM, ARM.home_rad, top, 0.0, CONFIG, block_height_m=-0.02)
+
+
+def test_a_segment_that_would_jump_between_ik_solutions_is_refused():
+    from armlab.motion.cartesian import DiscontinuousPath
+
+    q_start = ARM.ik(np.array([0.0, 0.25, 0.10]), pitch=math.pi / 2, yaw=0.0, q_seed=ARM.home_rad)
+    # The start pose's wrist matches yaw 0; asking for yaw 0.8 would snap the wrist by ≥ 0.77 rad.
+    with pytest.raises(DiscontinuousPath, match=r"wrist_rotate jumps 0\.\d+ rad at z = 10\d\.\d mm"):
+        plan_vertical_segment(ARM, q_start, 0.05, pitch_rad=math.pi / 2, yaw_rad=0.8)
+    with pytest.raises(ValueError, match="z_goal_m must be finite"):
+        plan_vertical_segment(ARM, q_start, math.nan)
