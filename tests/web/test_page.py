@@ -138,3 +138,31 @@ def test_wrong_token_falls_back_to_view_only_with_a_message(browser, server):
         assert page.errors == []
     finally:
         page.close()
+
+
+def test_cartesian_jog_moves_the_gripper_by_the_step(page, server):
+    wait_frames(page, 2)
+    server.post("/api/arm/joints?wait=true", {"q_rad": [0.0, 0.0, 0.3, 0.0, 0.0], "moving_time_s": 1.0})
+    start = server.wait_status(lambda s: s["state"] == "idle" and not s["moving"], 10.0, "the arm to settle")
+    page.wait_for_function("!document.querySelector(\"[data-jog='z-']\").disabled", timeout=5_000)
+    page.wait_for_function(
+        "p => Math.abs(window.armlab.status.gripper_pose.position_m[2] - p) < 1e-4",
+        arg=start["gripper_pose"]["position_m"][2],
+    )
+    page.select_option("#jog-step", "0.05")
+    page.click("[data-jog='z-']")
+    p0 = start["gripper_pose"]["position_m"]
+    end = server.wait_status(
+        lambda s: not s["moving"] and s["gripper_pose"]["position_m"][2] < p0[2] - 0.04, 10.0, "the jog to end"
+    )
+    p1 = end["gripper_pose"]["position_m"]
+    assert p1[2] == pytest.approx(p0[2] - 0.05, abs=0.003)
+    assert p1[0] == pytest.approx(p0[0], abs=0.003) and p1[1] == pytest.approx(p0[1], abs=0.003)
+    assert end["gripper_pose"]["pitch_rad"] == pytest.approx(start["gripper_pose"]["pitch_rad"], abs=0.02)
+    # The joint sliders follow the arm once it has moved (the operator did not touch them).
+    page.wait_for_function(
+        "q => Math.abs(Number(document.getElementById('slider-elbow').value) - q) < 0.6",
+        arg=math.degrees(end["joints_rad"][2]),
+        timeout=5_000,
+    )
+    assert page.errors == []
