@@ -53,7 +53,7 @@ def test_frames_arrive_in_file_order_and_the_file_loops(tmp_path):
 
 
 def test_async_read_sees_every_frame_of_a_slow_file_then_end_of_stream(tmp_path):
-    camera = OpenCVCamera(OpenCVCameraConfig(source=str(_video(tmp_path)), fps=40.0, loop=False))
+    camera = OpenCVCamera(OpenCVCameraConfig(source=str(_video(tmp_path)), fps=8.0, loop=False))
     camera.connect()
     try:
         levels = [_level(camera.async_read(timeout_ms=1000)) for _ in LEVELS]
