@@ -205,49 +205,86 @@ def solve(
 
 
 def _wrap_array(angles: np.ndarray) -> np.ndarray:
-    return np.mod(angles + np.pi, 2.0 * np.pi) - np.pi
+    """Angles within (-3pi, 3pi] wrapped into (-pi, pi] (two selects: cheaper than np.mod)."""
+    angles = np.where(angles > np.pi, angles - 2.0 * np.pi, angles)
+    return np.where(angles <= -np.pi, angles + 2.0 * np.pi, angles)
+
+
+def _batch_candidate(g: Rx200Geometry, reach_r, zb, cos_psi, sin_psi, psi, waist, seed, elbow_up: bool):
+    """One solution family (waist given, elbow up or down) for N targets: (joints (N, 4), cost (N,)),
+    cost = L1 distance to the seed, infinite where the family is out of reach, limits or the board."""
+    l2, l3, beta = g.upper_arm_m, g.forearm_m, g.upper_arm_elevation_rad
+    lower, upper = g.lower_rad, g.upper_rad
+    rc = reach_r - g.tool_m * cos_psi - g.shoulder_x_m
+    zc = zb + g.tool_m * sin_psi - g.shoulder_z_m
+    cos_bend = (rc * rc + zc * zc - (l2 * l2 + l3 * l3)) / (2.0 * l2 * l3)
+    valid = (cos_bend <= 1.0 + 1e-12) & (cos_bend >= -1.0 - 1e-12)
+    cos_bend = np.clip(cos_bend, -1.0, 1.0)
+    bend = np.arccos(cos_bend)
+    # the elbow triangle's angle at the shoulder, as a vector (a, b): atan2(b, a) = atan2(l3 sin g, l2 + l3 cos g)
+    a = l2 + l3 * cos_bend
+    b = l3 * np.sqrt(1.0 - cos_bend * cos_bend)
+    if elbow_up:
+        b = -b
+        q3 = bend - beta
+    else:
+        q3 = _wrap_array(-bend - beta)
+    # elevation of the upper arm = atan2(zc, rc) - atan2(b, a), as one atan2 of the rotated vector
+    x, y = rc * a + zc * b, zc * a - rc * b
+    elevation = np.arctan2(y, x)
+    q2 = _wrap_array(beta - elevation)
+    q4 = _wrap_array(_wrap_array(psi - q2) - q3)
+    for index, values in enumerate((waist, q2, q3, q4)):
+        valid &= (values >= lower[index] - _TOL) & (values <= upper[index] + _TOL)
+    floor = -g.base_xyz_m[2]
+    elbow_height = l2 * y / np.maximum(np.sqrt(x * x + y * y), 1e-300)  # l2 sin(elevation)
+    valid &= (g.shoulder_z_m + elbow_height >= floor) & (zc + g.shoulder_z_m >= floor)
+    cost = np.abs(waist - seed[:, 0]) + np.abs(q2 - seed[:, 1]) + np.abs(q3 - seed[:, 2]) + np.abs(q4 - seed[:, 3])
+    joints = np.empty((waist.shape[0], 4))
+    joints[:, 0], joints[:, 1], joints[:, 2], joints[:, 3] = waist, q2, q3, q4
+    return joints, np.where(valid, cost, np.inf)
 
 
 def _batch_at_pitch(g: Rx200Geometry, base_xyz: np.ndarray, pitch: np.ndarray, seed: np.ndarray):
-    """Vectorised _solve_at_pitch: base points (N, 3), pitch (N,), seed (N, 5) -> (q4 (N, 4), ok (N,))."""
-    l2, l3, beta = g.upper_arm_m, g.forearm_m, g.upper_arm_elevation_rad
-    lower, upper = np.asarray(g.lower_rad), np.asarray(g.upper_rad)
+    """Vectorised _solve_at_pitch: base points (N, 3), pitch (N,), seed (N, 5) -> (q4 (N, 4), ok (N,)).
+
+    Both waist directions are tried elbow-up; elbow-down only for the targets neither of those fits.
+    """
+    lower, upper = g.lower_rad, g.upper_rad
     xb, yb, zb = base_xyz[:, 0], base_xyz[:, 1], base_xyz[:, 2]
-    radius = np.hypot(xb, yb)
+    radius = np.sqrt(xb * xb + yb * yb)
     phi = np.where(radius > 1e-12, np.arctan2(yb, xb), seed[:, 0])
-    # axis 0: (front, back)
-    waist = _wrap_array(np.stack([phi, phi + np.pi]))
-    for shift in (-2.0 * np.pi, 2.0 * np.pi):  # the 2*pi equivalent nearer the seed, when within limits
-        shifted = waist + shift
-        better = (shifted >= lower[0] - _TOL) & (shifted <= upper[0] + _TOL) & (np.abs(shifted - seed[:, 0]) < np.abs(waist - seed[:, 0]))
-        waist = np.where(better, shifted, waist)
-    reach_r = np.stack([radius, -radius])
-    psi = np.stack([pitch, np.pi - pitch])
-    rc = reach_r - g.tool_m * np.cos(psi) - g.shoulder_x_m
-    zc = zb[None, :] + g.tool_m * np.sin(psi) - g.shoulder_z_m
-    cos_bend = (rc * rc + zc * zc - l2 * l2 - l3 * l3) / (2.0 * l2 * l3)
-    reachable = (cos_bend <= 1.0 + 1e-12) & (cos_bend >= -1.0 - 1e-12)
-    bend = np.arccos(np.clip(cos_bend, -1.0, 1.0))
-    line = np.arctan2(zc, rc)
-    # axis 0 now: (front-up, back-up, front-down, back-down)
-    gamma = np.concatenate([-bend, bend])
-    line4, zc4, psi4 = np.tile(line, (2, 1)), np.tile(zc, (2, 1)), np.tile(psi, (2, 1))
-    waist4, reach4 = np.tile(waist, (2, 1)), np.tile(reachable, (2, 1))
-    elevation = line4 - np.arctan2(l3 * np.sin(gamma), l2 + l3 * np.cos(gamma))
-    q2 = _wrap_array(beta - elevation)
-    q3 = _wrap_array(-gamma - beta)
-    q4 = _wrap_array(psi4 - q2 - q3)
-    joints = np.stack([waist4, q2, q3, q4], axis=-1)  # (4, N, 4)
-    within = np.all((joints >= lower[:4] - _TOL) & (joints <= upper[:4] + _TOL), axis=-1)
-    elbow_z = g.shoulder_z_m + l2 * np.sin(elevation) + g.base_xyz_m[2]
-    wrist_z = zc4 + g.shoulder_z_m + g.base_xyz_m[2]
-    valid = reach4 & within & (elbow_z >= 0.0) & (wrist_z >= 0.0)
-    cost = np.sum(np.abs(joints - seed[None, :, :4]), axis=-1)
-    cost[2:] += _ELBOW_DOWN_PENALTY
-    cost = np.where(valid, cost, np.inf)
-    pick = np.argmin(cost, axis=0)
-    columns = np.arange(base_xyz.shape[0])
-    return joints[pick, columns], valid[pick, columns]
+    cos_psi, sin_psi = np.cos(pitch), np.sin(pitch)
+    families = []
+    for back in (False, True):
+        waist = _wrap_array(phi + np.pi) if back else phi
+        for shift in (-2.0 * np.pi, 2.0 * np.pi):  # the 2*pi equivalent nearer the seed, when within limits
+            shifted = waist + shift
+            better = (shifted >= lower[0] - _TOL) & (shifted <= upper[0] + _TOL)
+            better &= np.abs(shifted - seed[:, 0]) < np.abs(waist - seed[:, 0])
+            waist = np.where(better, shifted, waist)
+        if back:  # turned half a turn: the target lies behind, the approach pitch is mirrored
+            families.append((-radius, -cos_psi, np.pi - pitch, waist))
+        else:
+            families.append((radius, cos_psi, pitch, waist))
+    best_q, best_cost = None, None
+    for reach_r, cos_family, psi, waist in families:  # elbow up, every target
+        joints, cost = _batch_candidate(g, reach_r, zb, cos_family, sin_psi, psi, waist, seed, True)
+        if best_q is None:
+            best_q, best_cost = joints, cost
+        else:
+            better = cost < best_cost
+            best_cost = np.where(better, cost, best_cost)
+            best_q = np.where(better[:, None], joints, best_q)
+    rows = np.flatnonzero(~np.isfinite(best_cost))
+    for reach_r, cos_family, psi, waist in families if rows.size else ():  # elbow down, the rest only
+        joints, cost = _batch_candidate(
+            g, reach_r[rows], zb[rows], cos_family[rows], sin_psi[rows], psi[rows], waist[rows], seed[rows], False
+        )
+        better = cost < best_cost[rows]
+        best_cost[rows[better]] = cost[better]
+        best_q[rows[better]] = joints[better]
+    return best_q, np.isfinite(best_cost)
 
 
 def _batch_search(g, base_xyz, seed, q_out, ok_out, pitch_out, todo):
