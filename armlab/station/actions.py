@@ -19,6 +19,8 @@ from armlab.station.jobs import Job, JobContext
 from armlab.station.telemetry import block_to_dict, tag_to_dict
 
 BLOCK_HEIGHTS_M = {"large": 0.038, "small": 0.025}
+MAX_SURFACE_HEIGHT_M = 0.25  # a drop surface higher than this is taken for the arm hiding the spot
+BOARD_NOISE_M = 0.006  # depth readings this close to the board are the board
 
 
 # Frames and clicks -------------------------------------------------------------------------------
@@ -221,9 +223,11 @@ def drop(station: Station, position_m=None, pixel=None, source: str | None = Non
         surface = np.asarray(below["position_m"], dtype=float)
         yaw = below["yaw_rad"]
         on = f"{below['color']} block"
-    elif on == "given" and station.calibration is None:
-        surface[2] = max(0.0, surface[2])
-    surface[2] = max(0.0, surface[2]) if surface[2] > 0.006 else 0.0  # depth noise on the board reads as board
+    elif on == "depth" and surface[2] > MAX_SURFACE_HEIGHT_M:  # the arm (or the held block) hides the spot
+        from armlab.vision import pixel_to_world as vision_pixel_to_world
+
+        surface, on = np.asarray(vision_pixel_to_world(station.calibration, *_finite_pixel(*pixel)), dtype=float), "board"
+    surface[2] = surface[2] if surface[2] > BOARD_NOISE_M else 0.0  # depth noise on the board reads as board
     held = station.held_block or {}
     height = float(held.get("height_m", station.config.default_block_height_m))
     steps = plan_place_steps(station, surface, yaw, height)

@@ -35,7 +35,7 @@ def url(cell, tmp_path_factory):
 
 
 def _open(url: str, token: str | None = None):
-    return connect(url + (f"?token={token}" if token else ""), compression=None, max_size=None, open_timeout=10)
+    return connect(url + (f"?token={token}" if token else ""), compression=None, max_size=None, open_timeout=10, close_timeout=2)
 
 
 def _next(ws, kind: str, timeout_s: float = 5.0):
