@@ -87,12 +87,13 @@ def stack_candidates(top_m: float, top_size: str, cfg: PerceptionConfig) -> list
     """
     large, small = cfg.blocks.large_size_m, cfg.blocks.small_size_m
     below = top_m - (large if top_size == "large" else small)
-    out = []
-    for n_large in range(0, 12):
-        for n_small in range(0, 12 if top_size == "small" else 1):
-            err = abs(below - n_large * large - n_small * small)
-            out.append((err, ("large",) * n_large + ("small",) * n_small + (top_size,)))
-    return sorted(out)
+    n_large, n_small = np.meshgrid(np.arange(12), np.arange(12 if top_size == "small" else 1), indexing="ij")
+    errors = np.abs(below - n_large * large - n_small * small).ravel()
+    order = np.argsort(errors, kind="stable")[:6]
+    nl, ns = n_large.ravel(), n_small.ravel()
+    return [
+        (float(errors[i]), ("large",) * int(nl[i]) + ("small",) * int(ns[i]) + (top_size,)) for i in order
+    ]
 
 
 def stack_from_height(top_m: float, top_size: str, cfg: PerceptionConfig) -> tuple[int, tuple[str, ...], float]:
@@ -226,7 +227,7 @@ def _top_face_in_roi(
         blob = _largest_blob((np.abs(z - top_m) < tol_m) & (keep if keep is not None else True))
         if blob is None:
             return None
-        face_m = float(np.nanmedian(z[blob > 0]))
+        face_m = float(np.median(z[blob > 0]))
         blob = _largest_blob((np.abs(z - face_m) < 0.5 * tol_m) & (keep if keep is not None else True))
     if blob is None:
         return None
@@ -234,7 +235,7 @@ def _top_face_in_roi(
     ys, xs = np.nonzero(blob)
     pixels = np.stack([xs + x0, ys + y0], axis=1).astype(np.float64)
     contour = max(contours, key=cv2.contourArea).reshape(-1, 2) + np.array([x0, y0])
-    return pixels, contour, float(np.nanmedian(z[ys, xs]))
+    return pixels, contour, float(np.median(z[ys, xs]))
 
 
 def _face_from_pixels(pixels: np.ndarray, contour: np.ndarray, top_m: float, cal: Calibration) -> _Face:
@@ -245,7 +246,8 @@ def _face_from_pixels(pixels: np.ndarray, contour: np.ndarray, top_m: float, cal
     local = intersect_rays_with_plane(
         cal.T_world_camera, normalized_rays(np.array([[u, v], [u + 1, v], [u, v + 1]]), cal.K, cal.dist), top_m
     )
-    pixel_area = float(abs(np.cross(local[1, :2] - local[0, :2], local[2, :2] - local[0, :2])))
+    du, dv = local[1, :2] - local[0, :2], local[2, :2] - local[0, :2]
+    pixel_area = float(abs(du[0] * dv[1] - du[1] * dv[0]))
     return _Face(world[:, :2], top_m, contour.astype(np.float64), pixels.mean(axis=0), pixels.shape[0], pixel_area)
 
 
@@ -277,6 +279,8 @@ def detect_blocks(
     classes = color_classes(cv2.cvtColor(color_bgr[::step, ::step], cv2.COLOR_BGR2HSV), cfg, lut)
     classes[~raised] = 0
     n, labels, stats, _ = cv2.connectedComponentsWithStats((classes > 0).astype(np.uint8), connectivity=8)
+    pixel_m = abs(float(cal.T_world_camera[2, 3])) / cal.K[0, 0] * step  # board-level pixel size, roughly
+    min_face_px = 0.25 * bc.small_size_m**2 / pixel_m**2
     detector = tag_detector
     blocks: list[Block] = []
     for k in range(1, n):
@@ -289,7 +293,10 @@ def detect_blocks(
         counts = np.bincount(comp_classes, minlength=len(names) + 1)
         roi = (max(0, x * step - 8), max(0, y * step - 8), min(w, (x + bw) * step + 8), min(h, (y + bh) * step + 8))
         for ci in np.nonzero(counts >= max(3, 0.1 * area))[0]:
-            top_m = float(np.nanpercentile(comp_z[comp_classes == ci], 90))
+            zs = comp_z[comp_classes == ci]
+            top_m = float(np.percentile(zs, 90))
+            if np.count_nonzero(np.abs(zs - top_m) < bc.top_face_tolerance_m) < min_face_px:
+                continue  # only a sliver of this colour at its top: the side of a lower stack member
             for block in _blocks_from_region(color_bgr, depth_mm, cal, cfg, roi, top_m, names[ci - 1], int(ci), lut, z_small, step):
                 if block.aruco_id is None and _face_looks_tagged(color_bgr, block):
                     detector = detector or make_detector(cfg.tags.block_tag_dictionary)
@@ -305,9 +312,20 @@ def detect_blocks(
 def _blocks_from_region(color_bgr, depth_mm, cal, cfg, roi, top_m, name, ci, lut, z_half, step) -> list[Block]:
     """The top face at about top_m in the ROI (pixels of this colour or colourless, e.g. a tag), as blocks."""
     x0, y0, x1, y1 = roi
-    classes = color_classes(cv2.cvtColor(color_bgr[y0:y1, x0:x1], cv2.COLOR_BGR2HSV), cfg, lut)
-    keep = (classes == ci) | (classes == 0)
+    hsv = cv2.cvtColor(color_bgr[y0:y1, x0:x1], cv2.COLOR_BGR2HSV)
+    classes = color_classes(hsv, cfg, lut)
     z = _roi_heights(depth_mm, cal, roi)
+    mine = classes == ci
+    with np.errstate(invalid="ignore"):
+        near_top = mine & (np.abs(z - top_m) < cfg.blocks.top_face_tolerance_m)
+    # Lit from above, a top face is brighter than the block's sides: dim pixels of this colour are side
+    # faces that the depth filter smeared up to the top's height at the edge facing the camera.
+    value = hsv[..., 2]
+    if np.count_nonzero(near_top) >= 10:
+        dim = mine & (value < 0.82 * float(np.percentile(value[near_top], 75)))
+    else:
+        dim = np.zeros_like(mine)
+    keep = (mine & ~dim) | (classes == 0)
     found = _top_face_in_roi(z, roi, top_m, keep, cfg.blocks.top_face_tolerance_m)
     if found is None:
         return []
@@ -362,20 +380,22 @@ def _with_tag(block: Block, color_bgr: np.ndarray, roi, detector, cfg: Perceptio
     return block
 
 
-def _make_block(face: _Face, color: str, cal, cfg, z_half, step, z_roi=None) -> Block:
+def _make_block(face: _Face, color: str, cal, cfg, z_small, step, z_roi=None) -> Block:
     size, side, yaw, is_cube, centre_xy = _classify_face(face, cfg)
     ring_m2 = cfg.blocks.large_size_m**2 - cfg.blocks.small_size_m**2
     sizes = choose_stack(face.top_m, size, cfg, z_roi, 0.3 * ring_m2 / face.pixel_area_m2)
-    level = len(sizes)
-    occluded = _is_occluded(face, size, cfg, z_half, step)
-    position = np.array([centre_xy[0], centre_xy[1], face.top_m])
+    occluded = _is_occluded(face, centre_xy, yaw, size, cal, cfg, z_small, step)
+    if occluded and not is_cube:
+        # Part of the face is hidden: judge by what can be seen (not larger than the cube, right height).
+        edge = cfg.blocks.large_size_m if size == "large" else cfg.blocks.small_size_m
+        is_cube = side <= edge * (1 + SIZE_TOLERANCE) and stack_from_height(face.top_m, size, cfg)[2] <= HEIGHT_TOLERANCE_M
     return Block(
         color=color,
         size=size,
-        position_m=position,
+        position_m=np.array([centre_xy[0], centre_xy[1], face.top_m]),
         yaw_rad=float(yaw),
         height_m=float(face.top_m),
-        stack_level=int(level),
+        stack_level=len(sizes),
         center_px=face.center_px,
         contour_px=face.contour_px,
         is_cube=bool(is_cube),
@@ -385,14 +405,22 @@ def _make_block(face: _Face, color: str, cal, cfg, z_half, step, z_roi=None) -> 
     )
 
 
-def _is_occluded(face: _Face, size: str, cfg: PerceptionConfig, z_half: np.ndarray, step: int) -> bool:
-    """True when something well above the face (the arm) borders it in the image and hides part of it."""
+def _is_occluded(face: _Face, centre_xy, yaw: float, size: str, cal, cfg: PerceptionConfig, z_small: np.ndarray, step: int) -> bool:
+    """True when something well above the face (the arm) covers part of where the cube's top should be:
+    the expected square, drawn around the measured centre, holds readings 15 mm or more above the face."""
     edge = cfg.blocks.large_size_m if size == "large" else cfg.blocks.small_size_m
-    coverage = face.pixel_count * face.pixel_area_m2 / (edge * edge)
-    if coverage > 0.8:
+    half = 0.5 * edge
+    c, s = math.cos(yaw), math.sin(yaw)
+    square = np.array([[centre_xy[0] + c * a - s * b, centre_xy[1] + s * a + c * b, face.top_m]
+                       for a, b in ((-half, -half), (half, -half), (half, half), (-half, half))])
+    poly = project_points(cal.T_world_camera, cal.K, cal.dist, square) / step
+    x0, y0 = np.maximum(np.floor(poly.min(axis=0)).astype(int) - 1, 0)
+    x1, y1 = np.ceil(poly.max(axis=0)).astype(int) + 2
+    window = z_small[y0:y1, x0:x1]
+    if window.size == 0:
         return False
-    c = (face.contour_px / step).astype(np.int32)
-    x0, y0 = np.maximum(c.min(axis=0) - 4, 0)
-    x1, y1 = c.max(axis=0) + 5
+    inside = np.zeros(window.shape, np.uint8)
+    cv2.fillConvexPoly(inside, np.round(poly - [x0, y0]).astype(np.int32), 1)
     with np.errstate(invalid="ignore"):
-        return bool(np.any(z_half[y0:y1, x0:x1] > face.top_m + 0.015))
+        above = np.count_nonzero((window > face.top_m + 0.015) & (inside > 0))
+    return above > 0.05 * max(1, np.count_nonzero(inside))

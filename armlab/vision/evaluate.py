@@ -28,6 +28,7 @@ class ExpectedTop:
     yaw_rad: float
     stack_level: int
     aruco_id: int | None
+    resting: bool = True  # flat on the board (not tipped over, not fallen off the board)
 
 
 def _yaw_mod_quarter(yaw_rad: float) -> float:
@@ -59,9 +60,13 @@ def expected_tops(truth: dict, pile_radius_m: float = 0.012) -> list[ExpectedTop
         else:
             half = 0.0
         centre = np.array(top["position_m"], dtype=float) + np.array([0.0, 0.0, half])
+        w, x, y, z = top["quat_wxyz"]
+        up_z = 1.0 - 2.0 * (x * x + y * y)  # world z of the body's z axis
+        on_board = abs(centre[0]) <= 0.5 and -0.175 <= centre[1] <= 0.475
         tops.append(
             ExpectedTop(top["id"], top["type"], top["color"], top.get("size"), centre,
-                        _yaw_mod_quarter(float(top["yaw_rad"])), len(pile), top.get("aruco_id"))
+                        _yaw_mod_quarter(float(top["yaw_rad"])), len(pile), top.get("aruco_id"),
+                        resting=bool(on_board and up_z > math.cos(math.radians(10.0))))
         )
     return tops
 
@@ -107,6 +112,7 @@ class SceneScore:
     distractors_rejected: int = 0
     hidden: int = 0
     hidden_flagged: int = 0
+    excluded: int = 0
     position_errors_m: list | None = None
     yaw_errors_rad: list | None = None
     failures: list | None = None
@@ -128,6 +134,10 @@ def score_blocks(blocks: list[Block], truth: dict, depth_mm: np.ndarray, match_r
         dists = [math.dist(b.position_m[:2], top.top_center_m[:2]) if i not in used else math.inf for i, b in enumerate(cubes)]
         best = int(np.argmin(dists)) if dists else -1
         matched = best >= 0 and dists[best] < match_radius_m
+        if not top.resting:  # tipped over or off the board: not a scene the station is asked to read
+            score.excluded += 1
+            used.update(i for i, b in enumerate(cubes) if math.dist(b.position_m[:2], top.top_center_m[:2]) < 0.03)
+            continue
         if top.type != "block":
             score.distractors += 1
             if matched:

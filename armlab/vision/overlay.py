@@ -58,7 +58,7 @@ def draw_overlay(
         pts = grid_points_m if grid_points_m is not None else default_grid_points_m()
         for u, v in project_points(calibration.T_world_camera, calibration.K, calibration.dist, pts):
             if 0 <= u < out.shape[1] and 0 <= v < out.shape[0]:
-                cv2.circle(out, (int(round(u)), int(round(v))), 2, (255, 255, 0), -1, cv2.LINE_AA)
+                cv2.circle(out, (int(round(u)), int(round(v))), 2, (255, 255, 0), -1, cv2.LINE_8)
     if layers.tags and tags:
         for tag in tags:
             corners = np.round(tag.corners_px).astype(np.int32)
