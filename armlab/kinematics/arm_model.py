@@ -27,7 +27,7 @@ from armlab.kinematics.arm_config import ArmConfig
 from armlab.kinematics.dh import dh_frames, fk_dh, matrix_from_flat
 from armlab.kinematics.errors import Unreachable
 from armlab.kinematics.rx200_geometry import HALF_PI, Rx200Geometry, approach_pitch_rad, fk_rx200_batch, fk_rx200_flat
-from armlab.kinematics.screws import fk_space, point_on_screw_axis
+from armlab.kinematics.screws import fk_space, matrix_exp6_batch, point_on_screw_axis
 
 
 def _readonly(array) -> np.ndarray:
@@ -177,10 +177,13 @@ class ArmModel:
         single = array.ndim == 1
         batch = array[None, :] if single else array
         if self._joint_homes is not None:
-            home_M, axes = self._pox
+            axes = self._pox[1]
             frames = np.empty((batch.shape[0], self.dof + 1, 4, 4))
+            product = np.broadcast_to(np.eye(4), (batch.shape[0], 4, 4))  # exp([S1]q1)...exp([Si]qi)
             for index in range(self.dof + 1):
-                frames[:, index] = fk_space(self._joint_homes[index], axes[:index], batch[:, :index])
+                frames[:, index] = product @ self._joint_homes[index]
+                if index < self.dof:
+                    product = product @ matrix_exp6_batch(axes[index], batch[:, index])
         else:
             frames = dh_frames(self._dh[0], batch, self._dh[1])
             frames = np.concatenate([frames[:, : self.dof], frames[:, -1:]], axis=1)
@@ -211,9 +214,16 @@ class ArmModel:
     def ik(self, position_m, pitch=None, yaw=None, q_seed=None) -> np.ndarray:
         """Joint vector putting the gripper point at `position_m` (world, metres); raises Unreachable.
 
-        pitch: approach axis below the horizontal (rad; pi/2 = straight down); None = straight down if
-        reachable, else the steepest reachable pitch. yaw: the block's yaw in the world (rad); sets
-        wrist_rotate so the fingers close across its faces, the equivalent nearest the seed's wrist.
+        pitch: approach axis below the horizontal (rad; pi/2 = straight down), in the vertical plane
+        through the base axis and the target; None = straight down if reachable, else the steepest
+        reachable pitch (searched). yaw: the block's yaw in the world (rad); sets wrist_rotate so the
+        fingers (which close along the gripper frame's y axis) close across the block's faces, choosing
+        among the pi/2-apart equivalents the one within limits nearest the seed's wrist_rotate. For the
+        RX200 pointing straight down the fingers close along the world direction at angle
+        (waist - wrist_rotate): along world x at waist = wrist_rotate = 0. yaw None keeps the seed's
+        wrist_rotate. q_seed (default: home) picks among the solutions: the valid one nearest it.
+        Raises Unreachable ("out of reach", "joint limit (<joint>)", "below the table"); ValueError
+        for malformed input.
         """
         return self.ik_with_pitch(position_m, pitch, yaw, q_seed)[0]
 

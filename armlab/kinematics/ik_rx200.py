@@ -27,7 +27,6 @@ from armlab.kinematics.rx200_geometry import (
 )
 
 _TOL = 1e-9
-_ELBOW_DOWN_PENALTY = 100.0  # cost added to elbow-down solutions so elbow-up ones win when both fit
 SEARCH_STEP_RAD = math.radians(1.0)
 PITCH_MIN_RAD = -HALF_PI  # approach axis pointing straight up
 PITCH_MAX_RAD = math.pi  # approach axis horizontal, pointing back toward the base
@@ -46,38 +45,52 @@ def _to_base(g: Rx200Geometry, x: float, y: float, z: float) -> tuple[float, flo
 
 
 def _solve_at_pitch(g: Rx200Geometry, xb: float, yb: float, zb: float, pitch: float, seed: tuple[float, ...]):
-    """Best (q1, q2, q3, q4) reaching base point (xb, yb, zb) at `pitch`, or (None, failure tuple)."""
+    """Best (q1, q2, q3, q4) reaching base point (xb, yb, zb) at `pitch`, or (None, failure tuple).
+
+    Elbow-up solutions (both waist directions) first; elbow-down ones only when no elbow-up one fits.
+    """
     l2, l3 = g.upper_arm_m, g.forearm_m
     beta = g.upper_arm_elevation_rad
     lower, upper = g.lower_rad, g.upper_rad
-    radius = math.hypot(xb, yb)
+    radius = math.sqrt(xb * xb + yb * yb)
     phi = math.atan2(yb, xb) if radius > 1e-12 else seed[0]
-    best, best_cost = None, math.inf
+    cos_pitch, sin_pitch = math.cos(pitch), math.sin(pitch)
     failure = (0, 0.0, "", 0.0)  # (rank, key: larger = nearer miss, what, value)
+    families = []  # (waist, psi, rc, zc, cos_bend, bend) of each waist direction that is in reach
     for back in (False, True):
-        if back:
-            waist, reach_r, psi = wrap_angle(phi + math.pi), -radius, math.pi - pitch
+        if back:  # turned half a turn: the target lies behind, the approach pitch is mirrored
+            waist, psi, rc = wrap_angle(phi + math.pi), math.pi - pitch, -radius + g.tool_m * cos_pitch
         else:
-            waist, reach_r, psi = wrap_angle(phi), radius, pitch
+            waist, psi, rc = wrap_angle(phi), pitch, radius - g.tool_m * cos_pitch
+        rc -= g.shoulder_x_m
         for shifted in (waist - 2.0 * math.pi, waist + 2.0 * math.pi):  # e.g. -pi for pi, near a -pi seed
             if lower[0] - _TOL <= shifted <= upper[0] + _TOL and abs(shifted - seed[0]) < abs(waist - seed[0]):
                 waist = shifted
         if not lower[0] - _TOL <= waist <= upper[0] + _TOL:
             failure = max(failure, (_RANK_LIMIT, -_excess(waist, lower[0], upper[0]), "waist", waist))
             continue
-        rc = reach_r - g.tool_m * math.cos(psi) - g.shoulder_x_m
-        zc = zb + g.tool_m * math.sin(psi) - g.shoulder_z_m
+        zc = zb + g.tool_m * sin_pitch - g.shoulder_z_m
         cos_bend = (rc * rc + zc * zc - l2 * l2 - l3 * l3) / (2.0 * l2 * l3)
         if cos_bend > 1.0 + 1e-12 or cos_bend < -1.0 - 1e-12:
-            distance = math.hypot(rc, zc)  # the key (third item) makes max() keep the nearest miss
+            distance = math.sqrt(rc * rc + zc * zc)  # the key (second item) makes max() keep the nearest miss
             failure = max(failure, (_RANK_REACH, -abs(distance - _span_middle(g)), "reach", distance))
             continue
-        bend = math.acos(min(1.0, max(-1.0, cos_bend)))
-        line = math.atan2(zc, rc)
-        for gamma in (-bend, bend):  # elbow up first
-            elevation = line - math.atan2(l3 * math.sin(gamma), l2 + l3 * math.cos(gamma))
-            q2 = wrap_angle(beta - elevation)
-            q3 = wrap_angle(-gamma - beta)
+        cos_bend = min(1.0, max(-1.0, cos_bend))
+        families.append((waist, psi, rc, zc, cos_bend, math.acos(cos_bend)))
+    best, best_cost = None, math.inf
+    floor = -g.base_xyz_m[2]
+    for elbow_up in (True, False):
+        for waist, psi, rc, zc, cos_bend, bend in families:
+            # shoulder angle of the elbow triangle as a vector (a, b); elevation of the upper arm =
+            # atan2(zc, rc) - atan2(b, a), computed as one atan2 of the rotated vector (x, y)
+            a = l2 + l3 * cos_bend
+            b = l3 * math.sqrt(1.0 - cos_bend * cos_bend)
+            if elbow_up:
+                b, q3 = -b, bend - beta
+            else:
+                q3 = wrap_angle(-bend - beta)
+            x, y = rc * a + zc * b, zc * a - rc * b
+            q2 = wrap_angle(beta - math.atan2(y, x))
             q4 = wrap_angle(psi - q2 - q3)
             limit = None
             for index, value in ((1, q2), (2, q3), (3, q4)):
@@ -87,17 +100,17 @@ def _solve_at_pitch(g: Rx200Geometry, xb: float, yb: float, zb: float, pitch: fl
             if limit is not None:
                 failure = max(failure, limit)
                 continue
-            elbow_z = g.shoulder_z_m + l2 * math.sin(elevation) + g.base_xyz_m[2]
-            wrist_z = zc + g.shoulder_z_m + g.base_xyz_m[2]
-            if elbow_z < 0.0 or wrist_z < 0.0:
-                lowest = min(elbow_z, wrist_z)
-                failure = max(failure, (_RANK_TABLE, lowest, "elbow" if elbow_z < 0.0 else "wrist", lowest))
+            elbow_z = g.shoulder_z_m + l2 * y / max(math.sqrt(x * x + y * y), 1e-300)  # + l2 sin(elevation)
+            wrist_z = zc + g.shoulder_z_m
+            if elbow_z < floor or wrist_z < floor:
+                lowest = min(elbow_z, wrist_z) - floor
+                failure = max(failure, (_RANK_TABLE, lowest, "elbow" if elbow_z < floor else "wrist", lowest))
                 continue
             cost = abs(waist - seed[0]) + abs(q2 - seed[1]) + abs(q3 - seed[2]) + abs(q4 - seed[3])
-            if gamma > 0.0:
-                cost += _ELBOW_DOWN_PENALTY
             if cost < best_cost:
                 best, best_cost = (waist, q2, q3, q4), cost
+        if best is not None:
+            break
     return best, failure
 
 

@@ -185,8 +185,13 @@ def point_on_screw_axis(screw_axis: np.ndarray) -> np.ndarray:
     return np.cross(axis[:3], axis[3:]) + 0.0
 
 
-def _exp6_batch(screw_axis: np.ndarray, theta: np.ndarray) -> np.ndarray:
-    """exp([S] theta) for one unit revolute screw axis and N angles: (N,) -> (N, 4, 4)."""
+def matrix_exp6_batch(screw_axis: np.ndarray, theta: np.ndarray) -> np.ndarray:
+    """exp([S] theta) for one unit revolute screw axis (6,) and N angles: (N,) -> (N, 4, 4).
+
+    >>> np.allclose(matrix_exp6_batch(np.array([0, 0, 1, 0, -1, 0.0]), np.array([0.3]))[0],
+    ...             matrix_exp6(vec_to_se3(np.array([0, 0, 1, 0, -1, 0.0]) * 0.3)))
+    True
+    """
     omega, v = screw_axis[:3], screw_axis[3:]
     w_mat = vec_to_so3(omega)
     w_mat2 = w_mat @ w_mat
@@ -223,7 +228,7 @@ def fk_space(home: np.ndarray, screw_axes: np.ndarray, q: np.ndarray) -> np.ndar
     q_batch = q[None, :] if single else q
     result = np.broadcast_to(np.eye(4), (q_batch.shape[0], 4, 4)).copy()
     for index in range(axes.shape[0]):
-        result = result @ _exp6_batch(axes[index], q_batch[:, index])
+        result = result @ matrix_exp6_batch(axes[index], q_batch[:, index])
     result = result @ np.asarray(home, dtype=float)
     return result[0] if single else result
 
