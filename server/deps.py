@@ -23,10 +23,17 @@ def require_control(
     authorization: Annotated[str | None, Header()] = None,
     x_armlab_controller: Annotated[str | None, Header()] = None,
 ) -> str:
-    """Check 'Authorization: Bearer <token>'; returns who controls: 'ui' (X-Armlab-Controller: ui) or 'api'."""
+    """Check 'Authorization: Bearer <token>'; returns who controls: 'ui' or 'api'.
+
+    'ui' when the request says so (X-Armlab-Controller: ui) or comes from a browser page (browsers
+    add Sec-Fetch-Mode to fetch() calls; scripts do not); otherwise 'api'.
+    """
     if not token_matches(request.app.state.token, bearer_token(authorization)):
         raise ApiError(401, "unauthorized", "this command needs the control token: send 'Authorization: Bearer <token>'")
-    return "ui" if (x_armlab_controller or "").strip().lower() == "ui" else "api"
+    declared = (x_armlab_controller or "").strip().lower()
+    if declared in ("ui", "api"):
+        return declared
+    return "ui" if "sec-fetch-mode" in request.headers else "api"
 
 
 StationDep = Annotated[Station, Depends(get_station)]

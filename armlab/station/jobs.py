@@ -96,8 +96,19 @@ class Job:
                 "message": self.message,
                 "started_s": self.started_s,
                 "finished_s": self.finished_s,
-                "result": self.result,
+                "result": jsonable(self.result),
             }
+
+
+def jsonable(value: Any) -> Any:
+    """numpy arrays and scalars (also nested in dicts, lists, tuples) → plain JSON-ready Python values."""
+    if isinstance(value, dict):
+        return {str(key): jsonable(item) for key, item in value.items()}
+    if isinstance(value, (list, tuple)):
+        return [jsonable(item) for item in value]
+    if hasattr(value, "tolist"):  # numpy arrays and numpy scalars
+        return value.tolist()
+    return value
 
 
 def start_job_thread(

@@ -5,6 +5,7 @@ from __future__ import annotations
 from fastapi import APIRouter
 
 from armlab.station.core import Station
+from armlab.station.jobs import jsonable
 from server.deps import ControlAuth, StationDep
 from server.errors import ApiError
 from server.models import SceneRequest
@@ -16,17 +17,6 @@ def _cell(station: Station):
     if station.sim is None:
         raise ApiError(404, "not_found", "the simulation API exists only when the backend is the simulation")
     return station.sim
-
-
-def _plain(value):
-    """numpy arrays and scalars → JSON-ready lists and floats."""
-    if hasattr(value, "tolist"):
-        return value.tolist()
-    if isinstance(value, dict):
-        return {key: _plain(item) for key, item in value.items()}
-    if isinstance(value, (list, tuple)):
-        return [_plain(item) for item in value]
-    return value
 
 
 @router.post("/scene")
@@ -49,4 +39,4 @@ def post_scene(body: SceneRequest, station: StationDep, controller: ControlAuth)
 @router.get("/truth")
 def read_truth(station: StationDep) -> dict:
     """Ground truth: object poses, camera pose and intrinsics, gripper contacts."""
-    return _plain(_cell(station).truth())
+    return jsonable(_cell(station).truth())

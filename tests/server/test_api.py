@@ -160,6 +160,9 @@ def test_gripper_and_torque(http):
     assert status["gripper"]["command"] == "release" and status["gripper"]["width_m"] > 0.05
     _error(http.post("/api/gripper", json={"action": "squeeze"}, headers=AUTH), 422, "invalid")
     assert http.post("/api/arm/torque", json={"enabled": True}, headers=AUTH).status_code == 200
+    assert http.get("/api/status").json()["controller"] == "api"
+    browser = {**AUTH, "Sec-Fetch-Mode": "cors"}  # what a page's fetch() adds
+    assert http.post("/api/gripper", json={"action": "release"}, headers=browser).json()["controller"] == "ui"
 
 
 def test_pixel_to_world_before_calibration_is_409(http):
