@@ -110,8 +110,10 @@ def _approach_steps(
     """Move above point_m, descend to it, do `action`, lift; all trajectories checked."""
     above_m = point_m + np.array([0.0, 0.0, config.approach_height_m])
     lift_m = point_m + np.array([0.0, 0.0, config.lift_height_m])
-    pitch, (q_point, q_above, _q_lift) = solve_approach(arm, q_now_rad, [point_m, above_m, lift_m], yaw_rad, config.top_down_pitch_rad)
-    del q_point  # reached by the vertical descent itself; solving it first fixed the IK branch
+    # Solving the low point first fixes the pitch and IK branch; the descent itself reaches it.
+    pitch, (_q_point, q_above, _q_lift) = solve_approach(
+        arm, q_now_rad, [point_m, above_m, lift_m], yaw_rad, config.top_down_pitch_rad
+    )
     vertical = dict(pitch_rad=pitch, yaw_rad=yaw_rad, speed_m_s=config.vertical_speed_m_s,
                     accel_m_s2=config.vertical_accel_m_s2, rate_hz=config.sample_rate_hz)
     move_above = plan_joint_move(q_now_rad, q_above, arm, config.move_time_s, config.accel_time_s, config.sample_rate_hz)
