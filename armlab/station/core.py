@@ -129,6 +129,11 @@ class Station:
         self._workers = []
         self._started = False
 
+    @property
+    def is_running(self) -> bool:
+        """True between start() and close() (the camera, perception and telemetry threads run)."""
+        return self._started
+
     # State ----------------------------------------------------------------------------------------
 
     @property
