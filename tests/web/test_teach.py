@@ -47,10 +47,11 @@ def test_teach_record_save_and_repeat_from_the_page(browser, server):
         server.post("/api/arm/joints?wait=true", {"q_rad": [0.0, 0.0, 0.0, 0.0, 0.0], "moving_time_s": 0.8})
         server.wait_status(lambda s: not s["moving"], 10.0, "the arm to settle")
         page.fill("#repeat-cycles", "1")
+        previous_id = (server.get("/api/status").get("job") or {}).get("id")
         item.locator("button[data-command='repeat']").click()
         status = server.wait_status(
             lambda s: s["state"] == "idle" and (s.get("job") or {}).get("name") == "repeat"
-            and s["job"]["state"] != "running",
+            and s["job"]["id"] != previous_id and s["job"]["state"] != "running",
             60.0,
             "the repeat job to finish",
         )

@@ -16,6 +16,7 @@ pytestmark = pytest.mark.browser
 
 SCREENSHOT = REPO / "docs" / "screenshot.png"
 JOB_TIMEOUT_S = 60.0
+SLEEP_RAD = np.array([0.0, -1.80, 1.55, 0.8, 0.0])  # DESIGN §4
 
 
 @pytest.fixture(scope="module")
@@ -31,35 +32,39 @@ def truth_objects(server) -> list[dict]:
     return truth["objects"] if isinstance(truth, dict) else truth
 
 
-def wait_job_done(server, name: str) -> dict:
-    """Wait until the station is back to idle after job `name`; returns the final job dict."""
+def last_job_id(server) -> str | None:
+    return (server.get("/api/status").get("job") or {}).get("id")
+
+
+def wait_job_done(server, name: str, previous_id: str | None) -> dict:
+    """Wait until a job `name` newer than `previous_id` has ended and the station is idle again;
+    fails unless it succeeded. Returns the final status."""
     status = server.wait_status(
-        lambda s: s["state"] in ("idle", "fault", "estop") and (s.get("job") or {}).get("state") != "running",
+        lambda s: (s.get("job") or {}).get("id") not in (None, previous_id)
+        and s["job"]["name"] == name
+        and s["job"]["state"] != "running"
+        and s["state"] in ("idle", "fault", "estop"),
         JOB_TIMEOUT_S,
-        f"{name} job to end",
+        f"the {name} job to end",
     )
-    job = status.get("job") or server.get("/api/jobs/current").get("job") or {}
+    assert status["job"]["state"] == "succeeded", f"{name} job: {status['job']}"
     assert status["state"] == "idle", f"{name}: station in {status['state']}: {status.get('detail')}"
-    if job:
-        assert job.get("state") == "succeeded", f"{name} job: {job}"
     return status
 
 
 def ensure_calibrated(page, server) -> None:
     if not server.get("/api/calibration").get("calibrated"):
+        previous = last_job_id(server)
         page.click("#btn-calibrate")
-        wait_job_done(server, "calibrate")
+        wait_job_done(server, "calibrate", previous)
     page.wait_for_function("document.getElementById('calib-badge').dataset.ok === 'true'", timeout=15_000)
 
 
 def test_calibrate_button_shows_the_result(page, server):
     page.wait_for_function("!document.getElementById('btn-calibrate').disabled", timeout=15_000)
+    previous = last_job_id(server)
     page.click("#btn-calibrate")
-    page.wait_for_function(
-        "document.getElementById('state-badge').textContent === 'calibrate' || window.armlab.status.calibrated",
-        timeout=10_000,
-    )
-    wait_job_done(server, "calibrate")
+    wait_job_done(server, "calibrate", previous)
     calibration = server.get("/api/calibration")
     assert calibration["calibrated"] is True
     page.wait_for_function("document.getElementById('calib-badge').dataset.ok === 'true'", timeout=15_000)
@@ -141,8 +146,9 @@ def test_click_grab_lifts_the_block_and_click_drop_places_it(page, server):
 
     page.click("#click-mode button[data-mode='grab']")
     x, y = canvas_point(page, *det["center_px"])
+    previous = last_job_id(server)
     page.mouse.click(x, y)
-    wait_job_done(server, "grab")
+    wait_job_done(server, "grab", previous)
     held = next(o for o in truth_objects(server) if o["id"] == before["id"])
     edge_m = {"large": 0.038, "small": 0.025}.get(before.get("size"), 0.038)
     assert held["position_m"][2] > edge_m / 2 + 0.02, f"block not lifted: {held}"
@@ -152,8 +158,9 @@ def test_click_grab_lifts_the_block_and_click_drop_places_it(page, server):
 
     (u, v), target_m = free_drop_pixel(server, truth_objects(server))
     x, y = canvas_point(page, u, v)
+    previous = last_job_id(server)
     page.mouse.click(x, y)
-    wait_job_done(server, "drop")
+    wait_job_done(server, "drop", previous)
     time.sleep(0.5)  # let the block settle
     placed = next(o for o in truth_objects(server) if o["id"] == before["id"])
     error_m = math.dist(placed["position_m"][:2], target_m[:2])
@@ -166,7 +173,9 @@ def test_screenshot_of_calibrated_scene_with_detections(page, server):
     ensure_calibrated(page, server)
     # Park the arm out of the camera's way so every block is seen whole.
     page.click("#btn-sleep")
-    server.wait_status(lambda s: s["state"] == "idle" and not s["moving"], 20.0, "the arm to reach sleep")
+    server.wait_status(
+        lambda s: not s["moving"] and np.abs(np.array(s["joints_rad"]) - SLEEP_RAD).max() < 0.02, 20.0, "the sleep pose"
+    )
     page.check("#layer-grid")
     page.wait_for_function(
         "window.armlab.detections.length > 0 && window.armlab.detections.every(d => !d.occluded)", timeout=20_000
@@ -194,8 +203,7 @@ def test_estop_during_a_move_stops_the_arm_and_shows_estop(page, server):
     status = server.get("/api/status")
     assert status["state"] == "idle"
     q_start = np.array(status["joints_rad"])
-    sleep_rad = np.array([0.0, -1.80, 1.55, 0.8, 0.0])
-    target_rad = sleep_rad if np.abs(q_start - sleep_rad).max() > 0.5 else np.zeros(5)
+    target_rad = SLEEP_RAD if np.abs(q_start - SLEEP_RAD).max() > 0.5 else np.zeros(5)
     page.fill("#jog-time", "4")
     # Send the long move through the page's own jog path, then hit Escape mid-way.
     page.evaluate("q => window.armlab.sendJoints(q)", target_rad.tolist())
