@@ -178,6 +178,12 @@ class StreamHub:
         self.calibration_text, self.calibration_version = text, self.calibration_version + 1
         self._wake_all()
 
+    def _forget_unwatched(self) -> None:
+        """Drop cached frames of views nobody watches any more (bounded memory as views come and go)."""
+        watched = {client.key for client in self.clients}
+        for key in [key for key in self.frames if key not in watched]:
+            del self.frames[key]
+
     def _wake_all(self) -> None:
         for client in self.clients:
             client.wake.set()
@@ -202,6 +208,7 @@ class StreamHub:
             sender.cancel()
             self.clients.discard(client)
             self.encoder.unwatch(client.key)
+            self._forget_unwatched()
             try:
                 await sender
             except (asyncio.CancelledError, Exception):  # noqa: BLE001 - the client is gone either way
@@ -256,6 +263,7 @@ class StreamHub:
             self.encoder.watch(key)
             self.encoder.unwatch(client.key)
             client.key = key
+            self._forget_unwatched()
             client.awaiting_ack = None  # the old view's frame needs no ack any more
             client.last_frame_seq = -1
             client.wake.set()
