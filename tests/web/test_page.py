@@ -166,3 +166,32 @@ def test_cartesian_jog_moves_the_gripper_by_the_step(page, server):
         timeout=5_000,
     )
     assert page.errors == []
+
+
+def test_gripper_buttons_close_and_open_the_gripper(page, server):
+    wait_frames(page, 2)
+    page.wait_for_function("!document.getElementById('btn-close').disabled", timeout=5_000)
+    opened = server.get("/api/status")["gripper"]
+    page.click("#btn-close")
+    closed = server.wait_status(
+        lambda s: s["gripper"]["command"] == "grasp" and s["gripper"]["width_m"] < opened["width_m"] - 0.02,
+        10.0,
+        "the gripper to close",
+    )["gripper"]
+    # The readout shows the closed width (mm) the station reports.
+    page.wait_for_function(
+        """w => {
+            const m = document.getElementById('pose-readout').textContent.match(/width ([0-9.]+) mm/);
+            return m !== null && Math.abs(Number(m[1]) - w) < 3;
+        }""",
+        arg=closed["width_m"] * 1000,
+        timeout=5_000,
+    )
+    page.click("#btn-open")
+    reopened = server.wait_status(
+        lambda s: s["gripper"]["command"] == "release" and s["gripper"]["width_m"] > closed["width_m"] + 0.02,
+        10.0,
+        "the gripper to open",
+    )["gripper"]
+    assert reopened["width_m"] == pytest.approx(opened["width_m"], abs=0.003)
+    assert page.errors == []
