@@ -62,6 +62,13 @@ class Block:
         }
 
 
+def quantile(values: np.ndarray, q: float) -> float:
+    """The q-quantile (0..1) of a non-empty array by partial sort: far cheaper than np.percentile on small arrays."""
+    flat = np.asarray(values).ravel()
+    k = int(round(q * (flat.size - 1)))
+    return float(np.partition(flat, k)[k])
+
+
 def hue_lut(cfg: PerceptionConfig) -> tuple[np.ndarray, list[str]]:
     """Lookup table hue (0..179) -> index of the nearest configured colour (cyclic hue distance)."""
     names = list(cfg.blocks.colors)
@@ -87,10 +94,11 @@ def stack_candidates(top_m: float, top_size: str, cfg: PerceptionConfig) -> list
     """
     large, small = cfg.blocks.large_size_m, cfg.blocks.small_size_m
     below = top_m - (large if top_size == "large" else small)
-    n_large, n_small = np.meshgrid(np.arange(12), np.arange(12 if top_size == "small" else 1), indexing="ij")
-    errors = np.abs(below - n_large * large - n_small * small).ravel()
+    n_small_max = 12 if top_size == "small" else 1
+    errors = np.abs(below - np.add.outer(np.arange(12) * large, np.arange(n_small_max) * small)).ravel()
     order = np.argsort(errors, kind="stable")[:6]
-    nl, ns = n_large.ravel(), n_small.ravel()
+    nl, ns = np.divmod(order, n_small_max)
+    nl, ns = dict(zip(order, nl)), dict(zip(order, ns))
     return [
         (float(errors[i]), ("large",) * int(nl[i]) + ("small",) * int(ns[i]) + (top_size,)) for i in order
     ]
@@ -227,7 +235,7 @@ def _top_face_in_roi(
         blob = _largest_blob((np.abs(z - top_m) < tol_m) & (keep if keep is not None else True))
         if blob is None:
             return None
-        face_m = float(np.median(z[blob > 0]))
+        face_m = quantile(z[blob > 0], 0.5)
         blob = _largest_blob((np.abs(z - face_m) < 0.5 * tol_m) & (keep if keep is not None else True))
     if blob is None:
         return None
@@ -235,7 +243,7 @@ def _top_face_in_roi(
     ys, xs = np.nonzero(blob)
     pixels = np.stack([xs + x0, ys + y0], axis=1).astype(np.float64)
     contour = max(contours, key=cv2.contourArea).reshape(-1, 2) + np.array([x0, y0])
-    return pixels, contour, float(np.median(z[ys, xs]))
+    return pixels, contour, quantile(z[ys, xs], 0.5)
 
 
 def _face_from_pixels(pixels: np.ndarray, contour: np.ndarray, top_m: float, cal: Calibration) -> _Face:
@@ -292,12 +300,23 @@ def detect_blocks(
         comp_z = z_small[y : y + bh, x : x + bw][sel]
         counts = np.bincount(comp_classes, minlength=len(names) + 1)
         roi = (max(0, x * step - 8), max(0, y * step - 8), min(w, (x + bw) * step + 8), min(h, (y + bh) * step + 8))
+        ys, xs = np.nonzero(sel)
+        tops: dict[int, tuple[float, np.ndarray, np.ndarray]] = {}  # colour -> (top, centroid, bbox)
         for ci in np.nonzero(counts >= max(3, 0.1 * area))[0]:
-            zs = comp_z[comp_classes == ci]
-            top_m = float(np.percentile(zs, 90))
-            if np.count_nonzero(np.abs(zs - top_m) < bc.top_face_tolerance_m) < min_face_px:
+            mine = comp_classes == ci
+            top_m = quantile(comp_z[mine], 0.9)
+            layer = mine & (np.abs(comp_z - top_m) < bc.top_face_tolerance_m)
+            if np.count_nonzero(layer) < min_face_px:
                 continue  # only a sliver of this colour at its top: the side of a lower stack member
-            for block in _blocks_from_region(color_bgr, depth_mm, cal, cfg, roi, top_m, names[ci - 1], int(ci), lut, z_small, step):
+            pts = np.stack([xs[layer], ys[layer]], axis=1)
+            tops[int(ci)] = (top_m, pts.mean(axis=0), np.concatenate([pts.min(axis=0) - 1, pts.max(axis=0) + 1]))
+        for ci, (top_m, _, box) in tops.items():
+            if any(
+                other_top > top_m + 0.01 and box[0] <= centre[0] <= box[2] and box[1] <= centre[1] <= box[3]
+                for cj, (other_top, centre, _) in tops.items() if cj != ci
+            ):
+                continue  # a lower member of a stack: the block on top sits inside its footprint
+            for block in _blocks_from_region(color_bgr, depth_mm, cal, cfg, roi, top_m, names[ci - 1], ci, lut, z_small, step):
                 if block.aruco_id is None and _face_looks_tagged(color_bgr, block):
                     detector = detector or make_detector(cfg.tags.block_tag_dictionary)
                     block = _with_tag(block, color_bgr, roi, detector, cfg)
@@ -322,7 +341,7 @@ def _blocks_from_region(color_bgr, depth_mm, cal, cfg, roi, top_m, name, ci, lut
     # faces that the depth filter smeared up to the top's height at the edge facing the camera.
     value = hsv[..., 2]
     if np.count_nonzero(near_top) >= 10:
-        dim = mine & (value < 0.82 * float(np.percentile(value[near_top], 75)))
+        dim = mine & (value < 0.82 * quantile(value[near_top], 0.75))
     else:
         dim = np.zeros_like(mine)
     keep = (mine & ~dim) | (classes == 0)
@@ -338,8 +357,10 @@ def _blocks_from_region(color_bgr, depth_mm, cal, cfg, roi, top_m, name, ci, lut
         return []  # a lower member of a stack: something sits on its centre
     if (classes[pixels[:, 1].astype(int) - y0, pixels[:, 0].astype(int) - x0] == ci).mean() < 0.15:
         return []  # the face is mostly another object's colourless top
-    parts = [face] if _classify_face(face, cfg)[3] else _split_touching(face, cfg)
-    return [_make_block(part, name, cal, cfg, z_half, step, z) for part in parts]
+    classified = _classify_face(face, cfg)
+    if classified[3]:
+        return [_make_block(face, name, cal, cfg, z_half, step, z, classified)]
+    return [_make_block(part, name, cal, cfg, z_half, step, z) for part in _split_touching(face, cfg)]
 
 
 def _covered(face: _Face, z: np.ndarray, roi) -> bool:
@@ -380,8 +401,8 @@ def _with_tag(block: Block, color_bgr: np.ndarray, roi, detector, cfg: Perceptio
     return block
 
 
-def _make_block(face: _Face, color: str, cal, cfg, z_small, step, z_roi=None) -> Block:
-    size, side, yaw, is_cube, centre_xy = _classify_face(face, cfg)
+def _make_block(face: _Face, color: str, cal, cfg, z_small, step, z_roi=None, classified=None) -> Block:
+    size, side, yaw, is_cube, centre_xy = classified or _classify_face(face, cfg)
     ring_m2 = cfg.blocks.large_size_m**2 - cfg.blocks.small_size_m**2
     sizes = choose_stack(face.top_m, size, cfg, z_roi, 0.3 * ring_m2 / face.pixel_area_m2)
     occluded = _is_occluded(face, centre_xy, yaw, size, cal, cfg, z_small, step)

@@ -29,6 +29,11 @@ class PerceptionPipeline:
     def __init__(self, cfg: PerceptionConfig) -> None:
         self.cfg = cfg
         self._board_detector = make_detector(cfg.tags.dictionary)
+        # Tracking known tags in small windows: one threshold scale is enough and three times cheaper.
+        self._tracking_detector = make_detector(cfg.tags.dictionary)
+        params = self._tracking_detector.getDetectorParameters()
+        params.adaptiveThreshWinSizeMin = params.adaptiveThreshWinSizeMax = 7
+        self._tracking_detector.setDetectorParameters(params)
         self._block_detector = make_detector(cfg.tags.block_tag_dictionary)
         self._grid_m = cfg.board.grid_points_m()
         self._tag_centres_m = np.array([[x, y, 0.0] for x, y in cfg.tags.board_tags.values()])
@@ -38,7 +43,10 @@ class PerceptionPipeline:
         if cal is None:
             return detect_tags(color_bgr, detector=self._board_detector)
         centres = project_points(cal.T_world_camera, cal.K, cal.dist, self._tag_centres_m)
-        return detect_tags_near(color_bgr, centres, 40, self._board_detector)
+        tags = detect_tags_near(color_bgr, centres, 32, self._tracking_detector)
+        if len(tags) < len(self._tag_centres_m):  # moved or shaded: look harder where they should be
+            tags = detect_tags_near(color_bgr, centres, 48, self._board_detector)
+        return tags
 
     def process(
         self, color_bgr: np.ndarray, depth_mm: np.ndarray | None, cal: Calibration | None,

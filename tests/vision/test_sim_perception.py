@@ -5,12 +5,10 @@ from __future__ import annotations
 
 import math
 
-import cv2
 import numpy as np
 import pytest
 from synth import render_sim
 
-from armlab.devices.sim.textures import block_top_texture
 from armlab.scene import Scene, SceneObject, quat_from_yaw
 from armlab.vision import (
     calibrate_extrinsics,
@@ -21,29 +19,8 @@ from armlab.vision import (
     project_grid,
     world_to_pixel,
 )
-from armlab.vision.evaluate import click_grid_errors, expected_tops, score_blocks
+from armlab.vision.evaluate import click_grid_errors, expected_tops, paint_block_top_tag, score_blocks
 from armlab.vision.geometry import project_points
-
-
-def paint_block_top_tag(image: np.ndarray, truth: dict, obj_id: str, tag_id: int, rgb) -> np.ndarray:
-    """The sim's own block-top texture (tag on white inside the block colour) warped onto a block's true
-    top face: the sim models tagged tops but does not draw them yet, so the test puts them in the image."""
-    obj = next(o for o in truth["objects"] if o["id"] == obj_id)
-    half = {"large": 0.019, "small": 0.0125}[obj["size"]]
-    x, y, z = obj["position_m"]
-    c, s = math.cos(obj["yaw_rad"]), math.sin(obj["yaw_rad"])
-    corners = np.array([[x + c * a - s * b, y + s * a + c * b, z + half] for a, b in ((-half, half), (half, half), (half, -half), (-half, -half))])
-    T = np.asarray(truth["camera"]["T_world_camera"])
-    K = np.asarray(truth["camera"]["K"])
-    px = project_points(T, K, np.zeros(5), corners).astype(np.float32)
-    texture = cv2.cvtColor(block_top_texture(tag_id, rgb, 200), cv2.COLOR_RGB2BGR)
-    H = cv2.getPerspectiveTransform(np.float32([[0, 0], [200, 0], [200, 200], [0, 200]]), px)
-    size = (image.shape[1], image.shape[0])
-    warped = cv2.warpPerspective(texture, H, size)
-    inside = cv2.warpPerspective(np.full((200, 200), 255, np.uint8), H, size) > 128
-    out = image.copy()
-    out[inside] = warped[inside]
-    return out
 
 
 def _obj(oid, otype, color, size, x, y, yaw=0.0, z_base=0.0, aruco_id=None):
