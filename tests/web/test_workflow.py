@@ -94,6 +94,14 @@ def test_topdown_view_hover_maps_the_board(page, server):
         page.wait_for_function("document.getElementById('hover-world').dataset.positionM !== undefined")
         x_m, y_m, _ = page.evaluate("JSON.parse(document.getElementById('hover-world').dataset.positionM)")
         assert abs(x_m - expected[0]) < 0.005 and abs(y_m - expected[1]) < 0.005, (x_m, y_m, expected)
+    # Hovering a block's world position in the warp highlights its row in the detections list.
+    page.wait_for_function("window.armlab.detections.length > 0", timeout=20_000)
+    det = page.evaluate("window.armlab.detections[0]")
+    u = (det["position_m"][0] + 0.5) / 1.0 * size[0]
+    v = (0.475 - det["position_m"][1]) / 0.65 * size[1]
+    page.mouse.move(left + u * scale, top + v * scale)
+    page.wait_for_function("document.querySelector('#det-body tr.hover') !== null", timeout=5_000)
+    assert page.get_attribute("#det-body tr.hover", "data-index") == "0"
     page.click("#view-select button[data-view='color']")
     page.wait_for_function("document.getElementById('live').dataset.view === 'color'", timeout=15_000)
 

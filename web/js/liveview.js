@@ -30,6 +30,7 @@ export class LiveView {
     this.onTarget = onTarget;
     this.onHoverDetection = onHoverDetection || (() => {});
     this.mode = "inspect";
+    this.layers = [];
     this.calibrated = false;
     this.header = null;
     this.bitmap = null;
@@ -79,6 +80,7 @@ export class LiveView {
       const c = det && this.cameraToFramePx(det.center_px);
       if (c) this.ring(c.u, c.v, 26 * Math.max(scale, 0.5), "#ffffff");
     }
+    if (this.view() === "topdown" && this.layers.includes("detections")) this.drawTopdownDetections();
     if (this.marker) {
       const p = this.markerFramePx(this.marker);
       if (p) this.cross(p.u, p.v, this.marker.color, this.marker.label, Math.max(scale, 0.5));
@@ -86,6 +88,36 @@ export class LiveView {
   }
 
   /** The view the shown frame really is: the server falls back to colour for top-down until calibrated. */
+  /**
+   * The server draws overlays on the camera views only; on the top-down warp the page marks the
+   * detections itself from their world positions (outline sized like the block, colour + size label).
+   */
+  drawTopdownDetections() {
+    const { ctx, canvas } = this;
+    const b = boundsFromHeader(this.header);
+    const pxPerM = canvas.width / (b.xMax - b.xMin);
+    ctx.save();
+    ctx.lineWidth = 2;
+    ctx.font = "13px sans-serif";
+    this.detections.forEach((det, i) => {
+      if (!Array.isArray(det.position_m)) return;
+      const p = worldToTopdownPx(det.position_m[0], det.position_m[1], canvas.width, canvas.height, b);
+      const half = ((det.size === "small" ? 0.025 : 0.038) * pxPerM) / 2 + 4;
+      ctx.strokeStyle = i === this.hoverDetection ? "#ffffff" : "#00e5ff";
+      ctx.save();
+      ctx.translate(p.u, p.v);
+      ctx.rotate(-(det.yaw_rad || 0)); // world yaw is counter-clockwise; image v grows downwards
+      ctx.strokeRect(-half, -half, 2 * half, 2 * half);
+      ctx.restore();
+      const label = `${det.color || "?"} ${det.size || ""}`.trim();
+      ctx.fillStyle = "#000000";
+      ctx.fillText(label, p.u + half + 3, p.v - half + 1);
+      ctx.fillStyle = "#00e5ff";
+      ctx.fillText(label, p.u + half + 2, p.v - half);
+    });
+    ctx.restore();
+  }
+
   view() {
     const v = (this.header && this.header.view) || "color";
     return v === "topdown" && !this.calibrated ? "color" : v;
@@ -186,7 +218,8 @@ export class LiveView {
       const b = boundsFromHeader(this.header);
       const w = topdownPxToWorld(px.frame.u, px.frame.v, this.canvas.width, this.canvas.height, b);
       this.showWorld(w, "board");
-      this.setHoverDetection(-1);
+      const world = this.detections.map((d) => ({ center_px: d.position_m ? [d.position_m[0], d.position_m[1]] : null }));
+      this.setHoverDetection(nearestDetection(world, w[0], w[1], 0.03));
       return;
     }
     this.setHoverDetection(nearestDetection(this.detections, px.camera.u, px.camera.v, PICK_RADIUS_PX));

@@ -81,6 +81,7 @@ class App {
   }
 
   start() {
+    this.live.layers = this.layers;
     const unknown = App.unknownWireNames();
     if (unknown.length) this.log.add("error", `page out of date with the server protocol: ${unknown.join(", ")}`);
     this.bindControls();
@@ -294,6 +295,7 @@ class App {
 
   setLayers() {
     this.layers = [...document.querySelectorAll("[data-layer]")].filter((c) => c.checked).map((c) => c.dataset.layer);
+    this.live.layers = this.layers;
     this.stream.setView(this.view, this.layers);
   }
 
