@@ -2,8 +2,8 @@
 
 FrameSource is the camera's only reader: it publishes each new Frame into a NewestSlot that every
 consumer (perception, the stream encoder, snapshots, calibration) reads at its own pace.
-PerceptionLoop runs tag and block detection on the newest frame at its own rate (never on every
-frame if it cannot keep up) and publishes a Perception snapshot.
+PerceptionLoop runs armlab.vision's PerceptionPipeline (tags, blocks) on the newest frame at its own
+rate (skipping frames it cannot keep up with) and publishes a Perception snapshot.
 """
 
 from __future__ import annotations
@@ -14,8 +14,6 @@ import time
 from collections.abc import Callable
 from dataclasses import dataclass, field
 from typing import Any
-
-import numpy as np
 
 from armlab.devices.camera import Camera, Frame
 from armlab.station.slots import NewestSlot
@@ -112,44 +110,28 @@ class PerceptionLoop(_Worker):
         self.config = config
         self.period_s = 1.0 / rate_hz
 
-    # Full tag searches this often; in between, tags are tracked in windows around their last centres.
-    FULL_TAG_SEARCH_PERIOD_S = 2.0
-    TRACK_HALF_SIZE_PX = 40
-
     def _run(self) -> None:
-        from armlab.vision import detect_blocks
-        from armlab.vision.tags import detect_tags, detect_tags_near, make_detector
+        from armlab.vision.pipeline import PerceptionPipeline
 
-        detector = make_detector(self.config.tags.dictionary)
-        version, tags, last_full_s = 0, (), 0.0
+        pipeline = PerceptionPipeline(self.config)  # holds its detectors; tracks tags near calibrated spots
+        version = 0
         while not self._stop.is_set():
             frame, version = self.frames.wait_newer(version, timeout_s=0.5)
             if frame is None:
                 continue
             started = time.monotonic()
-            try:
-                if tags and started - last_full_s < self.FULL_TAG_SEARCH_PERIOD_S:
-                    centers = np.array([tag.center_px for tag in tags])
-                    tracked = tuple(detect_tags_near(frame.color_bgr, centers, self.TRACK_HALF_SIZE_PX, detector))
-                    tags = tracked if len(tracked) == len(tags) else ()
-                if not tags or started - last_full_s >= self.FULL_TAG_SEARCH_PERIOD_S:
-                    tags = tuple(detect_tags(frame.color_bgr, self.config, detector=detector))
-                    last_full_s = started
-            except ValueError as error:
-                log.debug("tag detection failed: %s", error)
-                tags = ()
-            self.out.publish(analyse_frame(frame, tags, self.get_calibration(), self.config, detect_blocks))
+            self.out.publish(analyse_frame(pipeline, frame, self.get_calibration()))
             # At most the configured rate, and at most half of one core (sleep at least as long as we worked).
             elapsed = time.monotonic() - started
             self._stop.wait(max(self.period_s - elapsed, elapsed))
 
 
-def analyse_frame(frame: Frame, tags: tuple, calibration: Any, config: Any, detect_blocks: Callable) -> Perception:
-    """Blocks only with a calibration and a depth image (a failed detection logs and reports none)."""
-    blocks: tuple = ()
-    if calibration is not None and frame.depth_mm is not None:
-        try:
-            blocks = tuple(detect_blocks(frame.color_bgr, frame.depth_mm, calibration, config))
-        except ValueError as error:
-            log.debug("block detection failed: %s", error)
+def analyse_frame(pipeline: Any, frame: Frame, calibration: Any) -> Perception:
+    """Tags and (with a calibration and depth) blocks of one frame; a failed pass logs and reports none."""
+    try:
+        result = pipeline.process(frame.color_bgr, frame.depth_mm, calibration, layers=None)
+        tags, blocks = tuple(result.tags), tuple(result.blocks)
+    except ValueError as error:
+        log.debug("perception failed on frame %d: %s", frame.sequence, error)
+        tags, blocks = (), ()
     return Perception(blocks=blocks, tags=tags, frame_sequence=frame.sequence, capture_time_s=frame.timestamp_s)
