@@ -27,6 +27,22 @@ _DAMPING_MIN = 1e-6
 _MAX_STEP_RAD = 1.0
 
 
+def _solve_spd(matrix: np.ndarray, vector: np.ndarray) -> np.ndarray:
+    """Solve a small positive-definite system. np.linalg.solve's Python wrapper costs as much as the
+    solve itself at 6x6, so its gufunc is called directly when this numpy has it (same result)."""
+    if _SOLVE_GUFUNC is not None:
+        return _SOLVE_GUFUNC(matrix, vector)
+    return np.linalg.solve(matrix, vector)
+
+
+try:  # numpy's compiled solver behind np.linalg.solve (private; fall back to the public call)
+    from numpy.linalg import _umath_linalg
+
+    _SOLVE_GUFUNC = _umath_linalg.solve1
+except (ImportError, AttributeError):  # pragma: no cover - other numpy builds
+    _SOLVE_GUFUNC = None
+
+
 @dataclass(frozen=True)
 class DhKinematics:
     """World-frame tool pose and geometric Jacobian of a DH chain, in plain floats."""
@@ -153,10 +169,9 @@ def solve_pose(
     """
     dof = len(q_seed)
     rng = random.Random(random_seed)
-    identity = np.eye(dof)
-    best = NumericResult(tuple(q_seed), False, math.inf, math.inf, 0)
+    best_q, best_position, best_rotation, best_attempt = tuple(q_seed), math.inf, math.inf, 0
     tight_pos, tight_rot = position_tol_m * 1e-2, rotation_tol_rad * 1e-2
-    rows = 3 if position_only else 6
+    diagonal = slice(None, None, dof + 1)
     for attempt in range(1, max_attempts + 1):
         q = list(q_seed) if attempt == 1 else [rng.uniform(lo, hi) for lo, hi in zip(lower, upper)]
         _fit_limits(q, lower, upper)
@@ -166,30 +181,33 @@ def solve_pose(
             ex, ey, ez = T_world_target[3] - pose[3], T_world_target[7] - pose[7], T_world_target[11] - pose[11]
             position_error = math.sqrt(ex * ex + ey * ey + ez * ez)
             if position_only:
-                rotation_error_rad, error = 0.0, [ex, ey, ez]
+                rotation_error_rad, error = 0.0, (ex, ey, ez)
             else:
                 rx, ry, rz = rotation_error(T_world_target, pose)
                 rotation_error_rad = math.sqrt(rx * rx + ry * ry + rz * rz)
-                error = [ex, ey, ez, rx, ry, rz]
-            if position_error + rotation_error_rad < best.position_error_m + best.rotation_error_rad:
-                best = NumericResult(tuple(q), False, position_error, rotation_error_rad, attempt)
+                error = (ex, ey, ez, rx, ry, rz)
+            if position_error + rotation_error_rad < best_position + best_rotation:
+                best_q, best_position, best_rotation, best_attempt = tuple(q), position_error, rotation_error_rad, attempt
             if position_error < tight_pos and rotation_error_rad < tight_rot:
                 break
-            energy = 0.5 * sum(e * e for e in error)
+            energy = 0.5 * (position_error * position_error + rotation_error_rad * rotation_error_rad)
             stalled = stalled + 1 if energy > 0.98 * previous_energy else 0
             if stalled >= 6:
                 break
             previous_energy = min(previous_energy, energy)
-            jac = np.array(columns).T[:rows]
-            err = np.array(error)
-            step = np.linalg.solve(jac.T @ jac + (_DAMPING_GAIN * energy + _DAMPING_MIN) * identity, jac.T @ err)
-            norm = float(np.sqrt(step @ step))
-            if norm > _MAX_STEP_RAD:
-                step *= _MAX_STEP_RAD / norm
-            q = [value + float(delta) for value, delta in zip(q, step)]
+            # damped normal equations (J^T J + lambda I) dq = J^T e, with J^T built row by row
+            jac_t = np.array(columns)
+            if position_only:
+                jac_t = jac_t[:, :3]
+            normal = jac_t @ jac_t.T
+            normal.flat[diagonal] += _DAMPING_GAIN * energy + _DAMPING_MIN
+            step = _solve_spd(normal, jac_t @ np.array(error)).tolist()
+            norm = math.sqrt(sum(d * d for d in step))
+            scale = _MAX_STEP_RAD / norm if norm > _MAX_STEP_RAD else 1.0
+            q = [value + scale * delta for value, delta in zip(q, step)]
             _fit_limits(q, lower, upper)
-        if best.position_error_m <= tight_pos * 100 and best.rotation_error_rad <= tight_rot * 100:
-            solution = list(best.q)
+        if best_position <= position_tol_m and best_rotation <= rotation_tol_rad:
+            solution = list(best_q)
             _closest_equivalent(solution, q_seed, lower, upper)
-            return NumericResult(tuple(solution), True, best.position_error_m, best.rotation_error_rad, attempt)
-    return best
+            return NumericResult(tuple(solution), True, best_position, best_rotation, attempt)
+    return NumericResult(best_q, False, best_position, best_rotation, best_attempt)
