@@ -221,6 +221,7 @@ def test_estop_during_a_move_stops_the_arm_and_shows_estop(page, server):
     page.keyboard.press("Escape")
     page.wait_for_function("document.getElementById('state-badge').textContent === 'estop'", timeout=2_000)
     assert page.get_attribute("#state-badge", "data-state") == "estop"
+    assert page.is_visible("#halt-banner") and "E-STOP" in page.text_content("#halt-banner")
     time.sleep(0.3)
     q_a = np.array(server.get("/api/status")["joints_rad"])
     time.sleep(0.7)
@@ -232,6 +233,7 @@ def test_estop_during_a_move_stops_the_arm_and_shows_estop(page, server):
     assert page.is_disabled("#btn-home")
     page.click("#btn-reset")
     page.wait_for_function("document.getElementById('state-badge').textContent === 'idle'", timeout=5_000)
+    assert not page.is_visible("#halt-banner")
     q_c = np.array(server.get("/api/status")["joints_rad"])
     assert np.abs(q_c - q_b).max() < 0.01
     assert page.errors == []

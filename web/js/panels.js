@@ -46,6 +46,12 @@ export function renderStatus(s) {
   } else {
     line.hidden = true;
   }
+  const halted = s.state === "estop" || s.state === "fault";
+  $("halt-banner").hidden = !halted;
+  if (halted) {
+    $("halt-title").textContent = s.state === "estop" ? "E-STOP LATCHED" : "FAULT";
+    $("halt-text").textContent = `${s.detail || "Motion halted."} Press Reset when it is safe.`;
+  }
   $("backend").textContent = s.backend ? `backend: ${s.backend}` : "—";
   $("backend").title = s.controller ? `last commanded by: ${s.controller}` : "Device backend";
 }
