@@ -232,12 +232,13 @@ def _top_face_in_roi(
     """
     x0, y0 = roi[0], roi[1]
     with np.errstate(invalid="ignore"):
-        blob = _largest_blob((np.abs(z - top_m) < tol_m) & (keep if keep is not None else True))
+        band = np.abs(z - top_m) < tol_m
+        blob = _largest_blob(band & keep if keep is not None else band)
         if blob is None:
             return None
         face_m = quantile(z[blob > 0], 0.5)
-        blob = _largest_blob((np.abs(z - face_m) < 0.5 * tol_m) & (keep if keep is not None else True))
-    if blob is None:
+        blob &= (np.abs(z - face_m) < 0.5 * tol_m).astype(np.uint8)
+    if not blob.any():
         return None
     contours, _ = cv2.findContours(blob, cv2.RETR_EXTERNAL, cv2.CHAIN_APPROX_SIMPLE)
     ys, xs = np.nonzero(blob)
@@ -246,17 +247,26 @@ def _top_face_in_roi(
     return pixels, contour, quantile(z[ys, xs], 0.5)
 
 
+def _pixels_to_plane(pixels: np.ndarray, cal: Calibration, z_m: float) -> np.ndarray:
+    """World (x, y) of pixels (N, 2) on the horizontal plane z = z_m: one homography when the lens has no
+    distortion, else undistorted rays meeting the plane."""
+    if np.any(cal.dist != 0):
+        return intersect_rays_with_plane(cal.T_world_camera, normalized_rays(pixels, cal.K, cal.dist), z_m)[:, :2]
+    T_cw = cal.T_camera_world
+    H = cal.K @ np.column_stack([T_cw[:3, 0], T_cw[:3, 1], T_cw[:3, 2] * z_m + T_cw[:3, 3]])  # (x, y, 1) -> pixel
+    H_inv = np.linalg.inv(H)
+    xyw = pixels @ H_inv[:, :2].T + H_inv[:, 2]
+    return xyw[:, :2] / xyw[:, 2:3]
+
+
 def _face_from_pixels(pixels: np.ndarray, contour: np.ndarray, top_m: float, cal: Calibration) -> _Face:
-    rays = normalized_rays(pixels, cal.K, cal.dist)
-    world = intersect_rays_with_plane(cal.T_world_camera, rays, top_m)
+    centre_px = pixels.mean(axis=0)
+    u, v = centre_px
+    world_xy = _pixels_to_plane(np.vstack([pixels, [[u, v], [u + 1, v], [u, v + 1]]]), cal, top_m)
     # Footprint of one pixel on the face's plane, from the local Jacobian at the face's mean pixel.
-    u, v = pixels.mean(axis=0)
-    local = intersect_rays_with_plane(
-        cal.T_world_camera, normalized_rays(np.array([[u, v], [u + 1, v], [u, v + 1]]), cal.K, cal.dist), top_m
-    )
-    du, dv = local[1, :2] - local[0, :2], local[2, :2] - local[0, :2]
+    du, dv = world_xy[-2] - world_xy[-3], world_xy[-1] - world_xy[-3]
     pixel_area = float(abs(du[0] * dv[1] - du[1] * dv[0]))
-    return _Face(world[:, :2], top_m, contour.astype(np.float64), pixels.mean(axis=0), pixels.shape[0], pixel_area)
+    return _Face(world_xy[:-3], top_m, contour.astype(np.float64), centre_px, pixels.shape[0], pixel_area)
 
 
 def detect_blocks(
@@ -430,6 +440,8 @@ def _is_occluded(face: _Face, centre_xy, yaw: float, size: str, cal, cfg: Percep
     """True when something well above the face (the arm) covers part of where the cube's top should be:
     the expected square, drawn around the measured centre, holds readings 15 mm or more above the face."""
     edge = cfg.blocks.large_size_m if size == "large" else cfg.blocks.small_size_m
+    if face.pixel_count * face.pixel_area_m2 >= 0.92 * edge * edge:
+        return False  # the whole top face is in view
     half = 0.5 * edge
     c, s = math.cos(yaw), math.sin(yaw)
     square = np.array([[centre_xy[0] + c * a - s * b, centre_xy[1] + s * a + c * b, face.top_m]
