@@ -201,6 +201,7 @@ class App {
     }
     if (!TERMINAL_JOB_STATES.has(job.state) || this.reportedJobs.has(job.id)) return;
     this.reportedJobs.add(job.id);
+    if (this.reportedJobs.size > 100) this.reportedJobs.delete(this.reportedJobs.values().next().value);
     const wasOurs = this.trackedJob === job.id;
     this.trackedJob = null;
     if (!wasOurs) return;
