@@ -16,6 +16,10 @@ def register(subparsers: argparse._SubParsersAction) -> None:
     parser.add_argument("--event", default=None, help="starting scene: pick_sort, pick_stack, line_up, stack_high, to_the_sky")
     parser.add_argument("--level", type=int, default=None, help="starting scene level (1-3)")
     parser.add_argument("--scene-seed", type=int, default=None, help="starting scene seed")
+    parser.add_argument("--backend", choices=("sim", "real"), default="sim", help="sim (default) or real devices")
+    parser.add_argument("--arm", default="interbotix_arm", help="real backend: arm config (config/devices/)")
+    parser.add_argument("--gripper", default="interbotix_gripper", help="real backend: gripper config (config/devices/)")
+    parser.add_argument("--camera", default="realsense_l515", help="real backend: camera config (config/cameras/)")
     parser.add_argument("--log-level", default="warning", choices=("debug", "info", "warning", "error"))
     parser.set_defaults(func=run_serve)
 
@@ -41,13 +45,19 @@ def run_serve(args: argparse.Namespace) -> int:
     os.environ.setdefault("MUJOCO_GL", "egl")
     import uvicorn
 
-    from armlab.station.factory import make_sim_station
+    from armlab.station.factory import make_device_station, make_sim_station
     from server.app import create_app
     from server.auth import open_url, resolve_token
 
     config = build_station_config(args)
     token, generated = resolve_token(args.token)
-    app = create_app(station_factory=lambda: make_sim_station(config, db_path=args.db), token=token)
+    if args.backend == "real":
+        def factory():
+            return make_device_station(config, args.arm, args.gripper, args.camera, db_path=args.db)
+    else:
+        def factory():
+            return make_sim_station(config, db_path=args.db)
+    app = create_app(station_factory=factory, token=token)
     url = open_url(args.host, args.port, token)
     origin = "generated" if generated else "given"
     print(f"ArmLab control station ({origin} control token). Open:\n    {url}\n", flush=True)

@@ -1,4 +1,4 @@
-"""Building a Station on the simulated workcell (the default backend of `armlab serve`)."""
+"""Building a Station: on the simulated workcell (the default of `armlab serve`) or on real devices."""
 
 from __future__ import annotations
 
@@ -45,3 +45,52 @@ def make_sim_station(config: StationConfig | None = None, db_path: str | Path | 
         cell.close()
         raise
     return SimStation(station, cell)
+
+
+class DeviceStation:
+    """A Station on real (or mixed) devices; close() stops the station, then closes the devices it opened."""
+
+    def __init__(self, station: Station) -> None:
+        self.station = station
+
+    def close(self) -> None:
+        try:
+            self.station.close()
+        finally:
+            _close_devices(self.station.arm, self.station.gripper, self.station.camera)
+
+
+def _close_devices(*devices) -> None:
+    for device in devices:
+        try:
+            device.close()
+        except Exception:  # noqa: BLE001 - closing the others matters more
+            pass
+
+
+def make_device_station(
+    config: StationConfig | None = None,
+    arm: str = "interbotix_arm",
+    gripper: str = "interbotix_gripper",
+    camera: str = "realsense_l515",
+    db_path: str | Path | None = None,
+) -> DeviceStation:
+    """A started Station on devices chosen by config files (config/devices/, config/cameras/).
+
+    Connect failures (no hardware, missing SDK) raise the device's clear error; whatever was opened is closed.
+    """
+    from armlab.devices.factory import make_devices
+    from armlab.kinematics import load_arm
+
+    config = config or StationConfig()
+    devices = make_devices(arm, gripper, camera)
+    store = Store(db_path if db_path is not None else config.database_file())
+    station = Station(
+        devices.arm, devices.gripper, devices.camera, model=load_arm(config.arm), config=config, store=store, backend="real"
+    )
+    try:
+        station.start()
+    except BaseException:
+        _close_devices(devices.arm, devices.gripper, devices.camera)
+        raise
+    return DeviceStation(station)
