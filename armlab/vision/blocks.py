@@ -22,7 +22,8 @@ from armlab.vision.tags import check_color_image, detect_tags, make_detector
 MIN_FILL = 0.84  # top-face area / its minimum-area rectangle: squares ~0.95, discs 0.785
 MAX_ASPECT = 1.3
 SIZE_TOLERANCE = 0.22  # measured side within this fraction of the class size
-HEIGHT_TOLERANCE_M = 0.0045  # top height vs a sum of cube edges
+HEIGHT_TOLERANCE_M = 0.003  # top height vs a sum of cube edges (cubes measure within ~1 mm)
+SPLIT_SIZE_TOLERANCE = 0.12  # each side of a part split from touching cubes, within this of the edge
 
 
 @dataclass(frozen=True)
@@ -189,15 +190,28 @@ def _split_touching(face: _Face, cfg: PerceptionConfig) -> list[_Face]:
         n = int(round(area / (edge * edge)))
         if 2 <= n <= 6:
             candidates.append(n)
+    pts = face.points_xy.astype(np.float32)
+    centred = pts - pts.mean(axis=0)
+    axis = np.linalg.svd(centred, full_matrices=False)[2][0]  # the row of cubes lies along this axis
+    along = centred @ axis
+    pitch = math.sqrt(face.pixel_area_m2)
     for n in candidates:
-        pts = face.points_xy.astype(np.float32)
+        # Deterministic start: n equal slices along the main axis, then k-means refines the split.
+        labels = np.minimum((np.argsort(np.argsort(along)) * n) // len(along), n - 1).astype(np.int32).reshape(-1, 1)
         criteria = (cv2.TERM_CRITERIA_EPS + cv2.TERM_CRITERIA_MAX_ITER, 50, 1e-5)
-        _, labels, _ = cv2.kmeans(pts, n, None, criteria, 4, cv2.KMEANS_PP_CENTERS)
+        _, labels, _ = cv2.kmeans(pts, n, labels, criteria, 1, cv2.KMEANS_USE_INITIAL_LABELS)
         parts = []
         for k in range(n):
             sel = labels.ravel() == k
             parts.append(_Face(face.points_xy[sel], face.top_m, face.contour_px, face.center_px, int(sel.sum()), face.pixel_area_m2))
-        if all(_classify_face(p, cfg)[3] for p in parts):
+
+        def fits(part: _Face) -> bool:
+            size, _, _, is_cube, _ = _classify_face(part, cfg)
+            edge = cfg.blocks.large_size_m if size == "large" else cfg.blocks.small_size_m
+            _, wa, wb, _, _ = _measure_rect(part.points_xy, pitch)
+            return is_cube and max(abs(wa - edge), abs(wb - edge)) <= SPLIT_SIZE_TOLERANCE * edge
+
+        if all(fits(p) for p in parts):
             return parts
     return [face]
 
