@@ -199,20 +199,21 @@ class StreamHub:
         client.calibration_version = self.calibration_version
         self.clients.add(client)
         self.encoder.watch(client.key)
-        sender = asyncio.create_task(self._send_loop(client))
+        tasks = {asyncio.create_task(self._send_loop(client)), asyncio.create_task(self._receive_loop(client))}
         try:
-            await self._receive_loop(client)
-        except WebSocketDisconnect:
-            pass
+            # Whichever ends first (client gone, send failed) ends the session.
+            done, _ = await asyncio.wait(tasks, return_when=asyncio.FIRST_COMPLETED)
+            for task in done:
+                error = task.exception()
+                if error is not None and not isinstance(error, (WebSocketDisconnect, ConnectionError, RuntimeError)):
+                    log.warning("websocket session ended by %r", error)
         finally:
-            sender.cancel()
+            for task in tasks:
+                task.cancel()
+            await asyncio.gather(*tasks, return_exceptions=True)
             self.clients.discard(client)
             self.encoder.unwatch(client.key)
             self._forget_unwatched()
-            try:
-                await sender
-            except (asyncio.CancelledError, Exception):  # noqa: BLE001 - the client is gone either way
-                pass
 
     async def _send_loop(self, client: ClientSession) -> None:
         websocket = client.websocket
