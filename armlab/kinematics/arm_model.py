@@ -22,7 +22,7 @@ import numpy as np
 
 from armlab.config import load_config, resolve_config_path
 from armlab.errors import ConfigError
-from armlab.kinematics import ik_numeric, ik_rx200
+from armlab.kinematics import ik_numeric, ik_rx200, ik_rx200_batch
 from armlab.kinematics.arm_config import ArmConfig
 from armlab.kinematics.dh import dh_frames, fk_dh, matrix_from_flat
 from armlab.kinematics.errors import Unreachable
@@ -139,18 +139,21 @@ class ArmModel:
 
     def fk(self, q) -> np.ndarray:
         """World pose of the gripper point: (dof,) -> (4, 4); (N, dof) -> (N, 4, 4)."""
-        if self._geometry is not None:  # fast path for one joint vector: plain floats
-            values = q.tolist() if isinstance(q, np.ndarray) and q.ndim == 1 else q
-            if isinstance(values, list | tuple) and len(values) == self.dof:
-                if all(isinstance(v, float | int) and math.isfinite(v) for v in values):
+        # fast path for one joint vector: plain floats, no small numpy arrays
+        values = q.tolist() if isinstance(q, np.ndarray) and q.ndim == 1 else q
+        if isinstance(values, list | tuple) and len(values) == self.dof:
+            if all(isinstance(v, float | int) and math.isfinite(v) for v in values):
+                if self._geometry is not None:
                     return matrix_from_flat(fk_rx200_flat(self._geometry, values))
+                if self._dh is not None:
+                    return matrix_from_flat(self._numeric.pose(values))
         array = self._joint_vectors(q)
         if self._geometry is not None:
             if array.ndim == 1:
                 return matrix_from_flat(fk_rx200_flat(self._geometry, array.tolist()))
             return fk_rx200_batch(self._geometry, array)
         if array.ndim == 1 and self._dh is not None:
-            return matrix_from_flat(self._numeric(array.tolist())[0])
+            return matrix_from_flat(self._numeric.pose(array.tolist()))
         return self.fk_dh(array) if self._dh is not None else self.fk_pox(array)
 
     def fk_pox(self, q) -> np.ndarray:
@@ -259,7 +262,7 @@ class ArmModel:
         seeds = np.broadcast_to(self.home_rad, (count, self.dof)) if q_seed is None else self._joint_vectors(q_seed, "q_seed")
         seeds = np.broadcast_to(seeds, (count, self.dof)).astype(float)
         if self._geometry is not None:
-            q, ok, _pitch = ik_rx200.solve_batch(self._geometry, positions, pitches, yaws, seeds)
+            q, ok, _pitch = ik_rx200_batch.solve_batch(self._geometry, positions, pitches, yaws, seeds)
             return q, ok
         q = np.full((count, self.dof), np.nan)
         ok = np.zeros(count, dtype=bool)

@@ -55,6 +55,10 @@ class DhKinematics:
     def from_arrays(cls, rows: np.ndarray, tool: np.ndarray, T_world_base: np.ndarray) -> "DhKinematics":
         return cls(rows=fast_rows(rows), tool=flat_from_matrix(tool), world_base=flat_from_matrix(T_world_base))
 
+    def pose(self, q) -> Flat:
+        """T_world_tool as a flat tuple (FK only)."""
+        return compose_flat(dh_chain_frames_fast(self.rows, q, self.world_base)[-1], self.tool)
+
     def __call__(self, q) -> tuple[Flat, list[tuple[float, ...]]]:
         """(T_world_tool as a flat tuple, Jacobian columns (vx, vy, vz, wx, wy, wz) per joint)."""
         world = dh_chain_frames_fast(self.rows, q, self.world_base)

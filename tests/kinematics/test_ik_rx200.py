@@ -214,3 +214,24 @@ def test_batch_rejects_bad_shapes(rx200):
         rx200.ik_batch(np.zeros((4, 3)), pitch=np.zeros(3))
     with pytest.raises(ValueError, match="finite"):
         rx200.ik_batch(np.full((2, 3), np.nan))
+
+
+def test_pitch_search_is_the_steepest_by_brute_force(rx200):
+    # Independent of the search: try every pitch on a 0.1-degree grid; none steeper than the one
+    # found (beyond the grid spacing) may be reachable, and the one found must be.
+    rng = np.random.default_rng(8)
+    targets = np.column_stack([rng.uniform(-0.5, 0.5, 150), rng.uniform(-0.175, 0.475, 150), rng.uniform(0.0, 0.15, 150)])
+    q, ok = rx200.ik_batch(targets)
+    grid = np.arange(-math.pi / 2, math.pi + 1e-9, math.radians(0.1))
+    tiled_targets = np.repeat(targets, grid.size, axis=0)
+    tiled_pitch = np.tile(grid, len(targets))
+    _q, grid_ok = rx200.ik_batch(tiled_targets, tiled_pitch)
+    grid_ok = grid_ok.reshape(len(targets), grid.size)
+    for i in range(len(targets)):
+        if not ok[i]:
+            assert not grid_ok[i].any()  # unreachable at every pitch on the grid too
+            continue
+        found = rx200.pitch_of(q[i])
+        steepest_on_grid = np.min(np.abs(grid[grid_ok[i]] - math.pi / 2)) if grid_ok[i].any() else np.inf
+        assert abs(found - math.pi / 2) <= steepest_on_grid + 1e-9
+    assert ok.sum() > 100
