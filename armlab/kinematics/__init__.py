@@ -6,7 +6,7 @@ for the RX200 family and numerical IK for any arm.
     T_world_gripper = arm.fk(q)                          # (4, 4), or (N, 4, 4) for q of shape (N, 5)
     q = arm.ik([0.1, 0.25, 0.02], pitch=None, yaw=0.3)   # raises Unreachable (a ValueError) with the reason
 
-Modules: screws (Modern Robotics maths), dh (DH tables), rx200_geometry and ik_rx200 (closed form),
+Modules: screws (Modern Robotics maths), dh (DH tables), rx200_geometry, ik_rx200 and ik_rx200_batch (closed form),
 ik_numeric (Levenberg-Marquardt), arm_config (the validated file schema), arm_model (ArmModel, load_arm).
 """
 
