@@ -54,13 +54,32 @@ def make_detector(dictionary: str) -> cv2.aruco.ArucoDetector:
     return cv2.aruco.ArucoDetector(cv2.aruco.getPredefinedDictionary(getattr(cv2.aruco, dictionary)), params)
 
 
+def _log_grey(grey: np.ndarray) -> np.ndarray:
+    """Log-scaled grey: a shadow (a multiplicative dimming) becomes an offset, so a tag half in shadow
+    still thresholds into the right black and white cells."""
+    lut = np.round(255.0 * np.log1p(np.arange(256)) / np.log(256.0)).astype(np.uint8)
+    return lut[grey]
+
+
+def _markers(detector: cv2.aruco.ArucoDetector, grey: np.ndarray) -> dict[int, np.ndarray]:
+    corners, ids, _ = detector.detectMarkers(grey)
+    found: dict[int, np.ndarray] = {}
+    if ids is not None:
+        for tag_corners, tag_id in zip(corners, ids.ravel()):
+            found.setdefault(int(tag_id), np.asarray(tag_corners, dtype=np.float32).reshape(4, 1, 2))
+    return found
+
+
 def detect_tags(
     color_bgr: np.ndarray,
     cfg: PerceptionConfig | None = None,
     dictionary: str | None = None,
     detector: cv2.aruco.ArucoDetector | None = None,
+    expected_ids: set[int] | None = None,
 ) -> list[Tag]:
-    """All tags in the image, sorted by id. The dictionary comes from `dictionary`, else cfg, else 36h11.
+    """All tags in the image (one per id), sorted by id. The dictionary comes from `dictionary`, else
+    cfg, else 36h11. If some expected tag (default: cfg's board tags) is missing, or nothing was found,
+    the search is repeated on a log-scaled image, which reads tags that lie partly in shadow.
 
     Pass a prebuilt `detector` (make_detector) to save its construction in a per-frame loop.
     """
@@ -68,20 +87,22 @@ def detect_tags(
     if detector is None:
         name = dictionary or (cfg.tags.dictionary if cfg is not None else "DICT_APRILTAG_36h11")
         detector = make_detector(name)
+    if expected_ids is None and cfg is not None and dictionary in (None, cfg.tags.dictionary):
+        expected_ids = set(cfg.tags.board_tags)
     grey = color_bgr if color_bgr.ndim == 2 else cv2.cvtColor(color_bgr, cv2.COLOR_BGR2GRAY)
-    corners, ids, _ = detector.detectMarkers(grey)
-    if ids is None:
-        return []
+    found = _markers(detector, grey)
+    if not found or (expected_ids and not expected_ids <= set(found)):
+        for tag_id, pts in _markers(detector, _log_grey(grey)).items():
+            found.setdefault(tag_id, pts)
     tags = []
     criteria = (cv2.TERM_CRITERIA_EPS + cv2.TERM_CRITERIA_COUNT, 40, 0.001)
-    for tag_corners, tag_id in zip(corners, ids.ravel()):
-        pts = np.asarray(tag_corners, dtype=np.float32).reshape(4, 1, 2)
+    for tag_id, pts in sorted(found.items()):
         side_px = float(np.min(np.linalg.norm(pts[:, 0] - np.roll(pts[:, 0], 1, axis=0), axis=1)))
         half_window = int(np.clip(side_px / 10.0, 2, 5))  # ~1/10 of the tag: on the corner, off the code cells
-        pts = cv2.cornerSubPix(grey, pts, (half_window, half_window), (-1, -1), criteria)
-        pts = pts.reshape(4, 2).astype(np.float64)
-        tags.append(Tag(id=int(tag_id), corners_px=pts, center_px=pts.mean(axis=0)))
-    return sorted(tags, key=lambda tag: tag.id)
+        refined = cv2.cornerSubPix(grey, pts.copy(), (half_window, half_window), (-1, -1), criteria)
+        refined = refined.reshape(4, 2).astype(np.float64)
+        tags.append(Tag(id=tag_id, corners_px=refined, center_px=refined.mean(axis=0)))
+    return tags
 
 
 def detect_tags_near(

@@ -76,3 +76,17 @@ def test_bad_images_are_refused(cfg):
     with pytest.raises(ValueError, match="unknown"):
         detect_tags(np.zeros((100, 100, 3), np.uint8), cfg, dictionary="DICT_NOPE")
     assert detect_tags(np.full((720, 1280, 3), 128, np.uint8), cfg) == []
+
+
+def test_tags_half_in_hard_shadow(cfg, board_frame, board_pose):
+    """A shadow edge (60 % darker) running through every tag: still found, corners still sub-pixel-ish."""
+    color = board_frame[0].copy()
+    for tag_id in (1, 2, 3, 4):
+        px = _true_corners(cfg, board_pose, tag_id)
+        x0, y0 = px.min(axis=0).astype(int) - 8
+        xm, y1 = int(px[:, 0].mean()), px.max(axis=0).astype(int)[1] + 8
+        color[y0:y1, x0:xm] = (color[y0:y1, x0:xm] * 0.4).astype(np.uint8)
+    tags = detect_tags(color, cfg)
+    assert [t.id for t in tags] == [1, 2, 3, 4]
+    for tag in tags:
+        assert np.max(np.linalg.norm(tag.corners_px - _true_corners(cfg, board_pose, tag.id), axis=1)) < 1.5
