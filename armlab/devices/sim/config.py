@@ -37,6 +37,7 @@ class PhysicsConfig(StrictModel):
     impratio: Positive
     noslip_iterations: Annotated[int, Field(ge=0, le=50)] = 0
     cone: Literal["elliptic", "pyramidal"] = "elliptic"
+    sleep: bool = True  # resting free bodies sleep (no contacts computed) until something touches them
     settle_tolerance_rad: Positive
     settle_timeout_s: NonNegative
 
@@ -90,9 +91,14 @@ class PoseErrorConfig(StrictModel):
     rotation_deg: NonNegative
 
 
+class RenderConfig(StrictModel):
+    multisamples: Annotated[int, Field(ge=0, le=16)] = 0
+
+
 class SimConfig(StrictModel):
     """config/sim.yaml."""
 
+    render: RenderConfig = RenderConfig()
     physics: PhysicsConfig
     arm: ArmServoConfig
     gripper: GripperSimConfig

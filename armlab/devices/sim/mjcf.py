@@ -248,11 +248,13 @@ def build_model_xml(
     p = sim.physics
     xml = f"""<mujoco model="armlab_workcell">
   <compiler angle="radian" autolimits="true"/>
-  <option timestep="{p.timestep_s}" integrator="implicitfast" cone="{p.cone}" impratio="{p.impratio}" noslip_iterations="{p.noslip_iterations}"/>
+  <option timestep="{p.timestep_s}" integrator="implicitfast" cone="{p.cone}" impratio="{p.impratio}" noslip_iterations="{p.noslip_iterations}">
+    <flag sleep="{'enable' if p.sleep else 'disable'}"/>
+  </option>
   <statistic extent="1" center="0 0.15 0.2"/>
   <visual>
     <global offwidth="{camera.width}" offheight="{camera.height}"/>
-    <quality shadowsize="0" offsamples="4"/>
+    <quality shadowsize="0" offsamples="{sim.render.multisamples}"/>
     <map znear="0.05" zfar="20"/>
     <headlight ambient="0.35 0.35 0.35" diffuse="0.35 0.35 0.35" specular="0 0 0"/>
   </visual>

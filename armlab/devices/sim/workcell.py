@@ -269,9 +269,12 @@ class SimWorkcell:
     def capture_next_frame(self) -> Frame:
         """Fast mode: advance the physics to the next frame time of the camera clock and render."""
         period = 1.0 / self.camera.fps
+        timestep = self._model.opt.timestep
         with self.lock:
             next_frame_s = (math.floor(self.sim_time_s / period + 1e-6) + 1) * period
-            self._advance(next_frame_s - self.sim_time_s)
+            steps = max(1, math.ceil((next_frame_s - self.sim_time_s) / timestep - 1e-6))
+            for _ in range(steps):
+                self._step_once()
         return self.render()
 
     # -------------------------------------------------------------- lifecycle

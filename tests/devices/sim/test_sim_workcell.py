@@ -141,6 +141,13 @@ def test_camera_read_advances_to_the_next_frame_time(cell):
     assert cell.sim_time_s - t1 == pytest.approx(1.0 / 30.0, abs=0.003)
     latest = cell.camera.read_latest(max_age_ms=10_000)
     assert latest.sequence == second.sequence
+    times = []
+    for _ in range(8):  # frame times land on the 30 fps clock (to the 2 ms physics step), always advancing
+        cell.camera.read()
+        times.append(cell.sim_time_s)
+    gaps = np.diff(times)
+    assert gaps.min() > 0.02 and gaps.max() < 1.0 / 30.0 + 0.0021
+    assert np.mean(gaps) == pytest.approx(1.0 / 30.0, abs=0.001)
 
 
 def test_set_scene_replaces_objects_and_keeps_the_arm_pose(cell):
