@@ -145,7 +145,7 @@ async def run(args) -> None:
             print(f"10 clients (8 reading, 2 never reading), {args.duration:.0f} s:")
             produced = max(camera_fps(stats, args.duration) for stats in readers)
             print(f"  readers' frame rate: min {fps.min():.1f}, mean {fps.mean():.1f}, max {fps.max():.1f} fps (target >= 25 fps); "
-                  f"the camera produced {produced:.1f} fps")
+                  f"the camera produced {produced:.1f} fps, so readers got {100 * fps.mean() / max(produced, 1e-9):.0f}% of its frames")
             print(f"  server process CPU: {server_process.cpu_percent() / 100:.2f} cores on average; machine load average "
                   f"{os.getloadavg()[0]:.1f} on {os.cpu_count()} cores")
             print(f"  readers' latency: p50 {np.percentile(latency_ms, 50):.1f} ms, p95 {np.percentile(latency_ms, 95):.1f} ms; "
