@@ -172,8 +172,9 @@ class ArmModel:
         """World poses of each joint's origin and finally the gripper point: (dof,) -> (dof+1, 4, 4).
 
         For arms with urdf_origins (the RX200) these are the URDF joint origins (waist at 0.06566 m,
-        shoulder, elbow, wrist_angle, wrist_rotate, gripper point); otherwise the DH frames, whose
-        origins lie on each joint's axis. The safety checker keeps every one of them at z >= 0.
+        shoulder, elbow, wrist_angle, wrist_rotate, gripper point; translations only, as in the RX200
+        URDF), each oriented as its parent link; otherwise the DH frames, whose origins lie on each
+        joint's axis. The safety checker keeps every one of them at z >= 0.
         Accepts (N, dof) too, giving (N, dof+1, 4, 4).
         """
         array = self._joint_vectors(q)
