@@ -140,3 +140,13 @@ def test_sim_objects_from_depth_any_colour(event_frame, event_cal, cfg):
     # Besides the piles, only the arm (near the base) may form a cluster.
     extra = [o for o in objects if all(np.linalg.norm(o.centroid_m[:2] - t.top_center_m[:2]) >= 0.02 for t in tops)]
     assert all(np.linalg.norm(o.centroid_m[:2]) < 0.2 for o in extra)
+
+
+@pytest.mark.parametrize(
+    "gain_bgr", [(0.4, 0.4, 0.4), (1.4, 1.4, 1.4), (0.85, 1.0, 1.15), (1.15, 1.0, 0.85)], ids=["dim", "overexposed", "warm", "cool"]
+)
+def test_sim_block_colours_survive_lighting_changes(event_frame, event_cal, cfg, gain_bgr):
+    frame, truth = event_frame
+    relit = np.clip(frame.color_bgr * np.array(gain_bgr), 0, 255).astype(np.uint8)
+    score = score_blocks(detect_blocks(relit, frame.depth_mm, event_cal, cfg), truth, frame.depth_mm)
+    assert score.failures == [] and score.color_correct == score.true_positives >= 4
