@@ -4,6 +4,7 @@ view-only visitors cannot command, refused commands show the server's own senten
 from __future__ import annotations
 
 import math
+import time
 
 import pytest
 
@@ -168,30 +169,36 @@ def test_cartesian_jog_moves_the_gripper_by_the_step(page, server):
     assert page.errors == []
 
 
+def settled_gripper(server, command: str, timeout_s: float = 10.0) -> dict:
+    """The gripper state once `command` is active and its width stopped changing (two polls 0.2 s apart)."""
+    deadline = time.monotonic() + timeout_s
+    previous = None
+    while time.monotonic() < deadline:
+        gripper = server.get("/api/status")["gripper"]
+        if gripper["command"] == command and previous is not None and abs(gripper["width_m"] - previous) < 0.0005:
+            return gripper
+        previous = gripper["width_m"] if gripper["command"] == command else None
+        time.sleep(0.2)
+    raise AssertionError(f"gripper did not settle on '{command}' within {timeout_s} s")
+
+
 def test_gripper_buttons_close_and_open_the_gripper(page, server):
     wait_frames(page, 2)
     page.wait_for_function("!document.getElementById('btn-close').disabled", timeout=5_000)
-    opened = server.get("/api/status")["gripper"]
+    opened = settled_gripper(server, "release")
     page.click("#btn-close")
-    closed = server.wait_status(
-        lambda s: s["gripper"]["command"] == "grasp" and s["gripper"]["width_m"] < opened["width_m"] - 0.02,
-        10.0,
-        "the gripper to close",
-    )["gripper"]
+    closed = settled_gripper(server, "grasp")
+    assert closed["width_m"] < opened["width_m"] - 0.02
     # The readout shows the closed width (mm) the station reports.
     page.wait_for_function(
         """w => {
             const m = document.getElementById('pose-readout').textContent.match(/width ([0-9.]+) mm/);
-            return m !== null && Math.abs(Number(m[1]) - w) < 3;
+            return m !== null && Math.abs(Number(m[1]) - w) < 1;
         }""",
         arg=closed["width_m"] * 1000,
         timeout=5_000,
     )
     page.click("#btn-open")
-    reopened = server.wait_status(
-        lambda s: s["gripper"]["command"] == "release" and s["gripper"]["width_m"] > closed["width_m"] + 0.02,
-        10.0,
-        "the gripper to open",
-    )["gripper"]
+    reopened = settled_gripper(server, "release")
     assert reopened["width_m"] == pytest.approx(opened["width_m"], abs=0.003)
     assert page.errors == []
