@@ -26,6 +26,7 @@ import cv2  # noqa: E402
 import numpy as np  # noqa: E402
 
 from armlab.devices.sim import SimWorkcell, SimWorkcellConfig  # noqa: E402
+from armlab.errors import ConfigError  # noqa: E402
 from armlab.scene import EVENTS, Scene, generate_scene  # noqa: E402
 from armlab.vision import PerceptionPipeline, calibrate_extrinsics, load_perception_config  # noqa: E402
 from armlab.devices.sim.mjcf import COLOR_RGBA  # noqa: E402
@@ -75,6 +76,19 @@ def arm_over_block(cell: SimWorkcell, scene: Scene, rng: np.random.Generator) ->
     cell.step(3.0)
 
 
+def make_cell(seed: int, attempts: int = 30) -> SimWorkcell:
+    """A workcell whose rig is bumped by `seed`. Retries for a while if config/ is momentarily invalid
+    (the tree is shared with people editing it); a persistent error is raised."""
+    for attempt in range(attempts):
+        try:
+            return SimWorkcell(SimWorkcellConfig(realtime=False, seed=seed, camera_pose_error=True))
+        except ConfigError:
+            if attempt == attempts - 1:
+                raise
+            time.sleep(5.0)
+    raise AssertionError("unreachable")
+
+
 def run(args) -> int:
     cfg = load_perception_config()
     pipeline = PerceptionPipeline(cfg)
@@ -93,7 +107,7 @@ def run(args) -> int:
             before = len(scene.objects)
             scene = add_touching_twin(scene)
             touching_scenes += len(scene.objects) > before
-        cell = SimWorkcell(SimWorkcellConfig(realtime=False, seed=seed, camera_pose_error=True))
+        cell = make_cell(seed)
         cell.start()
         try:
             cell.set_scene(scene)
