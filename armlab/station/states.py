@@ -8,6 +8,7 @@ Job-internal events (a job finishing, a device failing) have their own small tab
 from __future__ import annotations
 
 from enum import Enum
+from types import MappingProxyType
 
 from armlab.errors import CommandRefused
 
@@ -49,7 +50,7 @@ COMMANDS = (
 _S = State
 _MANUAL_MOVES = ("home", "sleep", "move_joints", "move_to", "torque", "gripper")
 
-TRANSITIONS: dict[State, dict[str, State]] = {
+_TRANSITIONS: dict[State, dict[str, State]] = {
     _S.IDLE: {
         "estop": _S.ESTOP,
         **{name: _S.IDLE for name in _MANUAL_MOVES},
@@ -79,13 +80,18 @@ TRANSITIONS: dict[State, dict[str, State]] = {
     _S.FAULT: {"estop": _S.ESTOP, "reset": _S.IDLE},
 }
 
+# Read-only views: the table cannot be changed at run time.
+TRANSITIONS = MappingProxyType({state: MappingProxyType(row) for state, row in _TRANSITIONS.items()})
+
 JOB_STATES = (_S.CALIBRATE, _S.REPEAT, _S.CLICK_GRAB, _S.CLICK_DROP, _S.AUTO_SORT)
 
 # Internal events: a job ended (any outcome other than a device failure) or a device failed.
-EVENTS: dict[str, dict[State, State]] = {
-    "job_ended": {state: _S.IDLE for state in JOB_STATES},
-    "device_failed": {state: _S.FAULT for state in State if state is not _S.ESTOP},
-}
+EVENTS = MappingProxyType(
+    {
+        "job_ended": MappingProxyType({state: _S.IDLE for state in JOB_STATES}),
+        "device_failed": MappingProxyType({state: _S.FAULT for state in State if state is not _S.ESTOP}),
+    }
+)
 
 
 def allowed_commands(state: State) -> list[str]:
