@@ -149,6 +149,7 @@ class Status(Wire):
     detail: str
     joints_rad: list[float]
     joint_names: list[str]
+    joint_limits_rad: list[list[float]] = Field(description="[lower, upper] per joint")
     gripper: GripperStatus
     gripper_pose: GripperPose
     moving: bool

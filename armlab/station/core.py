@@ -206,6 +206,7 @@ class Station:
             "detail": detail,
             "joints_rad": [float(v) for v in q],
             "joint_names": list(self.model.joint_names),
+            "joint_limits_rad": [[float(lo), float(hi)] for lo, hi in zip(self.model.lower_rad, self.model.upper_rad)],
             "gripper": {"width_m": float(gripper.width_m), "holding": bool(gripper.holding), "command": gripper.command},
             "gripper_pose": gripper_pose_from_matrix(self.model.fk(q)),
             "moving": bool(self.arm.is_moving()),

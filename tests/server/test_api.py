@@ -69,6 +69,7 @@ def test_health_status_and_openapi(http):
     assert status["state"] == "idle" and status["backend"] == "sim"
     assert status["joint_names"] == ["waist", "shoulder", "elbow", "wrist_angle", "wrist_rotate"]
     assert len(status["joints_rad"]) == 5 and len(status["gripper_pose"]["position_m"]) == 3
+    assert status["joint_limits_rad"][1] == pytest.approx([-1.885, 1.972], abs=1e-3)  # shoulder -108..113 deg
     assert set(status["gripper"]) == {"width_m", "holding", "command"}
     assert "estop" in status["allowed_commands"] and "reset" not in status["allowed_commands"]
     assert abs(status["time_s"] - time.time()) < 5

@@ -215,6 +215,7 @@ export const CLIENT_MESSAGE_TYPES = Object.freeze(["ack", "view", "command"]);
  * @property {string} detail
  * @property {Array<number>} joints_rad
  * @property {Array<string>} joint_names
+ * @property {Array<Array<number>>} joint_limits_rad [lower, upper] per joint
  * @property {GripperStatus} gripper
  * @property {GripperPose} gripper_pose
  * @property {boolean} moving
@@ -252,6 +253,7 @@ export const CLIENT_MESSAGE_TYPES = Object.freeze(["ack", "view", "command"]);
  * @property {string} detail
  * @property {Array<number>} joints_rad
  * @property {Array<string>} joint_names
+ * @property {Array<Array<number>>} joint_limits_rad [lower, upper] per joint
  * @property {GripperStatus} gripper
  * @property {GripperPose} gripper_pose
  * @property {boolean} moving
