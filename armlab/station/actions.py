@@ -14,6 +14,7 @@ from typing import Any
 
 import numpy as np
 
+from armlab.station.checks import checked_position
 from armlab.station.core import NotCalibrated, Station
 from armlab.station.jobs import Job, JobContext
 from armlab.station.telemetry import block_to_dict, tag_to_dict
@@ -66,13 +67,6 @@ def pixel_to_world(station: Station, u: float, v: float) -> dict:
     return {"position_m": [float(x) for x in point], "on": "board"}
 
 
-def _checked_position(position_m) -> np.ndarray:
-    position = np.asarray(position_m, dtype=float) if position_m is not None else None
-    if position is None or position.shape != (3,) or not np.all(np.isfinite(position)):
-        raise ValueError(f"position_m must be 3 finite numbers (x, y, z in metres), got {position_m!r}")
-    return position
-
-
 def _target_point(station: Station, position_m, pixel) -> tuple[np.ndarray, str]:
     """The clicked world point from position_m or pixel=(u, v) (exactly one of them)."""
     if (position_m is None) == (pixel is None):
@@ -80,7 +74,7 @@ def _target_point(station: Station, position_m, pixel) -> tuple[np.ndarray, str]
     if pixel is not None:
         result = pixel_to_world(station, *pixel)
         return np.asarray(result["position_m"]), result["on"]
-    return _checked_position(position_m), "given"
+    return checked_position(position_m), "given"
 
 
 def block_near(station: Station, point_m: np.ndarray) -> dict | None:

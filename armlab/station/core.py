@@ -20,6 +20,7 @@ import numpy as np
 from armlab.devices.arm import Arm, JointTrajectory
 from armlab.devices.camera import Camera, Frame
 from armlab.devices.gripper import Gripper
+from armlab.station.checks import checked_joints, checked_moving_time, checked_position
 from armlab.station.config import StationConfig
 from armlab.station.jobs import Job, JobCancelled, JobContext, start_job_thread
 from armlab.station.perception import FrameSource, Perception, PerceptionLoop
@@ -277,28 +278,7 @@ class Station:
     # Manual commands ------------------------------------------------------------------------------
 
     def _checked_joints(self, q_rad) -> np.ndarray:
-        """A finite (dof,) joint vector within the limits, else ValueError naming the joint."""
-        q = np.asarray(q_rad, dtype=float)
-        dof = int(self.model.dof)
-        if q.shape != (dof,):
-            raise ValueError(f"q_rad must have {dof} values ({', '.join(self.model.joint_names)}), got shape {q.shape}")
-        if not np.all(np.isfinite(q)):
-            raise ValueError("q_rad must be finite numbers")
-        lower, upper = np.asarray(self.model.lower_rad), np.asarray(self.model.upper_rad)
-        for index, name in enumerate(self.model.joint_names):
-            if not lower[index] - 1e-9 <= q[index] <= upper[index] + 1e-9:
-                raise ValueError(
-                    f"joint '{name}' = {q[index]:.4f} rad is outside its limits [{lower[index]:.4f}, {upper[index]:.4f}] rad"
-                )
-        return q
-
-    def _checked_time(self, moving_time_s: float | None) -> float | None:
-        if moving_time_s is None:
-            return None
-        value = float(moving_time_s)
-        if not math.isfinite(value) or not 0.0 < value <= self.config.max_moving_time_s:
-            raise ValueError(f"moving_time_s must be in (0, {self.config.max_moving_time_s}] s, got {moving_time_s}")
-        return value
+        return checked_joints(self.model, q_rad)
 
     def plan_move(self, q_goal_rad, moving_time_s: float | None = None) -> JointTrajectory:
         """A checked joint move from the current position (ValueError/UnsafeTrajectory: nothing moves)."""
@@ -306,7 +286,7 @@ class Station:
 
         q_goal = self._checked_joints(q_goal_rad)
         q_now = np.asarray(self.arm.read_joint_state().position_rad, dtype=float)
-        trajectory = plan_joint_move(q_now, q_goal, self.model, moving_time_s=self._checked_time(moving_time_s))
+        trajectory = plan_joint_move(q_now, q_goal, self.model, moving_time_s=checked_moving_time(moving_time_s, self.config.max_moving_time_s))
         check_trajectory(self.model, trajectory)
         return trajectory
 
@@ -338,9 +318,7 @@ class Station:
 
     def solve_pose(self, position_m, pitch_rad: float | None = None, yaw_rad: float | None = None) -> np.ndarray:
         """IK for a world position (Unreachable, a ValueError, says why); validates the numbers first."""
-        position = np.asarray(position_m, dtype=float)
-        if position.shape != (3,) or not np.all(np.isfinite(position)):
-            raise ValueError(f"position_m must be 3 finite numbers (x, y, z in metres), got {position_m!r}")
+        position = checked_position(position_m)
         for name, angle in (("pitch_rad", pitch_rad), ("yaw_rad", yaw_rad)):
             if angle is not None and not math.isfinite(float(angle)):
                 raise ValueError(f"{name} must be finite")
