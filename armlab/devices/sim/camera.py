@@ -25,46 +25,62 @@ NOISE_BANK_SIZE = 3
 
 class NoiseModel:
     """Turns a clean render into a camera frame: colour noise (Gaussian, per channel) and depth noise
-    (Gaussian in mm, random dropouts, no reading outside the range)."""
+    (Gaussian in mm, random dropouts, no reading outside the range). Per frame it adds a bank image
+    shifted by a random number of rows, so no noise is generated on the hot path."""
 
     def __init__(self, config: SimCameraConfig, rng: np.random.Generator, color_noise: bool, depth_noise: bool) -> None:
         self._config = config
         self._rng = rng
         shape = (config.height, config.width)
-        self._color_bank = None
-        self._depth_bank = None
-        self._dropout_bank = None
+        self._pixels = config.height * config.width
+        self._color_bank: list[np.ndarray] = []
+        self._depth_bank: list[np.ndarray] = []
+        self._dropout_bank: list[np.ndarray] = []
         if color_noise and config.color.noise_std > 0:
             self._color_bank = [
-                np.clip(rng.normal(0.0, config.color.noise_std, (*shape, 3)), -127, 127).astype(np.int16)
+                np.clip(np.rint(rng.normal(0.0, config.color.noise_std, (*shape, 3))), -127, 127).astype(np.int16)
                 for _ in range(NOISE_BANK_SIZE)
             ]
-        if depth_noise and (config.depth.noise_std_mm > 0 or config.depth.dropout_fraction > 0):
+        if depth_noise:
             self._depth_bank = [
                 rng.normal(0.0, config.depth.noise_std_mm, shape).astype(np.float32) for _ in range(NOISE_BANK_SIZE)
             ]
-            self._dropout_bank = [rng.random(shape) < config.depth.dropout_fraction for _ in range(NOISE_BANK_SIZE)]
+            count = int(round(config.depth.dropout_fraction * self._pixels))
+            self._dropout_bank = [rng.choice(self._pixels, size=count, replace=False) for _ in range(NOISE_BANK_SIZE)]
 
-    def _pick(self, bank: list[np.ndarray]) -> np.ndarray:
-        """A bank image rolled by a random offset, so consecutive frames differ."""
-        image = bank[int(self._rng.integers(len(bank)))]
-        return np.roll(image, int(self._rng.integers(image.shape[0])), axis=0)
+    def _shift(self) -> tuple[int, int]:
+        return int(self._rng.integers(NOISE_BANK_SIZE)), int(self._rng.integers(self._config.height))
+
+    @staticmethod
+    def _add_rolled(image: np.ndarray, noise: np.ndarray, rows: int, out: np.ndarray, dtype: int) -> None:
+        """out = image + noise rolled down by `rows` (saturating), without materialising the roll."""
+        height = image.shape[0]
+        cv2.add(image[rows:], noise[: height - rows], dst=out[rows:], dtype=dtype)
+        if rows:
+            cv2.add(image[:rows], noise[height - rows :], dst=out[:rows], dtype=dtype)
 
     def apply(self, images: RawImages) -> tuple[np.ndarray, np.ndarray]:
         """(color_bgr uint8, depth_mm uint16) from a render."""
-        color_bgr = cv2.cvtColor(images.rgb, cv2.COLOR_RGB2BGR)
-        if self._color_bank is not None:
-            color_bgr = cv2.add(color_bgr, self._pick(self._color_bank), dtype=cv2.CV_8U)
-        depth_mm = images.depth_m * np.float32(1000.0)
-        if self._depth_bank is not None:
-            depth_mm += self._pick(self._depth_bank)
+        rgb = images.rgb
+        if self._color_bank:
+            index, rows = self._shift()
+            noisy = np.empty_like(rgb)
+            self._add_rolled(rgb, self._color_bank[index], rows, noisy, cv2.CV_8U)
+            rgb = noisy
+        color_bgr = cv2.cvtColor(rgb, cv2.COLOR_RGB2BGR)
+        depth_m = images.depth_m
+        depth_mm = cv2.addWeighted(depth_m, 1000.0, depth_m, 0.0, 0.5)  # +0.5: truncation below rounds
+        if self._depth_bank:
+            index, rows = self._shift()
+            self._add_rolled(depth_mm, self._depth_bank[index], rows, depth_mm, cv2.CV_32F)
         depth_cfg = self._config.depth
-        invalid = (images.depth_m < depth_cfg.min_range_m) | (images.depth_m > depth_cfg.max_range_m)
-        if self._dropout_bank is not None:
-            invalid |= self._pick(self._dropout_bank)
-        depth_mm = np.rint(depth_mm)
-        depth_mm[invalid] = 0.0
-        return color_bgr, np.clip(depth_mm, 0, 65535).astype(np.uint16)
+        valid = cv2.inRange(depth_m, depth_cfg.min_range_m, depth_cfg.max_range_m)
+        out = depth_mm.astype(np.uint16)
+        out = cv2.bitwise_and(out, out, mask=valid)  # no reading outside the range
+        if self._dropout_bank:
+            index, rows = self._shift()
+            out.flat[(self._dropout_bank[index] + rows * self._config.width) % self._pixels] = 0
+        return color_bgr, out
 
 
 class SimCamera(Camera):

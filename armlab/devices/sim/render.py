@@ -11,6 +11,7 @@ import threading
 from collections.abc import Callable
 from dataclasses import dataclass
 
+import cv2
 import mujoco
 import numpy as np
 
@@ -64,6 +65,9 @@ class _GLRenderer:
             self._context.free()
         self._model = model
         self._scene = mujoco.MjvScene(model, maxgeom=2000)
+        for flag in (mujoco.mjtRndFlag.mjRND_SKYBOX, mujoco.mjtRndFlag.mjRND_REFLECTION,
+                     mujoco.mjtRndFlag.mjRND_SHADOW, mujoco.mjtRndFlag.mjRND_HAZE, mujoco.mjtRndFlag.mjRND_FOG):
+            self._scene.flags[flag] = 0  # none of them is in the workcell; each costs a pass on a CPU
         self._option = mujoco.MjvOption()
         self._camera = mujoco.MjvCamera()
         self._camera.type = mujoco.mjtCamera.mjCAMERA_FIXED
@@ -91,8 +95,8 @@ class _GLRenderer:
         self._gl.make_current()
         mujoco.mjr_render(self._rect, self._scene, self._context)
         mujoco.mjr_readPixels(self._rgb, self._depth, self._rect, self._context)
-        rgb = np.flipud(self._rgb).copy()
-        depth = depth_from_buffer(np.flipud(self._depth), self._znear_m, self._zfar_m)
+        rgb = cv2.flip(self._rgb, 0)  # OpenGL rows start at the bottom
+        depth = depth_from_buffer(cv2.flip(self._depth, 0), self._znear_m, self._zfar_m)
         return rgb, depth
 
     def close(self) -> None:
