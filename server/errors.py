@@ -78,9 +78,13 @@ def install_error_handlers(app: FastAPI) -> None:
         return error_response(422, "invalid", _validation_message(error))
 
     @app.exception_handler(StarletteHTTPException)
-    async def _http(_: Request, error: StarletteHTTPException) -> JSONResponse:
+    async def _http(request: Request, error: StarletteHTTPException) -> JSONResponse:
         code = _HTTP_CODES.get(error.status_code, "invalid")
-        return error_response(error.status_code, code, str(error.detail), headers=getattr(error, "headers", None))
+        message = {
+            404: f"nothing at {request.method} {request.url.path}",
+            405: f"{request.method} is not allowed on {request.url.path}",
+        }.get(error.status_code, str(error.detail))
+        return error_response(error.status_code, code, message, headers=getattr(error, "headers", None))
 
     async def _library(_: Request, error: Exception) -> JSONResponse:
         status_code, code = _classify(error)

@@ -219,6 +219,12 @@ def test_calibrate_detect_frames_and_click_grab_drop(http, cell):
     assert [j["name"] for j in history[:3]] == ["drop", "grab", "calibrate"]
 
 
+def test_unknown_paths_and_methods_are_json_errors(http):
+    assert "/api/nonexistent" in _error(http.get("/api/nonexistent"), 404, "not_found")["message"]
+    assert "DELETE" in _error(http.delete("/api/status"), 405, "invalid")["message"]
+    _error(http.post("/api/programs/abc/repeat", headers=AUTH), 422, "invalid")
+
+
 def test_jobs_cancel_and_wrong_state(http):
     _error(http.post("/api/jobs/cancel", headers=AUTH), 409, "wrong_state")
     assert http.get("/api/jobs/current").status_code == 200
