@@ -22,7 +22,7 @@ import numpy as np
 
 from armlab.config import load_config, resolve_config_path
 from armlab.errors import ConfigError
-from armlab.kinematics import ik_numeric, ik_rx200, ik_rx200_batch
+from armlab.kinematics import ik_numeric, ik_numeric_batch, ik_rx200, ik_rx200_batch
 from armlab.kinematics.arm_config import ArmConfig
 from armlab.kinematics.dh import dh_frames, fk_dh, matrix_from_flat
 from armlab.kinematics.errors import Unreachable
@@ -301,6 +301,37 @@ class ArmModel:
                 "out of reach",
             )
         return np.array(result.q)
+
+    def ik_pose_batch(self, T_world_targets, q_seed=None) -> tuple[np.ndarray, np.ndarray]:
+        """Vectorised ik_pose: poses (N, 4, 4) -> (q (N, dof), ok (N,)); failed rows are NaN.
+
+        Same tolerances (0.1 mm, 0.1 deg) and restarts as ik_pose; targets below the board fail.
+        """
+        targets = _finite_array(T_world_targets, "of shape (N, 4, 4)", "T_world_targets")
+        if targets.ndim != 3 or targets.shape[1:] != (4, 4):
+            raise ValueError(f"T_world_targets: expected shape (N, 4, 4), got {targets.shape}")
+        rotation = targets[:, :3, :3]
+        gram = rotation.transpose(0, 2, 1) @ rotation
+        if not np.allclose(gram, np.eye(3), atol=1e-6) or not np.allclose(targets[:, 3], [0, 0, 0, 1]):
+            raise ValueError("T_world_targets: not all rigid transforms (rotation not orthonormal or last row not [0, 0, 0, 1])")
+        count = targets.shape[0]
+        seeds = np.broadcast_to(self.home_rad if q_seed is None else self._joint_vectors(q_seed, "q_seed"), (count, self.dof))
+        seeds = np.array(seeds, dtype=float)
+        if self._dh is None:  # no fast batch path: the scalar solver per target
+            q, ok = np.full((count, self.dof), np.nan), np.zeros(count, dtype=bool)
+            for i in range(count):
+                try:
+                    q[i], ok[i] = self.ik_pose(targets[i], seeds[i]), True
+                except Unreachable:
+                    pass
+            return q, ok
+        q, ok, _position, _rotation = ik_numeric_batch.solve_pose_batch(
+            self._dh[0], self._dh[1], np.asarray(self.T_world_base), targets, seeds,
+            np.asarray(self.lower_rad), np.asarray(self.upper_rad),
+        )  # fmt: skip
+        ok &= targets[:, 2, 3] >= 0.0
+        q[~ok] = np.nan
+        return q, ok
 
     def _ik_generic(self, target, pitch, yaw, seed) -> tuple[np.ndarray, float]:
         """Position + pitch (+ yaw) IK for arms without a closed form: numerical, on built target poses."""

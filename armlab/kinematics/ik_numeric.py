@@ -22,9 +22,9 @@ Flat = tuple[float, ...]  # a rigid transform as 12 floats, row-major 3x4
 
 # Damping lambda = gain * error energy + minimum (Sugihara's rule, scaled: 0.1 converged fastest on
 # UR3 and RX200 random poses, median ~10 iterations); joint steps are capped at 1 rad (norm).
-_DAMPING_GAIN = 0.1
-_DAMPING_MIN = 1e-6
-_MAX_STEP_RAD = 1.0
+DAMPING_GAIN = 0.1
+DAMPING_MIN = 1e-6
+MAX_STEP_RAD = 1.0
 
 
 def _solve_spd(matrix: np.ndarray, vector: np.ndarray) -> np.ndarray:
@@ -204,10 +204,10 @@ def solve_pose(
             if position_only:
                 jac_t = jac_t[:, :3]
             normal = jac_t @ jac_t.T
-            normal.flat[diagonal] += _DAMPING_GAIN * energy + _DAMPING_MIN
+            normal.flat[diagonal] += DAMPING_GAIN * energy + DAMPING_MIN
             step = _solve_spd(normal, jac_t @ np.array(error)).tolist()
             norm = math.sqrt(sum(d * d for d in step))
-            scale = _MAX_STEP_RAD / norm if norm > _MAX_STEP_RAD else 1.0
+            scale = MAX_STEP_RAD / norm if norm > MAX_STEP_RAD else 1.0
             q = [value + scale * delta for value, delta in zip(q, step)]
             _fit_limits(q, lower, upper)
         if best_position <= position_tol_m and best_rotation <= rotation_tol_rad:

@@ -126,3 +126,27 @@ def test_space_jacobian_matches_finite_differences(rx200, q_list):
         delta = fk_space(home, axes, q + dq) @ np.linalg.inv(fk_space(home, axes, q - dq))
         twist = se3_to_vec(matrix_log6(delta)) / (2 * step)
         assert np.allclose(twist, jacobian[:, i], atol=1e-5)
+
+
+def test_batch_pose_ik_solves_ur3_and_rx200_poses(ur3, rx200):
+    for arm, count in ((ur3, 2000), (rx200, 1000)):
+        poses = reachable_poses(arm, count, seed=23)
+        q, ok = arm.ik_pose_batch(poses)
+        assert ok.mean() >= 0.995, (arm.name, ok.mean())
+        reached = arm.fk(q[ok])
+        for T_reached, T_target in zip(reached, poses[ok]):
+            position_m, angle_deg = pose_errors(T_reached, T_target)
+            assert position_m <= 1e-4 and angle_deg <= 0.1
+        assert arm.within_limits(q[ok]) and np.isnan(q[~ok]).all()
+
+
+def test_batch_pose_ik_reports_impossible_rows(ur3):
+    poses = reachable_poses(ur3, 3, seed=24)
+    far = np.eye(4)
+    far[:3, 3] = [0.9, 0.0, 0.2]
+    below = np.eye(4)
+    below[2, 3] = -0.05
+    q, ok = ur3.ik_pose_batch(np.concatenate([poses, far[None], below[None]]), q_seed=ur3.home_rad)
+    assert ok.tolist() == [True, True, True, False, False]
+    with pytest.raises(ValueError, match="N, 4, 4"):
+        ur3.ik_pose_batch(np.eye(4))
