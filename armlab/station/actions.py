@@ -27,13 +27,14 @@ BOARD_NOISE_M = 0.006  # depth readings this close to the board are the board
 # Frames and clicks -------------------------------------------------------------------------------
 
 
-def newest_frame(station: Station, timeout_s: float = 2.0):
-    """The newest camera frame the station has seen (waits for the first one); TimeoutError if none."""
-    frame, _ = station.frames.get()
-    if frame is None:
-        frame, _ = station.frames.wait_newer(0, timeout_s)
-    if frame is None:
-        raise TimeoutError(f"no camera frame within {timeout_s} s")
+def newest_frame(station: Station, timeout_s: float = 2.0, max_age_s: float = 2.0):
+    """The newest camera frame (waiting up to timeout_s for the first one, or for a fresh one when the
+    newest is older than max_age_s); TimeoutError (a device error) if there is none."""
+    frame, version = station.frames.get()
+    if frame is None or time.time() - frame.timestamp_s > max_age_s:
+        frame, _ = station.frames.wait_newer(version, timeout_s)
+    if frame is None or time.time() - frame.timestamp_s > max_age_s + timeout_s:
+        raise TimeoutError(f"no fresh camera frame within {timeout_s} s: is the camera running?")
     return frame
 
 
