@@ -351,14 +351,30 @@ def generate_scene(event: str, level: int = 1, seed: int = 0) -> Scene:
     return _place_piles([[item] for item in items], WHOLE_BOARD, rng)
 
 
+# ArUco ids on block tops in the UR3 write-up (DESIGN §3): the colour -> destination mapping is config.
+ARUCO_IDS_BY_COLOR = {"yellow": 100, "red": 150, "blue": 200}
+
+
+def with_aruco_tops(scene: Scene, ids_by_color: dict[str, int] | None = None) -> Scene:
+    """The same scene with an ArUco tag on the top face of every block whose colour has an id."""
+    ids = ARUCO_IDS_BY_COLOR if ids_by_color is None else ids_by_color
+    return Scene(tuple(
+        SceneObject(o.id, o.type, o.color, o.size, o.position_m, o.quat_wxyz,
+                    ids.get(o.color) if o.type == "block" else None)
+        for o in scene.objects
+    ))
+
+
 def random_scene(
     seed: int = 0,
     n_blocks: int | None = None,
     n_distractors: int | None = None,
     max_stack: int = 1,
+    aruco: bool = False,
 ) -> Scene:
     """A random reachable layout: n_blocks (default 3..10) blocks of random size and colour,
-    n_distractors (default 0..2) distractors, stacks up to max_stack high."""
+    n_distractors (default 0..2) distractors, stacks up to max_stack high; aruco=True puts the UR3
+    write-up's tags on yellow, red and blue blocks (ARUCO_IDS_BY_COLOR)."""
     if max_stack < 1:
         raise ValueError("max_stack must be >= 1")
     rng = np.random.default_rng([int(seed), 99])
@@ -370,4 +386,5 @@ def random_scene(
     colors = [str(c) for c in rng.choice(COLORS, size=n_blocks)]
     piles = _into_piles(_blocks(sizes, colors), max_stack, 0.35, rng)
     piles += [[(str(kind), None, str(rng.choice(COLORS)))] for kind in rng.choice(DISTRACTOR_TYPES, size=n_distractors)]
-    return _place_piles(piles, WHOLE_BOARD, rng)
+    scene = _place_piles(piles, WHOLE_BOARD, rng)
+    return with_aruco_tops(scene) if aruco else scene

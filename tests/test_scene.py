@@ -127,3 +127,15 @@ def test_duplicate_ids_are_refused():
     obj = {"id": "a", "type": "block", "color": "red", "size": "large", "position_m": [0.1, 0.2, 0.019]}
     with pytest.raises(ValueError, match="unique"):
         Scene.from_dict({"objects": [obj, obj]})
+
+
+def test_aruco_tops_go_on_blocks_of_the_mapped_colours_only():
+    from armlab.scene import ARUCO_IDS_BY_COLOR
+
+    scene = random_scene(seed=2, n_blocks=12, n_distractors=2, aruco=True)
+    for obj in scene.objects:
+        expected = ARUCO_IDS_BY_COLOR.get(obj.color) if obj.type == "block" else None
+        assert obj.aruco_id == expected
+    assert Scene.from_dict(scene.to_dict()) == scene
+    with pytest.raises(ValueError, match="aruco_id"):
+        SceneObject("c", "cylinder", "red", None, (0.1, 0.2, 0.019), aruco_id=3)

@@ -19,6 +19,7 @@ TAG_SIZE_M = 0.025
 CAMERA_NAME = "overhead"
 GRIPPER_SITE = "gripper_point"
 OBJECT_PREFIX = "obj:"
+STICKER_FRACTION = 0.9  # the ArUco sticker covers this fraction of a block's top face
 
 COLOR_RGBA = {
     "red": (0.80, 0.08, 0.08, 1.0),
@@ -187,6 +188,18 @@ def _object_xml(obj: SceneObject, density: float, friction: list[float], solref:
             f'<geom type="box" size="{ext_x / 2:.9g} {ext_y / 2:.9g} {lintel_half_z:.9g}" '
             f'pos="0 0 {height / 2 - lintel_half_z:.9g}" {common}/>'
         )
+    if obj.aruco_id is not None:
+        # A visual-only sticker on the top face carrying the ArUco tag (texture upright toward body +y).
+        name = f"aruco_{obj.id}"
+        asset += (
+            f'<texture name="{name}" type="2d" file="{name}.png"/>'
+            f'<material name="{name}" texture="{name}" specular="0" shininess="0"/>'
+        )
+        half = 0.5 * ext_x * STICKER_FRACTION
+        geoms += (
+            f'<geom type="box" size="{half:.9g} {half:.9g} 0.00005" pos="0 0 {height / 2 + 0.00005:.9g}" '
+            f'material="{name}" contype="0" conaffinity="0" mass="0" group="2"/>'
+        )
     body = (
         f'<body name="{OBJECT_PREFIX}{obj.id}" pos="{_fmt(obj.position_m)}" quat="{_fmt(obj.quat_wxyz)}">'
         f"<freejoint/>{geoms}</body>"
@@ -229,6 +242,9 @@ def build_model_xml(
     )
     object_assets, object_bodies = [], []
     for obj in scene.objects:
+        if obj.aruco_id is not None:
+            rgb = tuple(int(255 * c) for c in COLOR_RGBA[obj.color][:3])
+            assets[f"aruco_{obj.id}.png"] = textures.encode_png(textures.block_top_texture(obj.aruco_id, rgb))
         asset, body = _object_xml(obj, sim.objects.density_kg_m3, sim.objects.friction, sim.objects.solref)
         object_assets.append(asset)
         object_bodies.append(body)

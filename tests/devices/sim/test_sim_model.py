@@ -156,3 +156,28 @@ def test_noise_is_on_by_default_and_l515_like():
     assert not np.array_equal(noisy.color_bgr, second.color_bgr), "consecutive frames have fresh noise"
     assert noisy.color_bgr.shape == (720, 1280, 3) and noisy.depth_mm.dtype == np.uint16
     assert noisy.intrinsics.fx == pytest.approx(904.0)
+
+
+def test_aruco_topped_blocks_show_their_tag_upright_on_the_top_face():
+    scene = Scene((
+        SceneObject("y", "block", "yellow", "large", (0.0, 0.25, 0.019), quat_from_yaw(0.0), aruco_id=100),
+        SceneObject("r", "block", "red", "large", (0.15, 0.2, 0.019), quat_from_yaw(0.5), aruco_id=150),
+        SceneObject("g", "block", "green", "large", (-0.15, 0.2, 0.019), quat_from_yaw(0.2)),
+    ))
+    with SimWorkcell(SimWorkcellConfig(seed=2, color_noise=False, depth_noise=False), scene=scene) as sim:
+        sim.gripper.release()
+        frame = sim.render()
+        truth = sim.truth()
+    detector = cv2.aruco.ArucoDetector(cv2.aruco.getPredefinedDictionary(cv2.aruco.DICT_4X4_250))
+    corners, ids, _ = detector.detectMarkers(frame.color_bgr)
+    assert sorted(ids.ravel().tolist()) == [100, 150]
+    by_id = {o.get("aruco_id"): o for o in truth["objects"]}
+    for tag_corners, tag_id in zip(corners, ids.ravel()):
+        obj = by_id[int(tag_id)]
+        top = np.array(obj["position_m"]) + [0, 0, 0.019]
+        (u, v), _ = project(truth["camera"]["T_world_camera"], truth["camera"]["K"], top)
+        assert np.linalg.norm(tag_corners[0].mean(axis=0) - [u, v]) < 1.5
+        # The tag's top edge (corner 0 -> 1) runs along the block's +x axis, seen from above.
+        edge = tag_corners[0][1] - tag_corners[0][0]
+        image_yaw = math.atan2(-edge[1], edge[0])  # image y points to world -y
+        assert abs(math.remainder(image_yaw - obj["yaw_rad"], 2 * math.pi)) < math.radians(6)
