@@ -1,5 +1,5 @@
 """Teach mode from the page: start, record two waypoints, stop with a name, see the program listed,
-repeat it and watch the arm replay the taught joints."""
+repeat it and watch the arm replay the taught joints; cancel a long repeat from the job line."""
 
 from __future__ import annotations
 
@@ -57,6 +57,22 @@ def test_teach_record_save_and_repeat_from_the_page(browser, server):
         )
         assert status["job"]["state"] == "succeeded", status["job"]
         assert np.allclose(status["joints_rad"], poses_rad[-1], atol=0.03)
+
+        # A long repeat shows in the job line with its progress, and the line's Cancel ends it.
+        previous_id = status["job"]["id"]
+        page.fill("#repeat-cycles", "20")
+        item.locator("button[data-command='repeat']").click()
+        page.wait_for_selector("#job-line:not([hidden])", timeout=5_000)
+        assert "repeat" in page.text_content("#job-name")
+        page.wait_for_function("!document.getElementById('btn-cancel-job').disabled", timeout=5_000)
+        page.click("#btn-cancel-job")
+        status = server.wait_status(
+            lambda s: (s.get("job") or {}).get("id") not in (None, previous_id) and s["job"]["state"] != "running",
+            10.0,
+            "the cancelled repeat to end",
+        )
+        assert status["job"]["state"] == "cancelled" and status["state"] == "idle", status
+        page.wait_for_selector("#job-line", state="hidden", timeout=5_000)
         assert page.errors == []
     finally:
         page.close()
