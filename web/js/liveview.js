@@ -98,7 +98,7 @@ export class LiveView {
     const pxPerM = canvas.width / (b.xMax - b.xMin);
     ctx.save();
     ctx.lineWidth = 2;
-    ctx.font = "13px sans-serif";
+    ctx.font = `bold ${Math.max(12, Math.round(canvas.width / 60))}px sans-serif`;
     this.detections.forEach((det, i) => {
       if (!Array.isArray(det.position_m)) return;
       const p = worldToTopdownPx(det.position_m[0], det.position_m[1], canvas.width, canvas.height, b);
