@@ -17,8 +17,12 @@ def read_status(station: StationDep) -> dict:
 
 
 @router.post("/estop", response_model=Status)
-def post_estop(station: StationDep, controller: ControlAuth) -> dict:
-    """Halt now and latch (allowed in every state)."""
+async def post_estop(station: StationDep, controller: ControlAuth) -> dict:
+    """Halt now and latch (allowed in every state).
+
+    Runs on the event loop, not in the worker-thread pool, so an e-stop never waits behind blocked
+    `?wait=true` requests; the station's lock is only ever held for short, non-blocking sections.
+    """
     station.estop(source=controller)
     return station.status()
 
