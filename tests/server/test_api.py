@@ -157,6 +157,27 @@ def test_estop_latches_with_409_naming_allowed_commands_and_reset_does_not_move(
     assert "reset" not in error["allowed"] and "estop" in error["allowed"]
 
 
+def test_estop_releases_a_request_waiting_for_its_move(http, url):
+    import threading
+
+    result = {}
+
+    def long_move():
+        with httpx.Client(base_url=url, timeout=30) as other:
+            body = {"q_rad": [-0.8, 0.2, 0.1, 0.3, 0.0], "moving_time_s": 4.0}
+            result["response"] = other.post("/api/arm/joints", params={"wait": "true"}, json=body, headers=AUTH)
+            result["done"] = time.monotonic()
+
+    waiter = threading.Thread(target=long_move)
+    waiter.start()
+    live.wait_for(lambda: http.get("/api/status").json()["moving"], 5)
+    stopped = time.monotonic()
+    assert http.post("/api/estop", headers=AUTH).json()["state"] == "estop"
+    waiter.join(10)
+    assert result["done"] - stopped < 1.0, "the waiting request outlived the e-stop"
+    assert result["response"].status_code == 200 and result["response"].json()["state"] == "estop"
+
+
 def test_gripper_and_torque(http):
     status = http.post("/api/gripper", json={"action": "grasp"}, headers=AUTH).json()
     assert status["gripper"]["command"] == "grasp" and status["gripper"]["width_m"] < 0.03
