@@ -23,6 +23,14 @@ def register(subparsers: argparse._SubParsersAction) -> None:
     parser.add_argument("--settle", type=float, default=0.3, help="seconds of physics before the frame (default 0.3)")
     parser.set_defaults(func=run_render)
 
+    scene_parser = subparsers.add_parser("scene", help="print a generated scene as JSON (the scene-file format)")
+    scene_parser.add_argument("--event", help="competition event (default: a random layout from the seed)")
+    scene_parser.add_argument("--level", type=int, default=1)
+    scene_parser.add_argument("--seed", type=int, default=0)
+    scene_parser.add_argument("--aruco", action="store_true", help="ArUco tags on yellow/red/blue block tops")
+    scene_parser.add_argument("--out", type=Path, help="write to this file instead of stdout")
+    scene_parser.set_defaults(func=run_scene, scene=None)
+
 
 def load_scene(args: argparse.Namespace):
     """The scene chosen on the command line (event/level, file, or a random layout from the seed)."""
@@ -78,4 +86,24 @@ def run_render(args: argparse.Namespace) -> int:
         args.truth.write_text(json.dumps(truth, indent=2))
     print(json.dumps({"color": str(args.out), "depth": str(args.depth) if args.depth else None,
                       "truth": str(args.truth) if args.truth else None, "objects": len(truth["objects"])}))
+    return 0
+
+
+def run_scene(args: argparse.Namespace) -> int:
+    import sys
+
+    from armlab.scene import with_aruco_tops
+
+    try:
+        scene = load_scene(args)
+    except ValueError as error:
+        print(f"armlab scene: {error}", file=sys.stderr)
+        return 2
+    if args.aruco:
+        scene = with_aruco_tops(scene)
+    text = json.dumps(scene.to_dict(), indent=2)
+    if args.out is not None:
+        args.out.write_text(text)
+    else:
+        print(text)
     return 0

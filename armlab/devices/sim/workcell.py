@@ -111,10 +111,13 @@ class SimWorkcell:
         self._model, self._data, self._scene = model, data, scene
         self._torque = True if previous is None else previous["torque"]
 
-    def set_scene(self, scene: Scene) -> None:
-        """Replace all objects (thread-safe; the arm and gripper keep their state)."""
+    def set_scene(self, scene: Scene | dict) -> None:
+        """Replace all objects (thread-safe; the arm and gripper keep their state). Accepts a Scene or
+        its dict form ({"objects": [...]}, the ground-truth format)."""
+        if isinstance(scene, dict):
+            scene = Scene.from_dict(scene)
         if not isinstance(scene, Scene):
-            raise ValueError(f"set_scene expects a Scene, got {type(scene).__name__}")
+            raise ValueError(f"set_scene expects a Scene or a dict with 'objects', got {type(scene).__name__}")
         with self.lock:
             data = self._data
             previous = {
@@ -286,6 +289,7 @@ class SimWorkcell:
             if not device.is_connected:
                 device.connect()
         self._started = True
+        self._renderer()  # creates the GL context now and logs which backend renders
         if self.realtime:
             self._stop_event.clear()
             self._physics_thread = threading.Thread(target=self._physics_loop, name="sim-physics", daemon=True)

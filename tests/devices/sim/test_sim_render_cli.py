@@ -48,3 +48,17 @@ def test_render_refuses_bad_input_with_a_clear_error(tmp_path):
     result = run("--scene", str(bad_scene), "--out", str(tmp_path / "c.png"))
     assert result.returncode == 2 and "a" in result.stderr
     assert not (tmp_path / "c.png").exists()
+
+
+def test_scene_command_prints_a_reproducible_scene_file(tmp_path):
+    def scene(*args):
+        return subprocess.run([sys.executable, "-m", "armlab.cli", "scene", *args], capture_output=True, text=True, timeout=120)
+
+    first = scene("--event", "stack_high", "--level", "2", "--seed", "9")
+    assert first.returncode == 0, first.stderr
+    data = json.loads(first.stdout)
+    assert len(data["objects"]) == 12
+    assert scene("--event", "stack_high", "--level", "2", "--seed", "9").stdout == first.stdout
+    tagged = json.loads(scene("--seed", "4", "--aruco").stdout)
+    assert any("aruco_id" in obj for obj in tagged["objects"])
+    assert scene("--event", "stack_high", "--level", "3").returncode == 2

@@ -155,7 +155,7 @@ def test_set_scene_replaces_objects_and_keeps_the_arm_pose(cell):
     q_before = cell.arm.read_joint_state().position_rad
     cell.set_scene(generate_scene("line_up", 1, seed=2))
     assert sorted(o["color"] for o in cell.truth()["objects"]) == sorted(["red", "orange", "yellow", "green", "blue", "violet"])
-    cell.set_scene(generate_scene("pick_sort", 1, seed=2))
+    cell.set_scene(generate_scene("pick_sort", 1, seed=2).to_dict())  # the dict form works too
     truth = cell.truth()
     assert len(truth["objects"]) == 3
     cell.step(0.5)
@@ -163,6 +163,9 @@ def test_set_scene_replaces_objects_and_keeps_the_arm_pose(cell):
     for obj, start in zip(cell.truth()["objects"], generate_scene("pick_sort", 1, seed=2).objects):
         assert np.allclose(obj["position_m"], start.position_m, atol=0.001)
     assert cell.render().color_bgr.shape == (720, 1280, 3)  # the renderer follows the new model
+    with pytest.raises(ValueError):
+        cell.set_scene([1, 2, 3])
+    assert len(cell.truth()["objects"]) == 3
 
 
 def test_truth_has_the_documented_structure(cell):
