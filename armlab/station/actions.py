@@ -17,7 +17,7 @@ import numpy as np
 from armlab.station.checks import checked_position
 from armlab.station.core import NotCalibrated, Station
 from armlab.station.jobs import Job, JobContext
-from armlab.station.telemetry import block_to_dict, tag_to_dict
+from armlab.station.telemetry import tag_to_dict
 
 BLOCK_HEIGHTS_M = {"large": 0.038, "small": 0.025}
 MAX_SURFACE_HEIGHT_M = 0.25  # a drop surface higher than this is taken for the arm hiding the spot
@@ -264,9 +264,3 @@ def run_task(station: Station, name: str, function: Callable[[Station, JobContex
     """Run an autonomous task (sort, stack, ...) as the auto_sort job; function(station, ctx) uses
     station.move_in_job / run_gripper / plan_pick_steps so e-stop and cancel apply to it too."""
     return station.start_job("auto", name, lambda ctx: function(station, ctx), detail=name, source=source)
-
-
-def detections_now(station: Station) -> list[dict]:
-    """The newest detections as wire dicts (convenience for tasks)."""
-    perception, _ = station.perception.get()
-    return [] if perception is None else [block_to_dict(i, b) for i, b in enumerate(perception.blocks)]
