@@ -40,6 +40,11 @@ class SimGripper(Gripper):
         return self._connected
 
     @property
+    def command(self) -> str:
+        """The last command: 'grasp' or 'release'."""
+        return self._command
+
+    @property
     def min_width_m(self) -> float:
         return 2.0 * (self._offset_min_m - self._pad_thickness_m)
 

