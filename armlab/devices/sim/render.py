@@ -8,6 +8,7 @@ import logging
 import os
 import queue
 import threading
+import time
 from collections.abc import Callable
 from dataclasses import dataclass
 
@@ -159,8 +160,6 @@ class RenderThread:
         return RawImages(rgb=rgb, depth_m=depth, sim_time_s=sim_time_s)
 
     def _run(self) -> None:
-        import time
-
         try:
             renderer = _GLRenderer(*self._args)
         except BaseException as error:  # noqa: BLE001 - reported to the constructor
