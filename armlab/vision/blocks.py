@@ -219,7 +219,7 @@ def _split_touching(face: _Face, cfg: PerceptionConfig) -> list[_Face]:
 def _roi_heights(depth_mm: np.ndarray, cal: Calibration, roi: tuple[int, int, int, int]) -> np.ndarray:
     """World z (m) of a region of interest from 5x5-median-filtered depth (edges kept, noise ~4x lower)."""
     x0, y0, x1, y1 = roi
-    d = cv2.medianBlur(np.ascontiguousarray(depth_mm[y0:y1, x0:x1]), 5).astype(np.float32) / 1000.0
+    d = cv2.medianBlur(np.ascontiguousarray(depth_mm[y0:y1, x0:x1]), 3).astype(np.float32) / 1000.0
     K = cal.K
     us = (np.arange(x0, x1, dtype=np.float32) - K[0, 2]) / K[0, 0]
     vs = (np.arange(y0, y1, dtype=np.float32) - K[1, 2]) / K[1, 1]
@@ -309,6 +309,7 @@ def detect_blocks(
         raised = (z_small > bc.min_height_m) & (z_small < bc.max_height_m)
     lut, names = hue_lut(cfg)
     classes = color_classes(cv2.cvtColor(color_bgr[::step, ::step], cv2.COLOR_BGR2HSV), cfg, lut)
+    colourless = classes == 0  # e.g. the white and black of a tag on a block's top
     classes[~raised] = 0
     n, labels, stats, _ = cv2.connectedComponentsWithStats((classes > 0).astype(np.uint8), connectivity=8)
     pixel_m = abs(float(cal.T_world_camera[2, 3])) / cal.K[0, 0] * step  # board-level pixel size, roughly
@@ -325,12 +326,16 @@ def detect_blocks(
         counts = np.bincount(comp_classes, minlength=len(names) + 1)
         roi = (max(0, x * step - 8), max(0, y * step - 8), min(w, (x + bw) * step + 8), min(h, (y + bh) * step + 8))
         ys, xs = np.nonzero(sel)
+        box_z = z_small[y : y + bh, x : x + bw]
+        box_colourless = colourless[y : y + bh, x : x + bw]
         tops: dict[int, tuple[float, np.ndarray, np.ndarray]] = {}  # colour -> (top, centroid, bbox)
         for ci in np.nonzero(counts >= max(3, 0.1 * area))[0]:
             mine = comp_classes == ci
             top_m = quantile(comp_z[mine], 0.9)
             layer = mine & (np.abs(comp_z - top_m) < bc.top_face_tolerance_m)
-            if np.count_nonzero(layer) < min_face_px:
+            with np.errstate(invalid="ignore"):
+                tag_layer = box_colourless & (np.abs(box_z - top_m) < bc.top_face_tolerance_m)
+            if np.count_nonzero(layer) + np.count_nonzero(tag_layer) < min_face_px:
                 continue  # only a sliver of this colour at its top: the side of a lower stack member
             pts = np.stack([xs[layer], ys[layer]], axis=1)
             tops[int(ci)] = (top_m, pts.mean(axis=0), np.concatenate([pts.min(axis=0) - 1, pts.max(axis=0) + 1]))
@@ -365,7 +370,7 @@ def _blocks_from_region(color_bgr, depth_mm, cal, cfg, roi, top_m, name, ci, lut
     # faces that the depth filter smeared up to the top's height at the edge facing the camera.
     value = hsv[..., 2]
     if np.count_nonzero(near_top) >= 10:
-        dim = mine & (value < 0.82 * quantile(value[near_top], 0.75))
+        dim = mine & (value < 0.7 * quantile(value[near_top], 0.95))
     else:
         dim = np.zeros_like(mine)
     keep = (mine & ~dim) | (classes == 0)
@@ -469,5 +474,5 @@ def _is_occluded(face: _Face, centre_xy, yaw: float, size: str, cal, cfg: Percep
     inside = np.zeros(window.shape, np.uint8)
     cv2.fillConvexPoly(inside, np.round(poly - [x0, y0]).astype(np.int32), 1)
     with np.errstate(invalid="ignore"):
-        above = np.count_nonzero((window > face.top_m + 0.015) & (inside > 0))
+        above = np.count_nonzero((window > face.top_m + 0.008) & (inside > 0))
     return above > 0.05 * max(1, np.count_nonzero(inside))
