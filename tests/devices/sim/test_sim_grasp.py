@@ -121,3 +121,30 @@ def test_block_released_half_off_a_stack_falls(cell):
     cell.set_scene(stack(3, x=-0.2, y=0.2, offset_top_m=0.012))  # centre of mass still supported
     cell.step(1.5)
     assert cell.truth()["objects"][-1]["position_m"][2] == pytest.approx(0.038 * 2 + 0.019, abs=0.001)
+
+
+def test_a_45_degree_grasp_is_decided_by_the_contacts(cell):
+    """Pads closing on the cube's vertical edges: no rule aligns or welds it; the pads stop on the edges
+    (span near the 53.7 mm diagonal) and whatever holds it is the two pads' contacts."""
+    result = pick_and_carry(cell, "large", yaw_error_rad=np.radians(45))
+    width = result["state"].width_m
+    assert 0.050 < width < 0.0538
+    gripper = result["grasped"]["gripper"]
+    assert (gripper["holding_id"] == "b") == (gripper["left_contacts"] == ["b"] == gripper["right_contacts"])
+
+
+def test_grip_comes_from_pad_friction_not_from_proximity(tmp_path):
+    """The same centred grasp with nearly frictionless pads lifts nothing."""
+    import yaml
+
+    from armlab.config import config_dir
+
+    data = yaml.safe_load((config_dir() / "sim.yaml").read_text())
+    data["gripper"]["pad_friction"] = [0.005, 0.0001, 0.0001]  # 2 pads x 10 N x 0.005 < the 0.37 N weight
+    data["objects"]["friction"] = [0.005, 0.0001, 0.0001]
+    slippery = tmp_path / "slippery.yaml"
+    slippery.write_text(yaml.safe_dump(data))
+    with SimWorkcell(SimWorkcellConfig(seed=0, sim=str(slippery), color_noise=False, depth_noise=False)) as sim:
+        result = pick_and_carry(sim, "large")
+    assert result["grasped"]["gripper"]["left_contacts"] == ["b"]  # the pads did close on it
+    assert result["lift_m"] < 0.02
