@@ -36,6 +36,7 @@ class PerceptionPipeline:
         self._tracking_detector.setDetectorParameters(params)
         self._block_detector = make_detector(cfg.tags.block_tag_dictionary)
         self._grid_m = cfg.board.grid_points_m()
+        self._tag_ids = list(cfg.tags.board_tags)
         self._tag_centres_m = np.array([[x, y, 0.0] for x, y in cfg.tags.board_tags.values()])
 
     def find_tags(self, color_bgr: np.ndarray, cal: Calibration | None) -> list[Tag]:
@@ -44,8 +45,11 @@ class PerceptionPipeline:
             return detect_tags(color_bgr, detector=self._board_detector)
         centres = project_points(cal.T_world_camera, cal.K, cal.dist, self._tag_centres_m)
         tags = detect_tags_near(color_bgr, centres, 32, self._tracking_detector)
-        if len(tags) < len(self._tag_centres_m):  # moved or shaded: look harder where they should be
-            tags = detect_tags_near(color_bgr, centres, 48, self._board_detector)
+        found = {tag.id for tag in tags}
+        missing = [c for tag_id, c in zip(self._tag_ids, centres) if tag_id not in found]
+        if missing:  # hidden, moved or shaded: look harder, but only where the missing ones should be
+            extra = detect_tags_near(color_bgr, np.array(missing), 48, self._board_detector)
+            tags = sorted(tags + [tag for tag in extra if tag.id not in found], key=lambda tag: tag.id)
         return tags
 
     def process(
