@@ -2,7 +2,7 @@
 centre and yaw in the world, stack level from height, touching same-colour blocks split, arm
 occlusion flagged, distractors rejected, and tag-topped blocks identified.
 
-Speed: colour and height are computed at half resolution to find candidates; each candidate's top
+Speed: colour and height are computed at quarter resolution to find candidates; each candidate's top
 face is then measured on a full-resolution region of interest.
 """
 
@@ -217,7 +217,7 @@ def _split_touching(face: _Face, cfg: PerceptionConfig) -> list[_Face]:
 
 
 def _roi_heights(depth_mm: np.ndarray, cal: Calibration, roi: tuple[int, int, int, int]) -> np.ndarray:
-    """World z (m) of a region of interest from 5x5-median-filtered depth (edges kept, noise ~4x lower)."""
+    """World z (m) of a region of interest from 3x3-median-filtered depth (edges kept, noise about halved)."""
     x0, y0, x1, y1 = roi
     d = cv2.medianBlur(np.ascontiguousarray(depth_mm[y0:y1, x0:x1]), 3).astype(np.float32) / 1000.0
     K = cal.K

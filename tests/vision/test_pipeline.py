@@ -3,6 +3,8 @@
 from __future__ import annotations
 
 import numpy as np
+import pytest
+from synth import L515
 
 from armlab.vision import OverlayLayers, PerceptionPipeline, calibrate_extrinsics, detect_blocks, detect_tags
 
@@ -32,3 +34,19 @@ def test_pipeline_without_calibration_and_with_a_hidden_tag(event_frame, cfg):
     u, v = np.round(uncalibrated.tags[1].center_px).astype(int)
     covered[v - 20 : v + 20, u - 20 : u + 20] = 40  # something dark over tag 2
     assert [t.id for t in pipeline.find_tags(covered, cal)] == [1, 3, 4]
+
+
+def test_detect_blocks_refuses_bad_frames_and_finds_nothing_on_a_bare_board(event_frame, cfg, board_frame):
+    frame, _ = event_frame
+    cal = calibrate_extrinsics(frame.color_bgr, frame.intrinsics, cfg)
+    with pytest.raises(ValueError, match="1280x720"):
+        detect_blocks(frame.color_bgr[:360], frame.depth_mm[:360], cal, cfg)
+    with pytest.raises(ValueError, match="uint16"):
+        detect_blocks(frame.color_bgr, frame.depth_mm.astype(np.float32), cal, cfg)
+    with pytest.raises(ValueError, match="BGR"):
+        detect_blocks(frame.color_bgr[..., 0].copy(), frame.depth_mm, cal, cfg)
+    with pytest.raises(ValueError, match="empty"):
+        detect_blocks(np.zeros((0, 0, 3), np.uint8), frame.depth_mm, cal, cfg)
+    bare_color, bare_depth = board_frame  # synthetic board: tags and grid, nothing standing on it
+    bare_cal = calibrate_extrinsics(bare_color, L515, cfg)
+    assert detect_blocks(bare_color, bare_depth, bare_cal, cfg) == []
