@@ -5,10 +5,12 @@ ground-truth dicts it serves have exactly the `SceneObject.to_dict()` format, so
 from __future__ import annotations
 
 import math
+import re
 from dataclasses import dataclass, field
 
 import numpy as np
 
+_ID_PATTERN = re.compile(r"[A-Za-z0-9_.:-]{1,64}")
 OBJECT_TYPES = ("block", "semicircle", "arch", "triangle", "cylinder")
 DISTRACTOR_TYPES = ("semicircle", "arch", "triangle", "cylinder")
 COLORS = ("red", "orange", "yellow", "green", "blue", "violet")
@@ -80,8 +82,8 @@ class SceneObject:
     aruco_id: int | None = None
 
     def __post_init__(self) -> None:
-        if not isinstance(self.id, str) or not self.id:
-            raise ValueError(f"SceneObject: id must be a non-empty string, got {self.id!r}")
+        if not isinstance(self.id, str) or not _ID_PATTERN.fullmatch(self.id):
+            raise ValueError(f"SceneObject: id must be 1-64 letters, digits or _.:- characters, got {self.id!r}")
         if self.type not in OBJECT_TYPES:
             raise ValueError(f"SceneObject {self.id}: type {self.type!r} not one of {OBJECT_TYPES}")
         if self.color not in COLORS:

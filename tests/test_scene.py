@@ -115,6 +115,7 @@ def test_yaw_only_objects_get_the_matching_quaternion():
         ({"size": "huge"}, "size"),
         ({"quat_wxyz": [0, 0, 0, 0]}, "non-zero"),
         ({"wobble": 1}, "unknown fields"),
+        ({"id": 'a"/><geom'}, "id must be"),
     ],
 )
 def test_bad_objects_are_refused_with_a_clear_error(change, message):

@@ -44,6 +44,7 @@ class ArmGeometry:
     pad_thickness_m: float
     grasp_effort_n: float
     T_world_base: np.ndarray
+    sleep_rad: np.ndarray
 
     @classmethod
     def load(cls, name: str = "rx200") -> ArmGeometry:
@@ -59,6 +60,7 @@ class ArmGeometry:
             pad_thickness_m=float(gripper["pad_thickness_m"]),
             grasp_effort_n=float(gripper["grasp_effort_n"]),
             T_world_base=np.asarray(data["T_world_base"], dtype=float),
+            sleep_rad=np.asarray(data["poses"]["sleep_rad"], dtype=float),
         )
 
 

@@ -29,7 +29,7 @@ from armlab.devices.sim.config import (
 from armlab.devices.sim.gripper import SimGripper
 from armlab.devices.sim.mjcf import CAMERA_NAME, GRIPPER_SITE, OBJECT_PREFIX, ArmGeometry, build_model_xml
 from armlab.devices.sim.render import RawImages, RenderThread
-from armlab.scene import Scene, SceneObject, yaw_from_quat
+from armlab.scene import Scene, SceneObject
 
 logger = logging.getLogger(__name__)
 
@@ -90,8 +90,8 @@ class SimWorkcell:
         self._object_bodies = {obj.id: model.body(OBJECT_PREFIX + obj.id).id for obj in scene.objects}
         self._body_to_object = {body: obj_id for obj_id, body in self._object_bodies.items()}
         if previous is None:
-            sleep = np.array([0.0, -1.80, 1.55, 0.8, 0.0])
-            data.qpos[self._arm_qpos] = np.clip(sleep, self._geometry.lower_rad, self._geometry.upper_rad)
+            # The arm powers up in its sleep pose, fingers open.
+            data.qpos[self._arm_qpos] = np.clip(self._geometry.sleep_rad, self._geometry.lower_rad, self._geometry.upper_rad)
             data.qpos[self._finger_qpos] = self._geometry.finger_offset_max_m
             data.ctrl[self._pos_act] = data.qpos[self._arm_qpos]
             data.ctrl[self._finger_act] = self._geometry.finger_offset_max_m
