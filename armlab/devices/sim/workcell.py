@@ -364,6 +364,7 @@ class SimWorkcell:
                 "width": self.camera.intrinsics.width,
                 "height": self.camera.intrinsics.height,
                 "T_world_camera": self._T_world_camera.tolist(),
+                "dist": list(self.camera.intrinsics.dist),
             },
             "objects": objects,
             "gripper": state,

@@ -181,3 +181,19 @@ def test_aruco_topped_blocks_show_their_tag_upright_on_the_top_face():
         edge = tag_corners[0][1] - tag_corners[0][0]
         image_yaw = math.atan2(-edge[1], edge[0])  # image y points to world -y
         assert abs(math.remainder(image_yaw - obj["yaw_rad"], 2 * math.pi)) < math.radians(6)
+
+
+def test_board_grid_lines_render_where_the_grid_is():
+    with SimWorkcell(SimWorkcellConfig(seed=5, color_noise=False, depth_noise=False)) as sim:
+        gray = cv2.cvtColor(sim.render().color_bgr, cv2.COLOR_BGR2GRAY).astype(int)
+        truth = sim.truth()
+    on_lines, off_lines = [], []
+    for x in np.arange(-0.45, 0.451, 0.1):
+        for y in np.arange(-0.125, 0.376, 0.1):  # grid lines at y = 25 mm + k * 50 mm (DESIGN §3)
+            if math.hypot(x, y) < 0.2 or min(math.dist((x, y), c) for c in TAG_CENTRES_M.values()) < 0.04:
+                continue  # the arm's base or a tag
+            for dx, dy, bucket in ((0, 0, on_lines), (0.025, 0.025, off_lines)):
+                (u, v), _ = project(truth["camera"]["T_world_camera"], truth["camera"]["K"], np.array([x + dx, y + dy, 0.0]))
+                bucket.append(gray[int(round(v)), int(round(u))])
+    assert len(on_lines) > 40
+    assert max(on_lines) < min(off_lines) - 30, (max(on_lines), min(off_lines))
