@@ -3,6 +3,7 @@ non-overlapping, composed as DESIGN §7 says)."""
 
 import math
 
+import numpy as np
 import pytest
 
 from armlab.scene import (
@@ -140,3 +141,20 @@ def test_aruco_tops_go_on_blocks_of_the_mapped_colours_only():
     assert Scene.from_dict(scene.to_dict()) == scene
     with pytest.raises(ValueError, match="aruco_id"):
         SceneObject("c", "cylinder", "red", None, (0.1, 0.2, 0.019), aruco_id=3)
+
+
+def test_every_generated_object_is_reachable_by_the_arm_and_bottom_ones_from_straight_above():
+    from armlab.kinematics import load_arm
+
+    arm = load_arm("rx200")
+    for event, level in ALL_EVENT_LEVELS:
+        for seed in range(3):
+            scene = generate_scene(event, level, seed=seed)
+            floor = bottoms(scene)
+            for obj in scene.objects:
+                centre = np.array(obj.position_m)
+                if obj in floor:
+                    q = arm.ik(centre, pitch=math.pi / 2, yaw=obj.yaw_rad)
+                else:
+                    q = arm.ik(centre, yaw=obj.yaw_rad)  # stacked: the steepest reachable approach
+                assert np.linalg.norm(arm.fk(q)[:3, 3] - centre) < 1e-4, (event, level, seed, obj.id)
