@@ -50,6 +50,12 @@ class PoseRequest(Request):
     moving_time_s: float | None = Field(None, gt=0.0)
 
 
+class PoseNameRequest(Request):
+    """Optional body of /api/arm/home and /api/arm/sleep."""
+
+    moving_time_s: float | None = Field(None, gt=0.0)
+
+
 class TorqueRequest(Request):
     enabled: bool
 
@@ -297,6 +303,7 @@ WIRE_MODELS: tuple[type[BaseModel], ...] = (
     ProgramsResponse,
     JointsRequest,
     PoseRequest,
+    PoseNameRequest,
     TorqueRequest,
     GripperRequest,
     PixelRequest,

@@ -72,10 +72,10 @@ class InterbotixArmFacade:
         return list(status["joints_rad"]), True
 
     def go_to_home_pose(self, moving_time: float | None = None, accel_time: float | None = None, blocking: bool = True) -> None:
-        self._client.home(wait=blocking)
+        self._client.home(wait=blocking, moving_time_s=moving_time or self.moving_time)
 
     def go_to_sleep_pose(self, moving_time: float | None = None, accel_time: float | None = None, blocking: bool = True) -> None:
-        self._client.sleep(wait=blocking)
+        self._client.sleep(wait=blocking, moving_time_s=moving_time or self.moving_time)
 
     def get_joint_commands(self) -> list[float]:
         return list(self._client.status()["joints_rad"])

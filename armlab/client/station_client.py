@@ -125,11 +125,11 @@ class StationClient:
 
     # Arm and gripper ------------------------------------------------------------------------------
 
-    def home(self, wait: bool = True) -> dict:
-        return self._post("/api/arm/home", wait=wait, timeout_s=60.0)
+    def home(self, wait: bool = True, moving_time_s: float | None = None) -> dict:
+        return self._post("/api/arm/home", {"moving_time_s": moving_time_s}, wait=wait, timeout_s=60.0)
 
-    def sleep(self, wait: bool = True) -> dict:
-        return self._post("/api/arm/sleep", wait=wait, timeout_s=60.0)
+    def sleep(self, wait: bool = True, moving_time_s: float | None = None) -> dict:
+        return self._post("/api/arm/sleep", {"moving_time_s": moving_time_s}, wait=wait, timeout_s=60.0)
 
     def move_joints(self, q_rad: Sequence[float], moving_time_s: float | None = None, wait: bool = True) -> dict:
         body = {"q_rad": _floats(q_rad, "q_rad"), "moving_time_s": moving_time_s}

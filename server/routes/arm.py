@@ -5,20 +5,22 @@ from __future__ import annotations
 from fastapi import APIRouter
 
 from server.deps import ControlAuth, StationDep
-from server.models import GripperRequest, JointsRequest, PoseRequest, Status, TorqueRequest
+from server.models import GripperRequest, JointsRequest, PoseNameRequest, PoseRequest, Status, TorqueRequest
 
 router = APIRouter(prefix="/api", tags=["arm"])
 
 
 @router.post("/arm/home", response_model=Status)
-def post_home(station: StationDep, controller: ControlAuth, wait: bool = False) -> dict:
-    station.home(wait=wait, source=controller)
+def post_home(station: StationDep, controller: ControlAuth, body: PoseNameRequest | None = None, wait: bool = False) -> dict:
+    """All joints to zero (body optional: {moving_time_s})."""
+    station.home(body.moving_time_s if body else None, wait=wait, source=controller)
     return station.status()
 
 
 @router.post("/arm/sleep", response_model=Status)
-def post_sleep(station: StationDep, controller: ControlAuth, wait: bool = False) -> dict:
-    station.sleep(wait=wait, source=controller)
+def post_sleep(station: StationDep, controller: ControlAuth, body: PoseNameRequest | None = None, wait: bool = False) -> dict:
+    """The folded rest pose (body optional: {moving_time_s})."""
+    station.sleep(body.moving_time_s if body else None, wait=wait, source=controller)
     return station.status()
 
 

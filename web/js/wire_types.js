@@ -174,6 +174,12 @@ export const CLIENT_MESSAGE_TYPES = Object.freeze(["ack", "view", "command"]);
  */
 
 /**
+ * Optional body of /api/arm/home and /api/arm/sleep.
+ * @typedef {Object} PoseNameRequest
+ * @property {(number|null)} [moving_time_s]
+ */
+
+/**
  * @typedef {Object} PoseRequest
  * @property {Array<number>} position_m gripper point in the world (board) frame
  * @property {(number|null)} [pitch_rad] approach angle below horizontal; +π/2 = straight down; None = steepest
