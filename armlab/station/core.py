@@ -416,9 +416,9 @@ class Station:
                 self._job, self._last_job = None, job
                 event = "device_failed" if isinstance(error, DEVICE_ERRORS) else "job_ended"
                 self._state = after_event(self._state, event)
-                if self._state is not State.IDLE or event == "job_ended":
-                    self._detail = "" if self._state is State.IDLE else self._detail
-                if self._state is State.FAULT:
+                if self._state is State.IDLE:
+                    self._detail = ""
+                elif self._state is State.FAULT:
                     self._detail = f"device failure in job '{job.name}': {error}"
                     self._halt_arm()
         try:
