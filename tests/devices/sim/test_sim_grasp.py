@@ -148,3 +148,20 @@ def test_grip_comes_from_pad_friction_not_from_proximity(tmp_path):
         result = pick_and_carry(sim, "large")
     assert result["grasped"]["gripper"]["left_contacts"] == ["b"]  # the pads did close on it
     assert result["lift_m"] < 0.02
+
+
+def test_distractors_rest_stably_where_they_were_placed(cell):
+    from armlab.scene import DISTRACTOR_TYPES, object_dimensions_m
+
+    objects = []
+    for i, kind in enumerate(DISTRACTOR_TYPES):
+        for j, size in enumerate((None, "small")):
+            height = object_dimensions_m(kind, size)[2]
+            position = (-0.3 + 0.2 * i, 0.3 - 0.12 * j, height / 2)
+            objects.append(SceneObject(f"{kind}_{j}", kind, "green", size, position, quat_from_yaw(0.3 * i)))
+    scene = Scene(tuple(objects))
+    cell.set_scene(scene)
+    cell.step(1.5)
+    for obj, start in zip(cell.truth()["objects"], scene.objects):
+        assert np.linalg.norm(np.array(obj["position_m"]) - start.position_m) < 0.002, obj["id"]
+        assert abs(obj["yaw_rad"] - start.yaw_rad) < 0.02, obj["id"]
