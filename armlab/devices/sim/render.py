@@ -39,16 +39,26 @@ def depth_from_buffer(buffer: np.ndarray, znear_m: float, zfar_m: float) -> np.n
     return (d_coef / (buffer + c_coef)).astype(np.float32)
 
 
+def _gl_context_class(backend: str):
+    """The GL context class for a backend, chosen explicitly (headless EGL by default) so that it works
+    even if MuJoCo was imported before MUJOCO_GL was set."""
+    if backend == "egl":
+        from mujoco.egl import GLContext
+    elif backend == "osmesa":
+        from mujoco.osmesa import GLContext
+    else:
+        from mujoco.gl_context import GLContext
+    return GLContext
+
+
 class _GLRenderer:
     """Owns the GL and MuJoCo render contexts; used only from the render thread."""
 
     def __init__(self, model: mujoco.MjModel, camera_name: str, width: int, height: int) -> None:
-        from mujoco import gl_context
-
         self.width, self.height = width, height
-        self._gl = gl_context.GLContext(width, height)
+        self.backend = os.environ.get("MUJOCO_GL", "egl")
+        self._gl = _gl_context_class(self.backend)(width, height)
         self._gl.make_current()
-        self.backend = os.environ.get("MUJOCO_GL", "default")
         try:
             from OpenGL import GL
 
