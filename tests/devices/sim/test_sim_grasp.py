@@ -165,3 +165,32 @@ def test_distractors_rest_stably_where_they_were_placed(cell):
     for obj, start in zip(cell.truth()["objects"], scene.objects):
         assert np.linalg.norm(np.array(obj["position_m"]) - start.position_m) < 0.002, obj["id"]
         assert abs(obj["yaw_rad"] - start.yaw_rad) < 0.02, obj["id"]
+
+
+@pytest.mark.parametrize("offset_m,falls", [(0.0, False), (0.024, True)])
+def test_block_released_by_the_gripper_on_a_stack_stays_or_falls(cell, offset_m, falls):
+    """Carry a block onto a two-block stack and open the fingers: centred it stays, half off it falls."""
+    stack_xy = np.array([-0.15, 0.22])
+    loose = np.array([0.1, 0.22, 0.019])
+    cell.set_scene(Scene((
+        SceneObject("s0", "block", "red", "large", (*stack_xy, 0.019)),
+        SceneObject("s1", "block", "orange", "large", (*stack_xy, 0.057)),
+        SceneObject("b", "block", "yellow", "large", tuple(loose)),
+    )))
+    cell.gripper.release()
+    move_to(cell, loose + [0, 0, 0.06])
+    move_to(cell, loose)
+    cell.gripper.grasp()
+    assert cell.gripper.read_state().holding
+    drop = np.array([stack_xy[0] + offset_m, stack_xy[1], 0.076 + 0.019 + 0.002])
+    move_to(cell, drop + [0, 0, 0.06])
+    move_to(cell, drop)
+    cell.gripper.release()
+    move_to(cell, drop + [0, 0, 0.06])
+    cell.step(1.5)
+    placed = {o["id"]: o for o in cell.truth()["objects"]}["b"]
+    if falls:
+        assert placed["position_m"][2] < 0.076
+    else:
+        assert placed["position_m"][2] == pytest.approx(0.095, abs=0.002)
+        assert np.linalg.norm(np.array(placed["position_m"][:2]) - drop[:2]) < 0.003
