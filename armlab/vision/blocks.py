@@ -311,7 +311,12 @@ def detect_blocks(
     classes = color_classes(cv2.cvtColor(color_bgr[::step, ::step], cv2.COLOR_BGR2HSV), cfg, lut)
     colourless = classes == 0  # e.g. the white and black of a tag on a block's top
     classes[~raised] = 0
-    n, labels, stats, _ = cv2.connectedComponentsWithStats((classes > 0).astype(np.uint8), connectivity=8)
+    coloured = (classes > 0).astype(np.uint8)
+    # A tag on a block's top is colourless: bridge it (and nothing far from colour) so the thin coloured
+    # ring around it stays one candidate at this resolution.
+    near_colour = cv2.dilate(coloured, np.ones((7, 7), np.uint8)) > 0
+    candidates = coloured | (raised & colourless & near_colour).astype(np.uint8)
+    n, labels, stats, _ = cv2.connectedComponentsWithStats(candidates, connectivity=8)
     pixel_m = abs(float(cal.T_world_camera[2, 3])) / cal.K[0, 0] * step  # board-level pixel size, roughly
     min_face_px = 0.25 * bc.small_size_m**2 / pixel_m**2
     detector = tag_detector
@@ -329,7 +334,8 @@ def detect_blocks(
         box_z = z_small[y : y + bh, x : x + bw]
         box_colourless = colourless[y : y + bh, x : x + bw]
         tops: dict[int, tuple[float, np.ndarray, np.ndarray]] = {}  # colour -> (top, centroid, bbox)
-        for ci in np.nonzero(counts >= max(3, 0.1 * area))[0]:
+        coloured_area = max(1, area - int(counts[0]))
+        for ci in np.nonzero(counts[1:] >= max(3, 0.1 * coloured_area))[0] + 1:
             mine = comp_classes == ci
             top_m = quantile(comp_z[mine], 0.9)
             layer = mine & (np.abs(comp_z - top_m) < bc.top_face_tolerance_m)
