@@ -136,7 +136,7 @@ def run(args) -> int:
         score = score_blocks(result.blocks, truth, frame.depth_mm)
         for name in ("true_positives", "false_positives", "false_negatives", "color_correct", "size_correct",
                      "level_correct", "tag_correct", "tag_total", "distractors", "distractors_rejected", "hidden", "hidden_flagged",
-                     "excluded"):
+                     "excluded", "visible_flagged"):
             setattr(total, name, getattr(total, name) + getattr(score, name))
         total.position_errors_m += score.position_errors_m
         total.yaw_errors_rad += score.yaw_errors_rad
@@ -177,7 +177,8 @@ def report(args, seeds, total, click_errors, cam_errors, reproj, depth_checks, e
     print(f"  stack level         {pct(total.level_correct, tp)}")
     print(f"  tag ids on blocks   {pct(total.tag_correct, total.tag_total)}")
     print(f"  distractors not reported as cubes {pct(total.distractors_rejected, total.distractors)}")
-    print(f"  arm-hidden blocks flagged occluded (or withheld) {pct(total.hidden_flagged, total.hidden)}")
+    print(f"  arm-hidden blocks flagged occluded (or withheld) {pct(total.hidden_flagged, total.hidden)}; "
+          f"visible blocks wrongly flagged {pct(total.visible_flagged, tp)}")
     print(f"  excluded from scoring: {total.excluded} objects tipped over or fallen off the board by the physics")
     print(f"  position error (top-face centre, 3-D): mean {pos.mean():.2f} mm, max {pos.max():.2f} mm   (targets 2 / 5 mm)")
     print(f"  yaw error (mod 90 deg): mean {yaw.mean():.2f} deg, max {yaw.max():.2f} deg   (target mean 3 deg)")

@@ -308,14 +308,15 @@ def detect_blocks(
     with np.errstate(invalid="ignore"):
         raised = (z_small > bc.min_height_m) & (z_small < bc.max_height_m)
     lut, names = hue_lut(cfg)
-    classes = color_classes(cv2.cvtColor(color_bgr[::step, ::step], cv2.COLOR_BGR2HSV), cfg, lut)
+    hsv_small = cv2.cvtColor(color_bgr[::step, ::step], cv2.COLOR_BGR2HSV)
+    classes = color_classes(hsv_small, cfg, lut)
     colourless = classes == 0  # e.g. the white and black of a tag on a block's top
     classes[~raised] = 0
     coloured = (classes > 0).astype(np.uint8)
-    # A tag on a block's top is colourless: bridge it (and nothing far from colour) so the thin coloured
-    # ring around it stays one candidate at this resolution.
+    # A tag on a block's top is white and black: bridge its white (next to colour, never the dark arm)
+    # so the thin coloured ring around it stays one candidate at this resolution.
     near_colour = cv2.dilate(coloured, np.ones((7, 7), np.uint8)) > 0
-    candidates = coloured | (raised & colourless & near_colour).astype(np.uint8)
+    candidates = coloured | (raised & colourless & near_colour & (hsv_small[..., 2] >= 150)).astype(np.uint8)
     n, labels, stats, _ = cv2.connectedComponentsWithStats(candidates, connectivity=8)
     pixel_m = abs(float(cal.T_world_camera[2, 3])) / cal.K[0, 0] * step  # board-level pixel size, roughly
     min_face_px = 0.25 * bc.small_size_m**2 / pixel_m**2
@@ -465,8 +466,6 @@ def _is_occluded(face: _Face, centre_xy, yaw: float, size: str, cal, cfg: Percep
     """True when something well above the face (the arm) covers part of where the cube's top should be:
     the expected square, drawn around the measured centre, holds readings 15 mm or more above the face."""
     edge = cfg.blocks.large_size_m if size == "large" else cfg.blocks.small_size_m
-    if face.pixel_count * face.pixel_area_m2 >= 0.92 * edge * edge:
-        return False  # the whole top face is in view
     half = 0.5 * edge
     c, s = math.cos(yaw), math.sin(yaw)
     square = np.array([[centre_xy[0] + c * a - s * b, centre_xy[1] + s * a + c * b, face.top_m]

@@ -114,6 +114,7 @@ class SceneScore:
     hidden: int = 0
     hidden_flagged: int = 0
     excluded: int = 0
+    visible_flagged: int = 0  # fully visible blocks wrongly flagged occluded
     position_errors_m: list | None = None
     yaw_errors_rad: list | None = None
     failures: list | None = None
@@ -165,6 +166,7 @@ def score_blocks(blocks: list[Block], truth: dict, depth_mm: np.ndarray, match_r
         score.color_correct += block.color == top.color
         score.size_correct += block.size == top.size
         score.level_correct += block.stack_level == top.stack_level
+        score.visible_flagged += bool(block.occluded)
         if top.aruco_id is not None:
             score.tag_total += 1
             score.tag_correct += block.aruco_id == top.aruco_id
