@@ -17,7 +17,7 @@ from armlab.config import read_config_file, resolve_config_path
 from armlab.devices.arm import Arm, JointState, JointTrajectory
 from armlab.devices.interbotix.configuration_interbotix import InterbotixArmConfig
 from armlab.devices.interbotix.connection import InterbotixConnection
-from armlab.devices.opencv.frame_buffer import ReaderThread
+from armlab.devices.frame_buffer import ReaderThread
 from armlab.errors import DeviceAlreadyConnectedError, DeviceNotConnectedError
 
 

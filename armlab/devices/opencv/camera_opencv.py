@@ -1,6 +1,6 @@
 """OpenCVCamera: a webcam or a video file behind the Camera interface (colour only, no depth).
 
-A daemon reader thread pulls frames from cv2.VideoCapture and keeps only the newest (FrameBuffer).
+A daemon reader thread pulls frames from cv2.VideoCapture and keeps only the newest (ThreadedCamera).
 A video file is paced at its frame rate and loops by default; with loop=False the camera reports
 EOFError once the last frame is consumed. connect() is all-or-nothing: on any failure it releases
 the capture and stops the thread, so calling connect() again works. Messages start with str(camera).
@@ -15,9 +15,9 @@ from pathlib import Path
 import cv2
 import numpy as np
 
-from armlab.devices.camera import Camera, Frame, Intrinsics
+from armlab.devices.camera import Intrinsics
 from armlab.devices.opencv.configuration_opencv import OpenCVCameraConfig
-from armlab.devices.opencv.frame_buffer import FrameBuffer, ReaderThread
+from armlab.devices.threaded_camera import ThreadedCamera
 from armlab.errors import DeviceAlreadyConnectedError, DeviceNotConnectedError
 
 
@@ -27,26 +27,18 @@ def nominal_intrinsics(width: int, height: int, hfov_deg: float) -> Intrinsics:
     return Intrinsics(width=width, height=height, fx=fx, fy=fx, cx=(width - 1) / 2.0, cy=(height - 1) / 2.0)
 
 
-class OpenCVCamera(Camera):
+class OpenCVCamera(ThreadedCamera):
     """cv2.VideoCapture camera with a reader thread; see OpenCVCameraConfig for the options."""
 
     def __init__(self, config: OpenCVCameraConfig) -> None:
         self.config = config
+        super().__init__()
         self._capture: cv2.VideoCapture | None = None
-        self._reader: ReaderThread | None = None
-        self._buffer = FrameBuffer(str(self))
-        self._intrinsics: Intrinsics | None = None
         self._period_s = 0.0
-        self._sequence = 0
-        self._failures = 0
         self._next_capture_s = 0.0
 
     def __str__(self) -> str:
         return f"OpenCVCamera({self.config.source})"
-
-    @property
-    def is_connected(self) -> bool:
-        return self._reader is not None
 
     @property
     def intrinsics(self) -> Intrinsics:
@@ -62,13 +54,8 @@ class OpenCVCamera(Camera):
             raise DeviceAlreadyConnectedError(f"{self}: already connected; call close() before connecting again")
         try:
             self._open()
-            self._buffer.reset()
-            self._sequence = 0
-            self._failures = 0
             self._next_capture_s = time.monotonic()
-            self._reader = ReaderThread(f"{self}-reader", self._step)
-            self._reader.start()
-            self._buffer.wait_for_first(self.config.warmup_timeout_s)
+            self._start_reader(self.config.warmup_timeout_s)
         except BaseException as error:
             self._teardown()
             if isinstance(error, TimeoutError):
@@ -113,9 +100,7 @@ class OpenCVCamera(Camera):
         self._teardown()
 
     def _teardown(self) -> None:
-        if self._reader is not None:
-            self._reader.stop()
-            self._reader = None
+        self._stop_reader()
         if self._capture is not None:
             self._capture.release()
             self._capture = None
@@ -138,39 +123,6 @@ class OpenCVCamera(Camera):
                 self._capture.set(cv2.CAP_PROP_POS_FRAMES, 0)
                 ok, image = self._capture.read()
             if not ok or image is None:
-                self._failures += 1
-                if self._failures >= self.config.max_consecutive_failures:
-                    self._buffer.end(ConnectionError(f"{self}: {self._failures} consecutive failed reads; device lost"))
-                    return False
-                return True
-        self._failures = 0
-        self._sequence += 1
-        self._buffer.publish(
-            Frame(
-                color_bgr=np.ascontiguousarray(image),
-                depth_mm=None,
-                timestamp_s=time.time(),
-                sequence=self._sequence,
-                intrinsics=self._intrinsics,
-            )
-        )
+                return self._read_failed("device lost")
+        self._publish(np.ascontiguousarray(image), None)
         return True
-
-    # -- reading ----------------------------------------------------------------------------------
-
-    def _require_connected(self) -> None:
-        if not self.is_connected:
-            raise DeviceNotConnectedError(f"{self}: not connected: call connect() first")
-
-    def read(self) -> Frame:
-        """Block until the next new frame (at most read_timeout_s, then TimeoutError)."""
-        self._require_connected()
-        return self._buffer.read(self.config.read_timeout_s)
-
-    def async_read(self, timeout_ms: float = 200.0) -> Frame:
-        self._require_connected()
-        return self._buffer.async_read(timeout_ms)
-
-    def read_latest(self, max_age_ms: float = 500.0) -> Frame:
-        self._require_connected()
-        return self._buffer.read_latest(max_age_ms)

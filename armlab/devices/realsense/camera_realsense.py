@@ -2,20 +2,19 @@
 
 pyrealsense2 is an optional extra (`pip install 'armlab[realsense]'`); it is imported inside connect()
 so nothing else pulls it in. The reader thread, buffering and error contract are the OpenCV backend's
-(FrameBuffer): only the device calls below are RealSense-specific, and they are kept thin because no
+(ThreadedCamera): only the device calls below are RealSense-specific, and they are kept thin because no
 test machine has the hardware.
 """
 
 from __future__ import annotations
 
-import time
 
 import numpy as np
 
-from armlab.devices.camera import Camera, Frame, Intrinsics
-from armlab.devices.opencv.frame_buffer import FrameBuffer, ReaderThread
+from armlab.devices.camera import Intrinsics
 from armlab.devices.realsense.configuration_realsense import RealSenseCameraConfig
-from armlab.errors import DeviceAlreadyConnectedError, DeviceNotConnectedError
+from armlab.devices.threaded_camera import ThreadedCamera
+from armlab.errors import DeviceAlreadyConnectedError
 
 
 class RealSenseNotInstalledError(ImportError):
@@ -34,33 +33,19 @@ def import_pyrealsense2(owner: str = "RealSenseCamera"):
     return pyrealsense2
 
 
-class RealSenseCamera(Camera):
+class RealSenseCamera(ThreadedCamera):
     """A RealSense camera streaming colour (BGR8) and, optionally, depth aligned to colour (mm)."""
 
     def __init__(self, config: RealSenseCameraConfig) -> None:
         self.config = config
+        super().__init__()
         self._rs = None
         self._pipeline = None
         self._align = None
         self._depth_scale_mm = 1.0
-        self._reader: ReaderThread | None = None
-        self._buffer = FrameBuffer(str(self))
-        self._intrinsics: Intrinsics | None = None
-        self._sequence = 0
-        self._failures = 0
 
     def __str__(self) -> str:
         return f"RealSenseCamera({self.config.serial or 'first'})"
-
-    @property
-    def is_connected(self) -> bool:
-        return self._reader is not None
-
-    @property
-    def intrinsics(self) -> Intrinsics:
-        if self._intrinsics is None:
-            raise DeviceNotConnectedError(f"{self}: not connected: call connect() first")
-        return self._intrinsics
 
     def connect(self) -> None:
         """Start the pipeline, read the factory intrinsics, start the reader; all-or-nothing."""
@@ -86,12 +71,7 @@ class RealSenseCamera(Camera):
             self._intrinsics = Intrinsics(
                 stream.width, stream.height, stream.fx, stream.fy, stream.ppx, stream.ppy, tuple(stream.coeffs[:5])
             )
-            self._buffer.reset()
-            self._sequence = 0
-            self._failures = 0
-            self._reader = ReaderThread(f"{self}-reader", self._step)
-            self._reader.start()
-            self._buffer.wait_for_first(cfg.warmup_timeout_s)
+            self._start_reader(cfg.warmup_timeout_s)
         except BaseException as error:
             self._teardown()
             if isinstance(error, TimeoutError):
@@ -105,9 +85,7 @@ class RealSenseCamera(Camera):
         self._teardown()
 
     def _teardown(self) -> None:
-        if self._reader is not None:
-            self._reader.stop()
-            self._reader = None
+        self._stop_reader()
         if self._pipeline is not None:
             try:
                 self._pipeline.stop()
@@ -127,40 +105,10 @@ class RealSenseCamera(Camera):
             if not color or (self._align is not None and not depth):
                 raise RuntimeError("incomplete frame set")
         except RuntimeError as error:
-            self._failures += 1
-            if self._failures >= self.config.max_consecutive_failures:
-                self._buffer.end(ConnectionError(f"{self}: {self._failures} consecutive failed reads: {error}"))
-                return False
-            return True
-        self._failures = 0
+            return self._read_failed(str(error))
         depth_mm = None
         if depth is not None:
             raw = np.asanyarray(depth.get_data())
             depth_mm = np.clip(np.rint(raw * self._depth_scale_mm), 0, 65535).astype(np.uint16)
-        self._sequence += 1
-        self._buffer.publish(
-            Frame(
-                color_bgr=np.array(np.asanyarray(color.get_data()), copy=True),
-                depth_mm=depth_mm,
-                timestamp_s=time.time(),
-                sequence=self._sequence,
-                intrinsics=self._intrinsics,
-            )
-        )
+        self._publish(np.array(np.asanyarray(color.get_data()), copy=True), depth_mm)
         return True
-
-    def _require_connected(self) -> None:
-        if not self.is_connected:
-            raise DeviceNotConnectedError(f"{self}: not connected: call connect() first")
-
-    def read(self) -> Frame:
-        self._require_connected()
-        return self._buffer.read(self.config.read_timeout_s)
-
-    def async_read(self, timeout_ms: float = 200.0) -> Frame:
-        self._require_connected()
-        return self._buffer.async_read(timeout_ms)
-
-    def read_latest(self, max_age_ms: float = 500.0) -> Frame:
-        self._require_connected()
-        return self._buffer.read_latest(max_age_ms)
