@@ -128,8 +128,7 @@ def choose_stack(top_m: float, top_size: str, cfg: PerceptionConfig, z_roi: np.n
         return close[0][1]
 
     def ring_seen(height_m: float) -> bool:
-        with np.errstate(invalid="ignore"):
-            return int(np.count_nonzero(np.abs(z_roi - height_m) < 0.0015)) >= ring_px
+        return int(np.count_nonzero(np.abs(z_roi - height_m) < 0.0015)) >= ring_px
 
     transitions = {c[1]: _transition_m(c[1], cfg) for c in close}
     seen = {h: ring_seen(h) for h in transitions.values() if h is not None}
@@ -245,13 +244,12 @@ def _top_face_in_roi(
     only the face (side-face pixels just below the top edge would bias the footprint toward the camera).
     """
     x0, y0 = roi[0], roi[1]
-    with np.errstate(invalid="ignore"):
-        band = np.abs(z - top_m) < tol_m
-        blob = _largest_blob(band & keep if keep is not None else band)
-        if blob is None:
-            return None
-        face_m = quantile(z[blob > 0], 0.5)
-        blob &= (np.abs(z - face_m) < 0.5 * tol_m).astype(np.uint8)
+    band = np.abs(z - top_m) < tol_m
+    blob = _largest_blob(band & keep if keep is not None else band)
+    if blob is None:
+        return None
+    face_m = quantile(z[blob > 0], 0.5)
+    blob &= (np.abs(z - face_m) < 0.5 * tol_m).astype(np.uint8)
     if not blob.any():
         return None
     contours, _ = cv2.findContours(blob, cv2.RETR_EXTERNAL, cv2.CHAIN_APPROX_SIMPLE)
@@ -305,8 +303,7 @@ def detect_blocks(
     bc = cfg.blocks
     step = 4  # candidates at quarter resolution (a small cube's top is still ~6x6 px); measured at full
     z_small = height_map_m(depth_mm[::step, ::step].astype(np.float32) / 1000.0, cal.K / np.array([[step], [step], [1]]), cal.T_world_camera)
-    with np.errstate(invalid="ignore"):
-        raised = (z_small > bc.min_height_m) & (z_small < bc.max_height_m)
+    raised = (z_small > bc.min_height_m) & (z_small < bc.max_height_m)
     lut, names = hue_lut(cfg)
     hsv_small = cv2.cvtColor(color_bgr[::step, ::step], cv2.COLOR_BGR2HSV)
     classes = color_classes(hsv_small, cfg, lut)
@@ -340,8 +337,7 @@ def detect_blocks(
             mine = comp_classes == ci
             top_m = quantile(comp_z[mine], 0.9)
             layer = mine & (np.abs(comp_z - top_m) < bc.top_face_tolerance_m)
-            with np.errstate(invalid="ignore"):
-                tag_layer = box_colourless & (np.abs(box_z - top_m) < bc.top_face_tolerance_m)
+            tag_layer = box_colourless & (np.abs(box_z - top_m) < bc.top_face_tolerance_m)
             if np.count_nonzero(layer) + np.count_nonzero(tag_layer) < min_face_px:
                 continue  # only a sliver of this colour at its top: the side of a lower stack member
             pts = np.stack([xs[layer], ys[layer]], axis=1)
@@ -371,8 +367,7 @@ def _blocks_from_region(color_bgr, depth_mm, cal, cfg, roi, top_m, name, ci, lut
     classes = color_classes(hsv, cfg, lut)
     z = _roi_heights(depth_mm, cal, roi)
     mine = classes == ci
-    with np.errstate(invalid="ignore"):
-        near_top = mine & (np.abs(z - top_m) < cfg.blocks.top_face_tolerance_m)
+    near_top = mine & (np.abs(z - top_m) < cfg.blocks.top_face_tolerance_m)
     # Lit from above, a top face is brighter than the block's sides: dim pixels of this colour are side
     # faces that the depth filter smeared up to the top's height at the edge facing the camera.
     value = hsv[..., 2]
@@ -405,8 +400,7 @@ def _covered(face: _Face, z: np.ndarray, roi) -> bool:
     hull = cv2.convexHull(np.round(face.contour_px - np.array(roi[:2])).astype(np.int32))
     inside = np.zeros(z.shape, np.uint8)
     cv2.fillConvexPoly(inside, hull, 1)
-    with np.errstate(invalid="ignore"):
-        above = np.count_nonzero((z > face.top_m + 0.01) & (inside > 0))
+    above = np.count_nonzero((z > face.top_m + 0.01) & (inside > 0))
     return above > 0.15 * max(1, np.count_nonzero(inside))
 
 
@@ -478,6 +472,5 @@ def _is_occluded(face: _Face, centre_xy, yaw: float, size: str, cal, cfg: Percep
         return False
     inside = np.zeros(window.shape, np.uint8)
     cv2.fillConvexPoly(inside, np.round(poly - [x0, y0]).astype(np.int32), 1)
-    with np.errstate(invalid="ignore"):
-        above = np.count_nonzero((window > face.top_m + 0.008) & (inside > 0))
+    above = np.count_nonzero((window > face.top_m + 0.008) & (inside > 0))
     return above > 0.05 * max(1, np.count_nonzero(inside))
