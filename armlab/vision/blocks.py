@@ -16,7 +16,7 @@ import numpy as np
 
 from armlab.vision.calibration import Calibration
 from armlab.vision.config import PerceptionConfig
-from armlab.vision.geometry import height_map_m, intersect_rays_with_plane, normalized_rays, project_points
+from armlab.vision.geometry import height_map_m, intersect_rays_with_plane, normalized_rays, project_plane_points
 from armlab.vision.tags import check_color_image, detect_tags, make_detector
 
 MIN_FILL = 0.84  # top-face area / its minimum-area rectangle: squares ~0.95, discs 0.785
@@ -462,9 +462,9 @@ def _is_occluded(face: _Face, centre_xy, yaw: float, size: str, cal, cfg: Percep
     edge = cfg.blocks.large_size_m if size == "large" else cfg.blocks.small_size_m
     half = 0.5 * edge
     c, s = math.cos(yaw), math.sin(yaw)
-    square = np.array([[centre_xy[0] + c * a - s * b, centre_xy[1] + s * a + c * b, face.top_m]
+    square = np.array([[centre_xy[0] + c * a - s * b, centre_xy[1] + s * a + c * b]
                        for a, b in ((-half, -half), (half, -half), (half, half), (-half, half))])
-    poly = project_points(cal.T_world_camera, cal.K, cal.dist, square) / step
+    poly = project_plane_points(cal.T_world_camera, cal.K, cal.dist, square, face.top_m) / step
     x0, y0 = np.maximum(np.floor(poly.min(axis=0)).astype(int) - 1, 0)
     x1, y1 = np.ceil(poly.max(axis=0)).astype(int) + 2
     window = z_small[y0:y1, x0:x1]

@@ -104,11 +104,22 @@ def project_points(T_world_camera: np.ndarray, K: np.ndarray, dist: np.ndarray, 
     return pixels.reshape(-1, 2)
 
 
-def board_homography(T_world_camera: np.ndarray, K: np.ndarray) -> np.ndarray:
-    """3x3 H mapping board-plane points (x, y, 1) at z = 0 (metres) to undistorted pixels (u, v, 1)."""
+def board_homography(T_world_camera: np.ndarray, K: np.ndarray, plane_z_m: float = 0.0) -> np.ndarray:
+    """3x3 H mapping points (x, y, 1) of the plane z = plane_z_m (metres) to undistorted pixels (u, v, 1)."""
     T_camera_world = invert_transform(T_world_camera)
-    H = K @ np.column_stack([T_camera_world[:3, 0], T_camera_world[:3, 1], T_camera_world[:3, 3]])
+    H = K @ np.column_stack([T_camera_world[:3, 0], T_camera_world[:3, 1], T_camera_world[:3, 2] * plane_z_m + T_camera_world[:3, 3]])
     return H / H[2, 2]
+
+
+def project_plane_points(T_world_camera: np.ndarray, K: np.ndarray, dist: np.ndarray, points_xy: np.ndarray, plane_z_m: float) -> np.ndarray:
+    """Pixels (N, 2) of points (N, 2) on the plane z = plane_z_m: a homography without lens distortion
+    (cheap enough for per-frame drawing), full projection with it."""
+    pts = np.asarray(points_xy, dtype=np.float64).reshape(-1, 2)
+    if np.any(np.asarray(dist) != 0):
+        return project_points(T_world_camera, K, dist, np.column_stack([pts, np.full(len(pts), plane_z_m)]))
+    H = board_homography(T_world_camera, K, plane_z_m)
+    uvw = pts @ H[:, :2].T + H[:, 2]
+    return uvw[:, :2] / uvw[:, 2:3]
 
 
 def height_map_m(depth_m: np.ndarray, K: np.ndarray, T_world_camera: np.ndarray, step: int = 1) -> np.ndarray:

@@ -11,7 +11,7 @@ import numpy as np
 
 from armlab.vision.blocks import Block
 from armlab.vision.calibration import Calibration
-from armlab.vision.geometry import project_points
+from armlab.vision.geometry import project_plane_points, project_points
 from armlab.vision.tags import Tag, check_color_image
 
 # Drawing colours (BGR) per colour class; unknown names are drawn white.
@@ -83,8 +83,8 @@ def _draw_block(out: np.ndarray, block: Block, cal: Calibration | None, labels: 
     cv2.circle(out, centre, 3, (255, 255, 255), -1)
     if cal is not None:
         half = 0.6 * block.side_m if block.side_m > 0 else 0.02
-        tip_world = block.position_m + np.array([half * math.cos(block.yaw_rad), half * math.sin(block.yaw_rad), 0.0])
-        tip = project_points(cal.T_world_camera, cal.K, cal.dist, tip_world)[0]
+        tip_xy = block.position_m[:2] + half * np.array([math.cos(block.yaw_rad), math.sin(block.yaw_rad)])
+        tip = project_plane_points(cal.T_world_camera, cal.K, cal.dist, tip_xy, float(block.position_m[2]))[0]
         cv2.arrowedLine(out, centre, (int(round(tip[0])), int(round(tip[1]))), (255, 255, 255), 1, cv2.LINE_AA, tipLength=0.3)
     if labels:
         text = f"{block.color} {block.size}" if block.is_cube else f"not cube ({block.color})"
