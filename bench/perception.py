@@ -5,8 +5,7 @@ whole perception pass on one core and the JPEG encode time.
     MUJOCO_GL=egl .venv/bin/python bench/perception.py [--scenes 110] [--first-seed 0]
 
 Each scene is calibrated from a frame with the arm parked (as the station does), then perceived.
-Scene variants by index: i % 5 == 2 puts tags on some blocks' tops (painted into the rendered image
-with the sim's own block-top texture, which the sim does not draw yet), i % 5 == 4 swings the arm over a
+Scene variants by index: i % 5 == 2 puts ArUco tags (DICT_4X4_250, drawn by the sim) on some blocks' tops, i % 5 == 4 swings the arm over a
 block (occlusion), i % 10 == 6 adds a touching same-colour twin next to a single block.
 """
 
@@ -29,8 +28,7 @@ from armlab.devices.sim import SimWorkcell, SimWorkcellConfig  # noqa: E402
 from armlab.errors import ConfigError  # noqa: E402
 from armlab.scene import EVENTS, Scene, generate_scene  # noqa: E402
 from armlab.vision import PerceptionPipeline, calibrate_extrinsics, load_perception_config  # noqa: E402
-from armlab.devices.sim.mjcf import COLOR_RGBA  # noqa: E402
-from armlab.vision.evaluate import SceneScore, click_grid_errors, expected_tops, paint_block_top_tag, score_blocks  # noqa: E402
+from armlab.vision.evaluate import SceneScore, click_grid_errors, expected_tops, score_blocks  # noqa: E402
 
 PAIRS = [(event, level) for event, levels in EVENTS.items() for level in levels]
 
@@ -121,12 +119,6 @@ def run(args) -> int:
             truth = cell.truth()
         finally:
             cell.close()
-        color = frame.color_bgr
-        for top in expected_tops(truth):  # the sim does not draw block-top tags yet: paint its own texture
-            if top.aruco_id is not None:
-                rgb = tuple(int(round(255 * c)) for c in COLOR_RGBA[top.color][:3])
-                color = paint_block_top_tag(color, truth, top.object_id, top.aruco_id, rgb)
-        frame = replace(frame, color_bgr=color)
         cal = calibrate_extrinsics(calibration_frame.color_bgr, calibration_frame.intrinsics, cfg, depth_mm=calibration_frame.depth_mm)
         T_true = np.asarray(truth["camera"]["T_world_camera"])
         cam_errors.append(np.linalg.norm(cal.camera_position_m - T_true[:3, 3]))

@@ -6,12 +6,11 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass
 
-import cv2
 import numpy as np
 
 from armlab.vision.blocks import Block
 from armlab.vision.calibration import Calibration
-from armlab.vision.geometry import invert_transform, project_points
+from armlab.vision.geometry import invert_transform
 from armlab.vision.pixel_world import pixel_to_world
 
 BLOCK_EDGE_M = {"large": 0.038, "small": 0.025}
@@ -201,26 +200,3 @@ def click_grid_errors(cal: Calibration, truth: dict, step_m: float = 0.025,
                 continue
             errors.append(np.linalg.norm(pixel_to_world(cal, u, v, plane_z_m=0.0) - np.array([x, y, 0.0])))
     return np.array(errors)
-
-
-def paint_block_top_tag(image: np.ndarray, truth: dict, obj_id: str, tag_id: int, rgb) -> np.ndarray:
-    """The sim's own block-top texture (tag on white inside the block colour) warped onto a block's true
-    top face: the sim models tagged tops (SceneObject.aruco_id) but does not draw them yet, so tests and
-    the bench put them into the rendered image. Returns a new image."""
-    from armlab.devices.sim.textures import block_top_texture
-    obj = next(o for o in truth["objects"] if o["id"] == obj_id)
-    half = {"large": 0.019, "small": 0.0125}[obj["size"]]
-    x, y, z = obj["position_m"]
-    c, s = math.cos(obj["yaw_rad"]), math.sin(obj["yaw_rad"])
-    corners = np.array([[x + c * a - s * b, y + s * a + c * b, z + half] for a, b in ((-half, half), (half, half), (half, -half), (-half, -half))])
-    T = np.asarray(truth["camera"]["T_world_camera"])
-    K = np.asarray(truth["camera"]["K"])
-    px = project_points(T, K, np.zeros(5), corners).astype(np.float32)
-    texture = cv2.cvtColor(block_top_texture(tag_id, rgb, 200), cv2.COLOR_RGB2BGR)
-    H = cv2.getPerspectiveTransform(np.float32([[0, 0], [200, 0], [200, 200], [0, 200]]), px)
-    size = (image.shape[1], image.shape[0])
-    warped = cv2.warpPerspective(texture, H, size)
-    inside = cv2.warpPerspective(np.full((200, 200), 255, np.uint8), H, size) > 128
-    out = image.copy()
-    out[inside] = warped[inside]
-    return out

@@ -19,7 +19,7 @@ from armlab.vision import (
     project_grid,
     world_to_pixel,
 )
-from armlab.vision.evaluate import click_grid_errors, expected_tops, paint_block_top_tag, score_blocks
+from armlab.vision.evaluate import click_grid_errors, expected_tops, score_blocks
 from armlab.vision.geometry import project_points
 
 
@@ -30,7 +30,8 @@ def _obj(oid, otype, color, size, x, y, yaw=0.0, z_base=0.0, aruco_id=None):
 
 @pytest.fixture(scope="module")
 def custom_frame():
-    """Tagged tops, two touching blue cubes, a cylinder, and an orange cube under the arm."""
+    """Tagged tops (the sim draws DICT_4X4_250 tags), two touching blue cubes, a cylinder, and an orange
+    cube under the arm."""
     scene = Scene(objects=(
         _obj("tagged", "block", "yellow", "large", 0.15, 0.26, yaw=0.3, aruco_id=100),
         _obj("twin_a", "block", "blue", "large", -0.22, 0.12),
@@ -41,9 +42,7 @@ def custom_frame():
         _obj("tagsmall", "block", "blue", "small", -0.10, 0.33, aruco_id=200),
     ))
     frame, truth = render_sim(scene, seed=7, arm_q=(0.0, 0.0, 0.0, 0.0, 0.0))
-    color = paint_block_top_tag(frame.color_bgr, truth, "tagged", 100, (235, 209, 20))
-    color = paint_block_top_tag(color, truth, "tagsmall", 200, (20, 56, 204))
-    return color, frame, truth
+    return frame.color_bgr, frame, truth
 
 
 @pytest.fixture(scope="module")
