@@ -1,10 +1,12 @@
 """The operator's workflow in real Chromium on the simulated workcell: calibrate, click a block to
 grab it (ground truth shows it lifted), click a free spot to drop it (within 10 mm of the clicked
-world point), e-stop during a move (the arm stops, the UI shows estop). Saves docs/screenshot.png."""
+world point), e-stop during a move (the arm stops, the UI shows estop). Takes the README's screenshot:
+into a temporary folder by default, into docs/screenshot.png with ARMLAB_UPDATE_SCREENSHOT=1."""
 
 from __future__ import annotations
 
 import math
+import os
 import time
 
 import numpy as np
@@ -14,7 +16,7 @@ from browser_helpers import REPO, canvas_point, open_page, wait_frames
 
 pytestmark = pytest.mark.browser
 
-SCREENSHOT = REPO / "docs" / "screenshot.png"
+README_SCREENSHOT = REPO / "docs" / "screenshot.png"
 JOB_TIMEOUT_S = 60.0
 SLEEP_RAD = np.array([0.0, -1.80, 1.55, 0.8, 0.0])  # DESIGN §4
 
@@ -177,7 +179,9 @@ def test_click_grab_lifts_the_block_and_click_drop_places_it(page, server):
     assert page.errors == []
 
 
-def test_screenshot_of_calibrated_scene_with_detections(page, server):
+def test_screenshot_of_calibrated_scene_with_detections(page, server, tmp_path):
+    update_readme = os.environ.get("ARMLAB_UPDATE_SCREENSHOT") == "1"
+    screenshot = README_SCREENSHOT if update_readme else tmp_path / "screenshot.png"
     ensure_calibrated(page, server)
     # Park the arm out of the camera's way so every block is seen whole.
     page.click("#btn-sleep")
@@ -201,9 +205,9 @@ def test_screenshot_of_calibrated_scene_with_detections(page, server):
     assert math.dist(hover_m[:2], det["position_m"][:2]) < 0.02
     frames = wait_frames(page, 1)
     wait_frames(page, frames + 3)  # frames drawn with the grid layer on
-    SCREENSHOT.parent.mkdir(parents=True, exist_ok=True)
-    page.screenshot(path=str(SCREENSHOT))
-    assert SCREENSHOT.stat().st_size > 50_000
+    screenshot.parent.mkdir(parents=True, exist_ok=True)
+    page.screenshot(path=str(screenshot))
+    assert screenshot.stat().st_size > 50_000
     page.uncheck("#layer-grid")
 
 
