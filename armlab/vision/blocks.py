@@ -405,13 +405,14 @@ def _covered(face: _Face, z: np.ndarray, roi) -> bool:
 
 
 def _face_looks_tagged(color_bgr: np.ndarray, block: Block) -> bool:
-    """A top face with a bright colourless patch in the middle may carry a tag."""
+    """A top face whose middle is mostly colourless (white, grey or black: hue is noise on dark
+    pixels, so they count too) may carry a tag."""
     u, v = block.center_px.astype(int)
     patch = color_bgr[max(0, v - 4) : v + 5, max(0, u - 4) : u + 5]
     if patch.size == 0:
         return False
     hsv = cv2.cvtColor(patch, cv2.COLOR_BGR2HSV)
-    return bool(np.mean(hsv[..., 1] < 60) > 0.5)
+    return bool(np.mean((hsv[..., 1] < 60) | (hsv[..., 2] < 60)) > 0.5)
 
 
 def _with_tag(block: Block, color_bgr: np.ndarray, roi, detector, cfg: PerceptionConfig) -> Block:

@@ -169,6 +169,8 @@ def score_blocks(blocks: list[Block], truth: dict, depth_mm: np.ndarray, match_r
         if top.aruco_id is not None:
             score.tag_total += 1
             score.tag_correct += block.aruco_id == top.aruco_id
+            if block.aruco_id != top.aruco_id:
+                score.failures.append(f"tag {top.aruco_id} on the {top.color} {top.size} block read as {block.aruco_id}")
         if block.color != top.color or block.size != top.size or block.stack_level != top.stack_level:
             score.failures.append(
                 f"{top.color} {top.size} L{top.stack_level} seen as {block.color} {block.size} L{block.stack_level}"
