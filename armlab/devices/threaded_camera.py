@@ -8,6 +8,7 @@ the same way for every backend.
 
 from __future__ import annotations
 
+import abc
 import time
 
 import numpy as np
@@ -40,9 +41,9 @@ class ThreadedCamera(Camera):
 
     # -- reader thread ----------------------------------------------------------------------------
 
+    @abc.abstractmethod
     def _step(self, stop) -> bool:
         """Capture one frame (the reader thread's body); False ends the thread."""
-        raise NotImplementedError
 
     def _start_reader(self, warmup_timeout_s: float) -> None:
         """Start the reader thread from a clean buffer and wait for the first frame (TimeoutError)."""
