@@ -16,7 +16,7 @@ import numpy as np
 
 from armlab.vision.calibration import Calibration
 from armlab.vision.config import PerceptionConfig
-from armlab.vision.geometry import height_map_m, intersect_rays_with_plane, normalized_rays, project_plane_points
+from armlab.vision.geometry import PlaneCamera, height_coefficients, height_map_m
 from armlab.vision.tags import check_color_image, detect_tags, make_detector
 
 MIN_FILL = 0.84  # top-face area / its minimum-area rectangle: squares ~0.95, discs 0.785
@@ -81,11 +81,16 @@ def hue_lut(cfg: PerceptionConfig) -> tuple[np.ndarray, list[str]]:
 
 
 def color_classes(hsv: np.ndarray, cfg: PerceptionConfig, lut: np.ndarray) -> np.ndarray:
-    """Per-pixel colour index + 1 (0 = not a block colour: grey, dark or washed out)."""
-    h, s, v = hsv[..., 0], hsv[..., 1], hsv[..., 2]
-    classes = lut[np.minimum(h, 179)] + 1
-    classes[(s < cfg.blocks.min_saturation) | (v < cfg.blocks.min_value)] = 0
-    return classes
+    """Per-pixel colour index + 1 (0 = not a block colour: grey, dark or washed out).
+
+    Two OpenCV passes: a 256-entry table on the hue plane (hues past 179 count as 179), and a range
+    mask for enough saturation and value."""
+    table = np.empty(256, np.uint8)
+    table[:180] = lut + 1
+    table[180:] = table[179]
+    classes = cv2.LUT(cv2.extractChannel(hsv, 0), table)
+    colourful = cv2.inRange(hsv, (0, cfg.blocks.min_saturation, cfg.blocks.min_value), (255, 255, 255))
+    return cv2.bitwise_and(classes, colourful)
 
 
 def stack_candidates(top_m: float, top_size: str, cfg: PerceptionConfig) -> list[tuple[float, tuple[str, ...]]]:
@@ -97,12 +102,8 @@ def stack_candidates(top_m: float, top_size: str, cfg: PerceptionConfig) -> list
     below = top_m - (large if top_size == "large" else small)
     n_small_max = 12 if top_size == "small" else 1
     errors = np.abs(below - np.add.outer(np.arange(12) * large, np.arange(n_small_max) * small)).ravel()
-    order = np.argsort(errors, kind="stable")[:6]
-    nl, ns = np.divmod(order, n_small_max)
-    nl, ns = dict(zip(order, nl)), dict(zip(order, ns))
-    return [
-        (float(errors[i]), ("large",) * int(nl[i]) + ("small",) * int(ns[i]) + (top_size,)) for i in order
-    ]
+    order = np.argsort(errors, kind="stable")[:6].tolist()
+    return [(float(errors[i]), ("large",) * (i // n_small_max) + ("small",) * (i % n_small_max) + (top_size,)) for i in order]
 
 
 def stack_from_height(top_m: float, top_size: str, cfg: PerceptionConfig) -> tuple[int, tuple[str, ...], float]:
@@ -118,10 +119,14 @@ def _transition_m(sizes: tuple[str, ...], cfg: PerceptionConfig) -> float | None
     return sizes.count("large") * cfg.blocks.large_size_m
 
 
-def choose_stack(top_m: float, top_size: str, cfg: PerceptionConfig, z_roi: np.ndarray | None, ring_px: float) -> tuple[str, ...]:
+def choose_stack(
+    top_m: float, top_size: str, cfg: PerceptionConfig, z_roi: np.ndarray | None, ring_px: float,
+    candidates: list[tuple[float, tuple[str, ...]]] | None = None,
+) -> tuple[str, ...]:
     """The pile (sizes bottom..top) for a top face: by height, and where two piles fit about equally
-    (e.g. 2 large + 1 small vs 4 small under a small top), by whether a large block's ring shows."""
-    candidates = stack_candidates(top_m, top_size, cfg)
+    (e.g. 2 large + 1 small vs 4 small under a small top), by whether a large block's ring shows.
+    candidates: stack_candidates(top_m, top_size, cfg) if the caller already has them."""
+    candidates = candidates or stack_candidates(top_m, top_size, cfg)
     best_err = candidates[0][0]
     close = [c for c in candidates if c[0] <= best_err + 0.0025][:4]
     if len(close) == 1 or z_roi is None:
@@ -162,15 +167,26 @@ def _measure_rect(points_xy: np.ndarray, pitch_m: float) -> tuple[np.ndarray, fl
     return np.array([cx, cy]), wa, wb, yaw, fill
 
 
-def _classify_face(face: _Face, cfg: PerceptionConfig) -> tuple[str, float, float, bool, np.ndarray]:
-    """(size, side_m, yaw, is_cube, centre_xy) from the face's metric footprint and height."""
+@dataclass(frozen=True)
+class _Classified:
+    size: str
+    side_m: float
+    yaw: float
+    is_cube: bool
+    centre_xy: np.ndarray
+    stacks: list[tuple[float, tuple[str, ...]]]  # stack_candidates(top, size), best first
+
+
+def _classify_face(face: _Face, cfg: PerceptionConfig) -> _Classified:
+    """Size, side, yaw, cube or not, centre and candidate stacks from the face's metric footprint and height."""
     pitch = math.sqrt(face.pixel_area_m2)
     centre, wa, wb, yaw, fill = _measure_rect(face.points_xy, pitch)
     side = math.sqrt(wa * wb)
     large, small = cfg.blocks.large_size_m, cfg.blocks.small_size_m
     size = "large" if abs(side - large) < abs(side - small) else "small"
     edge = large if size == "large" else small
-    _, _, height_err = stack_from_height(face.top_m, size, cfg)
+    stacks = stack_candidates(face.top_m, size, cfg)
+    height_err = stacks[0][0]
     is_cube = (
         fill >= MIN_FILL
         and max(wa, wb) / max(min(wa, wb), 1e-9) <= MAX_ASPECT
@@ -178,7 +194,7 @@ def _classify_face(face: _Face, cfg: PerceptionConfig) -> tuple[str, float, floa
         and height_err <= HEIGHT_TOLERANCE_M
     )
     centroid = face.points_xy.mean(axis=0)
-    return size, side, yaw, is_cube, (centroid if is_cube else centre)
+    return _Classified(size, side, yaw, is_cube, centroid if is_cube else centre, stacks)
 
 
 def _split_touching(face: _Face, cfg: PerceptionConfig) -> list[_Face]:
@@ -205,80 +221,93 @@ def _split_touching(face: _Face, cfg: PerceptionConfig) -> list[_Face]:
             parts.append(_Face(face.points_xy[sel], face.top_m, face.contour_px, face.center_px, int(sel.sum()), face.pixel_area_m2))
 
         def fits(part: _Face) -> bool:
-            size, _, _, is_cube, _ = _classify_face(part, cfg)
-            edge = cfg.blocks.large_size_m if size == "large" else cfg.blocks.small_size_m
+            classified = _classify_face(part, cfg)
+            edge = cfg.blocks.large_size_m if classified.size == "large" else cfg.blocks.small_size_m
             _, wa, wb, _, _ = _measure_rect(part.points_xy, pitch)
-            return is_cube and max(abs(wa - edge), abs(wb - edge)) <= SPLIT_SIZE_TOLERANCE * edge
+            return classified.is_cube and max(abs(wa - edge), abs(wb - edge)) <= SPLIT_SIZE_TOLERANCE * edge
 
         if all(fits(p) for p in parts):
             return parts
     return [face]
 
 
-def _roi_heights(depth_mm: np.ndarray, cal: Calibration, roi: tuple[int, int, int, int]) -> np.ndarray:
+STEP = 4  # candidates at quarter resolution (a small cube's top is still ~6x6 px); measured at full
+
+
+class BlockGeometry:
+    """What detect_blocks needs from a calibration, computed once: the plane mapper, the height
+    coefficients of the quarter-resolution height map and, per full-resolution column and row, the
+    terms of a pixel's world height. Depends only on the calibration, so a caller that sees the same
+    calibration every frame (PerceptionPipeline) builds it once; read-only afterwards."""
+
+    def __init__(self, cal: Calibration) -> None:
+        K = cal.K
+        self.calibration = cal
+        self.camera = PlaneCamera(cal.T_world_camera, K, cal.dist)
+        self.small_shape = (-(-cal.height // STEP), -(-cal.width // STEP))  # of image[::STEP, ::STEP]
+        self.small_K = K / np.array([[STEP], [STEP], [1]])
+        self.small_coefficients = height_coefficients(self.small_shape, self.small_K, cal.T_world_camera)
+        r3 = cal.T_world_camera[2, :3].astype(np.float32)
+        self.height_u = r3[0] * ((np.arange(cal.width, dtype=np.float32) - K[0, 2]) / K[0, 0])
+        self.height_v = r3[1] * ((np.arange(cal.height, dtype=np.float32) - K[1, 2]) / K[1, 1])
+        self.height_1 = r3[2]
+        self.height_t = np.float32(cal.T_world_camera[2, 3])
+
+
+def _roi_heights(depth_mm: np.ndarray, geo: BlockGeometry, roi: tuple[int, int, int, int]) -> np.ndarray:
     """World z (m) of a region of interest from 3x3-median-filtered depth (edges kept, noise about halved)."""
     x0, y0, x1, y1 = roi
-    d = cv2.medianBlur(np.ascontiguousarray(depth_mm[y0:y1, x0:x1]), 3).astype(np.float32) / 1000.0
-    K = cal.K
-    us = (np.arange(x0, x1, dtype=np.float32) - K[0, 2]) / K[0, 0]
-    vs = (np.arange(y0, y1, dtype=np.float32) - K[1, 2]) / K[1, 1]
-    r3 = cal.T_world_camera[2, :3].astype(np.float32)
-    z = d * (r3[0] * us[None, :] + r3[1] * vs[:, None] + r3[2]) + np.float32(cal.T_world_camera[2, 3])
+    d = cv2.medianBlur(depth_mm[y0:y1, x0:x1], 3).astype(np.float32) / 1000.0
+    z = d * (geo.height_u[None, x0:x1] + geo.height_v[y0:y1, None] + geo.height_1) + geo.height_t
     z[d <= 0] = np.nan
     return z
 
 
 def _largest_blob(mask: np.ndarray) -> np.ndarray | None:
-    n, labels, stats, _ = cv2.connectedComponentsWithStats(mask.astype(np.uint8), connectivity=4)
+    n, labels, stats, _ = cv2.connectedComponentsWithStats(mask.view(np.uint8), connectivity=4)
     if n <= 1:
         return None
-    return (labels == 1 + int(np.argmax(stats[1:, cv2.CC_STAT_AREA]))).astype(np.uint8)
+    return (labels == 1 + int(np.argmax(stats[1:, cv2.CC_STAT_AREA]))).view(np.uint8)
 
 
 def _top_face_in_roi(
-    z: np.ndarray, roi: tuple[int, int, int, int], top_m: float, keep: np.ndarray | None, tol_m: float
-) -> tuple[np.ndarray, np.ndarray, float] | None:
-    """Full-res pixels (N, 2), contour and median height of the flat face near top_m in the ROI's heights z.
+    z: np.ndarray, band: np.ndarray, keep: np.ndarray, tol_m: float
+) -> tuple[np.ndarray, np.ndarray, np.ndarray, float] | None:
+    """ROI pixels (rows, columns), contour (ROI coordinates) and median height of the flat face in the
+    band of heights z within tol_m of the guess (band), among the pixels to keep.
 
-    Two passes: a loose band around the guess finds the face, a tight band around its median keeps
-    only the face (side-face pixels just below the top edge would bias the footprint toward the camera).
+    Two passes: the loose band finds the face, a tight band around its median keeps only the face
+    (side-face pixels just below the top edge would bias the footprint toward the camera).
     """
-    x0, y0 = roi[0], roi[1]
-    band = np.abs(z - top_m) < tol_m
-    blob = _largest_blob(band & keep if keep is not None else band)
+    blob = _largest_blob(band & keep)
     if blob is None:
         return None
-    face_m = quantile(z[blob > 0], 0.5)
-    blob &= (np.abs(z - face_m) < 0.5 * tol_m).astype(np.uint8)
-    if not blob.any():
+    face_m = quantile(z[blob.view(bool)], 0.5)
+    blob &= (np.abs(z - face_m) < 0.5 * tol_m).view(np.uint8)
+    ys, xs = np.nonzero(blob)
+    if len(ys) == 0:
         return None
     contours, _ = cv2.findContours(blob, cv2.RETR_EXTERNAL, cv2.CHAIN_APPROX_SIMPLE)
-    ys, xs = np.nonzero(blob)
-    pixels = np.stack([xs + x0, ys + y0], axis=1).astype(np.float64)
-    contour = max(contours, key=cv2.contourArea).reshape(-1, 2) + np.array([x0, y0])
-    return pixels, contour, quantile(z[ys, xs], 0.5)
+    contour = max(contours, key=cv2.contourArea)
+    return ys, xs, contour, quantile(z[ys, xs], 0.5)
 
 
-def _pixels_to_plane(pixels: np.ndarray, cal: Calibration, z_m: float) -> np.ndarray:
-    """World (x, y) of pixels (N, 2) on the horizontal plane z = z_m: one homography when the lens has no
-    distortion, else undistorted rays meeting the plane."""
-    if np.any(cal.dist != 0):
-        return intersect_rays_with_plane(cal.T_world_camera, normalized_rays(pixels, cal.K, cal.dist), z_m)[:, :2]
-    T_cw = cal.T_camera_world
-    H = cal.K @ np.column_stack([T_cw[:3, 0], T_cw[:3, 1], T_cw[:3, 2] * z_m + T_cw[:3, 3]])  # (x, y, 1) -> pixel
-    H_inv = np.linalg.inv(H)
-    xyw = pixels @ H_inv[:, :2].T + H_inv[:, 2]
-    return xyw[:, :2] / xyw[:, 2:3]
-
-
-def _face_from_pixels(pixels: np.ndarray, contour: np.ndarray, top_m: float, cal: Calibration) -> _Face:
-    centre_px = pixels.mean(axis=0)
-    u, v = centre_px
-    world_xy = _pixels_to_plane(np.vstack([pixels, [[u, v], [u + 1, v], [u, v + 1]]]), cal, top_m)
+def _face_from_pixels(ys: np.ndarray, xs: np.ndarray, roi, contour: np.ndarray, top_m: float, camera: PlaneCamera) -> _Face:
+    """The face of full-res pixels (ROI rows ys, columns xs; contour in ROI coordinates) on the plane z = top_m."""
+    x0, y0 = roi[0], roi[1]
+    n = len(xs)
+    # Pixel centroid: the coordinates are integers, so their float sums are exact in any order.
+    u, v = float(xs.sum() + n * x0) / n, float(ys.sum() + n * y0) / n
+    pixels = np.empty((n + 3, 2))
+    pixels[:n, 0] = xs + x0
+    pixels[:n, 1] = ys + y0
+    pixels[n:] = [[u, v], [u + 1, v], [u, v + 1]]
+    world_xy = camera.to_plane(pixels, top_m)
     # Footprint of one pixel on the face's plane, from the local Jacobian at the face's mean pixel.
     du, dv = world_xy[-2] - world_xy[-3], world_xy[-1] - world_xy[-3]
     pixel_area = float(abs(du[0] * dv[1] - du[1] * dv[0]))
-    return _Face(world_xy[:-3], top_m, contour.astype(np.float64), centre_px, pixels.shape[0], pixel_area)
+    contour_px = contour.reshape(-1, 2) + np.array([x0, y0])
+    return _Face(world_xy[:-3], top_m, contour_px.astype(np.float64), np.array([u, v]), n, pixel_area)
 
 
 def detect_blocks(
@@ -287,10 +316,12 @@ def detect_blocks(
     cal: Calibration,
     cfg: PerceptionConfig,
     tag_detector: cv2.aruco.ArucoDetector | None = None,
+    geometry: BlockGeometry | None = None,
 ) -> list[Block]:
     """Blocks (top of each stack) and flagged non-cubes on the board, sorted by y then x.
 
     tag_detector: a prebuilt detector for the block-tag dictionary (saves its construction per frame).
+    geometry: BlockGeometry(cal), if the caller keeps one per calibration (saves its computation per frame).
     """
     check_color_image(color_bgr)
     if color_bgr.ndim != 3:
@@ -301,11 +332,18 @@ def detect_blocks(
     if not isinstance(depth_mm, np.ndarray) or depth_mm.shape != (h, w) or depth_mm.dtype != np.uint16:
         raise ValueError(f"depth must be a uint16 (H, W) = ({h}, {w}) image in mm, got {getattr(depth_mm, 'shape', None)}")
     bc = cfg.blocks
-    step = 4  # candidates at quarter resolution (a small cube's top is still ~6x6 px); measured at full
-    z_small = height_map_m(depth_mm[::step, ::step].astype(np.float32) / 1000.0, cal.K / np.array([[step], [step], [1]]), cal.T_world_camera)
+    if geometry is None or geometry.calibration is not cal:
+        geometry = BlockGeometry(cal)
+    geo, step = geometry, STEP
+    depth_small = depth_mm[::step, ::step].astype(np.float32)
+    depth_small /= 1000.0
+    z_small = height_map_m(depth_small, geo.small_K, cal.T_world_camera, coefficients=geo.small_coefficients)
     raised = (z_small > bc.min_height_m) & (z_small < bc.max_height_m)
     lut, names = hue_lut(cfg)
-    hsv_small = cv2.cvtColor(color_bgr[::step, ::step], cv2.COLOR_BGR2HSV)
+    # Every step-th pixel: nearest-neighbour resizing by an integer factor picks exactly those, and
+    # far faster than copying the strided view.
+    small_bgr = cv2.resize(color_bgr, geo.small_shape[::-1], interpolation=cv2.INTER_NEAREST)
+    hsv_small = cv2.cvtColor(small_bgr, cv2.COLOR_BGR2HSV)
     classes = color_classes(hsv_small, cfg, lut)
     colourless = classes == 0  # e.g. the white and black of a tag on a block's top
     classes[~raised] = 0
@@ -348,7 +386,7 @@ def detect_blocks(
                 for cj, (other_top, centre, _) in tops.items() if cj != ci
             ):
                 continue  # a lower member of a stack: the block on top sits inside its footprint
-            for block in _blocks_from_region(color_bgr, depth_mm, cal, cfg, roi, top_m, names[ci - 1], ci, lut, z_small, step):
+            for block in _blocks_from_region(color_bgr, depth_mm, geo, cfg, roi, top_m, names[ci - 1], ci, lut, z_small, step):
                 if block.aruco_id is None and _face_looks_tagged(color_bgr, block):
                     detector = detector or make_detector(cfg.tags.block_tag_dictionary)
                     block = _with_tag(block, color_bgr, roi, detector, cfg)
@@ -360,47 +398,48 @@ def detect_blocks(
     return sorted(blocks, key=lambda b: (round(float(b.position_m[1]), 3), float(b.position_m[0])))
 
 
-def _blocks_from_region(color_bgr, depth_mm, cal, cfg, roi, top_m, name, ci, lut, z_half, step) -> list[Block]:
+def _blocks_from_region(color_bgr, depth_mm, geo: BlockGeometry, cfg, roi, top_m, name, ci, lut, z_small, step) -> list[Block]:
     """The top face at about top_m in the ROI (pixels of this colour or colourless, e.g. a tag), as blocks."""
     x0, y0, x1, y1 = roi
+    tol = cfg.blocks.top_face_tolerance_m
     hsv = cv2.cvtColor(color_bgr[y0:y1, x0:x1], cv2.COLOR_BGR2HSV)
     classes = color_classes(hsv, cfg, lut)
-    z = _roi_heights(depth_mm, cal, roi)
+    z = _roi_heights(depth_mm, geo, roi)
     mine = classes == ci
-    near_top = mine & (np.abs(z - top_m) < cfg.blocks.top_face_tolerance_m)
+    band = np.abs(z - top_m) < tol
+    near_top = mine & band
     # Lit from above, a top face is brighter than the block's sides: dim pixels of this colour are side
     # faces that the depth filter smeared up to the top's height at the edge facing the camera.
-    value = hsv[..., 2]
     if np.count_nonzero(near_top) >= 10:
-        dim = mine & (value < 0.7 * quantile(value[near_top], 0.95))
+        value = hsv[..., 2]
+        keep = (mine & (value >= 0.7 * quantile(value[near_top], 0.95))) | (classes == 0)
     else:
-        dim = np.zeros_like(mine)
-    keep = (mine & ~dim) | (classes == 0)
-    found = _top_face_in_roi(z, roi, top_m, keep, cfg.blocks.top_face_tolerance_m)
+        keep = mine | (classes == 0)
+    found = _top_face_in_roi(z, band, keep, tol)
     if found is None:
         return []
-    pixels, contour, face_m = found
-    face = _face_from_pixels(pixels, contour, face_m, cal)
+    ys, xs, contour, face_m = found
+    if np.count_nonzero(classes[ys, xs] == ci) / len(ys) < 0.15:
+        return []  # the face is mostly another object's colourless top
+    face = _face_from_pixels(ys, xs, roi, contour, face_m, geo.camera)
     small = cfg.blocks.small_size_m
     if face.pixel_count * face.pixel_area_m2 < 0.3 * small * small:
         return []  # a sliver: the edge of a lower stack member or noise
-    if _covered(face, z, roi):
+    if _covered(contour, face_m, z):
         return []  # a lower member of a stack: something sits on its centre
-    if (classes[pixels[:, 1].astype(int) - y0, pixels[:, 0].astype(int) - x0] == ci).mean() < 0.15:
-        return []  # the face is mostly another object's colourless top
     classified = _classify_face(face, cfg)
-    if classified[3]:
-        return [_make_block(face, name, cal, cfg, z_half, step, z, classified)]
-    return [_make_block(part, name, cal, cfg, z_half, step, z) for part in _split_touching(face, cfg)]
+    if classified.is_cube:
+        return [_make_block(face, name, geo.camera, cfg, z_small, step, z, classified)]
+    return [_make_block(part, name, geo.camera, cfg, z_small, step, z) for part in _split_touching(face, cfg)]
 
 
-def _covered(face: _Face, z: np.ndarray, roi) -> bool:
-    """True for a lower member of a stack: within the face's convex hull in the image, a sizeable part
-    stands well above the face (the block on top)."""
-    hull = cv2.convexHull(np.round(face.contour_px - np.array(roi[:2])).astype(np.int32))
+def _covered(contour: np.ndarray, top_m: float, z: np.ndarray) -> bool:
+    """True for a lower member of a stack: within the face's convex hull (contour in the coordinates
+    of the ROI's heights z), a sizeable part stands well above the face (the block on top)."""
     inside = np.zeros(z.shape, np.uint8)
-    cv2.fillConvexPoly(inside, hull, 1)
-    above = np.count_nonzero((z > face.top_m + 0.01) & (inside > 0))
+    cv2.fillConvexPoly(inside, cv2.convexHull(contour), 1)
+    inside = inside.view(bool)
+    above = np.count_nonzero((z > top_m + 0.01) & inside)
     return above > 0.15 * max(1, np.count_nonzero(inside))
 
 
@@ -432,15 +471,16 @@ def _with_tag(block: Block, color_bgr: np.ndarray, roi, detector, cfg: Perceptio
     return block
 
 
-def _make_block(face: _Face, color: str, cal, cfg, z_small, step, z_roi=None, classified=None) -> Block:
-    size, side, yaw, is_cube, centre_xy = classified or _classify_face(face, cfg)
+def _make_block(face: _Face, color: str, camera: PlaneCamera, cfg, z_small, step, z_roi=None, classified: _Classified | None = None) -> Block:
+    c = classified or _classify_face(face, cfg)
+    size, side, yaw, is_cube, centre_xy = c.size, c.side_m, c.yaw, c.is_cube, c.centre_xy
     ring_m2 = cfg.blocks.large_size_m**2 - cfg.blocks.small_size_m**2
-    sizes = choose_stack(face.top_m, size, cfg, z_roi, 0.3 * ring_m2 / face.pixel_area_m2)
-    occluded = _is_occluded(face, centre_xy, yaw, size, cal, cfg, z_small, step)
+    sizes = choose_stack(face.top_m, size, cfg, z_roi, 0.3 * ring_m2 / face.pixel_area_m2, c.stacks)
+    occluded = _is_occluded(face, centre_xy, yaw, size, camera, cfg, z_small, step)
     if occluded and not is_cube:
         # Part of the face is hidden: judge by what can be seen (not larger than the cube, right height).
         edge = cfg.blocks.large_size_m if size == "large" else cfg.blocks.small_size_m
-        is_cube = side <= edge * (1 + SIZE_TOLERANCE) and stack_from_height(face.top_m, size, cfg)[2] <= HEIGHT_TOLERANCE_M
+        is_cube = side <= edge * (1 + SIZE_TOLERANCE) and c.stacks[0][0] <= HEIGHT_TOLERANCE_M
     return Block(
         color=color,
         size=size,
@@ -457,7 +497,7 @@ def _make_block(face: _Face, color: str, cal, cfg, z_small, step, z_roi=None, cl
     )
 
 
-def _is_occluded(face: _Face, centre_xy, yaw: float, size: str, cal, cfg: PerceptionConfig, z_small: np.ndarray, step: int) -> bool:
+def _is_occluded(face: _Face, centre_xy, yaw: float, size: str, camera: PlaneCamera, cfg: PerceptionConfig, z_small: np.ndarray, step: int) -> bool:
     """True when something well above the face (the arm) covers part of where the cube's top should be:
     the expected square, drawn around the measured centre, holds readings 15 mm or more above the face."""
     edge = cfg.blocks.large_size_m if size == "large" else cfg.blocks.small_size_m
@@ -465,7 +505,7 @@ def _is_occluded(face: _Face, centre_xy, yaw: float, size: str, cal, cfg: Percep
     c, s = math.cos(yaw), math.sin(yaw)
     square = np.array([[centre_xy[0] + c * a - s * b, centre_xy[1] + s * a + c * b]
                        for a, b in ((-half, -half), (half, -half), (half, half), (-half, half))])
-    poly = project_plane_points(cal.T_world_camera, cal.K, cal.dist, square, face.top_m) / step
+    poly = camera.project(square, face.top_m) / step
     x0, y0 = np.maximum(np.floor(poly.min(axis=0)).astype(int) - 1, 0)
     x1, y1 = np.ceil(poly.max(axis=0)).astype(int) + 2
     window = z_small[y0:y1, x0:x1]

@@ -106,9 +106,13 @@ def project_points(T_world_camera: np.ndarray, K: np.ndarray, dist: np.ndarray, 
 
 def board_homography(T_world_camera: np.ndarray, K: np.ndarray, plane_z_m: float = 0.0) -> np.ndarray:
     """3x3 H mapping points (x, y, 1) of the plane z = plane_z_m (metres) to undistorted pixels (u, v, 1)."""
-    T_camera_world = invert_transform(T_world_camera)
-    H = K @ np.column_stack([T_camera_world[:3, 0], T_camera_world[:3, 1], T_camera_world[:3, 2] * plane_z_m + T_camera_world[:3, 3]])
+    H = _plane_to_pixels(invert_transform(T_world_camera), K, plane_z_m)
     return H / H[2, 2]
+
+
+def _plane_to_pixels(T_camera_world: np.ndarray, K: np.ndarray, plane_z_m: float) -> np.ndarray:
+    """The unnormalised homography (x, y, 1) on the plane z = plane_z_m -> undistorted pixel."""
+    return K @ np.column_stack([T_camera_world[:3, 0], T_camera_world[:3, 1], T_camera_world[:3, 2] * plane_z_m + T_camera_world[:3, 3]])
 
 
 def project_plane_points(T_world_camera: np.ndarray, K: np.ndarray, dist: np.ndarray, points_xy: np.ndarray, plane_z_m: float) -> np.ndarray:
@@ -122,18 +126,61 @@ def project_plane_points(T_world_camera: np.ndarray, K: np.ndarray, dist: np.nda
     return uvw[:, :2] / uvw[:, 2:3]
 
 
-def height_map_m(depth_m: np.ndarray, K: np.ndarray, T_world_camera: np.ndarray, step: int = 1) -> np.ndarray:
-    """World z (metres) of every `step`-th pixel of a depth image (metres, 0 = none -> NaN).
+class PlaneCamera:
+    """A calibrated camera mapping between pixels and horizontal planes z = const, with its pose
+    inverted and its distortion checked once (build one per frame, not one per point set).
+    Results are identical to project_plane_points and to intersect_rays_with_plane(normalized_rays)."""
 
-    z = depth * (r3 . K^-1 [u, v, 1]) + t_z, computed separably so it costs a few operations per pixel.
-    Lens distortion is ignored here (it is applied exactly where a position is reported).
-    """
-    d = np.asarray(depth_m, dtype=np.float32)[::step, ::step]
-    h, w = d.shape
+    def __init__(self, T_world_camera: np.ndarray, K: np.ndarray, dist: np.ndarray) -> None:
+        self.T_world_camera = T_world_camera
+        self.T_camera_world = invert_transform(T_world_camera)
+        self.K = K
+        self.dist = dist
+        self.distorted = bool(np.any(np.asarray(dist) != 0))
+
+    def project(self, points_xy: np.ndarray, plane_z_m: float) -> np.ndarray:
+        """Pixels (N, 2) of points (N, 2) on the plane z = plane_z_m (as project_plane_points)."""
+        pts = np.asarray(points_xy, dtype=np.float64).reshape(-1, 2)
+        if self.distorted:
+            return project_points(self.T_world_camera, self.K, self.dist, np.column_stack([pts, np.full(len(pts), plane_z_m)]))
+        H = _plane_to_pixels(self.T_camera_world, self.K, plane_z_m)
+        H = H / H[2, 2]
+        uvw = pts @ H[:, :2].T + H[:, 2]
+        return uvw[:, :2] / uvw[:, 2:3]
+
+    def to_plane(self, pixels: np.ndarray, plane_z_m: float) -> np.ndarray:
+        """World (x, y) (N, 2) of pixels (N, 2) on the plane z = plane_z_m: one inverse homography when
+        the lens has no distortion, else undistorted rays meeting the plane."""
+        if self.distorted:
+            return intersect_rays_with_plane(self.T_world_camera, normalized_rays(pixels, self.K, self.dist), plane_z_m)[:, :2]
+        H_inv = np.linalg.inv(_plane_to_pixels(self.T_camera_world, self.K, plane_z_m))
+        xyw = pixels @ H_inv[:, :2].T + H_inv[:, 2]
+        return xyw[:, :2] / xyw[:, 2:3]
+
+
+def height_coefficients(shape: tuple[int, int], K: np.ndarray, T_world_camera: np.ndarray, step: int = 1) -> np.ndarray:
+    """Per pixel of an (H, W) depth image (every `step`-th pixel of the camera's): the factor c of
+    z = depth * c + t_z, i.e. r3 . K^-1 [u, v, 1], computed separably. Depends only on the calibration."""
+    h, w = shape
     us = (np.arange(w, dtype=np.float32) * step - K[0, 2]) / K[0, 0]
     vs = (np.arange(h, dtype=np.float32) * step - K[1, 2]) / K[1, 1]
     r3 = T_world_camera[2, :3].astype(np.float32)
-    coef = r3[0] * us[None, :] + (r3[1] * vs[:, None] + r3[2])
-    z = d * coef + np.float32(T_world_camera[2, 3])
+    return r3[0] * us[None, :] + (r3[1] * vs[:, None] + r3[2])
+
+
+def height_map_m(
+    depth_m: np.ndarray, K: np.ndarray, T_world_camera: np.ndarray, step: int = 1, coefficients: np.ndarray | None = None
+) -> np.ndarray:
+    """World z (metres) of every `step`-th pixel of a depth image (metres, 0 = none -> NaN).
+
+    z = depth * (r3 . K^-1 [u, v, 1]) + t_z, computed separably so it costs a few operations per pixel
+    (coefficients: height_coefficients for this shape and calibration, if the caller keeps them).
+    Lens distortion is ignored here (it is applied exactly where a position is reported).
+    """
+    d = np.asarray(depth_m, dtype=np.float32)[::step, ::step]
+    if coefficients is None:
+        coefficients = height_coefficients(d.shape, K, T_world_camera, step)
+    z = np.multiply(d, coefficients)  # then in place: one image-sized array, no temporaries
+    z += np.float32(T_world_camera[2, 3])
     z[d <= 0] = np.nan
     return z

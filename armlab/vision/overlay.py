@@ -11,7 +11,7 @@ import numpy as np
 
 from armlab.vision.blocks import Block
 from armlab.vision.calibration import Calibration
-from armlab.vision.geometry import project_plane_points, project_points
+from armlab.vision.geometry import PlaneCamera, project_points
 from armlab.vision.tags import Tag, check_color_image
 
 # Drawing colours (BGR) per colour class; unknown names are drawn white.
@@ -50,41 +50,52 @@ def draw_overlay(
     calibration: Calibration | None = None,
     layers: OverlayLayers = OverlayLayers(),
     grid_points_m: np.ndarray | None = None,
+    grid_px: np.ndarray | None = None,
 ) -> np.ndarray:
-    """A copy of the image with the enabled layers drawn; the input is never modified."""
+    """A copy of the image with the enabled layers drawn; the input is never modified.
+
+    grid_px: grid_pixels(calibration, grid_points_m, image size) when the caller keeps it per
+    calibration (it changes only with the calibration); computed here when None."""
     check_color_image(color_bgr)
     out = color_bgr.copy() if color_bgr.ndim == 3 else cv2.cvtColor(color_bgr, cv2.COLOR_GRAY2BGR)
     if layers.grid and calibration is not None:
-        pts = grid_points_m if grid_points_m is not None else default_grid_points_m()
-        px = np.round(project_points(calibration.T_world_camera, calibration.K, calibration.dist, pts)).astype(int)
-        h, w = out.shape[:2]
-        px = px[(px[:, 0] >= 1) & (px[:, 0] < w - 1) & (px[:, 1] >= 1) & (px[:, 1] < h - 1)]
-        for du in (-1, 0, 1):  # 3x3 dots, set directly: hundreds of points cost well under a millisecond
-            for dv in (-1, 0, 1):
-                out[px[:, 1] + dv, px[:, 0] + du] = (255, 255, 0)
+        if grid_px is None:
+            grid_px = grid_pixels(calibration, grid_points_m, out.shape[:2])
+        out.reshape(-1, 3)[grid_px] = (255, 255, 0)
     if layers.tags and tags:
         for tag in tags:
             corners = np.round(tag.corners_px).astype(np.int32)
             cv2.polylines(out, [corners], True, (0, 255, 0), 1, cv2.LINE_AA)
-            cv2.circle(out, tuple(corners[0]), 3, (0, 0, 255), -1)  # first corner marks orientation
+            cv2.circle(out, (int(corners[0, 0]), int(corners[0, 1])), 3, (0, 0, 255), -1)  # first corner marks orientation
             if layers.labels:
-                c = tuple(np.round(tag.center_px).astype(int) + np.array([-6, -14]))
-                cv2.putText(out, str(tag.id), c, cv2.FONT_HERSHEY_SIMPLEX, 0.5, (0, 255, 0), 1, cv2.LINE_AA)
+                u, v = np.round(tag.center_px).astype(int)
+                cv2.putText(out, str(tag.id), (int(u) - 6, int(v) - 14), cv2.FONT_HERSHEY_SIMPLEX, 0.5, (0, 255, 0), 1, cv2.LINE_AA)
     if layers.detections and blocks:
+        camera = PlaneCamera(calibration.T_world_camera, calibration.K, calibration.dist) if calibration is not None else None
         for block in blocks:
-            _draw_block(out, block, calibration, layers.labels)
+            _draw_block(out, block, camera, layers.labels)
     return out
 
 
-def _draw_block(out: np.ndarray, block: Block, cal: Calibration | None, labels: bool) -> None:
+def grid_pixels(cal: Calibration, grid_points_m: np.ndarray | None, image_hw: tuple[int, int]) -> np.ndarray:
+    """Flat pixel indices (into an (H * W) image) of the 3x3 grid dots drawn by draw_overlay."""
+    pts = grid_points_m if grid_points_m is not None else default_grid_points_m()
+    px = np.round(project_points(cal.T_world_camera, cal.K, cal.dist, pts)).astype(int)
+    h, w = image_hw
+    px = px[(px[:, 0] >= 1) & (px[:, 0] < w - 1) & (px[:, 1] >= 1) & (px[:, 1] < h - 1)]
+    offsets = np.array([dv * w + du for du in (-1, 0, 1) for dv in (-1, 0, 1)])  # 3x3 dots
+    return ((px[:, 1] * w + px[:, 0])[:, None] + offsets[None, :]).ravel()
+
+
+def _draw_block(out: np.ndarray, block: Block, camera: PlaneCamera | None, labels: bool) -> None:
     colour = DRAW_BGR.get(block.color, (255, 255, 255)) if block.is_cube else (160, 160, 160)
     cv2.drawContours(out, [np.round(block.contour_px).astype(np.int32)], -1, colour, 2, cv2.LINE_AA)
     centre = tuple(int(round(x)) for x in block.center_px)
     cv2.circle(out, centre, 3, (255, 255, 255), -1)
-    if cal is not None:
+    if camera is not None:
         half = 0.6 * block.side_m if block.side_m > 0 else 0.02
         tip_xy = block.position_m[:2] + half * np.array([math.cos(block.yaw_rad), math.sin(block.yaw_rad)])
-        tip = project_plane_points(cal.T_world_camera, cal.K, cal.dist, tip_xy, float(block.position_m[2]))[0]
+        tip = camera.project(tip_xy, float(block.position_m[2]))[0]
         cv2.arrowedLine(out, centre, (int(round(tip[0])), int(round(tip[1]))), (255, 255, 255), 1, cv2.LINE_AA, tipLength=0.3)
     if labels:
         text = f"{block.color} {block.size}" if block.is_cube else f"not cube ({block.color})"

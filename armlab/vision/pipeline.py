@@ -8,11 +8,11 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from armlab.vision.blocks import Block, detect_blocks
+from armlab.vision.blocks import Block, BlockGeometry, detect_blocks
 from armlab.vision.calibration import Calibration
 from armlab.vision.config import PerceptionConfig
 from armlab.vision.geometry import project_points
-from armlab.vision.overlay import OverlayLayers, draw_overlay
+from armlab.vision.overlay import OverlayLayers, draw_overlay, grid_pixels
 from armlab.vision.tags import Tag, detect_tags, detect_tags_near, make_detector
 
 
@@ -38,12 +38,25 @@ class PerceptionPipeline:
         self._grid_m = cfg.board.grid_points_m()
         self._tag_ids = list(cfg.tags.board_tags)
         self._tag_centres_m = np.array([[x, y, 0.0] for x, y in cfg.tags.board_tags.values()])
+        # Per-calibration constants, recomputed when another calibration object comes in.
+        self._cal: Calibration | None = None
+        self._tag_centres_px = np.empty((0, 2))
+        self._grid_px: dict[tuple[int, int], np.ndarray] = {}
+        self._block_geometry: BlockGeometry | None = None
+
+    def _use_calibration(self, cal: Calibration) -> None:
+        if cal is not self._cal:
+            self._cal = cal
+            self._tag_centres_px = project_points(cal.T_world_camera, cal.K, cal.dist, self._tag_centres_m)
+            self._grid_px = {}
+            self._block_geometry = None
 
     def find_tags(self, color_bgr: np.ndarray, cal: Calibration | None) -> list[Tag]:
         """Board tags: searched in windows around their calibrated image positions, else everywhere."""
         if cal is None:
             return detect_tags(color_bgr, detector=self._board_detector)
-        centres = project_points(cal.T_world_camera, cal.K, cal.dist, self._tag_centres_m)
+        self._use_calibration(cal)
+        centres = self._tag_centres_px
         tags = detect_tags_near(color_bgr, centres, 32, self._tracking_detector)
         found = {tag.id for tag in tags}
         missing = [c for tag_id, c in zip(self._tag_ids, centres) if tag_id not in found]
@@ -60,8 +73,17 @@ class PerceptionPipeline:
         tags = self.find_tags(color_bgr, cal)
         blocks = []
         if cal is not None and depth_mm is not None:
-            blocks = detect_blocks(color_bgr, depth_mm, cal, self.cfg, tag_detector=self._block_detector)
+            self._use_calibration(cal)
+            if self._block_geometry is None:
+                self._block_geometry = BlockGeometry(cal)
+            blocks = detect_blocks(color_bgr, depth_mm, cal, self.cfg, tag_detector=self._block_detector, geometry=self._block_geometry)
         overlay = None
         if layers is not None:
-            overlay = draw_overlay(color_bgr, tags=tags, blocks=blocks, calibration=cal, layers=layers, grid_points_m=self._grid_m)
+            grid_px = None
+            if cal is not None and layers.grid:
+                size = color_bgr.shape[:2]
+                grid_px = self._grid_px.get(size)
+                if grid_px is None:
+                    grid_px = self._grid_px[size] = grid_pixels(cal, self._grid_m, size)
+            overlay = draw_overlay(color_bgr, tags=tags, blocks=blocks, calibration=cal, layers=layers, grid_points_m=self._grid_m, grid_px=grid_px)
         return PerceptionResult(tags, blocks, overlay)
