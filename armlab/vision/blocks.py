@@ -10,6 +10,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass, field, replace
+from functools import lru_cache
 
 import cv2
 import numpy as np
@@ -73,11 +74,15 @@ def quantile(values: np.ndarray, q: float) -> float:
 def hue_lut(cfg: PerceptionConfig) -> tuple[np.ndarray, list[str]]:
     """Lookup table hue (0..179) -> index of the nearest configured colour (cyclic hue distance)."""
     names = list(cfg.blocks.colors)
-    centres = np.array([cfg.blocks.colors[n] for n in names])
+    return _hue_lut(tuple(cfg.blocks.colors[n] for n in names)).copy(), names
+
+
+@lru_cache(maxsize=16)
+def _hue_lut(centres_deg: tuple[float, ...]) -> np.ndarray:
     hues = np.arange(180)[:, None]
-    diff = np.abs(hues - centres[None, :])
+    diff = np.abs(hues - np.array(centres_deg)[None, :])
     diff = np.minimum(diff, 180 - diff)
-    return np.argmin(diff, axis=1).astype(np.uint8), names
+    return np.argmin(diff, axis=1).astype(np.uint8)
 
 
 def color_classes(hsv: np.ndarray, cfg: PerceptionConfig, lut: np.ndarray) -> np.ndarray:
@@ -85,9 +90,18 @@ def color_classes(hsv: np.ndarray, cfg: PerceptionConfig, lut: np.ndarray) -> np
 
     Two OpenCV passes: a 256-entry table on the hue plane (hues past 179 count as 179), and a range
     mask for enough saturation and value."""
+    return _color_classes(hsv, cfg, _class_table(lut))
+
+
+def _class_table(lut: np.ndarray) -> np.ndarray:
+    """hue_lut's table as cv2.LUT wants it: 256 entries of colour index + 1."""
     table = np.empty(256, np.uint8)
     table[:180] = lut + 1
     table[180:] = table[179]
+    return table
+
+
+def _color_classes(hsv: np.ndarray, cfg: PerceptionConfig, table: np.ndarray) -> np.ndarray:
     classes = cv2.LUT(cv2.extractChannel(hsv, 0), table)
     colourful = cv2.inRange(hsv, (0, cfg.blocks.min_saturation, cfg.blocks.min_value), (255, 255, 255))
     return cv2.bitwise_and(classes, colourful)
@@ -101,9 +115,17 @@ def stack_candidates(top_m: float, top_size: str, cfg: PerceptionConfig) -> list
     large, small = cfg.blocks.large_size_m, cfg.blocks.small_size_m
     below = top_m - (large if top_size == "large" else small)
     n_small_max = 12 if top_size == "small" else 1
-    errors = np.abs(below - np.add.outer(np.arange(12) * large, np.arange(n_small_max) * small)).ravel()
+    errors = np.abs(below - _pile_heights(large, small, n_small_max))
     order = np.argsort(errors, kind="stable")[:6].tolist()
     return [(float(errors[i]), ("large",) * (i // n_small_max) + ("small",) * (i % n_small_max) + (top_size,)) for i in order]
+
+
+@lru_cache(maxsize=16)
+def _pile_heights(large: float, small: float, n_small_max: int) -> np.ndarray:
+    """Heights of piles of 0..11 large then 0..n_small_max-1 small blocks, flattened (read-only)."""
+    heights = np.add.outer(np.arange(12) * large, np.arange(n_small_max) * small).ravel()
+    heights.flags.writeable = False
+    return heights
 
 
 def stack_from_height(top_m: float, top_size: str, cfg: PerceptionConfig) -> tuple[int, tuple[str, ...], float]:
@@ -155,6 +177,7 @@ class _Face:
     center_px: np.ndarray
     pixel_count: int
     pixel_area_m2: float
+    plane_H: np.ndarray | None = None  # PlaneCamera.homography(top_m)
 
 
 def _measure_rect(points_xy: np.ndarray, pitch_m: float) -> tuple[np.ndarray, float, float, float, float]:
@@ -218,7 +241,7 @@ def _split_touching(face: _Face, cfg: PerceptionConfig) -> list[_Face]:
         parts = []
         for k in range(n):
             sel = labels.ravel() == k
-            parts.append(_Face(face.points_xy[sel], face.top_m, face.contour_px, face.center_px, int(sel.sum()), face.pixel_area_m2))
+            parts.append(_Face(face.points_xy[sel], face.top_m, face.contour_px, face.center_px, int(sel.sum()), face.pixel_area_m2, face.plane_H))
 
         def fits(part: _Face) -> bool:
             classified = _classify_face(part, cfg)
@@ -302,12 +325,13 @@ def _face_from_pixels(ys: np.ndarray, xs: np.ndarray, roi, contour: np.ndarray, 
     pixels[:n, 0] = xs + x0
     pixels[:n, 1] = ys + y0
     pixels[n:] = [[u, v], [u + 1, v], [u, v + 1]]
-    world_xy = camera.to_plane(pixels, top_m)
+    H = None if camera.distorted else camera.homography(top_m)
+    world_xy = camera.to_plane(pixels, top_m, H)
     # Footprint of one pixel on the face's plane, from the local Jacobian at the face's mean pixel.
     du, dv = world_xy[-2] - world_xy[-3], world_xy[-1] - world_xy[-3]
     pixel_area = float(abs(du[0] * dv[1] - du[1] * dv[0]))
     contour_px = contour.reshape(-1, 2) + np.array([x0, y0])
-    return _Face(world_xy[:-3], top_m, contour_px.astype(np.float64), np.array([u, v]), n, pixel_area)
+    return _Face(world_xy[:-3], top_m, contour_px.astype(np.float64), np.array([u, v]), n, pixel_area, H)
 
 
 def detect_blocks(
@@ -344,7 +368,8 @@ def detect_blocks(
     # far faster than copying the strided view.
     small_bgr = cv2.resize(color_bgr, geo.small_shape[::-1], interpolation=cv2.INTER_NEAREST)
     hsv_small = cv2.cvtColor(small_bgr, cv2.COLOR_BGR2HSV)
-    classes = color_classes(hsv_small, cfg, lut)
+    table = _class_table(lut)
+    classes = _color_classes(hsv_small, cfg, table)
     colourless = classes == 0  # e.g. the white and black of a tag on a block's top
     classes[~raised] = 0
     coloured = (classes > 0).astype(np.uint8)
@@ -352,13 +377,15 @@ def detect_blocks(
     # so the thin coloured ring around it stays one candidate at this resolution.
     near_colour = cv2.dilate(coloured, np.ones((7, 7), np.uint8)) > 0
     candidates = coloured | (raised & colourless & near_colour & (hsv_small[..., 2] >= 150)).astype(np.uint8)
-    n, labels, stats, _ = cv2.connectedComponentsWithStats(candidates, connectivity=8)
+    # Grana's block-based labelling: the same labels as the default (Spaghetti) here, about 3x faster.
+    n, labels, stats, _ = cv2.connectedComponentsWithStatsWithAlgorithm(candidates, 8, cv2.CV_32S, cv2.CCL_GRANA)
+    stats_list = stats.tolist()  # plain ints: cheaper arithmetic and slicing than numpy scalars
     pixel_m = abs(float(cal.T_world_camera[2, 3])) / cal.K[0, 0] * step  # board-level pixel size, roughly
     min_face_px = 0.25 * bc.small_size_m**2 / pixel_m**2
     detector = tag_detector
     blocks: list[Block] = []
     for k in range(1, n):
-        x, y, bw, bh, area = stats[k]
+        x, y, bw, bh, area = stats_list[k]
         if area < 4:
             continue
         sel = labels[y : y + bh, x : x + bw] == k
@@ -386,8 +413,8 @@ def detect_blocks(
                 for cj, (other_top, centre, _) in tops.items() if cj != ci
             ):
                 continue  # a lower member of a stack: the block on top sits inside its footprint
-            for block in _blocks_from_region(color_bgr, depth_mm, geo, cfg, roi, top_m, names[ci - 1], ci, lut, z_small, step):
-                if block.aruco_id is None and _face_looks_tagged(color_bgr, block):
+            for block, looks_tagged in _blocks_from_region(color_bgr, depth_mm, geo, cfg, roi, top_m, names[ci - 1], ci, table, z_small, step):
+                if block.aruco_id is None and looks_tagged:
                     detector = detector or make_detector(cfg.tags.block_tag_dictionary)
                     block = _with_tag(block, color_bgr, roi, detector, cfg)
                 twins = [b for b in blocks if np.linalg.norm(block.position_m[:2] - b.position_m[:2]) < 0.015]
@@ -398,12 +425,13 @@ def detect_blocks(
     return sorted(blocks, key=lambda b: (round(float(b.position_m[1]), 3), float(b.position_m[0])))
 
 
-def _blocks_from_region(color_bgr, depth_mm, geo: BlockGeometry, cfg, roi, top_m, name, ci, lut, z_small, step) -> list[Block]:
-    """The top face at about top_m in the ROI (pixels of this colour or colourless, e.g. a tag), as blocks."""
+def _blocks_from_region(color_bgr, depth_mm, geo: BlockGeometry, cfg, roi, top_m, name, ci, table, z_small, step) -> list[tuple[Block, bool]]:
+    """The top face at about top_m in the ROI (pixels of this colour or colourless, e.g. a tag), as
+    blocks, each with whether its face looks tagged (_face_looks_tagged)."""
     x0, y0, x1, y1 = roi
     tol = cfg.blocks.top_face_tolerance_m
     hsv = cv2.cvtColor(color_bgr[y0:y1, x0:x1], cv2.COLOR_BGR2HSV)
-    classes = color_classes(hsv, cfg, lut)
+    classes = _color_classes(hsv, cfg, table)
     z = _roi_heights(depth_mm, geo, roi)
     mine = classes == ci
     band = np.abs(z - top_m) < tol
@@ -429,8 +457,10 @@ def _blocks_from_region(color_bgr, depth_mm, geo: BlockGeometry, cfg, roi, top_m
         return []  # a lower member of a stack: something sits on its centre
     classified = _classify_face(face, cfg)
     if classified.is_cube:
-        return [_make_block(face, name, geo.camera, cfg, z_small, step, z, classified)]
-    return [_make_block(part, name, geo.camera, cfg, z_small, step, z) for part in _split_touching(face, cfg)]
+        blocks = [_make_block(face, name, geo.camera, cfg, z_small, step, z, classified)]
+    else:
+        blocks = [_make_block(part, name, geo.camera, cfg, z_small, step, z) for part in _split_touching(face, cfg)]
+    return [(block, _face_looks_tagged(color_bgr, block, roi, hsv)) for block in blocks]
 
 
 def _covered(contour: np.ndarray, top_m: float, z: np.ndarray) -> bool:
@@ -443,14 +473,18 @@ def _covered(contour: np.ndarray, top_m: float, z: np.ndarray) -> bool:
     return above > 0.15 * max(1, np.count_nonzero(inside))
 
 
-def _face_looks_tagged(color_bgr: np.ndarray, block: Block) -> bool:
+def _face_looks_tagged(color_bgr: np.ndarray, block: Block, roi=None, roi_hsv: np.ndarray | None = None) -> bool:
     """A top face whose middle is mostly colourless (white, grey or black: hue is noise on dark
-    pixels, so they count too) may carry a tag."""
-    u, v = block.center_px.astype(int)
-    patch = color_bgr[max(0, v - 4) : v + 5, max(0, u - 4) : u + 5]
-    if patch.size == 0:
-        return False
-    hsv = cv2.cvtColor(patch, cv2.COLOR_BGR2HSV)
+    pixels, so they count too) may carry a tag. roi_hsv: the HSV image of the ROI, if at hand."""
+    u, v = block.center_px.astype(int).tolist()
+    xa, ya, xb, yb = max(0, u - 4), max(0, v - 4), u + 5, v + 5
+    if roi_hsv is not None and roi[0] <= xa and roi[1] <= ya and xb <= roi[2] and yb <= roi[3]:
+        hsv = roi_hsv[ya - roi[1] : yb - roi[1], xa - roi[0] : xb - roi[0]]
+    else:
+        patch = color_bgr[ya:yb, xa:xb]
+        if patch.size == 0:
+            return False
+        hsv = cv2.cvtColor(patch, cv2.COLOR_BGR2HSV)
     return bool(np.mean((hsv[..., 1] < 60) | (hsv[..., 2] < 60)) > 0.5)
 
 
@@ -505,7 +539,7 @@ def _is_occluded(face: _Face, centre_xy, yaw: float, size: str, camera: PlaneCam
     c, s = math.cos(yaw), math.sin(yaw)
     square = np.array([[centre_xy[0] + c * a - s * b, centre_xy[1] + s * a + c * b]
                        for a, b in ((-half, -half), (half, -half), (half, half), (-half, half))])
-    poly = camera.project(square, face.top_m) / step
+    poly = camera.project(square, face.top_m, face.plane_H) / step
     x0, y0 = np.maximum(np.floor(poly.min(axis=0)).astype(int) - 1, 0)
     x1, y1 = np.ceil(poly.max(axis=0)).astype(int) + 2
     window = z_small[y0:y1, x0:x1]

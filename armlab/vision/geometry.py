@@ -138,22 +138,32 @@ class PlaneCamera:
         self.dist = dist
         self.distorted = bool(np.any(np.asarray(dist) != 0))
 
-    def project(self, points_xy: np.ndarray, plane_z_m: float) -> np.ndarray:
-        """Pixels (N, 2) of points (N, 2) on the plane z = plane_z_m (as project_plane_points)."""
+    def homography(self, plane_z_m: float) -> np.ndarray:
+        """The unnormalised homography (x, y, 1) on the plane z = plane_z_m -> undistorted pixel."""
+        T = self.T_camera_world
+        M = np.empty((3, 3))
+        M[:, 0] = T[:3, 0]
+        M[:, 1] = T[:3, 1]
+        M[:, 2] = T[:3, 2] * plane_z_m + T[:3, 3]
+        return self.K @ M
+
+    def project(self, points_xy: np.ndarray, plane_z_m: float, H: np.ndarray | None = None) -> np.ndarray:
+        """Pixels (N, 2) of points (N, 2) on the plane z = plane_z_m (as project_plane_points).
+        H: self.homography(plane_z_m), if the caller has it."""
         pts = np.asarray(points_xy, dtype=np.float64).reshape(-1, 2)
         if self.distorted:
             return project_points(self.T_world_camera, self.K, self.dist, np.column_stack([pts, np.full(len(pts), plane_z_m)]))
-        H = _plane_to_pixels(self.T_camera_world, self.K, plane_z_m)
+        H = self.homography(plane_z_m) if H is None else H
         H = H / H[2, 2]
         uvw = pts @ H[:, :2].T + H[:, 2]
         return uvw[:, :2] / uvw[:, 2:3]
 
-    def to_plane(self, pixels: np.ndarray, plane_z_m: float) -> np.ndarray:
+    def to_plane(self, pixels: np.ndarray, plane_z_m: float, H: np.ndarray | None = None) -> np.ndarray:
         """World (x, y) (N, 2) of pixels (N, 2) on the plane z = plane_z_m: one inverse homography when
-        the lens has no distortion, else undistorted rays meeting the plane."""
+        the lens has no distortion, else undistorted rays meeting the plane. H: as for project."""
         if self.distorted:
             return intersect_rays_with_plane(self.T_world_camera, normalized_rays(pixels, self.K, self.dist), plane_z_m)[:, :2]
-        H_inv = np.linalg.inv(_plane_to_pixels(self.T_camera_world, self.K, plane_z_m))
+        H_inv = np.linalg.inv(self.homography(plane_z_m) if H is None else H)
         xyw = pixels @ H_inv[:, :2].T + H_inv[:, 2]
         return xyw[:, :2] / xyw[:, 2:3]
 

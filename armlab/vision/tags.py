@@ -97,8 +97,9 @@ def detect_tags(
     tags = []
     criteria = (cv2.TERM_CRITERIA_EPS + cv2.TERM_CRITERIA_COUNT, 40, 0.001)
     for tag_id, pts in sorted(found.items()):
-        side_px = float(np.min(np.linalg.norm(pts[:, 0] - np.roll(pts[:, 0], 1, axis=0), axis=1)))
-        half_window = int(np.clip(side_px / 10.0, 2, 5))  # ~1/10 of the tag: on the corner, off the code cells
+        sides = pts[:, 0] - pts[[3, 0, 1, 2], 0]
+        side_px = float(np.sqrt((sides * sides).sum(axis=1)).min())
+        half_window = int(min(max(side_px / 10.0, 2), 5))  # ~1/10 of the tag: on the corner, off the code cells
         refined = cv2.cornerSubPix(grey, pts.copy(), (half_window, half_window), (-1, -1), criteria)
         refined = refined.reshape(4, 2).astype(np.float64)
         tags.append(Tag(id=tag_id, corners_px=refined, center_px=refined.mean(axis=0)))
