@@ -407,13 +407,15 @@ def detect_blocks(
                 continue  # only a sliver of this colour at its top: the side of a lower stack member
             pts = np.stack([xs[layer], ys[layer]], axis=1)
             tops[int(ci)] = (top_m, pts.mean(axis=0), np.concatenate([pts.min(axis=0) - 1, pts.max(axis=0) + 1]))
+        region = None  # the ROI's colour and heights, shared by the colours of this component
         for ci, (top_m, _, box) in tops.items():
             if any(
                 other_top > top_m + 0.01 and box[0] <= centre[0] <= box[2] and box[1] <= centre[1] <= box[3]
                 for cj, (other_top, centre, _) in tops.items() if cj != ci
             ):
                 continue  # a lower member of a stack: the block on top sits inside its footprint
-            for block, looks_tagged in _blocks_from_region(color_bgr, depth_mm, geo, cfg, roi, top_m, names[ci - 1], ci, table, z_small, step):
+            region = region or _Region(color_bgr, depth_mm, geo, cfg, roi, table)
+            for block, looks_tagged in _blocks_from_region(color_bgr, geo, cfg, region, top_m, names[ci - 1], ci, z_small, step):
                 if block.aruco_id is None and looks_tagged:
                     detector = detector or make_detector(cfg.tags.block_tag_dictionary)
                     block = _with_tag(block, color_bgr, roi, detector, cfg)
@@ -425,14 +427,23 @@ def detect_blocks(
     return sorted(blocks, key=lambda b: (round(float(b.position_m[1]), 3), float(b.position_m[0])))
 
 
-def _blocks_from_region(color_bgr, depth_mm, geo: BlockGeometry, cfg, roi, top_m, name, ci, table, z_small, step) -> list[tuple[Block, bool]]:
+class _Region:
+    """A region of interest at full resolution: its HSV image, colour classes and world heights."""
+
+    def __init__(self, color_bgr: np.ndarray, depth_mm: np.ndarray, geo: BlockGeometry, cfg: PerceptionConfig, roi, table: np.ndarray) -> None:
+        x0, y0, x1, y1 = roi
+        self.roi = roi
+        self.hsv = cv2.cvtColor(color_bgr[y0:y1, x0:x1], cv2.COLOR_BGR2HSV)
+        self.classes = _color_classes(self.hsv, cfg, table)
+        self.colourless = self.classes == 0
+        self.z = _roi_heights(depth_mm, geo, roi)
+
+
+def _blocks_from_region(color_bgr, geo: BlockGeometry, cfg, region: _Region, top_m, name, ci, z_small, step) -> list[tuple[Block, bool]]:
     """The top face at about top_m in the ROI (pixels of this colour or colourless, e.g. a tag), as
     blocks, each with whether its face looks tagged (_face_looks_tagged)."""
-    x0, y0, x1, y1 = roi
+    roi, hsv, classes, z = region.roi, region.hsv, region.classes, region.z
     tol = cfg.blocks.top_face_tolerance_m
-    hsv = cv2.cvtColor(color_bgr[y0:y1, x0:x1], cv2.COLOR_BGR2HSV)
-    classes = _color_classes(hsv, cfg, table)
-    z = _roi_heights(depth_mm, geo, roi)
     mine = classes == ci
     band = np.abs(z - top_m) < tol
     near_top = mine & band
@@ -440,9 +451,9 @@ def _blocks_from_region(color_bgr, depth_mm, geo: BlockGeometry, cfg, roi, top_m
     # faces that the depth filter smeared up to the top's height at the edge facing the camera.
     if np.count_nonzero(near_top) >= 10:
         value = hsv[..., 2]
-        keep = (mine & (value >= 0.7 * quantile(value[near_top], 0.95))) | (classes == 0)
+        keep = (mine & (value >= 0.7 * quantile(value[near_top], 0.95))) | region.colourless
     else:
-        keep = mine | (classes == 0)
+        keep = mine | region.colourless
     found = _top_face_in_roi(z, band, keep, tol)
     if found is None:
         return []
