@@ -85,14 +85,6 @@ def _hue_lut(centres_deg: tuple[float, ...]) -> np.ndarray:
     return np.argmin(diff, axis=1).astype(np.uint8)
 
 
-def color_classes(hsv: np.ndarray, cfg: PerceptionConfig, lut: np.ndarray) -> np.ndarray:
-    """Per-pixel colour index + 1 (0 = not a block colour: grey, dark or washed out).
-
-    Two OpenCV passes: a 256-entry table on the hue plane (hues past 179 count as 179), and a range
-    mask for enough saturation and value."""
-    return _color_classes(hsv, cfg, _class_table(lut))
-
-
 def _class_table(lut: np.ndarray) -> np.ndarray:
     """hue_lut's table as cv2.LUT wants it: 256 entries of colour index + 1."""
     table = np.empty(256, np.uint8)
@@ -102,6 +94,10 @@ def _class_table(lut: np.ndarray) -> np.ndarray:
 
 
 def _color_classes(hsv: np.ndarray, cfg: PerceptionConfig, table: np.ndarray) -> np.ndarray:
+    """Per-pixel colour index + 1 (0 = not a block colour: grey, dark or washed out).
+
+    Two OpenCV passes: the _class_table on the hue plane (hues past 179 count as 179), and a range
+    mask for enough saturation and value."""
     classes = cv2.LUT(cv2.extractChannel(hsv, 0), table)
     colourful = cv2.inRange(hsv, (0, cfg.blocks.min_saturation, cfg.blocks.min_value), (255, 255, 255))
     return cv2.bitwise_and(classes, colourful)

@@ -106,30 +106,14 @@ def project_points(T_world_camera: np.ndarray, K: np.ndarray, dist: np.ndarray, 
 
 def board_homography(T_world_camera: np.ndarray, K: np.ndarray, plane_z_m: float = 0.0) -> np.ndarray:
     """3x3 H mapping points (x, y, 1) of the plane z = plane_z_m (metres) to undistorted pixels (u, v, 1)."""
-    H = _plane_to_pixels(invert_transform(T_world_camera), K, plane_z_m)
+    H = PlaneCamera(T_world_camera, K, np.zeros(5)).homography(plane_z_m)
     return H / H[2, 2]
-
-
-def _plane_to_pixels(T_camera_world: np.ndarray, K: np.ndarray, plane_z_m: float) -> np.ndarray:
-    """The unnormalised homography (x, y, 1) on the plane z = plane_z_m -> undistorted pixel."""
-    return K @ np.column_stack([T_camera_world[:3, 0], T_camera_world[:3, 1], T_camera_world[:3, 2] * plane_z_m + T_camera_world[:3, 3]])
-
-
-def project_plane_points(T_world_camera: np.ndarray, K: np.ndarray, dist: np.ndarray, points_xy: np.ndarray, plane_z_m: float) -> np.ndarray:
-    """Pixels (N, 2) of points (N, 2) on the plane z = plane_z_m: a homography without lens distortion
-    (cheap enough for per-frame drawing), full projection with it."""
-    pts = np.asarray(points_xy, dtype=np.float64).reshape(-1, 2)
-    if np.any(np.asarray(dist) != 0):
-        return project_points(T_world_camera, K, dist, np.column_stack([pts, np.full(len(pts), plane_z_m)]))
-    H = board_homography(T_world_camera, K, plane_z_m)
-    uvw = pts @ H[:, :2].T + H[:, 2]
-    return uvw[:, :2] / uvw[:, 2:3]
 
 
 class PlaneCamera:
     """A calibrated camera mapping between pixels and horizontal planes z = const, with its pose
     inverted and its distortion checked once (build one per frame, not one per point set).
-    Results are identical to project_plane_points and to intersect_rays_with_plane(normalized_rays)."""
+    Without distortion a plane maps through one homography; with it, through full projection and rays."""
 
     def __init__(self, T_world_camera: np.ndarray, K: np.ndarray, dist: np.ndarray) -> None:
         self.T_world_camera = T_world_camera
@@ -148,8 +132,8 @@ class PlaneCamera:
         return self.K @ M
 
     def project(self, points_xy: np.ndarray, plane_z_m: float, H: np.ndarray | None = None) -> np.ndarray:
-        """Pixels (N, 2) of points (N, 2) on the plane z = plane_z_m (as project_plane_points).
-        H: self.homography(plane_z_m), if the caller has it."""
+        """Pixels (N, 2) of points (N, 2) on the plane z = plane_z_m: a homography without lens distortion
+        (cheap enough for per-frame drawing), full projection with it. H: self.homography(plane_z_m), if the caller has it."""
         pts = np.asarray(points_xy, dtype=np.float64).reshape(-1, 2)
         if self.distorted:
             return project_points(self.T_world_camera, self.K, self.dist, np.column_stack([pts, np.full(len(pts), plane_z_m)]))
