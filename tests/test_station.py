@@ -19,7 +19,7 @@ import live  # noqa: E402
 from armlab.errors import CommandRefused  # noqa: E402
 from armlab.scene import Scene  # noqa: E402
 from armlab.station import COMMANDS, State, allowed_commands  # noqa: E402
-from armlab.station import actions  # noqa: E402
+from armlab import skills  # noqa: E402
 from armlab.station.states import JOB_STATES, TRANSITIONS  # noqa: E402
 
 JOB_COMMAND = {State.CALIBRATE: "calibrate", State.REPEAT: "repeat", State.CLICK_GRAB: "grab", State.CLICK_DROP: "drop", State.AUTO_SORT: "auto"}
@@ -92,14 +92,14 @@ def _issue(station, command: str, program_id: int):
         "move_to": lambda: station.move_to([0.0, 0.3, 0.15]),
         "torque": lambda: station.set_torque(True),
         "gripper": lambda: station.gripper_command("release", wait=False),
-        "calibrate": lambda: station.calibrate(),
-        "grab": lambda: station.grab(position_m=[0.0, 0.3, 0.03]),
-        "drop": lambda: station.drop(position_m=[0.0, 0.3, 0.0]),
+        "calibrate": lambda: skills.calibrate(station),
+        "grab": lambda: skills.grab(station, position_m=[0.0, 0.3, 0.03]),
+        "drop": lambda: skills.drop(station, position_m=[0.0, 0.3, 0.0]),
         "teach_start": lambda: station.teach_start(),
         "teach_record": lambda: station.teach_record(),
         "teach_stop": lambda: station.teach_stop("never saved"),
-        "repeat": lambda: station.repeat(program_id),
-        "auto": lambda: actions.run_task(station, "noop", lambda st, ctx: None),
+        "repeat": lambda: skills.repeat(station, program_id),
+        "auto": lambda: station.start_job("auto", "noop", lambda ctx: None),
         "cancel": lambda: station.cancel_job(),
         "set_scene": lambda: station.allowed_or_raise("set_scene"),
     }
@@ -215,7 +215,7 @@ def test_bad_input_is_refused_and_nothing_moves(idle):
         (lambda: station.move_joints([0.0, 3.0, 0, 0, 0]), "shoulder"),
         (lambda: station.move_joints([0.0] * 5, moving_time_s=-1), "moving_time_s"),
         (lambda: station.move_to([float("inf"), 0.2, 0.1]), "finite"),
-        (lambda: station.grab(position_m=[0.0, 0.3]), "position_m"),
+        (lambda: skills.grab(station, position_m=[0.0, 0.3]), "position_m"),
         (lambda: station.gripper_command("squeeze"), "grasp"),
     ]
     for call, message in bad_calls:
@@ -224,7 +224,7 @@ def test_bad_input_is_refused_and_nothing_moves(idle):
     with pytest.raises(Unreachable):
         station.move_to([0.0, 0.9, 0.1])
     with pytest.raises(Unreachable):
-        station.grab(position_m=[0.0, 1.2, 0.02])
+        skills.grab(station, position_m=[0.0, 1.2, 0.02])
     assert station.state is State.IDLE
     time.sleep(0.1)
     assert np.allclose(_joints(station), q_before, atol=2e-3)
@@ -250,7 +250,7 @@ def test_teach_record_stop_saves_a_program_that_repeats(idle):
     assert station.state is State.IDLE
     assert [w.joints_rad for w in program.waypoints][0] == first.joints_rad
     station.move_joints(station.model.home_rad, moving_time_s=0.6, wait=True)
-    job = station.repeat(program.id, cycles=1)
+    job = skills.repeat(station, program.id, cycles=1)
     assert station.state is State.REPEAT
     assert job.wait(30) and job.state == "succeeded", job.message
     assert np.allclose(_joints(station), program.waypoints[-1].joints_rad, atol=0.02)
@@ -271,14 +271,14 @@ def test_click_grab_lifts_the_block_and_drop_places_it_within_10_mm(idle, cell):
             }
         )
     )
-    job = station.calibrate()
+    job = skills.calibrate(station)
     assert job.wait(20) and job.state == "succeeded", job.message
     live.wait_for(lambda: station.detections()["count"] == 2, 10)
     truth = {o["id"]: o for o in cell.truth()["objects"]}
     z_start = truth["red"]["position_m"][2]
     # Click slightly off the block's centre: the station snaps to the detected block (centre, top, yaw).
     u, v = world_to_pixel(station.calibration, np.array([[0.088, 0.215, 0.038]]))[0]
-    job = station.grab(pixel=(u, v))
+    job = skills.grab(station, pixel=(u, v))
     assert station.state is State.CLICK_GRAB
     assert job.wait(60) and job.state == "succeeded", job.message
     assert job.result["block"]["color"] == "red"
@@ -286,7 +286,7 @@ def test_click_grab_lifts_the_block_and_drop_places_it_within_10_mm(idle, cell):
     assert red["position_m"][2] > z_start + 0.04, f"block not lifted: {red['position_m']}"
     assert station.gripper.read_state().holding
     # Drop onto the blue block: the station stacks on what is there.
-    job = station.drop(position_m=[-0.12, 0.18, 0.0])
+    job = skills.drop(station, position_m=[-0.12, 0.18, 0.0])
     assert station.state is State.CLICK_DROP
     assert job.wait(60) and job.state == "succeeded", job.message
     time.sleep(0.5)
@@ -295,11 +295,11 @@ def test_click_grab_lifts_the_block_and_drop_places_it_within_10_mm(idle, cell):
     assert np.hypot(red["position_m"][0] - blue["position_m"][0], red["position_m"][1] - blue["position_m"][1]) < 0.010
     assert red["position_m"][2] == pytest.approx(blue["position_m"][2] + 0.038, abs=0.006)
     # Grab it again and drop it by a click on the free board: within 10 mm of the clicked point.
-    job = station.grab(position_m=red["position_m"][:2] + [red["position_m"][2] + 0.019])
+    job = skills.grab(station, position_m=red["position_m"][:2] + [red["position_m"][2] + 0.019])
     assert job.wait(60) and job.state == "succeeded", job.message
     target = [0.15, 0.05, 0.0]
     u, v = world_to_pixel(station.calibration, np.array([target]))[0]
-    job = station.drop(pixel=(u, v))
+    job = skills.drop(station, pixel=(u, v))
     assert job.wait(60) and job.state == "succeeded", job.message
     time.sleep(0.5)
     red = {o["id"]: o for o in cell.truth()["objects"]}["red"]

@@ -1,9 +1,13 @@
-"""The Station: owns the devices, the calibration and the running job; the only writer of arm commands.
+"""The Station, the gate: state table, lock, devices, job runner, e-stop; the only writer of arm commands.
 
-Every command is checked against the transition table (states.py) under one lock, so an e-stop and a
-command can never interleave: after estop() returns, no job or manual command can reach the arm until
-reset(). Long actions (calibrate, grab, drop, repeat, tasks) run as cancellable jobs (jobs.py); the
-camera, perception and telemetry each run on their own thread (perception.py, telemetry.py).
+Every command is checked against the transition table (states.py) under one lock and every state change
+goes through `_transition`, so an e-stop and a command can never interleave: after estop() returns, no
+job or manual command can reach the arm until reset(). Skills and tasks (armlab.skills, armlab.tasks)
+sit above the gate and use its small public interface: `start_job`, `run_trajectory`, `run_gripper`,
+`fresh_frame`, `fresh_perception`, `joints_rad`, `checked_joints`, `held_block`, `moved_over_since`.
+The camera, perception and telemetry each run on their own thread (perception.py, telemetry.py), except
+in synchronous mode (a fast-mode simulation for evaluations), where frames are captured on demand and
+physics advances only while the gate waits for the devices.
 """
 
 from __future__ import annotations
@@ -23,9 +27,9 @@ from armlab.devices.gripper import Gripper
 from armlab.station.checks import checked_joints, checked_moving_time, checked_position
 from armlab.station.config import StationConfig
 from armlab.station.jobs import Job, JobCancelled, JobContext, start_job_thread
-from armlab.station.perception import FrameSource, Perception, PerceptionLoop
+from armlab.station.perception import FrameSource, Perception, PerceptionLoop, analyse_frame
 from armlab.station.slots import EventLog, NewestSlot
-from armlab.station.states import State, allowed_commands, after_event, next_state
+from armlab.station.states import JOB_STATES, State, allowed_commands, after_event, next_state
 from armlab.station.telemetry import TelemetryPublisher, block_to_dict, gripper_pose_from_matrix
 from armlab.store import Store, Waypoint
 
@@ -42,11 +46,16 @@ class NotCalibrated(RuntimeError):
 # Errors that mean a device failed (→ fault), as opposed to a refused or impossible request.
 DEVICE_ERRORS = (ConnectionError, TimeoutError, OSError)
 
+WAIT_CHUNK_S = 0.05  # waits on the devices check cancel/e-stop this often (simulated time in fast mode)
+MOTION_MEMORY = 256  # how many recent arm motions the gate remembers for stale-perception checks
+
 
 class Station:
-    """The control station. Backends are injected; `sim` is the SimWorkcell when simulated (else None).
+    """The control station's gate. Backends are injected; `sim` is the SimWorkcell when simulated (else None).
 
     model: the armlab.kinematics ArmModel of the arm; perception_config: armlab.vision's config.
+    synchronous: the sim runs in fast mode and nothing runs on threads (evaluations); frames are
+    captured when a skill asks for one and physics advances only while the gate waits.
     """
 
     def __init__(
@@ -62,15 +71,19 @@ class Station:
         motion_config: Any = None,
         sim: Any = None,
         backend: str = "sim",
+        synchronous: bool = False,
     ) -> None:
+        if synchronous and (sim is None or sim.realtime):
+            raise ValueError("synchronous mode needs a fast-mode simulation (SimWorkcell with realtime=False)")
         self.arm, self.gripper, self.camera = arm, gripper, camera
         self.model = model
         self.config = config or StationConfig()
         self.store = store or Store(self.config.database_file())
         self.perception_config = perception_config
-        self.motion_config = motion_config
+        self._motion_config = motion_config
         self.sim = sim
         self.backend = backend
+        self.synchronous = synchronous
         self._lock = threading.RLock()
         self._state = State.IDLE
         self._detail = ""
@@ -80,7 +93,9 @@ class Station:
         self._calibration: Any = None
         self._calibration_info: dict | None = None
         self._controller: str | None = None
-        self.held_block: dict | None = None  # what the last grab picked (wire dict + "height_m")
+        self._held_block: dict | None = None
+        self._motions: list[tuple[float, np.ndarray]] = []  # (end time_s, xy box [xmin, ymin, xmax, ymax])
+        self._pipeline: Any = None  # synchronous mode's perception pipeline
         self.events = EventLog()
         self.frames: NewestSlot[Frame] = NewestSlot()
         self.perception: NewestSlot[Perception] = NewestSlot()
@@ -92,7 +107,8 @@ class Station:
     # Lifecycle ------------------------------------------------------------------------------------
 
     def start(self) -> None:
-        """Connect devices not yet connected and start the camera, perception and telemetry threads."""
+        """Connect devices not yet connected and start the camera, perception and telemetry threads
+        (none in synchronous mode)."""
         if self._started:
             return
         for device in (self.arm, self.gripper, self.camera):
@@ -104,13 +120,14 @@ class Station:
             self.perception_config = load_perception_config()
         if self.config.restore_calibration:
             self._restore_calibration()
-        self._workers = [
-            FrameSource(self.camera, self.frames),
-            PerceptionLoop(
-                self.frames, self.perception, lambda: self._calibration, self.perception_config, self.config.perception_rate_hz
-            ),
-            TelemetryPublisher(self.telemetry_snapshot, self.telemetry, self.config.telemetry_rate_hz),
-        ]
+        if not self.synchronous:
+            self._workers = [
+                FrameSource(self.camera, self.frames),
+                PerceptionLoop(
+                    self.frames, self.perception, lambda: self._calibration, self.perception_config, self.config.perception_rate_hz
+                ),
+                TelemetryPublisher(self.telemetry_snapshot, self.telemetry, self.config.telemetry_rate_hz),
+            ]
         for worker in self._workers:
             worker.start()
         self._started = True
@@ -151,14 +168,16 @@ class Station:
         with self._lock:
             next_state(self._state, command)
 
-    def _accept(self, command: str, source: str | None) -> State:
-        """Check `command` against the table (CommandRefused if not allowed); return the next state.
-
-        Caller holds the lock and assigns the state once its own checks passed.
-        """
-        new_state = next_state(self._state, command)
+    def _transition(self, trigger: str, *, source: str | None = None, detail: str | None = None, event: bool = False) -> State:
+        """The one place the state changes. `trigger` is an operator command (checked against the table:
+        CommandRefused if not allowed) or, with event=True, an internal event (job_ended, device_failed).
+        Caller holds the lock. detail None keeps the detail unless the new state is idle."""
+        new_state = after_event(self._state, trigger) if event else next_state(self._state, trigger)
         if source is not None:
             self._controller = source
+        if new_state is not self._state or detail is not None:
+            self._detail = detail if detail is not None else ("" if new_state is State.IDLE else self._detail)
+        self._state = new_state
         return new_state
 
     @property
@@ -191,12 +210,42 @@ class Station:
             return
         self.set_calibration(calibration, data["info"])
 
+    @property
+    def motion_config(self) -> Any:
+        """armlab.motion's MotionConfig (config/motion.yaml unless one was injected)."""
+        if self._motion_config is None:
+            from armlab.motion.config import load_motion_config
+
+            self._motion_config = load_motion_config()
+        return self._motion_config
+
+    @property
+    def held_block(self) -> dict | None:
+        """What the last pick put in the gripper (block wire dict + "height_m"), or None."""
+        with self._lock:
+            return None if self._held_block is None else dict(self._held_block)
+
+    def set_held_block(self, block: dict | None) -> None:
+        with self._lock:
+            self._held_block = None if block is None else dict(block)
+
     # Status ---------------------------------------------------------------------------------------
+
+    def joints_rad(self) -> np.ndarray:
+        """The measured joint positions (rad)."""
+        return np.asarray(self.arm.read_joint_state().position_rad, dtype=float)
+
+    def checked_joints(self, q_rad) -> np.ndarray:
+        """A finite joint vector inside the limits (ValueError naming the joint otherwise)."""
+        return checked_joints(self.model, q_rad)
+
+    def clock_s(self) -> float:
+        """The motion clock: simulated time on the simulation, else monotonic wall time."""
+        return self.sim.sim_time_s if self.sim is not None else time.monotonic()
 
     def status(self) -> dict:
         """GET /api/status: the wire dict (SI units)."""
-        joint_state = self.arm.read_joint_state()
-        q = np.asarray(joint_state.position_rad, dtype=float)
+        q = self.joints_rad()
         gripper = self.gripper.read_state()
         with self._lock:
             job = self._job or self._last_job
@@ -225,6 +274,8 @@ class Station:
         if perception is None:
             return {"data": [], "count": 0, "time_s": time.time(), "frame_sequence": -1}
         data = [block_to_dict(index, block) for index, block in enumerate(perception.blocks)]
+        for block in data:
+            block.setdefault("seen_time_s", perception.capture_time_s)
         return {"data": data, "count": len(data), "time_s": perception.time_s, "frame_sequence": perception.frame_sequence}
 
     def telemetry_snapshot(self) -> dict:
@@ -238,8 +289,7 @@ class Station:
     def estop(self, source: str | None = None) -> None:
         """Halt now and latch: cancel the job, stop arm and gripper. Allowed in every state."""
         with self._lock:
-            self._state = self._accept("estop", source)
-            self._detail = "e-stop pressed: reset to continue"
+            self._transition("estop", source=source, detail="e-stop pressed: reset to continue")
             if self._job is not None:
                 self._job.cancel()
             failures = []
@@ -253,19 +303,24 @@ class Station:
     def reset(self, source: str | None = None) -> None:
         """Leave estop/fault for idle without moving the arm."""
         with self._lock:
-            self._state = self._accept("reset", source)
-            self._detail = ""
+            self._transition("reset", source=source, detail="")
         self.events.add("info", "reset: station idle")
 
     def cancel_job(self, source: str | None = None) -> Job:
-        """Cancel the running job: the arm halts where it is, the station returns to idle."""
+        """Cancel the running job: the arm halts where it is, the station returns to idle.
+
+        A job that registered a cleanup (e.g. put a held block down) runs it on its own thread after the
+        cancel; the station stays in the job's state until that ends."""
         with self._lock:
-            new_state = self._accept("cancel", source)
+            next_state(self._state, "cancel")
             job = self._job
             assert job is not None, "a job state without a job"
             job.cancel()
             self._halt_arm()
-            self._state, self._detail = new_state, ""
+            if not job.has_cleanup:
+                self._transition("cancel", source=source, detail="")
+            elif source is not None:
+                self._controller = source
         self.events.add("warn", f"job '{job.name}' cancelled")
         return job
 
@@ -275,37 +330,62 @@ class Station:
         except DEVICE_ERRORS as error:
             log.warning("arm.stop failed: %s", error)
 
-    # Manual commands ------------------------------------------------------------------------------
+    # Waiting on the devices -----------------------------------------------------------------------
 
-    def _checked_joints(self, q_rad) -> np.ndarray:
-        return checked_joints(self.model, q_rad)
+    def _wait_until(self, predicate: Callable[[], bool], timeout_s: float, ctx: JobContext | None = None) -> bool:
+        """Block until predicate() holds (False after timeout_s of motion-clock time). On the simulation
+        this lets fast mode advance the physics; a job's cancel is checked every WAIT_CHUNK_S."""
+        deadline = self.clock_s() + timeout_s
+        while True:
+            if ctx is not None:
+                ctx.check()
+            if self.sim is not None:
+                if self.sim.wait_for(predicate, WAIT_CHUNK_S):
+                    return True
+            elif predicate():
+                return True
+            else:
+                time.sleep(0.005)
+            if self.clock_s() > deadline:
+                return predicate()
+
+    def wait_motion(self, timeout_s: float) -> bool:
+        """Block until the arm stops; False on timeout."""
+        return self._wait_until(lambda: not self.arm.is_moving(), timeout_s)
+
+    def wait_gripper(self, ctx: JobContext | None = None) -> None:
+        """Wait until the fingers stop moving (≤ gripper_settle_timeout_s of motion-clock time)."""
+        still = {"width": None, "since": self.clock_s()}
+
+        def fingers_still() -> bool:
+            width, now = self.gripper.read_state().width_m, self.clock_s()
+            if still["width"] is None or abs(width - still["width"]) > 2e-4:
+                still["width"], still["since"] = width, now
+                return False
+            return now - still["since"] > 0.15
+
+        self._wait_until(fingers_still, self.config.gripper_settle_timeout_s, ctx)
+
+    # Manual commands ------------------------------------------------------------------------------
 
     def plan_move(self, q_goal_rad, moving_time_s: float | None = None) -> JointTrajectory:
         """A checked joint move from the current position (ValueError/UnsafeTrajectory: nothing moves)."""
         from armlab.motion import check_trajectory, plan_joint_move
 
-        q_goal = self._checked_joints(q_goal_rad)
-        q_now = np.asarray(self.arm.read_joint_state().position_rad, dtype=float)
-        trajectory = plan_joint_move(q_now, q_goal, self.model, moving_time_s=checked_moving_time(moving_time_s, self.config.max_moving_time_s))
+        q_goal = self.checked_joints(q_goal_rad)
+        trajectory = plan_joint_move(
+            self.joints_rad(), q_goal, self.model, moving_time_s=checked_moving_time(moving_time_s, self.config.max_moving_time_s)
+        )
         check_trajectory(self.model, trajectory)
         return trajectory
 
     def _manual_move(self, command: str, q_goal_rad, moving_time_s: float | None, wait: bool, source: str | None) -> None:
         with self._lock:
-            self._accept(command, source)  # state unchanged: idle/teach stay
+            self._transition(command, source=source)  # state unchanged: idle/teach stay
             trajectory = self.plan_move(q_goal_rad, moving_time_s)
-            self.arm.command_trajectory(trajectory)
+            self._command_arm(trajectory, self._swept_box(trajectory))
         if wait:
             self.wait_motion(trajectory.duration_s + 5.0)
-
-    def wait_motion(self, timeout_s: float) -> bool:
-        """Block until the arm stops (or the station is e-stopped); False on timeout."""
-        deadline = time.monotonic() + timeout_s
-        while self.arm.is_moving():
-            if time.monotonic() > deadline:
-                return False
-            time.sleep(0.01)
-        return True
 
     def move_joints(self, q_rad, moving_time_s: float | None = None, wait: bool = False, source: str | None = None) -> None:
         self._manual_move("move_joints", q_rad, moving_time_s, wait, source)
@@ -322,22 +402,21 @@ class Station:
         for name, angle in (("pitch_rad", pitch_rad), ("yaw_rad", yaw_rad)):
             if angle is not None and not math.isfinite(float(angle)):
                 raise ValueError(f"{name} must be finite")
-        q_seed = np.asarray(self.arm.read_joint_state().position_rad, dtype=float)
-        return self.model.ik(position, pitch=pitch_rad, yaw=yaw_rad, q_seed=q_seed)
+        return self.model.ik(position, pitch=pitch_rad, yaw=yaw_rad, q_seed=self.joints_rad())
 
     def move_to(self, position_m, pitch_rad=None, yaw_rad=None, moving_time_s=None, wait=False, source=None) -> np.ndarray:
         """Move the gripper point to a world position (IK, joint move); returns the goal joints."""
         with self._lock:
-            self._accept("move_to", source)
+            self.allowed_or_raise("move_to")
             q_goal = self.solve_pose(position_m, pitch_rad, yaw_rad)
-            self._manual_move("move_to", q_goal, moving_time_s, wait=False, source=None)
+            self._manual_move("move_to", q_goal, moving_time_s, wait=False, source=source)
         if wait:
             self.wait_motion(self.config.max_moving_time_s + 5.0)
         return q_goal
 
     def set_torque(self, enabled: bool, source: str | None = None) -> None:
         with self._lock:
-            self._accept("torque", source)
+            self._transition("torque", source=source)
             self.arm.set_torque(bool(enabled))
         self.events.add("info", f"torque {'on' if enabled else 'off'}")
 
@@ -346,51 +425,37 @@ class Station:
         if action not in ("grasp", "release"):
             raise ValueError(f"gripper action must be 'grasp' or 'release', not {action!r}")
         with self._lock:
-            self._accept("gripper", source)
+            self._transition("gripper", source=source)
             getattr(self.gripper, action)(wait=False)
         if wait:
             self.wait_gripper()
 
-    def wait_gripper(self, ctx: JobContext | None = None) -> None:
-        """Poll until the fingers stop moving (≤ gripper_settle_timeout_s)."""
-        deadline = time.monotonic() + self.config.gripper_settle_timeout_s
-        last_width, still_since = None, time.monotonic()
-        while time.monotonic() < deadline:
-            if ctx is not None:
-                ctx.check()
-            width = self.gripper.read_state().width_m
-            if last_width is None or abs(width - last_width) > 2e-4:
-                last_width, still_since = width, time.monotonic()
-            elif time.monotonic() - still_since > 0.15:
-                return
-            time.sleep(0.02)
-
-    # Teach and repeat -----------------------------------------------------------------------------
+    # Teach ----------------------------------------------------------------------------------------
 
     def teach_start(self, source: str | None = None) -> None:
         with self._lock:
-            self._state = self._accept("teach_start", source)
-            self._detail = "teaching: 0 waypoints"
+            self._transition("teach_start", source=source, detail="teaching: 0 waypoints")
             self._teach = []
         self.events.add("info", "teach mode: record waypoints, then stop with a name")
 
     def teach_record(self, source: str | None = None) -> Waypoint:
         """Add the current joints and gripper command as a waypoint."""
         with self._lock:
-            self._accept("teach_record", source)
-            q = self.arm.read_joint_state().position_rad
+            next_state(self._state, "teach_record")
+            q = self.joints_rad()
             command = self.gripper.read_state().command
             waypoint = Waypoint(tuple(float(v) for v in q), command if command in ("grasp", "release") else "release")
             self._teach.append(waypoint)
-            self._detail = f"teaching: {len(self._teach)} waypoints"
+            self._transition("teach_record", source=source, detail=f"teaching: {len(self._teach)} waypoints")
         return waypoint
 
     def teach_stop(self, name: str, source: str | None = None):
         """Save the recorded waypoints as a program and return to idle (Program)."""
         with self._lock:
-            new_state = self._accept("teach_stop", source)
+            next_state(self._state, "teach_stop")
             program = self.store.save_program(name, self._teach)
-            self._state, self._detail, self._teach = new_state, "", []
+            self._transition("teach_stop", source=source, detail="")
+            self._teach = []
         self.events.add("info", f"program '{program.name}' saved ({len(program.waypoints)} waypoints)")
         return program
 
@@ -400,13 +465,27 @@ class Station:
         with self._lock:
             return self._job or self._last_job
 
-    def start_job(self, command: str, name: str, function: Callable[[JobContext], Any], detail: str = "", source=None) -> Job:
-        """Enter the job's state and run function(ctx) on a job thread (CommandRefused if not allowed)."""
+    def start_job(
+        self,
+        command: str,
+        name: str,
+        function: Callable[[JobContext], Any],
+        detail: str = "",
+        source=None,
+        cleanup: Callable[[JobContext], Any] | None = None,
+    ) -> Job:
+        """Enter the job's state and run function(ctx) on a job thread (CommandRefused if not allowed).
+
+        cleanup(ctx), if given, runs after a cancel (not after an e-stop) with the arm still the job's,
+        e.g. to put a held block down; the station returns to idle when it ends."""
         with self._lock:
-            new_state = self._accept(command, source)
-            job = Job(name=name, detail=detail)
-            self._state, self._detail, self._job = new_state, detail or name, job
-            start_job_thread(job, function, self._on_job_end)
+            next_state(self._state, command)
+            if command not in ("calibrate", "grab", "drop", "repeat", "auto"):
+                raise ValueError(f"'{command}' does not start a job")
+            job = Job(name=name, detail=detail, has_cleanup=cleanup is not None)
+            self._transition(command, source=source, detail=detail or name)
+            self._job = job
+            start_job_thread(job, function, self._on_job_end, cleanup=cleanup)
         self.events.add("info", f"job '{name}' started" + (f": {detail}" if detail else ""))
         return job
 
@@ -414,13 +493,11 @@ class Station:
         with self._lock:
             if self._job is job:
                 self._job, self._last_job = None, job
-                event = "device_failed" if isinstance(error, DEVICE_ERRORS) else "job_ended"
-                self._state = after_event(self._state, event)
-                if self._state is State.IDLE:
-                    self._detail = ""
-                elif self._state is State.FAULT:
-                    self._detail = f"device failure in job '{job.name}': {error}"
-                    self._halt_arm()
+                if self._state in JOB_STATES:
+                    event = "device_failed" if isinstance(error, DEVICE_ERRORS) else "job_ended"
+                    if self._transition(event, event=True) is State.FAULT:
+                        self._detail = f"device failure in job '{job.name}': {error}"
+                        self._halt_arm()
         try:
             self.store.record_job(job.to_dict())
         except Exception as store_error:  # noqa: BLE001 - the job's outcome matters more than its record
@@ -428,57 +505,101 @@ class Station:
         level = {"succeeded": "info", "cancelled": "warn"}.get(job.state, "error")
         self.events.add(level, f"job '{job.name}' {job.state}: {job.message}")
 
-    def run_trajectory(self, ctx: JobContext, trajectory: JointTrajectory) -> None:
-        """Inside a job: command a trajectory (only while this job is current) and wait for it."""
+    def _owns_arm(self, ctx: JobContext) -> None:
+        """Inside a job, under the lock: JobCancelled unless this job may still command the devices
+        (it is current and not cancelled, or it is running its cleanup after a cancel)."""
+        if self._job is not ctx.job or self._state not in JOB_STATES:
+            raise JobCancelled("job is no longer current")
+        if not ctx.in_cleanup:
+            ctx.check()
+
+    def _swept_box(self, trajectory: JointTrajectory) -> np.ndarray:
+        """[xmin, ymin, xmax, ymax] of the gripper point along a trajectory (sampled; no lock needed)."""
+        positions = trajectory.positions_rad
+        tips = self.model.fk(positions[:: max(1, len(positions) // 20)])[:, :2, 3]
+        tips = np.vstack([tips, self.model.fk(positions[-1])[:2, 3]])
+        return np.concatenate([tips.min(axis=0), tips.max(axis=0)])
+
+    def _command_arm(self, trajectory: JointTrajectory, swept_box: np.ndarray) -> None:
+        """Send a checked trajectory and remember where the gripper sweeps (caller holds the lock)."""
+        self.arm.command_trajectory(trajectory)
+        self._motions.append((time.time() + trajectory.duration_s, swept_box))
+        del self._motions[:-MOTION_MEMORY]
+
+    def moved_over_since(self, point_m, since_s: float, radius_m: float = 0.06) -> bool:
+        """True if a motion that ended after `since_s` (wall time, like frame timestamps) swept the gripper
+        within radius_m of point_m in x-y: a detection seen at since_s may be stale there."""
+        x, y = float(point_m[0]), float(point_m[1])
         with self._lock:
+            motions = list(self._motions)
+        for end_s, (xmin, ymin, xmax, ymax) in motions:
+            if end_s > since_s and xmin - radius_m <= x <= xmax + radius_m and ymin - radius_m <= y <= ymax + radius_m:
+                return True
+        return False
+
+    def run_trajectory(self, ctx: JobContext, trajectory: JointTrajectory) -> None:
+        """Inside a job: command a trajectory (only while this job owns the arm) and wait for it."""
+        swept_box = self._swept_box(trajectory)
+        with self._lock:
+            self._owns_arm(ctx)
+            self._command_arm(trajectory, swept_box)
+        checked = ctx if not ctx.in_cleanup else None
+        if not self._wait_until(lambda: not self.arm.is_moving(), trajectory.duration_s + 5.0, checked):
+            self._halt_arm()
+            raise TimeoutError(f"the arm did not finish a {trajectory.duration_s:.2f} s move in time")
+        with self._lock:
+            self._motions[-1] = (time.time(), self._motions[-1][1])
+        if checked is not None:
             ctx.check()
-            if self._job is not ctx.job:
-                raise JobCancelled("job is no longer current")
-            self.arm.command_trajectory(trajectory)
-        deadline = time.monotonic() + trajectory.duration_s + 5.0
-        while self.arm.is_moving():
-            ctx.check()
-            if time.monotonic() > deadline:
-                self._halt_arm()
-                raise TimeoutError(f"the arm did not finish a {trajectory.duration_s:.2f} s move in time")
-            time.sleep(0.01)
-        ctx.check()
 
     def run_gripper(self, ctx: JobContext, action: str) -> None:
-        """Inside a job: grasp or release (only while this job is current) and wait for the fingers."""
+        """Inside a job: grasp or release (only while this job owns the arm) and wait for the fingers."""
+        if action not in ("grasp", "release"):
+            raise ValueError(f"gripper action must be 'grasp' or 'release', not {action!r}")
         with self._lock:
-            ctx.check()
-            if self._job is not ctx.job:
-                raise JobCancelled("job is no longer current")
+            self._owns_arm(ctx)
             getattr(self.gripper, action)(wait=False)
-        self.wait_gripper(ctx)
+        self.wait_gripper(ctx if not ctx.in_cleanup else None)
 
     def move_in_job(self, ctx: JobContext, q_goal_rad, moving_time_s: float | None = None) -> None:
         self.run_trajectory(ctx, self.plan_move(q_goal_rad, moving_time_s))
 
-    # Long actions (armlab.station.actions) ----------------------------------------------------------
+    # Perception for skills ------------------------------------------------------------------------
 
-    def calibrate(self, source: str | None = None) -> Job:
-        from armlab.station import actions
+    def fresh_frame(self, timeout_s: float = 2.0, max_age_s: float = 2.0) -> Frame:
+        """A camera frame taken now (synchronous mode: rendered now; else the newest, waiting for a newer
+        one when it is older than max_age_s). TimeoutError (a device error) when the camera gives none."""
+        if self.synchronous:
+            frame = self.sim.capture_next_frame()
+            self.frames.publish(frame)
+            return frame
+        frame, version = self.frames.get()
+        if frame is None or time.time() - frame.timestamp_s > max_age_s:
+            frame, _ = self.frames.wait_newer(version, timeout_s)
+        if frame is None or time.time() - frame.timestamp_s > max_age_s + timeout_s:
+            raise TimeoutError(f"no fresh camera frame within {timeout_s} s: is the camera running?")
+        return frame
 
-        return actions.calibrate(self, source=source)
+    def fresh_perception(self, ctx: JobContext | None = None, timeout_s: float = 5.0) -> Perception:
+        """Perception of a frame captured after this call began (so after the last motion ended).
 
-    def grab(self, position_m=None, pixel=None, source: str | None = None) -> Job:
-        from armlab.station import actions
+        Synchronous mode: captured and analysed now. Otherwise: waits for the perception thread."""
+        if self.synchronous:
+            from armlab.vision.pipeline import PerceptionPipeline
 
-        return actions.grab(self, position_m=position_m, pixel=pixel, source=source)
-
-    def drop(self, position_m=None, pixel=None, source: str | None = None) -> Job:
-        from armlab.station import actions
-
-        return actions.drop(self, position_m=position_m, pixel=pixel, source=source)
-
-    def repeat(self, program_id: int, cycles: int = 1, source: str | None = None) -> Job:
-        from armlab.station import actions
-
-        return actions.repeat(self, program_id, cycles, source=source)
-
-    def pixel_to_world(self, u: float, v: float) -> dict:
-        from armlab.station import actions
-
-        return actions.pixel_to_world(self, u, v)
+            if self._pipeline is None:
+                self._pipeline = PerceptionPipeline(self.perception_config)
+            frame = self.fresh_frame()
+            perception = analyse_frame(self._pipeline, frame, self.calibration)
+            self.perception.publish(perception)
+            return perception
+        asked_s = time.time()
+        deadline = time.monotonic() + timeout_s
+        _, version = self.perception.get()
+        while time.monotonic() < deadline:
+            if ctx is not None:
+                ctx.check()
+            perception, version = self.perception.wait_newer(version, timeout_s=0.2)
+            if perception is not None and perception.capture_time_s >= asked_s:
+                return perception
+        raise TimeoutError(f"no perception of a fresh frame within {timeout_s} s: is the camera running?")

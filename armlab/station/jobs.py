@@ -24,6 +24,7 @@ class JobContext:
     """What a running job sees: its cancel flag and a progress reporter."""
 
     job: "Job"
+    in_cleanup: bool = False  # True while the job's cleanup runs after a cancel
 
     def check(self) -> None:
         """Raise JobCancelled if the job was cancelled."""
@@ -54,6 +55,7 @@ class Job:
     result: Any = None
     started_s: float = field(default_factory=time.time)
     finished_s: float | None = None
+    has_cleanup: bool = False  # a cleanup runs after a cancel (the station waits for it)
     cancel_event: threading.Event = field(default_factory=threading.Event, repr=False)
     done_event: threading.Event = field(default_factory=threading.Event, repr=False)
     _lock: threading.Lock = field(default_factory=threading.Lock, repr=False)
@@ -115,12 +117,14 @@ def start_job_thread(
     job: Job,
     function: Callable[[JobContext], Any],
     on_end: Callable[[Job, BaseException | None], None],
+    cleanup: Callable[[JobContext], Any] | None = None,
 ) -> threading.Thread:
     """Run `function(ctx)` in a daemon thread; finish the job by its outcome, call on_end(job, error), then mark it done.
 
     Outcomes: returned → succeeded (its return value is the result); JobCancelled → cancelled;
     any other exception → failed with the exception's sentence (passed to on_end so the station can
-    tell device failures from refusals).
+    tell device failures from refusals). After a cancel, cleanup(ctx) runs (its failure is reported in
+    the job's message).
     """
 
     def run() -> None:
@@ -128,7 +132,14 @@ def start_job_thread(
         try:
             result = function(JobContext(job))
         except JobCancelled as cancelled:
-            job.finish("cancelled", str(cancelled) or "cancelled")
+            message = str(cancelled) or "cancelled"
+            if cleanup is not None:
+                try:
+                    outcome = cleanup(JobContext(job, in_cleanup=True))
+                    message += f"; {outcome}" if outcome else ""
+                except Exception as failure:  # noqa: BLE001 - reported, the job is cancelled either way
+                    message += f"; cleanup failed: {type(failure).__name__}: {failure}"
+            job.finish("cancelled", message)
         except Exception as failure:  # noqa: BLE001 - a job's failure is reported, never raised into the void
             error = failure
             job.finish("failed", f"{type(failure).__name__}: {failure}")

@@ -46,6 +46,7 @@ def block_to_dict(index: int, block) -> dict:
         "yaw_rad": float(getattr(block, "yaw_rad", 0.0)),
         "height_m": float(getattr(block, "height_m", 0.0) or 0.0),
         "stack_level": int(getattr(block, "stack_level", 1) or 1),
+        "stack_sizes": [str(size) for size in getattr(block, "stack_sizes", ()) or ()],
         "center_px": _floats(getattr(block, "center_px", (0.0, 0.0))),
         "is_cube": bool(getattr(block, "is_cube", True)),
         "occluded": bool(getattr(block, "occluded", False)),

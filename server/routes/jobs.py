@@ -5,6 +5,7 @@ from __future__ import annotations
 from fastapi import APIRouter
 from fastapi.responses import JSONResponse
 
+from armlab import skills
 from armlab.station.jobs import Job
 from server.deps import ControlAuth, StationDep
 from server.models import JobResponse, TargetRequest
@@ -31,13 +32,13 @@ def _target(body: TargetRequest) -> dict:
 @router.post("/grab", response_model=JobResponse, status_code=202)
 def post_grab(body: TargetRequest, station: StationDep, controller: ControlAuth, wait: bool = False) -> JSONResponse:
     """Grab the detected block under the target (centre, top, yaw), else at the target point."""
-    return job_response(station.grab(**_target(body), source=controller), wait)
+    return job_response(skills.grab(station, **_target(body), source=controller), wait)
 
 
 @router.post("/drop", response_model=JobResponse, status_code=202)
 def post_drop(body: TargetRequest, station: StationDep, controller: ControlAuth, wait: bool = False) -> JSONResponse:
     """Place the held block at the target, on the board or on top of the block/stack there."""
-    return job_response(station.drop(**_target(body), source=controller), wait)
+    return job_response(skills.drop(station, **_target(body), source=controller), wait)
 
 
 @router.get("/jobs/current", response_model=JobResponse)

@@ -5,6 +5,7 @@ from __future__ import annotations
 from fastapi import APIRouter
 from fastapi.responses import JSONResponse
 
+from armlab import skills
 from server.deps import ControlAuth, StationDep
 from server.models import JobResponse, ProgramInfo, ProgramsResponse, RepeatRequest, Status, TeachStopRequest, WaypointInfo
 from server.routes.jobs import job_response
@@ -53,4 +54,4 @@ def post_repeat(
 ) -> JSONResponse:
     """Play a program `cycles` times as a job."""
     cycles = body.cycles if body is not None else 1
-    return job_response(station.repeat(program_id, cycles, source=controller), wait)
+    return job_response(skills.repeat(station, program_id, cycles, source=controller), wait)

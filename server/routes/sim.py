@@ -31,7 +31,7 @@ def post_scene(body: SceneRequest, station: StationDep, controller: ControlAuth)
     else:
         scene = generate_scene(body.event, level=body.level or 1, seed=body.seed or 0)
     cell.set_scene(scene)
-    station.held_block = None
+    station.set_held_block(None)
     station.events.add("info", f"scene set: {body.event or 'custom'} ({len(scene.objects)} objects)")
     return {"objects": len(scene.objects), "event": body.event, "level": body.level, "seed": body.seed}
 

@@ -5,7 +5,6 @@ from __future__ import annotations
 from fastapi import APIRouter, Query, WebSocket
 from fastapi.responses import Response
 
-from armlab.station.actions import newest_frame
 from server.auth import token_matches
 from server.deps import StationDep
 from server.errors import ApiError
@@ -25,7 +24,7 @@ def read_frame(
         key = ViewKey.parse(view, layers)
     except ValueError as error:
         raise ApiError(422, "invalid", str(error)) from error
-    frame = newest_frame(station)
+    frame = station.fresh_frame()
     perception, _ = station.perception.get()
     image = compose_view(frame, key, perception, station.calibration, station.perception_config)
     return Response(

@@ -1,0 +1,23 @@
+"""Skills: perception and manipulation steps above the station gate (armlab.station), below the tasks.
+
+Imports go one way: armlab.tasks → armlab.skills → armlab.station → armlab.devices.
+"""
+
+from armlab.skills.manipulate import plan_pick_steps, plan_place_steps, run_steps
+from armlab.skills.operator import calibrate, calibration_summary, drop, grab, repeat
+from armlab.skills.perceive import block_near, is_stale, look, pixel_to_world
+
+__all__ = [
+    "block_near",
+    "calibrate",
+    "calibration_summary",
+    "drop",
+    "grab",
+    "is_stale",
+    "look",
+    "pixel_to_world",
+    "plan_pick_steps",
+    "plan_place_steps",
+    "repeat",
+    "run_steps",
+]

@@ -1,0 +1,147 @@
+"""The operator's long actions as jobs: calibrate, click-grab, click-drop, repeat a program.
+
+Each validates and plans first (bad input, unreachable target, no calibration: an exception before
+anything moves), then starts a job on the gate whose steps run through its guarded
+run_trajectory/run_gripper.
+"""
+
+from __future__ import annotations
+
+import time
+from collections.abc import Sequence
+from typing import Any
+
+import numpy as np
+
+from armlab.skills.manipulate import plan_pick_steps, plan_place_steps, run_steps
+from armlab.skills.perceive import block_near, finite_pixel, target_point
+from armlab.station.core import Station
+from armlab.station.jobs import Job, JobContext
+from armlab.station.telemetry import tag_to_dict
+
+MAX_SURFACE_HEIGHT_M = 0.25  # a drop surface higher than this is taken for the arm hiding the spot
+BOARD_NOISE_M = 0.006  # depth readings this close to the board are the board
+
+
+def block_edge_m(station: Station, size: str | None) -> float:
+    """The edge of a block of `size` (perception config, filled from the workcell); the default when unknown."""
+    if size not in ("large", "small") or station.perception_config is None:
+        return station.config.default_block_height_m
+    return float(getattr(station.perception_config.blocks, f"{size}_size_m"))
+
+
+def calibrate(station: Station, source: str | None = None) -> Job:
+    """Start the calibration job: tags → extrinsics (+ depth cross-check) → saved and installed."""
+    from armlab.vision import calibrate_extrinsics, detect_tags
+    from armlab.vision.calibration import project_grid
+
+    def run(ctx: JobContext) -> dict:
+        ctx.progress(0.1, "finding the board tags")
+        frame = station.fresh_frame()
+        intrinsics = frame.intrinsics or station.camera.intrinsics
+        tags = detect_tags(frame.color_bgr, station.perception_config)
+        ctx.progress(0.4, f"{len(tags)} tags found; solving the camera pose")
+        calibration = calibrate_extrinsics(frame.color_bgr, intrinsics, station.perception_config, frame.depth_mm, tags=tags)
+        info = calibration_summary(calibration, tags, project_grid(calibration, station.perception_config))
+        ctx.check()
+        station.store.save_calibration({"calibration": calibration.to_dict(), "info": info})
+        station.set_calibration(calibration, info)
+        ctx.job.update(message=f"calibrated: reprojection error {calibration.reprojection_error_px:.2f} px")
+        return {key: info[key] for key in ("reprojection_error_px", "camera_position_m", "depth_check_error_m")}
+
+    return station.start_job("calibrate", "calibrate", run, source=source)
+
+
+def calibration_summary(calibration: Any, tags: Sequence, grid_px: np.ndarray) -> dict:
+    """The wire dict of GET /api/calibration (without 'calibrated')."""
+    depth_error = calibration.depth_check_error_m
+    return {
+        "reprojection_error_px": float(calibration.reprojection_error_px),
+        "camera_position_m": [float(x) for x in calibration.camera_position_m],
+        "T_world_camera": np.asarray(calibration.T_world_camera, dtype=float).tolist(),
+        "K": np.asarray(calibration.K, dtype=float).tolist(),
+        "dist": np.asarray(calibration.dist, dtype=float).ravel().tolist(),
+        "width": int(calibration.width),
+        "height": int(calibration.height),
+        "depth_check_error_m": None if depth_error is None else float(depth_error),
+        "grid_points_px": np.asarray(grid_px, dtype=float).round(2).tolist(),
+        "tags": [tag_to_dict(tag) for tag in tags],
+        "time": time.time(),
+    }
+
+
+def grab(station: Station, position_m=None, pixel=None, source: str | None = None) -> Job:
+    """Pick the detected block under the click (its centre, top and yaw), else at the clicked world point."""
+    station.allowed_or_raise("grab")
+    point, on = target_point(station, position_m, pixel)
+    block = block_near(station, point) if station.calibration is not None else None
+    if block is not None:
+        top = np.asarray(block["position_m"], dtype=float)
+        yaw, edge = block["yaw_rad"], block_edge_m(station, block["size"])
+        detail = f"{block['size']} {block['color']} block at ({top[0] * 1000:.0f}, {top[1] * 1000:.0f}) mm"
+    else:
+        top, yaw, edge = point, None, station.config.default_block_height_m
+        detail = f"point ({top[0] * 1000:.0f}, {top[1] * 1000:.0f}, {top[2] * 1000:.0f}) mm ({on})"
+    steps = plan_pick_steps(station, top, yaw)
+
+    def run(ctx: JobContext) -> dict:
+        run_steps(station, ctx, steps, replan=lambda: plan_pick_steps(station, top, yaw))
+        holding = bool(station.gripper.read_state().holding)
+        station.set_held_block({**(block or {}), "edge_m": edge, "yaw_rad": yaw} if holding else None)
+        ctx.job.update(message="holding the block" if holding else "nothing in the gripper")
+        return {"target_m": [float(x) for x in top], "yaw_rad": yaw, "block": block, "holding": holding}
+
+    return station.start_job("grab", "grab", run, detail=detail, source=source)
+
+
+def drop(station: Station, position_m=None, pixel=None, source: str | None = None) -> Job:
+    """Place the held block at the clicked spot, on whatever is there (board or the top of a stack)."""
+    station.allowed_or_raise("drop")
+    point, on = target_point(station, position_m, pixel)
+    surface = point.copy()
+    yaw = None
+    below = block_near(station, point) if station.calibration is not None else None
+    if below is not None:  # stack on it: centre on its top face, align with its yaw
+        surface = np.asarray(below["position_m"], dtype=float)
+        yaw = below["yaw_rad"]
+        on = f"{below['color']} block"
+    elif on == "depth" and surface[2] > MAX_SURFACE_HEIGHT_M:  # the arm (or the held block) hides the spot
+        from armlab.vision import pixel_to_world as vision_pixel_to_world
+
+        surface, on = np.asarray(vision_pixel_to_world(station.calibration, *finite_pixel(*pixel)), dtype=float), "board"
+    surface[2] = surface[2] if surface[2] > BOARD_NOISE_M else 0.0  # depth noise on the board reads as board
+    held = station.held_block or {}
+    edge = float(held.get("edge_m", station.config.default_block_height_m))
+    steps = plan_place_steps(station, surface, yaw, edge)
+    detail = f"onto {on} at ({surface[0] * 1000:.0f}, {surface[1] * 1000:.0f}, {surface[2] * 1000:.0f}) mm"
+
+    def run(ctx: JobContext) -> dict:
+        run_steps(station, ctx, steps, replan=lambda: plan_place_steps(station, surface, yaw, edge))
+        station.set_held_block(None)
+        return {"target_m": [float(x) for x in surface], "on": on}
+
+    return station.start_job("drop", "drop", run, detail=detail, source=source)
+
+
+def repeat(station: Station, program_id: int, cycles: int = 1, source: str | None = None) -> Job:
+    """Play a saved program `cycles` times: joint moves between waypoints, gripper changes where taught."""
+    station.allowed_or_raise("repeat")
+    if not isinstance(cycles, int) or not 1 <= cycles <= 100:
+        raise ValueError(f"cycles must be an integer from 1 to 100, got {cycles!r}")
+    program = station.store.get_program(program_id)
+    for waypoint in program.waypoints:
+        station.checked_joints(waypoint.joints_rad)
+
+    def run(ctx: JobContext) -> dict:
+        total = cycles * len(program.waypoints)
+        done = 0
+        for cycle in range(cycles):
+            for index, waypoint in enumerate(program.waypoints):
+                ctx.progress(done / total, f"cycle {cycle + 1}/{cycles}, waypoint {index + 1}/{len(program.waypoints)}")
+                station.move_in_job(ctx, waypoint.joints_rad)
+                if station.gripper.read_state().command != waypoint.gripper:
+                    station.run_gripper(ctx, waypoint.gripper)
+                done += 1
+        return {"program_id": program.id, "cycles": cycles}
+
+    return station.start_job("repeat", "repeat", run, detail=f"program '{program.name}' × {cycles}", source=source)

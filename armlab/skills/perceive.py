@@ -1,0 +1,84 @@
+"""Perception skills: pixel → world, the detected block under a point, and a fresh look at the board.
+
+They read the gate's frames and perception (armlab.station) and never move anything.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from armlab.station.checks import checked_position
+from armlab.station.core import NotCalibrated, Station
+from armlab.station.jobs import JobContext
+from armlab.station.telemetry import block_to_dict
+
+
+def finite_pixel(u, v) -> tuple[float, float]:
+    """(u, v) as finite floats, else ValueError."""
+    try:
+        u, v = float(u), float(v)
+    except (TypeError, ValueError) as error:
+        raise ValueError(f"pixel must be two numbers, got ({u!r}, {v!r})") from error
+    if not (math.isfinite(u) and math.isfinite(v)):
+        raise ValueError("pixel (u, v) must be finite")
+    return u, v
+
+
+def pixel_to_world(station: Station, u: float, v: float) -> dict:
+    """{position_m, on}: the world point under pixel (u, v); 'depth' from the depth image, else 'board' (z = 0)."""
+    from armlab.vision import pixel_to_world as vision_pixel_to_world
+
+    u, v = finite_pixel(u, v)
+    calibration = station.calibration
+    if calibration is None:
+        raise NotCalibrated("pixel-to-world")
+    frame, _ = station.frames.get()
+    if frame is not None and frame.depth_mm is not None:
+        try:
+            point = vision_pixel_to_world(calibration, u, v, depth_mm=frame.depth_mm)
+            return {"position_m": [float(x) for x in point], "on": "depth"}
+        except ValueError as error:
+            if "outside" in str(error):
+                raise
+    point = vision_pixel_to_world(calibration, u, v)
+    return {"position_m": [float(x) for x in point], "on": "board"}
+
+
+def target_point(station: Station, position_m, pixel) -> tuple[np.ndarray, str]:
+    """The clicked world point from position_m or pixel=(u, v) (exactly one of them)."""
+    if (position_m is None) == (pixel is None):
+        raise ValueError("give either position_m or a pixel (u, v), not both or neither")
+    if pixel is not None:
+        result = pixel_to_world(station, *pixel)
+        return np.asarray(result["position_m"]), result["on"]
+    return checked_position(position_m), "given"
+
+
+def block_near(station: Station, point_m: np.ndarray) -> dict | None:
+    """The detected block whose top centre is nearest `point_m` in x-y, within click_snap_radius_m."""
+    best, best_distance = None, station.config.click_snap_radius_m
+    for block in station.detections()["data"]:
+        distance = math.dist(block["position_m"][:2], point_m[:2])
+        if distance <= best_distance:
+            best, best_distance = block, distance
+    return best
+
+
+def look(station: Station, ctx: JobContext | None = None) -> list[dict]:
+    """The blocks seen in a frame taken after the arm last moved (wire dicts with seen_time_s).
+
+    NotCalibrated without a calibration: blocks need one."""
+    if station.calibration is None:
+        raise NotCalibrated("looking at the board")
+    perception = station.fresh_perception(ctx)
+    blocks = [block_to_dict(index, block) for index, block in enumerate(perception.blocks)]
+    for block in blocks:
+        block.setdefault("seen_time_s", perception.capture_time_s)
+    return blocks
+
+
+def is_stale(station: Station, block: dict) -> bool:
+    """True if the arm moved over the block's spot after the block was seen (do not act on it)."""
+    return station.moved_over_since(block["position_m"], float(block.get("seen_time_s", 0.0)))
