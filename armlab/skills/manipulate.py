@@ -51,3 +51,93 @@ def run_steps(station: Station, ctx: JobContext, steps: Sequence, replan: Callab
             station.run_gripper(ctx, step.action)
     if progress:
         ctx.progress(1.0, "done")
+
+
+# Pick and place with a safe transfer height ------------------------------------------------------
+
+TRANSFER_CLEARANCE_M = 0.05  # the held block's bottom (or the fingers) this far above the tallest obstacle
+MAX_TRANSFER_Z_M = 0.42
+
+
+def _transfer_plan(station: Station, q_start, point_m, yaw_rad: float | None, boxes: list, held_edge_m: float | None,
+                   action: str, words: tuple[str, str, str]) -> list:
+    """Steps: rise straight up to a transfer height (if low), joint move above point_m at that height,
+    straight down, gripper `action`, straight up to the transfer height. Every trajectory is checked
+    against limits and the table, and the transfers against the obstacle boxes; the transfer height
+    rises until they clear. Unreachable / UnsafeTrajectory before anything moves."""
+    from armlab.kinematics import Unreachable
+    from armlab.motion import GripperStep, TrajectoryStep, check_trajectory, plan_joint_move
+    from armlab.motion.cartesian import plan_vertical_segment
+    from armlab.motion.clearance import first_collision
+    from armlab.motion.pick_place import solve_approach
+    from armlab.motion.safety import UnsafeTrajectory
+
+    config = station.motion_config
+    model = station.model
+    point_m = np.asarray(point_m, float)
+    carried = 0.0 if held_edge_m is None else held_edge_m
+    tallest = max([box.top_z_m for box in boxes] + [0.0])
+    z_transfer = max(point_m[2] + config.approach_height_m, tallest + carried + TRANSFER_CLEARANCE_M)
+    vertical = dict(speed_m_s=config.vertical_speed_m_s, accel_m_s2=config.vertical_accel_m_s2, rate_hz=config.sample_rate_hz)
+    q_start = np.asarray(q_start, float)
+    start_m = model.fk(q_start)[:3, 3]
+    last_problem = "no transfer height tried"
+    while z_transfer <= MAX_TRANSFER_Z_M:
+        above_m = np.array([point_m[0], point_m[1], z_transfer])
+        try:
+            pitch, (q_point, q_above) = solve_approach(model, q_start, [point_m, above_m], yaw_rad, config.top_down_pitch_rad)
+            steps = []
+            q_from = q_start
+            if start_m[2] < z_transfer - 0.01:
+                try:  # straight up first, clear of what is below; near the base it may not reach
+                    rise = plan_vertical_segment(model, q_start, z_transfer, **vertical)
+                    steps.append(TrajectoryStep("rise to transfer height", rise))
+                    q_from = rise.positions_rad[-1]
+                except (Unreachable, ValueError):
+                    pass
+            move = plan_joint_move(q_from, q_above, model, config.move_time_s, config.accel_time_s, config.sample_rate_hz)
+            descend = plan_vertical_segment(model, q_above, float(point_m[2]), pitch_rad=pitch, yaw_rad=yaw_rad, **vertical)
+            ascend = plan_vertical_segment(model, descend.positions_rad[-1], z_transfer, pitch_rad=pitch, yaw_rad=yaw_rad, **vertical)
+        except (Unreachable, ValueError) as error:
+            last_problem = str(error)
+            z_transfer += 0.04
+            continue
+        steps += [TrajectoryStep(words[0], move), TrajectoryStep(words[1], descend), GripperStep(action, action),
+                  TrajectoryStep(words[2], ascend)]
+        for step in steps:
+            if isinstance(step, TrajectoryStep):
+                check_trajectory(model, step.trajectory, clearance_m=config.board_clearance_m)
+        collision = first_collision(model, move, boxes, held_edge_m=held_edge_m)
+        if collision is None and steps[0].name == "rise to transfer height":
+            collision = first_collision(model, steps[0].trajectory, boxes, held_edge_m=held_edge_m)
+        if collision is None:
+            return steps
+        last_problem = collision
+        z_transfer += 0.04
+    raise UnsafeTrajectory(f"no safe transfer to ({point_m[0] * 1000:.0f}, {point_m[1] * 1000:.0f}) mm: {last_problem}")
+
+
+def plan_pick(station: Station, top_center_m, yaw_rad: float | None, edge_m: float, boxes: list, q_start=None) -> list:
+    """Plan picking the block whose top-face centre is top_center_m: open, transfer above it, descend
+    to grasp_depth_m below its top (at most half the block), grasp, rise. boxes: other objects."""
+    from armlab.motion import GripperStep
+
+    config = station.motion_config
+    top = np.asarray(top_center_m, float)
+    grasp_m = top - np.array([0.0, 0.0, min(config.grasp_depth_m, edge_m / 2.0)])
+    grasp_m[2] = max(grasp_m[2], config.board_clearance_m)
+    q_start = station.joints_rad() if q_start is None else q_start
+    steps = _transfer_plan(station, q_start, grasp_m, yaw_rad, boxes, None, "grasp", ("move above block", "descend to grasp", "lift"))
+    return [GripperStep("open before pick", "release"), *steps]
+
+
+def plan_place(station: Station, surface_m, yaw_rad: float | None, edge_m: float, boxes: list, q_start=None) -> list:
+    """Plan setting the held block (edge edge_m, grasped as plan_pick does) with its bottom centre on
+    surface_m, releasing place_clearance_m above it, then rising."""
+    config = station.motion_config
+    surface = np.asarray(surface_m, float)
+    held_below_top = min(config.grasp_depth_m, edge_m / 2.0)
+    release_m = surface + np.array([0.0, 0.0, edge_m - held_below_top + config.place_clearance_m])
+    q_start = station.joints_rad() if q_start is None else q_start
+    return _transfer_plan(station, q_start, release_m, yaw_rad, boxes, edge_m, "release",
+                          ("move above place", "descend to place", "retreat"))

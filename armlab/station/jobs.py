@@ -7,12 +7,15 @@ what a job may do to the devices; this module only knows threads, progress and o
 
 from __future__ import annotations
 
+import logging
 import threading
 import time
 import uuid
 from collections.abc import Callable
 from dataclasses import dataclass, field
 from typing import Any
+
+log = logging.getLogger(__name__)
 
 
 class JobCancelled(Exception):
@@ -56,6 +59,7 @@ class Job:
     started_s: float = field(default_factory=time.time)
     finished_s: float | None = None
     has_cleanup: bool = False  # a cleanup runs after a cancel (the station waits for it)
+    extra: dict = field(default_factory=dict)  # job-specific live details (e.g. a task's progress)
     cancel_event: threading.Event = field(default_factory=threading.Event, repr=False)
     done_event: threading.Event = field(default_factory=threading.Event, repr=False)
     _lock: threading.Lock = field(default_factory=threading.Lock, repr=False)
@@ -66,6 +70,11 @@ class Job:
                 self.progress = progress
             if message is not None:
                 self.message = message
+
+    def update_extra(self, **values: Any) -> None:
+        """Merge job-specific live details into `extra` (shown in GET /api/jobs/current)."""
+        with self._lock:
+            self.extra = {**self.extra, **values}
 
     def finish(self, state: str, message: str, result: Any = None) -> None:
         with self._lock:
@@ -99,6 +108,7 @@ class Job:
                 "started_s": self.started_s,
                 "finished_s": self.finished_s,
                 "result": jsonable(self.result),
+                **({"extra": jsonable(self.extra)} if self.extra else {}),
             }
 
 
@@ -142,6 +152,7 @@ def start_job_thread(
             job.finish("cancelled", message)
         except Exception as failure:  # noqa: BLE001 - a job's failure is reported, never raised into the void
             error = failure
+            log.info("job %s failed", job.name, exc_info=True)
             job.finish("failed", f"{type(failure).__name__}: {failure}")
         else:
             job.finish("succeeded", job.message or "done", result)

@@ -1,0 +1,89 @@
+"""One headless run of an autonomous job in the simulation's fast mode, scored by the judge.
+
+Deterministic per (event, level, seed): the scene comes from the seed, the simulation steps only
+while the job waits on the devices, and frames are rendered only when the job looks.
+"""
+
+from __future__ import annotations
+
+import tempfile
+import time
+from pathlib import Path
+
+from armlab.station.jobs import jsonable
+
+CALIBRATION_TIMEOUT_S = 60.0
+JOB_TIMEOUT_S = 1800.0  # wall time; a job that runs longer is cancelled and scored as it stands
+
+
+def run_episode(event: str, level: int, seed: int, *, keep_truth: bool = False) -> dict:
+    """Run job `event` at `level` on the scene of `seed`; return the judged result as a JSON-ready dict:
+    {event, level, seed, points, max_points, sim_time_s, wall_time_s, breakdown, failures, full,
+    within_limit} (+ truth with gripper_path_m when keep_truth)."""
+    from armlab import skills
+    from armlab.devices.sim import SimWorkcell, SimWorkcellConfig
+    from armlab.kinematics import load_arm
+    from armlab.scene import generate_scene
+    from armlab.station.config import StationConfig
+    from armlab.station.core import Station
+    from armlab.store import Store
+    from armlab.tasks.judge import judge
+    from armlab.tasks.registry import checked_request, start_auto
+
+    checked_request(event, level, None)
+    wall_start = time.monotonic()
+    config = StationConfig()
+    with tempfile.TemporaryDirectory(prefix="armlab-eval-") as tmp, SimWorkcell(
+        SimWorkcellConfig(realtime=False, seed=int(seed)), scene=generate_scene(event, level=level, seed=int(seed))
+    ) as cell:
+        station = Station(cell.arm, cell.gripper, cell.camera, model=load_arm(config.arm), config=config,
+                          store=Store(Path(tmp) / "eval.sqlite3"), sim=cell, backend="sim", synchronous=True)
+        station.start()
+        try:
+            calibration = skills.calibrate(station)
+            calibration.wait(CALIBRATION_TIMEOUT_S)
+            if calibration.state != "succeeded":
+                raise RuntimeError(f"calibration failed: {calibration.message}")
+            sim_start = cell.sim_time_s
+            recorder = getattr(cell, "start_path_recording", None)
+            if recorder is not None:
+                recorder()
+            job = start_auto(station, event, level)
+            if not job.wait(JOB_TIMEOUT_S):
+                job.cancel()
+                job.wait(60)
+            sim_time_s = cell.sim_time_s - sim_start
+            truth = cell.truth()
+            path = cell.gripper_path() if hasattr(cell, "gripper_path") else None
+        finally:
+            station.close()
+    gripper_path_m = None if path is None else [list(map(float, row[1:4])) for row in path]
+    score = judge(event, level, truth, sim_time_s=sim_time_s, gripper_path_m=_after_first_motion(path))
+    failures = list((job.to_dict().get("extra", {}).get("task") or {}).get("failures", []))
+    if job.state != "succeeded":
+        failures.append(f"job {job.state}: {job.message}")
+    result = {
+        "event": event, "level": level, "seed": int(seed), **{k: v for k, v in score.to_dict().items() if k != "breakdown"},
+        "sim_time_s": round(sim_time_s, 3), "wall_time_s": round(time.monotonic() - wall_start, 3),
+        "breakdown": score.to_dict()["breakdown"], "failures": failures,
+    }
+    if keep_truth:
+        result["truth"] = {**jsonable(truth), "gripper_path_m": gripper_path_m}
+    return result
+
+
+def _after_first_motion(path):
+    """The gripper path from the end of the job's first motion (the first time the point stops moving
+    after it started), as (N, 3); None when not recorded."""
+    if path is None or len(path) == 0:
+        return None
+    import numpy as np
+
+    points = np.asarray(path, float)[:, 1:4]
+    steps = np.linalg.norm(np.diff(points, axis=0), axis=1)
+    moving = np.flatnonzero(steps > 1e-4)
+    if moving.size == 0:
+        return points
+    first_start = moving[0]
+    still_after = np.flatnonzero(steps[first_start:] <= 1e-4)
+    return points[first_start + (still_after[0] if still_after.size else 0):]

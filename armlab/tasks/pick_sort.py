@@ -1,0 +1,47 @@
+"""pick_sort (DESIGN §7): every block to the negative half-plane, small ones at x < 0, large at x > 0.
+
+Blocks go to slots in two rows at y < 0, one side per size, away from the calibration tags; pile tops
+are taken first, so the blocks under them show up at the next look.
+"""
+
+from __future__ import annotations
+
+from armlab.tasks.runner import Move, Plan, cubes, near
+
+SLOT_XS_M = (0.09, 0.155, 0.22, 0.285, 0.35)
+SLOT_YS_M = (-0.065, -0.13)
+SLOT_FREE_RADIUS_M = 0.04
+
+
+def side_sign(size: str) -> float:
+    """+1 for large (x > 0), -1 for small (x < 0)."""
+    return 1.0 if size == "large" else -1.0
+
+
+def is_sorted(block: dict) -> bool:
+    x, y = block["position_m"][:2]
+    return y < 0.0 and x * side_sign(block["size"]) > 0.0 and block.get("stack_level", 1) == 1
+
+
+def slots(size: str) -> list[tuple[float, float]]:
+    sign = side_sign(size)
+    return [(sign * x, y) for y in SLOT_YS_M for x in SLOT_XS_M]
+
+
+def policy(objects: list[dict], given_up: set) -> Plan:
+    blocks = cubes(objects)
+    done = [b for b in blocks if is_sorted(b)]
+    todo = [b for b in blocks if not is_sorted(b)]
+    hidden = sum(b.get("stack_level", 1) - 1 for b in todo)
+    moves, claimed = [], []
+    # Pile tops first (they uncover blocks), then nearest the board's middle.
+    for block in sorted(todo, key=lambda b: (-b.get("stack_level", 1), abs(b["position_m"][0]))):
+        free = [s for s in slots(block["size"])
+                if not any(near(o["position_m"], s, SLOT_FREE_RADIUS_M) for o in objects)
+                and not any(near(c, s, SLOT_FREE_RADIUS_M) for c in claimed)]
+        if not free:
+            continue
+        target = free[0]
+        claimed.append(target)
+        moves.append(Move(block, (target[0], target[1], 0.0), f"to the {block['size']} side"))
+    return Plan(moves, done=len(done), left=len(todo) + hidden, finished=not todo)

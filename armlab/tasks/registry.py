@@ -1,0 +1,80 @@
+"""The autonomous jobs by name, their levels and parameters, and how to start one on the station."""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from dataclasses import dataclass
+
+from armlab.station.core import NotCalibrated, Station
+from armlab.station.jobs import Job, JobContext
+from armlab.tasks import pick_sort
+from armlab.tasks.runner import Plan, TaskRunner
+
+
+@dataclass(frozen=True)
+class JobSpec:
+    """An autonomous job: its levels (() = none), and its policy for a level and parameters."""
+
+    name: str
+    levels: tuple[int, ...]
+    make_policy: Callable[[int | None, dict, TaskRunner], Callable[[list[dict], set], Plan]]
+    summary: str
+    param_types: tuple[tuple[str, type], ...] = ()
+
+
+JOBS: dict[str, JobSpec] = {
+    spec.name: spec
+    for spec in (
+        JobSpec("pick_sort", (1, 2, 3), lambda level, params, runner: pick_sort.policy,
+                "every block to y < 0: small at x < 0, large at x > 0"),
+    )
+}
+
+
+def checked_request(job: str, level, params) -> tuple[JobSpec, int | None, dict]:
+    """Validate a job request: ValueError naming the problem (unknown job, level, parameter)."""
+    if not isinstance(job, str) or job not in JOBS:
+        raise ValueError(f"unknown job {job!r}; jobs: {', '.join(JOBS)}")
+    spec = JOBS[job]
+    if spec.levels:
+        if level is None:
+            level = spec.levels[-1]
+        if isinstance(level, bool) or not isinstance(level, int) or level not in spec.levels:
+            raise ValueError(f"job '{job}' has levels {', '.join(map(str, spec.levels))}, not {level!r}")
+    elif level is not None:
+        raise ValueError(f"job '{job}' has no levels; leave 'level' out")
+    params = {} if params is None else params
+    if not isinstance(params, dict):
+        raise ValueError("params must be an object")
+    known = dict(spec.param_types)
+    for name, value in params.items():
+        if name not in known:
+            raise ValueError(f"job '{job}' has no parameter {name!r}" + (f"; parameters: {', '.join(known)}" if known else ""))
+        wanted = known[name]
+        if isinstance(value, bool) and wanted is not bool or not isinstance(value, wanted):
+            raise ValueError(f"parameter {name!r} of job '{job}' must be {wanted.__name__}, got {type(value).__name__}")
+    return spec, level, params
+
+
+def start_auto(station: Station, job: str, level: int | None = None, params: dict | None = None, source: str | None = None) -> Job:
+    """Start an autonomous job in the auto_sort state (CommandRefused unless idle; ValueError for a bad
+    request; NotCalibrated without a camera calibration). Nothing moves before the checks pass."""
+    station.allowed_or_raise("auto")
+    spec, level, params = checked_request(job, level, params)
+    if station.calibration is None:
+        raise NotCalibrated(f"job '{job}'")
+    runners: dict[str, TaskRunner] = {}
+
+    def run(ctx: JobContext) -> dict:
+        runner = runners["runner"] = TaskRunner(station, ctx, job)
+        return runner.run(spec.make_policy(level, params, runner))
+
+    def cleanup(ctx: JobContext) -> str:
+        runner = runners.get("runner")
+        if runner is None:
+            return ""
+        runner.ctx = ctx
+        return runner.put_down_held()
+
+    detail = job if level is None else f"{job} L{level}"
+    return station.start_job("auto", job, run, detail=detail, source=source, cleanup=cleanup)

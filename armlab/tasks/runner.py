@@ -1,0 +1,226 @@
+"""The closed loop every autonomous job shares: park where the arm hides nothing → look → ask the job's
+policy for the next move → plan (checked against limits, table and known objects) → pick → place →
+look again. A failed move is retried up to a bound, then given up with a reason; the job goes on.
+
+A job is a policy: a function from what is seen (a Scene view of detections) to candidate moves in
+order of preference. The runner owns the arm through the gate (armlab.station) via armlab.skills.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Callable
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from armlab import skills
+from armlab.kinematics import Unreachable
+from armlab.motion.clearance import box_around
+from armlab.skills.manipulate import plan_pick, plan_place, run_steps
+from armlab.station.core import Station
+from armlab.station.jobs import JobContext
+
+MAX_ATTEMPTS_PER_MOVE = 3
+MAX_LOOKS = 200  # a job that has looked this often without finishing stops (no endless loops)
+OBJECT_BOX_RADIUS_M = 0.032  # half-width of the box around a detected object (a 38 mm cube at any yaw + margin)
+
+
+@dataclass(frozen=True)
+class Move:
+    """Pick `block` (a detection wire dict) and set it down with its bottom centre at `to_m`
+    (x, y, surface z) with yaw `yaw_rad` (None: keep the block's own yaw). `why` is shown to the operator."""
+
+    block: dict
+    to_m: tuple[float, float, float]
+    why: str
+    yaw_rad: float | None = 0.0
+
+    def key(self) -> tuple:
+        """Identifies "the same move" across looks (attempt counting): the block and where it goes."""
+        b = self.block
+        return (b.get("color"), b.get("size"), b.get("is_cube", True), round(self.to_m[0], 2), round(self.to_m[1], 2))
+
+
+@dataclass(frozen=True)
+class Plan:
+    """A policy's answer: candidate moves (best first), and how many target blocks are done / left."""
+
+    moves: list[Move]
+    done: int
+    left: int
+    finished: bool = False
+
+
+@dataclass
+class Progress:
+    done: int = 0
+    left: int = 0
+    step: str = ""
+    attempts: int = 0
+    failures: list[str] = field(default_factory=list)
+    moves: int = 0
+    next_block: dict | None = None
+    next_target_m: list[float] | None = None
+
+    def to_dict(self) -> dict:
+        return {"done": self.done, "left": self.left, "step": self.step, "attempts": self.attempts,
+                "failures": list(self.failures), "moves": self.moves, "next_block": self.next_block,
+                "next_target_m": self.next_target_m}
+
+
+Policy = Callable[[list[dict], set], Plan]
+
+
+def cubes(objects: list[dict]) -> list[dict]:
+    """The detections that are blocks (not distractors)."""
+    return [o for o in objects if o.get("is_cube", True)]
+
+
+def near(a, b, radius_m: float) -> bool:
+    return math.dist(a[:2], b[:2]) <= radius_m
+
+
+class TaskRunner:
+    """Runs a policy to completion through the gate; see the module docstring."""
+
+    def __init__(self, station: Station, ctx: JobContext, name: str) -> None:
+        self.station = station
+        self.ctx = ctx
+        self.name = name
+        self.progress = Progress()
+        self._attempts: dict[tuple, int] = {}
+        self._given_up: set[tuple] = set()
+        self.edges_m = {size: float(getattr(station.perception_config.blocks, f"{size}_size_m")) for size in ("large", "small")}
+
+    # Reporting -------------------------------------------------------------------------------------
+
+    def report(self, step: str) -> None:
+        self.progress.step = step
+        total = self.progress.done + self.progress.left
+        self.ctx.progress(self.progress.done / total if total else 0.0, step)
+        self.ctx.job.update_extra(task=self.progress.to_dict())
+
+    def fail(self, reason: str) -> None:
+        self.progress.failures.append(reason)
+        self.station.events.add("warn", f"{self.name}: {reason}")
+
+    # Arm -------------------------------------------------------------------------------------------
+
+    def park(self) -> None:
+        """Move to the sleep pose, where the arm hides no block from the camera."""
+        q_park = np.asarray(self.station.model.sleep_rad, float)
+        if np.abs(self.station.joints_rad() - q_park).max() > 0.02:
+            self.report("parking to look")
+            self.station.move_in_job(self.ctx, q_park)
+
+    def look(self) -> list[dict]:
+        """Detections of a fresh frame taken with the arm parked (occluded ones left out)."""
+        self.park()
+        self.report("looking")
+        return [o for o in skills.look(self.station, self.ctx) if not o.get("occluded")]
+
+    def boxes(self, objects: list[dict], *exclude: dict) -> list:
+        """Obstacle boxes around every detected object except `exclude`."""
+        skip = {id(o) for o in exclude}
+        return [box_around(f"{o.get('color')} {o.get('size') or 'object'} at ({o['position_m'][0] * 1000:.0f}, "
+                           f"{o['position_m'][1] * 1000:.0f}) mm", o["position_m"], OBJECT_BOX_RADIUS_M, o["position_m"][2])
+                for o in objects if id(o) not in skip]
+
+    def edge_of(self, block: dict) -> float:
+        return self.edges_m.get(block.get("size") or "large", self.edges_m["large"])
+
+    def execute(self, move: Move, objects: list[dict]) -> bool:
+        """Pick move.block and place it at move.to_m; True if the block was held and released there."""
+        block = move.block
+        edge = self.edge_of(block)
+        to = np.asarray(move.to_m, float)
+        below = [o for o in objects if o is not block and near(o["position_m"], to, 0.02) and abs(o["position_m"][2] - to[2]) < 0.01]
+        others_pick = self.boxes(objects, block)
+        self.progress.next_block, self.progress.next_target_m = block, [float(v) for v in to]
+        try:
+            pick = plan_pick(self.station, block["position_m"], block.get("yaw_rad"), edge, others_pick)
+            self.report(f"picking {block.get('color')} {block.get('size')} block: {move.why}")
+            run_steps(self.station, self.ctx, pick, progress=False)
+        except (Unreachable, ValueError) as error:
+            self.fail(f"cannot pick {block.get('color')} {block.get('size')} block at "
+                      f"({block['position_m'][0] * 1000:.0f}, {block['position_m'][1] * 1000:.0f}) mm: {error}")
+            return False
+        if not self.station.gripper.read_state().holding:
+            self.fail(f"missed the {block.get('color')} {block.get('size')} block (nothing in the gripper)")
+            return False
+        self.station.set_held_block({**block, "edge_m": edge})
+        yaw = block.get("yaw_rad") if move.yaw_rad is None else move.yaw_rad
+        try:
+            place = plan_place(self.station, to, yaw, edge, self.boxes(objects, block, *below))
+        except (Unreachable, ValueError) as error:
+            self.fail(f"cannot place at ({to[0] * 1000:.0f}, {to[1] * 1000:.0f}, {to[2] * 1000:.0f}) mm: {error}")
+            self.put_down_held(objects)
+            return False
+        self.report(f"placing {block.get('color')} {block.get('size')} block: {move.why}")
+        run_steps(self.station, self.ctx, place, progress=False)
+        self.station.set_held_block(None)
+        self.progress.moves += 1
+        return True
+
+    def put_down_held(self, objects: list[dict] | None = None) -> str:
+        """Set a held block down on a free spot of the board (after a failure or a cancel)."""
+        held = self.station.held_block
+        if not self.station.gripper.read_state().holding:
+            self.station.set_held_block(None)
+            return "nothing in the gripper"
+        edge = float((held or {}).get("edge_m", self.edges_m["large"]))
+        spot = self.free_spot(objects or [], edge)
+        place = plan_place(self.station, (spot[0], spot[1], 0.0), 0.0, edge, self.boxes(objects or []))
+        run_steps(self.station, self.ctx, place, progress=False)
+        self.station.set_held_block(None)
+        return f"put the held block down at ({spot[0] * 1000:.0f}, {spot[1] * 1000:.0f}) mm"
+
+    # Space -----------------------------------------------------------------------------------------
+
+    def free_spot(self, objects: list[dict], edge_m: float, region=None, avoid_m: list | None = None) -> tuple[float, float]:
+        """A reachable board spot in `region` ((x_min, x_max), (y_min, y_max); default y > 0.06) at least
+        one block plus a finger gap from every object and `avoid_m` point."""
+        (x_min, x_max), (y_min, y_max) = region or ((-0.30, 0.30), (0.08, 0.32))
+        taken = [o["position_m"][:2] for o in objects] + [p[:2] for p in (avoid_m or [])]
+        gap = edge_m / 2 + 0.019 + 0.03
+        best, best_score = None, -1.0
+        for x in np.arange(x_min, x_max + 1e-9, 0.02):
+            for y in np.arange(y_min, y_max + 1e-9, 0.02):
+                r = math.hypot(x, y)
+                if not 0.14 <= r <= 0.34 or any(math.dist((x, y), tag) < 0.045 for tag in self.tag_centres()):
+                    continue
+                clearance = min((math.dist((x, y), t) for t in taken), default=1.0)
+                if clearance >= gap and clearance > best_score:
+                    best, best_score = (float(x), float(y)), clearance
+        if best is None:
+            raise RuntimeError("no free spot on the board to put a block aside")
+        return best
+
+    def tag_centres(self) -> list[tuple[float, float]]:
+        return [tuple(map(float, xy)) for xy in self.station.perception_config.tags.board_tags.values()]
+
+    # The loop --------------------------------------------------------------------------------------
+
+    def run(self, policy: Policy) -> dict:
+        """Look, move, repeat until the policy is finished or has nothing left it can try."""
+        for _ in range(MAX_LOOKS):
+            objects = self.look()
+            plan = policy(objects, self._given_up)
+            self.progress.done, self.progress.left = plan.done, plan.left
+            moves = [m for m in plan.moves if m.key() not in self._given_up]
+            if plan.finished or not moves:
+                if not plan.finished:
+                    self.fail(f"{plan.left} block(s) left that no move can reach")
+                break
+            move = moves[0]
+            key = move.key()
+            self._attempts[key] = self._attempts.get(key, 0) + 1
+            self.progress.attempts += 1
+            if not self.execute(move, objects) and self._attempts[key] >= MAX_ATTEMPTS_PER_MOVE:
+                self._given_up.add(key)
+                self.fail(f"gave up on the {move.block.get('color')} {move.block.get('size')} block after "
+                          f"{MAX_ATTEMPTS_PER_MOVE} attempts")
+        self.park()
+        self.report("finished")
+        return self.progress.to_dict()
