@@ -56,11 +56,24 @@ def run_steps(station: Station, ctx: JobContext, steps: Sequence, replan: Callab
 # Pick and place with a safe transfer height ------------------------------------------------------
 
 TRANSFER_CLEARANCE_M = 0.05  # the held block's bottom (or the fingers) this far above the tallest obstacle
-MAX_TRANSFER_Z_M = 0.42
+
+
+def _finger_seed(station: Station, q_start, point_m, pitch_rad: float, yaw_rad: float, finger_axis_rad: float):
+    """q_start with wrist_rotate chosen so IK closes the fingers along world angle finger_axis_rad
+    (mod pi) rather than the perpendicular equivalent (top-down only)."""
+    q = station.model.ik(point_m, pitch=pitch_rad, yaw=yaw_rad, q_seed=q_start)
+    fingers = station.model.fk(q)[:3, 1]
+    want = np.array([np.cos(finger_axis_rad), np.sin(finger_axis_rad), 0.0])
+    if abs(float(fingers @ want)) >= 0.7:
+        return q_start
+    seed = np.asarray(q_start, float).copy()
+    seed[-1] = q[-1] + (np.pi / 2 if q[-1] < 0 else -np.pi / 2)
+    return seed
 
 
 def _transfer_plan(station: Station, q_start, point_m, yaw_rad: float | None, boxes: list, held_edge_m: float | None,
-                   action: str, words: tuple[str, str, str]) -> list:
+                   action: str, words: tuple[str, str, str], max_transfer_z_m: float = 0.42,
+                   finger_axis_rad: float | None = None) -> list:
     """Steps: rise straight up to a transfer height (if low), joint move above point_m at that height,
     straight down, gripper `action`, straight up to the transfer height. Every trajectory is checked
     against limits and the table, and the transfers against the obstacle boxes; the transfer height
@@ -82,10 +95,14 @@ def _transfer_plan(station: Station, q_start, point_m, yaw_rad: float | None, bo
     q_start = np.asarray(q_start, float)
     start_m = model.fk(q_start)[:3, 3]
     last_problem = "no transfer height tried"
-    while z_transfer <= MAX_TRANSFER_Z_M:
+    z_transfer = min(z_transfer, max_transfer_z_m)
+    while z_transfer <= max_transfer_z_m + 1e-9:
         above_m = np.array([point_m[0], point_m[1], z_transfer])
         try:
-            pitch, (q_point, q_above) = solve_approach(model, q_start, [point_m, above_m], yaw_rad, config.top_down_pitch_rad)
+            seed = q_start
+            if finger_axis_rad is not None and yaw_rad is not None:
+                seed = _finger_seed(station, q_start, point_m, config.top_down_pitch_rad, yaw_rad, finger_axis_rad)
+            pitch, (q_point, q_above) = solve_approach(model, seed, [point_m, above_m], yaw_rad, config.top_down_pitch_rad)
             steps = []
             q_from = q_start
             if start_m[2] < z_transfer - 0.01:
@@ -117,7 +134,8 @@ def _transfer_plan(station: Station, q_start, point_m, yaw_rad: float | None, bo
     raise UnsafeTrajectory(f"no safe transfer to ({point_m[0] * 1000:.0f}, {point_m[1] * 1000:.0f}) mm: {last_problem}")
 
 
-def plan_pick(station: Station, top_center_m, yaw_rad: float | None, edge_m: float, boxes: list, q_start=None) -> list:
+def plan_pick(station: Station, top_center_m, yaw_rad: float | None, edge_m: float, boxes: list, q_start=None,
+              max_transfer_z_m: float = 0.42) -> list:
     """Plan picking the block whose top-face centre is top_center_m: open, transfer above it, descend
     to grasp_depth_m below its top (at most half the block), grasp, rise. boxes: other objects."""
     from armlab.motion import GripperStep
@@ -127,17 +145,20 @@ def plan_pick(station: Station, top_center_m, yaw_rad: float | None, edge_m: flo
     grasp_m = top - np.array([0.0, 0.0, min(config.grasp_depth_m, edge_m / 2.0)])
     grasp_m[2] = max(grasp_m[2], config.board_clearance_m)
     q_start = station.joints_rad() if q_start is None else q_start
-    steps = _transfer_plan(station, q_start, grasp_m, yaw_rad, boxes, None, "grasp", ("move above block", "descend to grasp", "lift"))
+    steps = _transfer_plan(station, q_start, grasp_m, yaw_rad, boxes, None, "grasp", ("move above block", "descend to grasp", "lift"),
+                           max_transfer_z_m)
     return [GripperStep("open before pick", "release"), *steps]
 
 
-def plan_place(station: Station, surface_m, yaw_rad: float | None, edge_m: float, boxes: list, q_start=None) -> list:
+def plan_place(station: Station, surface_m, yaw_rad: float | None, edge_m: float, boxes: list, q_start=None,
+               max_transfer_z_m: float = 0.42, finger_axis_rad: float | None = None) -> list:
     """Plan setting the held block (edge edge_m, grasped as plan_pick does) with its bottom centre on
-    surface_m, releasing place_clearance_m above it, then rising."""
+    surface_m, releasing place_clearance_m above it, then rising. finger_axis_rad: the world direction
+    the fingers open along (e.g. across a line of blocks, so they do not push the neighbours)."""
     config = station.motion_config
     surface = np.asarray(surface_m, float)
     held_below_top = min(config.grasp_depth_m, edge_m / 2.0)
     release_m = surface + np.array([0.0, 0.0, edge_m - held_below_top + config.place_clearance_m])
     q_start = station.joints_rad() if q_start is None else q_start
     return _transfer_plan(station, q_start, release_m, yaw_rad, boxes, edge_m, "release",
-                          ("move above place", "descend to place", "retreat"))
+                          ("move above place", "descend to place", "retreat"), max_transfer_z_m, finger_axis_rad)

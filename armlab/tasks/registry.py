@@ -7,7 +7,7 @@ from dataclasses import dataclass
 
 from armlab.station.core import NotCalibrated, Station
 from armlab.station.jobs import Job, JobContext
-from armlab.tasks import pick_sort
+from armlab.tasks import line_up, pick_sort, pick_stack, sort_stack, stack_high
 from armlab.tasks.runner import Plan, TaskRunner
 
 
@@ -27,6 +27,14 @@ JOBS: dict[str, JobSpec] = {
     for spec in (
         JobSpec("pick_sort", (1, 2, 3), lambda level, params, runner: pick_sort.policy,
                 "every block to y < 0: small at x < 0, large at x > 0"),
+        JobSpec("pick_stack", (1, 2, 3), pick_stack.make_policy,
+                "every block into columns of three or more on the calibration tags"),
+        JobSpec("line_up", (1, 2, 3), line_up.make_policy,
+                "per size, the six blocks in a straight rainbow line"),
+        JobSpec("stack_high", (1, 2), stack_high.make_policy,
+                "per size, one column of the six blocks in rainbow order, red at the bottom"),
+        JobSpec("sort_stack", (1, 2, 3), sort_stack.make_policy,
+                "every block to its side of y < 0, stacked in rainbow order per side"),
     )
 }
 

@@ -35,6 +35,7 @@ class Move:
     to_m: tuple[float, float, float]
     why: str
     yaw_rad: float | None = 0.0
+    finger_axis_rad: float | None = None  # world direction the fingers open along when releasing
 
     def key(self) -> tuple:
         """Identifies "the same move" across looks (attempt counting): the block and where it goes."""
@@ -92,6 +93,8 @@ class TaskRunner:
         self._attempts: dict[tuple, int] = {}
         self._given_up: set[tuple] = set()
         self.edges_m = {size: float(getattr(station.perception_config.blocks, f"{size}_size_m")) for size in ("large", "small")}
+        self.max_transfer_z_m = 0.42  # a job may lower it (pick_stack keeps the gripper under 300 mm)
+        self.reserved_m: list[tuple[float, float]] = []  # spots a job keeps free (column bases, line slots)
 
     # Reporting -------------------------------------------------------------------------------------
 
@@ -139,7 +142,8 @@ class TaskRunner:
         others_pick = self.boxes(objects, block)
         self.progress.next_block, self.progress.next_target_m = block, [float(v) for v in to]
         try:
-            pick = plan_pick(self.station, block["position_m"], block.get("yaw_rad"), edge, others_pick)
+            pick = plan_pick(self.station, block["position_m"], block.get("yaw_rad"), edge, others_pick,
+                             max_transfer_z_m=self.max_transfer_z_m)
             self.report(f"picking {block.get('color')} {block.get('size')} block: {move.why}")
             run_steps(self.station, self.ctx, pick, progress=False)
         except (Unreachable, ValueError) as error:
@@ -152,7 +156,8 @@ class TaskRunner:
         self.station.set_held_block({**block, "edge_m": edge})
         yaw = block.get("yaw_rad") if move.yaw_rad is None else move.yaw_rad
         try:
-            place = plan_place(self.station, to, yaw, edge, self.boxes(objects, block, *below))
+            place = plan_place(self.station, to, yaw, edge, self.boxes(objects, block, *below),
+                               max_transfer_z_m=self.max_transfer_z_m, finger_axis_rad=move.finger_axis_rad)
         except (Unreachable, ValueError) as error:
             self.fail(f"cannot place at ({to[0] * 1000:.0f}, {to[1] * 1000:.0f}, {to[2] * 1000:.0f}) mm: {error}")
             self.put_down_held(objects)
@@ -171,7 +176,8 @@ class TaskRunner:
             return "nothing in the gripper"
         edge = float((held or {}).get("edge_m", self.edges_m["large"]))
         spot = self.free_spot(objects or [], edge)
-        place = plan_place(self.station, (spot[0], spot[1], 0.0), 0.0, edge, self.boxes(objects or []))
+        place = plan_place(self.station, (spot[0], spot[1], 0.0), 0.0, edge, self.boxes(objects or []),
+                           max_transfer_z_m=self.max_transfer_z_m)
         run_steps(self.station, self.ctx, place, progress=False)
         self.station.set_held_block(None)
         return f"put the held block down at ({spot[0] * 1000:.0f}, {spot[1] * 1000:.0f}) mm"
@@ -182,7 +188,7 @@ class TaskRunner:
         """A reachable board spot in `region` ((x_min, x_max), (y_min, y_max); default y > 0.06) at least
         one block plus a finger gap from every object and `avoid_m` point."""
         (x_min, x_max), (y_min, y_max) = region or ((-0.30, 0.30), (0.08, 0.32))
-        taken = [o["position_m"][:2] for o in objects] + [p[:2] for p in (avoid_m or [])]
+        taken = [o["position_m"][:2] for o in objects] + [p[:2] for p in (avoid_m or [])] + list(self.reserved_m)
         gap = edge_m / 2 + 0.019 + 0.03
         best, best_score = None, -1.0
         for x in np.arange(x_min, x_max + 1e-9, 0.02):

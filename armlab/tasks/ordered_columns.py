@@ -1,0 +1,68 @@
+"""Columns in rainbow order, one per block size (sort_stack L2/L3, stack_high, stack_here).
+
+The next block for a column is the lowest rainbow rank of its size still loose. A pile whose top is
+not next hides blocks: its top is put aside on a free spot so the blocks under it can be seen. A
+column whose top outranks a loose block of its size (a block was hidden, or fell) gives its top back.
+"""
+
+from __future__ import annotations
+
+from armlab.scene import COLORS
+from armlab.tasks.columns import Column
+from armlab.tasks.runner import Move, Plan, TaskRunner, cubes
+
+RANK = {color: rank for rank, color in enumerate(COLORS)}
+
+
+def pile_sizes(block: dict) -> list[str]:
+    return list(block.get("stack_sizes") or []) or [block["size"]] * int(block.get("stack_level", 1))
+
+
+def make_ordered_policy(runner: TaskRunner, bases: dict[str, tuple[float, float]] | None, *,
+                        aside_region=None, choose_bases=None, keep=lambda block: True):
+    """A policy building one rainbow-ordered column per size at bases[size] (or choose_bases(objects)
+    at the first look). keep(block) selects the blocks the job moves (the others are obstacles)."""
+    columns: dict[str, Column] = {}
+
+    def policy(objects: list[dict], given_up: set) -> Plan:
+        if not columns:
+            chosen = bases if bases is not None else choose_bases(objects)
+            columns.update({size: Column(f"{size} column", xy) for size, xy in chosen.items()})
+            runner.reserved_m.extend(chosen.values())
+        for column in columns.values():
+            column.observe(objects)
+        blocks = [b for b in cubes(objects) if keep(b) and b["size"] in columns]
+        tops = {id(c.top) for c in columns.values() if c.top is not None}
+        loose = [b for b in blocks if id(b) not in tops]
+        hidden = {size: sum(pile_sizes(b)[:-1].count(size) for b in loose) for size in columns}
+        done = sum(c.height for c in columns.values())
+        left = sum(len(pile_sizes(b)) for b in loose)
+        moves: list[Move] = []
+        # A column whose top outranks a loose block of its size gives the top back (put aside).
+        for size, column in columns.items():
+            if column.top is None:
+                continue
+            lower = [b for b in loose if b["size"] == size and RANK[b["color"]] < RANK[column.top["color"]]]
+            if lower:
+                moves.append(aside(runner, column.top, objects, aside_region, "out of order: make room for the "
+                                   f"{lower[0]['color']} block"))
+        for block in sorted(loose, key=lambda b: (RANK[b["color"]], -b.get("stack_level", 1))):
+            size = block["size"]
+            column = columns[size]
+            same = [b for b in loose if b["size"] == size]
+            is_next = RANK[block["color"]] == min(RANK[b["color"]] for b in same) and hidden[size] == 0
+            if is_next:
+                yaw = column.top["yaw_rad"] if column.top is not None else 0.0
+                moves.append(Move(block, column.surface_m(), f"next on the {column.name}", yaw_rad=yaw))
+        for block in sorted(loose, key=lambda b: -b.get("stack_level", 1)):
+            if block.get("stack_level", 1) > 1:
+                moves.append(aside(runner, block, objects, aside_region, "uncover the pile under it"))
+        return Plan(moves, done=done, left=left, finished=not loose)
+
+    return policy
+
+
+def aside(runner: TaskRunner, block: dict, objects: list[dict], region, why: str) -> Move:
+    """Move `block` to a free spot on the board (in region, if given)."""
+    x, y = runner.free_spot(objects, runner.edge_of(block), region=region)
+    return Move(block, (x, y, 0.0), why)
