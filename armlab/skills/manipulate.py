@@ -135,7 +135,7 @@ def _transfer_plan(station: Station, q_start, point_m, yaw_rad: float | None, bo
 
 
 def plan_pick(station: Station, top_center_m, yaw_rad: float | None, edge_m: float, boxes: list, q_start=None,
-              max_transfer_z_m: float = 0.42) -> list:
+              max_transfer_z_m: float = 0.42, finger_axis_rad: float | None = None) -> list:
     """Plan picking the block whose top-face centre is top_center_m: open, transfer above it, descend
     to grasp_depth_m below its top (at most half the block), grasp, rise. boxes: other objects."""
     from armlab.motion import GripperStep
@@ -146,7 +146,7 @@ def plan_pick(station: Station, top_center_m, yaw_rad: float | None, edge_m: flo
     grasp_m[2] = max(grasp_m[2], config.board_clearance_m)
     q_start = station.joints_rad() if q_start is None else q_start
     steps = _transfer_plan(station, q_start, grasp_m, yaw_rad, boxes, None, "grasp", ("move above block", "descend to grasp", "lift"),
-                           max_transfer_z_m)
+                           max_transfer_z_m, finger_axis_rad)
     return [GripperStep("open before pick", "release"), *steps]
 
 

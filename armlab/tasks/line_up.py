@@ -11,63 +11,75 @@ from __future__ import annotations
 
 import math
 
+import numpy as np
+
 from armlab.scene import COLORS
 from armlab.tasks.runner import Move, Plan, TaskRunner, cubes, near
 
 SPACING_M = 0.055  # centre to centre: 5 gaps = 275 mm < 300 mm
 LINE_GAP_M = 0.075  # between the large and the small line
-CORRIDOR_M = 0.045  # objects closer than this to a line's segment are in the way
+CORRIDOR_M = 0.07  # objects closer than this to a line segment are in the way (an opening finger reaches them)
 DISTRACTOR_CLEARANCE_M = 0.065  # > the judge's 50 mm
 SLOT_TOLERANCE_M = 0.012
+BOARD_X_M = (-0.47, 0.47)  # slot centres stay this far inside the board's edges
+BOARD_Y_M = (-0.15, 0.45)
 
 
-def line_layouts(sizes: list[str]):
-    """Candidate layouts: {size: [(x, y) of slot k for rank k]} and the line direction (rad)."""
-    offsets = [k - 2.5 for k in range(6)]
-    for y0 in [0.15 + 0.01 * i for i in range(16)]:
-        for x0 in (-0.04, -0.02, 0.0, 0.02, 0.04):
-            for sign in (1, -1):
-                layout = {size: [(x0 + sign * o * SPACING_M, y0 + j * LINE_GAP_M) for o in offsets]
-                          for j, size in enumerate(sizes)}
-                yield layout, 0.0
-    for x0 in [0.17 + 0.01 * i for i in range(12)]:
-        for side in (1, -1):
-            for y0 in (0.06, 0.08, 0.10):
-                layout = {size: [(side * (x0 + j * LINE_GAP_M), y0 + o * SPACING_M) for o in offsets]
-                          for j, size in enumerate(sizes)}
-                yield layout, math.pi / 2
+def line_layouts(sizes: list[str]) -> tuple[np.ndarray, np.ndarray]:
+    """Candidate layouts as arrays: slots (L, lines, 6, 2) — slot k of a line holds rank k — and each
+    layout's line direction (L,), over line centres on a grid across the reachable board and
+    directions every 15° (both reading directions), the second line on either side of the first."""
+    cx, cy, direction, side = np.meshgrid(np.arange(-0.25, 0.2501, 0.025), np.arange(-0.10, 0.3251, 0.025),
+                                          np.radians(np.arange(0, 360, 15)), np.array([1.0, -1.0]), indexing="ij")
+    cx, cy, direction, side = (a.ravel() for a in (cx, cy, direction, side))
+    ux, uy = np.cos(direction), np.sin(direction)
+    nx, ny = -uy * side, ux * side
+    offsets = np.arange(6) - 2.5
+    lines = np.arange(len(sizes))
+    x = cx[:, None, None] + lines[None, :, None] * LINE_GAP_M * nx[:, None, None] + offsets * SPACING_M * ux[:, None, None]
+    y = cy[:, None, None] + lines[None, :, None] * LINE_GAP_M * ny[:, None, None] + offsets * SPACING_M * uy[:, None, None]
+    return np.stack([x, y], axis=-1), direction
 
 
-def segment_distance(p, a, b) -> float:
-    ax, ay = a
-    bx, by = b
-    t = max(0.0, min(1.0, ((p[0] - ax) * (bx - ax) + (p[1] - ay) * (by - ay)) / ((bx - ax) ** 2 + (by - ay) ** 2)))
-    return math.dist(p, (ax + t * (bx - ax), ay + t * (by - ay)))
-
-
-def in_reach(xy) -> bool:
-    return 0.14 <= math.hypot(*xy) <= 0.35
+def segment_distances(points: np.ndarray, starts: np.ndarray, ends: np.ndarray) -> np.ndarray:
+    """Distance (L, P) from each of P points to each of L segments starts[l] → ends[l] (x-y)."""
+    d = ends - starts  # (L, 2)
+    rel = points[None, :, :] - starts[:, None, :]  # (L, P, 2)
+    t = np.clip((rel @ d[:, :, None])[..., 0] / np.sum(d * d, axis=1)[:, None], 0.0, 1.0)
+    return np.linalg.norm(rel - t[..., None] * d[:, None, :], axis=-1)
 
 
 def choose_layout(runner: TaskRunner, objects: list[dict], sizes: list[str]):
-    """The layout with no distractor near, all slots in reach and off the tags, and least in the way."""
-    distractors = [o for o in objects if not o.get("is_cube", True)]
-    best, best_cost = None, math.inf
-    for layout, direction in line_layouts(sizes):
-        slots = [xy for line in layout.values() for xy in line]
-        if not all(in_reach(xy) and all(math.dist(xy, t) > 0.04 for t in runner.tag_centres()) for xy in slots):
-            continue
-        segments = [(line[0], line[-1]) for line in layout.values()]
-        if any(segment_distance(d["position_m"][:2], a, b) < DISTRACTOR_CLEARANCE_M for d in distractors for a, b in segments):
-            continue
-        cost = sum(o.get("stack_level", 1) for o in objects
-                   if any(segment_distance(o["position_m"][:2], a, b) < CORRIDOR_M for a, b in segments))
-        cost += 0.1 * sum(math.hypot(*xy) for xy in slots)  # prefer lines near the arm (faster)
-        if cost < best_cost:
-            best, best_cost = (layout, direction), cost
-    if best is None:
+    """The layout with no distractor near, all slots in reach, on the board and off the tags, and the
+    fewest blocks in its way (then the nearest the arm)."""
+    slots, directions = line_layouts(sizes)
+    flat = slots.reshape(len(slots), -1, 2)
+    radius = np.linalg.norm(flat, axis=-1)
+    ok = np.all((radius >= 0.14) & (radius <= 0.35), axis=1)
+    ok &= np.all((flat[..., 0] > BOARD_X_M[0]) & (flat[..., 0] < BOARD_X_M[1]) & (flat[..., 1] > BOARD_Y_M[0])
+                 & (flat[..., 1] < BOARD_Y_M[1]), axis=1)
+    for tag in runner.tag_centres():
+        ok &= np.all(np.linalg.norm(flat - np.asarray(tag), axis=-1) > 0.04, axis=1)
+    distractors = np.array([o["position_m"][:2] for o in objects if not o.get("is_cube", True)]).reshape(-1, 2)
+    blocks = [o for o in objects if o.get("is_cube", True)]
+    block_xy = np.array([o["position_m"][:2] for o in blocks]).reshape(-1, 2)
+    weights = np.array([o.get("stack_level", 1) for o in blocks], float)
+    cost = 0.1 * radius.sum(axis=1)  # prefer lines near the arm (faster)
+    for line in range(slots.shape[1]):
+        starts, ends = slots[:, line, 0], slots[:, line, -1]
+        if len(distractors):
+            ok &= np.all(segment_distances(distractors, starts, ends) >= DISTRACTOR_CLEARANCE_M, axis=1)
+        if len(block_xy):
+            cost += ((segment_distances(block_xy, starts, ends) < CORRIDOR_M) * weights).sum(axis=1)
+    if not ok.any():
         raise RuntimeError("no place for the lines clear of the distractors")
-    return best
+    best = int(np.flatnonzero(ok)[np.argmin(cost[ok])])
+    layout = {size: [tuple(map(float, xy)) for xy in slots[best, j]] for j, size in enumerate(sizes)}
+    return layout, float(directions[best])
+
+
+def segment_distance(p, a, b) -> float:
+    return float(segment_distances(np.asarray([p[:2]], float), np.asarray([a], float), np.asarray([b], float))[0, 0])
 
 
 def make_policy(level: int | None, params: dict, runner: TaskRunner):
@@ -100,16 +112,27 @@ def make_policy(level: int | None, params: dict, runner: TaskRunner):
         def slot_free(xy) -> bool:
             return not any(near(o["position_m"], xy, 0.035) for o in objects)
 
-        # Blocks whose slot is free go straight there (pile tops first: they uncover others).
-        for block in sorted(loose, key=lambda b: -b.get("stack_level", 1)):
+        def to_slot(block) -> Move:
             xy = slot_of(block)
-            if slot_free(xy):
-                moves.append(Move(block, (xy[0], xy[1], 0.0), f"to slot {COLORS.index(block['color']) + 1} of the "
-                                  f"{block['size']} line", yaw_rad=direction, finger_axis_rad=across))
-        # Then whatever is in the way, and pile tops hiding blocks, go aside.
-        for block in in_way + [b for b in loose if b.get("stack_level", 1) > 1 and b not in in_way]:
+            return Move(block, (xy[0], xy[1], 0.0), f"to slot {COLORS.index(block['color']) + 1} of the "
+                        f"{block['size']} line", yaw_rad=direction, finger_axis_rad=across)
+
+        def to_aside(block) -> Move:
             x, y = runner.free_spot(objects, runner.edge_of(block))
-            moves.append(Move(block, (x, y, 0.0), "out of the lines' way"))
+            return Move(block, (x, y, 0.0), "out of the lines' way")
+
+        # First clear the lines' corridor (to the block's own slot when it is free), then fill the
+        # slots (pile tops first: they uncover others), then put aside pile tops that hide blocks.
+        for block in sorted(in_way, key=lambda b: -b.get("stack_level", 1)):
+            wanted = block["size"] in sizes and block in loose and slot_free(slot_of(block))
+            moves.append(to_slot(block) if wanted else to_aside(block))
+        if not in_way:
+            for block in sorted(loose, key=lambda b: -b.get("stack_level", 1)):
+                if slot_free(slot_of(block)):
+                    moves.append(to_slot(block))
+            for block in loose:
+                if block.get("stack_level", 1) > 1:
+                    moves.append(to_aside(block))
         return Plan(moves, done=len(done), left=left, finished=not loose)
 
     return policy

@@ -82,6 +82,20 @@ def near(a, b, radius_m: float) -> bool:
     return math.dist(a[:2], b[:2]) <= radius_m
 
 
+FINGER_REACH_M = 0.075  # neighbours closer than this (centre to centre) can meet an opening finger
+
+
+def finger_axis_away(point_m, yaw_rad: float, objects: list[dict], exclude: dict | None = None) -> float | None:
+    """Of the two finger directions that close on a block of yaw yaw_rad, the one more across the
+    direction to the nearest neighbour within FINGER_REACH_M (None when nobody is that close)."""
+    others = [o for o in objects if o is not exclude and 1e-3 < math.dist(o["position_m"][:2], point_m[:2]) < FINGER_REACH_M]
+    if not others:
+        return None
+    nearest = min(others, key=lambda o: math.dist(o["position_m"][:2], point_m[:2]))
+    toward = math.atan2(nearest["position_m"][1] - point_m[1], nearest["position_m"][0] - point_m[0])
+    return max((yaw_rad, yaw_rad + math.pi / 2), key=lambda axis: abs(math.sin(axis - toward)))
+
+
 class TaskRunner:
     """Runs a policy to completion through the gate; see the module docstring."""
 
@@ -119,6 +133,10 @@ class TaskRunner:
 
     def look(self) -> list[dict]:
         """Detections of a fresh frame taken with the arm parked (occluded ones left out)."""
+        import os
+        if os.environ.get("ARMLAB_DEBUG_TILT") and self.station.sim is not None:
+            from armlab.tasks.judge import tilt_rad
+            print("LOOK", [(o["id"], round(math.degrees(tilt_rad(o)))) for o in self.station.sim.truth()["objects"] if math.degrees(tilt_rad(o)) > 10])
         self.park()
         self.report("looking")
         return [o for o in skills.look(self.station, self.ctx) if not o.get("occluded")]
@@ -136,6 +154,9 @@ class TaskRunner:
     def execute(self, move: Move, objects: list[dict]) -> bool:
         """Pick move.block and place it at move.to_m; True if the block was held and released there."""
         block = move.block
+        import os
+        if os.environ.get("ARMLAB_DEBUG_TILT"):
+            print("MOVE", block.get("color"), block.get("size"), [round(v * 1000) for v in block["position_m"]], block.get("stack_level"), "->", [round(v * 1000) for v in move.to_m], move.why)
         edge = self.edge_of(block)
         to = np.asarray(move.to_m, float)
         below = [o for o in objects if o is not block and near(o["position_m"], to, 0.02) and abs(o["position_m"][2] - to[2]) < 0.01]
@@ -143,7 +164,8 @@ class TaskRunner:
         self.progress.next_block, self.progress.next_target_m = block, [float(v) for v in to]
         try:
             pick = plan_pick(self.station, block["position_m"], block.get("yaw_rad"), edge, others_pick,
-                             max_transfer_z_m=self.max_transfer_z_m)
+                             max_transfer_z_m=self.max_transfer_z_m,
+                             finger_axis_rad=finger_axis_away(block["position_m"], block.get("yaw_rad") or 0.0, objects, block))
             self.report(f"picking {block.get('color')} {block.get('size')} block: {move.why}")
             run_steps(self.station, self.ctx, pick, progress=False)
         except (Unreachable, ValueError) as error:
@@ -155,9 +177,12 @@ class TaskRunner:
             return False
         self.station.set_held_block({**block, "edge_m": edge})
         yaw = block.get("yaw_rad") if move.yaw_rad is None else move.yaw_rad
+        axis = move.finger_axis_rad
+        if axis is None:
+            axis = finger_axis_away(to, yaw or 0.0, [o for o in objects if o is not block and o not in below], block)
         try:
             place = plan_place(self.station, to, yaw, edge, self.boxes(objects, block, *below),
-                               max_transfer_z_m=self.max_transfer_z_m, finger_axis_rad=move.finger_axis_rad)
+                               max_transfer_z_m=self.max_transfer_z_m, finger_axis_rad=axis)
         except (Unreachable, ValueError) as error:
             self.fail(f"cannot place at ({to[0] * 1000:.0f}, {to[1] * 1000:.0f}, {to[2] * 1000:.0f}) mm: {error}")
             self.put_down_held(objects)
@@ -166,6 +191,12 @@ class TaskRunner:
         run_steps(self.station, self.ctx, place, progress=False)
         self.station.set_held_block(None)
         self.progress.moves += 1
+        import os
+        if os.environ.get("ARMLAB_DEBUG_TILT") and self.station.sim is not None:
+            from armlab.tasks.judge import tilt_rad
+            for o in self.station.sim.truth()["objects"]:
+                if math.degrees(tilt_rad(o)) > 10:
+                    print("TILT after", move.why, block.get("color"), block.get("size"), "->", o["id"], round(math.degrees(tilt_rad(o))))
         return True
 
     def put_down_held(self, objects: list[dict] | None = None) -> str:
