@@ -7,9 +7,12 @@ these models (server/gen_wire_types.py).
 
 from __future__ import annotations
 
-from typing import Any, Literal
+import math
+from typing import Annotated, Any, Literal
 
 from pydantic import BaseModel, ConfigDict, Field, model_validator
+
+from armlab.scene import COLORS, EVENTS, OBJECT_TYPES, SIZES
 
 Vector3 = list[float]
 View = Literal["color", "depth", "topdown"]
@@ -22,13 +25,31 @@ ERROR_CODES = (
     "not_found",
     "not_calibrated",
     "unauthorized",
+    "forbidden",
     "device",
     "internal",
 )
 
+# Sanity bounds of request values, stated in the OpenAPI schema. The station applies the real limits
+# (joint limits, reach, config max_moving_time_s) on top; these only keep absurd numbers out.
+ANGLE_LIMIT_RAD = 2.0 * math.pi
+POSITION_LIMIT_M = 5.0  # the workcell is ~1 m across; scene objects are refused beyond 5 m too
+MOVING_TIME_LIMIT_S = 3600.0
+PIXEL_LIMIT = 100_000.0
+SQLITE_INTEGER_MAX = 2**63 - 1  # program ids are SQLite INTEGERs
+
+Angle = Annotated[float, Field(ge=-ANGLE_LIMIT_RAD, le=ANGLE_LIMIT_RAD, description="radians, |angle| <= 2π")]
+Coordinate = Annotated[float, Field(ge=-POSITION_LIMIT_M, le=POSITION_LIMIT_M, description="metres, |value| <= 5")]
+Position = Annotated[list[Coordinate], Field(min_length=3, max_length=3)]
+MovingTime = Annotated[float, Field(gt=0.0, le=MOVING_TIME_LIMIT_S, description="seconds; the station refuses more than its configured maximum")]
+Pixel = Annotated[float, Field(ge=0.0, le=PIXEL_LIMIT, description="pixel coordinate in the colour image")]
+ProgramId = Annotated[int, Field(ge=0, le=SQLITE_INTEGER_MAX, description="a program id (SQLite integer)")]
+
 
 class Request(BaseModel):
-    model_config = ConfigDict(extra="forbid", allow_inf_nan=False)
+    """Base of every request: strict types (no bool/number/string coercion), no unknown fields, no NaN/inf."""
+
+    model_config = ConfigDict(extra="forbid", allow_inf_nan=False, strict=True)
 
 
 class Wire(BaseModel):
@@ -39,21 +60,21 @@ class Wire(BaseModel):
 
 
 class JointsRequest(Request):
-    q_rad: list[float] = Field(min_length=1, max_length=12, description="joint positions, radians, in joint_names order")
-    moving_time_s: float | None = Field(None, gt=0.0, description="move duration; None = as fast as the limits allow")
+    q_rad: list[Angle] = Field(min_length=1, max_length=12, description="joint positions, radians, in joint_names order")
+    moving_time_s: MovingTime | None = Field(None, description="move duration; None = as fast as the limits allow")
 
 
 class PoseRequest(Request):
-    position_m: Vector3 = Field(min_length=3, max_length=3, description="gripper point in the world (board) frame")
-    pitch_rad: float | None = Field(None, description="approach angle below horizontal; +π/2 = straight down; None = steepest")
-    yaw_rad: float | None = Field(None, description="block yaw in the world frame the fingers align with")
-    moving_time_s: float | None = Field(None, gt=0.0)
+    position_m: Position = Field(description="gripper point in the world (board) frame")
+    pitch_rad: Angle | None = Field(None, description="approach angle below horizontal; +π/2 = straight down; None = steepest")
+    yaw_rad: Angle | None = Field(None, description="block yaw in the world frame the fingers align with")
+    moving_time_s: MovingTime | None = None
 
 
 class PoseNameRequest(Request):
     """Optional body of /api/arm/home and /api/arm/sleep."""
 
-    moving_time_s: float | None = Field(None, gt=0.0)
+    moving_time_s: MovingTime | None = None
 
 
 class TorqueRequest(Request):
@@ -65,16 +86,16 @@ class GripperRequest(Request):
 
 
 class PixelRequest(Request):
-    u: float = Field(description="pixel column in the colour image")
-    v: float = Field(description="pixel row in the colour image")
+    u: Pixel = Field(description="pixel column in the colour image")
+    v: Pixel = Field(description="pixel row in the colour image")
 
 
 class TargetRequest(Request):
     """A grab/drop target: a world point, or a pixel of the colour image (exactly one)."""
 
-    position_m: Vector3 | None = Field(None, min_length=3, max_length=3)
-    u: float | None = None
-    v: float | None = None
+    position_m: Position | None = None
+    u: Pixel | None = None
+    v: Pixel | None = None
 
     @model_validator(mode="after")
     def _one_target(self) -> "TargetRequest":
@@ -94,13 +115,28 @@ class RepeatRequest(Request):
     cycles: int = Field(1, ge=1, le=100)
 
 
+class SceneObjectRequest(Request):
+    """One object of an explicit scene, in the ground-truth format (quat_wxyz wins over yaw_rad)."""
+
+    id: str = Field(pattern=r"^[A-Za-z0-9_.:-]{1,64}$")
+    type: Literal[OBJECT_TYPES]  # type: ignore[valid-type]
+    color: Literal[COLORS]  # type: ignore[valid-type]
+    size: Literal[SIZES] | None = Field(None, description="blocks: large (default) or small; distractors: None = large")  # type: ignore[valid-type]
+    position_m: Position = Field(description="body centre, world frame")
+    yaw_rad: Angle | None = None
+    quat_wxyz: Annotated[list[Annotated[float, Field(ge=-1e6, le=1e6)]], Field(min_length=4, max_length=4)] | None = Field(
+        None, description="orientation (w, x, y, z), non-zero; normalised by the station"
+    )
+    aruco_id: int | None = Field(None, ge=0, le=249, description="ArUco tag (DICT_4X4_250) on a block's top face")
+
+
 class SceneRequest(Request):
     """A generated competition scene (event, level, seed) or explicit objects (ground-truth format)."""
 
-    event: str | None = None
+    event: Literal[tuple(EVENTS)] | None = None  # type: ignore[valid-type]
     level: int | None = Field(None, ge=1, le=3)
-    seed: int | None = None
-    objects: list[dict[str, Any]] | None = None
+    seed: int | None = Field(None, ge=0, le=2**32 - 1)
+    objects: list[SceneObjectRequest] | None = Field(None, max_length=100)
 
     @model_validator(mode="after")
     def _one_kind(self) -> "SceneRequest":
@@ -230,6 +266,7 @@ class ProgramInfo(Wire):
 class ProgramsResponse(Wire):
     data: list[ProgramInfo]
     count: int
+    skipped: list[str] = Field([], description="damaged rows left out of data, one line each (also logged)")
 
 
 # Websocket messages ------------------------------------------------------------------------------
@@ -310,6 +347,7 @@ WIRE_MODELS: tuple[type[BaseModel], ...] = (
     TargetRequest,
     TeachStopRequest,
     RepeatRequest,
+    SceneObjectRequest,
     SceneRequest,
     FrameHeader,
     TelemetryMessage,

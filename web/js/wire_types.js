@@ -6,7 +6,7 @@ export const STATES = Object.freeze(["idle", "calibrate", "teach", "repeat", "cl
 export const COMMANDS = Object.freeze(["estop", "reset", "home", "sleep", "move_joints", "move_to", "torque", "gripper", "calibrate", "grab", "drop", "teach_start", "teach_record", "teach_stop", "repeat", "auto", "cancel", "set_scene"]);
 export const VIEWS = Object.freeze(["color", "depth", "topdown"]);
 export const LAYERS = Object.freeze(["tags", "detections", "grid"]);
-export const ERROR_CODES = Object.freeze(["wrong_state", "unreachable", "unsafe", "invalid", "not_found", "not_calibrated", "unauthorized", "device", "internal"]);
+export const ERROR_CODES = Object.freeze(["wrong_state", "unreachable", "unsafe", "invalid", "not_found", "not_calibrated", "unauthorized", "forbidden", "device", "internal"]);
 export const SERVER_MESSAGE_TYPES = Object.freeze(["frame", "telemetry", "event", "calibration", "hello"]);
 export const CLIENT_MESSAGE_TYPES = Object.freeze(["ack", "view", "command"]);
 
@@ -199,6 +199,7 @@ export const CLIENT_MESSAGE_TYPES = Object.freeze(["ack", "view", "command"]);
  * @typedef {Object} ProgramsResponse
  * @property {Array<ProgramInfo>} data
  * @property {number} count
+ * @property {Array<string>} [skipped] damaged rows left out of data, one line each (also logged)
  */
 
 /**
@@ -207,12 +208,25 @@ export const CLIENT_MESSAGE_TYPES = Object.freeze(["ack", "view", "command"]);
  */
 
 /**
+ * One object of an explicit scene, in the ground-truth format (quat_wxyz wins over yaw_rad).
+ * @typedef {Object} SceneObjectRequest
+ * @property {string} id
+ * @property {("block"|"semicircle"|"arch"|"triangle"|"cylinder")} type
+ * @property {("red"|"orange"|"yellow"|"green"|"blue"|"violet")} color
+ * @property {(("large"|"small")|null)} [size] blocks: large (default) or small; distractors: None = large
+ * @property {Array<number>} position_m body centre, world frame
+ * @property {(number|null)} [yaw_rad]
+ * @property {(Array<number>|null)} [quat_wxyz] orientation (w, x, y, z), non-zero; normalised by the station
+ * @property {(number|null)} [aruco_id] ArUco tag (DICT_4X4_250) on a block's top face
+ */
+
+/**
  * A generated competition scene (event, level, seed) or explicit objects (ground-truth format).
  * @typedef {Object} SceneRequest
- * @property {(string|null)} [event]
+ * @property {(("pick_sort"|"pick_stack"|"line_up"|"stack_high"|"to_the_sky")|null)} [event]
  * @property {(number|null)} [level]
  * @property {(number|null)} [seed]
- * @property {(Array<Object<string, *>>|null)} [objects]
+ * @property {(Array<SceneObjectRequest>|null)} [objects]
  */
 
 /**
