@@ -223,7 +223,7 @@ export const CLIENT_MESSAGE_TYPES = Object.freeze(["ack", "view", "command"]);
 /**
  * A generated competition scene (event, level, seed) or explicit objects (ground-truth format).
  * @typedef {Object} SceneRequest
- * @property {(("pick_sort"|"pick_stack"|"line_up"|"stack_high"|"to_the_sky")|null)} [event]
+ * @property {(("pick_sort"|"pick_stack"|"line_up"|"stack_high"|"to_the_sky"|"sort_stack")|null)} [event]
  * @property {(number|null)} [level]
  * @property {(number|null)} [seed]
  * @property {(Array<SceneObjectRequest>|null)} [objects]
