@@ -17,6 +17,66 @@ export const CLIENT_MESSAGE_TYPES = Object.freeze(["ack", "view", "command"]);
  */
 
 /**
+ * @typedef {Object} AutoJobInfo
+ * @property {string} name
+ * @property {Array<number>} levels [] = the job has no levels
+ * @property {string} summary
+ * @property {Array<AutoParam>} params
+ * @property {boolean} judged a competition event (DESIGN §7): the simulation scores it with the judge
+ * @property {boolean} scene POST /api/sim/scene can generate its starting scene
+ * @property {(number|null)} [time_limit_s] the event's time limit, simulated seconds
+ */
+
+/**
+ * @typedef {Object} AutoJobsResponse
+ * @property {Array<AutoJobInfo>} data
+ * @property {number} count
+ */
+
+/**
+ * @typedef {Object} AutoParam
+ * @property {string} name
+ * @property {string} type Python type name: int, float, str, bool, list, ...
+ */
+
+/**
+ * Start an autonomous job: a name from GET /api/auto/jobs, one of its levels, its parameters.
+ * @typedef {Object} AutoRequest
+ * @property {string} job job name (GET /api/auto/jobs)
+ * @property {(number|null)} [level] one of the job's levels; None = its highest
+ * @property {(Object<string, *>|null)} [params] job parameters by name, each of the type GET /api/auto/jobs gives
+ */
+
+/**
+ * @typedef {Object} AutoResponse
+ * @property {JobInfo} job
+ * @property {(AutoScoreResponse|null)} [score] with ?wait=true in the simulation: the final score
+ */
+
+/**
+ * @typedef {Object} AutoScore
+ * @property {number} points
+ * @property {number} max_points
+ * @property {boolean} within_limit
+ * @property {boolean} full
+ * @property {number} time_limit_s
+ * @property {Array<ScoreRule>} breakdown
+ */
+
+/**
+ * The judge's score of the last autonomous job started over the API (simulation only).
+ * @typedef {Object} AutoScoreResponse
+ * @property {string} job_id
+ * @property {string} job
+ * @property {(number|null)} level
+ * @property {("running"|"succeeded"|"failed"|"cancelled")} state
+ * @property {boolean} final True once the job has ended and its final ground truth was scored
+ * @property {number} sim_time_s simulated seconds from the job's start to its end (so far, while running)
+ * @property {(AutoScore|null)} [score] None while running, or for a job the judge does not score
+ * @property {string} [note]
+ */
+
+/**
  * @typedef {Object} CalibrationInfo
  * @property {boolean} calibrated
  * @property {(number|null)} [reprojection_error_px]
@@ -148,6 +208,7 @@ export const CLIENT_MESSAGE_TYPES = Object.freeze(["ack", "view", "command"]);
  * @property {number} started_s
  * @property {(number|null)} [finished_s]
  * @property {*} [result]
+ * @property {(Object<string, *>|null)} [extra] job-specific live details; autonomous jobs: {task: TaskProgress}
  */
 
 /**
@@ -230,6 +291,14 @@ export const CLIENT_MESSAGE_TYPES = Object.freeze(["ack", "view", "command"]);
  */
 
 /**
+ * @typedef {Object} ScoreRule
+ * @property {string} rule
+ * @property {number} points
+ * @property {string} detail
+ * @property {Array<string>} object_ids
+ */
+
+/**
  * @typedef {Object} Status
  * @property {("idle"|"calibrate"|"teach"|"repeat"|"click_grab"|"click_drop"|"auto_sort"|"estop"|"fault")} state
  * @property {string} detail
@@ -260,6 +329,19 @@ export const CLIENT_MESSAGE_TYPES = Object.freeze(["ack", "view", "command"]);
  * @property {(Array<number>|null)} [position_m]
  * @property {(number|null)} [u]
  * @property {(number|null)} [v]
+ */
+
+/**
+ * job.extra.task of a running autonomous job (also on the websocket's telemetry).
+ * @typedef {Object} TaskProgress
+ * @property {number} done
+ * @property {number} left
+ * @property {string} step
+ * @property {number} attempts
+ * @property {Array<string>} failures
+ * @property {number} moves
+ * @property {(Detection|null)} [next_block] the block being moved (a detection)
+ * @property {(Array<number>|null)} [next_target_m] where it goes: bottom-centre x, y and surface z, world frame
  */
 
 /**
