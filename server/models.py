@@ -300,11 +300,47 @@ class CalibrationMessage(CalibrationInfo):
     type: Literal["calibration"] = "calibration"
 
 
+class GridInfo(Wire):
+    x_m: list[float] = Field(description="first and last grid point x, metres")
+    y_m: list[float] = Field(description="first and last grid point y, metres")
+    step_m: float
+
+
+class BoardInfo(Wire):
+    x_range_m: list[float] = Field(description="[x_min, x_max] of the board, world frame, metres")
+    y_range_m: list[float] = Field(description="[y_min, y_max] of the board, world frame, metres")
+    grid: GridInfo
+
+
+class BoardTagsInfo(Wire):
+    family: str
+    size_m: float
+    centres_m: dict[str, list[float]] = Field(description="tag id -> [x, y] of its centre, metres")
+
+
+class BinInfo(Wire):
+    x_range_m: list[float]
+    y_range_m: list[float]
+
+
+class WorkcellInfo(Wire):
+    """The workcell's geometry (config/workcells/<name>.yaml), sent once in the hello."""
+
+    name: str
+    board: BoardInfo
+    board_tags: BoardTagsInfo
+    block_edges_m: dict[str, float] = Field(description="block size (large, small) -> cube edge, metres")
+    places_m: dict[str, list[float]] = Field(description="sort_by_tag place -> [x, y], metres")
+    feeder_spot_m: list[float] = Field(description="to_the_sky feed spot [x, y], metres")
+    bin: BinInfo
+
+
 class HelloMessage(Wire):
     type: Literal["hello"] = "hello"
     server_time_s: float
     can_control: bool
     backend: Literal["sim", "real"]
+    workcell: WorkcellInfo
 
 
 class AckMessage(Request):
@@ -354,6 +390,11 @@ WIRE_MODELS: tuple[type[BaseModel], ...] = (
     TelemetryMessage,
     EventMessage,
     CalibrationMessage,
+    GridInfo,
+    BoardInfo,
+    BoardTagsInfo,
+    BinInfo,
+    WorkcellInfo,
     HelloMessage,
     AckMessage,
     ViewMessage,

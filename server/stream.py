@@ -24,6 +24,7 @@ from starlette.websockets import WebSocket, WebSocketDisconnect
 
 from armlab.station.core import Station
 from armlab.station.perception import _Worker
+from armlab.workcell import DEFAULT_WORKCELL, load_workcell
 from server.models import AckMessage, CommandMessage, ViewMessage
 from server.views import ViewKey, compose_view, encode_jpeg
 
@@ -203,9 +204,15 @@ class StreamHub:
 
     # One client -----------------------------------------------------------------------------------
 
+    def _workcell_info(self) -> dict:
+        """The geometry of the workcell perception uses (HelloMessage.workcell)."""
+        name = getattr(self.station.perception_config, "workcell", None) or DEFAULT_WORKCELL
+        return load_workcell(name).to_wire()
+
     async def serve(self, websocket: WebSocket, can_control: bool) -> None:
         client = ClientSession(websocket, can_control, event_seq=self.station.events.last_seq)
-        hello = {"type": "hello", "server_time_s": time.time(), "can_control": can_control, "backend": self.station.backend}
+        hello = {"type": "hello", "server_time_s": time.time(), "can_control": can_control, "backend": self.station.backend,
+                 "workcell": self._workcell_info()}
         await websocket.send_text(json.dumps(hello))
         calibration = self.station.calibration_info
         await websocket.send_text(json.dumps({"type": "calibration", **calibration}))

@@ -77,6 +77,26 @@ export const CLIENT_MESSAGE_TYPES = Object.freeze(["ack", "view", "command"]);
  */
 
 /**
+ * @typedef {Object} BinInfo
+ * @property {Array<number>} x_range_m
+ * @property {Array<number>} y_range_m
+ */
+
+/**
+ * @typedef {Object} BoardInfo
+ * @property {Array<number>} x_range_m [x_min, x_max] of the board, world frame, metres
+ * @property {Array<number>} y_range_m [y_min, y_max] of the board, world frame, metres
+ * @property {GridInfo} grid
+ */
+
+/**
+ * @typedef {Object} BoardTagsInfo
+ * @property {string} family
+ * @property {number} size_m
+ * @property {Object<string, *>} centres_m tag id -> [x, y] of its centre, metres
+ */
+
+/**
  * @typedef {Object} CalibrationInfo
  * @property {boolean} calibrated
  * @property {(number|null)} [reprojection_error_px]
@@ -171,6 +191,13 @@ export const CLIENT_MESSAGE_TYPES = Object.freeze(["ack", "view", "command"]);
  */
 
 /**
+ * @typedef {Object} GridInfo
+ * @property {Array<number>} x_m first and last grid point x, metres
+ * @property {Array<number>} y_m first and last grid point y, metres
+ * @property {number} step_m
+ */
+
+/**
  * @typedef {Object} GripperPose
  * @property {Array<number>} position_m
  * @property {number} pitch_rad
@@ -195,6 +222,7 @@ export const CLIENT_MESSAGE_TYPES = Object.freeze(["ack", "view", "command"]);
  * @property {number} server_time_s
  * @property {boolean} can_control
  * @property {("sim"|"real")} backend
+ * @property {WorkcellInfo} workcell
  */
 
 /**
@@ -385,4 +413,16 @@ export const CLIENT_MESSAGE_TYPES = Object.freeze(["ack", "view", "command"]);
  * @typedef {Object} WaypointInfo
  * @property {Array<number>} joints_rad
  * @property {("grasp"|"release")} gripper
+ */
+
+/**
+ * The workcell's geometry (config/workcells/<name>.yaml), sent once in the hello.
+ * @typedef {Object} WorkcellInfo
+ * @property {string} name
+ * @property {BoardInfo} board
+ * @property {BoardTagsInfo} board_tags
+ * @property {Object<string, *>} block_edges_m block size (large, small) -> cube edge, metres
+ * @property {Object<string, *>} places_m sort_by_tag place -> [x, y], metres
+ * @property {Array<number>} feeder_spot_m to_the_sky feed spot [x, y], metres
+ * @property {BinInfo} bin
  */
