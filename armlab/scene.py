@@ -1,6 +1,8 @@
-"""Scenes as data: the objects on the board (type, colour, size, pose) and seeded generators for every
-competition event and level of DESIGN §7 plus random layouts. The simulation builds from a Scene; the
-ground-truth dicts it serves have exactly the `SceneObject.to_dict()` format, so truth round-trips."""
+"""Scenes as data: the objects on the board (type, colour, size, pose), an optional to_the_sky feeder,
+and seeded generators for every competition event and level of DESIGN §7, the sort_by_tag and
+clear_table jobs, and random layouts. Sizes, board, tags, places, feed spot and bin come from the
+workcell config (armlab.workcell). The simulation builds from a Scene; the ground-truth dicts it serves
+have exactly the `SceneObject.to_dict()` format, so truth round-trips."""
 
 from __future__ import annotations
 
@@ -10,48 +12,39 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from armlab.workcell import DISTRACTOR_SHAPES, Workcell, load_workcell
+
 _ID_PATTERN = re.compile(r"[A-Za-z0-9_.:-]{1,64}")
-OBJECT_TYPES = ("block", "semicircle", "arch", "triangle", "cylinder")
-DISTRACTOR_TYPES = ("semicircle", "arch", "triangle", "cylinder")
-COLORS = ("red", "orange", "yellow", "green", "blue", "violet")
+OBJECT_TYPES = ("block", *DISTRACTOR_SHAPES)
+DISTRACTOR_TYPES = DISTRACTOR_SHAPES
+COLORS = ("red", "orange", "yellow", "green", "blue", "violet")  # rainbow order (DESIGN §7)
 SIZES = ("large", "small")
-BLOCK_EDGE_M = {"large": 0.038, "small": 0.025}
+FEED_ID_PREFIX = "feed_"  # feeder blocks are feed_0, feed_1, ... in the order they are fed
 
-# Distractor dimensions (m): footprint extents along body x and y, and height. Body origin = centre of
-# the footprint's bounding box at mid-height (the semicircle's flat side faces body -y).
-DISTRACTOR_DIMENSIONS_M = {
-    "semicircle": (0.050, 0.025, 0.025),
-    "arch": (0.060, 0.025, 0.030),
-    "triangle": (0.045, 0.039, 0.025),
-    "cylinder": (0.038, 0.038, 0.038),
-}
-
-# Event name -> levels defined for it (DESIGN §7).
+# Event name -> levels defined for it (DESIGN §7). Order matters: it seeds the generators.
 EVENTS: dict[str, tuple[int, ...]] = {
     "pick_sort": (1, 2, 3),
     "pick_stack": (1, 2, 3),
     "line_up": (1, 2, 3),
     "stack_high": (1, 2),
     "to_the_sky": (1,),
+    "sort_stack": (1, 2, 3),
 }
+# Every job with a scene generator: the judged events plus sort_by_tag and clear_table (not judged by §7).
+JOBS: dict[str, tuple[int, ...]] = {**EVENTS, "sort_by_tag": (1, 2, 3), "clear_table": (1, 2, 3)}
 
-# Where a top-down grasp reaches comfortably (radius from the base axis, m), board limits, tag keep-out.
+# Generator choices (not workcell facts): where a top-down grasp reaches comfortably (radius from the
+# base axis, m), the margin kept from the board edges (x, y), the tag keep-out and the gap between piles.
 REACH_MIN_M = 0.13
 REACH_MAX_M = 0.36
-BOARD_X_M = (-0.48, 0.48)
-BOARD_Y_M = (-0.16, 0.46)
-TAG_CENTRES_M = ((-0.25, -0.025), (0.25, -0.025), (0.25, 0.275), (-0.25, 0.275))
+BOARD_MARGIN_M = (0.02, 0.015)
 TAG_KEEPOUT_M = 0.035
 SPACING_MARGIN_M = 0.03  # free gap between footprints so fingers fit between neighbours
 
 
-def object_dimensions_m(obj_type: str, size: str | None) -> tuple[float, float, float]:
-    """(extent_x, extent_y, height) of an object in its body frame, metres."""
-    if obj_type == "block":
-        edge = BLOCK_EDGE_M[size or "large"]
-        return (edge, edge, edge)
-    scale = 1.0 if size in (None, "large") else 25.0 / 38.0
-    return tuple(value * scale for value in DISTRACTOR_DIMENSIONS_M[obj_type])  # type: ignore[return-value]
+def object_dimensions_m(obj_type: str, size: str | None, workcell: Workcell | None = None) -> tuple[float, float, float]:
+    """(extent_x, extent_y, height) of an object in its body frame, metres (default workcell if None)."""
+    return (workcell or load_workcell()).object_dimensions_m(obj_type, size)
 
 
 def quat_from_yaw(yaw_rad: float) -> tuple[float, float, float, float]:
@@ -105,6 +98,8 @@ class SceneObject:
             raise ValueError(f"SceneObject {self.id}: aruco_id needs a block and an id in 0..249")
         object.__setattr__(self, "position_m", tuple(float(v) for v in position))
         object.__setattr__(self, "quat_wxyz", tuple(float(v) for v in quat / norm))
+        # Looked up once (the workcell config); not a dataclass field, so equality ignores it.
+        object.__setattr__(self, "_dimensions_m", object_dimensions_m(self.type, self.size))
 
     @property
     def yaw_rad(self) -> float:
@@ -112,7 +107,8 @@ class SceneObject:
 
     @property
     def dimensions_m(self) -> tuple[float, float, float]:
-        return object_dimensions_m(self.type, self.size)
+        """(extent_x, extent_y, height) in the body frame, from the workcell config."""
+        return self._dimensions_m
 
     @property
     def footprint_radius_m(self) -> float:
@@ -168,26 +164,86 @@ class SceneObject:
 
 
 @dataclass(frozen=True)
+class Feeder:
+    """to_the_sky's feeder: `count` large blocks in all, of which `fed` are already on the board (as
+    scene objects feed_0 .. feed_<fed-1>); the simulation puts feed_<fed>, ... at spot_m (x, y) whenever
+    the spot is clear. How "clear" is judged is the workcell's feeder config."""
+
+    spot_m: tuple[float, float]
+    count: int
+    fed: int = 0
+
+    def __post_init__(self) -> None:
+        spot = np.asarray(self.spot_m, dtype=float)
+        if spot.shape != (2,) or not np.all(np.isfinite(spot)) or np.any(np.abs(spot) > 5.0):
+            raise ValueError(f"Feeder: spot_m must be 2 finite values (x, y) in metres, got {self.spot_m!r}")
+        if isinstance(self.count, bool) or not isinstance(self.count, int | np.integer) or not 0 <= self.count <= 100:
+            raise ValueError(f"Feeder: count must be an integer in 0..100, got {self.count!r}")
+        if isinstance(self.fed, bool) or not isinstance(self.fed, int | np.integer) or not 0 <= self.fed <= self.count:
+            raise ValueError(f"Feeder: fed must be an integer in 0..count ({self.count}), got {self.fed!r}")
+        object.__setattr__(self, "spot_m", (float(spot[0]), float(spot[1])))
+        object.__setattr__(self, "count", int(self.count))
+        object.__setattr__(self, "fed", int(self.fed))
+
+    @property
+    def remaining(self) -> int:
+        return self.count - self.fed
+
+    def block_id(self, index: int) -> str:
+        return f"{FEED_ID_PREFIX}{index}"
+
+    def waiting_ids(self) -> list[str]:
+        """Ids of the blocks not yet fed, in feeding order."""
+        return [self.block_id(i) for i in range(self.fed, self.count)]
+
+    def to_dict(self) -> dict:
+        return {"spot_m": list(self.spot_m), "count": self.count, "fed": self.fed, "remaining": self.remaining}
+
+    @classmethod
+    def from_dict(cls, data: dict) -> Feeder:
+        """Accepts to_dict()'s format (remaining, if given, must equal count - fed)."""
+        if not isinstance(data, dict):
+            raise ValueError(f"feeder must be a mapping, got {type(data).__name__}")
+        unknown = set(data) - {"spot_m", "count", "fed", "remaining"}
+        if unknown or not {"spot_m", "count"} <= set(data):
+            raise ValueError(f"feeder needs spot_m and count (optional fed, remaining), got fields {sorted(data)}")
+        feeder = cls(spot_m=tuple(data["spot_m"]), count=data["count"], fed=data.get("fed", 0))
+        if data.get("remaining") is not None and data["remaining"] != feeder.remaining:
+            raise ValueError(f"feeder: remaining {data['remaining']!r} != count - fed = {feeder.remaining}")
+        return feeder
+
+
+@dataclass(frozen=True)
 class Scene:
-    """The objects on the board; ids are unique."""
+    """The objects on the board (ids unique) and, for to_the_sky, the feeder."""
 
     objects: tuple[SceneObject, ...] = field(default_factory=tuple)
+    feeder: Feeder | None = None
 
     def __post_init__(self) -> None:
         objects = tuple(self.objects)
         ids = [obj.id for obj in objects]
         if len(set(ids)) != len(ids):
             raise ValueError(f"Scene: object ids must be unique, got {ids}")
+        if self.feeder is not None:
+            clash = sorted(set(ids) & set(self.feeder.waiting_ids()))
+            if clash:
+                raise ValueError(f"Scene: object ids {clash} are reserved for blocks the feeder has not fed yet")
         object.__setattr__(self, "objects", objects)
 
     def to_dict(self) -> dict:
-        return {"objects": [obj.to_dict() for obj in self.objects]}
+        data = {"objects": [obj.to_dict() for obj in self.objects]}
+        if self.feeder is not None:
+            data["feeder"] = self.feeder.to_dict()
+        return data
 
     @classmethod
     def from_dict(cls, data: dict) -> Scene:
+        """From to_dict()'s format or a ground-truth dict (its other keys are ignored)."""
         if not isinstance(data, dict) or not isinstance(data.get("objects"), list):
             raise ValueError("scene must be a mapping with an 'objects' list")
-        return cls(objects=tuple(SceneObject.from_dict(item) for item in data["objects"]))
+        feeder = Feeder.from_dict(data["feeder"]) if data.get("feeder") is not None else None
+        return cls(objects=tuple(SceneObject.from_dict(item) for item in data["objects"]), feeder=feeder)
 
     def overlapping_pairs(self) -> list[tuple[str, str]]:
         """Pairs of objects whose bounding boxes intersect in 3-D (stacked objects only touch)."""
@@ -216,31 +272,48 @@ def _boxes_overlap(first: SceneObject, second: SceneObject, tolerance_m: float =
 
 @dataclass(frozen=True)
 class _Region:
-    """Where the bottom object of each footprint may be centred."""
+    """Where the bottom object of each footprint may be centred (also within reach and on the board,
+    clear of the board tags and of the keep-out circles (x, y, radius) and rectangles (x0, x1, y0, y1))."""
 
     x_m: tuple[float, float]
     y_m: tuple[float, float]
+    keepout_circles: tuple[tuple[float, float, float], ...] = ()
+    keepout_rects: tuple[tuple[float, float, float, float], ...] = ()
 
-    def contains(self, x: float, y: float, radius: float) -> bool:
+    def contains(self, x: float, y: float, radius: float, workcell: Workcell) -> bool:
         r = math.hypot(x, y)
         if not (REACH_MIN_M <= r <= REACH_MAX_M):
             return False
         if not (self.x_m[0] + radius <= x <= self.x_m[1] - radius and self.y_m[0] + radius <= y <= self.y_m[1] - radius):
             return False
-        if not (BOARD_X_M[0] + radius <= x <= BOARD_X_M[1] - radius and BOARD_Y_M[0] + radius <= y <= BOARD_Y_M[1] - radius):
+        (bx0, bx1), (by0, by1) = workcell.board.x_range_m, workcell.board.y_range_m
+        mx, my = BOARD_MARGIN_M
+        if not (bx0 + mx + radius <= x <= bx1 - mx - radius and by0 + my + radius <= y <= by1 - my - radius):
             return False
-        return all(math.dist((x, y), tag) >= TAG_KEEPOUT_M + radius for tag in TAG_CENTRES_M)
+        if any(math.dist((x, y), (cx, cy)) < cr + radius for cx, cy, cr in self.keepout_circles):
+            return False
+        if any(x0 - radius < x < x1 + radius and y0 - radius < y < y1 + radius for x0, x1, y0, y1 in self.keepout_rects):
+            return False
+        return all(math.dist((x, y), tag) >= TAG_KEEPOUT_M + radius for tag in workcell.board_tags.centres_m.values())
 
 
-POSITIVE_HALF = _Region(x_m=(-0.5, 0.5), y_m=(0.04, 0.475))
-TAG_RECTANGLE = _Region(x_m=(-0.25, 0.25), y_m=(-0.025, 0.275))
-WHOLE_BOARD = _Region(x_m=(-0.5, 0.5), y_m=(-0.175, 0.475))
+def _regions(workcell: Workcell) -> dict[str, _Region]:
+    """The generators' regions: y > 0 (with a strip kept free), the tag rectangle, the whole board."""
+    tag_x = [x for x, _ in workcell.board_tags.centres_m.values()]
+    tag_y = [y for _, y in workcell.board_tags.centres_m.values()]
+    board_x, board_y = workcell.board.x_range_m, workcell.board.y_range_m
+    return {
+        "positive_half": _Region(x_m=board_x, y_m=(0.04, board_y[1])),
+        "tag_rectangle": _Region(x_m=(min(tag_x), max(tag_x)), y_m=(min(tag_y), max(tag_y))),
+        "whole_board": _Region(x_m=board_x, y_m=board_y),
+    }
 
 
 def _stack_objects(
-    pile: list[tuple[str, str | None, str]], x: float, y: float, yaw: float, first_index: int
+    pile: list[tuple[str, str | None, str]], x: float, y: float, yaw: float, first_index: int,
+    aruco_ids: list[int | None] | None = None,
 ) -> list[SceneObject]:
-    """Objects of one footprint, bottom first (pile: (type, size, colour))."""
+    """Objects of one footprint, bottom first (pile: (type, size, colour)); optional ArUco id per object."""
     objects = []
     z_bottom = 0.0
     for offset, (obj_type, size, color) in enumerate(pile):
@@ -254,26 +327,28 @@ def _stack_objects(
                 size=size,
                 position_m=(x, y, z_bottom + 0.5 * height),
                 quat_wxyz=quat_from_yaw(yaw),
+                aruco_id=aruco_ids[offset] if aruco_ids else None,
             )
         )
         z_bottom += height
     return objects
 
 
-def _place_piles(
-    piles: list[list[tuple[str, str | None, str]]], region: _Region, rng: np.random.Generator
-) -> Scene:
-    """Place each pile (a stack of 1+ objects) at a random reachable, non-overlapping spot."""
+def _place_piles(piles: list[list[tuple]], region: _Region, rng: np.random.Generator,
+                 workcell: Workcell | None = None, feeder: Feeder | None = None) -> Scene:
+    """Place each pile (a stack of 1+ objects, bottom first) at a random reachable, non-overlapping spot.
+    A pile item is (type, size, colour) or (type, size, colour, aruco_id)."""
+    workcell = workcell or load_workcell()
     for _attempt in range(50):
         placed: list[tuple[float, float, float]] = []  # x, y, footprint radius
         objects: list[SceneObject] = []
         ok = True
         for pile in piles:
-            radius = max(0.5 * math.hypot(*object_dimensions_m(t, s)[:2]) for t, s, _ in pile)
+            radius = max(0.5 * math.hypot(*object_dimensions_m(item[0], item[1], workcell)[:2]) for item in pile)
             for _try in range(400):
                 x = rng.uniform(-REACH_MAX_M, REACH_MAX_M)
                 y = rng.uniform(-REACH_MAX_M, REACH_MAX_M)
-                if not region.contains(x, y, radius):
+                if not region.contains(x, y, radius, workcell):
                     continue
                 if all(math.dist((x, y), (px, py)) >= radius + pr + SPACING_MARGIN_M for px, py, pr in placed):
                     break
@@ -282,9 +357,10 @@ def _place_piles(
                 break
             yaw = float(rng.uniform(-math.pi / 4.0, math.pi / 4.0))
             placed.append((x, y, radius))
-            objects.extend(_stack_objects(pile, x, y, yaw, len(objects)))
+            ids = [item[3] if len(item) > 3 else None for item in pile]
+            objects.extend(_stack_objects([item[:3] for item in pile], x, y, yaw, len(objects), ids))
         if ok:
-            return Scene(objects=tuple(objects))
+            return Scene(objects=tuple(objects), feeder=feeder)
     raise RuntimeError("could not place the scene's objects without overlap; ask for fewer objects")
 
 
@@ -308,29 +384,43 @@ def _into_piles(items: list, max_height: int, stack_probability: float, rng: np.
 
 
 def generate_scene(event: str, level: int = 1, seed: int = 0) -> Scene:
-    """A starting layout for a competition event and level (DESIGN §7), reproducible from `seed`."""
-    if event not in EVENTS:
-        raise ValueError(f"unknown event {event!r}; events: {', '.join(EVENTS)}")
-    if level not in EVENTS[event]:
-        raise ValueError(f"event {event!r} has levels {EVENTS[event]}, not {level!r}")
-    rng = np.random.default_rng([int(seed), list(EVENTS).index(event), int(level)])
+    """A starting layout for a job and level, reproducible from (event, level, seed): the competition
+    events of DESIGN §7 (EVENTS) and the sort_by_tag and clear_table jobs (JOBS)."""
+    if event not in JOBS:
+        raise ValueError(f"unknown event {event!r}; events: {', '.join(JOBS)}")
+    if level not in JOBS[event]:
+        raise ValueError(f"event {event!r} has levels {JOBS[event]}, not {level!r}")
+    rng = np.random.default_rng([int(seed), list(JOBS).index(event), int(level)])
+    workcell = load_workcell()
+    regions = _regions(workcell)
 
     def random_colors(count: int) -> list[str]:
         return [str(c) for c in rng.choice(COLORS, size=count)]
 
-    rainbow = list(COLORS)
-    if event in ("pick_sort", "pick_stack"):
-        region = POSITIVE_HALF if event == "pick_sort" else TAG_RECTANGLE
+    def distractors(count: int, sizes: bool = False) -> list[list[tuple]]:
+        kinds = rng.choice(DISTRACTOR_TYPES, size=count)
+        return [[(str(kind), str(rng.choice(SIZES)) if sizes else None, str(rng.choice(COLORS)))] for kind in kinds]
+
+    def three_or_six_blocks(level: int, max_height: int) -> list[list[tuple]]:
+        """§7's L1 (3 large R, G, B), L2 (3 large + 3 small, random colours), L3 (L2 piled up to max_height)."""
         if level == 1:
-            items = _blocks(["large"] * 3, ["red", "green", "blue"])
-            piles = [[item] for item in items]
-        elif level == 2:
-            items = _blocks(["large"] * 3 + ["small"] * 3, random_colors(6))
-            piles = [[item] for item in items]
+            return [[item] for item in _blocks(["large"] * 3, ["red", "green", "blue"])]
+        items = _blocks(["large"] * 3 + ["small"] * 3, random_colors(6))
+        return [[item] for item in items] if level == 2 else _into_piles(items, max_height, 0.35, rng)
+
+    rainbow = list(COLORS)
+    if event == "pick_sort":
+        if level < 3:
+            piles = three_or_six_blocks(level, 1)
         else:
             sizes = [str(s) for s in rng.choice(SIZES, size=9)]
             piles = _into_piles(_blocks(sizes, random_colors(9)), 2, 0.35, rng)
-        return _place_piles(piles, region, rng)
+        return _place_piles(piles, regions["positive_half"], rng, workcell)
+    if event == "pick_stack":
+        return _place_piles(three_or_six_blocks(level, 2), regions["tag_rectangle"], rng, workcell)
+    if event == "sort_stack":
+        piles = three_or_six_blocks(level, 2) + (distractors(2) if level == 3 else [])
+        return _place_piles(piles, regions["positive_half"], rng, workcell)
     if event == "line_up":
         items = _blocks(["large"] * 6, rainbow)
         if level == 1:
@@ -340,31 +430,82 @@ def generate_scene(event: str, level: int = 1, seed: int = 0) -> Scene:
         if level == 3:
             kinds = rng.choice(DISTRACTOR_TYPES, size=int(rng.integers(2, 5)))
             piles += [[(str(kind), None, str(rng.choice(COLORS)))] for kind in kinds]
-        return _place_piles(piles, WHOLE_BOARD, rng)
+        return _place_piles(piles, regions["whole_board"], rng, workcell)
     if event == "stack_high":
         items = _blocks(["large"] * 6, rainbow)
         if level == 1:
             piles = [[item] for item in items]
         else:
             piles = _into_piles(items, 4, 0.4, rng) + _into_piles(_blocks(["small"] * 6, rainbow), 4, 0.4, rng)
-        return _place_piles(piles, WHOLE_BOARD, rng)
-    # to_the_sky: large blocks only, as many as the board takes comfortably.
-    items = _blocks(["large"] * 10, [rainbow[i % 6] for i in range(10)])
-    return _place_piles([[item] for item in items], WHOLE_BOARD, rng)
+        return _place_piles(piles, regions["whole_board"], rng, workcell)
+    if event == "to_the_sky":
+        return _to_the_sky(rng, workcell, regions["whole_board"])
+    if event == "sort_by_tag":
+        return _sort_by_tag(level, rng, workcell, regions["positive_half"])
+    return _clear_table(level, rng, workcell, regions["whole_board"], distractors)
 
 
-# ArUco ids on block tops in the UR3 write-up (DESIGN §3): the colour -> destination mapping is config.
-ARUCO_IDS_BY_COLOR = {"yellow": 100, "red": 150, "blue": 200}
+def _to_the_sky(rng: np.random.Generator, workcell: Workcell, board: _Region) -> Scene:
+    """Large blocks only, as many as the board takes comfortably, clear of the feed spot; plus the feeder."""
+    spec = workcell.feeder
+    feeder = Feeder(spot_m=spec.spot_m, count=spec.count)
+    keepout = (*spec.spot_m, spec.clear_radius_m + SPACING_MARGIN_M)
+    region = _Region(board.x_m, board.y_m, keepout_circles=(keepout,))
+    items = _blocks(["large"] * 10, [COLORS[i % 6] for i in range(10)])
+    return _place_piles([[item] for item in items], region, rng, workcell, feeder)
+
+
+def _sort_by_tag(level: int, rng: np.random.Generator, workcell: Workcell, half: _Region) -> Scene:
+    """Blocks with ArUco tops (id and colour from the workcell's block_tags), in y > 0, clear of the places.
+    L1: one large block per id; L2: 6 blocks of random sizes and ids (ids repeat); L3: 8, piled up to 2 high."""
+    tags = workcell.block_tags.ids
+    if not tags:
+        raise ValueError(f"sort_by_tag needs block_tags.ids in the workcell config {workcell.name!r}")
+    ids = sorted(tags)
+    if level == 1:
+        chosen, sizes = ids, ["large"] * len(ids)
+    else:
+        count = 6 if level == 2 else 8
+        chosen = [int(i) for i in rng.choice(ids, size=count)]
+        sizes = [str(s) for s in rng.choice(SIZES, size=count)]
+    items = [("block", size, tags[tag_id].color, tag_id) for size, tag_id in zip(sizes, chosen)]
+    piles = [[item] for item in items] if level < 3 else _into_piles(items, 2, 0.35, rng)
+    keepouts = tuple((x, y, 0.04) for x, y in workcell.places_m.values())
+    region = _Region(half.x_m, half.y_m, keepout_circles=keepouts)
+    return _place_piles(piles, region, rng, workcell)
+
+
+def _clear_table(level: int, rng: np.random.Generator, workcell: Workcell, board: _Region, distractors) -> Scene:
+    """Random blocks and distractors (any colour, shape and size) anywhere reachable outside the bin.
+    L1: 3 blocks + 1 distractor; L2: 5 + 2; L3: 6 + 3, blocks piled up to 2 high."""
+    n_blocks, n_distractors = {1: (3, 1), 2: (5, 2), 3: (6, 3)}[level]
+    sizes = [str(s) for s in rng.choice(SIZES, size=n_blocks)]
+    colors = [str(c) for c in rng.choice(COLORS, size=n_blocks)]
+    items = _blocks(sizes, colors)
+    piles = [[item] for item in items] if level < 3 else _into_piles(items, 2, 0.35, rng)
+    piles += distractors(n_distractors, sizes=True)
+    bin_ = workcell.bin
+    region = _Region(board.x_m, board.y_m, keepout_rects=((*bin_.x_range_m, *bin_.y_range_m),))
+    return _place_piles(piles, region, rng, workcell)
+
+
+def aruco_ids_by_color(workcell: Workcell | None = None) -> dict[str, int]:
+    """Colour -> ArUco id of the workcell's block tags (the first id of each colour)."""
+    ids: dict[str, int] = {}
+    for tag_id, entry in sorted((workcell or load_workcell()).block_tags.ids.items()):
+        ids.setdefault(entry.color, tag_id)
+    return ids
 
 
 def with_aruco_tops(scene: Scene, ids_by_color: dict[str, int] | None = None) -> Scene:
-    """The same scene with an ArUco tag on the top face of every block whose colour has an id."""
-    ids = ARUCO_IDS_BY_COLOR if ids_by_color is None else ids_by_color
+    """The same scene with an ArUco tag on the top face of every block whose colour has an id
+    (default: the workcell's block_tags, e.g. the UR3 write-up's yellow 100, red 150, blue 200)."""
+    ids = aruco_ids_by_color() if ids_by_color is None else ids_by_color
     return Scene(tuple(
         SceneObject(o.id, o.type, o.color, o.size, o.position_m, o.quat_wxyz,
                     ids.get(o.color) if o.type == "block" else None)
         for o in scene.objects
-    ))
+    ), feeder=scene.feeder)
 
 
 def random_scene(
@@ -375,8 +516,8 @@ def random_scene(
     aruco: bool = False,
 ) -> Scene:
     """A random reachable layout: n_blocks (default 3..10) blocks of random size and colour,
-    n_distractors (default 0..2) distractors, stacks up to max_stack high; aruco=True puts the UR3
-    write-up's tags on yellow, red and blue blocks (ARUCO_IDS_BY_COLOR)."""
+    n_distractors (default 0..2) distractors, stacks up to max_stack high; aruco=True puts the
+    workcell's block tags on blocks of their colours (aruco_ids_by_color)."""
     if max_stack < 1:
         raise ValueError("max_stack must be >= 1")
     rng = np.random.default_rng([int(seed), 99])
@@ -388,5 +529,6 @@ def random_scene(
     colors = [str(c) for c in rng.choice(COLORS, size=n_blocks)]
     piles = _into_piles(_blocks(sizes, colors), max_stack, 0.35, rng)
     piles += [[(str(kind), None, str(rng.choice(COLORS)))] for kind in rng.choice(DISTRACTOR_TYPES, size=n_distractors)]
-    scene = _place_piles(piles, WHOLE_BOARD, rng)
+    workcell = load_workcell()
+    scene = _place_piles(piles, _regions(workcell)["whole_board"], rng, workcell)
     return with_aruco_tops(scene) if aruco else scene

@@ -2,21 +2,35 @@
 
 One real file (default var/armlab.sqlite3). Each call opens its own short-lived connection, so the
 store is safe to use from the station's job threads and the server's threads alike.
+
+Damaged data: opening runs `PRAGMA quick_check` and refuses a damaged file with DamagedDatabase, a
+one-line message naming the file and the newest good backup. A 0-byte file that already exists is
+damaged: SQLite writes its header on the first statement, so a database is never empty once created
+(a first start killed before that leaves 0 bytes: delete the file). Only a missing file is new.
+With backups=N, each good open first copies the file to <db>.bak1 with SQLite's backup API, shifting
+older copies to .bak2 .. .bakN. A single row that cannot be read (bad UTF-8, bad JSON, an invalid
+waypoint) is logged and skipped, never hiding the others. Each program (its waypoints are in its
+row) and each calibration is one INSERT in one transaction.
 """
 
 from __future__ import annotations
 
 import json
+import logging
 import math
+import os
 import sqlite3
 import time
 from collections.abc import Sequence
 from dataclasses import dataclass
 from pathlib import Path
 
+log = logging.getLogger(__name__)
+
 DEFAULT_DB_PATH = Path(__file__).resolve().parents[1] / "var" / "armlab.sqlite3"
 
 _SCHEMA = """
+BEGIN;
 CREATE TABLE IF NOT EXISTS programs (
     id INTEGER PRIMARY KEY AUTOINCREMENT,
     name TEXT NOT NULL,
@@ -37,11 +51,22 @@ CREATE TABLE IF NOT EXISTS job_results (
     finished_s REAL,
     result_json TEXT
 );
+COMMIT;
 """
+# A row that cannot be read: undecodable text, bad JSON, or values the dataclasses refuse.
+_ROW_ERRORS = (UnicodeDecodeError, json.JSONDecodeError, KeyError, TypeError, ValueError, IndexError)
+
+
+class DamagedDatabase(RuntimeError):
+    """The database file fails its integrity check. The message is one line: the file, why, how to recover."""
 
 
 class NotFound(LookupError):
     """A stored item (program, calibration) does not exist."""
+
+
+class DamagedRecord(NotFound):
+    """A stored item exists but cannot be read (it is skipped in lists)."""
 
 
 @dataclass(frozen=True)
@@ -81,21 +106,90 @@ class Program:
 
 
 class Store:
-    """The station's database file. Creates the file, its folder and the schema on first use."""
+    """The station's database file. Creates the file, its folder and the schema on first use.
 
-    def __init__(self, path: str | Path = DEFAULT_DB_PATH) -> None:
+    Raises DamagedDatabase when the file exists but is not a sound SQLite database. backups: how many
+    rolling copies (<db>.bak1 newest .. .bakN) to keep; each good open makes a new one (0 = none).
+    """
+
+    def __init__(self, path: str | Path = DEFAULT_DB_PATH, backups: int = 0) -> None:
         self.path = Path(path)
         self.path.parent.mkdir(parents=True, exist_ok=True)
-        with self._connect() as connection:
-            connection.executescript(_SCHEMA)
+        self._check()
+        if backups > 0:
+            self._rolling_backup(backups)
 
     def _connect(self) -> sqlite3.Connection:
         connection = sqlite3.connect(self.path, timeout=5.0)
         connection.execute("PRAGMA journal_mode=WAL")
+        connection.execute("PRAGMA synchronous=FULL")  # an acknowledged write survives a power cut too
         return connection
 
-    def _run(self, sql: str, parameters: Sequence = ()) -> list[tuple]:
+    def backup_path(self, index: int) -> Path:
+        return self.path.with_name(f"{self.path.name}.bak{index}")
+
+    def _check(self) -> None:
+        """Create the schema in a new file; refuse an existing file that fails PRAGMA quick_check."""
+        if self.path.exists() and self.path.stat().st_size == 0:
+            self._refuse("it is empty (0 bytes) although it exists: a truncated database")
+        try:
+            connection = self._connect()
+            try:
+                rows = connection.execute("PRAGMA quick_check").fetchall()
+                if [tuple(row) for row in rows] != [("ok",)]:
+                    problems = "; ".join(str(row[0]) for row in rows[:3])
+                    self._refuse(f"PRAGMA quick_check found damage: {problems}")
+                connection.executescript(_SCHEMA)
+            finally:
+                connection.close()
+        except sqlite3.DatabaseError as error:
+            self._refuse(str(error))
+
+    def _refuse(self, reason: str):
+        reason = " ".join(reason.split())[:200]
+        backup = self._newest_good_backup()
+        if backup is not None:
+            recover = (
+                f"to recover, stop the station, remove '{self.path}-wal' and '{self.path}-shm' if present, "
+                f"and copy the last good backup over it: cp '{backup}' '{self.path}'"
+            )
+        else:
+            recover = f"no good backup exists; move '{self.path}' away to start with an empty database"
+        raise DamagedDatabase(f"database '{self.path}' is damaged ({reason}); {recover}")
+
+    def _newest_good_backup(self) -> Path | None:
+        index = 1
+        while (candidate := self.backup_path(index)).exists():
+            if _passes_quick_check(candidate):
+                return candidate
+            index += 1
+        return None
+
+    def _rolling_backup(self, keep: int) -> None:
+        """Copy the (checked) file to .bak1 with the backup API; older copies shift up; keep `keep`."""
+        temporary = self.path.with_name(f"{self.path.name}.bak-new")
+        source, target = self._connect(), sqlite3.connect(temporary)
+        try:
+            source.backup(target)
+            target.execute("PRAGMA journal_mode=DELETE")  # a backup is one self-contained file (no -wal)
+        finally:
+            target.close()
+            source.close()
+        self.backup_path(keep).unlink(missing_ok=True)
+        for index in range(keep - 1, 0, -1):
+            if self.backup_path(index).exists():
+                os.replace(self.backup_path(index), self.backup_path(index + 1))
+        os.replace(temporary, self.backup_path(1))
+        for extra in range(keep + 1, keep + 100):  # copies beyond a lowered `keep`
+            if not self.backup_path(extra).exists():
+                break
+            self.backup_path(extra).unlink()
+
+    def _run(self, sql: str, parameters: Sequence = (), raw_text: bool = False) -> list[tuple]:
+        """Rows of one statement in one transaction; raw_text: TEXT columns come back as bytes (decoded per row)."""
         connection = self._connect()
+        if raw_text:
+            connection.text_factory = bytes
         try:
             with connection:
                 cursor = connection.execute(sql, parameters)
@@ -103,6 +197,15 @@ class Store:
             return rows
         finally:
             connection.close()
+
+    def _skip(self, what: str, error: Exception) -> str:
+        """Log a row that cannot be read and return the one-line entry that reports it."""
+        reason = "bad UTF-8" if isinstance(error, UnicodeDecodeError) else (
+            "bad JSON" if isinstance(error, json.JSONDecodeError) else "invalid data"
+        )
+        entry = f"{what} in '{self.path}' skipped: {reason} ({type(error).__name__}: {str(error)[:120]})"
+        log.warning("%s", entry)
+        return entry
 
     # Programs -------------------------------------------------------------------------------------
 
@@ -127,18 +230,36 @@ class Store:
             connection.close()
         return Program(program_id, name, created_s, tuple(waypoints))
 
+    def read_programs(self) -> tuple[list[Program], list[str]]:
+        """(programs that read back, one entry per skipped damaged row), by id."""
+        rows = self._run("SELECT id, name, created_s, waypoints_json FROM programs ORDER BY id", raw_text=True)
+        programs, skipped = [], []
+        for row in rows:
+            try:
+                programs.append(_program_from_row(row))
+            except _ROW_ERRORS as error:
+                skipped.append(self._skip(f"program {row[0]}", error))
+        return programs, skipped
+
     def list_programs(self) -> list[Program]:
-        rows = self._run("SELECT id, name, created_s, waypoints_json FROM programs ORDER BY id")
-        return [_program_from_row(row) for row in rows]
+        """The programs that read back; damaged rows are logged and skipped."""
+        return self.read_programs()[0]
 
     def get_program(self, program_id: int) -> Program:
-        rows = self._run("SELECT id, name, created_s, waypoints_json FROM programs WHERE id = ?", (int(program_id),))
+        rows = self._run(
+            "SELECT id, name, created_s, waypoints_json FROM programs WHERE id = ?", (int(program_id),), raw_text=True
+        )
         if not rows:
             raise NotFound(f"no program with id {program_id}")
-        return _program_from_row(rows[0])
+        try:
+            return _program_from_row(rows[0])
+        except _ROW_ERRORS as error:
+            raise DamagedRecord(f"program {program_id} is damaged: {self._skip(f'program {program_id}', error)}") from error
 
     def delete_program(self, program_id: int) -> None:
-        self.get_program(program_id)
+        """Delete a program (a damaged one too); NotFound when there is none with this id."""
+        if not self._run("SELECT id FROM programs WHERE id = ?", (int(program_id),)):
+            raise NotFound(f"no program with id {program_id}")
         self._run("DELETE FROM programs WHERE id = ?", (int(program_id),))
 
     # Calibrations ---------------------------------------------------------------------------------
@@ -156,8 +277,17 @@ class Store:
             connection.close()
 
     def latest_calibration(self) -> dict | None:
-        rows = self._run("SELECT data_json FROM calibrations ORDER BY id DESC LIMIT 1")
-        return json.loads(rows[0][0]) if rows else None
+        """The newest calibration that reads back (damaged rows are logged and skipped), else None."""
+        rows = self._run("SELECT id, data_json FROM calibrations ORDER BY id DESC LIMIT 20", raw_text=True)
+        for calibration_id, data in rows:
+            try:
+                value = json.loads(data.decode("utf-8"))
+                if not isinstance(value, dict):
+                    raise ValueError("not a JSON object")
+                return value
+            except _ROW_ERRORS as error:
+                self._skip(f"calibration {calibration_id}", error)
+        return None
 
     # Job results ----------------------------------------------------------------------------------
 
@@ -178,25 +308,49 @@ class Store:
         )
 
     def job_results(self, limit: int = 50) -> list[dict]:
+        """The newest job outcomes; damaged rows are logged and skipped."""
         rows = self._run(
             "SELECT id, name, state, message, started_s, finished_s, result_json FROM job_results "
             "ORDER BY started_s DESC LIMIT ?",
             (int(limit),),
+            raw_text=True,
         )
-        return [
-            {
-                "id": row[0],
-                "name": row[1],
-                "state": row[2],
-                "message": row[3],
-                "started_s": row[4],
-                "finished_s": row[5],
-                "result": json.loads(row[6]) if row[6] else None,
-            }
-            for row in rows
-        ]
+        results = []
+        for row in rows:
+            try:
+                text = [value.decode("utf-8") if isinstance(value, bytes) else value for value in row]
+                results.append(
+                    {
+                        "id": text[0],
+                        "name": text[1],
+                        "state": text[2],
+                        "message": text[3],
+                        "started_s": float(text[4]),
+                        "finished_s": None if text[5] is None else float(text[5]),
+                        "result": json.loads(text[6]) if text[6] else None,
+                    }
+                )
+            except _ROW_ERRORS as error:
+                self._skip(f"job result {row[0]!r}", error)
+        return results
 
 
 def _program_from_row(row: tuple) -> Program:
-    waypoints = tuple(Waypoint(tuple(item["joints_rad"]), item["gripper"]) for item in json.loads(row[3]))
-    return Program(int(row[0]), str(row[1]), float(row[2]), waypoints)
+    """A Program from (id, name bytes, created_s, waypoints_json bytes); raises one of _ROW_ERRORS if damaged."""
+    name, items = row[1].decode("utf-8"), json.loads(row[3].decode("utf-8"))
+    if not isinstance(items, list) or not items:
+        raise ValueError("waypoints_json is not a non-empty list")
+    waypoints = tuple(Waypoint(tuple(item["joints_rad"]), item["gripper"]) for item in items)
+    return Program(int(row[0]), name, float(row[2]), waypoints)
+
+
+def _passes_quick_check(path: Path) -> bool:
+    """True when `path` opens read-only as SQLite and PRAGMA quick_check says ok."""
+    try:
+        connection = sqlite3.connect(f"file:{path}?mode=ro", uri=True)
+        try:
+            return connection.execute("PRAGMA quick_check").fetchall() == [("ok",)]
+        finally:
+            connection.close()
+    except sqlite3.DatabaseError:
+        return False

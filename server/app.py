@@ -7,7 +7,7 @@ lifespan and closed at shutdown; the routes are thin calls into it. web/ is serv
 from __future__ import annotations
 
 import logging
-from collections.abc import Callable
+from collections.abc import Callable, Iterable
 from contextlib import asynccontextmanager
 from pathlib import Path
 from typing import Any
@@ -18,7 +18,8 @@ from fastapi.staticfiles import StaticFiles
 import armlab
 from server.auth import resolve_token
 from server.errors import install_error_handlers
-from server.routes import arm, calibration, detections, jobs, programs, sim, station, stream
+from server.guard import HostOriginGuard
+from server.routes import arm, auto, calibration, detections, jobs, programs, sim, station, stream
 from server.stream import StreamHub
 
 log = logging.getLogger(__name__)
@@ -42,9 +43,16 @@ def _open_station(factory: Callable[[], Any]):
 
 
 def create_app(
-    station_factory: Callable[[], Any] | None = None, token: str | None = None, web_dir: str | Path | None = WEB_DIR
+    station_factory: Callable[[], Any] | None = None,
+    token: str | None = None,
+    web_dir: str | Path | None = WEB_DIR,
+    allowed_hosts: Iterable[str] = (),
 ) -> FastAPI:
-    """The app. token: the control token (default: $ARMLAB_TOKEN, else generated: read app.state.token)."""
+    """The app. token: the control token (default: $ARMLAB_TOKEN, else generated: read app.state.token).
+
+    allowed_hosts: Host names served besides the loopback names (the --host name, config allowed_hosts);
+    any other Host, and any foreign Origin, gets 403 (server/guard.py).
+    """
     factory = station_factory or default_station_factory
 
     @asynccontextmanager
@@ -69,13 +77,14 @@ def create_app(
     app.state.token = resolve_token(token)[0]
     app.state.station = None
     install_error_handlers(app)
+    app.add_middleware(HostOriginGuard, allowed_hosts=tuple(allowed_hosts))
 
     @app.get("/api/health", tags=["station"])
     def read_health() -> dict:
         """Liveness check."""
         return {"status": "ok", "version": armlab.__version__}
 
-    for module in (station, arm, calibration, detections, jobs, programs, sim, stream):
+    for module in (station, arm, calibration, detections, jobs, auto, programs, sim, stream):
         app.include_router(module.router)
     if web_dir is not None and Path(web_dir, "index.html").exists():
         app.mount("/", StaticFiles(directory=str(web_dir), html=True), name="web")

@@ -15,7 +15,7 @@ from armlab.store import NotFound
 
 log = logging.getLogger(__name__)
 
-_HTTP_CODES = {400: "invalid", 401: "unauthorized", 403: "unauthorized", 404: "not_found", 405: "invalid", 409: "wrong_state"}
+_HTTP_CODES = {400: "invalid", 401: "unauthorized", 403: "forbidden", 404: "not_found", 405: "invalid", 409: "wrong_state"}
 
 
 class ApiError(Exception):

@@ -7,9 +7,12 @@ these models (server/gen_wire_types.py).
 
 from __future__ import annotations
 
-from typing import Any, Literal
+import math
+from typing import Annotated, Any, Literal
 
 from pydantic import BaseModel, ConfigDict, Field, model_validator
+
+from armlab.scene import COLORS, EVENTS, OBJECT_TYPES, SIZES
 
 Vector3 = list[float]
 View = Literal["color", "depth", "topdown"]
@@ -22,13 +25,31 @@ ERROR_CODES = (
     "not_found",
     "not_calibrated",
     "unauthorized",
+    "forbidden",
     "device",
     "internal",
 )
 
+# Sanity bounds of request values, stated in the OpenAPI schema. The station applies the real limits
+# (joint limits, reach, config max_moving_time_s) on top; these only keep absurd numbers out.
+ANGLE_LIMIT_RAD = 2.0 * math.pi
+POSITION_LIMIT_M = 5.0  # the workcell is ~1 m across; scene objects are refused beyond 5 m too
+MOVING_TIME_LIMIT_S = 3600.0
+PIXEL_LIMIT = 100_000.0
+SQLITE_INTEGER_MAX = 2**63 - 1  # program ids are SQLite INTEGERs
+
+Angle = Annotated[float, Field(ge=-ANGLE_LIMIT_RAD, le=ANGLE_LIMIT_RAD, description="radians, |angle| <= 2π")]
+Coordinate = Annotated[float, Field(ge=-POSITION_LIMIT_M, le=POSITION_LIMIT_M, description="metres, |value| <= 5")]
+Position = Annotated[list[Coordinate], Field(min_length=3, max_length=3)]
+MovingTime = Annotated[float, Field(gt=0.0, le=MOVING_TIME_LIMIT_S, description="seconds; the station refuses more than its configured maximum")]
+Pixel = Annotated[float, Field(ge=0.0, le=PIXEL_LIMIT, description="pixel coordinate in the colour image")]
+ProgramId = Annotated[int, Field(ge=0, le=SQLITE_INTEGER_MAX, description="a program id (SQLite integer)")]
+
 
 class Request(BaseModel):
-    model_config = ConfigDict(extra="forbid", allow_inf_nan=False)
+    """Base of every request: strict types (no bool/number/string coercion), no unknown fields, no NaN/inf."""
+
+    model_config = ConfigDict(extra="forbid", allow_inf_nan=False, strict=True)
 
 
 class Wire(BaseModel):
@@ -39,21 +60,21 @@ class Wire(BaseModel):
 
 
 class JointsRequest(Request):
-    q_rad: list[float] = Field(min_length=1, max_length=12, description="joint positions, radians, in joint_names order")
-    moving_time_s: float | None = Field(None, gt=0.0, description="move duration; None = as fast as the limits allow")
+    q_rad: list[Angle] = Field(min_length=1, max_length=12, description="joint positions, radians, in joint_names order")
+    moving_time_s: MovingTime | None = Field(None, description="move duration; None = as fast as the limits allow")
 
 
 class PoseRequest(Request):
-    position_m: Vector3 = Field(min_length=3, max_length=3, description="gripper point in the world (board) frame")
-    pitch_rad: float | None = Field(None, description="approach angle below horizontal; +π/2 = straight down; None = steepest")
-    yaw_rad: float | None = Field(None, description="block yaw in the world frame the fingers align with")
-    moving_time_s: float | None = Field(None, gt=0.0)
+    position_m: Position = Field(description="gripper point in the world (board) frame")
+    pitch_rad: Angle | None = Field(None, description="approach angle below horizontal; +π/2 = straight down; None = steepest")
+    yaw_rad: Angle | None = Field(None, description="block yaw in the world frame the fingers align with")
+    moving_time_s: MovingTime | None = None
 
 
 class PoseNameRequest(Request):
     """Optional body of /api/arm/home and /api/arm/sleep."""
 
-    moving_time_s: float | None = Field(None, gt=0.0)
+    moving_time_s: MovingTime | None = None
 
 
 class TorqueRequest(Request):
@@ -65,16 +86,16 @@ class GripperRequest(Request):
 
 
 class PixelRequest(Request):
-    u: float = Field(description="pixel column in the colour image")
-    v: float = Field(description="pixel row in the colour image")
+    u: Pixel = Field(description="pixel column in the colour image")
+    v: Pixel = Field(description="pixel row in the colour image")
 
 
 class TargetRequest(Request):
     """A grab/drop target: a world point, or a pixel of the colour image (exactly one)."""
 
-    position_m: Vector3 | None = Field(None, min_length=3, max_length=3)
-    u: float | None = None
-    v: float | None = None
+    position_m: Position | None = None
+    u: Pixel | None = None
+    v: Pixel | None = None
 
     @model_validator(mode="after")
     def _one_target(self) -> "TargetRequest":
@@ -94,13 +115,28 @@ class RepeatRequest(Request):
     cycles: int = Field(1, ge=1, le=100)
 
 
+class SceneObjectRequest(Request):
+    """One object of an explicit scene, in the ground-truth format (quat_wxyz wins over yaw_rad)."""
+
+    id: str = Field(pattern=r"^[A-Za-z0-9_.:-]{1,64}$")
+    type: Literal[OBJECT_TYPES]  # type: ignore[valid-type]
+    color: Literal[COLORS]  # type: ignore[valid-type]
+    size: Literal[SIZES] | None = Field(None, description="blocks: large (default) or small; distractors: None = large")  # type: ignore[valid-type]
+    position_m: Position = Field(description="body centre, world frame")
+    yaw_rad: Angle | None = None
+    quat_wxyz: Annotated[list[Annotated[float, Field(ge=-1e6, le=1e6)]], Field(min_length=4, max_length=4)] | None = Field(
+        None, description="orientation (w, x, y, z), non-zero; normalised by the station"
+    )
+    aruco_id: int | None = Field(None, ge=0, le=249, description="ArUco tag (DICT_4X4_250) on a block's top face")
+
+
 class SceneRequest(Request):
     """A generated competition scene (event, level, seed) or explicit objects (ground-truth format)."""
 
-    event: str | None = None
+    event: Literal[tuple(EVENTS)] | None = None  # type: ignore[valid-type]
     level: int | None = Field(None, ge=1, le=3)
-    seed: int | None = None
-    objects: list[dict[str, Any]] | None = None
+    seed: int | None = Field(None, ge=0, le=2**32 - 1)
+    objects: list[SceneObjectRequest] | None = Field(None, max_length=100)
 
     @model_validator(mode="after")
     def _one_kind(self) -> "SceneRequest":
@@ -144,6 +180,7 @@ class JobInfo(Wire):
     started_s: float
     finished_s: float | None = None
     result: Any = None
+    extra: dict[str, Any] | None = Field(None, description="job-specific live details; autonomous jobs: {task: TaskProgress}")
 
 
 class JobResponse(Wire):
@@ -230,6 +267,7 @@ class ProgramInfo(Wire):
 class ProgramsResponse(Wire):
     data: list[ProgramInfo]
     count: int
+    skipped: list[str] = Field([], description="damaged rows left out of data, one line each (also logged)")
 
 
 # Websocket messages ------------------------------------------------------------------------------
@@ -262,11 +300,47 @@ class CalibrationMessage(CalibrationInfo):
     type: Literal["calibration"] = "calibration"
 
 
+class GridInfo(Wire):
+    x_m: list[float] = Field(description="first and last grid point x, metres")
+    y_m: list[float] = Field(description="first and last grid point y, metres")
+    step_m: float
+
+
+class BoardInfo(Wire):
+    x_range_m: list[float] = Field(description="[x_min, x_max] of the board, world frame, metres")
+    y_range_m: list[float] = Field(description="[y_min, y_max] of the board, world frame, metres")
+    grid: GridInfo
+
+
+class BoardTagsInfo(Wire):
+    family: str
+    size_m: float
+    centres_m: dict[str, list[float]] = Field(description="tag id -> [x, y] of its centre, metres")
+
+
+class BinInfo(Wire):
+    x_range_m: list[float]
+    y_range_m: list[float]
+
+
+class WorkcellInfo(Wire):
+    """The workcell's geometry (config/workcells/<name>.yaml), sent once in the hello."""
+
+    name: str
+    board: BoardInfo
+    board_tags: BoardTagsInfo
+    block_edges_m: dict[str, float] = Field(description="block size (large, small) -> cube edge, metres")
+    places_m: dict[str, list[float]] = Field(description="sort_by_tag place -> [x, y], metres")
+    feeder_spot_m: list[float] = Field(description="to_the_sky feed spot [x, y], metres")
+    bin: BinInfo
+
+
 class HelloMessage(Wire):
     type: Literal["hello"] = "hello"
     server_time_s: float
     can_control: bool
     backend: Literal["sim", "real"]
+    workcell: WorkcellInfo
 
 
 class AckMessage(Request):
@@ -310,13 +384,116 @@ WIRE_MODELS: tuple[type[BaseModel], ...] = (
     TargetRequest,
     TeachStopRequest,
     RepeatRequest,
+    SceneObjectRequest,
     SceneRequest,
     FrameHeader,
     TelemetryMessage,
     EventMessage,
     CalibrationMessage,
+    GridInfo,
+    BoardInfo,
+    BoardTagsInfo,
+    BinInfo,
+    WorkcellInfo,
     HelloMessage,
     AckMessage,
     ViewMessage,
     CommandMessage,
+)
+
+
+# Autonomous jobs (server/routes/auto.py) ---------------------------------------------------------
+
+AUTO_LEVEL_LIMIT = 100  # sanity bound; the job's own levels (GET /api/auto/jobs) are checked by the station
+AUTO_PARAMS_MAX = 32
+
+
+class AutoRequest(Request):
+    """Start an autonomous job: a name from GET /api/auto/jobs, one of its levels, its parameters."""
+
+    job: str = Field(min_length=1, max_length=64, description="job name (GET /api/auto/jobs)")
+    level: int | None = Field(None, ge=0, le=AUTO_LEVEL_LIMIT, description="one of the job's levels; None = its highest")
+    params: dict[Annotated[str, Field(max_length=64)], Any] | None = Field(
+        None, max_length=AUTO_PARAMS_MAX, description="job parameters by name, each of the type GET /api/auto/jobs gives"
+    )
+
+
+class AutoParam(Wire):
+    name: str
+    type: str = Field(description="Python type name: int, float, str, bool, list, ...")
+
+
+class AutoJobInfo(Wire):
+    name: str
+    levels: list[int] = Field(description="[] = the job has no levels")
+    summary: str
+    params: list[AutoParam]
+    judged: bool = Field(description="a competition event (DESIGN §7): the simulation scores it with the judge")
+    scene: bool = Field(description="POST /api/sim/scene can generate its starting scene")
+    time_limit_s: float | None = Field(None, description="the event's time limit, simulated seconds")
+
+
+class AutoJobsResponse(Wire):
+    data: list[AutoJobInfo]
+    count: int
+
+
+class TaskProgress(Wire):
+    """job.extra.task of a running autonomous job (also on the websocket's telemetry)."""
+
+    done: int
+    left: int
+    step: str
+    attempts: int
+    failures: list[str]
+    moves: int
+    next_block: Detection | None = Field(None, description="the block being moved (a detection)")
+    next_target_m: Vector3 | None = Field(None, description="where it goes: bottom-centre x, y and surface z, world frame")
+
+
+class ScoreRule(Wire):
+    rule: str
+    points: int
+    detail: str
+    object_ids: list[str]
+
+
+class AutoScore(Wire):
+    points: int
+    max_points: int
+    within_limit: bool
+    full: bool
+    time_limit_s: float
+    breakdown: list[ScoreRule]
+
+
+class AutoScoreResponse(Wire):
+    """The judge's score of the last autonomous job started over the API (simulation only)."""
+
+    job_id: str
+    job: str
+    level: int | None
+    state: Literal["running", "succeeded", "failed", "cancelled"]
+    final: bool = Field(description="True once the job has ended and its final ground truth was scored")
+    sim_time_s: float = Field(description="simulated seconds from the job's start to its end (so far, while running)")
+    score: AutoScore | None = Field(None, description="None while running, or for a job the judge does not score")
+    note: str = ""
+
+
+class AutoResponse(Wire):
+    job: JobInfo
+    score: AutoScoreResponse | None = Field(None, description="with ?wait=true in the simulation: the final score")
+
+
+WIRE_MODELS = (
+    *WIRE_MODELS,
+    AutoRequest,
+    AutoParam,
+    AutoJobInfo,
+    AutoJobsResponse,
+    TaskProgress,
+    ScoreRule,
+    AutoScore,
+    AutoScoreResponse,
+    AutoResponse,
 )

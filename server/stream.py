@@ -17,14 +17,28 @@ import threading
 import time
 from collections import Counter
 from dataclasses import dataclass, field
+from typing import Annotated
 
+from pydantic import Field, TypeAdapter, ValidationError
 from starlette.websockets import WebSocket, WebSocketDisconnect
 
 from armlab.station.core import Station
 from armlab.station.perception import _Worker
+from armlab.workcell import DEFAULT_WORKCELL, load_workcell
+from server.models import AckMessage, CommandMessage, ViewMessage
 from server.views import ViewKey, compose_view, encode_jpeg
 
 log = logging.getLogger(__name__)
+
+# What a client may send: validated strictly (server/models.py), dispatched on "type".
+CLIENT_MESSAGE = TypeAdapter(Annotated[AckMessage | ViewMessage | CommandMessage, Field(discriminator="type")])
+
+
+def _message_error(text: str, error: ValidationError) -> str:
+    """One line for the client: what was wrong with its message."""
+    first = error.errors()[0]
+    where = ".".join(str(part) for part in first.get("loc", ()))
+    return f"bad message {text[:80]!r}: {where + ': ' if where else ''}{first.get('msg')} (expected type ack, view or command)"
 
 
 @dataclass(frozen=True)
@@ -190,9 +204,15 @@ class StreamHub:
 
     # One client -----------------------------------------------------------------------------------
 
+    def _workcell_info(self) -> dict:
+        """The geometry of the workcell perception uses (HelloMessage.workcell)."""
+        name = getattr(self.station.perception_config, "workcell", None) or DEFAULT_WORKCELL
+        return load_workcell(name).to_wire()
+
     async def serve(self, websocket: WebSocket, can_control: bool) -> None:
         client = ClientSession(websocket, can_control, event_seq=self.station.events.last_seq)
-        hello = {"type": "hello", "server_time_s": time.time(), "can_control": can_control, "backend": self.station.backend}
+        hello = {"type": "hello", "server_time_s": time.time(), "can_control": can_control, "backend": self.station.backend,
+                 "workcell": self._workcell_info()}
         await websocket.send_text(json.dumps(hello))
         calibration = self.station.calibration_info
         await websocket.send_text(json.dumps({"type": "calibration", **calibration}))
@@ -236,27 +256,32 @@ class StreamHub:
                 await websocket.send_bytes(encoded.message)
 
     async def _receive_loop(self, client: ClientSession) -> None:
+        """Handle the client's messages; a malformed one gets an error event and the session goes on."""
         while True:
-            text = await client.websocket.receive_text()
+            message = await client.websocket.receive()
+            if message["type"] == "websocket.disconnect":
+                raise WebSocketDisconnect(message.get("code", 1000), message.get("reason"))
+            text = message.get("text")
+            if text is None:
+                await self._reply_error(client, "binary messages are not accepted: send JSON text (type ack, view or command)")
+                continue
             try:
-                message = json.loads(text)
-                kind = message.get("type") if isinstance(message, dict) else None
-            except json.JSONDecodeError:
-                kind, message = None, None
-            if kind == "ack":
-                if message.get("seq") == client.awaiting_ack:
+                parsed = CLIENT_MESSAGE.validate_json(text)
+            except ValidationError as error:
+                await self._reply_error(client, _message_error(text, error))
+                continue
+            if isinstance(parsed, AckMessage):
+                if parsed.seq == client.awaiting_ack:
                     client.awaiting_ack = None
                     client.wake.set()
-            elif kind == "view":
-                await self._change_view(client, message)
-            elif kind == "command":
-                await self._command(client, message)
+            elif isinstance(parsed, ViewMessage):
+                await self._change_view(client, parsed.view, parsed.layers)
             else:
-                await self._reply_error(client, f"unknown message: expected type ack, view or command, got {text[:80]!r}")
+                await self._command(client, parsed.name)
 
-    async def _change_view(self, client: ClientSession, message: dict) -> None:
+    async def _change_view(self, client: ClientSession, view: str, layers: list[str]) -> None:
         try:
-            key = ViewKey.make(message.get("view", "color"), message.get("layers") or [])
+            key = ViewKey.make(view, layers)
         except (ValueError, TypeError) as error:
             await self._reply_error(client, str(error))
             return
@@ -269,8 +294,7 @@ class StreamHub:
             client.last_frame_seq = -1
             client.wake.set()
 
-    async def _command(self, client: ClientSession, message: dict) -> None:
-        name = message.get("name")
+    async def _command(self, client: ClientSession, name: str) -> None:
         if not client.can_control:
             await self._reply_error(client, f"command '{name}' refused: this connection is view-only (no control token)")
             return

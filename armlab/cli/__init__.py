@@ -13,6 +13,7 @@ COMMAND_MODULES = (
     "armlab.cli.kinematics_cmd",
     "armlab.cli.sim_cmd",
     "armlab.cli.vision_cmd",
+    "armlab.cli.eval_cmd",
 )
 
 

@@ -39,8 +39,20 @@ def build_station_config(args: argparse.Namespace):
     return config
 
 
+def open_checked_store(db_path, backups: int) -> str | None:
+    """Check the database file (and make its rolling backup); None if sound, else the one-line reason."""
+    from armlab.store import DamagedDatabase, Store
+
+    try:
+        Store(db_path, backups=backups)
+    except DamagedDatabase as error:
+        return str(error)
+    return None
+
+
 def run_serve(args: argparse.Namespace) -> int:
     import os
+    import sys
 
     os.environ.setdefault("MUJOCO_GL", "egl")
     import uvicorn
@@ -48,8 +60,13 @@ def run_serve(args: argparse.Namespace) -> int:
     from armlab.station.factory import make_device_station, make_sim_station
     from server.app import create_app
     from server.auth import open_url, resolve_token
+    from server.logging_config import log_config
 
     config = build_station_config(args)
+    problem = open_checked_store(args.db if args.db is not None else config.database_file(), config.database_backups)
+    if problem is not None:
+        print(f"armlab serve: {problem}", file=sys.stderr, flush=True)
+        return 2
     token, generated = resolve_token(args.token)
     if args.backend == "real":
         def factory():
@@ -57,11 +74,13 @@ def run_serve(args: argparse.Namespace) -> int:
     else:
         def factory():
             return make_sim_station(config, db_path=args.db)
-    app = create_app(station_factory=factory, token=token)
+    app = create_app(station_factory=factory, token=token, allowed_hosts=[args.host, *config.allowed_hosts])
     url = open_url(args.host, args.port, token)
     origin = "generated" if generated else "given"
     print(f"ArmLab control station ({origin} control token). Open:\n    {url}\n", flush=True)
     if args.host not in ("127.0.0.1", "localhost", "::1"):
         print(f"warning: listening on {args.host}: anyone who can reach it can watch; the token guards control", flush=True)
-    uvicorn.run(app, host=args.host, port=args.port, log_level=args.log_level, ws_per_message_deflate=False)
+    uvicorn.run(
+        app, host=args.host, port=args.port, log_level=args.log_level, ws_per_message_deflate=False, log_config=log_config()
+    )
     return 0

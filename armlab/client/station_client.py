@@ -205,6 +205,28 @@ class StationClient:
                 raise TimeoutError(f"job {job['name']} still running after {timeout_s} s")
             time.sleep(poll_s)
 
+    # Autonomous jobs ------------------------------------------------------------------------------
+
+    def auto_jobs(self) -> list[dict]:
+        """The autonomous jobs: name, levels, summary, params [{name, type}], judged, scene, time_limit_s."""
+        return self._get("/api/auto/jobs")["data"]
+
+    def auto(self, job: str, level: int | None = None, params: dict | None = None, wait: bool = False,
+             timeout_s: float = 900.0) -> dict:
+        """Start autonomous job `job` (at `level`, with `params`); returns the job (with wait, once it has
+        ended: check job['state'] and job['extra']['task']). Values go as given: the server refuses wrong types."""
+        body: dict = {"job": job}
+        if level is not None:
+            body["level"] = level
+        if params is not None:
+            body["params"] = params
+        return self._post("/api/auto", body, wait=wait, timeout_s=timeout_s)["job"]
+
+    def auto_score(self) -> dict:
+        """Simulation: the judge's score of the last autonomous job started on the server
+        ({job_id, job, level, state, final, sim_time_s, score: {points, max_points, breakdown, ...}, note})."""
+        return self._get("/api/auto/score")
+
     # Teach and repeat -----------------------------------------------------------------------------
 
     def teach_start(self) -> dict:

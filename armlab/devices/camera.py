@@ -32,13 +32,19 @@ class Intrinsics:
 
 @dataclass(frozen=True)
 class Frame:
-    """One capture. depth_mm is None for colour-only cameras. sequence increases by one per frame."""
+    """One capture. depth_mm is None for colour-only cameras. sequence increases by one per frame.
+
+    arm_joints_rad: the arm's measured joints (dof,) when the frame was captured, for perception's
+    robot self-filter: the simulated camera fills it exactly at render time; for a real camera it is
+    None and the station fills it from the arm when the frame arrives.
+    """
 
     color_bgr: np.ndarray
     depth_mm: np.ndarray | None
     timestamp_s: float
     sequence: int
     intrinsics: Intrinsics = field(repr=False, default=None)  # type: ignore[assignment]
+    arm_joints_rad: np.ndarray | None = field(repr=False, default=None)
 
 
 class Camera(abc.ABC):

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 from pathlib import Path
 
-from pydantic import Field
+from pydantic import Field, field_validator
 
 from armlab.config import StrictModel, config_dir, load_config
 
@@ -30,7 +30,18 @@ class StationConfig(StrictModel):
     max_moving_time_s: float = Field(30.0, gt=0.0)
     default_block_height_m: float = Field(0.038, gt=0.0, le=0.2)
     gripper_settle_timeout_s: float = Field(2.5, gt=0.0, le=10.0)
+    database_backups: int = Field(3, ge=0, le=50)
+    allowed_hosts: tuple[str, ...] = ()
     sim: SimStartConfig = SimStartConfig()
+
+    @field_validator("allowed_hosts")
+    @classmethod
+    def _host_names(cls, names: tuple[str, ...]) -> tuple[str, ...]:
+        """Bare host names or IP addresses: no scheme, path or port (the Host check compares names)."""
+        for name in names:
+            if not name.strip() or any(char in name for char in "/ \t@") or name.count(":") == 1:
+                raise ValueError(f"allowed_hosts: {name!r} is not a bare host name (no scheme, port or path)")
+        return tuple(name.strip() for name in names)
 
     def database_file(self) -> Path:
         """database_path; a relative path is relative to the repository root."""

@@ -122,9 +122,9 @@ class Station:
             self._restore_calibration()
         if not self.synchronous:
             self._workers = [
-                FrameSource(self.camera, self.frames),
+                FrameSource(self.camera, self.frames, self.arm),
                 PerceptionLoop(
-                    self.frames, self.perception, lambda: self._calibration, self.perception_config, self.config.perception_rate_hz
+                    self.frames, self.perception, lambda: self._calibration, self.perception_config, self.config.perception_rate_hz, self.model
                 ),
                 TelemetryPublisher(self.telemetry_snapshot, self.telemetry, self.config.telemetry_rate_hz),
             ]

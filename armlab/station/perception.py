@@ -3,7 +3,9 @@
 FrameSource is the camera's only reader: it publishes each new Frame into a NewestSlot that every
 consumer (perception, the stream encoder, snapshots, calibration) reads at its own pace.
 PerceptionLoop runs armlab.vision's PerceptionPipeline (tags, blocks) on the newest frame at its own
-rate (skipping frames it cannot keep up with) and publishes a Perception snapshot.
+rate (skipping frames it cannot keep up with) and publishes a Perception snapshot. Each frame carries
+the arm joints measured when it was taken (from the sim camera, else read here from the arm), so
+perception can filter the robot out of the image (armlab.vision.self_filter).
 """
 
 from __future__ import annotations
@@ -12,9 +14,12 @@ import logging
 import threading
 import time
 from collections.abc import Callable
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from typing import Any
 
+import numpy as np
+
+from armlab.devices.arm import Arm
 from armlab.devices.camera import Camera, Frame
 from armlab.station.slots import NewestSlot
 
@@ -23,13 +28,20 @@ log = logging.getLogger(__name__)
 
 @dataclass(frozen=True)
 class Perception:
-    """What the station currently sees: blocks (armlab.vision Block objects) and tags, from one frame."""
+    """What the station currently sees: blocks (armlab.vision Block objects) and tags, from one frame.
+
+    arm_joints_rad: the arm's measured joints when that frame was captured (None if unknown).
+    robot_mask: (H, W) bool pixels of that frame that belong to the robot (the self-filter's mask;
+    None without joints, arm model or calibration), e.g. for pixel-to-world to ignore the arm's depth.
+    """
 
     blocks: tuple = ()
     tags: tuple = ()
     frame_sequence: int = -1
     capture_time_s: float = 0.0
     time_s: float = field(default_factory=time.time)
+    arm_joints_rad: tuple[float, ...] | None = None
+    robot_mask: np.ndarray | None = field(default=None, repr=False)
 
 
 class _Worker:
@@ -68,14 +80,18 @@ class _Worker:
 
 
 class FrameSource(_Worker):
-    """Reads the camera (async_read: newest frame not yet consumed) and publishes into `slot`."""
+    """Reads the camera (async_read: newest frame not yet consumed) and publishes into `slot`.
+
+    arm: when given, a frame whose camera left arm_joints_rad None gets the arm's measured joints,
+    read as soon as the frame arrives (the sim camera fills them exactly at render time)."""
 
     name = "station-camera"
 
-    def __init__(self, camera: Camera, slot: NewestSlot[Frame]) -> None:
+    def __init__(self, camera: Camera, slot: NewestSlot[Frame], arm: Arm | None = None) -> None:
         super().__init__()
         self.camera = camera
         self.slot = slot
+        self.arm = arm
 
     def _run(self) -> None:
         while not self._stop.is_set():
@@ -83,14 +99,28 @@ class FrameSource(_Worker):
                 frame = self.camera.async_read(timeout_ms=200.0)
             except TimeoutError:
                 continue
-            self.slot.publish(frame)
+            self.slot.publish(with_arm_joints(frame, self.arm))
+
+
+def with_arm_joints(frame: Frame, arm: Arm | None) -> Frame:
+    """The frame with the arm's measured joints if it has none (unchanged without an arm or when the
+    arm cannot be read: perception then runs without the self-filter)."""
+    if frame.arm_joints_rad is not None or arm is None:
+        return frame
+    try:
+        joints = np.array(arm.read_joint_state().position_rad, dtype=float)
+    except (ConnectionError, TimeoutError, OSError) as error:
+        log.debug("no arm joints for frame %d: %s", frame.sequence, error)
+        return frame
+    return replace(frame, arm_joints_rad=joints)
 
 
 class PerceptionLoop(_Worker):
     """Detects tags and blocks on the newest frame, at most `rate_hz` times per second.
 
     `get_calibration()` returns the current armlab.vision Calibration or None; blocks need it, tags
-    do not. `config` is the armlab.vision PerceptionConfig.
+    do not. `config` is the armlab.vision PerceptionConfig. `arm_model` (armlab.kinematics ArmModel)
+    turns on the robot self-filter for frames that carry the arm's joints.
     """
 
     name = "station-perception"
@@ -102,18 +132,20 @@ class PerceptionLoop(_Worker):
         get_calibration: Callable[[], Any],
         config: Any,
         rate_hz: float,
+        arm_model: Any = None,
     ) -> None:
         super().__init__()
         self.frames = frames
         self.out = out
         self.get_calibration = get_calibration
         self.config = config
+        self.arm_model = arm_model
         self.period_s = 1.0 / rate_hz
 
     def _run(self) -> None:
         from armlab.vision.pipeline import PerceptionPipeline
 
-        pipeline = PerceptionPipeline(self.config)  # holds its detectors; tracks tags near calibrated spots
+        pipeline = PerceptionPipeline(self.config, self.arm_model)  # holds its detectors; tracks tags near calibrated spots
         version = 0
         while not self._stop.is_set():
             frame, version = self.frames.wait_newer(version, timeout_s=0.5)
@@ -127,11 +159,24 @@ class PerceptionLoop(_Worker):
 
 
 def analyse_frame(pipeline: Any, frame: Frame, calibration: Any) -> Perception:
-    """Tags and (with a calibration and depth) blocks of one frame; a failed pass logs and reports none."""
+    """Tags and (with a calibration and depth) blocks of one frame, each block stamped with the
+    frame's time and arm joints; the robot is filtered out when the frame carries the arm's joints
+    and the pipeline has an arm model. A failed pass logs and reports none."""
+    joints = frame.arm_joints_rad
+    filter_joints = joints if getattr(pipeline, "self_filter", None) is not None else None
+    robot_mask = None
     try:
-        result = pipeline.process(frame.color_bgr, frame.depth_mm, calibration, layers=None)
-        tags, blocks = tuple(result.tags), tuple(result.blocks)
+        result = pipeline.process(
+            frame.color_bgr, frame.depth_mm, calibration, layers=None, arm_joints_rad=filter_joints, frame_time_s=frame.timestamp_s
+        )
+        tags, blocks, robot_mask = tuple(result.tags), tuple(result.blocks), result.robot_mask
+        if joints is not None and filter_joints is None:  # no arm model: unfiltered, but say what pose they were seen in
+            seen = tuple(float(v) for v in np.ravel(joints))
+            blocks = tuple(replace(block, seen_arm_joints_rad=seen) for block in blocks)
     except ValueError as error:
         log.debug("perception failed on frame %d: %s", frame.sequence, error)
         tags, blocks = (), ()
-    return Perception(blocks=blocks, tags=tags, frame_sequence=frame.sequence, capture_time_s=frame.timestamp_s)
+    return Perception(
+        blocks=blocks, tags=tags, frame_sequence=frame.sequence, capture_time_s=frame.timestamp_s,
+        arm_joints_rad=None if joints is None else tuple(float(v) for v in np.ravel(joints)), robot_mask=robot_mask,
+    )

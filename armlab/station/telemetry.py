@@ -36,9 +36,10 @@ def gripper_pose_from_matrix(T_world_gripper: np.ndarray) -> dict:
 
 
 def block_to_dict(index: int, block) -> dict:
-    """A detected block (armlab.vision Block) as the wire dict of GET /api/detections."""
+    """A detected block (armlab.vision Block) as the wire dict of GET /api/detections; seen_time_s
+    (the capture time of the frame it was seen in) when the block carries it."""
     size = getattr(block, "size", None)
-    return {
+    data = {
         "id": index,
         "color": getattr(block, "color", None),
         "size": size,
@@ -53,6 +54,10 @@ def block_to_dict(index: int, block) -> dict:
         "aruco_id": getattr(block, "aruco_id", None),
         "destination": getattr(block, "destination", None),
     }
+    seen_time_s = getattr(block, "seen_time_s", None)
+    if seen_time_s is not None:
+        data["seen_time_s"] = float(seen_time_s)
+    return data
 
 
 def tag_to_dict(tag) -> dict:

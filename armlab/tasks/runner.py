@@ -202,6 +202,7 @@ class TaskRunner:
     def put_down_held(self, objects: list[dict] | None = None) -> str:
         """Set a held block down on a free spot of the board (after a failure or a cancel)."""
         held = self.station.held_block
+        self.station.wait_gripper()  # a cancel during a grasp: let the fingers settle before asking
         if not self.station.gripper.read_state().holding:
             self.station.set_held_block(None)
             return "nothing in the gripper"

@@ -45,6 +45,8 @@ class Block:
     destination: int | None = None
     side_m: float = 0.0
     stack_sizes: tuple[str, ...] = field(default=())
+    seen_time_s: float | None = None  # capture time (time.time()) of the frame it was seen in
+    seen_arm_joints_rad: tuple[float, ...] | None = None  # the measured arm joints at that frame
 
     def to_dict(self) -> dict:
         return {
@@ -61,6 +63,8 @@ class Block:
             "aruco_id": self.aruco_id,
             "destination": self.destination,
             "side_m": float(self.side_m),
+            "seen_time_s": self.seen_time_s,
+            "seen_arm_joints_rad": None if self.seen_arm_joints_rad is None else list(self.seen_arm_joints_rad),
         }
 
 
@@ -337,11 +341,14 @@ def detect_blocks(
     cfg: PerceptionConfig,
     tag_detector: cv2.aruco.ArucoDetector | None = None,
     geometry: BlockGeometry | None = None,
+    ignore_mask: np.ndarray | None = None,
 ) -> list[Block]:
     """Blocks (top of each stack) and flagged non-cubes on the board, sorted by y then x.
 
     tag_detector: a prebuilt detector for the block-tag dictionary (saves its construction per frame).
     geometry: BlockGeometry(cal), if the caller keeps one per calibration (saves its computation per frame).
+    ignore_mask: (H, W) bool pixels that are not the scene (the robot self-filter's mask): no face is
+    built from them, and a block partly hidden under them, or partly inside them, is flagged occluded.
     """
     check_color_image(color_bgr)
     if color_bgr.ndim != 3:
@@ -351,6 +358,8 @@ def detect_blocks(
         raise ValueError(f"image is {w}x{h} but the calibration is for {cal.width}x{cal.height}")
     if not isinstance(depth_mm, np.ndarray) or depth_mm.shape != (h, w) or depth_mm.dtype != np.uint16:
         raise ValueError(f"depth must be a uint16 (H, W) = ({h}, {w}) image in mm, got {getattr(depth_mm, 'shape', None)}")
+    if ignore_mask is not None and (not isinstance(ignore_mask, np.ndarray) or ignore_mask.shape != (h, w) or ignore_mask.dtype != bool):
+        raise ValueError(f"ignore_mask must be a bool (H, W) = ({h}, {w}) array, got {getattr(ignore_mask, 'shape', None)}")
     bc = cfg.blocks
     if geometry is None or geometry.calibration is not cal:
         geometry = BlockGeometry(cal)
@@ -368,6 +377,13 @@ def detect_blocks(
     classes = _color_classes(hsv_small, cfg, table)
     colourless = classes == 0  # e.g. the white and black of a tag on a block's top
     classes[~raised] = 0
+    z_cover = z_small  # what may hide part of a face: what stands above it, and the robot
+    if ignore_mask is not None:  # the robot: neither colour nor a tag's white
+        ignored_small = ignore_mask[::step, ::step]
+        classes[ignored_small] = 0
+        colourless[ignored_small] = False
+        z_cover = z_small.copy()
+        z_cover[ignored_small] = np.inf
     coloured = (classes > 0).astype(np.uint8)
     # A tag on a block's top is white and black: bridge its white (next to colour, never the dark arm)
     # so the thin coloured ring around it stays one candidate at this resolution.
@@ -410,8 +426,8 @@ def detect_blocks(
                 for cj, (other_top, centre, _) in tops.items() if cj != ci
             ):
                 continue  # a lower member of a stack: the block on top sits inside its footprint
-            region = region or _Region(color_bgr, depth_mm, geo, cfg, roi, table)
-            for block, looks_tagged in _blocks_from_region(color_bgr, geo, cfg, region, top_m, names[ci - 1], ci, z_small, step):
+            region = region or _Region(color_bgr, depth_mm, geo, cfg, roi, table, ignore_mask)
+            for block, looks_tagged in _blocks_from_region(color_bgr, geo, cfg, region, top_m, names[ci - 1], ci, z_cover, step):
                 if block.aruco_id is None and looks_tagged:
                     detector = detector or make_detector(cfg.tags.block_tag_dictionary)
                     block = _with_tag(block, color_bgr, roi, detector, cfg)
@@ -426,13 +442,19 @@ def detect_blocks(
 class _Region:
     """A region of interest at full resolution: its HSV image, colour classes and world heights."""
 
-    def __init__(self, color_bgr: np.ndarray, depth_mm: np.ndarray, geo: BlockGeometry, cfg: PerceptionConfig, roi, table: np.ndarray) -> None:
+    def __init__(self, color_bgr: np.ndarray, depth_mm: np.ndarray, geo: BlockGeometry, cfg: PerceptionConfig, roi, table: np.ndarray,
+                 ignore_mask: np.ndarray | None = None) -> None:
         x0, y0, x1, y1 = roi
         self.roi = roi
         self.hsv = cv2.cvtColor(color_bgr[y0:y1, x0:x1], cv2.COLOR_BGR2HSV)
         self.classes = _color_classes(self.hsv, cfg, table)
         self.colourless = self.classes == 0
         self.z = _roi_heights(depth_mm, geo, roi)
+        if ignore_mask is not None:  # the robot: no height, so it neither forms a face nor covers one
+            ignored = ignore_mask[y0:y1, x0:x1]
+            self.classes[ignored] = 0
+            self.colourless[ignored] = False
+            self.z[ignored] = np.nan
 
 
 def _blocks_from_region(color_bgr, geo: BlockGeometry, cfg, region: _Region, top_m, name, ci, z_small, step) -> list[tuple[Block, bool]]:

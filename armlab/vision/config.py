@@ -1,5 +1,7 @@
-"""Perception configuration (config/vision.yaml): tag dictionary and board layout, block colours and
-sizes, tag-topped block mapping. Validated at load time so a typo fails at start-up, not mid-job."""
+"""Perception configuration: config/vision.yaml (colour classes, thresholds, calibration limits, depth
+objects) filled with the workcell's facts (board and grid, tag dictionary and layout, block sizes,
+block-top tag mapping) from config/workcells/<name>.yaml, which vision.yaml names and must not copy.
+Validated at load time so a typo fails at start-up, not mid-job."""
 
 from __future__ import annotations
 
@@ -9,21 +11,20 @@ import cv2
 import numpy as np
 from pydantic import Field, field_validator, model_validator
 
-from armlab.config import StrictModel, config_dir, load_config
+from armlab.config import StrictModel, config_dir, read_config_file, validate_config
+from armlab.errors import ConfigError
+from armlab.workcell import DEFAULT_WORKCELL, BlockTagEntry, Workcell, load_workcell
 
-
-class BlockTagEntry(StrictModel):
-    """What an ArUco id on a block's top face means."""
-
-    color: str
-    destination: int
+__all__ = ["BlockTagEntry", "PerceptionConfig", "load_perception_config", "workcell_sections"]
 
 
 class TagConfig(StrictModel):
-    dictionary: str = "DICT_APRILTAG_36h11"
-    board_tag_size_m: float = Field(0.025, gt=0.0, lt=1.0)
+    """Filled from the workcell: board tags (dictionary, size, id -> centre) and block-top tags."""
+
+    dictionary: str
+    board_tag_size_m: float = Field(gt=0.0, lt=1.0)
     board_tags: dict[int, tuple[float, float]]
-    block_tag_dictionary: str = "DICT_4X4_250"
+    block_tag_dictionary: str
     block_tags: dict[int, BlockTagEntry] = {}
 
     @field_validator("dictionary", "block_tag_dictionary")
@@ -49,6 +50,8 @@ class CalibrationLimits(StrictModel):
 
 
 class BoardConfig(StrictModel):
+    """Filled from the workcell's board and grid."""
+
     x_range_m: tuple[float, float]
     y_range_m: tuple[float, float]
     grid_x_m: tuple[float, float]
@@ -72,8 +75,10 @@ class BoardConfig(StrictModel):
 
 
 class BlockConfig(StrictModel):
-    large_size_m: float = Field(0.038, gt=0.0)
-    small_size_m: float = Field(0.025, gt=0.0)
+    """Sizes filled from the workcell's block edges; the rest (colour classes, thresholds) is vision's."""
+
+    large_size_m: float = Field(gt=0.0)
+    small_size_m: float = Field(gt=0.0)
     min_height_m: float = Field(0.008, gt=0.0)
     max_height_m: float = Field(0.4, gt=0.0)
     top_face_tolerance_m: float = Field(0.006, gt=0.0)
@@ -103,14 +108,39 @@ class ObjectConfig(StrictModel):
     min_points: int = Field(30, ge=1)
 
 
-class PerceptionConfig(StrictModel):
-    """Everything perception needs besides the camera intrinsics."""
+class SelfFilterConfig(StrictModel):
+    """The robot self-filter (armlab.vision.self_filter): the arm's volume, inflated, that perception
+    ignores. Links are capsules along the joint frames; the gripper a box in the gripper-point frame
+    (x = approach axis, y = the fingers' closing axis); a held block a cube between the fingers."""
 
+    enabled: bool = True
+    link_radius_m: float = Field(0.04, gt=0.0, lt=0.5)
+    base_radius_m: float = Field(0.07, gt=0.0, lt=0.5)
+    gripper_x_m: tuple[float, float] = (-0.105, 0.02)
+    gripper_half_width_m: float = Field(0.06, gt=0.0, lt=0.5)
+    gripper_half_height_m: float = Field(0.035, gt=0.0, lt=0.5)
+    held_block_edge_m: float = Field(0.038, ge=0.0, lt=0.5)
+    held_block_margin_m: float = Field(0.01, ge=0.0, lt=0.1)
+    pixel_step: int = Field(2, ge=1, le=8)
+
+    @model_validator(mode="after")
+    def _ordered(self) -> "SelfFilterConfig":
+        low, high = self.gripper_x_m
+        if not low < high:
+            raise ValueError(f"gripper_x_m: lower bound {low} must be below upper bound {high}")
+        return self
+
+
+class PerceptionConfig(StrictModel):
+    """Everything perception needs besides the camera intrinsics (workcell = the config it was filled from)."""
+
+    workcell: str = DEFAULT_WORKCELL
     tags: TagConfig
     calibration: CalibrationLimits = CalibrationLimits()
     board: BoardConfig
     blocks: BlockConfig
     objects: ObjectConfig = ObjectConfig()
+    self_filter: SelfFilterConfig = SelfFilterConfig()
 
     @model_validator(mode="after")
     def _block_tag_colours_known(self) -> "PerceptionConfig":
@@ -126,6 +156,56 @@ class PerceptionConfig(StrictModel):
         return np.array([[cx - h, cy + h, 0.0], [cx + h, cy + h, 0.0], [cx + h, cy - h, 0.0], [cx - h, cy - h, 0.0]])
 
 
-def load_perception_config(path: str | Path | None = None) -> PerceptionConfig:
-    """Load config/vision.yaml (or `path`); ConfigError naming the file and field when invalid."""
-    return load_config(Path(path) if path is not None else config_dir() / "vision.yaml", PerceptionConfig)
+# vision.yaml fields that are workcell facts: filled from the workcell config, never written in vision.yaml.
+WORKCELL_FIELDS = {
+    "tags": ("dictionary", "board_tag_size_m", "board_tags", "block_tag_dictionary", "block_tags"),
+    "board": ("x_range_m", "y_range_m", "grid_x_m", "grid_y_m", "grid_step_m"),
+    "blocks": ("large_size_m", "small_size_m"),
+}
+
+
+def workcell_sections(workcell: Workcell) -> dict[str, dict]:
+    """The PerceptionConfig fields a workcell fills (see WORKCELL_FIELDS), in vision's names."""
+    board = workcell.board
+    return {
+        "tags": {
+            "dictionary": workcell.board_tags.dictionary,
+            "board_tag_size_m": workcell.board_tags.size_m,
+            "board_tags": dict(workcell.board_tags.centres_m),
+            "block_tag_dictionary": workcell.block_tags.dictionary,
+            "block_tags": dict(workcell.block_tags.ids),
+        },
+        "board": {
+            "x_range_m": board.x_range_m,
+            "y_range_m": board.y_range_m,
+            "grid_x_m": board.grid.x_m,
+            "grid_y_m": board.grid.y_m,
+            "grid_step_m": board.grid.step_m,
+        },
+        "blocks": {"large_size_m": workcell.block_edge_m("large"), "small_size_m": workcell.block_edge_m("small")},
+    }
+
+
+def load_perception_config(path: str | Path | None = None, workcell: str | Workcell | None = None) -> PerceptionConfig:
+    """Load config/vision.yaml (or `path`) and fill it from the workcell it names (`workcell:`, default
+    rx200_armlab; the argument overrides it). ConfigError naming the file and field when either is
+    invalid, or when vision.yaml copies a workcell fact."""
+    path = Path(path) if path is not None else config_dir() / "vision.yaml"
+    data = read_config_file(path)
+    name = data.get("workcell", DEFAULT_WORKCELL)
+    if not isinstance(name, str):
+        raise ConfigError(f"{path}: invalid config: workcell: expected the name of a config/workcells/ file, got {name!r}")
+    for section, fields in WORKCELL_FIELDS.items():
+        values = data.get(section)
+        copied = [field for field in fields if isinstance(values, dict) and field in values]
+        if copied:
+            raise ConfigError(
+                f"{path}: invalid config: {section}.{copied[0]}: is a workcell fact; set it in "
+                f"config/workcells/{name}.yaml, not in vision.yaml (one fact, one place)"
+            )
+    cell = workcell if isinstance(workcell, Workcell) else load_workcell(workcell or name)
+    merged = {**data, "workcell": cell.name}
+    for section, values in workcell_sections(cell).items():
+        own = data.get(section, {})
+        merged[section] = {**own, **values} if isinstance(own, dict) else own
+    return validate_config(merged, PerceptionConfig, str(path))

@@ -12,8 +12,7 @@ from armlab.vision.blocks import Block
 from armlab.vision.calibration import Calibration
 from armlab.vision.geometry import invert_transform
 from armlab.vision.pixel_world import pixel_to_world
-
-BLOCK_EDGE_M = {"large": 0.038, "small": 0.025}
+from armlab.workcell import Workcell, load_workcell
 
 
 @dataclass(frozen=True)
@@ -41,8 +40,10 @@ def yaw_error_rad(a: float, b: float) -> float:
     return min(d, math.pi / 2 - d)
 
 
-def expected_tops(truth: dict, pile_radius_m: float = 0.012) -> list[ExpectedTop]:
-    """Top object of every pile (objects whose centres are within pile_radius_m horizontally)."""
+def expected_tops(truth: dict, pile_radius_m: float = 0.012, workcell: Workcell | None = None) -> list[ExpectedTop]:
+    """Top object of every pile (objects whose centres are within pile_radius_m horizontally); block
+    sizes and the board from the workcell config (default: the default workcell)."""
+    workcell = workcell or load_workcell()
     objects = sorted(truth["objects"], key=lambda o: o["position_m"][2])
     piles: list[list[dict]] = []
     for obj in objects:
@@ -56,13 +57,13 @@ def expected_tops(truth: dict, pile_radius_m: float = 0.012) -> list[ExpectedTop
     for pile in piles:
         top = pile[-1]
         if top["type"] == "block":
-            half = BLOCK_EDGE_M[top["size"]] / 2
+            half = workcell.block_edge_m(top["size"]) / 2
         else:
             half = 0.0
         centre = np.array(top["position_m"], dtype=float) + np.array([0.0, 0.0, half])
         w, x, y, z = top["quat_wxyz"]
         up_z = 1.0 - 2.0 * (x * x + y * y)  # world z of the body's z axis
-        on_board = abs(centre[0]) <= 0.5 and -0.175 <= centre[1] <= 0.475
+        on_board = workcell.board.contains(float(centre[0]), float(centre[1]))
         tops.append(
             ExpectedTop(top["id"], top["type"], top["color"], top.get("size"), centre,
                         _yaw_mod_quarter(float(top["yaw_rad"])), len(pile), top.get("aruco_id"),
@@ -71,9 +72,11 @@ def expected_tops(truth: dict, pile_radius_m: float = 0.012) -> list[ExpectedTop
     return tops
 
 
-def hidden_tops(tops: list[ExpectedTop], truth: dict, depth_mm: np.ndarray, margin_mm: float = 8.0) -> set[str]:
+def hidden_tops(tops: list[ExpectedTop], truth: dict, depth_mm: np.ndarray, margin_mm: float = 8.0,
+                workcell: Workcell | None = None) -> set[str]:
     """Ids of block tops that something (the arm) hides in part: a corner or the centre of the top face
     shows a depth reading well in front of the face."""
+    workcell = workcell or load_workcell()
     cam = truth["camera"]
     K = np.asarray(cam["K"], dtype=float)
     T_camera_world = invert_transform(np.asarray(cam["T_world_camera"], dtype=float))
@@ -81,7 +84,7 @@ def hidden_tops(tops: list[ExpectedTop], truth: dict, depth_mm: np.ndarray, marg
     for top in tops:
         if top.type != "block":
             continue
-        h = BLOCK_EDGE_M[top.size] / 2 * 0.8
+        h = workcell.block_edge_m(top.size) / 2 * 0.8
         c, s = math.cos(top.yaw_rad), math.sin(top.yaw_rad)
         offsets = [(0.0, 0.0)] + [(sx * h * c - sy * h * s, sx * h * s + sy * h * c) for sx in (-1, 1) for sy in (-1, 1)]
         for dx, dy in offsets:
@@ -185,9 +188,13 @@ def score_blocks(blocks: list[Block], truth: dict, depth_mm: np.ndarray, match_r
 
 
 def click_grid_errors(cal: Calibration, truth: dict, step_m: float = 0.025,
-                      x_range_m=(-0.45, 0.45), y_range_m=(-0.15, 0.45)) -> np.ndarray:
+                      x_range_m=None, y_range_m=None, workcell: Workcell | None = None) -> np.ndarray:
     """Click-to-world errors (m) over a dense grid of board points: each point is projected through the
-    true camera to the pixel a user would click, then mapped back through the calibration (ray-plane)."""
+    true camera to the pixel a user would click, then mapped back through the calibration (ray-plane).
+    Default ranges: the workcell's grid in x, its board inset by 25 mm in y."""
+    board = (workcell or load_workcell()).board
+    x_range_m = board.grid.x_m if x_range_m is None else x_range_m
+    y_range_m = (board.y_range_m[0] + 0.025, board.y_range_m[1] - 0.025) if y_range_m is None else y_range_m
     cam = truth["camera"]
     K = np.asarray(cam["K"], dtype=float)
     T_camera_world = invert_transform(np.asarray(cam["T_world_camera"], dtype=float))

@@ -80,11 +80,16 @@ def fit_plane_ransac(points: np.ndarray, iterations: int, threshold_m: float, se
 
 
 def detect_objects_from_depth(
-    depth_mm: np.ndarray, cal: Calibration, cfg: PerceptionConfig, seed: int = 0
+    depth_mm: np.ndarray, cal: Calibration, cfg: PerceptionConfig, seed: int = 0, ignore_mask: np.ndarray | None = None
 ) -> list[DepthObject]:
-    """Clusters of points standing above the table plane, whatever their colour, largest first."""
+    """Clusters of points standing above the table plane, whatever their colour, largest first.
+
+    ignore_mask: (H, W) bool pixels that are not the scene (the robot self-filter's mask): never part
+    of an object."""
     if not isinstance(depth_mm, np.ndarray) or depth_mm.shape != (cal.height, cal.width):
         raise ValueError(f"depth must be an (H, W) = ({cal.height}, {cal.width}) image in mm")
+    if ignore_mask is not None and (not isinstance(ignore_mask, np.ndarray) or ignore_mask.shape != depth_mm.shape or ignore_mask.dtype != bool):
+        raise ValueError(f"ignore_mask must be a bool (H, W) = ({cal.height}, {cal.width}) array")
     oc = cfg.objects
     step = 2
     smoothed = cv2.medianBlur(np.ascontiguousarray(depth_mm, dtype=np.uint16), 5)  # depth noise, edges kept
@@ -96,6 +101,8 @@ def detect_objects_from_depth(
     with np.errstate(invalid="ignore"):
         height = np.nan_to_num(pts @ normal + d, nan=0.0)
     above = (height > oc.min_height_m).astype(np.uint8)
+    if ignore_mask is not None:
+        above[ignore_mask[::step, ::step]] = 0
     # Points within cluster_distance join: close gaps of that size in the image before labelling.
     gap_px = max(1, int(round(oc.cluster_distance_m / (np.nanmedian(pts[..., 2]) / cal.K[0, 0] * step))))
     joined = cv2.morphologyEx(above, cv2.MORPH_CLOSE, np.ones((gap_px, gap_px), np.uint8))

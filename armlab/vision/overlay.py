@@ -13,6 +13,7 @@ from armlab.vision.blocks import Block
 from armlab.vision.calibration import Calibration
 from armlab.vision.geometry import PlaneCamera, project_points
 from armlab.vision.tags import Tag, check_color_image
+from armlab.workcell import load_workcell
 
 # Drawing colours (BGR) per colour class; unknown names are drawn white.
 DRAW_BGR = {
@@ -23,8 +24,6 @@ DRAW_BGR = {
     "blue": (230, 120, 30),
     "violet": (200, 60, 160),
 }
-DEFAULT_BOARD_X_M = (-0.5, 0.5)
-DEFAULT_BOARD_Y_M = (-0.175, 0.475)
 
 
 @dataclass(frozen=True)
@@ -38,9 +37,9 @@ class OverlayLayers:
 
 
 def default_grid_points_m() -> np.ndarray:
-    """DESIGN §3 grid: x -450..450, y -175..475 mm every 50 mm, z = 0."""
-    gx, gy = np.meshgrid(np.arange(-0.45, 0.451, 0.05), np.arange(-0.175, 0.476, 0.05))
-    return np.stack([gx.ravel(), gy.ravel(), np.zeros(gx.size)], axis=1)
+    """The default workcell's board grid points (N, 3) at z = 0 (DESIGN §3: x -450..450, y -175..475 mm
+    every 50 mm)."""
+    return load_workcell().board.grid_points_m()
 
 
 def draw_overlay(
@@ -114,13 +113,18 @@ def top_down_view(
     color_bgr: np.ndarray,
     cal: Calibration,
     mm_per_px: float = 1.0,
-    x_range_m: tuple[float, float] = DEFAULT_BOARD_X_M,
-    y_range_m: tuple[float, float] = DEFAULT_BOARD_Y_M,
+    x_range_m: tuple[float, float] | None = None,
+    y_range_m: tuple[float, float] | None = None,
 ) -> np.ndarray:
-    """The board seen from straight above (row 0 = +y edge, column 0 = -x edge), mm_per_px per pixel.
+    """The board seen from straight above (row 0 = +y edge, column 0 = -x edge), mm_per_px per pixel;
+    ranges default to the workcell's board.
 
     Uses the board-plane homography, so only the board surface (z = 0) is geometrically exact.
     """
+    if x_range_m is None or y_range_m is None:
+        board = load_workcell().board
+        x_range_m = board.x_range_m if x_range_m is None else x_range_m
+        y_range_m = board.y_range_m if y_range_m is None else y_range_m
     check_color_image(color_bgr)
     if not (math.isfinite(mm_per_px) and mm_per_px > 0):
         raise ValueError(f"mm_per_px must be a positive number, got {mm_per_px}")

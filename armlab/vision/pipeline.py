@@ -1,10 +1,11 @@
 """One perception pass per frame for the live stream: board tags tracked near where the calibration
-puts them (full search when uncalibrated), blocks, and the overlay. Holds its detectors so a
-per-frame call builds nothing."""
+puts them (full search when uncalibrated), the robot self-filter's mask (given the measured arm
+joints), blocks outside that mask, and the overlay. Holds its detectors so a per-frame call builds
+nothing."""
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import numpy as np
 
@@ -13,21 +14,30 @@ from armlab.vision.calibration import Calibration
 from armlab.vision.config import PerceptionConfig
 from armlab.vision.geometry import project_points
 from armlab.vision.overlay import OverlayLayers, draw_overlay, grid_pixels
+from armlab.vision.self_filter import RobotSelfFilter
 from armlab.vision.tags import Tag, detect_tags, detect_tags_near, make_detector
 
 
 @dataclass(frozen=True)
 class PerceptionResult:
+    """tags, blocks and the overlay of one frame; robot_mask: the (H, W) bool pixels that belong to
+    the robot (the self-filter's mask), None when the pass had no arm joints or no calibration."""
+
     tags: list[Tag]
     blocks: list[Block]
     overlay_bgr: np.ndarray | None
+    robot_mask: np.ndarray | None = None
 
 
 class PerceptionPipeline:
-    """Reusable per-frame perception (not thread-safe: one per perception thread)."""
+    """Reusable per-frame perception (not thread-safe: one per perception thread).
 
-    def __init__(self, cfg: PerceptionConfig) -> None:
+    arm_model: the armlab.kinematics ArmModel the self-filter needs for process(arm_joints_rad=...).
+    """
+
+    def __init__(self, cfg: PerceptionConfig, arm_model=None) -> None:
         self.cfg = cfg
+        self.self_filter = RobotSelfFilter(arm_model, cfg.self_filter) if arm_model is not None else None
         self._board_detector = make_detector(cfg.tags.dictionary)
         # Tracking known tags in small windows: one threshold scale is enough and three times cheaper.
         self._tracking_detector = make_detector(cfg.tags.dictionary)
@@ -68,15 +78,38 @@ class PerceptionPipeline:
     def process(
         self, color_bgr: np.ndarray, depth_mm: np.ndarray | None, cal: Calibration | None,
         layers: OverlayLayers | None = OverlayLayers(),
+        arm_joints_rad: np.ndarray | None = None,
+        held_block_edge_m: float | None = None,
+        frame_time_s: float | None = None,
     ) -> PerceptionResult:
-        """Tags, blocks (needs depth and a calibration) and, unless layers is None, the overlay image."""
+        """Tags, blocks (needs depth and a calibration) and, unless layers is None, the overlay image.
+
+        arm_joints_rad: the arm's measured joints (dof,) when the frame was taken. Given (and
+        cfg.self_filter.enabled), pixels of the robot and of a block held between its fingers are
+        ignored by block detection; None = no filter. held_block_edge_m: the held block's edge for
+        the filter (None: the config's; 0: nothing held). Each block is stamped with frame_time_s
+        (seen_time_s) and arm_joints_rad (seen_arm_joints_rad).
+        ValueError if joints are given without an arm model, or are malformed.
+        """
         tags = self.find_tags(color_bgr, cal)
         blocks = []
+        robot_mask = None
+        if arm_joints_rad is not None:
+            if self.self_filter is None:
+                raise ValueError("process: arm_joints_rad needs a PerceptionPipeline built with an arm_model")
+            joints = tuple(float(v) for v in np.asarray(arm_joints_rad, dtype=float).ravel())
         if cal is not None and depth_mm is not None:
             self._use_calibration(cal)
             if self._block_geometry is None:
                 self._block_geometry = BlockGeometry(cal)
-            blocks = detect_blocks(color_bgr, depth_mm, cal, self.cfg, tag_detector=self._block_detector, geometry=self._block_geometry)
+            if arm_joints_rad is not None and self.cfg.self_filter.enabled:
+                robot_mask = self.self_filter.mask(depth_mm, cal, np.asarray(arm_joints_rad, dtype=float), held_block_edge_m)
+            blocks = detect_blocks(
+                color_bgr, depth_mm, cal, self.cfg, tag_detector=self._block_detector, geometry=self._block_geometry, ignore_mask=robot_mask
+            )
+            if frame_time_s is not None or arm_joints_rad is not None:
+                seen_joints = joints if arm_joints_rad is not None else None
+                blocks = [replace(b, seen_time_s=frame_time_s, seen_arm_joints_rad=seen_joints) for b in blocks]
         overlay = None
         if layers is not None:
             grid_px = None
@@ -86,4 +119,4 @@ class PerceptionPipeline:
                 if grid_px is None:
                     grid_px = self._grid_px[size] = grid_pixels(cal, self._grid_m, size)
             overlay = draw_overlay(color_bgr, tags=tags, blocks=blocks, calibration=cal, layers=layers, grid_points_m=self._grid_m, grid_px=grid_px)
-        return PerceptionResult(tags, blocks, overlay)
+        return PerceptionResult(tags, blocks, overlay, robot_mask)

@@ -7,7 +7,7 @@ from fastapi.responses import JSONResponse
 
 from armlab import skills
 from server.deps import ControlAuth, StationDep
-from server.models import JobResponse, ProgramInfo, ProgramsResponse, RepeatRequest, Status, TeachStopRequest, WaypointInfo
+from server.models import JobResponse, ProgramId, ProgramInfo, ProgramsResponse, RepeatRequest, Status, TeachStopRequest, WaypointInfo
 from server.routes.jobs import job_response
 
 router = APIRouter(prefix="/api", tags=["programs"])
@@ -33,24 +33,25 @@ def post_teach_stop(body: TeachStopRequest, station: StationDep, controller: Con
 
 @router.get("/programs", response_model=ProgramsResponse)
 def read_programs(station: StationDep) -> dict:
-    programs = [program.to_dict() for program in station.store.list_programs()]
-    return {"data": programs, "count": len(programs)}
+    """Saved programs; a damaged row is left out and named in `skipped`, never hiding the others."""
+    programs, skipped = station.store.read_programs()
+    return {"data": [program.to_dict() for program in programs], "count": len(programs), "skipped": skipped}
 
 
 @router.get("/programs/{program_id}", response_model=ProgramInfo)
-def read_program(program_id: int, station: StationDep) -> dict:
+def read_program(program_id: ProgramId, station: StationDep) -> dict:
     return station.store.get_program(program_id).to_dict()
 
 
 @router.delete("/programs/{program_id}")
-def delete_program(program_id: int, station: StationDep, controller: ControlAuth) -> dict:
+def delete_program(program_id: ProgramId, station: StationDep, controller: ControlAuth) -> dict:
     station.store.delete_program(program_id)
     return {"deleted": program_id}
 
 
 @router.post("/programs/{program_id}/repeat", response_model=JobResponse, status_code=202)
 def post_repeat(
-    program_id: int, station: StationDep, controller: ControlAuth, body: RepeatRequest | None = None, wait: bool = False
+    program_id: ProgramId, station: StationDep, controller: ControlAuth, body: RepeatRequest | None = None, wait: bool = False
 ) -> JSONResponse:
     """Play a program `cycles` times as a job."""
     cycles = body.cycles if body is not None else 1

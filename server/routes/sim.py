@@ -27,7 +27,7 @@ def post_scene(body: SceneRequest, station: StationDep, controller: ControlAuth)
     cell = _cell(station)
     station.allowed_or_raise("set_scene")
     if body.objects is not None:
-        scene = Scene.from_dict({"objects": body.objects})
+        scene = Scene.from_dict({"objects": [item.model_dump(exclude_none=True) for item in body.objects]})
     else:
         scene = generate_scene(body.event, level=body.level or 1, seed=body.seed or 0)
     cell.set_scene(scene)

@@ -292,3 +292,29 @@ def test_programs_survive_a_server_restart(cell, tmp_path):
         assert status["gripper"]["command"] == "grasp"
         assert np.allclose(status["joints_rad"], program["waypoints"][1]["joints_rad"], atol=0.02)
         http.post("/api/gripper", json={"action": "release"}, headers=AUTH)
+
+
+def test_a_damaged_program_row_is_reported_and_skipped_not_a_500(cell, tmp_path):
+    import sqlite3
+
+    from armlab.store import Store, Waypoint
+
+    db_path = tmp_path / "damaged-row.sqlite3"
+    store = Store(db_path)
+    good = store.save_program("good", [Waypoint((0.1, 0.0, 0.0, 0.0, 0.0), "release")])
+    connection = sqlite3.connect(db_path)
+    with connection:
+        connection.execute("INSERT INTO programs (name, created_s, waypoints_json) VALUES (CAST(X'ff' AS TEXT), 1.0, '[]')")
+        bad_id = connection.execute("SELECT max(id) FROM programs").fetchone()[0]
+    connection.close()
+    app = create_app(station_factory=lambda: live.StationOnCell(cell, db_path), token=TOKEN)
+    with live.serve(app) as base_url, httpx.Client(base_url=base_url, timeout=30) as http:
+        listing = http.get("/api/programs")
+        assert listing.status_code == 200, listing.text
+        body = listing.json()
+        assert [p["id"] for p in body["data"]] == [good.id] and body["count"] == 1
+        assert len(body["skipped"]) == 1 and f"program {bad_id}" in body["skipped"][0] and "UTF-8" in body["skipped"][0]
+        assert "damaged" in _error(http.get(f"/api/programs/{bad_id}"), 404, "not_found")["message"]
+        _error(http.post(f"/api/programs/{bad_id}/repeat", headers=AUTH), 404, "not_found")
+        assert http.delete(f"/api/programs/{bad_id}", headers=AUTH).json() == {"deleted": bad_id}
+        assert http.get("/api/programs").json()["skipped"] == []

@@ -16,7 +16,7 @@ def test_health_reports_ok_and_version_and_lifespan_closes_the_station(tmp_path)
 
     try:
         app = create_app(station_factory=factory, token="t")
-        with TestClient(app) as client:
+        with TestClient(app, base_url="http://127.0.0.1") as client:  # a Host the station serves
             response = client.get("/api/health")
             assert response.status_code == 200 and response.json()["status"] == "ok"
             assert client.get("/api/status").json()["state"] == "idle"

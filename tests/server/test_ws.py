@@ -70,6 +70,9 @@ def test_hello_calibration_and_telemetry(url):
         hello = json.loads(ws.recv(timeout=5))
         assert hello["type"] == "hello" and hello["can_control"] is True and hello["backend"] == "sim"
         assert abs(hello["server_time_s"] - time.time()) < 5
+        workcell = hello["workcell"]  # the workcell geometry the browser draws with (DESIGN §3)
+        assert workcell["board"]["x_range_m"] == [-0.5, 0.5] and workcell["board"]["y_range_m"] == [-0.175, 0.475]
+        assert workcell["block_edges_m"] == {"large": 0.038, "small": 0.025}
         calibration = json.loads(ws.recv(timeout=5))
         assert calibration["type"] == "calibration" and "calibrated" in calibration
         first = _next(ws, "telemetry")

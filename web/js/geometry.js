@@ -1,8 +1,25 @@
 // Pure view geometry: where a pointer lands in the shown image, and the top-down warp's pixel↔world map.
-// No DOM access here, so every function can be checked in isolation.
+// No DOM access here, so every function can be checked in isolation. The workcell's geometry (board,
+// block sizes) is not written here: the server sends it in the websocket hello (WorkcellInfo).
 
-/** Board extent in the world frame (DESIGN §3), metres: x −0.5…0.5, y −0.175…0.475. */
-export const BOARD_BOUNDS_M = Object.freeze({ xMin: -0.5, xMax: 0.5, yMin: -0.175, yMax: 0.475 });
+/**
+ * The board's extent {xMin, xMax, yMin, yMax} (world frame, metres) from the workcell the server sent
+ * in its hello (WorkcellInfo), or null when it is missing or malformed.
+ */
+export function boardBoundsFromWorkcell(workcell) {
+  const board = workcell && workcell.board;
+  const x = board && board.x_range_m;
+  const y = board && board.y_range_m;
+  if (!(Array.isArray(x) && Array.isArray(y) && x.length === 2 && y.length === 2)) return null;
+  if (![...x, ...y].every(Number.isFinite) || !(x[0] < x[1] && y[0] < y[1])) return null;
+  return Object.freeze({ xMin: x[0], xMax: x[1], yMin: y[0], yMax: y[1] });
+}
+
+/** Cube edge (metres) of a block size ("large", "small") in the hello's workcell, or null if unknown. */
+export function blockEdgeM(workcell, size) {
+  const edge = workcell && workcell.block_edges_m && workcell.block_edges_m[size];
+  return Number.isFinite(edge) && edge > 0 ? edge : null;
+}
 
 /**
  * Map a pointer position inside an element (CSS px, origin top-left) to image pixels when an
@@ -38,23 +55,26 @@ export function frameToCameraPx(u, v, frameW, frameH, cameraW, cameraH) {
 
 /**
  * Top-down warp: the board rectangle `bounds` fills the image, +x to the right, +y up (far edge at
- * the top). Returns the world point (metres, on the board plane z = 0) under image pixel (u, v).
+ * the top). Returns the world point (metres, on the board plane z = 0) under image pixel (u, v), or
+ * null without bounds.
  */
-export function topdownPxToWorld(u, v, imageW, imageH, bounds = BOARD_BOUNDS_M) {
+export function topdownPxToWorld(u, v, imageW, imageH, bounds) {
+  if (!bounds) return null;
   const x = bounds.xMin + (u / imageW) * (bounds.xMax - bounds.xMin);
   const y = bounds.yMax - (v / imageH) * (bounds.yMax - bounds.yMin);
   return [x, y, 0];
 }
 
-/** Inverse of topdownPxToWorld (z ignored). */
-export function worldToTopdownPx(xM, yM, imageW, imageH, bounds = BOARD_BOUNDS_M) {
+/** Inverse of topdownPxToWorld (z ignored); null without bounds. */
+export function worldToTopdownPx(xM, yM, imageW, imageH, bounds) {
+  if (!bounds) return null;
   const u = ((xM - bounds.xMin) / (bounds.xMax - bounds.xMin)) * imageW;
   const v = ((bounds.yMax - yM) / (bounds.yMax - bounds.yMin)) * imageH;
   return { u, v };
 }
 
-/** Read warp bounds from a frame header when the server sends them, else the board's. */
-export function boundsFromHeader(header) {
+/** Read warp bounds from a frame header when the server sends them, else `fallback` (the board's). */
+export function boundsFromHeader(header, fallback = null) {
   const b = header && (header.world_bounds_m || header.bounds_m);
   if (Array.isArray(b) && b.length === 4 && b.every(Number.isFinite)) {
     return { xMin: b[0], xMax: b[1], yMin: b[2], yMax: b[3] };
@@ -63,7 +83,7 @@ export function boundsFromHeader(header) {
   if (b && ["x_min", "x_max", "y_min", "y_max"].every((k) => Number.isFinite(b[k]))) {
     return { xMin: b.x_min, xMax: b.x_max, yMin: b.y_min, yMax: b.y_max };
   }
-  return BOARD_BOUNDS_M;
+  return fallback;
 }
 
 /** Format metres as whole millimetres with a sign, e.g. "+123". */

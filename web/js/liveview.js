@@ -2,6 +2,8 @@
 // last click target), reports the world point under the cursor, and turns clicks into targets.
 
 import {
+  blockEdgeM,
+  boardBoundsFromWorkcell,
   boundsFromHeader,
   elementToImagePx,
   fmtMm,
@@ -41,6 +43,8 @@ export class LiveView {
     this.hoverBusy = false;
     this.hoverTimer = null;
     this.framesDrawn = 0;
+    this.workcell = null; // WorkcellInfo from the server's hello: board bounds, block sizes
+    this.boardBounds = null;
     canvas.addEventListener("mousemove", (e) => this.onMove(e));
     canvas.addEventListener("mouseleave", () => this.onLeave());
     canvas.addEventListener("click", (e) => this.onClick(e));
@@ -49,6 +53,17 @@ export class LiveView {
   setMode(mode) {
     this.mode = mode;
     this.wrap.dataset.mode = mode;
+  }
+
+  /** The workcell geometry the server sent in its hello (WorkcellInfo). */
+  setWorkcell(workcell) {
+    this.workcell = workcell || null;
+    this.boardBounds = boardBoundsFromWorkcell(this.workcell);
+  }
+
+  /** The top-down warp's bounds: the frame header's if it has them, else the workcell's board (null before the hello). */
+  topdownBounds() {
+    return boundsFromHeader(this.header, this.boardBounds);
   }
 
   setDetections(detections) {
@@ -94,7 +109,8 @@ export class LiveView {
    */
   drawTopdownDetections() {
     const { ctx, canvas } = this;
-    const b = boundsFromHeader(this.header);
+    const b = this.topdownBounds();
+    if (!b) return;
     const pxPerM = canvas.width / (b.xMax - b.xMin);
     ctx.save();
     ctx.lineWidth = 2;
@@ -102,7 +118,9 @@ export class LiveView {
     this.detections.forEach((det, i) => {
       if (!Array.isArray(det.position_m)) return;
       const p = worldToTopdownPx(det.position_m[0], det.position_m[1], canvas.width, canvas.height, b);
-      const half = ((det.size === "small" ? 0.025 : 0.038) * pxPerM) / 2 + 4;
+      const edge = blockEdgeM(this.workcell, det.size) ?? blockEdgeM(this.workcell, "large");
+      if (edge === null) return;
+      const half = (edge * pxPerM) / 2 + 4;
       ctx.strokeStyle = i === this.hoverDetection ? "#ffffff" : "#00e5ff";
       ctx.save();
       ctx.translate(p.u, p.v);
@@ -141,8 +159,7 @@ export class LiveView {
   markerFramePx(marker) {
     if (this.view() === "topdown") {
       if (!marker.positionM) return null;
-      const b = boundsFromHeader(this.header);
-      return worldToTopdownPx(marker.positionM[0], marker.positionM[1], this.canvas.width, this.canvas.height, b);
+      return worldToTopdownPx(marker.positionM[0], marker.positionM[1], this.canvas.width, this.canvas.height, this.topdownBounds());
     }
     return marker.cameraPx ? this.cameraToFramePx(marker.cameraPx) : null;
   }
@@ -215,8 +232,8 @@ export class LiveView {
       return;
     }
     if (this.view() === "topdown") {
-      const b = boundsFromHeader(this.header);
-      const w = topdownPxToWorld(px.frame.u, px.frame.v, this.canvas.width, this.canvas.height, b);
+      const w = topdownPxToWorld(px.frame.u, px.frame.v, this.canvas.width, this.canvas.height, this.topdownBounds());
+      if (!w) return;
       this.showWorld(w, "board");
       const world = this.detections.map((d) => ({ center_px: d.position_m ? [d.position_m[0], d.position_m[1]] : null }));
       this.setHoverDetection(nearestDetection(world, w[0], w[1], 0.03));
@@ -263,8 +280,8 @@ export class LiveView {
     const color = this.mode === "grab" ? "#2fbf71" : "#e0a030";
     const label = this.mode === "grab" ? "grab" : "drop";
     if (this.view() === "topdown") {
-      const b = boundsFromHeader(this.header);
-      const positionM = topdownPxToWorld(px.frame.u, px.frame.v, this.canvas.width, this.canvas.height, b);
+      const positionM = topdownPxToWorld(px.frame.u, px.frame.v, this.canvas.width, this.canvas.height, this.topdownBounds());
+      if (!positionM) return;
       this.marker = { positionM, color, label };
       this.onTarget({ mode: this.mode, positionM });
     } else {

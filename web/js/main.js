@@ -132,6 +132,7 @@ class App {
     switch (msg.type) {
       case "hello":
         this.helloSeen = true;
+        this.live.setWorkcell(msg.workcell);
         this.canControl = Boolean(msg.can_control) && this.api.canControl;
         $("control-mode").textContent = this.canControl ? "control" : "view only";
         $("sim-panel").hidden = msg.backend !== "sim";

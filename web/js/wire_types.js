@@ -6,7 +6,7 @@ export const STATES = Object.freeze(["idle", "calibrate", "teach", "repeat", "cl
 export const COMMANDS = Object.freeze(["estop", "reset", "home", "sleep", "move_joints", "move_to", "torque", "gripper", "calibrate", "grab", "drop", "teach_start", "teach_record", "teach_stop", "repeat", "auto", "cancel", "set_scene"]);
 export const VIEWS = Object.freeze(["color", "depth", "topdown"]);
 export const LAYERS = Object.freeze(["tags", "detections", "grid"]);
-export const ERROR_CODES = Object.freeze(["wrong_state", "unreachable", "unsafe", "invalid", "not_found", "not_calibrated", "unauthorized", "device", "internal"]);
+export const ERROR_CODES = Object.freeze(["wrong_state", "unreachable", "unsafe", "invalid", "not_found", "not_calibrated", "unauthorized", "forbidden", "device", "internal"]);
 export const SERVER_MESSAGE_TYPES = Object.freeze(["frame", "telemetry", "event", "calibration", "hello"]);
 export const CLIENT_MESSAGE_TYPES = Object.freeze(["ack", "view", "command"]);
 
@@ -14,6 +14,86 @@ export const CLIENT_MESSAGE_TYPES = Object.freeze(["ack", "view", "command"]);
  * @typedef {Object} AckMessage
  * @property {"ack"} type
  * @property {number} seq
+ */
+
+/**
+ * @typedef {Object} AutoJobInfo
+ * @property {string} name
+ * @property {Array<number>} levels [] = the job has no levels
+ * @property {string} summary
+ * @property {Array<AutoParam>} params
+ * @property {boolean} judged a competition event (DESIGN §7): the simulation scores it with the judge
+ * @property {boolean} scene POST /api/sim/scene can generate its starting scene
+ * @property {(number|null)} [time_limit_s] the event's time limit, simulated seconds
+ */
+
+/**
+ * @typedef {Object} AutoJobsResponse
+ * @property {Array<AutoJobInfo>} data
+ * @property {number} count
+ */
+
+/**
+ * @typedef {Object} AutoParam
+ * @property {string} name
+ * @property {string} type Python type name: int, float, str, bool, list, ...
+ */
+
+/**
+ * Start an autonomous job: a name from GET /api/auto/jobs, one of its levels, its parameters.
+ * @typedef {Object} AutoRequest
+ * @property {string} job job name (GET /api/auto/jobs)
+ * @property {(number|null)} [level] one of the job's levels; None = its highest
+ * @property {(Object<string, *>|null)} [params] job parameters by name, each of the type GET /api/auto/jobs gives
+ */
+
+/**
+ * @typedef {Object} AutoResponse
+ * @property {JobInfo} job
+ * @property {(AutoScoreResponse|null)} [score] with ?wait=true in the simulation: the final score
+ */
+
+/**
+ * @typedef {Object} AutoScore
+ * @property {number} points
+ * @property {number} max_points
+ * @property {boolean} within_limit
+ * @property {boolean} full
+ * @property {number} time_limit_s
+ * @property {Array<ScoreRule>} breakdown
+ */
+
+/**
+ * The judge's score of the last autonomous job started over the API (simulation only).
+ * @typedef {Object} AutoScoreResponse
+ * @property {string} job_id
+ * @property {string} job
+ * @property {(number|null)} level
+ * @property {("running"|"succeeded"|"failed"|"cancelled")} state
+ * @property {boolean} final True once the job has ended and its final ground truth was scored
+ * @property {number} sim_time_s simulated seconds from the job's start to its end (so far, while running)
+ * @property {(AutoScore|null)} [score] None while running, or for a job the judge does not score
+ * @property {string} [note]
+ */
+
+/**
+ * @typedef {Object} BinInfo
+ * @property {Array<number>} x_range_m
+ * @property {Array<number>} y_range_m
+ */
+
+/**
+ * @typedef {Object} BoardInfo
+ * @property {Array<number>} x_range_m [x_min, x_max] of the board, world frame, metres
+ * @property {Array<number>} y_range_m [y_min, y_max] of the board, world frame, metres
+ * @property {GridInfo} grid
+ */
+
+/**
+ * @typedef {Object} BoardTagsInfo
+ * @property {string} family
+ * @property {number} size_m
+ * @property {Object<string, *>} centres_m tag id -> [x, y] of its centre, metres
  */
 
 /**
@@ -111,6 +191,13 @@ export const CLIENT_MESSAGE_TYPES = Object.freeze(["ack", "view", "command"]);
  */
 
 /**
+ * @typedef {Object} GridInfo
+ * @property {Array<number>} x_m first and last grid point x, metres
+ * @property {Array<number>} y_m first and last grid point y, metres
+ * @property {number} step_m
+ */
+
+/**
  * @typedef {Object} GripperPose
  * @property {Array<number>} position_m
  * @property {number} pitch_rad
@@ -135,6 +222,7 @@ export const CLIENT_MESSAGE_TYPES = Object.freeze(["ack", "view", "command"]);
  * @property {number} server_time_s
  * @property {boolean} can_control
  * @property {("sim"|"real")} backend
+ * @property {WorkcellInfo} workcell
  */
 
 /**
@@ -148,6 +236,7 @@ export const CLIENT_MESSAGE_TYPES = Object.freeze(["ack", "view", "command"]);
  * @property {number} started_s
  * @property {(number|null)} [finished_s]
  * @property {*} [result]
+ * @property {(Object<string, *>|null)} [extra] job-specific live details; autonomous jobs: {task: TaskProgress}
  */
 
 /**
@@ -199,6 +288,7 @@ export const CLIENT_MESSAGE_TYPES = Object.freeze(["ack", "view", "command"]);
  * @typedef {Object} ProgramsResponse
  * @property {Array<ProgramInfo>} data
  * @property {number} count
+ * @property {Array<string>} [skipped] damaged rows left out of data, one line each (also logged)
  */
 
 /**
@@ -207,12 +297,33 @@ export const CLIENT_MESSAGE_TYPES = Object.freeze(["ack", "view", "command"]);
  */
 
 /**
+ * One object of an explicit scene, in the ground-truth format (quat_wxyz wins over yaw_rad).
+ * @typedef {Object} SceneObjectRequest
+ * @property {string} id
+ * @property {("block"|"semicircle"|"arch"|"triangle"|"cylinder")} type
+ * @property {("red"|"orange"|"yellow"|"green"|"blue"|"violet")} color
+ * @property {(("large"|"small")|null)} [size] blocks: large (default) or small; distractors: None = large
+ * @property {Array<number>} position_m body centre, world frame
+ * @property {(number|null)} [yaw_rad]
+ * @property {(Array<number>|null)} [quat_wxyz] orientation (w, x, y, z), non-zero; normalised by the station
+ * @property {(number|null)} [aruco_id] ArUco tag (DICT_4X4_250) on a block's top face
+ */
+
+/**
  * A generated competition scene (event, level, seed) or explicit objects (ground-truth format).
  * @typedef {Object} SceneRequest
- * @property {(string|null)} [event]
+ * @property {(("pick_sort"|"pick_stack"|"line_up"|"stack_high"|"to_the_sky"|"sort_stack")|null)} [event]
  * @property {(number|null)} [level]
  * @property {(number|null)} [seed]
- * @property {(Array<Object<string, *>>|null)} [objects]
+ * @property {(Array<SceneObjectRequest>|null)} [objects]
+ */
+
+/**
+ * @typedef {Object} ScoreRule
+ * @property {string} rule
+ * @property {number} points
+ * @property {string} detail
+ * @property {Array<string>} object_ids
  */
 
 /**
@@ -246,6 +357,19 @@ export const CLIENT_MESSAGE_TYPES = Object.freeze(["ack", "view", "command"]);
  * @property {(Array<number>|null)} [position_m]
  * @property {(number|null)} [u]
  * @property {(number|null)} [v]
+ */
+
+/**
+ * job.extra.task of a running autonomous job (also on the websocket's telemetry).
+ * @typedef {Object} TaskProgress
+ * @property {number} done
+ * @property {number} left
+ * @property {string} step
+ * @property {number} attempts
+ * @property {Array<string>} failures
+ * @property {number} moves
+ * @property {(Detection|null)} [next_block] the block being moved (a detection)
+ * @property {(Array<number>|null)} [next_target_m] where it goes: bottom-centre x, y and surface z, world frame
  */
 
 /**
@@ -289,4 +413,16 @@ export const CLIENT_MESSAGE_TYPES = Object.freeze(["ack", "view", "command"]);
  * @typedef {Object} WaypointInfo
  * @property {Array<number>} joints_rad
  * @property {("grasp"|"release")} gripper
+ */
+
+/**
+ * The workcell's geometry (config/workcells/<name>.yaml), sent once in the hello.
+ * @typedef {Object} WorkcellInfo
+ * @property {string} name
+ * @property {BoardInfo} board
+ * @property {BoardTagsInfo} board_tags
+ * @property {Object<string, *>} block_edges_m block size (large, small) -> cube edge, metres
+ * @property {Object<string, *>} places_m sort_by_tag place -> [x, y], metres
+ * @property {Array<number>} feeder_spot_m to_the_sky feed spot [x, y], metres
+ * @property {BinInfo} bin
  */

@@ -134,7 +134,7 @@ class SimCamera(Camera):
         with self._condition:
             self._sequence += 1
             frame = Frame(color_bgr=color_bgr, depth_mm=depth_mm, timestamp_s=time.time(),
-                          sequence=self._sequence, intrinsics=self._intrinsics)
+                          sequence=self._sequence, intrinsics=self._intrinsics, arm_joints_rad=images.arm_joints_rad)
             self._latest = frame
             self._condition.notify_all()
         return frame

@@ -29,6 +29,7 @@ class SimWorkcellConfig(StrictModel):
     arm: str = "rx200"
     camera: str = "sim_l515"
     sim: str = "sim"  # config/<sim>.yaml
+    workcell: str = "rx200_armlab"  # config/workcells/<workcell>.yaml: board, tags, object sizes, feeder
 
 
 class PhysicsConfig(StrictModel):

@@ -1,6 +1,7 @@
 """Build the MuJoCo model of the workcell (MJCF text + in-memory texture assets) from config and a
-Scene: the RX200 from its URDF joint origins, a two-finger gripper with pads, the board, the tags,
-the overhead camera and the scene's objects as free bodies. Pure: same inputs, same XML."""
+Scene: the RX200 from its URDF joint origins, a two-finger gripper with pads, the board and its tags
+(from the workcell config), the overhead camera, the scene's objects as free bodies and the feeder's
+blocks parked out of sight. Pure: same inputs, same XML."""
 
 from __future__ import annotations
 
@@ -12,10 +13,10 @@ import numpy as np
 from armlab.config import read_config_file, resolve_config_path
 from armlab.devices.sim import textures
 from armlab.devices.sim.config import SimCameraConfig, SimConfig
-from armlab.scene import DISTRACTOR_DIMENSIONS_M, Scene, SceneObject
+from armlab.devices.sim.feeder import FEEDER_PROBE, parked_objects
+from armlab.scene import Scene, SceneObject
+from armlab.workcell import Workcell, load_workcell
 
-TAG_CENTRES_M = {1: (-0.25, -0.025), 2: (0.25, -0.025), 3: (0.25, 0.275), 4: (-0.25, 0.275)}
-TAG_SIZE_M = 0.025
 CAMERA_NAME = "overhead"
 GRIPPER_SITE = "gripper_point"
 OBJECT_PREFIX = "obj:"
@@ -158,11 +159,15 @@ def _prism_vertices(outline_xy: list[tuple[float, float]], height_m: float) -> s
     return _fmt(points)
 
 
-def _object_xml(obj: SceneObject, density: float, friction: list[float], solref: list[float]) -> tuple[str, str]:
-    """(asset xml, body xml) of one free object. Body origin = footprint bounding-box centre, mid-height."""
+def _object_xml(obj: SceneObject, density: float, friction: list[float], solref: list[float],
+                workcell: Workcell, parked: bool = False) -> tuple[str, str]:
+    """(asset xml, body xml) of one free object. Body origin = footprint bounding-box centre, mid-height.
+    parked: a feeder block waiting out of sight, weightless and without contacts until it is fed."""
     ext_x, ext_y, height = obj.dimensions_m
-    scale = ext_x / DISTRACTOR_DIMENSIONS_M[obj.type][0] if obj.type != "block" else 1.0
-    common = f'material="c_{obj.color}" density="{density}" friction="{_fmt(friction)}" solref="{_fmt(solref)}" contype="1" conaffinity="1"'
+    scale = ext_x / workcell.object_dimensions_m(obj.type, None)[0] if obj.type != "block" else 1.0
+    collide = 0 if parked else 1
+    common = (f'material="c_{obj.color}" density="{density}" friction="{_fmt(friction)}" solref="{_fmt(solref)}" '
+              f'contype="{collide}" conaffinity="{collide}"')
     mesh_name = f"mesh_{obj.type}_{obj.id}"
     asset = ""
     if obj.type == "block":
@@ -202,8 +207,9 @@ def _object_xml(obj: SceneObject, density: float, friction: list[float], solref:
             f'<geom type="box" size="{half:.9g} {half:.9g} 0.00005" pos="0 0 {height / 2 + 0.00005:.9g}" '
             f'material="{name}" contype="0" conaffinity="0" mass="0" group="2"/>'
         )
+    gravcomp = ' gravcomp="1"' if parked else ""
     body = (
-        f'<body name="{OBJECT_PREFIX}{obj.id}" pos="{_fmt(obj.position_m)}" quat="{_fmt(obj.quat_wxyz)}">'
+        f'<body name="{OBJECT_PREFIX}{obj.id}" pos="{_fmt(obj.position_m)}" quat="{_fmt(obj.quat_wxyz)}"{gravcomp}>'
         f"<freejoint/>{geoms}</body>"
     )
     return asset, body
@@ -221,16 +227,34 @@ def camera_xml_attributes(T_world_camera: np.ndarray, camera: SimCameraConfig) -
     )
 
 
+def _feeder_xml(scene: Scene, workcell: Workcell) -> str:
+    """An invisible, contact-free probe the size of a large block at the feed spot (the feeder measures
+    the arm's distance to it), or nothing without a feeder."""
+    if scene.feeder is None:
+        return ""
+    half = 0.5 * workcell.block_edge_m("large")
+    x, y = scene.feeder.spot_m
+    return (f'<geom name="{FEEDER_PROBE}" type="box" size="{half:.9g} {half:.9g} {half:.9g}" pos="{x:.9g} {y:.9g} {half:.9g}" '
+            f'contype="0" conaffinity="0" group="5" rgba="0 0 0 0"/>')
+
+
 def build_model_xml(
-    arm: ArmGeometry, sim: SimConfig, camera: SimCameraConfig, T_world_camera: np.ndarray, scene: Scene
+    arm: ArmGeometry, sim: SimConfig, camera: SimCameraConfig, T_world_camera: np.ndarray, scene: Scene,
+    workcell: Workcell | None = None,
 ) -> tuple[str, dict[str, bytes]]:
     """The whole workcell as MJCF text plus the texture PNGs it references (MuJoCo in-memory assets)."""
-    assets = {"board.png": textures.encode_png(textures.board_texture())}
+    import cv2
+
+    workcell = workcell or load_workcell()
+    board = workcell.board
+    assets = {"board.png": textures.encode_png(textures.board_texture(board))}
     tag_cells = textures.TAG_CELLS + 2 * textures.TAG_QUIET_CELLS
-    tag_half_m = 0.5 * TAG_SIZE_M * tag_cells / textures.TAG_CELLS
+    tag_half_m = 0.5 * workcell.board_tags.size_m * tag_cells / textures.TAG_CELLS
+    tag_dictionary = getattr(cv2.aruco, workcell.board_tags.dictionary)
+    block_dictionary = getattr(cv2.aruco, workcell.block_tags.dictionary)
     tag_assets, tag_geoms = [], []
-    for tag_id, (x, y) in TAG_CENTRES_M.items():
-        assets[f"tag{tag_id}.png"] = textures.encode_png(textures.tag_texture(tag_id))
+    for tag_id, (x, y) in workcell.board_tags.centres_m.items():
+        assets[f"tag{tag_id}.png"] = textures.encode_png(textures.tag_texture(tag_id, tag_dictionary))
         tag_assets.append(
             f'<texture name="tag{tag_id}" type="2d" file="tag{tag_id}.png"/>'
             f'<material name="tag{tag_id}" texture="tag{tag_id}" specular="0" shininess="0"/>'
@@ -243,11 +267,14 @@ def build_model_xml(
         f'<material name="c_{name}" rgba="{_fmt(rgba)}" specular="0.1" shininess="0.1"/>' for name, rgba in COLOR_RGBA.items()
     )
     object_assets, object_bodies = [], []
-    for obj in scene.objects:
+    parked = parked_objects(scene.feeder, workcell) if scene.feeder is not None else []
+    for obj, is_parked in [(obj, False) for obj in scene.objects] + [(obj, True) for obj in parked]:
         if obj.aruco_id is not None:
             rgb = tuple(int(255 * c) for c in COLOR_RGBA[obj.color][:3])
-            assets[f"aruco_{obj.id}.png"] = textures.encode_png(textures.block_top_texture(obj.aruco_id, rgb))
-        asset, body = _object_xml(obj, sim.objects.density_kg_m3, sim.objects.friction, sim.objects.solref)
+            assets[f"aruco_{obj.id}.png"] = textures.encode_png(
+                textures.block_top_texture(obj.aruco_id, rgb, dictionary=block_dictionary))
+        asset, body = _object_xml(obj, sim.objects.density_kg_m3, sim.objects.friction, sim.objects.solref,
+                                  workcell, parked=is_parked)
         object_assets.append(asset)
         object_bodies.append(body)
     actuators = []
@@ -289,10 +316,11 @@ def build_model_xml(
   </asset>
   <worldbody>
     <light name="sun" directional="true" pos="0.2 0.3 2" dir="-0.1 -0.15 -1" castshadow="false" diffuse="0.55 0.55 0.55" specular="0 0 0"/>
-    <geom name="board" type="plane" size="0.5 0.325 0.05" pos="0 0.15 0" material="board"
+    <geom name="board" type="plane" size="{0.5 * board.size_m[0]:.9g} {0.5 * board.size_m[1]:.9g} 0.05" pos="{_fmt(np.mean(board.corners_m, axis=0))} 0" material="board"
           friction="{_fmt(sim.objects.board_friction)}" solref="{_fmt(sim.objects.solref)}" contype="1" conaffinity="1"/>
     <geom name="table" type="plane" size="1.5 1.5 0.05" pos="0 0.15 -0.003" material="table" contype="0" conaffinity="0"/>
     {''.join(tag_geoms)}
+    {_feeder_xml(scene, workcell)}
     <camera name="{CAMERA_NAME}" mode="fixed" {camera_xml_attributes(T_world_camera, camera)}/>
     {_arm_xml(arm, sim)}
     {''.join(object_bodies)}

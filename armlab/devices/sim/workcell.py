@@ -26,10 +26,13 @@ from armlab.devices.sim.config import (
     load_sim_config,
     nominal_T_world_camera,
 )
+from armlab.devices.sim.feeder import FeederRuntime, parked_objects
 from armlab.devices.sim.gripper import SimGripper
 from armlab.devices.sim.mjcf import CAMERA_NAME, GRIPPER_SITE, OBJECT_PREFIX, ArmGeometry, build_model_xml
+from armlab.devices.sim.path import MAX_DURATION_S, PathRecorder
 from armlab.devices.sim.render import RawImages, RenderThread
 from armlab.scene import Scene, SceneObject
+from armlab.workcell import load_workcell
 
 logger = logging.getLogger(__name__)
 
@@ -44,6 +47,7 @@ class SimWorkcell:
         self.config = config or SimWorkcellConfig()
         self.lock = threading.RLock()
         self._geometry = ArmGeometry.load(self.config.arm)
+        self._workcell = load_workcell(self.config.workcell)
         self._sim = load_sim_config(self.config.sim)
         self._camera_config = load_camera_config(self.config.camera)
         pose_rng, noise_rng = (np.random.default_rng(s) for s in np.random.SeedSequence(self.config.seed).spawn(2))
@@ -54,6 +58,8 @@ class SimWorkcell:
         self._scene = scene or Scene()
         self._model: mujoco.MjModel | None = None
         self._data: mujoco.MjData | None = None
+        self._feeder: FeederRuntime | None = None
+        self._path: PathRecorder | None = None
         self._build(self._scene, previous=None)
         physics = self._sim.physics
         self.arm = SimArm(self, self._geometry.joint_names, self._geometry.lower_rad, self._geometry.upper_rad,
@@ -72,7 +78,8 @@ class SimWorkcell:
     # ------------------------------------------------------------------ model
     def _build(self, scene: Scene, previous: dict | None) -> None:
         """(Re)build model and data for a scene; `previous` carries the arm/gripper state across."""
-        xml, assets = build_model_xml(self._geometry, self._sim, self._camera_config, self._T_world_camera, scene)
+        xml, assets = build_model_xml(self._geometry, self._sim, self._camera_config, self._T_world_camera, scene,
+                                      self._workcell)
         model = mujoco.MjModel.from_xml_string(xml, assets)
         data = mujoco.MjData(model)
         self._arm_qpos = np.array([model.jnt_qposadr[model.joint(n).id] for n in self._geometry.joint_names])
@@ -83,12 +90,16 @@ class SimWorkcell:
         self._vel_act = np.array([model.actuator(f"{n}_vel").id for n in self._geometry.joint_names])
         self._finger_act = np.array([model.actuator(f"{s}_finger").id for s in ("left", "right")])
         self._arm_gains = (model.actuator_gainprm[self._pos_act, 0].copy(), model.actuator_gainprm[self._vel_act, 0].copy())
-        self._arm_body_ids = np.flatnonzero(model.body_gravcomp > 0)
+        arm_root = model.body("base").id
+        self._arm_body_ids = np.flatnonzero((model.body_gravcomp > 0) & (model.body_rootid == arm_root))
         self._gripper_site = model.site(GRIPPER_SITE).id
         self._gripper_body = model.body("gripper_link").id
         self._pad_geoms = {model.geom(name).id: name for name in PAD_GEOMS}
         self._object_bodies = {obj.id: model.body(OBJECT_PREFIX + obj.id).id for obj in scene.objects}
+        parked = parked_objects(scene.feeder, self._workcell) if scene.feeder is not None else []
+        parked_bodies = [(model.body(OBJECT_PREFIX + obj.id).id, obj) for obj in parked]
         self._body_to_object = {body: obj_id for obj_id, body in self._object_bodies.items()}
+        self._body_to_object.update({body: obj.id for body, obj in parked_bodies})
         if previous is None:
             # The arm powers up in its sleep pose, fingers open.
             data.qpos[self._arm_qpos] = np.clip(self._geometry.sleep_rad, self._geometry.lower_rad, self._geometry.upper_rad)
@@ -108,6 +119,13 @@ class SimWorkcell:
             if not previous["torque"]:
                 self._apply_torque(model, False)
         mujoco.mj_forward(model, data)
+        self._feeder = None
+        if scene.feeder is not None:
+            arm_geoms = np.flatnonzero(model.body_rootid[model.geom_bodyid] == arm_root).tolist()
+            watched = [(self._object_bodies[obj.id], obj) for obj in scene.objects]
+            self._feeder = FeederRuntime(model, data, scene.feeder, self._workcell.feeder,
+                                         self._workcell.block_edge_m("large"), watched, parked_bodies, arm_geoms)
+            self._feeder.tick(model, data)  # a clear spot starts filled
         self._model, self._data, self._scene = model, data, scene
         self._torque = True if previous is None else previous["torque"]
 
@@ -195,7 +213,11 @@ class SimWorkcell:
             if self.arm.is_connected:
                 self.arm.control(data.time)
             self.gripper.control(data.time)
+            if self._feeder is not None:
+                self._feeder.tick(self._model, data)
         mujoco.mj_step(self._model, data)
+        if self._path is not None and self._path.due(data.time):
+            self._path.record(float(data.time), data.site_xpos[self._gripper_site])
 
     def _advance(self, duration_s: float) -> None:
         steps = int(round(duration_s / self._model.opt.timestep))
@@ -250,12 +272,13 @@ class SimWorkcell:
             time.sleep(0.001)
 
     # ---------------------------------------------------------------- camera
-    def _snapshot(self, renderer) -> float:
+    def _snapshot(self, renderer) -> tuple[float, np.ndarray]:
+        """Copy the state to draw; (sim time, arm joints) of exactly that state."""
         with self.lock:
             if renderer.model is not self._model:
                 renderer.set_model(self._model, CAMERA_NAME)
             renderer.update_scene(self._model, self._data)
-            return float(self._data.time)
+            return float(self._data.time), self.arm_positions()
 
     def _renderer(self) -> RenderThread:
         if self._render_thread is None:
@@ -327,13 +350,43 @@ class SimWorkcell:
         with self.lock:
             return self._data.site_xpos[self._gripper_site].copy()
 
+    def start_path_recording(self, period_s: float = 0.05, max_duration_s: float = MAX_DURATION_S) -> None:
+        """Record the gripper point every period_s of simulated time from now on (inside the physics
+        stepping, so fast mode records too), replacing any earlier recording. Memory is bounded: beyond
+        max_duration_s of samples the oldest are dropped."""
+        recorder = PathRecorder(period_s, max_duration_s)  # validates before anything changes
+        with self.lock:
+            recorder.record(float(self._data.time), self._data.site_xpos[self._gripper_site])
+            self._path = recorder
+
+    def stop_path_recording(self) -> np.ndarray:
+        """Stop recording; returns the samples (as gripper_path())."""
+        with self.lock:
+            path = self.gripper_path()
+            self._path = None
+            return path
+
+    def gripper_path(self) -> np.ndarray:
+        """(N, 4) samples (sim_time_s, x, y, z) of the gripper point, oldest first; (0, 4) if not recording.
+        Each sample is gripper_point_m() as it read at that simulated time."""
+        with self.lock:
+            return self._path.samples() if self._path is not None else np.empty((0, 4))
+
+    def feeder_status(self) -> dict | None:
+        """to_the_sky feeder: {spot_m, count, fed, remaining}, or None if the scene has no feeder."""
+        with self.lock:
+            return self._feeder.status() if self._feeder is not None else None
+
     def truth(self) -> dict:
-        """Ground truth: camera (K, size, true T_world_camera), objects (pose), gripper contacts, arm."""
+        """Ground truth: camera (K, size, true T_world_camera), objects (pose; feeder blocks only once
+        fed, as feed_0, feed_1, ...), the feeder's state (None without one), gripper contacts, arm."""
         with self.lock:
             data = self._data
             objects = []
-            for obj in self._scene.objects:
-                body = self._object_bodies[obj.id]
+            on_board = [(self._object_bodies[obj.id], obj) for obj in self._scene.objects]
+            if self._feeder is not None:
+                on_board += self._feeder.fed_bodies()
+            for body, obj in on_board:
                 quat = data.xquat[body].copy()
                 entry = SceneObject(obj.id, obj.type, obj.color, obj.size, tuple(data.xpos[body]), tuple(quat),
                                     obj.aruco_id).to_dict()
@@ -357,6 +410,7 @@ class SimWorkcell:
             }
             arm = {"joint_names": list(self._geometry.joint_names), "position_rad": self.arm_positions().tolist()}
             sim_time = float(data.time)
+            feeder = self._feeder.status() if self._feeder is not None else None
         K = self.camera.intrinsics.K
         return {
             "camera": {
@@ -367,6 +421,7 @@ class SimWorkcell:
                 "dist": list(self.camera.intrinsics.dist),
             },
             "objects": objects,
+            "feeder": feeder,
             "gripper": state,
             "arm": arm,
             "time_s": sim_time,

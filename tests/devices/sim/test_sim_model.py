@@ -10,9 +10,12 @@ import pytest
 
 from armlab.devices.sim import SimWorkcell, SimWorkcellConfig
 from armlab.devices.sim.config import load_camera_config, nominal_T_world_camera
-from armlab.devices.sim.mjcf import TAG_CENTRES_M, TAG_SIZE_M
 from armlab.kinematics import load_arm
 from armlab.scene import Scene, SceneObject, quat_from_yaw
+from armlab.workcell import load_workcell
+
+TAG_CENTRES_M = load_workcell().board_tags.centres_m
+TAG_SIZE_M = load_workcell().board_tags.size_m
 
 
 @pytest.fixture(scope="module")

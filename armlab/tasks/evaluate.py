@@ -1,0 +1,190 @@
+"""Fan-out of headless episodes over seeds: serially, over a process pool, or over a Ray cluster.
+
+Pure orchestration around `armlab.tasks.episode.run_episode`: every seed runs the same function with
+the same arguments wherever it runs, so the results equal a serial run's apart from wall time. Runs
+come back in seed order. A run that raises is recorded as crashed (no points) instead of ending the
+evaluation, so one bad seed among thousands still leaves the other results.
+"""
+
+from __future__ import annotations
+
+import os
+import re
+import time
+import traceback
+from collections.abc import Iterator, Sequence
+
+MAX_SEEDS = 10_000  # per evaluation; a larger sweep is several evaluations
+MAX_SEED = 2**32 - 1  # seeds are unsigned 32-bit, like most simulators' seeds
+MAX_WORKERS = 256
+RUN_KEYS = ("event", "level", "seed", "points", "max_points", "sim_time_s", "wall_time_s", "breakdown", "failures")
+_SEED_ITEM = re.compile(r"(\d+)(?:-(\d+))?")
+
+
+class EvalError(ValueError):
+    """A bad evaluation request (event, level, seeds, workers); the message says what is wrong."""
+
+
+def parse_seeds(text: str) -> list[int]:
+    """Seeds from "1,2,3", "1-20" or a mix ("0-4,9"): sorted, distinct, non-negative, at most MAX_SEEDS.
+    EvalError for anything else (empty items, backwards ranges, signs, letters, repeats)."""
+    if not isinstance(text, str) or not text.strip():
+        raise EvalError("empty seed list; give seeds like 1,2,3 or 1-20")
+    seeds: list[int] = []
+    count = 0
+    for item in text.split(","):
+        item = item.strip()
+        match = _SEED_ITEM.fullmatch(item)
+        if match is None:
+            what = "an empty item" if not item else f"{item!r}"
+            raise EvalError(f"bad seed list {text!r}: {what} is not a seed (N) or a range (N-M) of non-negative integers")
+        first = int(match.group(1))
+        last = first if match.group(2) is None else int(match.group(2))
+        if last < first:
+            raise EvalError(f"bad seed list {text!r}: range {item} runs backwards")
+        if last > MAX_SEED:
+            raise EvalError(f"bad seed list {text!r}: seeds go up to {MAX_SEED}, not {last}")
+        count += last - first + 1
+        if count > MAX_SEEDS:
+            raise EvalError(f"bad seed list {text!r}: more than {MAX_SEEDS} seeds in one evaluation")
+        seeds.extend(range(first, last + 1))
+    seeds.sort()
+    repeated = next((a for a, b in zip(seeds, seeds[1:]) if a == b), None)
+    if repeated is not None:
+        raise EvalError(f"bad seed list {text!r}: seed {repeated} given more than once")
+    return seeds
+
+
+def check_request(event: str, level: int | None) -> int | None:
+    """The level to run `event` at; EvalError for an unknown job, a missing or out-of-range level, or a
+    job the headless episode cannot run yet (no scene generator or judge for it)."""
+    from armlab.tasks.registry import JOBS, checked_request
+
+    if event in JOBS and JOBS[event].levels and level is None:
+        levels = ", ".join(map(str, JOBS[event].levels))
+        raise EvalError(f"job '{event}' has levels {levels}; give --level")
+    try:
+        _, level, _ = checked_request(event, level, None)
+    except ValueError as error:
+        raise EvalError(str(error)) from None
+    reason = episode_unsupported(event, level)
+    if reason:
+        raise EvalError(f"job '{event}' cannot be evaluated headless yet: {reason}")
+    return level
+
+
+def episode_unsupported(event: str, level: int | None) -> str | None:
+    """Why a headless episode of (event, level) cannot run yet, or None when it can: the episode needs a
+    scene generator for the pair and a judge for the event. Cheap (generates one scene, judges nothing)."""
+    from armlab.scene import generate_scene
+    from armlab.tasks.judge import EVENT_LIMITS_S
+
+    try:
+        generate_scene(event, level=level, seed=0)
+    except (ValueError, TypeError) as error:
+        return f"no scene generator ({error})"
+    if event not in EVENT_LIMITS_S:
+        return "the judge does not score it"
+    return None
+
+
+def run_one(event: str, level: int | None, seed: int, keep_truth: bool = False) -> dict:
+    """One episode, in whichever process runs it; an exception becomes a crashed run with no points."""
+    os.environ.setdefault("MUJOCO_GL", "egl")
+    from armlab.tasks.episode import run_episode
+
+    started = time.monotonic()
+    try:
+        return run_episode(event, level, seed, keep_truth=keep_truth)
+    except Exception as error:  # noqa: BLE001 - any failure of one seed is that seed's result
+        where = traceback.extract_tb(error.__traceback__)[-1]
+        return {
+            "event": event, "level": level, "seed": int(seed), "points": 0, "max_points": None,
+            "within_limit": False, "full": False, "sim_time_s": None,
+            "wall_time_s": round(time.monotonic() - started, 3), "breakdown": [],
+            "failures": [f"crashed: {type(error).__name__}: {error} ({os.path.basename(where.filename)}:{where.lineno})"],
+            "crashed": True,
+        }
+
+
+def evaluate(event: str, level: int | None, seeds: Sequence[int], *, workers: int = 1,
+             ray_address: str | None = None, keep_truth: bool = False) -> Iterator[dict]:
+    """Run every seed and yield the results in seed order as they become available. workers = 1 runs in
+    this process; more use a spawn-context process pool (MuJoCo's GL context and threads do not survive
+    fork); ray_address ("auto" or host:port) runs each seed as a Ray task on that cluster instead."""
+    seeds = sorted(int(s) for s in seeds)
+    if isinstance(workers, bool) or not isinstance(workers, int) or not 1 <= workers <= MAX_WORKERS:
+        raise EvalError(f"workers must be an integer in 1..{MAX_WORKERS}, not {workers!r}")
+    if ray_address is not None:
+        return _over_ray(event, level, seeds, ray_address, keep_truth)
+    if workers == 1 or len(seeds) <= 1:
+        return (run_one(event, level, seed, keep_truth) for seed in seeds)
+    return _over_processes(event, level, seeds, min(workers, len(seeds)), keep_truth)
+
+
+def _over_processes(event, level, seeds, workers, keep_truth) -> Iterator[dict]:
+    import multiprocessing
+    from concurrent.futures import ProcessPoolExecutor
+
+    executor = ProcessPoolExecutor(max_workers=workers, mp_context=multiprocessing.get_context("spawn"))
+    try:
+        futures = [executor.submit(run_one, event, level, seed, keep_truth) for seed in seeds]
+        for future in futures:
+            yield future.result()
+    finally:
+        executor.shutdown(wait=True, cancel_futures=True)
+
+
+def _over_ray(event, level, seeds, address, keep_truth) -> Iterator[dict]:
+    try:
+        import ray
+    except ImportError:
+        raise EvalError("--ray needs Ray: pip install 'armlab[cluster]'") from None
+    connected_here = not ray.is_initialized()
+    if connected_here:
+        # Worker output stays on the workers: --json prints only the results on stdout.
+        ray.init(address=address, log_to_driver=False, logging_level="warning")
+    try:
+        task = ray.remote(num_cpus=1, max_retries=0)(run_one)
+        refs = [task.remote(event, level, seed, keep_truth) for seed in seeds]
+        for ref in refs:
+            yield ray.get(ref)
+    finally:
+        if connected_here:
+            ray.shutdown()
+
+
+def public_run(run: dict) -> dict:
+    """A run as `armlab eval --json` prints it (RUN_KEYS only; truth and the judge's extras left out)."""
+    return {key: run.get(key) for key in RUN_KEYS}
+
+
+def points_fraction(run: dict) -> float:
+    """Points as a fraction of the maximum; a crashed run scores 0."""
+    return run["points"] / run["max_points"] if run.get("max_points") else 0.0
+
+
+def summarize(runs: Sequence[dict]) -> dict:
+    """Figures over runs: mean and minimum points fraction, full-points rate within the time limit, mean
+    simulated and wall time per run, and the real-time factor per worker (simulated / wall seconds)."""
+    ran = [run for run in runs if not run.get("crashed")]
+    fractions = [points_fraction(run) for run in runs]
+    sim_s = sum(run["sim_time_s"] for run in ran)
+    wall_s = sum(run["wall_time_s"] for run in ran)
+
+    def mean(values) -> float | None:
+        values = list(values)
+        return round(sum(values) / len(values), 4) if values else None
+
+    return {
+        "runs": len(runs),
+        "crashed": len(runs) - len(ran),
+        "mean_points_fraction": mean(fractions),
+        "min_points_fraction": round(min(fractions), 4) if fractions else None,
+        "full_rate": mean(float(bool(run.get("full"))) for run in runs),
+        "mean_points": mean(run["points"] for run in runs),
+        "mean_sim_time_s": mean(run["sim_time_s"] for run in ran),
+        "mean_wall_time_s": mean(run["wall_time_s"] for run in ran),
+        "realtime_factor_per_worker": round(sim_s / wall_s, 2) if wall_s > 0 else None,
+    }
+

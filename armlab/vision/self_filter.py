@@ -1,0 +1,251 @@
+"""Robot self-filter: which depth pixels belong to the robot, so perception ignores the arm and the
+block it holds (the point-cloud pipelines' "robot self-filter").
+
+From FK of the measured joints (ArmModel.joint_frames) the robot becomes a simple inflated volume in
+the world frame: capsules along the links, a box for the gripper and fingers, and a cube between
+the fingers for a held block. A depth pixel is the robot when its 3-D point lies inside that volume;
+a pixel with no depth reading is the robot when it lies inside the volume's projected silhouette.
+A block on the board under a hovering gripper is not masked (its points are far below the gripper);
+a block held in the gripper is. Only pixels inside each part's projected silhouette are back-projected,
+every `pixel_step`-th one, so the mask costs about a millisecond per frame.
+
+Frames as in DESIGN §3: world = board frame; T_world_camera maps camera (OpenCV) to world coordinates.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import cv2
+import numpy as np
+
+from armlab.vision.calibration import Calibration
+from armlab.vision.config import SelfFilterConfig
+from armlab.vision.geometry import as_points, invert_transform, normalized_rays, project_points
+
+_CELL_NEIGHBOURS = np.ones((3, 3), np.uint8)
+_UNIT_CUBE = np.array([[x, y, z] for x in (-1.0, 1.0) for y in (-1.0, 1.0) for z in (-1.0, 1.0)])
+
+
+@dataclass(frozen=True)
+class RobotVolume:
+    """The robot's inflated volume in the world frame (metres).
+
+    capsule_ends_m (N, 2, 3) and capsule_radii_m (N,): points within the radius of a segment.
+    box_poses (M, 4, 4) T_world_box and box_half_extents_m (M, 3): boxes centred on their pose's origin.
+    """
+
+    capsule_ends_m: np.ndarray
+    capsule_radii_m: np.ndarray
+    box_poses: np.ndarray
+    box_half_extents_m: np.ndarray
+
+    def contains(self, points_m: np.ndarray) -> np.ndarray:
+        """(N,) bool: which world points (N, 3) lie inside the volume."""
+        pts = as_points(points_m, 3, "points_m")
+        inside = np.zeros(len(pts), bool)
+        for (a, b), r in zip(self.capsule_ends_m, self.capsule_radii_m):
+            inside |= _in_capsule(pts[:, 0], pts[:, 1], pts[:, 2], a, b, r)
+        for T, half in zip(self.box_poses, self.box_half_extents_m):
+            inside |= _in_box(pts[:, 0], pts[:, 1], pts[:, 2], T, half)
+        return inside
+
+    def hull_corners_m(self) -> np.ndarray:
+        """(N + M, 8, 3): the corners of a box around each part (a capsule's is oriented along it).
+        Each part's projected silhouette lies inside the convex hull of its corners' pixels."""
+        capsules = _capsule_boxes(self.capsule_ends_m, self.capsule_radii_m)
+        # corner k of box j: centre_j + R_j (unit_k * half_j)
+        boxes = np.einsum("jab,jkb->jka", self.box_poses[:, :3, :3], _UNIT_CUBE[None] * self.box_half_extents_m[:, None, :])
+        boxes += self.box_poses[:, None, :3, 3]
+        return np.concatenate([capsules, boxes])
+
+    def in_frame(self, T_to_from: np.ndarray) -> RobotVolume:
+        """The same volume with every part moved by the rigid transform T (e.g. T_camera_world)."""
+        R, t = T_to_from[:3, :3], T_to_from[:3, 3]
+        return RobotVolume(self.capsule_ends_m @ R.T + t, self.capsule_radii_m, T_to_from @ self.box_poses, self.box_half_extents_m)
+
+
+def _capsule_boxes(ends_m: np.ndarray, radii_m: np.ndarray) -> np.ndarray:
+    """(N, 8, 3) corners of the box around each capsule (ends (N, 2, 3), radii (N,)), its long axis
+    along the segment."""
+    axis = ends_m[:, 1] - ends_m[:, 0]
+    length = np.linalg.norm(axis, axis=1)
+    u = np.where(length[:, None] > 1e-9, axis / np.maximum(length, 1e-9)[:, None], [0.0, 0.0, 1.0])
+    helper = np.where(np.abs(u[:, :1]) < 0.9, [1.0, 0.0, 0.0], [0.0, 1.0, 0.0])
+    v = np.cross(u, helper)
+    v /= np.linalg.norm(v, axis=1)[:, None]
+    w = np.cross(u, v)
+    half = np.stack([0.5 * length + radii_m, radii_m, radii_m], axis=1)  # (N, 3) along u, v, w
+    scaled = _UNIT_CUBE[None] * half[:, None, :]  # (N, 8, 3)
+    centre = 0.5 * (ends_m[:, 0] + ends_m[:, 1])
+    return centre[:, None] + scaled[..., :1] * u[:, None] + scaled[..., 1:2] * v[:, None] + scaled[..., 2:] * w[:, None]
+
+
+def _in_capsule(X, Y, Z, a, b, radius_m: float) -> np.ndarray:
+    """Which points (coordinate arrays of any one shape) lie within radius_m of the segment a-b."""
+    ab = b - a
+    denom = float(ab @ ab)
+    dx, dy, dz = X - np.float32(a[0]), Y - np.float32(a[1]), Z - np.float32(a[2])
+    if denom > 1e-18:
+        t = (dx * np.float32(ab[0]) + dy * np.float32(ab[1]) + dz * np.float32(ab[2])) * np.float32(1.0 / denom)
+        np.clip(t, 0.0, 1.0, out=t)
+        dx -= t * np.float32(ab[0])
+        dy -= t * np.float32(ab[1])
+        dz -= t * np.float32(ab[2])
+    return dx * dx + dy * dy + dz * dz <= np.float32(radius_m * radius_m)
+
+
+def _in_box(X, Y, Z, T_frame_box: np.ndarray, half_m: np.ndarray) -> np.ndarray:
+    """Which points lie inside the box centred at T_frame_box's origin with half extents half_m."""
+    R, c = T_frame_box[:3, :3].astype(np.float32), T_frame_box[:3, 3].astype(np.float32)
+    dx, dy, dz = X - c[0], Y - c[1], Z - c[2]
+    inside = None
+    for k in range(3):
+        local = dx * R[0, k] + dy * R[1, k] + dz * R[2, k]
+        within = np.abs(local) <= np.float32(half_m[k])
+        inside = within if inside is None else inside & within
+    return inside
+
+
+def robot_volume(model, joints_rad, cfg: SelfFilterConfig, held_block_edge_m: float | None = None) -> RobotVolume:
+    """The robot's inflated volume at joints_rad (dof,) of an armlab.kinematics ArmModel.
+
+    Capsules: base origin -> first joint frame -> ... -> last joint frame (the first two with
+    cfg.base_radius_m, the rest with cfg.link_radius_m); a box for the gripper in the gripper-point
+    frame; a cube between the fingers for a held block of held_block_edge_m (None: cfg's; 0: none),
+    spanning from half an edge above the gripper point to a full edge below it, plus the margin.
+    ValueError for malformed joints or a negative or non-finite edge.
+    """
+    frames = model.joint_frames(joints_rad)  # (dof + 1, 4, 4): joint origins, then the gripper point
+    edge = cfg.held_block_edge_m if held_block_edge_m is None else held_block_edge_m
+    if not (isinstance(edge, (int, float)) and math.isfinite(edge) and 0.0 <= edge < 0.5):
+        raise ValueError(f"held_block_edge_m must be a finite number in [0, 0.5) m, got {held_block_edge_m!r}")
+    points = np.vstack([np.asarray(model.T_world_base)[:3, 3], frames[:-1, :3, 3]])
+    ends = np.stack([points[:-1], points[1:]], axis=1)
+    radii = np.full(len(ends), cfg.link_radius_m)
+    radii[:2] = cfg.base_radius_m
+    if len(ends) > 2 and _off_segment_m(points[1], points[0], points[2]) < 1e-3:  # base, waist, shoulder in a line
+        ends, radii = np.concatenate([[[points[0], points[2]]], ends[2:]]), radii[1:]
+    T_gripper = frames[-1]
+    x0, x1 = cfg.gripper_x_m
+    boxes = [(_offset(T_gripper, 0.5 * (x0 + x1)), (0.5 * (x1 - x0), cfg.gripper_half_width_m, cfg.gripper_half_height_m))]
+    if edge > 0.0:
+        margin = cfg.held_block_margin_m
+        half_across = 0.5 * edge + margin
+        boxes.append((_offset(T_gripper, 0.25 * edge), (0.75 * edge + margin, half_across, half_across)))
+    return RobotVolume(
+        capsule_ends_m=ends,
+        capsule_radii_m=radii,
+        box_poses=np.array([T for T, _ in boxes]),
+        box_half_extents_m=np.array([half for _, half in boxes], dtype=float),
+    )
+
+
+def _off_segment_m(p: np.ndarray, a: np.ndarray, b: np.ndarray) -> float:
+    """Distance of point p from the segment a-b."""
+    ab = b - a
+    t = min(max(float((p - a) @ ab) / max(float(ab @ ab), 1e-18), 0.0), 1.0)
+    return float(np.linalg.norm(p - a - t * ab))
+
+
+def _offset(T: np.ndarray, along_x_m: float) -> np.ndarray:
+    """T moved along its own x axis."""
+    moved = T.copy()
+    moved[:3, 3] = T[:3, 3] + along_x_m * T[:3, 0]
+    return moved
+
+
+class _RayGrid:
+    """Undistorted normalised image coordinates (x, y) of every step-th pixel, for one calibration."""
+
+    def __init__(self, cal: Calibration, step: int) -> None:
+        self.calibration = cal
+        self.step = step
+        us = np.arange(0, cal.width, step, dtype=np.float64)
+        vs = np.arange(0, cal.height, step, dtype=np.float64)
+        if np.any(np.asarray(cal.dist) != 0):
+            grid = np.stack(np.meshgrid(us, vs), axis=-1).reshape(-1, 2)
+            rays = normalized_rays(grid, cal.K, cal.dist)
+            self.x = rays[:, 0].reshape(len(vs), len(us)).astype(np.float32)
+            self.y = rays[:, 1].reshape(len(vs), len(us)).astype(np.float32)
+        else:
+            xn = ((us - cal.K[0, 2]) / cal.K[0, 0]).astype(np.float32)
+            yn = ((vs - cal.K[1, 2]) / cal.K[1, 1]).astype(np.float32)
+            self.x, self.y = np.broadcast_to(xn[None, :], (len(vs), len(us))), np.broadcast_to(yn[:, None], (len(vs), len(us)))
+        self.T_camera_world = invert_transform(cal.T_world_camera)
+
+
+def robot_mask(depth_mm: np.ndarray, cal: Calibration, volume: RobotVolume, pixel_step: int = 2, rays: _RayGrid | None = None) -> np.ndarray:
+    """(H, W) bool: pixels whose depth point lies inside the volume, or that have no depth reading
+    and lie inside the volume's projected silhouette. depth_mm: (H, W) uint16 mm along the optical
+    axis, 0 = none. Every pixel_step-th pixel is tested and fills its pixel_step x pixel_step cell
+    (with pixel_step > 1 the cells next to a robot cell are marked too: at most pixel_step pixels more).
+    rays: a cached _RayGrid for (cal, pixel_step), if the caller keeps one."""
+    h, w = cal.height, cal.width
+    if not isinstance(depth_mm, np.ndarray) or depth_mm.shape != (h, w) or depth_mm.dtype != np.uint16:
+        raise ValueError(f"depth must be a uint16 (H, W) = ({h}, {w}) image in mm, got {getattr(depth_mm, 'shape', None)}")
+    step = int(pixel_step)
+    if step < 1:
+        raise ValueError(f"pixel_step must be >= 1, got {pixel_step!r}")
+    if rays is None or rays.calibration is not cal or rays.step != step:
+        rays = _RayGrid(cal, step)
+    grid_h, grid_w = rays.x.shape
+    mask = np.zeros((h, w), bool)
+    local = volume.in_frame(rays.T_camera_world)
+    corners_world = volume.hull_corners_m()
+    corners_camera = corners_world @ rays.T_camera_world[:3, :3].T + rays.T_camera_world[:3, 3]
+    pixels = project_points(cal.T_world_camera, cal.K, cal.dist, corners_world.reshape(-1, 3)).reshape(-1, 8, 2)
+    n_capsules = len(local.capsule_radii_m)
+    for index, (hull_px, hull_camera) in enumerate(zip(pixels, corners_camera)):
+        if np.all(hull_camera[:, 2] > 0.01):
+            grid_pts = hull_px / step
+            x0, y0 = np.maximum(np.floor(grid_pts.min(axis=0)).astype(int), 0)
+            x1, y1 = np.minimum(np.ceil(grid_pts.max(axis=0)).astype(int) + 1, (grid_w, grid_h))
+            if x0 >= x1 or y0 >= y1:
+                continue  # outside the image
+            silhouette = np.zeros((y1 - y0, x1 - x0), np.uint8)
+            hull = cv2.convexHull(np.round((grid_pts - [x0, y0]) * 16).astype(np.int32))
+            cv2.fillConvexPoly(silhouette, hull, 1, lineType=cv2.LINE_8, shift=4)
+        else:  # a part reaches behind the camera (a nonsense calibration or pose): no silhouette, skip it
+            continue
+        inside = silhouette.view(bool)
+        d_mm = depth_mm[y0 * step : y1 * step : step, x0 * step : x1 * step : step][inside]  # a part's points project inside it
+        Z = d_mm.astype(np.float32) * np.float32(0.001)
+        X, Y = Z * rays.x[y0:y1, x0:x1][inside], Z * rays.y[y0:y1, x0:x1][inside]
+        if index < n_capsules:
+            (a, b), r = local.capsule_ends_m[index], local.capsule_radii_m[index]
+            hit_inside = _in_capsule(X, Y, Z, a, b, r)
+        else:
+            k = index - n_capsules
+            hit_inside = _in_box(X, Y, Z, local.box_poses[k], local.box_half_extents_m[k])
+        hit_inside |= d_mm == 0
+        hit = np.zeros(inside.shape, bool)
+        hit[inside] = hit_inside
+        full = mask[y0 * step : y1 * step, x0 * step : x1 * step]
+        if step > 1:  # a sample stands for its cell; grown by one cell so the robot's edge cells are covered
+            cells = cv2.dilate(hit.view(np.uint8), _CELL_NEIGHBOURS)
+            hit = cv2.resize(cells, (cells.shape[1] * step, cells.shape[0] * step), interpolation=cv2.INTER_NEAREST).view(bool)
+        full |= hit[: full.shape[0], : full.shape[1]]
+    return mask
+
+
+class RobotSelfFilter:
+    """The self-filter for one arm model and config; caches its per-calibration ray grid (one per
+    perception thread: not thread-safe)."""
+
+    def __init__(self, model, cfg: SelfFilterConfig) -> None:
+        self.model = model
+        self.cfg = cfg
+        self._rays: _RayGrid | None = None
+
+    def volume(self, joints_rad, held_block_edge_m: float | None = None) -> RobotVolume:
+        """robot_volume for this arm and config."""
+        return robot_volume(self.model, joints_rad, self.cfg, held_block_edge_m)
+
+    def mask(self, depth_mm: np.ndarray, cal: Calibration, joints_rad, held_block_edge_m: float | None = None) -> np.ndarray:
+        """(H, W) bool robot mask of a depth image taken with the arm at joints_rad (see robot_mask)."""
+        step = self.cfg.pixel_step
+        if self._rays is None or self._rays.calibration is not cal or self._rays.step != step:
+            self._rays = _RayGrid(cal, step)
+        return robot_mask(depth_mm, cal, self.volume(joints_rad, held_block_edge_m), step, self._rays)

@@ -1,0 +1,330 @@
+"""The workcell (config/workcells/<name>.yaml): board and grid, board tags, block and distractor sizes,
+block-top ArUco ids, and the spots the jobs use (sort_by_tag places, the to_the_sky feeder, the
+clear_table bin). One fact, one place: vision, scenes, the simulation, skills and the browser read it
+from here (DESIGN §3). Validated at load; errors name the file and the field."""
+
+from __future__ import annotations
+
+import functools
+import os
+from pathlib import Path
+from typing import Annotated
+
+import numpy as np
+from pydantic import Field, field_validator, model_validator
+
+from armlab.config import StrictModel, load_config, resolve_config_path
+
+DEFAULT_WORKCELL = "rx200_armlab"
+_REPO_CONFIG_DIR = str(Path(__file__).resolve().parents[1] / "config")
+DISTRACTOR_SHAPES = ("semicircle", "arch", "triangle", "cylinder")
+BLOCK_SIZES = ("large", "small")
+
+Positive = Annotated[float, Field(gt=0.0)]
+Length = Annotated[float, Field(gt=0.0, lt=1.0)]  # an object or tag dimension, metres
+Point2 = tuple[float, float]
+
+
+def _ordered(name: str, bounds: tuple[float, float]) -> None:
+    if not bounds[0] < bounds[1]:
+        raise ValueError(f"{name}: lower bound {bounds[0]} must be below upper bound {bounds[1]}")
+
+
+def _known_dictionary(name: str) -> str:
+    import cv2
+
+    if not name.startswith("DICT_") or not hasattr(cv2.aruco, name):
+        raise ValueError(f"unknown OpenCV ArUco dictionary '{name}' (e.g. DICT_APRILTAG_36h11, DICT_4X4_250)")
+    return name
+
+
+def dictionary_size(name: str) -> int:
+    """Number of markers in an OpenCV predefined dictionary (ids are 0 .. size - 1)."""
+    import cv2
+
+    return int(cv2.aruco.getPredefinedDictionary(getattr(cv2.aruco, name)).bytesList.shape[0])
+
+
+class GridSpec(StrictModel):
+    x_m: Point2
+    y_m: Point2
+    step_m: Length
+
+    @model_validator(mode="after")
+    def _check(self) -> GridSpec:
+        _ordered("x_m", self.x_m)
+        _ordered("y_m", self.y_m)
+        return self
+
+
+class BoardSpec(StrictModel):
+    """The board rectangle (world x/y ranges, its surface at z = 0) and its grid points."""
+
+    x_range_m: Point2
+    y_range_m: Point2
+    grid: GridSpec
+
+    @model_validator(mode="after")
+    def _check(self) -> BoardSpec:
+        _ordered("x_range_m", self.x_range_m)
+        _ordered("y_range_m", self.y_range_m)
+        if not (self.x_range_m[1] - self.x_range_m[0] <= 4.0 and self.y_range_m[1] - self.y_range_m[0] <= 4.0):
+            raise ValueError("board larger than 4 m: are the ranges in metres?")
+        for axis, grid, board in (("x", self.grid.x_m, self.x_range_m), ("y", self.grid.y_m, self.y_range_m)):
+            if grid[0] < board[0] - 1e-9 or grid[1] > board[1] + 1e-9:
+                raise ValueError(f"grid.{axis}_m {list(grid)} reaches outside the board {list(board)}")
+        return self
+
+    def contains(self, x_m: float, y_m: float, margin_m: float = 0.0) -> bool:
+        """True if (x, y) is on the board at least margin_m from every edge."""
+        return (self.x_range_m[0] + margin_m <= x_m <= self.x_range_m[1] - margin_m
+                and self.y_range_m[0] + margin_m <= y_m <= self.y_range_m[1] - margin_m)
+
+    @property
+    def corners_m(self) -> tuple[Point2, Point2, Point2, Point2]:
+        """Corners counter-clockwise from (x_min, y_min)."""
+        (x0, x1), (y0, y1) = self.x_range_m, self.y_range_m
+        return ((x0, y0), (x1, y0), (x1, y1), (x0, y1))
+
+    @property
+    def size_m(self) -> Point2:
+        return (self.x_range_m[1] - self.x_range_m[0], self.y_range_m[1] - self.y_range_m[0])
+
+    def grid_points_m(self) -> np.ndarray:
+        """The grid points (N, 3) at z = 0, row by row (y outer, x inner)."""
+        step = self.grid.step_m
+        xs = np.arange(self.grid.x_m[0], self.grid.x_m[1] + 1e-9, step)
+        ys = np.arange(self.grid.y_m[0], self.grid.y_m[1] + 1e-9, step)
+        gx, gy = np.meshgrid(xs, ys)
+        return np.stack([gx.ravel(), gy.ravel(), np.zeros(gx.size)], axis=1)
+
+
+class BoardTagsSpec(StrictModel):
+    """Calibration tags printed on the board: family (for the AprilTag library), the OpenCV dictionary
+    that decodes it, edge length and id -> centre (x, y) at z = 0."""
+
+    family: str
+    dictionary: str
+    size_m: Length
+    centres_m: dict[int, Point2]
+
+    @field_validator("dictionary")
+    @classmethod
+    def _dictionary_known(cls, name: str) -> str:
+        return _known_dictionary(name)
+
+    @model_validator(mode="after")
+    def _check(self) -> BoardTagsSpec:
+        if len(self.centres_m) < 3:
+            raise ValueError("centres_m needs at least 3 tags for a calibration")
+        size = dictionary_size(self.dictionary)
+        bad = [tag_id for tag_id in self.centres_m if not 0 <= tag_id < size]
+        if bad:
+            raise ValueError(f"centres_m: ids {bad} are not in {self.dictionary} (0..{size - 1})")
+        return self
+
+
+class BlockSpec(StrictModel):
+    edges_m: dict[str, Length]
+
+    @model_validator(mode="after")
+    def _check(self) -> BlockSpec:
+        if set(self.edges_m) != set(BLOCK_SIZES):
+            raise ValueError(f"edges_m must give exactly {list(BLOCK_SIZES)}, got {sorted(self.edges_m)}")
+        if not self.edges_m["small"] < self.edges_m["large"]:
+            raise ValueError("edges_m: small must be below large")
+        return self
+
+
+class ShapeSpec(StrictModel):
+    extent_x_m: Length
+    extent_y_m: Length
+    height_m: Length
+
+
+class DistractorSpec(StrictModel):
+    """Distractor shapes (large version); small ones are scaled by small_scale (None = small/large block edge)."""
+
+    small_scale: Annotated[float, Field(gt=0.0, le=1.0)] | None = None
+    shapes: dict[str, ShapeSpec]
+
+    @model_validator(mode="after")
+    def _check(self) -> DistractorSpec:
+        if set(self.shapes) != set(DISTRACTOR_SHAPES):
+            raise ValueError(f"shapes must describe exactly {list(DISTRACTOR_SHAPES)}, got {sorted(self.shapes)}")
+        return self
+
+
+class BlockTagEntry(StrictModel):
+    """What an ArUco id on a block's top face means: the block's colour and its sort_by_tag place."""
+
+    color: str
+    destination: int
+
+
+class BlockTagsSpec(StrictModel):
+    dictionary: str
+    ids: dict[int, BlockTagEntry] = {}
+
+    @field_validator("dictionary")
+    @classmethod
+    def _dictionary_known(cls, name: str) -> str:
+        return _known_dictionary(name)
+
+    @model_validator(mode="after")
+    def _check(self) -> BlockTagsSpec:
+        size = dictionary_size(self.dictionary)
+        bad = [tag_id for tag_id in self.ids if not 0 <= tag_id < size]
+        if bad:
+            raise ValueError(f"ids {bad} are not in {self.dictionary} (0..{size - 1})")
+        return self
+
+
+class FeederSpec(StrictModel):
+    """to_the_sky: where the simulated feeder puts new large blocks, how many it holds, when it is clear."""
+
+    spot_m: Point2
+    count: Annotated[int, Field(ge=0, le=100)]
+    clear_radius_m: Length = 0.04
+    arm_clearance_m: Annotated[float, Field(ge=0.0, lt=0.5)] = 0.02
+    check_period_s: Annotated[float, Field(gt=0.0, le=5.0)] = 0.05
+
+
+class BinSpec(StrictModel):
+    """clear_table: the rectangle every object goes to."""
+
+    x_range_m: Point2
+    y_range_m: Point2
+
+    @model_validator(mode="after")
+    def _check(self) -> BinSpec:
+        _ordered("x_range_m", self.x_range_m)
+        _ordered("y_range_m", self.y_range_m)
+        return self
+
+    @property
+    def centre_m(self) -> Point2:
+        return (0.5 * sum(self.x_range_m), 0.5 * sum(self.y_range_m))
+
+    def contains(self, x_m: float, y_m: float) -> bool:
+        return self.x_range_m[0] <= x_m <= self.x_range_m[1] and self.y_range_m[0] <= y_m <= self.y_range_m[1]
+
+
+class Workcell(StrictModel):
+    """config/workcells/<name>.yaml, validated. World frame = board frame, metres (DESIGN §3)."""
+
+    name: str
+    board: BoardSpec
+    board_tags: BoardTagsSpec
+    blocks: BlockSpec
+    distractors: DistractorSpec
+    block_tags: BlockTagsSpec
+    places_m: dict[int, Point2] = {}
+    feeder: FeederSpec
+    bin: BinSpec
+
+    @model_validator(mode="after")
+    def _spots_on_the_board(self) -> Workcell:
+        half_tag = 0.5 * self.board_tags.size_m
+        for tag_id, (x, y) in self.board_tags.centres_m.items():
+            if not self.board.contains(x, y, half_tag):
+                raise ValueError(f"board_tags.centres_m.{tag_id}: ({x}, {y}) is not on the board")
+        for place, (x, y) in self.places_m.items():
+            if not self.board.contains(x, y):
+                raise ValueError(f"places_m.{place}: ({x}, {y}) is not on the board")
+        for tag_id, entry in self.block_tags.ids.items():
+            if entry.destination not in self.places_m:
+                raise ValueError(
+                    f"block_tags.ids.{tag_id}.destination: place {entry.destination} is not in places_m {sorted(self.places_m)}"
+                )
+        overlap = set(self.board_tags.centres_m) & set(self.block_tags.ids)
+        if overlap and self.board_tags.dictionary == self.block_tags.dictionary:
+            raise ValueError(f"block_tags.ids: {sorted(overlap)} are also board tags of the same dictionary")
+        if not self.board.contains(*self.feeder.spot_m, 0.5 * self.blocks.edges_m["large"]):
+            raise ValueError(f"feeder.spot_m: {list(self.feeder.spot_m)} is not on the board")
+        corners = [(x, y) for x in self.bin.x_range_m for y in self.bin.y_range_m]
+        if not all(self.board.contains(x, y) for x, y in corners):
+            raise ValueError("bin: the rectangle reaches outside the board")
+        return self
+
+    # ------------------------------------------------------------------ lookups
+    def block_edge_m(self, size: str) -> float:
+        """Edge of a cube of `size` ("large" or "small"), metres."""
+        try:
+            return float(self.blocks.edges_m[size])
+        except KeyError:
+            raise ValueError(f"block size must be one of {list(BLOCK_SIZES)}, got {size!r}") from None
+
+    def object_dimensions_m(self, obj_type: str, size: str | None) -> tuple[float, float, float]:
+        """(extent_x, extent_y, height) of a block or distractor in its body frame; size None = large."""
+        if obj_type == "block":
+            edge = self.block_edge_m(size or "large")
+            return (edge, edge, edge)
+        shape = self.distractors.shapes.get(obj_type)
+        if shape is None:
+            raise ValueError(f"unknown object type {obj_type!r}; distractors: {list(DISTRACTOR_SHAPES)}")
+        if size not in (None, *BLOCK_SIZES):
+            raise ValueError(f"size must be one of {list(BLOCK_SIZES)} or None, got {size!r}")
+        small_scale = self.distractors.small_scale or self.block_edge_m("small") / self.block_edge_m("large")
+        scale = 1.0 if size in (None, "large") else small_scale
+        return (shape.extent_x_m * scale, shape.extent_y_m * scale, shape.height_m * scale)
+
+    def board_tag_corners_m(self, tag_id: int) -> np.ndarray:
+        """World corners (4, 3) of a board tag in OpenCV corner order (TL, TR, BR, BL seen from above, +y up)."""
+        cx, cy = self.board_tags.centres_m[tag_id]
+        h = self.board_tags.size_m / 2.0
+        return np.array([[cx - h, cy + h, 0.0], [cx + h, cy + h, 0.0], [cx + h, cy - h, 0.0], [cx - h, cy - h, 0.0]])
+
+    def place_m(self, destination: int) -> Point2:
+        """Centre (x, y) of a sort_by_tag place."""
+        if destination not in self.places_m:
+            raise ValueError(f"no place {destination!r}; places: {sorted(self.places_m)}")
+        return self.places_m[destination]
+
+    def to_wire(self) -> dict:
+        """JSON-ready geometry for the browser (sent in the websocket hello)."""
+        board = self.board
+        return {
+            "name": self.name,
+            "board": {
+                "x_range_m": list(board.x_range_m),
+                "y_range_m": list(board.y_range_m),
+                "grid": {"x_m": list(board.grid.x_m), "y_m": list(board.grid.y_m), "step_m": board.grid.step_m},
+            },
+            "board_tags": {
+                "family": self.board_tags.family,
+                "size_m": self.board_tags.size_m,
+                "centres_m": {str(k): list(v) for k, v in self.board_tags.centres_m.items()},
+            },
+            "block_edges_m": dict(self.blocks.edges_m),
+            "places_m": {str(k): list(v) for k, v in self.places_m.items()},
+            "feeder_spot_m": list(self.feeder.spot_m),
+            "bin": {"x_range_m": list(self.bin.x_range_m), "y_range_m": list(self.bin.y_range_m)},
+        }
+
+
+@functools.lru_cache(maxsize=8)
+def _load_cached(path: str, _mtime_ns: int, _size: int) -> Workcell:
+    return load_config(path, Workcell)
+
+
+def load_workcell(name: str | Path = DEFAULT_WORKCELL) -> Workcell:
+    """config/workcells/<name>.yaml (under $ARMLAB_CONFIG_DIR if set), or a .yaml/.json path.
+
+    ConfigError naming the file and the field when invalid. The validated model is immutable and
+    memoised per file version (path, mtime, size), so hot paths may call this freely."""
+    if str(name).endswith((".yaml", ".yml", ".json")):
+        path = str(name)
+    else:  # config_dir() without its Path.resolve(): this runs per scene object
+        path = f"{os.environ.get('ARMLAB_CONFIG_DIR') or _REPO_CONFIG_DIR}/workcells/{name}.yaml"
+    try:
+        stat = os.stat(path)
+    except OSError:
+        path = str(resolve_config_path(name, "workcells"))  # raises ConfigError listing what exists
+        stat = os.stat(path)
+    return _load_cached(path, stat.st_mtime_ns, stat.st_size)
+
+
+def block_edge_m(size: str, workcell: Workcell | None = None) -> float:
+    """Edge of a cube of `size` in `workcell` (default: the default workcell), metres."""
+    return (workcell or load_workcell()).block_edge_m(size)

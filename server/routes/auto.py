@@ -1,0 +1,96 @@
+"""Autonomous jobs (the auto_sort state): the list of jobs, start one, and (simulation) the judge's score.
+
+Every job comes from armlab.tasks.JOBS, so jobs added there appear here and in the page unchanged.
+"""
+
+from __future__ import annotations
+
+from fastapi import APIRouter, Request
+from fastapi.responses import JSONResponse
+from pydantic import ValidationError
+
+from armlab.tasks import JOBS, JobSpec, start_auto
+from armlab.tasks.judge import EVENT_LIMITS_S
+from armlab.tasks.registry import checked_request
+from server.auto_runs import SCORE_WAIT_S, AutoRun, watch_run
+from server.deps import ControlAuth, StationDep
+from server.errors import ApiError
+from server.models import AutoJobsResponse, AutoRequest, AutoResponse, AutoScoreResponse, SceneRequest
+
+router = APIRouter(prefix="/api/auto", tags=["auto"])
+
+AUTO_WAIT_TIMEOUT_S = 900.0  # the longest event allows 600 s; a job still running is returned as it stands
+
+
+def _has_scene(name: str, levels: tuple[int, ...]) -> bool:
+    """Whether POST /api/sim/scene generates this job's scenes (whatever that route accepts)."""
+    try:
+        SceneRequest(event=name, level=levels[0] if levels else 1, seed=0)
+    except ValidationError:
+        return False
+    return True
+
+
+def _job_info(spec: JobSpec) -> dict:
+    judged = spec.name in EVENT_LIMITS_S and bool(spec.levels)
+    return {
+        "name": spec.name,
+        "levels": list(spec.levels),
+        "summary": spec.summary,
+        "params": [{"name": name, "type": kind.__name__} for name, kind in spec.param_types],
+        "judged": judged,
+        "scene": _has_scene(spec.name, spec.levels),
+        "time_limit_s": EVENT_LIMITS_S.get(spec.name) if judged else None,
+    }
+
+
+def _widened(name: str, params: dict | None) -> dict | None:
+    """JSON has one number type: a whole number sent for a float parameter counts as that float
+    (as for every float field of the API). Nothing else is converted."""
+    spec = JOBS.get(name)
+    if spec is None or not params:
+        return params
+    kinds = dict(spec.param_types)
+    return {key: float(value) if kinds.get(key) is float and type(value) is int else value for key, value in params.items()}
+
+
+def _last_run(request: Request) -> AutoRun | None:
+    return getattr(request.app.state, "auto_run", None)
+
+
+@router.get("/jobs", response_model=AutoJobsResponse)
+def read_auto_jobs() -> dict:
+    """The autonomous jobs: levels, summary, parameter names and types, whether the judge scores them."""
+    data = [_job_info(spec) for spec in JOBS.values()]
+    return {"data": data, "count": len(data)}
+
+
+@router.post("", response_model=AutoResponse, status_code=202)
+def post_auto(body: AutoRequest, request: Request, station: StationDep, controller: ControlAuth, wait: bool = False) -> JSONResponse:
+    """Start an autonomous job in the auto_sort state: 202 {job} at once, or (?wait=true) 200 {job, score}
+    once it has ended. 422 for an unknown job, level or parameter; 409 unless idle or without a calibration."""
+    params = _widened(body.job, body.params)
+    station.allowed_or_raise("auto")
+    _, level, _ = checked_request(body.job, body.level, params)
+    sim_start_s = station.sim.sim_time_s if station.sim is not None else None
+    job = start_auto(station, body.job, level, params, source=controller)
+    run = None
+    if station.sim is not None:
+        run = request.app.state.auto_run = watch_run(job, body.job, level, station.sim, sim_start_s)
+    if not wait:
+        return JSONResponse({"job": job.to_dict(), "score": None}, status_code=202)
+    job.wait(AUTO_WAIT_TIMEOUT_S)
+    score = run.to_dict(wait_s=SCORE_WAIT_S) if run is not None else None
+    return JSONResponse({"job": job.to_dict(), "score": score}, status_code=200)
+
+
+@router.get("/score", response_model=AutoScoreResponse)
+def read_auto_score(request: Request, station: StationDep) -> dict:
+    """Simulation: the judge's score of the last autonomous job started here, from the ground truth when
+    it ended and the simulated time it took (sim time so far and no score while it runs)."""
+    if station.sim is None:
+        raise ApiError(404, "not_found", "the judge scores runs in the simulation only")
+    run = _last_run(request)
+    if run is None:
+        raise ApiError(404, "not_found", "no autonomous job has been started on this server yet: POST /api/auto")
+    return run.to_dict(wait_s=SCORE_WAIT_S)
