@@ -5,7 +5,7 @@ Imports go one way: armlab.tasks → armlab.skills → armlab.station → armlab
 
 from armlab.skills.manipulate import plan_pick_steps, plan_place_steps, run_steps
 from armlab.skills.operator import calibrate, calibration_summary, drop, grab, repeat
-from armlab.skills.perceive import block_near, is_stale, look, pixel_to_world
+from armlab.skills.perceive import block_near, is_stale, look, pixel_to_world, surface_height_m
 
 __all__ = [
     "block_near",
@@ -20,4 +20,5 @@ __all__ = [
     "plan_place_steps",
     "repeat",
     "run_steps",
+    "surface_height_m",
 ]

@@ -82,3 +82,32 @@ def look(station: Station, ctx: JobContext | None = None) -> list[dict]:
 def is_stale(station: Station, block: dict) -> bool:
     """True if the arm moved over the block's spot after the block was seen (do not act on it)."""
     return station.moved_over_since(block["position_m"], float(block.get("seen_time_s", 0.0)))
+
+
+def surface_height_m(station: Station, xy_m, radius_m: float = 0.008, max_height_m: float = 0.6) -> float:
+    """The height of whatever stands at world (x, y), measured in the newest depth image: the highest
+    z whose point projects to a pixel whose depth lands back within radius_m of (x, y) at that height
+    (a ray cast down the column onto the depth surface). 0.0 for the bare board; NotCalibrated without
+    a calibration; ValueError without depth."""
+    from armlab.vision.geometry import backproject, project_points, transform_points
+
+    calibration = station.calibration
+    if calibration is None:
+        raise NotCalibrated("measuring a height")
+    frame, _ = station.frames.get()
+    if frame is None or frame.depth_mm is None:
+        raise ValueError("measuring a height needs a depth image")
+    heights = np.arange(max_height_m, -0.0001, -0.004)
+    points = np.column_stack([np.full_like(heights, float(xy_m[0])), np.full_like(heights, float(xy_m[1])), heights])
+    pixels = project_points(calibration.T_world_camera, calibration.K, calibration.dist, points)
+    rows, cols = np.round(pixels[:, 1]).astype(int), np.round(pixels[:, 0]).astype(int)
+    depth = frame.depth_mm
+    inside = (rows >= 0) & (rows < depth.shape[0]) & (cols >= 0) & (cols < depth.shape[1])
+    depth_m = np.zeros(len(heights))
+    depth_m[inside] = depth[rows[inside], cols[inside]] / 1000.0
+    valid = inside & (depth_m > 0)
+    if not valid.any():
+        return 0.0
+    world = transform_points(calibration.T_world_camera, backproject(pixels[valid], depth_m[valid], calibration.K, calibration.dist))
+    hits = (np.hypot(world[:, 0] - float(xy_m[0]), world[:, 1] - float(xy_m[1])) <= radius_m) & (np.abs(world[:, 2] - heights[valid]) <= 0.006)
+    return float(max(0.0, world[hits, 2].max())) if hits.any() else 0.0

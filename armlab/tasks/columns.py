@@ -1,14 +1,20 @@
-"""Columns (stacks) that a job builds at a fixed spot: what is there is read from the newest look
-(the measured top and pile height), what it holds from memory of what the job put there, trimmed
-when the measured pile is lower than remembered (a block fell)."""
+"""Columns (stacks) that a job builds at a fixed spot.
+
+What stands there is measured at every look: the column's height from the depth image at its base
+(a ray cast onto the depth surface, which works however tall the column is) and its top block's
+centre from the detection there, when there is one. What the column holds (colours, bottom-up) is
+remembered from what the job put there, trimmed when the measured height says blocks fell.
+"""
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from dataclasses import dataclass, field
 
 from armlab.tasks.runner import near
 
 COLUMN_RADIUS_M = 0.02  # a detection this close to the base (x-y) is the column's top
+HEIGHT_TOLERANCE_M = 0.012
 
 
 @dataclass
@@ -17,30 +23,46 @@ class Column:
 
     name: str
     base_xy_m: tuple[float, float]
-    placed: list[dict] = field(default_factory=list)  # blocks put here, bottom-up (wire dicts)
+    placed: list[dict] = field(default_factory=list)  # blocks put here, bottom-up (wire dicts + "edge_m")
     top: dict | None = None  # the detection of its top block at the newest look
+    height_m: float = 0.0  # measured height of the column's top face
 
-    def observe(self, objects: list[dict]) -> None:
-        """Update from a look: the top detection at the base and the measured pile height."""
-        tops = [o for o in objects if near(o["position_m"], self.base_xy_m, COLUMN_RADIUS_M + 0.01)]
+    def observe(self, objects: list[dict], measure_height: Callable[[tuple[float, float]], float]) -> None:
+        """Update from a look: the top detection near the base and the measured height."""
+        tops = [o for o in objects if near(o["position_m"], self.base_xy_m, COLUMN_RADIUS_M)]
         self.top = max(tops, key=lambda o: o["position_m"][2]) if tops else None
-        level = 0 if self.top is None else int(self.top.get("stack_level", 1))
-        if level < len(self.placed):
-            del self.placed[level:]
+        self.height_m = measure_height(self.base_xy_m)
+        kept, stacked_m = [], 0.0
+        for block in self.placed:  # keep what the measured height still holds
+            if stacked_m + block["edge_m"] > self.height_m + HEIGHT_TOLERANCE_M:
+                break
+            kept.append(block)
+            stacked_m += block["edge_m"]
+        self.placed = kept
 
     @property
     def height(self) -> int:
-        return 0 if self.top is None else int(self.top.get("stack_level", 1))
+        """How many blocks it holds: remembered, else the top detection's measured level."""
+        if self.placed:
+            return len(self.placed)
+        return 0 if self.top is None or self.height_m < 0.005 else int(self.top.get("stack_level", 1))
+
+    def top_color(self) -> str | None:
+        if self.placed:
+            return self.placed[-1].get("color")
+        return None if self.top is None else self.top.get("color")
 
     def surface_m(self) -> tuple[float, float, float]:
-        """Where the next block's bottom centre goes: on the measured top, else the base on the board."""
-        if self.top is None:
-            return (self.base_xy_m[0], self.base_xy_m[1], 0.0)
-        x, y, z = self.top["position_m"]
-        if not near((x, y), self.base_xy_m, COLUMN_RADIUS_M):
-            x, y = self.base_xy_m
-        return (float(x), float(y), float(z))
+        """Where the next block's bottom centre goes: on the measured top (its detected centre when
+        the detection agrees with the measured height, else above the base)."""
+        x, y = self.base_xy_m
+        if self.top is not None and abs(self.top["position_m"][2] - self.height_m) < HEIGHT_TOLERANCE_M:
+            x, y = self.top["position_m"][:2]
+        return (float(x), float(y), float(self.height_m if self.height_m > 0.005 else 0.0))
 
     def holds(self, block: dict) -> bool:
         """True if `block` (a detection) is this column's top."""
         return self.top is not None and block is self.top
+
+    def add(self, block: dict, edge_m: float) -> None:
+        self.placed.append({**block, "edge_m": edge_m})

@@ -30,7 +30,7 @@ def make_ordered_policy(runner: TaskRunner, bases: dict[str, tuple[float, float]
             columns.update({size: Column(f"{size} column", xy) for size, xy in chosen.items()})
             runner.reserved_m.extend(chosen.values())
         for column in columns.values():
-            column.observe(objects)
+            column.observe(objects, runner.height_at)
         blocks = [b for b in cubes(objects) if keep(b) and b["size"] in columns]
         tops = {id(c.top) for c in columns.values() if c.top is not None}
         loose = [b for b in blocks if id(b) not in tops]
@@ -40,12 +40,14 @@ def make_ordered_policy(runner: TaskRunner, bases: dict[str, tuple[float, float]
         moves: list[Move] = []
         # A column whose top outranks a loose block of its size gives the top back (put aside).
         for size, column in columns.items():
-            if column.top is None:
+            top_color = column.top_color()
+            if column.top is None or top_color is None:
                 continue
-            lower = [b for b in loose if b["size"] == size and RANK[b["color"]] < RANK[column.top["color"]]]
+            lower = [b for b in loose if b["size"] == size and RANK[b["color"]] < RANK[top_color]]
             if lower:
-                moves.append(aside(runner, column.top, objects, aside_region, "out of order: make room for the "
-                                   f"{lower[0]['color']} block"))
+                move = aside(runner, column.top, objects, aside_region, "out of order: make room for the "
+                             f"{lower[0]['color']} block")
+                moves.append(Move(move.block, move.to_m, move.why, on_placed=lambda edge, c=column: c.placed.pop() if c.placed else None))
         for block in sorted(loose, key=lambda b: (RANK[b["color"]], -b.get("stack_level", 1))):
             size = block["size"]
             column = columns[size]
@@ -53,7 +55,8 @@ def make_ordered_policy(runner: TaskRunner, bases: dict[str, tuple[float, float]
             is_next = RANK[block["color"]] == min(RANK[b["color"]] for b in same) and hidden[size] == 0
             if is_next:
                 yaw = column.top["yaw_rad"] if column.top is not None else 0.0
-                moves.append(Move(block, column.surface_m(), f"next on the {column.name}", yaw_rad=yaw))
+                moves.append(Move(block, column.surface_m(), f"next on the {column.name}", yaw_rad=yaw,
+                                  on_placed=lambda edge, c=column, b=block: c.add(b, edge)))
         for block in sorted(loose, key=lambda b: -b.get("stack_level", 1)):
             if block.get("stack_level", 1) > 1:
                 moves.append(aside(runner, block, objects, aside_region, "uncover the pile under it"))

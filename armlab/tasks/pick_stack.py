@@ -29,8 +29,8 @@ def make_policy(level: int | None, params: dict, runner: TaskRunner):
     state: dict = {}
 
     def policy(objects: list[dict], given_up: set) -> Plan:
-        large.observe(objects)
-        small.observe(objects)
+        large.observe(objects, runner.height_at)
+        small.observe(objects, runner.height_at)
         blocks = cubes(objects)
         in_columns = {id(c.top) for c in (large, small) if c.top is not None}
         loose = [b for b in blocks if id(b) not in in_columns]
@@ -49,7 +49,8 @@ def make_policy(level: int | None, params: dict, runner: TaskRunner):
                 if block["size"] == "small" and large_left and block.get("stack_level", 1) == 1:
                     continue  # small blocks go on top once every large one is in
             yaw = column.top["yaw_rad"] if column.top is not None else 0.0
-            moves.append(Move(block, column.surface_m(), f"onto the {column.name}", yaw_rad=yaw))
+            moves.append(Move(block, column.surface_m(), f"onto the {column.name}", yaw_rad=yaw,
+                              on_placed=lambda edge, c=column, b=block: c.add(b, edge)))
         return Plan(moves, done=done, left=left, finished=not loose)
 
     return policy

@@ -36,6 +36,7 @@ class Move:
     why: str
     yaw_rad: float | None = 0.0
     finger_axis_rad: float | None = None  # world direction the fingers open along when releasing
+    on_placed: Callable[[float], None] | None = field(default=None, compare=False)  # called with the edge once placed
 
     def key(self) -> tuple:
         """Identifies "the same move" across looks (attempt counting): the block and where it goes."""
@@ -139,7 +140,11 @@ class TaskRunner:
             print("LOOK", [(o["id"], round(math.degrees(tilt_rad(o)))) for o in self.station.sim.truth()["objects"] if math.degrees(tilt_rad(o)) > 10])
         self.park()
         self.report("looking")
-        return [o for o in skills.look(self.station, self.ctx) if not o.get("occluded")]
+        seen = skills.look(self.station, self.ctx)
+        if os.environ.get("ARMLAB_DEBUG_TILT"):
+            for o in seen:
+                print("   SEEN", o.get("color"), o.get("size"), [round(v * 1000) for v in o["position_m"]], o.get("stack_level"), o.get("stack_sizes"), "cube" if o.get("is_cube") else "NOT CUBE", "OCC" if o.get("occluded") else "")
+        return [o for o in seen if not o.get("occluded")]
 
     def boxes(self, objects: list[dict], *exclude: dict) -> list:
         """Obstacle boxes around every detected object except `exclude`."""
@@ -191,10 +196,14 @@ class TaskRunner:
         run_steps(self.station, self.ctx, place, progress=False)
         self.station.set_held_block(None)
         self.progress.moves += 1
+        if move.on_placed is not None:
+            move.on_placed(edge)
         import os
         if os.environ.get("ARMLAB_DEBUG_TILT") and self.station.sim is not None:
             from armlab.tasks.judge import tilt_rad
             for o in self.station.sim.truth()["objects"]:
+                if math.dist(o["position_m"][:2], to[:2]) < 0.03:
+                    print("   near target:", o["id"], o["color"], o["size"], [round(v * 1000, 1) for v in o["position_m"]], round(math.degrees(tilt_rad(o))))
                 if math.degrees(tilt_rad(o)) > 10:
                     print("TILT after", move.why, block.get("color"), block.get("size"), "->", o["id"], round(math.degrees(tilt_rad(o))))
         return True
@@ -234,6 +243,10 @@ class TaskRunner:
         if best is None:
             raise RuntimeError("no free spot on the board to put a block aside")
         return best
+
+    def height_at(self, xy_m) -> float:
+        """Measured height of what stands at (x, y) in the newest look's depth image (0 = board)."""
+        return skills.surface_height_m(self.station, xy_m)
 
     def tag_centres(self) -> list[tuple[float, float]]:
         return [tuple(map(float, xy)) for xy in self.station.perception_config.tags.board_tags.values()]
