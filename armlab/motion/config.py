@@ -16,6 +16,7 @@ class MotionConfig(StrictModel):
     approach_height_m: float = Field(0.08, gt=0.0, le=0.3)
     lift_height_m: float = Field(0.08, gt=0.0, le=0.3)
     grasp_depth_m: float = Field(0.015, ge=0.0, le=0.05)
+    pad_reach_m: float = Field(0.009, ge=0.0, le=0.1)
     place_clearance_m: float = Field(0.005, ge=0.0, le=0.05)
     board_clearance_m: float = Field(0.003, ge=0.0, le=0.05)
     vertical_speed_m_s: float = Field(0.10, gt=0.0, le=1.0)
@@ -30,6 +31,11 @@ class MotionConfig(StrictModel):
         if self.move_time_s is not None and self.accel_time_s is not None and self.accel_time_s > self.move_time_s / 2:
             raise ValueError(f"accel_time_s ({self.accel_time_s}) must be at most half of move_time_s ({self.move_time_s})")
         return self
+
+    def grasp_depth_for(self, edge_m: float) -> float:
+        """How far below a block's top face the gripper point closes: grasp_depth_m, but never so deep
+        that the pads (reaching pad_reach_m below the gripper point) touch what the block stands on."""
+        return max(0.0, min(self.grasp_depth_m, edge_m - self.pad_reach_m))
 
 
 def load_motion_config(path: str | Path | None = None) -> MotionConfig:

@@ -137,7 +137,7 @@ def plan_pick(
     """Steps to pick the block whose top-face centre is position_m (world, metres) with yaw yaw_rad.
 
     Open the gripper, move above the block (approach_height_m over the grasp point), go straight down
-    to grasp_depth_m below the top face (at most half the block when block_height_m is given), grasp,
+    to grasp_depth_for(block_height_m) below the top face (pads clear of what it stands on), grasp,
     go straight up lift_height_m. The grasp point is never lower than board_clearance_m.
     """
     top_m = _check_point("position_m", position_m)
@@ -147,7 +147,7 @@ def plan_pick(
         height = _check_finite("block_height_m", block_height_m)
         if height <= 0.0:
             raise ValueError(f"block_height_m must be > 0, got {height}")
-        depth_m = min(depth_m, height / 2.0)
+        depth_m = config.grasp_depth_for(height)
     grasp_m = top_m - np.array([0.0, 0.0, depth_m])
     grasp_m[2] = max(grasp_m[2], config.board_clearance_m)
     steps = _approach_steps(arm, q_now_rad, grasp_m, yaw, config, "grasp", ("move above block", "descend to grasp", "lift"))
@@ -160,7 +160,7 @@ def plan_place(
     """Steps to set the held block down with its bottom-face centre at position_m (world, metres).
 
     position_m is the surface point (board or the top of a stack). The gripper point, which holds the
-    block min(grasp_depth_m, block_height_m / 2) below its top (as plan_pick grasps), is released
+    block grasp_depth_for(block_height_m) below its top (as plan_pick grasps), is released
     place_clearance_m above the resting height.
     """
     surface_m = _check_point("position_m", position_m)
@@ -168,7 +168,7 @@ def plan_place(
     height = _check_finite("block_height_m", block_height_m)
     if height <= 0.0:
         raise ValueError(f"block_height_m must be > 0, got {height}")
-    held_below_top_m = min(config.grasp_depth_m, height / 2.0)  # as plan_pick grasped it
+    held_below_top_m = config.grasp_depth_for(height)  # as plan_pick grasped it
     release_m = surface_m + np.array([0.0, 0.0, height - held_below_top_m + config.place_clearance_m])
     release_m[2] = max(release_m[2], config.board_clearance_m)
     return _approach_steps(arm, q_now_rad, release_m, yaw, config, "release", ("move above place", "descend to place", "retreat"))

@@ -137,12 +137,12 @@ def _transfer_plan(station: Station, q_start, point_m, yaw_rad: float | None, bo
 def plan_pick(station: Station, top_center_m, yaw_rad: float | None, edge_m: float, boxes: list, q_start=None,
               max_transfer_z_m: float = 0.42, finger_axis_rad: float | None = None) -> list:
     """Plan picking the block whose top-face centre is top_center_m: open, transfer above it, descend
-    to grasp_depth_m below its top (at most half the block), grasp, rise. boxes: other objects."""
+    to config.grasp_depth_for(edge) below its top, grasp, rise. boxes: other objects."""
     from armlab.motion import GripperStep
 
     config = station.motion_config
     top = np.asarray(top_center_m, float)
-    grasp_m = top - np.array([0.0, 0.0, min(config.grasp_depth_m, edge_m / 2.0)])
+    grasp_m = top - np.array([0.0, 0.0, config.grasp_depth_for(edge_m)])
     grasp_m[2] = max(grasp_m[2], config.board_clearance_m)
     q_start = station.joints_rad() if q_start is None else q_start
     steps = _transfer_plan(station, q_start, grasp_m, yaw_rad, boxes, None, "grasp", ("move above block", "descend to grasp", "lift"),
@@ -157,7 +157,7 @@ def plan_place(station: Station, surface_m, yaw_rad: float | None, edge_m: float
     the fingers open along (e.g. across a line of blocks, so they do not push the neighbours)."""
     config = station.motion_config
     surface = np.asarray(surface_m, float)
-    held_below_top = min(config.grasp_depth_m, edge_m / 2.0)
+    held_below_top = config.grasp_depth_for(edge_m)
     release_m = surface + np.array([0.0, 0.0, edge_m - held_below_top + config.place_clearance_m])
     q_start = station.joints_rad() if q_start is None else q_start
     return _transfer_plan(station, q_start, release_m, yaw_rad, boxes, edge_m, "release",

@@ -23,6 +23,8 @@ from armlab.station.jobs import JobContext
 
 MAX_ATTEMPTS_PER_MOVE = 3
 MAX_LOOKS = 200  # a job that has looked this often without finishing stops (no endless loops)
+PARK_CLEARANCE_M = 0.015  # the sleep pose is low beside the base: it passes blocks closer than transfers do
+PARK_RISE_Z_M = 0.32  # how high the gripper rises before parking when the straight way is blocked
 OBJECT_BOX_RADIUS_M = 0.032  # half-width of the box around a detected object (a 38 mm cube at any yaw + margin)
 
 
@@ -109,6 +111,7 @@ class TaskRunner:
         self._given_up: set[tuple] = set()
         self.edges_m = {size: float(getattr(station.perception_config.blocks, f"{size}_size_m")) for size in ("large", "small")}
         self.max_transfer_z_m = 0.42  # a job may lower it (pick_stack keeps the gripper under 300 mm)
+        self.last_objects: list[dict] = []  # the newest look's detections (obstacles while parking)
         self.reserved_m: list[tuple[float, float]] = []  # spots a job keeps free (column bases, line slots)
 
     # Reporting -------------------------------------------------------------------------------------
@@ -126,11 +129,39 @@ class TaskRunner:
     # Arm -------------------------------------------------------------------------------------------
 
     def park(self) -> None:
-        """Move to the sleep pose, where the arm hides no block from the camera."""
-        q_park = np.asarray(self.station.model.sleep_rad, float)
-        if np.abs(self.station.joints_rad() - q_park).max() > 0.02:
-            self.report("parking to look")
-            self.station.move_in_job(self.ctx, q_park)
+        """Move to the sleep pose, where the arm hides no block from the camera, by a path that keeps
+        clear of the objects seen last (straight there, else up first, else up and over the base)."""
+        from armlab.motion import plan_joint_move
+        from armlab.motion.cartesian import plan_vertical_segment
+        from armlab.motion.clearance import first_collision
+
+        model = self.station.model
+        q_park = np.asarray(model.sleep_rad, float)
+        q_now = self.station.joints_rad()
+        if np.abs(q_now - q_park).max() <= 0.02:
+            return
+        self.report("parking to look")
+        boxes = self.boxes(self.last_objects)
+        config = self.station.motion_config
+        routes = [[]]
+        try:
+            rise = plan_vertical_segment(model, q_now, max(PARK_RISE_Z_M, model.fk(q_now)[2, 3]), speed_m_s=config.vertical_speed_m_s,
+                                         accel_m_s2=config.vertical_accel_m_s2, rate_hz=config.sample_rate_hz)
+            routes.append([rise.positions_rad[-1]])
+            routes.append([rise.positions_rad[-1], model.ik([0.0, 0.12, PARK_RISE_Z_M], q_seed=q_park)])
+        except (Unreachable, ValueError):
+            pass
+        for via in routes:
+            legs, q_from = [], q_now
+            for q_to in [*via, q_park]:
+                legs.append(plan_joint_move(q_from, q_to, model, None, None, config.sample_rate_hz))
+                q_from = q_to
+            if all(first_collision(model, leg, boxes, link_radius_m=PARK_CLEARANCE_M) is None for leg in legs):
+                for leg in legs:
+                    self.station.run_trajectory(self.ctx, leg)
+                return
+        self.fail("no collision-free way to the park pose; parking straight")
+        self.station.move_in_job(self.ctx, q_park)
 
     def look(self) -> list[dict]:
         """Detections of a fresh frame taken with the arm parked (occluded ones left out)."""
@@ -144,7 +175,8 @@ class TaskRunner:
         if os.environ.get("ARMLAB_DEBUG_TILT"):
             for o in seen:
                 print("   SEEN", o.get("color"), o.get("size"), [round(v * 1000) for v in o["position_m"]], o.get("stack_level"), o.get("stack_sizes"), "cube" if o.get("is_cube") else "NOT CUBE", "OCC" if o.get("occluded") else "")
-        return [o for o in seen if not o.get("occluded")]
+        self.last_objects = [o for o in seen if not o.get("occluded")]
+        return self.last_objects
 
     def boxes(self, objects: list[dict], *exclude: dict) -> list:
         """Obstacle boxes around every detected object except `exclude`."""
@@ -157,6 +189,7 @@ class TaskRunner:
         return self.edges_m.get(block.get("size") or "large", self.edges_m["large"])
 
     def execute(self, move: Move, objects: list[dict]) -> bool:
+        import os
         """Pick move.block and place it at move.to_m; True if the block was held and released there."""
         block = move.block
         import os
@@ -181,6 +214,13 @@ class TaskRunner:
             self.fail(f"missed the {block.get('color')} {block.get('size')} block (nothing in the gripper)")
             return False
         self.station.set_held_block({**block, "edge_m": edge})
+        if os.environ.get("ARMLAB_DEBUG_TILT") and self.station.sim is not None:
+            truth = self.station.sim.truth()
+            held = truth["gripper"]["holding_id"]
+            gp = truth["gripper"]["position_m"]
+            for o in truth["objects"]:
+                if o["id"] == held:
+                    print("   HELD offset mm", [round((a - b) * 1000, 1) for a, b in zip(o["position_m"], gp)], "detected top", [round(v * 1000, 1) for v in block["position_m"]])
         yaw = block.get("yaw_rad") if move.yaw_rad is None else move.yaw_rad
         axis = move.finger_axis_rad
         if axis is None:
@@ -196,6 +236,8 @@ class TaskRunner:
         run_steps(self.station, self.ctx, place, progress=False)
         self.station.set_held_block(None)
         self.progress.moves += 1
+        placed = {**block, "position_m": [float(to[0]), float(to[1]), float(to[2] + edge)]}
+        self.last_objects = [o for o in self.last_objects if o is not block] + [placed]
         if move.on_placed is not None:
             move.on_placed(edge)
         import os
@@ -247,6 +289,23 @@ class TaskRunner:
     def height_at(self, xy_m) -> float:
         """Measured height of what stands at (x, y) in the newest look's depth image (0 = board)."""
         return skills.surface_height_m(self.station, xy_m)
+
+    def clear_of_park(self, xy_m, clearance_m: float = 0.09) -> bool:
+        """True if a tall column at (x, y) keeps clear of the arm's way into its park pose (the vertical
+        plane through the base axis and the parked gripper, out to 0.22 m)."""
+        park_xy = self.station.model.fk(np.asarray(self.station.model.sleep_rad, float))[:2, 3]
+        direction = park_xy / max(np.linalg.norm(park_xy), 1e-9)
+        along = float(np.clip(np.dot(xy_m, direction), 0.0, 0.22))
+        return float(np.linalg.norm(np.asarray(xy_m) - along * direction)) >= clearance_m
+
+    def in_view(self, xy_m, height_m: float, margin_px: float = 40.0) -> bool:
+        """True if a column at (x, y) up to height_m stays inside the camera image (so it can be measured)."""
+        from armlab.vision.geometry import project_points
+
+        calibration = self.station.calibration
+        points = np.array([[xy_m[0], xy_m[1], z] for z in (0.0, height_m)])
+        pixels = project_points(calibration.T_world_camera, calibration.K, calibration.dist, points)
+        return bool(np.all((pixels >= margin_px) & (pixels <= np.array([calibration.width, calibration.height]) - margin_px)))
 
     def tag_centres(self) -> list[tuple[float, float]]:
         return [tuple(map(float, xy)) for xy in self.station.perception_config.tags.board_tags.values()]

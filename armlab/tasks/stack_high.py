@@ -11,6 +11,7 @@ from armlab.tasks.runner import TaskRunner, cubes
 
 COLUMN_RADIUS_M = 0.17  # distance of a column from the arm's base axis
 MIN_SEPARATION_M = 0.12
+MAX_COLUMN_HEIGHT_M = 0.25  # six large blocks and a margin: the whole column must stay in the camera's view
 
 
 def choose_bases(runner: TaskRunner, objects: list[dict], sizes: list[str]) -> dict[str, tuple[float, float]]:
@@ -25,7 +26,8 @@ def choose_bases(runner: TaskRunner, objects: list[dict], sizes: list[str]) -> d
             gaps += [math.dist(xy, b) * 0.5 for b in bases.values()]  # keep the columns apart
             return min(gaps, default=1.0)
 
-        usable = [c for c in candidates if all(math.dist(c, b) >= MIN_SEPARATION_M for b in bases.values())]
+        usable = [c for c in candidates if all(math.dist(c, b) >= MIN_SEPARATION_M for b in bases.values())
+                  and runner.in_view(c, MAX_COLUMN_HEIGHT_M) and runner.clear_of_park(c)]
         bases[size] = max(usable, key=clearance)
     return bases
 

@@ -75,7 +75,10 @@ def test_place_releases_the_block_just_above_the_surface():
     steps = plan_place(ARM, ARM.home_rad, surface, -0.2, CONFIG, block_height_m=0.025)
     assert [getattr(step, "action", None) for step in steps] == [None, None, "release", None]
     descend = steps[1]
-    held_below_top = min(CONFIG.grasp_depth_m, 0.025 / 2)  # as plan_pick grasps a 25 mm block
+    # plan_pick grasps a 25 mm block grasp_depth_m below its top unless the pads (reaching pad_reach_m
+    # below the gripper point) would touch what it stands on: 15 mm with the shipped config (25 - 9 = 16).
+    held_below_top = min(CONFIG.grasp_depth_m, 0.025 - CONFIG.pad_reach_m)
+    assert held_below_top == pytest.approx(0.015)
     expected_z = surface[2] + 0.025 - held_below_top + CONFIG.place_clearance_m
     np.testing.assert_allclose(_tip(descend.q_end_rad), [surface[0], surface[1], expected_z], atol=1e-3)
     np.testing.assert_allclose(_tip(steps[3].q_end_rad)[2], expected_z + CONFIG.lift_height_m, atol=1e-3)
@@ -140,10 +143,10 @@ def test_every_pick_plan_is_reachable_continuous_and_within_limits(radius_m, bea
     assert np.abs(descent_xy - grasp[:2]).max() < 5e-4  # straight down
 
 
-def test_grasp_depth_is_at_most_half_a_small_block():
-    top = np.array([0.05, 0.22, 0.020])  # a 20 mm block: 15 mm deep would be past its middle
+def test_grasp_keeps_the_pads_clear_of_what_a_short_block_stands_on():
+    top = np.array([0.05, 0.22, 0.020])  # a 20 mm block: 15 mm deep would put the pads' ends 4 mm into the board
     steps = plan_pick(ARM, ARM.home_rad, top, 0.0, CONFIG, block_height_m=0.020)
-    np.testing.assert_allclose(_tip(steps[2].q_end_rad), [0.05, 0.22, 0.010], atol=1e-3)
+    np.testing.assert_allclose(_tip(steps[2].q_end_rad), [0.05, 0.22, CONFIG.pad_reach_m], atol=1e-3)
     with pytest.raises(ValueError, match="block_height_m must be > 0"):
         plan_pick(ARM, ARM.home_rad, top, 0.0, CONFIG, block_height_m=-0.02)
 
