@@ -69,7 +69,8 @@ def _classify(error: Exception) -> tuple[int, str]:
 
 
 # Error statuses every operation documents (all with the ErrorResponse body); 401 only where the
-# control token is required, 400 only where there is a request body. 422 replaces FastAPI's default HTTPValidationError, which this API never sends.
+# control token is required, 400 only where there is a request body. 422 replaces FastAPI's default
+# HTTPValidationError, which this API never sends.
 _DOCUMENTED_ERRORS = {
     "400": "the request body could not be read (not UTF-8)",
     "401": "the control token is missing or wrong",
