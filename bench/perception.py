@@ -126,7 +126,8 @@ def run(args) -> int:
         cam_errors.append(np.linalg.norm(cal.camera_position_m - T_true[:3, 3]))
         reproj.append(cal.reprojection_error_px)
         depth_checks.append(cal.depth_check_error_m)
-        result = pipeline.process(frame.color_bgr, frame.depth_mm, cal, arm_joints_rad=frame.arm_joints_rad)
+        held_edge_m = 0.0 if frame.gripper_closed is False else None  # as the station: no held block with the gripper open
+        result = pipeline.process(frame.color_bgr, frame.depth_mm, cal, arm_joints_rad=frame.arm_joints_rad, held_block_edge_m=held_edge_m)
         score = score_blocks(result.blocks, truth, frame.depth_mm)
         for name in ("true_positives", "false_positives", "false_negatives", "color_correct", "size_correct",
                      "level_correct", "tag_correct", "tag_total", "distractors", "distractors_rejected", "hidden", "hidden_flagged",

@@ -5,10 +5,14 @@ from __future__ import annotations
 from typing import Annotated
 
 from fastapi import Depends, Header, Request
+from fastapi.security import HTTPAuthorizationCredentials, HTTPBearer
 
 from armlab.station.core import Station
-from server.auth import bearer_token, token_matches
+from server.auth import token_matches
 from server.errors import ApiError
+
+# The control token as an OpenAPI security scheme ('Authorization: Bearer <token>', scheme name case-insensitive).
+control_token = HTTPBearer(auto_error=False, scheme_name="ControlToken", description="the control token printed at start-up")
 
 
 def get_station(request: Request) -> Station:
@@ -20,7 +24,7 @@ def get_station(request: Request) -> Station:
 
 def require_control(
     request: Request,
-    authorization: Annotated[str | None, Header()] = None,
+    credentials: Annotated[HTTPAuthorizationCredentials | None, Depends(control_token)],
     x_armlab_controller: Annotated[str | None, Header()] = None,
 ) -> str:
     """Check 'Authorization: Bearer <token>'; returns who controls: 'ui' or 'api'.
@@ -28,7 +32,8 @@ def require_control(
     'ui' when the request says so (X-Armlab-Controller: ui) or comes from a browser page (browsers
     add Sec-Fetch-Mode to fetch() calls; scripts do not); otherwise 'api'.
     """
-    if not token_matches(request.app.state.token, bearer_token(authorization)):
+    given = credentials.credentials.strip() if credentials is not None else None
+    if not token_matches(request.app.state.token, given or None):
         raise ApiError(401, "unauthorized", "this command needs the control token: send 'Authorization: Bearer <token>'")
     declared = (x_armlab_controller or "").strip().lower()
     if declared in ("ui", "api"):

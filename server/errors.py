@@ -68,7 +68,50 @@ def _classify(error: Exception) -> tuple[int, str]:
     return 500, "internal"
 
 
+# Error statuses every operation documents (all with the ErrorResponse body); 401 only where the
+# control token is required, 400 only where there is a request body. 422 replaces FastAPI's default
+# HTTPValidationError, which this API never sends.
+_DOCUMENTED_ERRORS = {
+    "400": "the request body could not be read (not UTF-8)",
+    "401": "the control token is missing or wrong",
+    "403": "refused: a Host this station does not serve, or a foreign Origin",
+    "404": "no such item (or a damaged one, left out)",
+    "409": "not allowed in the current state (allowed commands listed), or not calibrated",
+    "422": "invalid input, or an unreachable or unsafe target; nothing moved",
+    "503": "a device is not connected or timed out",
+}
+
+
+def document_error_responses(schema: dict) -> dict:
+    """Add the documented error responses (ErrorResponse body) to every operation of an OpenAPI schema."""
+    from server.models import ErrorResponse
+
+    components = schema.setdefault("components", {}).setdefault("schemas", {})
+    definitions = ErrorResponse.model_json_schema(ref_template="#/components/schemas/{model}")
+    components.update(definitions.pop("$defs", {}))
+    components["ErrorResponse"] = definitions
+    body = {"application/json": {"schema": {"$ref": "#/components/schemas/ErrorResponse"}}}
+    for path_item in schema.get("paths", {}).values():
+        for operation in path_item.values():
+            responses = operation.setdefault("responses", {})
+            for status, description in _DOCUMENTED_ERRORS.items():
+                if (status != "401" or operation.get("security")) and (status != "400" or "requestBody" in operation):
+                    responses[status] = {"description": description, "content": body}
+    for unused in ("HTTPValidationError", "ValidationError"):
+        components.pop(unused, None)
+    return schema
+
+
 def install_error_handlers(app: FastAPI) -> None:
+    build_openapi = app.openapi
+
+    def openapi() -> dict:
+        if app.openapi_schema is None:
+            app.openapi_schema = document_error_responses(build_openapi())
+        return app.openapi_schema
+
+    app.openapi = openapi  # type: ignore[method-assign]
+
     @app.exception_handler(ApiError)
     async def _api_error(_: Request, error: ApiError) -> JSONResponse:
         return error_response(error.status_code, error.code, error.message, error.allowed)

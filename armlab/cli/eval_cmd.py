@@ -125,4 +125,5 @@ def print_summary(summary: dict) -> None:
     print(f"  full points within the time limit: {figure(summary['full_rate'], ' %', 100)} of runs")
     print(f"  simulated time: mean {figure(summary['mean_sim_time_s'], ' s')}; wall time: mean "
           f"{figure(summary['mean_wall_time_s'], ' s', digits=2)} per run; real-time factor per worker "
-          f"{figure(summary['realtime_factor_per_worker'], 'x')}; elapsed {summary['elapsed_wall_s']:.1f} s")
+          f"{figure(summary['realtime_factor_per_worker'], 'x')} ({figure(summary['realtime_factor_per_cpu_s'], 'x')} "
+          f"per CPU second); elapsed {summary['elapsed_wall_s']:.1f} s")

@@ -34,9 +34,10 @@ class Intrinsics:
 class Frame:
     """One capture. depth_mm is None for colour-only cameras. sequence increases by one per frame.
 
-    arm_joints_rad: the arm's measured joints (dof,) when the frame was captured, for perception's
-    robot self-filter: the simulated camera fills it exactly at render time; for a real camera it is
-    None and the station fills it from the arm when the frame arrives.
+    arm_joints_rad: the arm's measured joints (dof,) when the frame was captured, and gripper_closed:
+    whether the gripper was commanded closed (a block may be between its fingers), for perception's
+    robot self-filter. The simulated camera fills both exactly at render time; a real camera leaves
+    them None and the station fills them from the arm and gripper when the frame arrives.
     """
 
     color_bgr: np.ndarray
@@ -45,6 +46,7 @@ class Frame:
     sequence: int
     intrinsics: Intrinsics = field(repr=False, default=None)  # type: ignore[assignment]
     arm_joints_rad: np.ndarray | None = field(repr=False, default=None)
+    gripper_closed: bool | None = None
 
 
 class Camera(abc.ABC):

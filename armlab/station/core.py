@@ -122,7 +122,7 @@ class Station:
             self._restore_calibration()
         if not self.synchronous:
             self._workers = [
-                FrameSource(self.camera, self.frames, self.arm),
+                FrameSource(self.camera, self.frames, self.arm, self.gripper),
                 PerceptionLoop(
                     self.frames, self.perception, lambda: self._calibration, self.perception_config, self.config.perception_rate_hz, self.model
                 ),

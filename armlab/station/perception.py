@@ -4,8 +4,9 @@ FrameSource is the camera's only reader: it publishes each new Frame into a Newe
 consumer (perception, the stream encoder, snapshots, calibration) reads at its own pace.
 PerceptionLoop runs armlab.vision's PerceptionPipeline (tags, blocks) on the newest frame at its own
 rate (skipping frames it cannot keep up with) and publishes a Perception snapshot. Each frame carries
-the arm joints measured when it was taken (from the sim camera, else read here from the arm), so
-perception can filter the robot out of the image (armlab.vision.self_filter).
+the arm joints measured when it was taken and whether the gripper was closed (from the sim camera,
+else read here from the arm and gripper), so perception can filter the robot, and a block it holds,
+out of the image (armlab.vision.self_filter).
 """
 
 from __future__ import annotations
@@ -21,6 +22,7 @@ import numpy as np
 
 from armlab.devices.arm import Arm
 from armlab.devices.camera import Camera, Frame
+from armlab.devices.gripper import Gripper
 from armlab.station.slots import NewestSlot
 
 log = logging.getLogger(__name__)
@@ -82,16 +84,18 @@ class _Worker:
 class FrameSource(_Worker):
     """Reads the camera (async_read: newest frame not yet consumed) and publishes into `slot`.
 
-    arm: when given, a frame whose camera left arm_joints_rad None gets the arm's measured joints,
-    read as soon as the frame arrives (the sim camera fills them exactly at render time)."""
+    arm, gripper: when given, a frame whose camera left arm_joints_rad (gripper_closed) None gets the
+    arm's measured joints (the gripper's command), read as soon as the frame arrives (the sim camera
+    fills both exactly at render time)."""
 
     name = "station-camera"
 
-    def __init__(self, camera: Camera, slot: NewestSlot[Frame], arm: Arm | None = None) -> None:
+    def __init__(self, camera: Camera, slot: NewestSlot[Frame], arm: Arm | None = None, gripper: Gripper | None = None) -> None:
         super().__init__()
         self.camera = camera
         self.slot = slot
         self.arm = arm
+        self.gripper = gripper
 
     def _run(self) -> None:
         while not self._stop.is_set():
@@ -99,20 +103,22 @@ class FrameSource(_Worker):
                 frame = self.camera.async_read(timeout_ms=200.0)
             except TimeoutError:
                 continue
-            self.slot.publish(with_arm_joints(frame, self.arm))
+            self.slot.publish(with_robot_state(frame, self.arm, self.gripper))
 
 
-def with_arm_joints(frame: Frame, arm: Arm | None) -> Frame:
-    """The frame with the arm's measured joints if it has none (unchanged without an arm or when the
-    arm cannot be read: perception then runs without the self-filter)."""
-    if frame.arm_joints_rad is not None or arm is None:
-        return frame
+def with_robot_state(frame: Frame, arm: Arm | None, gripper: Gripper | None = None) -> Frame:
+    """The frame with the arm's measured joints and whether the gripper is commanded closed, where the
+    camera left them None (each unchanged without its device or when the device cannot be read:
+    perception then runs without the self-filter, or assumes a block may be held)."""
+    changes: dict = {}
     try:
-        joints = np.array(arm.read_joint_state().position_rad, dtype=float)
+        if frame.arm_joints_rad is None and arm is not None:
+            changes["arm_joints_rad"] = np.array(arm.read_joint_state().position_rad, dtype=float)
+        if frame.gripper_closed is None and gripper is not None:
+            changes["gripper_closed"] = gripper.read_state().command == "grasp"
     except (ConnectionError, TimeoutError, OSError) as error:
-        log.debug("no arm joints for frame %d: %s", frame.sequence, error)
-        return frame
-    return replace(frame, arm_joints_rad=joints)
+        log.debug("no robot state for frame %d: %s", frame.sequence, error)
+    return replace(frame, **changes) if changes else frame
 
 
 class PerceptionLoop(_Worker):
@@ -161,13 +167,16 @@ class PerceptionLoop(_Worker):
 def analyse_frame(pipeline: Any, frame: Frame, calibration: Any) -> Perception:
     """Tags and (with a calibration and depth) blocks of one frame, each block stamped with the
     frame's time and arm joints; the robot is filtered out when the frame carries the arm's joints
-    and the pipeline has an arm model. A failed pass logs and reports none."""
+    and the pipeline has an arm model (with a held block's volume unless the gripper was open).
+    A failed pass logs and reports none."""
     joints = frame.arm_joints_rad
     filter_joints = joints if getattr(pipeline, "self_filter", None) is not None else None
+    held_block_edge_m = 0.0 if frame.gripper_closed is False else None  # None: the config's held block
     robot_mask = None
     try:
         result = pipeline.process(
-            frame.color_bgr, frame.depth_mm, calibration, layers=None, arm_joints_rad=filter_joints, frame_time_s=frame.timestamp_s
+            frame.color_bgr, frame.depth_mm, calibration, layers=None, arm_joints_rad=filter_joints,
+            held_block_edge_m=held_block_edge_m, frame_time_s=frame.timestamp_s,
         )
         tags, blocks, robot_mask = tuple(result.tags), tuple(result.blocks), result.robot_mask
         if joints is not None and filter_joints is None:  # no arm model: unfiltered, but say what pose they were seen in

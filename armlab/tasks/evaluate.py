@@ -93,9 +93,13 @@ def run_one(event: str, level: int | None, seed: int, keep_truth: bool = False) 
     os.environ.setdefault("MUJOCO_GL", "egl")
     from armlab.tasks.episode import run_episode
 
-    started = time.monotonic()
+    started, cpu_started = time.monotonic(), time.process_time()
     try:
-        return run_episode(event, level, seed, keep_truth=keep_truth)
+        result = run_episode(event, level, seed, keep_truth=keep_truth)
+        # CPU seconds of this process (all its threads): a speed figure that other load on the machine
+        # does not inflate, unlike wall time.
+        result["cpu_time_s"] = round(time.process_time() - cpu_started, 3)
+        return result
     except Exception as error:  # noqa: BLE001 - any failure of one seed is that seed's result
         where = traceback.extract_tb(error.__traceback__)[-1]
         return {
@@ -166,11 +170,13 @@ def points_fraction(run: dict) -> float:
 
 def summarize(runs: Sequence[dict]) -> dict:
     """Figures over runs: mean and minimum points fraction, full-points rate within the time limit, mean
-    simulated and wall time per run, and the real-time factor per worker (simulated / wall seconds)."""
+    simulated and wall time per run, and the real-time factor per worker (simulated / wall seconds) and
+    per CPU second (simulated / CPU seconds of the worker, which a loaded machine does not inflate)."""
     ran = [run for run in runs if not run.get("crashed")]
     fractions = [points_fraction(run) for run in runs]
     sim_s = sum(run["sim_time_s"] for run in ran)
     wall_s = sum(run["wall_time_s"] for run in ran)
+    cpu_s = sum(run.get("cpu_time_s", 0.0) for run in ran)
 
     def mean(values) -> float | None:
         values = list(values)
@@ -186,5 +192,6 @@ def summarize(runs: Sequence[dict]) -> dict:
         "mean_sim_time_s": mean(run["sim_time_s"] for run in ran),
         "mean_wall_time_s": mean(run["wall_time_s"] for run in ran),
         "realtime_factor_per_worker": round(sim_s / wall_s, 2) if wall_s > 0 else None,
+        "realtime_factor_per_cpu_s": round(sim_s / cpu_s, 2) if cpu_s > 0 else None,
     }
 

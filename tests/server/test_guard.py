@@ -100,3 +100,38 @@ def test_the_websocket_handshake_checks_origin_and_host(url):
         assert json.loads(response.body)["error"]["code"] == "forbidden"
     with connect(ws_url, origin=url, open_timeout=10, close_timeout=2) as ws:  # the page's own origin
         assert json.loads(ws.recv(timeout=10))["type"] == "hello"
+
+
+def _scope(host: str | None, origin: str | None = None, server=("127.0.0.1", 8000), kind: str = "http") -> dict:
+    headers = [(b"host", host.encode())] if host is not None else []
+    if origin is not None:
+        headers.append((b"origin", origin.encode()))
+    return {"type": kind, "scheme": "http" if kind == "http" else "ws", "headers": headers, "server": server}
+
+
+def test_an_ip_literal_host_is_served_only_when_it_is_the_address_the_connection_arrived_on():
+    from server.guard import HostOriginGuard
+
+    guard = HostOriginGuard(app=None, allowed_hosts=["0.0.0.0"])  # --host 0.0.0.0 is no name: not added
+    lan = ("192.168.1.5", 8000)
+    assert guard.refusal(_scope("192.168.1.5:8000", server=lan)) is None  # a LAN browser at the bound address
+    assert guard.refusal(_scope("192.168.1.5:8000", "http://192.168.1.5:8000", server=lan, kind="websocket")) is None
+    assert "Host" in guard.refusal(_scope("192.168.1.6:8000", server=lan))
+    assert "Host" in guard.refusal(_scope("0.0.0.0:8000", server=lan))
+    assert "Host" in guard.refusal(_scope(None))  # no Host header at all
+    assert "Origin" in guard.refusal(_scope("127.0.0.1:8000", "http://127.0.0.1:8000/evil"))  # not an origin
+    assert "Origin" in guard.refusal(_scope("127.0.0.1:8000", "http://user@127.0.0.1:8000"))
+    doubled = _scope("127.0.0.1:8000")
+    doubled["headers"].append((b"host", b"evil.example"))
+    assert "Host" in guard.refusal(doubled)  # a repeated Host is malformed
+
+
+@pytest.mark.parametrize("name", ["http://armlab.lab", "armlab.lab:8000", "a b", "", "lab/x"])
+def test_config_allowed_hosts_are_bare_names(name):
+    from pydantic import ValidationError
+
+    from armlab.station import StationConfig
+
+    with pytest.raises(ValidationError, match="allowed_hosts"):
+        StationConfig(allowed_hosts=[name])
+    assert StationConfig(allowed_hosts=["armlab.lab", "10.0.0.7", "fe80::1"]).allowed_hosts == ("armlab.lab", "10.0.0.7", "fe80::1")

@@ -73,6 +73,7 @@ def test_json_shape_and_summary(serial):
     assert summary["mean_wall_time_s"] == pytest.approx(sum(r["wall_time_s"] for r in runs) / 2, abs=1e-3)
     rtf = sum(r["sim_time_s"] for r in runs) / sum(r["wall_time_s"] for r in runs)
     assert summary["realtime_factor_per_worker"] == pytest.approx(rtf, rel=1e-2)
+    assert summary["realtime_factor_per_cpu_s"] > 0
     assert 0.0 <= summary["full_rate"] <= 1.0
 
 

@@ -17,7 +17,7 @@ from armlab.errors import ConfigError
 from armlab.kinematics.arm_model import load_arm
 from armlab.motion import plan_joint_move
 from armlab.scene import Scene, SceneObject, quat_from_yaw
-from armlab.station.perception import analyse_frame, with_arm_joints
+from armlab.station.perception import analyse_frame, with_robot_state
 from armlab.station.telemetry import block_to_dict
 from armlab.vision import PerceptionPipeline, calibrate_extrinsics, load_perception_config
 from armlab.vision.config import SelfFilterConfig
@@ -213,9 +213,10 @@ def test_detections_carry_the_frame_time_and_the_arm_pose(run):
             assert block_to_dict(0, block)["seen_time_s"] == frame.timestamp_s
 
 
-def test_sim_frames_carry_the_joints_they_were_rendered_with(run):
+def test_sim_frames_carry_the_joints_and_gripper_they_were_rendered_with(run):
     for pose in run["poses"].values():
         np.testing.assert_array_equal(pose["frame"].arm_joints_rad, pose["truth"]["arm"]["position_rad"])
+        assert pose["frame"].gripper_closed == (_holding(pose) is not None)
 
 
 def test_the_held_block_is_masked_and_a_block_under_the_hovering_gripper_is_not(run):
@@ -242,14 +243,15 @@ def test_the_held_block_is_masked_and_a_block_under_the_hovering_gripper_is_not(
 
 
 def test_a_real_camera_frame_gets_the_joints_from_the_arm(run, arm, cfg):
-    """A frame without joints (as a real camera gives) is completed from the arm; analyse_frame puts the
-    joints and the robot mask in the Perception snapshot and stamps the blocks."""
+    """A frame without joints (as a real camera gives) is completed from the arm and gripper;
+    analyse_frame puts the joints and the robot mask in the Perception snapshot and stamps the blocks."""
     cell = run["cell"]
     sim_frame = cell.render()
     bare = Frame(sim_frame.color_bgr, sim_frame.depth_mm, sim_frame.timestamp_s, sim_frame.sequence, sim_frame.intrinsics)
-    assert bare.arm_joints_rad is None and with_arm_joints(bare, None) is bare
-    completed = with_arm_joints(bare, cell.arm)
+    assert bare.arm_joints_rad is None and bare.gripper_closed is None and with_robot_state(bare, None) is bare
+    completed = with_robot_state(bare, cell.arm, cell.gripper)
     np.testing.assert_array_equal(completed.arm_joints_rad, cell.arm.read_joint_state().position_rad)
+    assert completed.gripper_closed is True  # it holds the red block
     perception = analyse_frame(PerceptionPipeline(cfg, arm), completed, run["cal"])
     assert perception.arm_joints_rad == tuple(completed.arm_joints_rad.tolist())
     assert perception.robot_mask is not None and perception.robot_mask.shape == bare.depth_mm.shape
@@ -309,3 +311,22 @@ def test_bad_self_filter_config_is_a_clear_error(tmp_path, change, field):
     path.write_text(yaml.safe_dump(data))
     with pytest.raises(ConfigError, match=f"self_filter.*{field}"):
         load_perception_config(path)
+
+
+def test_a_block_under_the_parked_empty_gripper_is_seen_and_masked_only_when_it_could_be_held(arm, cfg):
+    """The sleep pose parks the open gripper 74 mm above the board at y = 123 mm: a block under it is
+    the scene, not a held block, unless the gripper is closed (then the filter must assume it holds one)."""
+    blue = _block("blue", "blue", "large", 0.011, 0.133)
+    with SimWorkcell(SimWorkcellConfig(realtime=False, seed=21, camera_pose_error=True)) as cell:
+        cell.set_scene(Scene(objects=(blue,)))
+        cell.step(0.5)
+        open_frame = cell.render()
+        cal = calibrate_extrinsics(open_frame.color_bgr, open_frame.intrinsics, cfg)
+        pipeline = PerceptionPipeline(cfg, arm)
+        cell.gripper.grasp()  # closes on nothing
+        closed_frame = cell.render()
+        top = _top_centre(cell.truth()["objects"][0])
+    assert open_frame.gripper_closed is False and closed_frame.gripper_closed is True
+    seen = analyse_frame(pipeline, open_frame, cal).blocks
+    assert len(seen) == 1 and np.linalg.norm(seen[0].position_m - top) < 0.010
+    assert analyse_frame(pipeline, closed_frame, cal).blocks == ()

@@ -134,7 +134,8 @@ class SimCamera(Camera):
         with self._condition:
             self._sequence += 1
             frame = Frame(color_bgr=color_bgr, depth_mm=depth_mm, timestamp_s=time.time(),
-                          sequence=self._sequence, intrinsics=self._intrinsics, arm_joints_rad=images.arm_joints_rad)
+                          sequence=self._sequence, intrinsics=self._intrinsics, arm_joints_rad=images.arm_joints_rad,
+                          gripper_closed=images.gripper_closed)
             self._latest = frame
             self._condition.notify_all()
         return frame

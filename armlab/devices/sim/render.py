@@ -22,12 +22,14 @@ logger = logging.getLogger(__name__)
 @dataclass(frozen=True)
 class RawImages:
     """One render: rgb (H, W, 3) uint8 in RGB order, depth_m (H, W) float32 along the optical axis;
-    arm_joints_rad: the arm's joint positions in the rendered state (None if the snapshot gave none)."""
+    arm_joints_rad and gripper_closed: the arm's joint positions and whether the gripper was commanded
+    closed in the rendered state (None if the snapshot gave none)."""
 
     rgb: np.ndarray
     depth_m: np.ndarray
     sim_time_s: float
     arm_joints_rad: np.ndarray | None = None
+    gripper_closed: bool | None = None
 
 
 def depth_from_buffer(buffer: np.ndarray, znear_m: float, zfar_m: float) -> np.ndarray:
@@ -125,12 +127,12 @@ class RenderThread:
 
     snapshot(renderer) is called in the render thread and must lock the simulation, switch the renderer
     to the current model if it changed (renderer.model / renderer.set_model), call
-    renderer.update_scene(model, data) and return (simulation time, arm joint positions or None) of
-    that state; publish(RawImages) receives each periodic frame.
+    renderer.update_scene(model, data) and return (simulation time, arm joint positions or None,
+    gripper commanded closed or None) of that state; publish(RawImages) receives each periodic frame.
     """
 
     def __init__(self, model: mujoco.MjModel, camera_name: str, width: int, height: int,
-                 snapshot: Callable[[_GLRenderer], tuple[float, np.ndarray | None]]) -> None:
+                 snapshot: Callable[[_GLRenderer], tuple[float, np.ndarray | None, bool | None]]) -> None:
         self._snapshot = snapshot
         self._requests: queue.Queue = queue.Queue()
         self._stop = threading.Event()
@@ -167,9 +169,9 @@ class RenderThread:
         self._thread.join(timeout=10.0)
 
     def _render_once(self, renderer: _GLRenderer) -> RawImages:
-        sim_time_s, arm_joints_rad = self._snapshot(renderer)
+        sim_time_s, arm_joints_rad, gripper_closed = self._snapshot(renderer)
         rgb, depth = renderer.draw()
-        return RawImages(rgb=rgb, depth_m=depth, sim_time_s=sim_time_s, arm_joints_rad=arm_joints_rad)
+        return RawImages(rgb=rgb, depth_m=depth, sim_time_s=sim_time_s, arm_joints_rad=arm_joints_rad, gripper_closed=gripper_closed)
 
     def _run(self) -> None:
         try:

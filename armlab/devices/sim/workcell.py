@@ -272,13 +272,13 @@ class SimWorkcell:
             time.sleep(0.001)
 
     # ---------------------------------------------------------------- camera
-    def _snapshot(self, renderer) -> tuple[float, np.ndarray]:
-        """Copy the state to draw; (sim time, arm joints) of exactly that state."""
+    def _snapshot(self, renderer) -> tuple[float, np.ndarray, bool]:
+        """Copy the state to draw; (sim time, arm joints, gripper commanded closed) of exactly that state."""
         with self.lock:
             if renderer.model is not self._model:
                 renderer.set_model(self._model, CAMERA_NAME)
             renderer.update_scene(self._model, self._data)
-            return float(self._data.time), self.arm_positions()
+            return float(self._data.time), self.arm_positions(), self.gripper.command == "grasp"
 
     def _renderer(self) -> RenderThread:
         if self._render_thread is None:
