@@ -137,6 +137,7 @@ class TaskRunner:
 
         model = self.station.model
         q_park = np.asarray(model.sleep_rad, float)
+        self.progress.next_block = self.progress.next_target_m = None  # no move planned until the next look
         q_now = self.station.joints_rad()
         if np.abs(q_now - q_park).max() <= 0.02:
             return
