@@ -56,6 +56,7 @@ def run_steps(station: Station, ctx: JobContext, steps: Sequence, replan: Callab
 # Pick and place with a safe transfer height ------------------------------------------------------
 
 TRANSFER_CLEARANCE_M = 0.05  # the held block's bottom (or the fingers) this far above the tallest obstacle
+MAX_PLACE_TILT_RAD = np.radians(5.0)  # a block set down tilted more than this lands on an edge
 
 
 def _finger_seed(station: Station, q_start, point_m, pitch_rad: float, yaw_rad: float, finger_axis_rad: float):
@@ -73,11 +74,13 @@ def _finger_seed(station: Station, q_start, point_m, pitch_rad: float, yaw_rad: 
 
 def _transfer_plan(station: Station, q_start, point_m, yaw_rad: float | None, boxes: list, held_edge_m: float | None,
                    action: str, words: tuple[str, str, str], max_transfer_z_m: float = 0.42,
-                   finger_axis_rad: float | None = None) -> list:
-    """Steps: rise straight up to a transfer height (if low), joint move above point_m at that height,
-    straight down, gripper `action`, straight up to the transfer height. Every trajectory is checked
-    against limits and the table, and the transfers against the obstacle boxes; the transfer height
-    rises until they clear. Unreachable / UnsafeTrajectory before anything moves."""
+                   finger_axis_rad: float | None = None, min_pitch_rad: float = 0.0) -> list:
+    """Steps: rise straight up to a transfer height (if low), joint move over point_m at that height,
+    down to approach_height_m above point_m, straight down at the steepest pitch that reaches both,
+    gripper `action`, straight up and back to the transfer height. The transfer height rises until
+    the transfers clear the obstacle boxes; the last approach keeps its own (top-down) pitch however
+    high the transfer. Every trajectory is checked against limits and the table. Unreachable /
+    UnsafeTrajectory before anything moves."""
     from armlab.kinematics import Unreachable
     from armlab.motion import GripperStep, TrajectoryStep, check_trajectory, plan_joint_move
     from armlab.motion.cartesian import plan_vertical_segment
@@ -89,44 +92,60 @@ def _transfer_plan(station: Station, q_start, point_m, yaw_rad: float | None, bo
     model = station.model
     point_m = np.asarray(point_m, float)
     carried = 0.0 if held_edge_m is None else held_edge_m
-    tallest = max([box.top_z_m for box in boxes] + [0.0])
-    z_transfer = max(point_m[2] + config.approach_height_m, tallest + carried + TRANSFER_CLEARANCE_M)
     vertical = dict(speed_m_s=config.vertical_speed_m_s, accel_m_s2=config.vertical_accel_m_s2, rate_hz=config.sample_rate_hz)
+
+    def joint_move(q_a, q_b):
+        return plan_joint_move(q_a, q_b, model, config.move_time_s, config.accel_time_s, config.sample_rate_hz)
+
     q_start = np.asarray(q_start, float)
+    seed = q_start
+    if finger_axis_rad is not None and yaw_rad is not None:
+        seed = _finger_seed(station, q_start, point_m, config.top_down_pitch_rad, yaw_rad, finger_axis_rad)
+    near_m = point_m + np.array([0.0, 0.0, min(config.approach_height_m, max(0.0, max_transfer_z_m - point_m[2]))])
+    pitch, (_q_point, q_near) = solve_approach(model, seed, [point_m, near_m], yaw_rad, config.top_down_pitch_rad)
+    if pitch < min_pitch_rad - 1e-9:
+        raise Unreachable(f"({point_m[0] * 1000:.0f}, {point_m[1] * 1000:.0f}, {point_m[2] * 1000:.0f}) mm is reachable only at "
+                          f"{np.degrees(pitch):.0f}° pitch (at least {np.degrees(min_pitch_rad):.0f}° needed)", "out of reach")
+    descend = plan_vertical_segment(model, q_near, float(point_m[2]), pitch_rad=pitch, yaw_rad=yaw_rad, **vertical)
+    ascend = plan_vertical_segment(model, descend.positions_rad[-1], float(near_m[2]), pitch_rad=pitch, yaw_rad=yaw_rad, **vertical)
+    final = [TrajectoryStep(words[1], descend), GripperStep(action, action), TrajectoryStep(words[2], ascend)]
+
     start_m = model.fk(q_start)[:3, 3]
+    tallest = max([box.top_z_m for box in boxes] + [0.0])
+    z_transfer = min(max(near_m[2], tallest + carried + TRANSFER_CLEARANCE_M), max_transfer_z_m)
     last_problem = "no transfer height tried"
-    z_transfer = min(z_transfer, max_transfer_z_m)
     while z_transfer <= max_transfer_z_m + 1e-9:
-        above_m = np.array([point_m[0], point_m[1], z_transfer])
         try:
-            seed = q_start
-            if finger_axis_rad is not None and yaw_rad is not None:
-                seed = _finger_seed(station, q_start, point_m, config.top_down_pitch_rad, yaw_rad, finger_axis_rad)
-            pitch, (q_point, q_above) = solve_approach(model, seed, [point_m, above_m], yaw_rad, config.top_down_pitch_rad)
-            steps = []
+            steps, checked = [], []
             q_from = q_start
             if start_m[2] < z_transfer - 0.01:
                 try:  # straight up first, clear of what is below; near the base it may not reach
                     rise = plan_vertical_segment(model, q_start, z_transfer, **vertical)
                     steps.append(TrajectoryStep("rise to transfer height", rise))
+                    checked.append(rise)
                     q_from = rise.positions_rad[-1]
                 except (Unreachable, ValueError):
                     pass
-            move = plan_joint_move(q_from, q_above, model, config.move_time_s, config.accel_time_s, config.sample_rate_hz)
-            descend = plan_vertical_segment(model, q_above, float(point_m[2]), pitch_rad=pitch, yaw_rad=yaw_rad, **vertical)
-            ascend = plan_vertical_segment(model, descend.positions_rad[-1], z_transfer, pitch_rad=pitch, yaw_rad=yaw_rad, **vertical)
+            if z_transfer > near_m[2] + 0.005:  # over the target high, then down to the approach point
+                q_high = model.ik([point_m[0], point_m[1], z_transfer], yaw=yaw_rad, q_seed=q_near)
+                over, lower = joint_move(q_from, q_high), joint_move(q_high, q_near)
+                steps += [TrajectoryStep(words[0], over), TrajectoryStep("lower to approach", lower)]
+                back = [TrajectoryStep("back to transfer height", joint_move(ascend.positions_rad[-1], q_high))]
+                checked += [over, lower, back[0].trajectory]
+            else:
+                over = joint_move(q_from, q_near)
+                steps.append(TrajectoryStep(words[0], over))
+                checked.append(over)
+                back = []
         except (Unreachable, ValueError) as error:
             last_problem = str(error)
             z_transfer += 0.04
             continue
-        steps += [TrajectoryStep(words[0], move), TrajectoryStep(words[1], descend), GripperStep(action, action),
-                  TrajectoryStep(words[2], ascend)]
+        steps += final + back
         for step in steps:
             if isinstance(step, TrajectoryStep):
                 check_trajectory(model, step.trajectory, clearance_m=config.board_clearance_m)
-        collision = first_collision(model, move, boxes, held_edge_m=held_edge_m)
-        if collision is None and steps[0].name == "rise to transfer height":
-            collision = first_collision(model, steps[0].trajectory, boxes, held_edge_m=held_edge_m)
+        collision = next((c for c in (first_collision(model, t, boxes, held_edge_m=held_edge_m) for t in checked) if c), None)
         if collision is None:
             return steps
         last_problem = collision
@@ -161,4 +180,46 @@ def plan_place(station: Station, surface_m, yaw_rad: float | None, edge_m: float
     release_m = surface + np.array([0.0, 0.0, edge_m - held_below_top + config.place_clearance_m])
     q_start = station.joints_rad() if q_start is None else q_start
     return _transfer_plan(station, q_start, release_m, yaw_rad, boxes, edge_m, "release",
-                          ("move above place", "descend to place", "retreat"), max_transfer_z_m, finger_axis_rad)
+                          ("move above place", "descend to place", "retreat"), max_transfer_z_m, finger_axis_rad,
+                          min_pitch_rad=config.top_down_pitch_rad - MAX_PLACE_TILT_RAD)
+
+
+def plan_side_place(station: Station, surface_m, edge_m: float, boxes: list, q_start=None, max_transfer_z_m: float = 0.55) -> list:
+    """Plan setting the held block (grasped top-down as plan_pick does) on surface_m with the gripper
+    horizontal (pitch 0), for surfaces too high for a top-down place (tall towers). The wrist turns
+    to a multiple of 90° so the block's faces stay level; its centre lies (edge/2 - grasp depth)
+    beyond the gripper point along the horizontal approach axis."""
+    from armlab.kinematics import Unreachable
+    from armlab.motion import GripperStep, TrajectoryStep, check_trajectory, plan_joint_move
+    from armlab.motion.cartesian import plan_vertical_segment
+    from armlab.motion.clearance import first_collision
+    from armlab.motion.safety import UnsafeTrajectory
+
+    config = station.motion_config
+    model = station.model
+    surface = np.asarray(surface_m, float)
+    base_xy = np.asarray(model.joint_frames(np.zeros(model.dof))[0][:2, 3])  # the waist axis
+    outward = (surface[:2] - base_xy) / max(np.linalg.norm(surface[:2] - base_xy), 1e-9)
+    beyond = edge_m / 2.0 - config.grasp_depth_for(edge_m)
+    release_m = np.array([*(surface[:2] - outward * beyond), surface[2] + edge_m / 2.0 + config.place_clearance_m])
+    near_m = release_m + np.array([0.0, 0.0, config.approach_height_m])
+    q_start = station.joints_rad() if q_start is None else np.asarray(q_start, float)
+    seed = q_start.copy()
+    seed[-1] = np.round(seed[-1] / (np.pi / 2)) * (np.pi / 2)
+    vertical = dict(speed_m_s=config.vertical_speed_m_s, accel_m_s2=config.vertical_accel_m_s2, rate_hz=config.sample_rate_hz)
+    if near_m[2] > max_transfer_z_m:
+        raise Unreachable(f"a side place at {release_m[2] * 1000:.0f} mm needs the gripper above the {max_transfer_z_m * 1000:.0f} mm limit",
+                          "out of reach")
+    q_near = model.ik(near_m, pitch=0.0, yaw=None, q_seed=seed)
+    descend = plan_vertical_segment(model, q_near, float(release_m[2]), pitch_rad=0.0, yaw_rad=None, **vertical)
+    ascend = plan_vertical_segment(model, descend.positions_rad[-1], float(near_m[2]), pitch_rad=0.0, yaw_rad=None, **vertical)
+    move = plan_joint_move(q_start, q_near, model, config.move_time_s, config.accel_time_s, config.sample_rate_hz)
+    steps = [TrajectoryStep("move beside the tower", move), TrajectoryStep("descend to place", descend),
+             GripperStep("release", "release"), TrajectoryStep("retreat", ascend)]
+    for step in steps:
+        if isinstance(step, TrajectoryStep):
+            check_trajectory(model, step.trajectory, clearance_m=config.board_clearance_m)
+    collision = first_collision(model, move, boxes, held_edge_m=edge_m)
+    if collision is not None:
+        raise UnsafeTrajectory(f"no safe way beside the tower: {collision}")
+    return steps

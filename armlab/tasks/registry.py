@@ -7,7 +7,7 @@ from dataclasses import dataclass
 
 from armlab.station.core import NotCalibrated, Station
 from armlab.station.jobs import Job, JobContext
-from armlab.tasks import line_up, pick_sort, pick_stack, sort_stack, stack_high
+from armlab.tasks import line_up, pick_sort, pick_stack, sort_stack, stack_high, to_the_sky
 from armlab.tasks.runner import Plan, TaskRunner
 
 
@@ -33,6 +33,8 @@ JOBS: dict[str, JobSpec] = {
                 "per size, the six blocks in a straight rainbow line"),
         JobSpec("stack_high", (1, 2), stack_high.make_policy,
                 "per size, one column of the six blocks in rainbow order, red at the bottom"),
+        JobSpec("to_the_sky", (1,), to_the_sky.make_policy,
+                "one tower of large blocks, as tall as the arm can build (fed by the feeder)"),
         JobSpec("sort_stack", (1, 2, 3), sort_stack.make_policy,
                 "every block to its side of y < 0, stacked in rainbow order per side"),
     )

@@ -17,7 +17,7 @@ import numpy as np
 from armlab import skills
 from armlab.kinematics import Unreachable
 from armlab.motion.clearance import box_around
-from armlab.skills.manipulate import plan_pick, plan_place, run_steps
+from armlab.skills.manipulate import plan_pick, plan_place, plan_side_place, run_steps
 from armlab.station.core import Station
 from armlab.station.jobs import JobContext
 
@@ -38,12 +38,13 @@ class Move:
     why: str
     yaw_rad: float | None = 0.0
     finger_axis_rad: float | None = None  # world direction the fingers open along when releasing
+    side_ok: bool = False  # may be set down with the gripper horizontal when too high for top-down
     on_placed: Callable[[float], None] | None = field(default=None, compare=False)  # called with the edge once placed
 
     def key(self) -> tuple:
-        """Identifies "the same move" across looks (attempt counting): the block and where it goes."""
+        """Identifies "the same move" across looks (attempt counting): the block, by its kind and where it is."""
         b = self.block
-        return (b.get("color"), b.get("size"), b.get("is_cube", True), round(self.to_m[0], 2), round(self.to_m[1], 2))
+        return (b.get("color"), b.get("size"), b.get("is_cube", True), round(b["position_m"][0], 2), round(b["position_m"][1], 2))
 
 
 @dataclass(frozen=True)
@@ -86,6 +87,13 @@ def near(a, b, radius_m: float) -> bool:
 
 
 FINGER_REACH_M = 0.075  # neighbours closer than this (centre to centre) can meet an opening finger
+
+
+def pick_end_joints(steps: list) -> np.ndarray:
+    """The joints a plan's last trajectory ends at."""
+    from armlab.motion import TrajectoryStep
+
+    return [step for step in steps if isinstance(step, TrajectoryStep)][-1].q_end_rad
 
 
 def finger_axis_away(point_m, yaw_rad: float, objects: list[dict], exclude: dict | None = None) -> float | None:
@@ -154,9 +162,12 @@ class TaskRunner:
             pass
         for via in routes:
             legs, q_from = [], q_now
-            for q_to in [*via, q_park]:
-                legs.append(plan_joint_move(q_from, q_to, model, None, None, config.sample_rate_hz))
-                q_from = q_to
+            try:
+                for q_to in [*via, q_park]:
+                    legs.append(plan_joint_move(q_from, q_to, model, None, None, config.sample_rate_hz))
+                    q_from = q_to
+            except ValueError:  # an IK point a hair outside a limit: try the next route
+                continue
             if all(first_collision(model, leg, boxes, link_radius_m=PARK_CLEARANCE_M) is None for leg in legs):
                 for leg in legs:
                     self.station.run_trajectory(self.ctx, leg)
@@ -166,18 +177,26 @@ class TaskRunner:
 
     def look(self) -> list[dict]:
         """Detections of a fresh frame taken with the arm parked (occluded ones left out)."""
-        import os
-        if os.environ.get("ARMLAB_DEBUG_TILT") and self.station.sim is not None:
-            from armlab.tasks.judge import tilt_rad
-            print("LOOK", [(o["id"], round(math.degrees(tilt_rad(o)))) for o in self.station.sim.truth()["objects"] if math.degrees(tilt_rad(o)) > 10])
         self.park()
         self.report("looking")
         seen = skills.look(self.station, self.ctx)
-        if os.environ.get("ARMLAB_DEBUG_TILT"):
-            for o in seen:
-                print("   SEEN", o.get("color"), o.get("size"), [round(v * 1000) for v in o["position_m"]], o.get("stack_level"), o.get("stack_sizes"), "cube" if o.get("is_cube") else "NOT CUBE", "OCC" if o.get("occluded") else "")
-        self.last_objects = [o for o in seen if not o.get("occluded")]
+        objects = [o for o in seen if not o.get("occluded")]
+        self.last_objects = objects + self.unseen_columns(objects)
         return self.last_objects
+
+    def unseen_columns(self, objects: list[dict]) -> list[dict]:
+        """Obstacles the detector missed at the job's reserved spots (e.g. a column too tall for it):
+        wherever depth measures something standing there and no detection is near, an object of
+        that height that no policy picks (is_cube False, no colour)."""
+        found = []
+        for xy in self.reserved_m:
+            if any(near(o["position_m"], xy, 0.03) for o in objects):
+                continue
+            height = self.height_at(xy)
+            if height > 0.005:
+                found.append({"position_m": [float(xy[0]), float(xy[1]), height], "is_cube": False, "color": None,
+                              "size": None, "stack_level": 0, "unseen": True, "yaw_rad": 0.0})
+        return found
 
     def boxes(self, objects: list[dict], *exclude: dict) -> list:
         """Obstacle boxes around every detected object except `exclude`."""
@@ -190,50 +209,56 @@ class TaskRunner:
         return self.edges_m.get(block.get("size") or "large", self.edges_m["large"])
 
     def execute(self, move: Move, objects: list[dict]) -> bool:
-        import os
-        """Pick move.block and place it at move.to_m; True if the block was held and released there."""
+        """Pick move.block and place it at move.to_m; True if the block was held and released there.
+
+        Both the pick and the place are planned (and checked) before the arm moves, the place from
+        where the pick ends, so a block is never picked up that cannot be put where it should go."""
         block = move.block
-        import os
-        if os.environ.get("ARMLAB_DEBUG_TILT"):
-            print("MOVE", block.get("color"), block.get("size"), [round(v * 1000) for v in block["position_m"]], block.get("stack_level"), "->", [round(v * 1000) for v in move.to_m], move.why)
         edge = self.edge_of(block)
         to = np.asarray(move.to_m, float)
+        name = f"{block.get('color')} {block.get('size')} block"
         below = [o for o in objects if o is not block and near(o["position_m"], to, 0.02) and abs(o["position_m"][2] - to[2]) < 0.01]
-        others_pick = self.boxes(objects, block)
-        self.progress.next_block, self.progress.next_target_m = block, [float(v) for v in to]
-        try:
-            pick = plan_pick(self.station, block["position_m"], block.get("yaw_rad"), edge, others_pick,
-                             max_transfer_z_m=self.max_transfer_z_m,
-                             finger_axis_rad=finger_axis_away(block["position_m"], block.get("yaw_rad") or 0.0, objects, block))
-            self.report(f"picking {block.get('color')} {block.get('size')} block: {move.why}")
-            run_steps(self.station, self.ctx, pick, progress=False)
-        except (Unreachable, ValueError) as error:
-            self.fail(f"cannot pick {block.get('color')} {block.get('size')} block at "
-                      f"({block['position_m'][0] * 1000:.0f}, {block['position_m'][1] * 1000:.0f}) mm: {error}")
-            return False
-        if not self.station.gripper.read_state().holding:
-            self.fail(f"missed the {block.get('color')} {block.get('size')} block (nothing in the gripper)")
-            return False
-        self.station.set_held_block({**block, "edge_m": edge})
-        if os.environ.get("ARMLAB_DEBUG_TILT") and self.station.sim is not None:
-            truth = self.station.sim.truth()
-            held = truth["gripper"]["holding_id"]
-            gp = truth["gripper"]["position_m"]
-            for o in truth["objects"]:
-                if o["id"] == held:
-                    print("   HELD offset mm", [round((a - b) * 1000, 1) for a, b in zip(o["position_m"], gp)], "detected top", [round(v * 1000, 1) for v in block["position_m"]])
+        place_boxes = self.boxes(objects, block, *below)
         yaw = block.get("yaw_rad") if move.yaw_rad is None else move.yaw_rad
         axis = move.finger_axis_rad
         if axis is None:
             axis = finger_axis_away(to, yaw or 0.0, [o for o in objects if o is not block and o not in below], block)
+        self.progress.next_block, self.progress.next_target_m = block, [float(v) for v in to]
+
+        def plan_the_place(q_start=None) -> list:
+            try:
+                return plan_place(self.station, to, yaw, edge, place_boxes, q_start=q_start,
+                                  max_transfer_z_m=self.max_transfer_z_m, finger_axis_rad=axis)
+            except (Unreachable, ValueError):
+                if not move.side_ok:
+                    raise
+                return plan_side_place(self.station, to, edge, place_boxes, q_start=q_start)
+
         try:
-            place = plan_place(self.station, to, yaw, edge, self.boxes(objects, block, *below),
-                               max_transfer_z_m=self.max_transfer_z_m, finger_axis_rad=axis)
+            pick = plan_pick(self.station, block["position_m"], block.get("yaw_rad"), edge, self.boxes(objects, block),
+                             max_transfer_z_m=self.max_transfer_z_m,
+                             finger_axis_rad=finger_axis_away(block["position_m"], block.get("yaw_rad") or 0.0, objects, block))
         except (Unreachable, ValueError) as error:
-            self.fail(f"cannot place at ({to[0] * 1000:.0f}, {to[1] * 1000:.0f}, {to[2] * 1000:.0f}) mm: {error}")
+            self.fail(f"cannot pick the {name} at ({block['position_m'][0] * 1000:.0f}, {block['position_m'][1] * 1000:.0f}) mm: {error}")
+            return False
+        try:
+            plan_the_place(pick_end_joints(pick))
+        except (Unreachable, ValueError) as error:
+            self.fail(f"cannot place the {name} at ({to[0] * 1000:.0f}, {to[1] * 1000:.0f}, {to[2] * 1000:.0f}) mm: {error}")
+            return False
+        self.report(f"picking the {name}: {move.why}")
+        run_steps(self.station, self.ctx, pick, progress=False)
+        if not self.station.gripper.read_state().holding:
+            self.fail(f"missed the {name} (nothing in the gripper)")
+            return False
+        self.station.set_held_block({**block, "edge_m": edge})
+        try:
+            place = plan_the_place()
+        except (Unreachable, ValueError) as error:
+            self.fail(f"cannot place the {name} at ({to[0] * 1000:.0f}, {to[1] * 1000:.0f}, {to[2] * 1000:.0f}) mm: {error}")
             self.put_down_held(objects)
             return False
-        self.report(f"placing {block.get('color')} {block.get('size')} block: {move.why}")
+        self.report(f"placing the {name}: {move.why}")
         run_steps(self.station, self.ctx, place, progress=False)
         self.station.set_held_block(None)
         self.progress.moves += 1
@@ -241,14 +266,6 @@ class TaskRunner:
         self.last_objects = [o for o in self.last_objects if o is not block] + [placed]
         if move.on_placed is not None:
             move.on_placed(edge)
-        import os
-        if os.environ.get("ARMLAB_DEBUG_TILT") and self.station.sim is not None:
-            from armlab.tasks.judge import tilt_rad
-            for o in self.station.sim.truth()["objects"]:
-                if math.dist(o["position_m"][:2], to[:2]) < 0.03:
-                    print("   near target:", o["id"], o["color"], o["size"], [round(v * 1000, 1) for v in o["position_m"]], round(math.degrees(tilt_rad(o))))
-                if math.degrees(tilt_rad(o)) > 10:
-                    print("TILT after", move.why, block.get("color"), block.get("size"), "->", o["id"], round(math.degrees(tilt_rad(o))))
         return True
 
     def put_down_held(self, objects: list[dict] | None = None) -> str:
@@ -307,6 +324,12 @@ class TaskRunner:
         points = np.array([[xy_m[0], xy_m[1], z] for z in (0.0, height_m)])
         pixels = project_points(calibration.T_world_camera, calibration.K, calibration.dist, points)
         return bool(np.all((pixels >= margin_px) & (pixels <= np.array([calibration.width, calibration.height]) - margin_px)))
+
+    def feed_spot(self) -> tuple[float, float] | None:
+        """The simulated feeder's spot (to keep clear), when the scene has a feeder."""
+        sim = self.station.sim
+        feeder = sim.truth().get("feeder") if sim is not None else None
+        return None if not feeder else tuple(map(float, feeder["spot_m"]))
 
     def tag_centres(self) -> list[tuple[float, float]]:
         return [tuple(map(float, xy)) for xy in self.station.perception_config.tags.board_tags.values()]
