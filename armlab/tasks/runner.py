@@ -224,6 +224,9 @@ class TaskRunner:
         if axis is None:
             axis = finger_axis_away(to, yaw or 0.0, [o for o in objects if o is not block and o not in below], block)
         self.progress.next_block, self.progress.next_target_m = block, [float(v) for v in to]
+        if skills.is_stale(self.station, block):
+            self.fail(f"the {name} was seen before the arm last moved over it: looking again")
+            return False
 
         def plan_the_place(q_start=None) -> list:
             try:
