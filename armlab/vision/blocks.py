@@ -1,6 +1,8 @@
 """Block detection from colour + depth: colour class, size class from the metric footprint, top-face
 centre and yaw in the world, stack level from height, touching same-colour blocks split, arm
-occlusion flagged, distractors rejected, and tag-topped blocks identified.
+occlusion flagged, distractors rejected, and tag-topped blocks identified. A top face the image's edge
+cuts (a tall stack's top leaving the camera's view) is measured from the edges that show
+(clipped_face.py), or flagged occluded when they do not fix it.
 
 Speed: colour and height are computed at quarter resolution to find candidates; each candidate's top
 face is then measured on a full-resolution region of interest.
@@ -16,6 +18,7 @@ import cv2
 import numpy as np
 
 from armlab.vision.calibration import Calibration
+from armlab.vision.clipped_face import fit_clipped_square, on_image_border
 from armlab.vision.config import PerceptionConfig
 from armlab.vision.geometry import PlaneCamera, height_coefficients, height_map_m
 from armlab.vision.tags import check_color_image, detect_tags, make_detector
@@ -25,6 +28,8 @@ MAX_ASPECT = 1.3
 SIZE_TOLERANCE = 0.22  # measured side within this fraction of the class size
 HEIGHT_TOLERANCE_M = 0.003  # top height vs a sum of cube edges (cubes measure within ~1 mm)
 SPLIT_SIZE_TOLERANCE = 0.12  # each side of a part split from touching cubes, within this of the edge
+BORDER_MARGIN_PX = 2  # a face with pixels this close to the image's edge runs off the image
+MAX_EDGE_RESIDUAL = 0.025  # a cut face's outline this close to a square's edges on average (x edge): cubes ~0.013, discs ~0.036
 
 
 @dataclass(frozen=True)
@@ -110,20 +115,22 @@ def _color_classes(hsv: np.ndarray, cfg: PerceptionConfig, table: np.ndarray) ->
 def stack_candidates(top_m: float, top_size: str, cfg: PerceptionConfig) -> list[tuple[float, tuple[str, ...]]]:
     """(height mismatch m, sizes bottom..top) of every pile explaining a top face at top_m, best first.
 
-    Piles hold large blocks below small ones, so the blocks under a large block are large.
+    Piles hold large blocks below small ones, so the blocks under a large block are large. Piles up to
+    the configured max_height_m are considered (a to_the_sky tower of 14 large blocks is 0.53 m).
     """
     large, small = cfg.blocks.large_size_m, cfg.blocks.small_size_m
     below = top_m - (large if top_size == "large" else small)
-    n_small_max = 12 if top_size == "small" else 1
-    errors = np.abs(below - _pile_heights(large, small, n_small_max))
+    n_large = int(cfg.blocks.max_height_m // large) + 1  # 0 .. n_large - 1 large blocks below
+    n_small = int(cfg.blocks.max_height_m // small) + 1 if top_size == "small" else 1
+    errors = np.abs(below - _pile_heights(large, small, n_large, n_small))
     order = np.argsort(errors, kind="stable")[:6].tolist()
-    return [(float(errors[i]), ("large",) * (i // n_small_max) + ("small",) * (i % n_small_max) + (top_size,)) for i in order]
+    return [(float(errors[i]), ("large",) * (i // n_small) + ("small",) * (i % n_small) + (top_size,)) for i in order]
 
 
 @lru_cache(maxsize=16)
-def _pile_heights(large: float, small: float, n_small_max: int) -> np.ndarray:
-    """Heights of piles of 0..11 large then 0..n_small_max-1 small blocks, flattened (read-only)."""
-    heights = np.add.outer(np.arange(12) * large, np.arange(n_small_max) * small).ravel()
+def _pile_heights(large: float, small: float, n_large: int, n_small: int) -> np.ndarray:
+    """Heights of piles of 0..n_large-1 large then 0..n_small-1 small blocks, flattened (read-only)."""
+    heights = np.add.outer(np.arange(n_large) * large, np.arange(n_small) * small).ravel()
     heights.flags.writeable = False
     return heights
 
@@ -484,12 +491,52 @@ def _blocks_from_region(color_bgr, geo: BlockGeometry, cfg, region: _Region, top
         return []  # a sliver: the edge of a lower stack member or noise
     if _covered(contour, face_m, z):
         return []  # a lower member of a stack: something sits on its centre
+    if _runs_off_image(ys, xs, roi, geo.calibration):
+        # A tall stack's top partly out of view: the square from the edges that show, else flagged.
+        # No tag lookup: a tag on a cut face is likely cut too.
+        clipped = _classify_clipped(face, ys, xs, roi, geo, cfg)
+        if clipped is None or not clipped.is_cube:
+            return [(_make_block(face, name, geo.camera, cfg, z_small, step, z, clipped, out_of_view=True), False)]
+        return [(_make_block(face, name, geo.camera, cfg, z_small, step, z, clipped), False)]
     classified = _classify_face(face, cfg)
     if classified.is_cube:
         blocks = [_make_block(face, name, geo.camera, cfg, z_small, step, z, classified)]
     else:
         blocks = [_make_block(part, name, geo.camera, cfg, z_small, step, z) for part in _split_touching(face, cfg)]
     return [(block, _face_looks_tagged(color_bgr, block, roi, hsv)) for block in blocks]
+
+
+def _runs_off_image(ys: np.ndarray, xs: np.ndarray, roi, cal: Calibration) -> bool:
+    """True when a face (ROI rows ys, columns xs) reaches within BORDER_MARGIN_PX of the image's edge."""
+    x0, y0 = roi[0], roi[1]
+    m = BORDER_MARGIN_PX
+    return bool(
+        xs.min() + x0 <= m or ys.min() + y0 <= m or xs.max() + x0 >= cal.width - 1 - m or ys.max() + y0 >= cal.height - 1 - m
+    )
+
+
+def _classify_clipped(face: _Face, ys: np.ndarray, xs: np.ndarray, roi, geo: BlockGeometry, cfg: PerceptionConfig) -> _Classified | None:
+    """Size, side, yaw, cube or not, centre and stacks of a face the image's edge cuts, from the edges
+    of its outline that show (clipped_face.fit_clipped_square); None when they do not fix the square."""
+    mask = np.zeros((roi[3] - roi[1], roi[2] - roi[0]), np.uint8)
+    mask[ys, xs] = 1
+    contours, _ = cv2.findContours(mask, cv2.RETR_EXTERNAL, cv2.CHAIN_APPROX_NONE)
+    outline_px = max(contours, key=cv2.contourArea).reshape(-1, 2) + np.array(roi[:2])
+    shown = ~on_image_border(outline_px, geo.calibration.width, geo.calibration.height, BORDER_MARGIN_PX)
+    outline_xy = geo.camera.to_plane(outline_px.astype(np.float64), face.top_m, face.plane_H)
+    large, small = cfg.blocks.large_size_m, cfg.blocks.small_size_m
+    fit = fit_clipped_square(outline_xy, shown, math.sqrt(face.pixel_area_m2), (large, small), SIZE_TOLERANCE)
+    if fit is None:
+        return None
+    size = "large" if abs(fit.side_m - large) < abs(fit.side_m - small) else "small"
+    edge = large if size == "large" else small
+    stacks = stack_candidates(face.top_m, size, cfg)
+    is_cube = (
+        abs(fit.side_m - edge) <= SIZE_TOLERANCE * edge
+        and fit.edge_residual_m <= MAX_EDGE_RESIDUAL * edge
+        and stacks[0][0] <= HEIGHT_TOLERANCE_M
+    )
+    return _Classified(size, fit.side_m, fit.yaw_rad, is_cube, fit.centre_xy, stacks)
 
 
 def _covered(contour: np.ndarray, top_m: float, z: np.ndarray) -> bool:
@@ -534,12 +581,15 @@ def _with_tag(block: Block, color_bgr: np.ndarray, roi, detector, cfg: Perceptio
     return block
 
 
-def _make_block(face: _Face, color: str, camera: PlaneCamera, cfg, z_small, step, z_roi=None, classified: _Classified | None = None) -> Block:
+def _make_block(face: _Face, color: str, camera: PlaneCamera, cfg, z_small, step, z_roi=None, classified: _Classified | None = None,
+                out_of_view: bool = False) -> Block:
+    """The block of a face (classified: its _classify_face or _classify_clipped, if at hand).
+    out_of_view: part of the face is outside the image and its square is not known: flagged occluded."""
     c = classified or _classify_face(face, cfg)
     size, side, yaw, is_cube, centre_xy = c.size, c.side_m, c.yaw, c.is_cube, c.centre_xy
     ring_m2 = cfg.blocks.large_size_m**2 - cfg.blocks.small_size_m**2
     sizes = choose_stack(face.top_m, size, cfg, z_roi, 0.3 * ring_m2 / face.pixel_area_m2, c.stacks)
-    occluded = _is_occluded(face, centre_xy, yaw, size, camera, cfg, z_small, step)
+    occluded = out_of_view or _is_occluded(face, centre_xy, yaw, size, camera, cfg, z_small, step)
     if occluded and not is_cube:
         # Part of the face is hidden: judge by what can be seen (not larger than the cube, right height).
         edge = cfg.blocks.large_size_m if size == "large" else cfg.blocks.small_size_m

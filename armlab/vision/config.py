@@ -80,7 +80,7 @@ class BlockConfig(StrictModel):
     large_size_m: float = Field(gt=0.0)
     small_size_m: float = Field(gt=0.0)
     min_height_m: float = Field(0.008, gt=0.0)
-    max_height_m: float = Field(0.4, gt=0.0)
+    max_height_m: float = Field(0.55, gt=0.0)
     top_face_tolerance_m: float = Field(0.006, gt=0.0)
     min_saturation: int = Field(70, ge=0, le=255)
     min_value: int = Field(40, ge=0, le=255)

@@ -43,6 +43,7 @@ export class LiveView {
     this.hoverBusy = false;
     this.hoverTimer = null;
     this.framesDrawn = 0;
+    this.overlays = []; // functions (liveView) => void drawn over every frame (e.g. the competition plan)
     this.workcell = null; // WorkcellInfo from the server's hello: board bounds, block sizes
     this.boardBounds = null;
     canvas.addEventListener("mousemove", (e) => this.onMove(e));
@@ -100,6 +101,7 @@ export class LiveView {
       const p = this.markerFramePx(this.marker);
       if (p) this.cross(p.u, p.v, this.marker.color, this.marker.label, Math.max(scale, 0.5));
     }
+    for (const draw of this.overlays) draw(this);
   }
 
   /** The view the shown frame really is: the server falls back to colour for top-down until calibrated. */

@@ -1,6 +1,7 @@
 // Page controller: connects the stream, the REST client and the panels; one dispatch on message type.
 
 import { Api, adoptToken, dropToken } from "./api.js";
+import { CompetitionPanel } from "./competition.js";
 import { LiveView } from "./liveview.js";
 import { EventLog } from "./log.js";
 import {
@@ -65,6 +66,12 @@ class App {
         onTokenRejected: (reason) => this.tokenRejected(reason),
       },
     });
+    this.competition = new CompetitionPanel({
+      api: this.api,
+      live: this.live,
+      log: this.log,
+      serverNowS: () => this.stream.serverNowS(),
+    });
     this.unknownWireNames = App.unknownWireNames;
     window.armlab = this; // handle for operators' devtools and the browser tests
   }
@@ -88,7 +95,8 @@ class App {
     this.stream.setView(this.view, this.layers);
     this.stream.connect();
     this.refreshAllowed();
-    this.api.calibration().then((c) => renderCalibration(c)).catch(() => {});
+    this.api.calibration().then((c) => this.showCalibration(c)).catch(() => {});
+    this.competition.start();
     this.refreshPrograms();
     setInterval(() => this.updateIndicators(), 500);
     $("control-mode").textContent = this.api.canControl ? "control" : "view only";
@@ -133,6 +141,7 @@ class App {
       case "hello":
         this.helloSeen = true;
         this.live.setWorkcell(msg.workcell);
+        this.competition.setBackend(msg.backend);
         this.canControl = Boolean(msg.can_control) && this.api.canControl;
         $("control-mode").textContent = this.canControl ? "control" : "view only";
         $("sim-panel").hidden = msg.backend !== "sim";
@@ -145,7 +154,7 @@ class App {
         this.log.add(msg.level || "info", msg.message || "", msg.time_s);
         break;
       case "calibration":
-        renderCalibration(msg);
+        this.showCalibration(msg);
         break;
       case "error":
         this.log.error("command", msg.error || msg);
@@ -172,13 +181,19 @@ class App {
       this.log.add(s.state === "estop" || s.state === "fault" ? "error" : "info", `state: ${previous.state} → ${s.state}`);
     }
     if (previous && previous.calibrated !== s.calibrated && s.calibrated) {
-      this.api.calibration().then((c) => renderCalibration(c)).catch(() => {});
+      this.api.calibration().then((c) => this.showCalibration(c)).catch(() => {});
     }
     this.live.calibrated = Boolean(s.calibrated);
     $("view-select").querySelector("[data-view='topdown']").disabled = !s.calibrated;
     if (Array.isArray(s.detections)) this.setDetections(s.detections);
     this.watchJob(s.job);
+    this.competition.onStatus(s);
     this.refreshAllowed();
+  }
+
+  showCalibration(calibration) {
+    renderCalibration(calibration);
+    this.competition.setCalibration(calibration);
   }
 
   setDetections(detections) {

@@ -1,9 +1,12 @@
 """SimArm: the Arm interface over the workcell's joint servos. Commands are validated (dof, finite,
 joint limits) before anything changes; the workcell calls control() at each control tick to feed the
-servos the trajectory's position and velocity."""
+servos the trajectory's position and velocity. stop() never waits for the workcell's lock: when the lock
+is busy (a physics batch, a scene swap) the halt is latched and the next control tick applies it, so
+the arm holds within one control period of simulated time either way."""
 
 from __future__ import annotations
 
+import threading
 import time
 from typing import TYPE_CHECKING
 
@@ -48,6 +51,9 @@ class SimArm(Arm):
         self._start_s = 0.0
         self._hold_rad: np.ndarray | None = None
         self._torque = True
+        self._halt_requested = threading.Event()  # set by stop() without the lock; applied under it
+        self._halt_requested_s = 0.0
+        self._last_halt_s: tuple[float, float] | None = None
 
     def __str__(self) -> str:
         return "SimArm(rx200)"
@@ -104,6 +110,7 @@ class SimArm(Arm):
             raise ValueError(f"{self}: expected a JointTrajectory, got {type(trajectory).__name__}")
         self.validate_positions(trajectory.positions_rad)
         with self._cell.lock:
+            self._apply_halt()  # a stop requested before this command came first
             if not self._torque:
                 raise ValueError(f"{self}: torque is off; enable it before commanding motion")
             self._trajectory = trajectory
@@ -115,6 +122,7 @@ class SimArm(Arm):
     def is_moving(self) -> bool:
         self._require()
         with self._cell.lock:
+            self._apply_halt()
             return self._trajectory is not None
 
     def wait_until_done(self, timeout_s: float | None = None) -> bool:
@@ -127,11 +135,30 @@ class SimArm(Arm):
         return self._cell.wait_for(lambda: self._trajectory is None, limit)
 
     def stop(self) -> None:
+        """Halt: at once if the workcell's lock is free, else at the next control tick (never waits)."""
         self._require()
-        with self._cell.lock:
-            self._trajectory = None
-            self._hold_rad = self._cell.arm_positions()
-            self._cell.apply_arm_reference(self._hold_rad, np.zeros_like(self._hold_rad))
+        self._halt_requested_s = self._cell.sim_time_s
+        self._halt_requested.set()
+        if self._cell.lock.acquire(blocking=False):
+            try:
+                self._apply_halt()
+            finally:
+                self._cell.lock.release()
+
+    @property
+    def last_halt_sim_s(self) -> tuple[float, float] | None:
+        """(requested, applied) simulated times of the last stop(), or None: the halt latency in sim time."""
+        return self._last_halt_s
+
+    def _apply_halt(self) -> None:
+        """Under the lock: apply a latched stop() (drop the trajectory, hold the measured position)."""
+        if not self._halt_requested.is_set():
+            return
+        self._halt_requested.clear()
+        self._trajectory = None
+        self._hold_rad = self._cell.arm_positions()
+        self._cell.apply_arm_reference(self._hold_rad, np.zeros_like(self._hold_rad))
+        self._last_halt_s = (self._halt_requested_s, self._cell.sim_time_s)
 
     def set_torque(self, enabled: bool) -> None:
         self._require()
@@ -144,6 +171,7 @@ class SimArm(Arm):
 
     def control(self, sim_time_s: float) -> None:
         """Feed the servos (called by the workcell under its lock at every control tick)."""
+        self._apply_halt()
         trajectory = self._trajectory
         if trajectory is None or not self._torque:
             return

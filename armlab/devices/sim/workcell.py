@@ -78,26 +78,48 @@ class SimWorkcell:
     # ------------------------------------------------------------------ model
     def _build(self, scene: Scene, previous: dict | None) -> None:
         """(Re)build model and data for a scene; `previous` carries the arm/gripper state across."""
+        self._install(self._compile(scene), scene, previous)
+
+    def _compile(self, scene: Scene) -> dict:
+        """The slow half of a scene change (XML, compile, index look-ups): touches no shared state, so it
+        runs outside the lock and the physics, the devices and an e-stop never wait for it."""
         xml, assets = build_model_xml(self._geometry, self._sim, self._camera_config, self._T_world_camera, scene,
                                       self._workcell)
         model = mujoco.MjModel.from_xml_string(xml, assets)
-        data = mujoco.MjData(model)
-        self._arm_qpos = np.array([model.jnt_qposadr[model.joint(n).id] for n in self._geometry.joint_names])
-        self._arm_qvel = np.array([model.jnt_dofadr[model.joint(n).id] for n in self._geometry.joint_names])
-        self._finger_qpos = np.array([model.jnt_qposadr[model.joint(f"{s}_finger").id] for s in ("left", "right")])
-        self._finger_qvel = np.array([model.jnt_dofadr[model.joint(f"{s}_finger").id] for s in ("left", "right")])
-        self._pos_act = np.array([model.actuator(f"{n}_pos").id for n in self._geometry.joint_names])
-        self._vel_act = np.array([model.actuator(f"{n}_vel").id for n in self._geometry.joint_names])
-        self._finger_act = np.array([model.actuator(f"{s}_finger").id for s in ("left", "right")])
-        self._arm_gains = (model.actuator_gainprm[self._pos_act, 0].copy(), model.actuator_gainprm[self._vel_act, 0].copy())
+        names = self._geometry.joint_names
         arm_root = model.body("base").id
-        self._arm_body_ids = np.flatnonzero((model.body_gravcomp > 0) & (model.body_rootid == arm_root))
-        self._gripper_site = model.site(GRIPPER_SITE).id
-        self._gripper_body = model.body("gripper_link").id
-        self._pad_geoms = {model.geom(name).id: name for name in PAD_GEOMS}
-        self._object_bodies = {obj.id: model.body(OBJECT_PREFIX + obj.id).id for obj in scene.objects}
+        pos_act = np.array([model.actuator(f"{n}_pos").id for n in names])
+        vel_act = np.array([model.actuator(f"{n}_vel").id for n in names])
+        object_bodies = {obj.id: model.body(OBJECT_PREFIX + obj.id).id for obj in scene.objects}
         parked = parked_objects(scene.feeder, self._workcell) if scene.feeder is not None else []
-        parked_bodies = [(model.body(OBJECT_PREFIX + obj.id).id, obj) for obj in parked]
+        return {
+            "model": model,
+            "data": mujoco.MjData(model),
+            "_arm_qpos": np.array([model.jnt_qposadr[model.joint(n).id] for n in names]),
+            "_arm_qvel": np.array([model.jnt_dofadr[model.joint(n).id] for n in names]),
+            "_finger_qpos": np.array([model.jnt_qposadr[model.joint(f"{s}_finger").id] for s in ("left", "right")]),
+            "_finger_qvel": np.array([model.jnt_dofadr[model.joint(f"{s}_finger").id] for s in ("left", "right")]),
+            "_pos_act": pos_act,
+            "_vel_act": vel_act,
+            "_finger_act": np.array([model.actuator(f"{s}_finger").id for s in ("left", "right")]),
+            "_arm_gains": (model.actuator_gainprm[pos_act, 0].copy(), model.actuator_gainprm[vel_act, 0].copy()),
+            "_arm_body_ids": np.flatnonzero((model.body_gravcomp > 0) & (model.body_rootid == arm_root)),
+            "_gripper_site": model.site(GRIPPER_SITE).id,
+            "_gripper_body": model.body("gripper_link").id,
+            "_pad_geoms": {model.geom(name).id: name for name in PAD_GEOMS},
+            "_object_bodies": object_bodies,
+            "parked_bodies": [(model.body(OBJECT_PREFIX + obj.id).id, obj) for obj in parked],
+            "arm_root": arm_root,
+        }
+
+    def _install(self, compiled: dict, scene: Scene, previous: dict | None) -> None:
+        """The quick half of a scene change (call under the lock): adopt a compiled model, carrying the arm
+        and gripper state across from `previous`."""
+        model, data = compiled["model"], compiled["data"]
+        for name, value in compiled.items():
+            if name.startswith("_"):
+                setattr(self, name, value)
+        parked_bodies, arm_root = compiled["parked_bodies"], compiled["arm_root"]
         self._body_to_object = {body: obj_id for obj_id, body in self._object_bodies.items()}
         self._body_to_object.update({body: obj.id for body, obj in parked_bodies})
         if previous is None:
@@ -136,6 +158,7 @@ class SimWorkcell:
             scene = Scene.from_dict(scene)
         if not isinstance(scene, Scene):
             raise ValueError(f"set_scene expects a Scene or a dict with 'objects', got {type(scene).__name__}")
+        compiled = self._compile(scene)  # outside the lock: physics, devices and e-stop go on meanwhile
         with self.lock:
             data = self._data
             previous = {
@@ -149,7 +172,7 @@ class SimWorkcell:
                 "finger_ctrl": data.ctrl[self._finger_act].copy(),
                 "torque": self._torque,
             }
-            self._build(scene, previous)
+            self._install(compiled, scene, previous)
 
     def reset_scene(self) -> None:
         """Put every object back where the current scene started it (the arm keeps its pose)."""
@@ -166,6 +189,11 @@ class SimWorkcell:
     @property
     def realtime(self) -> bool:
         return self.config.realtime
+
+    @property
+    def control_period_s(self) -> float:
+        """How often the servo references are updated (simulated seconds): the e-stop's halt bound."""
+        return float(self._sim.physics.control_period_s)
 
     @property
     def sim_time_s(self) -> float:
