@@ -76,15 +76,16 @@ def check_request(event: str, level: int | None) -> int | None:
 def episode_unsupported(event: str, level: int | None) -> str | None:
     """Why a headless episode of (event, level) cannot run yet, or None when it can: the episode needs a
     scene generator for the pair and a judge for the event. Cheap (generates one scene, judges nothing)."""
-    from armlab.scene import generate_scene
+    from armlab.tasks.episode import episode_scene
     from armlab.tasks.judge import EVENT_LIMITS_S
+    from armlab.tasks.scorers import SCORED_JOBS
 
     try:
-        generate_scene(event, level=level, seed=0)
+        episode_scene(event, level, 0)
     except (ValueError, TypeError) as error:
         return f"no scene generator ({error})"
-    if event not in EVENT_LIMITS_S:
-        return "the judge does not score it"
+    if event not in EVENT_LIMITS_S and event not in SCORED_JOBS:
+        return "neither the judge nor armlab.tasks.scorers scores it"
     return None
 
 

@@ -2,12 +2,13 @@
 
 from __future__ import annotations
 
+import math
 from collections.abc import Callable
 from dataclasses import dataclass
 
 from armlab.station.core import NotCalibrated, Station
 from armlab.station.jobs import Job, JobContext
-from armlab.tasks import line_up, pick_sort, pick_stack, sort_stack, stack_high, to_the_sky
+from armlab.tasks import clear_table, line_up, pick_sort, pick_stack, sort_by_tag, sort_stack, stack_here, stack_high, to_the_sky
 from armlab.tasks.runner import Plan, TaskRunner
 
 
@@ -37,6 +38,13 @@ JOBS: dict[str, JobSpec] = {
                 "one tower of large blocks, as tall as the arm can build (fed by the feeder)"),
         JobSpec("sort_stack", (1, 2, 3), sort_stack.make_policy,
                 "every block to its side of y < 0, stacked in rainbow order per side"),
+        JobSpec("sort_by_tag", (1, 2, 3), sort_by_tag.make_policy,
+                "every ArUco-topped block to the place its id names, stacked when ids repeat"),
+        JobSpec("clear_table", (1, 2, 3), clear_table.make_policy,
+                "every object on the board, any colour or shape, into the bin"),
+        JobSpec("stack_here", (), stack_here.make_policy,
+                "all blocks (or one colour / size) stacked at a point, large ones first",
+                (("x_m", float), ("y_m", float), ("color", str), ("size", str))),
     )
 }
 
@@ -61,8 +69,15 @@ def checked_request(job: str, level, params) -> tuple[JobSpec, int | None, dict]
         if name not in known:
             raise ValueError(f"job '{job}' has no parameter {name!r}" + (f"; parameters: {', '.join(known)}" if known else ""))
         wanted = known[name]
-        if isinstance(value, bool) and wanted is not bool or not isinstance(value, wanted):
+        accepted = (int, float) if wanted is float else wanted
+        if isinstance(value, bool) and wanted is not bool or not isinstance(value, accepted):
             raise ValueError(f"parameter {name!r} of job '{job}' must be {wanted.__name__}, got {type(value).__name__}")
+        if wanted is float and not (math.isfinite(value) and abs(value) <= 1.0):
+            raise ValueError(f"parameter {name!r} of job '{job}' must be a finite position within 1 m, got {value!r}")
+    from armlab.scene import COLORS, SIZES
+
+    if params.get("color") not in (None, *COLORS) or params.get("size") not in (None, *SIZES):
+        raise ValueError(f"color must be one of {', '.join(COLORS)} and size one of {', '.join(SIZES)}")
     return spec, level, params
 
 

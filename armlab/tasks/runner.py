@@ -130,6 +130,11 @@ class TaskRunner:
         self.ctx.progress(self.progress.done / total if total else 0.0, step)
         self.ctx.job.update_extra(task=self.progress.to_dict())
 
+    def note_once(self, reason: str) -> None:
+        """A failure reported once however often the policy meets it (e.g. a block it must leave)."""
+        if reason not in self.progress.failures:
+            self.fail(reason)
+
     def fail(self, reason: str) -> None:
         self.progress.failures.append(reason)
         self.station.events.add("warn", f"{self.name}: {reason}")

@@ -1,0 +1,42 @@
+"""clear_table (the Sawyer project): every object the camera finds on the board — blocks of any
+colour and size, distractors of any shape — into the bin area of the workcell config; blocks may be
+stacked there when the bin's floor is full."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from armlab.tasks.runner import Move, Plan, TaskRunner, near
+
+SPOT_PITCH_M = 0.045
+
+
+def make_policy(level: int | None, params: dict, runner: TaskRunner):
+    from armlab.workcell import load_workcell
+
+    bin_ = load_workcell().bin
+    xs = np.arange(bin_.x_range_m[0] + 0.025, bin_.x_range_m[1] - 0.02 + 1e-9, SPOT_PITCH_M)
+    ys = np.arange(bin_.y_range_m[0] + 0.025, bin_.y_range_m[1] - 0.02 + 1e-9, SPOT_PITCH_M)
+    spots = [(float(x), float(y)) for y in ys for x in xs if 0.14 <= math.hypot(x, y) <= 0.36]
+
+    def policy(objects: list[dict], given_up: set) -> Plan:
+        inside = [o for o in objects if bin_.contains(*o["position_m"][:2])]
+        outside = [o for o in objects if not bin_.contains(*o["position_m"][:2]) and not o.get("unseen")]
+        free = [s for s in spots if not any(near(o["position_m"], s, 0.035) for o in inside)]
+        moves = []
+        for obj in sorted(outside, key=lambda o: (-o.get("stack_level", 1), not o.get("is_cube", True))):
+            if free:
+                target = (*free[0], 0.0)
+            else:  # the floor is full: a block goes on top of the lowest block in the bin
+                bases = sorted((o for o in inside if o.get("is_cube", True)), key=lambda o: o["position_m"][2])
+                if not bases or not obj.get("is_cube", True):
+                    continue
+                target = tuple(bases[0]["position_m"])
+            kind = f"{obj.get('color') or ''} {obj.get('size') or ''} {'block' if obj.get('is_cube', True) else 'object'}"
+            moves.append(Move(obj, target, f"{' '.join(kind.split())} into the bin", yaw_rad=None))
+        hidden = sum(o.get("stack_level", 1) - 1 for o in outside)
+        return Plan(moves, done=len(inside), left=len(outside) + hidden, finished=not outside)
+
+    return policy

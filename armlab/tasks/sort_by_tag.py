@@ -1,0 +1,36 @@
+"""sort_by_tag (the UR3 write-up): every block whose top carries an ArUco id goes to the place its id
+names (workcell config: block_tags → places_m), stacked there when several blocks share an id
+(large ones first); blocks without a known id stay where they are."""
+
+from __future__ import annotations
+
+from armlab.tasks.columns import Column
+from armlab.tasks.runner import Move, Plan, TaskRunner, cubes
+
+
+def make_policy(level: int | None, params: dict, runner: TaskRunner):
+    from armlab.workcell import load_workcell
+
+    workcell = load_workcell()
+    columns = {int(dest): Column(f"place {dest}", tuple(map(float, xy))) for dest, xy in workcell.places_m.items()}
+    runner.reserved_m.extend(column.base_xy_m for column in columns.values())
+
+    def policy(objects: list[dict], given_up: set) -> Plan:
+        for column in columns.values():
+            column.observe(objects, runner.height_at)
+        tops = {id(c.top) for c in columns.values() if c.top is not None}
+        tagged = [b for b in cubes(objects) if b.get("destination") in columns and id(b) not in tops]
+        unknown = [b for b in cubes(objects) if b.get("aruco_id") is not None and b.get("destination") not in columns]
+        moves = []
+        for block in sorted(tagged, key=lambda b: (-b.get("stack_level", 1), b["size"] != "large")):
+            column = columns[block["destination"]]
+            yaw = column.top["yaw_rad"] if column.top is not None else 0.0
+            moves.append(Move(block, column.surface_m(), f"id {block['aruco_id']} → place {block['destination']}", yaw_rad=yaw,
+                              on_placed=lambda edge, c=column, b=block: c.add(b, edge)))
+        for block in unknown:
+            runner.note_once(f"block with id {block['aruco_id']} at ({block['position_m'][0] * 1000:.0f}, "
+                             f"{block['position_m'][1] * 1000:.0f}) mm: no destination for that id in the workcell config")
+        done = sum(column.height for column in columns.values())
+        return Plan(moves, done=done, left=len(tagged), finished=not tagged)
+
+    return policy

@@ -1,0 +1,33 @@
+"""stack_here: all blocks (or those of one colour and/or size) stacked at a given point, large ones
+first. Parameters: x_m, y_m (default: the workcell's sort_by_tag place nearest the arm), color, size."""
+
+from __future__ import annotations
+
+from armlab.tasks.columns import Column
+from armlab.tasks.runner import Move, Plan, TaskRunner, cubes
+
+
+def make_policy(level: int | None, params: dict, runner: TaskRunner):
+    from armlab.workcell import load_workcell
+
+    default = min(load_workcell().places_m.values(), key=lambda xy: xy[0] ** 2 + xy[1] ** 2)
+    column = Column("stack", (float(params.get("x_m", default[0])), float(params.get("y_m", default[1]))))
+    runner.reserved_m.append(column.base_xy_m)
+
+    def wanted(block: dict) -> bool:
+        return params.get("color") in (None, block.get("color")) and params.get("size") in (None, block.get("size"))
+
+    def policy(objects: list[dict], given_up: set) -> Plan:
+        column.observe(objects, runner.height_at)
+        loose = [b for b in cubes(objects) if wanted(b) and not column.holds(b)]
+        larges_left = any(b["size"] == "large" for b in loose)
+        moves = []
+        for block in sorted(loose, key=lambda b: (b["size"] != "large", -b.get("stack_level", 1))):
+            if block["size"] == "small" and larges_left and block.get("stack_level", 1) == 1:
+                continue  # small blocks on top, once every large one is in
+            yaw = column.top["yaw_rad"] if column.top is not None else 0.0
+            moves.append(Move(block, column.surface_m(), f"onto the stack at ({column.base_xy_m[0] * 1000:.0f}, "
+                              f"{column.base_xy_m[1] * 1000:.0f}) mm", yaw_rad=yaw, on_placed=lambda edge, b=block: column.add(b, edge)))
+        return Plan(moves, done=column.height, left=len(loose), finished=not loose)
+
+    return policy
