@@ -1,0 +1,173 @@
+"""Manual commands of the gate: joint and pose moves, hold-to-run jog, torque, gripper, teach.
+
+A mixin of core.Station (it uses the station's lock, transition table, lease and `_command_arm`). Every
+command is refused before planning (state, latch, lease), planned and checked outside the lock, then
+re-checked and sent under it; nothing slow (IK, planning, SQLite) runs while the lock is held.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from armlab.devices.arm import JointTrajectory
+from armlab.errors import CommandRefused, NeedsConfirmation
+from armlab.station.checks import checked_moving_time, checked_position
+from armlab.station.states import State, allowed_commands
+from armlab.store import Waypoint
+
+
+class ManualCommands:
+    """Operator commands outside jobs (idle and teach)."""
+
+    def plan_move(self, q_goal_rad, moving_time_s: float | None = None) -> JointTrajectory:
+        """A checked joint move from the current position (ValueError/UnsafeTrajectory: nothing moves)."""
+        from armlab.motion import plan_joint_move
+
+        q_goal = self.checked_joints(q_goal_rad)
+        trajectory = plan_joint_move(
+            self.joints_rad(), q_goal, self.model, moving_time_s=checked_moving_time(moving_time_s, self.config.max_moving_time_s)
+        )
+        self.check_motion(trajectory)
+        return trajectory
+
+    def _manual_move(self, command: str, q_goal_rad, moving_time_s: float | None, wait: bool, source: str | None) -> None:
+        self.allowed_or_raise(command, source)  # refuse before planning
+        trajectory = self.plan_move(q_goal_rad, moving_time_s)  # planning and checks: outside the lock
+        swept_box = self._swept_box(trajectory)
+        with self._lock:
+            self._transition(command, source=source)  # state unchanged: idle/teach stay
+            self._jog = None
+            self._command_arm(trajectory, swept_box)
+        if wait:
+            self.wait_motion(trajectory.duration_s + 5.0)
+
+    def move_joints(self, q_rad, moving_time_s: float | None = None, wait: bool = False, source: str | None = None) -> None:
+        self._manual_move("move_joints", q_rad, moving_time_s, wait, source)
+
+    def home(self, moving_time_s: float | None = None, wait: bool = False, source: str | None = None) -> None:
+        self._manual_move("home", self.model.home_rad, moving_time_s, wait, source)
+
+    def sleep(self, moving_time_s: float | None = None, wait: bool = False, source: str | None = None) -> None:
+        self._manual_move("sleep", self.model.sleep_rad, moving_time_s, wait, source)
+
+    def solve_pose(self, position_m, pitch_rad: float | None = None, yaw_rad: float | None = None) -> np.ndarray:
+        """IK for a world position (Unreachable, a ValueError, says why); validates the numbers first."""
+        position = checked_position(position_m)
+        for name, angle in (("pitch_rad", pitch_rad), ("yaw_rad", yaw_rad)):
+            if angle is not None and not math.isfinite(float(angle)):
+                raise ValueError(f"{name} must be finite")
+        return self.model.ik(position, pitch=pitch_rad, yaw=yaw_rad, q_seed=self.joints_rad())
+
+    def move_to(self, position_m, pitch_rad=None, yaw_rad=None, moving_time_s=None, wait=False, source=None) -> np.ndarray:
+        """Move the gripper point to a world position (IK outside the lock, joint move); returns the goal joints."""
+        self.allowed_or_raise("move_to", source)
+        q_goal = self.solve_pose(position_m, pitch_rad, yaw_rad)
+        self._manual_move("move_to", q_goal, moving_time_s, wait=False, source=source)
+        if wait:
+            self.wait_motion(self.config.max_moving_time_s + 5.0)
+        return q_goal
+
+    def jog(self, velocity_rad_s, source: str | None = None) -> JointTrajectory:
+        """Hold-to-run: move at these joint velocities (rad/s) for motion jog_hold_s, then stop by itself.
+        Sending it again (or heartbeat()) within jog_hold_s keeps it going; zeros ramp down to rest."""
+        from armlab.motion.jog import checked_jog_velocity, plan_jog, reference_velocity
+
+        velocity = checked_jog_velocity(velocity_rad_s, self.model.velocity_limit_rad_s, self.model.joint_names)
+        self.allowed_or_raise("jog", source)
+        with self._lock:
+            jog = dict(self._jog) if self._jog is not None else None
+        q0, v0 = self.joints_rad(), np.zeros_like(velocity)
+        if jog is not None and self.arm.is_moving():
+            _, v0 = reference_velocity(jog["trajectory"], self.clock_s() - jog["start_s"])
+        config = self.motion_config
+        trajectory = plan_jog(
+            q0, v0, velocity, config.jog_hold_s, self.model.lower_rad, self.model.upper_rad, self.model.accel_limit_rad_s2,
+            config.sample_rate_hz,
+        )
+        self.check_motion(trajectory)
+        swept_box = self._swept_box(trajectory)
+        with self._lock:
+            self._transition("jog", source=source)
+            self._command_arm(trajectory, swept_box)
+            self._jog = {"trajectory": trajectory, "start_s": self.clock_s(), "velocity": velocity, "source": source}
+        return trajectory
+
+    def heartbeat(self, source: str | None = None) -> bool:
+        """The controlling client is still there: extend its running jog by jog_hold_s. False (nothing
+        moves) when it has no jog running."""
+        with self._lock:
+            jog = self._jog
+        if jog is None or jog["source"] != source or not self.arm.is_moving():
+            return False
+        self.jog(jog["velocity"], source=source)
+        return True
+
+    def set_torque(self, enabled: bool, source: str | None = None, confirm: bool = False) -> None:
+        """Torque on, or off (limp: the arm falls under gravity unless held), which outside teach needs
+        confirm=True (NeedsConfirmation otherwise: nothing changes)."""
+        with self._lock:
+            state = self._check("torque", source)
+            if not enabled and state is not State.TEACH and not confirm:
+                raise NeedsConfirmation(
+                    "torque off outside teach lets the arm fall under gravity: hold the arm and send confirm: true "
+                    "(or start teach first)"
+                )
+            self._transition("torque", source=source)
+            self._jog = None
+            if self._halt.is_set():
+                raise CommandRefused("torque", self._effective_state().value, allowed_commands(self._effective_state()))
+            self.arm.set_torque(bool(enabled))
+        self.events.add("warn" if not enabled else "info", f"torque {'on' if enabled else 'off'}")
+
+    def gripper_command(self, action: str, wait: bool = True, source: str | None = None) -> None:
+        """'grasp' or 'release'."""
+        if action not in ("grasp", "release"):
+            raise ValueError(f"gripper action must be 'grasp' or 'release', not {action!r}")
+        with self._lock:
+            self._transition("gripper", source=source)
+            getattr(self.gripper, action)(wait=False)
+        if wait:
+            self.wait_gripper()
+
+
+    def teach_start(self, source: str | None = None) -> None:
+        with self._lock:
+            self._transition("teach_start", source=source, detail="teaching: 0 waypoints")
+            self._teach = []
+        self.events.add("info", "teach mode: record waypoints, then stop with a name")
+
+    def teach_record(self, source: str | None = None) -> Waypoint:
+        """Add the current joints and gripper command as a waypoint."""
+        self.allowed_or_raise("teach_record", source)
+        q = self.joints_rad()
+        command = self.gripper.read_state().command
+        waypoint = Waypoint(tuple(float(v) for v in q), command if command in ("grasp", "release") else "release")
+        with self._lock:
+            if self._teach_saving:
+                raise CommandRefused("teach_record", "teach (saving)", [])
+            self._transition("teach_record", source=source, detail=f"teaching: {len(self._teach) + 1} waypoints")
+            self._teach.append(waypoint)
+        return waypoint
+
+    def teach_stop(self, name: str, source: str | None = None):
+        """Save the recorded waypoints as a program (the SQLite write runs outside the lock) and return to
+        idle (Program). An e-stop during the write keeps the program and the latch."""
+        with self._lock:
+            self._check("teach_stop", source)
+            if self._teach_saving:
+                raise CommandRefused("teach_stop", "teach (saving)", [])
+            self._teach_saving = True
+            waypoints = list(self._teach)
+        try:
+            program = self.store.save_program(name, waypoints)
+        finally:
+            with self._lock:
+                self._teach_saving = False
+        with self._lock:
+            self._teach = []
+            if self._state is State.TEACH:
+                self._transition("teach_stop", source=source, detail="")
+        self.events.add("info", f"program '{program.name}' saved ({len(program.waypoints)} waypoints)")
+        return program

@@ -1,0 +1,90 @@
+"""What the gate sees: detections (marked stale while the camera is lost), telemetry snapshots and
+fresh frames and perception for skills.
+
+A mixin of core.Station.
+"""
+
+from __future__ import annotations
+
+import time
+
+from armlab.devices.camera import Frame
+from armlab.station.jobs import JobContext
+from armlab.station.perception import Perception, analyse_frame
+from armlab.station.telemetry import block_to_dict
+
+
+class Perceiving:
+    """Detections, telemetry snapshots, fresh frames and perception."""
+
+    def detections(self) -> dict:
+        """GET /api/detections: the newest detected blocks as wire dicts; none, with stale: true and the
+        reason, while the camera is lost or perception is older than camera_timeout_s."""
+        perception, _ = self.perception.get()
+        if perception is None:
+            return {"data": [], "count": 0, "time_s": time.time(), "frame_sequence": -1, "stale": False, "stale_reason": None}
+        stale_reason = self._perception_stale_reason(perception)
+        data = [] if stale_reason else [block_to_dict(index, block) for index, block in enumerate(perception.blocks)]
+        for block in data:
+            block.setdefault("seen_time_s", perception.capture_time_s)
+        return {
+            "data": data, "count": len(data), "time_s": perception.time_s, "frame_sequence": perception.frame_sequence,
+            "stale": stale_reason is not None, "stale_reason": stale_reason,
+        }
+
+    def _perception_stale_reason(self, perception: Perception) -> str | None:
+        with self._lock:
+            camera_lost = self._lost.get("camera")
+        if camera_lost is not None:
+            return f"the camera is lost ({camera_lost})"
+        age_s = time.time() - perception.capture_time_s
+        if not self.synchronous and age_s > self.config.camera_timeout_s:
+            return f"the newest perception is {age_s:.1f} s old"
+        return None
+
+    def telemetry_snapshot(self) -> dict:
+        """Status + detections: one telemetry message (the TelemetryPublisher calls this)."""
+        snapshot = self.status()
+        detections = self.detections()
+        snapshot["detections"] = detections["data"]
+        snapshot["detections_stale"] = detections["stale"]
+        return snapshot
+
+
+    def fresh_frame(self, timeout_s: float = 2.0, max_age_s: float = 2.0) -> Frame:
+        """A camera frame taken now (synchronous mode: rendered now; else the newest, waiting for a newer
+        one when it is older than max_age_s). TimeoutError (a device error) when the camera gives none."""
+        if self.synchronous:
+            frame = self.sim.capture_next_frame()
+            self.frames.publish(frame)
+            return frame
+        frame, version = self.frames.get()
+        if frame is None or time.time() - frame.timestamp_s > max_age_s:
+            frame, _ = self.frames.wait_newer(version, timeout_s)
+        if frame is None or time.time() - frame.timestamp_s > max_age_s + timeout_s:
+            raise TimeoutError(f"no fresh camera frame within {timeout_s} s: is the camera running?")
+        return frame
+
+    def fresh_perception(self, ctx: JobContext | None = None, timeout_s: float = 5.0) -> Perception:
+        """Perception of a frame captured after this call began (so after the last motion ended).
+
+        Synchronous mode: captured and analysed now. Otherwise: waits for the perception thread."""
+        if self.synchronous:
+            from armlab.vision.pipeline import PerceptionPipeline
+
+            if self._pipeline is None:
+                self._pipeline = PerceptionPipeline(self.perception_config)
+            frame = self.fresh_frame()
+            perception = analyse_frame(self._pipeline, frame, self.calibration)
+            self.perception.publish(perception)
+            return perception
+        asked_s = time.time()
+        deadline = time.monotonic() + timeout_s
+        _, version = self.perception.get()
+        while time.monotonic() < deadline:
+            if ctx is not None:
+                ctx.check()
+            perception, version = self.perception.wait_newer(version, timeout_s=0.2)
+            if perception is not None and perception.capture_time_s >= asked_s:
+                return perception
+        raise TimeoutError(f"no perception of a fresh frame within {timeout_s} s: is the camera running?")
