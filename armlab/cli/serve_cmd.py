@@ -55,12 +55,11 @@ def run_serve(args: argparse.Namespace) -> int:
     import sys
 
     os.environ.setdefault("MUJOCO_GL", "egl")
-    import uvicorn
-
     from armlab.station.factory import make_device_station, make_sim_station
     from server.app import create_app
     from server.auth import open_url, resolve_token
     from server.logging_config import log_config
+    from server.serving import run
 
     config = build_station_config(args)
     problem = open_checked_store(args.db if args.db is not None else config.database_file(), config.database_backups)
@@ -74,13 +73,25 @@ def run_serve(args: argparse.Namespace) -> int:
     else:
         def factory():
             return make_sim_station(config, db_path=args.db)
-    app = create_app(station_factory=factory, token=token, allowed_hosts=[args.host, *config.allowed_hosts])
+    app = create_app(
+        station_factory=factory, token=token, allowed_hosts=[args.host, *config.allowed_hosts], on_close=print_close_report
+    )
     url = open_url(args.host, args.port, token)
     origin = "generated" if generated else "given"
     print(f"ArmLab control station ({origin} control token). Open:\n    {url}\n", flush=True)
     if args.host not in ("127.0.0.1", "localhost", "::1"):
         print(f"warning: listening on {args.host}: anyone who can reach it can watch; the token guards control", flush=True)
-    uvicorn.run(
-        app, host=args.host, port=args.port, log_level=args.log_level, ws_per_message_deflate=False, log_config=log_config()
-    )
+    run(app, args.host, args.port, args.log_level, log_config())
     return 0
+
+
+def print_close_report(report: dict) -> None:
+    """One line at shutdown: the threads joined, and any still running (a hang to look into)."""
+    import sys
+
+    joined = ", ".join(report.get("joined", ())) or "none"
+    alive = report.get("alive", ())
+    line = f"armlab serve: stopped; threads joined: {joined}"
+    if alive:
+        line += f"; still running: {', '.join(alive)}"
+    print(line, file=sys.stderr, flush=True)

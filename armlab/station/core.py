@@ -171,7 +171,7 @@ class Station(Latch, MotionGate, ManualCommands, Perceiving):
         self.begin_shutdown()
         deadline = time.monotonic() + self.config.close_timeout_s
         joined, alive = [], []
-        job = self._job
+        job = self._job or self._last_job  # a job cancelled by begin_shutdown may have just ended
         if job is not None and job.thread is not None:
             job.thread.join(max(0.0, deadline - time.monotonic()))
             (alive if job.thread.is_alive() else joined).append(job.thread.name)

@@ -123,7 +123,7 @@ class FrameSource(_Worker):
                 frame = self.camera.async_read(timeout_ms=200.0)
             except TimeoutError:
                 continue
-            except DEVICE_ERRORS as error:  # reported (the station faults), read again a little later
+            except Exception as error:  # noqa: BLE001 - any camera failure is reported (the station faults), then retried
                 if self.error is None:
                     log.warning("%s: camera failed: %s", self.name, error)
                 self.error = f"{type(error).__name__}: {error}"
