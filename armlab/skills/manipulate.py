@@ -56,7 +56,7 @@ def run_steps(station: Station, ctx: JobContext, steps: Sequence, replan: Callab
 # Pick and place with a safe transfer height ------------------------------------------------------
 
 TRANSFER_CLEARANCE_M = 0.05  # the held block's bottom (or the fingers) this far above the tallest obstacle
-MAX_PLACE_TILT_RAD = np.radians(5.0)  # a block set down tilted more than this lands on an edge
+MAX_PLACE_TILT_RAD = np.radians(5.0)  # by default a block is released at most this far from top-down
 
 
 def _finger_seed(station: Station, q_start, point_m, pitch_rad: float, yaw_rad: float, finger_axis_rad: float):
@@ -170,7 +170,8 @@ def plan_pick(station: Station, top_center_m, yaw_rad: float | None, edge_m: flo
 
 
 def plan_place(station: Station, surface_m, yaw_rad: float | None, edge_m: float, boxes: list, q_start=None,
-               max_transfer_z_m: float = 0.42, finger_axis_rad: float | None = None) -> list:
+               max_transfer_z_m: float = 0.42, finger_axis_rad: float | None = None,
+               max_tilt_rad: float = MAX_PLACE_TILT_RAD) -> list:
     """Plan setting the held block (edge edge_m, grasped as plan_pick does) with its bottom centre on
     surface_m, releasing place_clearance_m above it, then rising. finger_axis_rad: the world direction
     the fingers open along (e.g. across a line of blocks, so they do not push the neighbours)."""
@@ -181,7 +182,7 @@ def plan_place(station: Station, surface_m, yaw_rad: float | None, edge_m: float
     q_start = station.joints_rad() if q_start is None else q_start
     return _transfer_plan(station, q_start, release_m, yaw_rad, boxes, edge_m, "release",
                           ("move above place", "descend to place", "retreat"), max_transfer_z_m, finger_axis_rad,
-                          min_pitch_rad=config.top_down_pitch_rad - MAX_PLACE_TILT_RAD)
+                          min_pitch_rad=config.top_down_pitch_rad - max_tilt_rad)
 
 
 def plan_side_place(station: Station, surface_m, edge_m: float, boxes: list, q_start=None, max_transfer_z_m: float = 0.55) -> list:

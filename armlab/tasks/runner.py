@@ -39,6 +39,7 @@ class Move:
     yaw_rad: float | None = 0.0
     finger_axis_rad: float | None = None  # world direction the fingers open along when releasing
     side_ok: bool = False  # may be set down with the gripper horizontal when too high for top-down
+    max_tilt_rad: float = math.radians(5.0)  # how far from top-down the gripper may be when it releases
     on_placed: Callable[[float], None] | None = field(default=None, compare=False)  # called with the edge once placed
 
     def key(self) -> tuple:
@@ -87,6 +88,11 @@ def near(a, b, radius_m: float) -> bool:
 
 
 FINGER_REACH_M = 0.075  # neighbours closer than this (centre to centre) can meet an opening finger
+
+
+def park_pose(model) -> np.ndarray:
+    """Where the arm waits while the camera looks: the sleep pose (folded beside the base, low)."""
+    return np.asarray(model.sleep_rad, float)
 
 
 def pick_end_joints(steps: list) -> np.ndarray:
@@ -142,14 +148,14 @@ class TaskRunner:
     # Arm -------------------------------------------------------------------------------------------
 
     def park(self) -> None:
-        """Move to the sleep pose, where the arm hides no block from the camera, by a path that keeps
+        """Move to the park pose (park_pose: the arm hides no block from the camera) by a path that keeps
         clear of the objects seen last (straight there, else up first, else up and over the base)."""
         from armlab.motion import plan_joint_move
         from armlab.motion.cartesian import plan_vertical_segment
         from armlab.motion.clearance import first_collision
 
         model = self.station.model
-        q_park = np.asarray(model.sleep_rad, float)
+        q_park = park_pose(model)
         self.progress.next_block = self.progress.next_target_m = None  # no move planned until the next look
         q_now = self.station.joints_rad()
         if np.abs(q_now - q_park).max() <= 0.02:
@@ -236,7 +242,7 @@ class TaskRunner:
         def plan_the_place(q_start=None) -> list:
             try:
                 return plan_place(self.station, to, yaw, edge, place_boxes, q_start=q_start,
-                                  max_transfer_z_m=self.max_transfer_z_m, finger_axis_rad=axis)
+                                  max_transfer_z_m=self.max_transfer_z_m, finger_axis_rad=axis, max_tilt_rad=move.max_tilt_rad)
             except (Unreachable, ValueError):
                 if not move.side_ok:
                     raise
@@ -319,7 +325,7 @@ class TaskRunner:
     def clear_of_park(self, xy_m, clearance_m: float = 0.09) -> bool:
         """True if a tall column at (x, y) keeps clear of the arm's way into its park pose (the vertical
         plane through the base axis and the parked gripper, out to 0.22 m)."""
-        park_xy = self.station.model.fk(np.asarray(self.station.model.sleep_rad, float))[:2, 3]
+        park_xy = self.station.model.fk(np.asarray(self.station.model.sleep_rad, float))[:2, 3]  # the way down to it
         direction = park_xy / max(np.linalg.norm(park_xy), 1e-9)
         along = float(np.clip(np.dot(xy_m, direction), 0.0, 0.22))
         return float(np.linalg.norm(np.asarray(xy_m) - along * direction)) >= clearance_m
