@@ -1,9 +1,10 @@
 """Scores an autonomous job run from the API in the simulation: simulated time from the job's start to
-its end, the gripper path, and the judge's points for the final ground truth.
+its end, the gripper path, and the judge's points for the final ground truth (the competition events
+of DESIGN §7; the other jobs by their own scorers, armlab.tasks.scorers).
 
-Server side only: the task and perception never see ground truth or the judge (DESIGN §7). A watcher
-thread samples the true gripper point while the job runs (pick_stack's box rule needs the path) and
-scores the run once, the moment the job ends.
+Server side only: the task and perception never see ground truth or the judge. A watcher thread
+samples the true gripper point while the job runs (pick_stack's box rule needs the path) and scores
+the run once, the moment the job ends.
 """
 
 from __future__ import annotations
@@ -13,8 +14,9 @@ import threading
 from dataclasses import dataclass, field
 from typing import Any
 
-from armlab.scene import EVENTS
 from armlab.station.jobs import Job, jsonable
+from armlab.tasks.judge import EVENT_LIMITS_S
+from armlab.tasks.scorers import SCORED_JOBS
 
 log = logging.getLogger(__name__)
 
@@ -29,6 +31,7 @@ class AutoRun:
     job: Job
     name: str
     level: int | None
+    params: dict
     cell: Any  # the SimWorkcell: sim_time_s, gripper_point_m(), truth()
     sim_start_s: float
     path: list[list[float]] = field(default_factory=list)  # rows [sim time s, x, y, z] of the gripper point
@@ -37,9 +40,6 @@ class AutoRun:
     note: str = ""
     scored: threading.Event = field(default_factory=threading.Event)
 
-    @property
-    def judged(self) -> bool:
-        return self.name in EVENTS and self.level is not None
 
     def start(self) -> "AutoRun":
         threading.Thread(target=self._watch, name=f"auto-score-{self.job.id}", daemon=True).start()
@@ -64,16 +64,19 @@ class AutoRun:
             self.scored.set()
 
     def _judge(self) -> tuple[dict | None, str]:
-        if not self.judged:
-            return None, f"'{self.name}' is not a competition event: the judge does not score it"
-        from armlab.tasks.episode import _after_first_motion
-        from armlab.tasks.judge import judge
+        if not is_scored(self.name):
+            return None, f"'{self.name}' has no judge or scorer"
+        from armlab.tasks.episode import _after_first_motion, score_run
+        from armlab.tasks.scorers import score_job
 
         truth = self.cell.truth()
-        path = _after_first_motion(self.path)
-        score = judge(self.name, self.level, truth, sim_time_s=self.sim_end_s - self.sim_start_s,
-                      gripper_path_m=None if path is None else path.tolist())
-        return jsonable(score.to_dict()), ""
+        sim_time_s = self.sim_end_s - self.sim_start_s
+        if self.name in EVENT_LIMITS_S:
+            path = _after_first_motion(self.path)
+            score = score_run(self.name, self.level, truth, sim_time_s, None if path is None else path.tolist())
+            return jsonable(score.to_dict()), ""
+        score = score_job(self.name, truth, sim_time_s=sim_time_s, params=self.params)
+        return jsonable(score.to_dict()), "not a competition event: scored by the job's own scorer, not the §7 judge"
 
     def to_dict(self, wait_s: float = 0.0) -> dict:
         """The AutoScoreResponse wire dict; waits up to wait_s for the score of a job that has ended."""
@@ -88,6 +91,16 @@ class AutoRun:
         }
 
 
-def watch_run(job: Job, name: str, level: int | None, cell: Any, sim_start_s: float) -> AutoRun:
+def is_judged(name: str) -> bool:
+    """A competition event of DESIGN §7: the judge scores it."""
+    return name in EVENT_LIMITS_S
+
+
+def is_scored(name: str) -> bool:
+    """The simulation can score it: the judge, or the job's own scorer."""
+    return is_judged(name) or name in SCORED_JOBS
+
+
+def watch_run(job: Job, name: str, level: int | None, params: dict | None, cell: Any, sim_start_s: float) -> AutoRun:
     """Start watching `job` (begun at simulated time sim_start_s on `cell`) to score it when it ends."""
-    return AutoRun(job, name, level, cell, sim_start_s).start()
+    return AutoRun(job, name, level, dict(params or {}), cell, sim_start_s).start()

@@ -12,7 +12,8 @@ from typing import Annotated, Any, Literal
 
 from pydantic import BaseModel, ConfigDict, Field, model_validator
 
-from armlab.scene import COLORS, EVENTS, OBJECT_TYPES, SIZES
+from armlab.scene import COLORS, OBJECT_TYPES, SIZES
+from armlab.scene import JOBS as SCENE_JOBS
 
 Vector3 = list[float]
 View = Literal["color", "depth", "topdown"]
@@ -133,7 +134,7 @@ class SceneObjectRequest(Request):
 class SceneRequest(Request):
     """A generated competition scene (event, level, seed) or explicit objects (ground-truth format)."""
 
-    event: Literal[tuple(EVENTS)] | None = None  # type: ignore[valid-type]
+    event: Literal[tuple(SCENE_JOBS)] | None = Field(None, description="a competition event or another job with a scene generator")  # type: ignore[valid-type]
     level: int | None = Field(None, ge=1, le=3)
     seed: int | None = Field(None, ge=0, le=2**32 - 1)
     objects: list[SceneObjectRequest] | None = Field(None, max_length=100)
@@ -454,6 +455,7 @@ class TaskProgress(Wire):
 class ScoreRule(Wire):
     rule: str
     points: int
+    scored: bool = Field(description="the simulation scores it: the judge (§7), else the job's own scorer")
     detail: str
     object_ids: list[str]
 

@@ -12,7 +12,7 @@ from pydantic import ValidationError
 from armlab.tasks import JOBS, JobSpec, start_auto
 from armlab.tasks.judge import EVENT_LIMITS_S
 from armlab.tasks.registry import checked_request
-from server.auto_runs import SCORE_WAIT_S, AutoRun, watch_run
+from server.auto_runs import SCORE_WAIT_S, AutoRun, is_judged, is_scored, watch_run
 from server.deps import ControlAuth, StationDep
 from server.errors import ApiError
 from server.models import AutoJobsResponse, AutoRequest, AutoResponse, AutoScoreResponse, SceneRequest
@@ -32,13 +32,14 @@ def _has_scene(name: str, levels: tuple[int, ...]) -> bool:
 
 
 def _job_info(spec: JobSpec) -> dict:
-    judged = spec.name in EVENT_LIMITS_S and bool(spec.levels)
+    judged = is_judged(spec.name)
     return {
         "name": spec.name,
         "levels": list(spec.levels),
         "summary": spec.summary,
         "params": [{"name": name, "type": kind.__name__} for name, kind in spec.param_types],
         "judged": judged,
+        "scored": is_scored(spec.name),
         "scene": _has_scene(spec.name, spec.levels),
         "time_limit_s": EVENT_LIMITS_S.get(spec.name) if judged else None,
     }
@@ -76,7 +77,7 @@ def post_auto(body: AutoRequest, request: Request, station: StationDep, controll
     job = start_auto(station, body.job, level, params, source=controller)
     run = None
     if station.sim is not None:
-        run = request.app.state.auto_run = watch_run(job, body.job, level, station.sim, sim_start_s)
+        run = request.app.state.auto_run = watch_run(job, body.job, level, params, station.sim, sim_start_s)
     if not wait:
         return JSONResponse({"job": job.to_dict(), "score": None}, status_code=202)
     job.wait(AUTO_WAIT_TIMEOUT_S)
@@ -86,8 +87,9 @@ def post_auto(body: AutoRequest, request: Request, station: StationDep, controll
 
 @router.get("/score", response_model=AutoScoreResponse)
 def read_auto_score(request: Request, station: StationDep) -> dict:
-    """Simulation: the judge's score of the last autonomous job started here, from the ground truth when
-    it ended and the simulated time it took (sim time so far and no score while it runs)."""
+    """Simulation: the judge's score of the last autonomous job started here (§7 events; the job's own
+    scorer for the others), from the ground truth when it ended and the simulated time it took (sim time
+    so far and no score while it runs)."""
     if station.sim is None:
         raise ApiError(404, "not_found", "the judge scores runs in the simulation only")
     run = _last_run(request)

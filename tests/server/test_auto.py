@@ -107,7 +107,10 @@ def test_job_list_names_levels_summaries_and_parameters(http):
     assert body["count"] == len(body["data"]) >= 1
     pick_sort = jobs["pick_sort"]
     assert pick_sort["levels"] == [1, 2, 3] and pick_sort["judged"] is True and pick_sort["scene"] is True
-    assert pick_sort["time_limit_s"] == 180.0 and "y < 0" in pick_sort["summary"]
+    assert pick_sort["time_limit_s"] == 180.0 and "y < 0" in pick_sort["summary"] and pick_sort["scored"] is True
+    for name in ("sort_by_tag", "clear_table"):  # scored by their own scorers, not the §7 judge; scenes from seeds
+        assert jobs[name]["judged"] is False and jobs[name]["scored"] is True and jobs[name]["scene"] is True
+        assert http.post("/api/sim/scene", json={"event": name, "level": 1, "seed": 1}, headers=AUTH).status_code == 200
     for job in body["data"]:
         assert isinstance(job["summary"], str) and job["summary"]
         assert all(set(p) == {"name", "type"} for p in job["params"])
@@ -251,7 +254,9 @@ def test_cancel_while_holding_puts_the_block_down_and_the_arm_stops(http, calibr
     assert "cancel" in error["allowed"] and "auto" not in error["allowed"]
     running = http.get("/api/auto/score").json()
     assert running["job_id"] == job_id and running["final"] is False and running["score"] is None
-    held = live.wait_for(lambda: _truth(http)["gripper"]["holding_id"], 90, poll_s=0.05)
+    live.wait_for(lambda: _truth(http)["gripper"]["holding_id"] or http.get("/api/jobs/current").json()["job"]["state"] != "running", 90)
+    held = _truth(http)["gripper"]["holding_id"]
+    assert held, f"the job ended before it held a block: {http.get('/api/jobs/current').json()['job']}"
     task = http.get("/api/jobs/current").json()["job"]["extra"]["task"]
     assert task["next_block"]["color"] and len(task["next_target_m"]) == 3 and task["attempts"] >= 1
     cancelled = http.post("/api/jobs/cancel", headers=AUTH)
@@ -284,3 +289,24 @@ def test_estop_mid_job_latches_and_the_arm_stops(http, calibrated):
     _error(http.post("/api/auto", json={"job": "pick_sort", "level": 1}, headers=AUTH), 409, "wrong_state")
     assert http.post("/api/reset", headers=AUTH).json()["state"] == "idle"
     assert np.allclose(_assert_still(http), q_halted, atol=HALT_TOL_RAD)
+
+
+def test_a_job_with_parameters_runs_and_its_own_scorer_scores_it(http, calibrated):
+    """stack_here with a point and a colour: the red block goes onto the point, the blue one stays."""
+    scene = {"objects": [
+        {"id": "r", "type": "block", "color": "red", "size": "large", "position_m": [0.08, 0.24, 0.019], "yaw_rad": 0.3},
+        {"id": "b", "type": "block", "color": "blue", "size": "large", "position_m": [-0.12, 0.28, 0.019]},
+    ]}
+    assert http.post("/api/sim/scene", json=scene, headers=AUTH).status_code == 200
+    body = {"job": "stack_here", "params": {"x_m": -0.05, "y_m": 0.18, "color": "red"}}
+    with httpx.Client(base_url=str(http.base_url), timeout=RUN_TIMEOUT_S) as waiting:
+        response = waiting.post("/api/auto", params={"wait": "true"}, json=body, headers=AUTH)
+    assert response.status_code == 200, response.text
+    job, score = response.json()["job"], response.json()["score"]
+    assert job["state"] == "succeeded" and job["name"] == "stack_here", job
+    objects = {o["id"]: o for o in _truth(http)["objects"]}
+    assert math.dist(objects["r"]["position_m"][:2], (-0.05, 0.18)) < 0.015 and _tilt_deg(objects["r"]["quat_wxyz"]) < 15
+    assert math.dist(objects["b"]["position_m"][:2], (-0.12, 0.28)) < 0.005  # not its colour: left alone
+    assert score["final"] and score["level"] is None and "scorer" in score["note"]
+    assert score["score"]["points"] == score["score"]["max_points"] == 1
+

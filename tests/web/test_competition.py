@@ -107,6 +107,10 @@ def test_competition_panel_runs_pick_sort_level_1_to_the_full_score(page, server
     assert 0 <= check["target"]["u"] <= 1280 and 0 <= check["target"]["v"] <= 720, check
     assert check["targetM"][1] < 0, "pick_sort puts blocks at y < 0"
     assert any(all(abs(px[i] - PLAN_RGB[i]) < 40 for i in range(3)) for px in check["edge"]), check["edge"]
+    # Progress from the telemetry's job.extra.task (the websocket): attempts so far and the current step.
+    assert int(page.text_content("#comp-attempts")) >= 1
+    assert page.text_content("#comp-step").strip() != ""
+    assert page.text_content("#comp-done").endswith("/ 3")
     page.screenshot(path=str(shots / "competition_running.png"))
 
     # The end: the judge's score and its breakdown.

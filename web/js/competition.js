@@ -197,9 +197,9 @@ export class CompetitionPanel {
   async fetchScore(job) {
     this.scoredJobId = job.id;
     const spec = this.jobs.find((j) => j.name === job.name);
-    if (this.backend !== "sim" || !spec || !spec.judged) {
+    if (this.backend !== "sim" || !spec || !spec.scored) {
       $("comp-score").dataset.state = "none";
-      $("comp-score-points").textContent = spec && !spec.judged ? "not judged" : "judged in the simulation only";
+      $("comp-score-points").textContent = spec && !spec.scored ? "no score for this job" : "scored in the simulation only";
       return;
     }
     for (let attempt = 1; ; attempt += 1) {
@@ -277,7 +277,8 @@ export class CompetitionPanel {
     box.dataset.state = s.full ? "full" : "partial";
     $("comp-score-points").textContent = `${s.points} / ${s.max_points}`;
     const within = s.within_limit ? "within" : "over";
-    $("comp-score-meta").textContent = `simulated ${result.sim_time_s.toFixed(1)} s, ${within} the ${s.time_limit_s} s limit${s.full ? " · full points" : ""}`;
+    const note = result.note ? ` · ${result.note}` : "";
+    $("comp-score-meta").textContent = `simulated ${result.sim_time_s.toFixed(1)} s, ${within} the ${s.time_limit_s} s limit${s.full ? " · full points" : ""}${note}`;
     body.replaceChildren(
       ...s.breakdown.map((rule) => {
         const row = document.createElement("tr");

@@ -23,6 +23,7 @@ export const CLIENT_MESSAGE_TYPES = Object.freeze(["ack", "view", "command"]);
  * @property {string} summary
  * @property {Array<AutoParam>} params
  * @property {boolean} judged a competition event (DESIGN §7): the simulation scores it with the judge
+ * @property {boolean} scored the simulation scores it: the judge (§7), else the job's own scorer
  * @property {boolean} scene POST /api/sim/scene can generate its starting scene
  * @property {(number|null)} [time_limit_s] the event's time limit, simulated seconds
  */
@@ -312,7 +313,7 @@ export const CLIENT_MESSAGE_TYPES = Object.freeze(["ack", "view", "command"]);
 /**
  * A generated competition scene (event, level, seed) or explicit objects (ground-truth format).
  * @typedef {Object} SceneRequest
- * @property {(("pick_sort"|"pick_stack"|"line_up"|"stack_high"|"to_the_sky"|"sort_stack")|null)} [event]
+ * @property {(("pick_sort"|"pick_stack"|"line_up"|"stack_high"|"to_the_sky"|"sort_stack"|"sort_by_tag"|"clear_table")|null)} [event] a competition event or another job with a scene generator
  * @property {(number|null)} [level]
  * @property {(number|null)} [seed]
  * @property {(Array<SceneObjectRequest>|null)} [objects]
