@@ -339,6 +339,14 @@ class TaskRunner:
         pixels = project_points(calibration.T_world_camera, calibration.K, calibration.dist, points)
         return bool(np.all((pixels >= margin_px) & (pixels <= np.array([calibration.width, calibration.height]) - margin_px)))
 
+    def can_place_on(self, surface_m, edge_m: float) -> bool:
+        """True if a block of edge_m can be set down top-down on surface_m from here (obstacles aside)."""
+        try:
+            plan_place(self.station, surface_m, 0.0, edge_m, [], max_transfer_z_m=self.max_transfer_z_m)
+        except (Unreachable, ValueError):
+            return False
+        return True
+
     def feed_spot(self) -> tuple[float, float] | None:
         """The simulated feeder's spot (to keep clear), when the scene has a feeder."""
         sim = self.station.sim
