@@ -6,6 +6,15 @@ board are kept, and the one closest to the seed is returned (elbow-up solutions 
 pitch given, pitch pi/2 (straight down) is tried first and then the steepest reachable pitch is
 searched, so far targets can still be picked. Failures raise Unreachable with the reason.
 
+The half-turned waist is the "over the back" branch: waist = target direction + pi, the shoulder
+leaning back past vertical, the arm reaching over the base to a target behind it. The requested
+pitch is a world quantity (below the horizontal, in the vertical plane through the base axis and
+the target, 0 = pointing away from the base axis, pi/2 = straight down), so in the arm's own plane,
+which faces away from the target on that branch, the gripper's pitch is pi - pitch. Other pitches
+ask for other orientations: the arm-plane pitch (shoulder + elbow + wrist_angle) when the gripper
+point lies behind the base axis, an rpy/asin pitch (which cannot say "pointing back toward the base")
+when the gripper points back toward the base axis; ArmModel.pitch_of gives the pitch ik means.
+
 Plain `math` on floats (about ten microseconds a call); ik_rx200_batch holds the same maths
 vectorised over N targets with numpy.
 """

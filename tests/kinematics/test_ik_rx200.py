@@ -10,6 +10,13 @@ from hypothesis import strategies as st
 from armlab.kinematics import Unreachable
 
 DOWN = math.pi / 2
+# RX200 geometry from config/arms/rx200.yaml, typed in by hand so the expectations below do not come
+# from the solver: shoulder axis height, shoulder->elbow at q = 0 (urdf_origins.elbow), forearm, tool.
+SHOULDER_Z_M = 0.10457
+UPPER_ARM_M = math.hypot(0.05, 0.2)
+UPPER_ARM_ELEVATION_RAD = math.atan2(0.2, 0.05)  # 75.96 deg: the upper arm is vertical at shoulder = beta - pi/2
+FOREARM_M = 0.2
+TOOL_M = 0.158575
 
 
 def physical_pitch(arm, poses):
@@ -28,15 +35,31 @@ def valid_random_configs(arm, count, seed):
     return q[above]
 
 
+def leaning_back(q):
+    """Shoulder past vertical: the upper arm leans back over the base (q (N, 5) -> (N,) bool)."""
+    return np.asarray(q)[:, 1] < UPPER_ARM_ELEVATION_RAD - math.pi / 2
+
+
+def over_the_back(arm, q):
+    """The gripper point lies behind the base axis, seen from where the waist faces: the arm reaches
+    over the base to a target behind it (waist = the target's direction + pi). q (N, 5) -> (N,) bool."""
+    q = np.asarray(q)
+    point = arm.fk(q)[:, :2, 3] - arm.T_world_base[:2, 3]
+    facing = q[:, 0] + math.atan2(arm.T_world_base[1, 0], arm.T_world_base[0, 0])  # waist in the world
+    return point[:, 0] * np.cos(facing) + point[:, 1] * np.sin(facing) < 0.0
+
+
 def test_batch_round_trip_100000_targets(rx200):
+    # Every in-limit, above-board sample is kept, the arm leaning back over the base included.
     q = valid_random_configs(rx200, 150_000, seed=11)[:100_000]
     assert q.shape[0] == 100_000
+    assert leaning_back(q).sum() > 50_000 and over_the_back(rx200, q).sum() > 30_000
     poses = rx200.fk(q)
     targets, pitch = poses[:, :3, 3], physical_pitch(rx200, poses)
     solution, ok = rx200.ik_batch(targets, pitch)
     assert ok.all(), f"{(~ok).sum()} unsolved"
     reached = rx200.fk(solution)
-    assert np.abs(reached[:, :3, 3] - targets).max() < 1e-6
+    assert np.abs(reached[:, :3, 3] - targets).max() < 1e-9
     assert np.allclose(physical_pitch(rx200, reached), pitch, atol=1e-6)
     assert rx200.within_limits(solution)
     assert np.all(rx200.joint_frames(solution)[:, :, 2, 3] >= -1e-9)
@@ -169,12 +192,142 @@ def test_batch_yaw_matches_scalar(rx200):
         assert np.allclose(batch[i], rx200.ik(targets[i], DOWN, yaws[i], q_seed=seed), atol=1e-9)
 
 
+# ---------------------------------------------------------------- over the back (waist + pi, shoulder past vertical)
+
+# In-limit joint vectors with every joint above the board, the shoulder past vertical and the gripper
+# point behind the base axis: the arm reaches over the base to a target behind it.
+LEANING_BACK_Q = [
+    [0.5, -1.5, 1.2, 2.1, 0.3],  # issue 8's example: gripper 7 cm above the board, just behind the base
+    [0.5, -1.5, 1.2, DOWN + 0.3, 0.3],  # the same arm pointing straight down
+    [2.92, -1.88, -0.69, 1.25, 1.17],  # far over the back, pointing up: only the half-turned waist reaches it
+    [1.34, -1.79, -0.99, 1.95, 0.37],  # likewise
+]
+# Of those, the targets no solution facing the target reaches (only waist = target direction + pi)
+ONLY_OVER_THE_BACK_Q = LEANING_BACK_Q[2:]
+
+
+def world_approach(arm, target, pitch):
+    """The approach axis a pitch means in the world: `pitch` below the horizontal, in the vertical plane
+    through the base axis and the target, 0 = pointing away from the base axis."""
+    radial = np.asarray(target[:2], float) - arm.T_world_base[:2, 3]
+    radial /= np.linalg.norm(radial)
+    return np.array([math.cos(pitch) * radial[0], math.cos(pitch) * radial[1], -math.sin(pitch)])
+
+
+@pytest.mark.parametrize("q", LEANING_BACK_Q)
+def test_target_of_an_arm_leaning_back_over_the_base_is_solved(rx200, q):
+    q = np.array(q)
+    assert rx200.within_limits(q) and rx200.joint_frames(q)[:, 2, 3].min() >= 0.0
+    assert leaning_back(q[None])[0] and over_the_back(rx200, q[None])[0]
+    pose = rx200.fk(q)
+    target, pitch = pose[:3, 3], float(physical_pitch(rx200, pose[None])[0])
+    for seed in (None, q, rx200.sleep_rad):
+        solution = rx200.ik(target, pitch=pitch, q_seed=seed)
+        reached = rx200.fk(solution)
+        assert np.abs(reached[:3, 3] - target).max() < 1e-9
+        assert np.allclose(reached[:3, 0], world_approach(rx200, target, pitch), atol=1e-9)
+        assert rx200.within_limits(solution)
+        assert rx200.joint_frames(solution)[:, 2, 3].min() >= -1e-9
+    # seeded with the arm's own pose, that pose is the closest solution: the over-the-back one
+    assert np.allclose(rx200.ik(target, pitch=pitch, q_seed=q), q, atol=1e-9)
+    batch, ok = rx200.ik_batch(target[None], pitch, q_seed=q)
+    assert ok[0] and np.allclose(batch[0], q, atol=1e-9)
+
+
+@pytest.mark.parametrize("q", ONLY_OVER_THE_BACK_Q)
+def test_targets_only_reachable_over_the_back_get_the_half_turned_waist(rx200, q):
+    q = np.array(q)
+    pose = rx200.fk(q)
+    target, pitch = pose[:3, 3], float(physical_pitch(rx200, pose[None])[0])
+    toward_target = math.atan2(target[1], target[0]) - math.pi / 2  # waist facing the target (base x = world y)
+    for seed_waist in (toward_target, 0.0, q[0]):
+        seed = np.array([seed_waist, 0.0, 0.0, 0.0, 0.0])
+        solution = rx200.ik(target, pitch=pitch, q_seed=seed)
+        assert math.cos(solution[0] - toward_target) == pytest.approx(-1.0, abs=1e-9)  # waist = direction + pi
+        assert leaning_back(solution[None])[0]
+        assert np.abs(rx200.fk(solution)[:3, 3] - target).max() < 1e-9
+    q_found, pitch_found = rx200.ik_with_pitch(target)  # the pitch search finds a pitch there too
+    assert np.abs(rx200.fk(q_found)[:3, 3] - target).max() < 1e-9
+    assert rx200.pitch_of(q_found) == pytest.approx(pitch_found, abs=1e-9)
+
+
+@pytest.mark.parametrize("yaw", [0.0, 0.3, -1.2, 2.5])
+def test_over_the_back_pitch_and_yaw_mean_the_same_in_the_world(rx200, yaw):
+    # Straight down over a point just behind the base, the arm leaning back with the waist turned away.
+    q = np.array(LEANING_BACK_Q[1])
+    target = rx200.fk(q)[:3, 3]
+    solution = rx200.ik(target, pitch=DOWN, yaw=yaw, q_seed=q)
+    assert np.allclose(solution[:4], q[:4], atol=1e-9)  # the over-the-back branch, as seeded
+    reached = rx200.fk(solution)
+    assert np.abs(reached[:3, 3] - target).max() < 1e-9
+    assert np.allclose(reached[:3, 0], [0.0, 0.0, -1.0], atol=1e-9)  # pi/2 = straight down
+    assert face_angle_error(reached[:2, 1], yaw) < 1e-9  # the fingers close across the block's faces
+    # tilted and far over the back (pointing up): the pitch is the world pitch, the yaw the world yaw
+    q_far = np.array(LEANING_BACK_Q[2])
+    far = rx200.fk(q_far)[:3, 3]
+    pitch = float(physical_pitch(rx200, rx200.fk(q_far)[None])[0])
+    solution = rx200.ik(far, pitch=pitch, yaw=yaw, q_seed=q_far)
+    reached = rx200.fk(solution)
+    assert np.abs(reached[:3, 3] - far).max() < 1e-9
+    assert np.allclose(reached[:3, 0], world_approach(rx200, far, pitch), atol=1e-9)
+    assert face_angle_error(reached[:2, 1], yaw) < 1e-9
+
+
+# ---------------------------------------------------------------- the default choice in front of the arm
+
+
+def hand_elbow_up_straight_down(x, y, z):
+    """Elbow-up joints pointing straight down at world (x, y, z), by plane geometry (RX200, base at the
+    world origin with base x = world y): waist toward the target, law of cosines in the arm's plane."""
+    waist = math.atan2(-x, y)
+    rc, zc = math.hypot(x, y), z + TOOL_M - SHOULDER_Z_M  # wrist centre from the shoulder
+    d = math.hypot(rc, zc)
+    cos_at_shoulder = (UPPER_ARM_M**2 + d * d - FOREARM_M**2) / (2.0 * UPPER_ARM_M * d)
+    elevation = math.atan2(zc, rc) + math.acos(cos_at_shoulder)  # elbow above the shoulder-wrist line
+    shoulder = UPPER_ARM_ELEVATION_RAD - elevation
+    forearm_down = math.atan2(-(zc - UPPER_ARM_M * math.sin(elevation)), rc - UPPER_ARM_M * math.cos(elevation))
+    return [waist, shoulder, forearm_down - shoulder, DOWN - forearm_down, 0.0]
+
+
+@pytest.mark.parametrize("target", [[0.0, 0.25, 0.05], [-0.15, 0.2, 0.03], [0.2, 0.15, 0.0], [-0.1, 0.3, 0.08], [0.25, 0.05, 0.02]])
+def test_default_choice_in_front_matches_hand_computed_elbow_up(rx200, target):
+    expected = hand_elbow_up_straight_down(*target)
+    for seed in (None, [0.3, 0.2, 0.2, 1.0, 0.0], [-0.5, 0.5, -0.3, 1.4, 0.0]):
+        assert np.allclose(rx200.ik(target, q_seed=seed), expected, atol=1e-9)
+
+
+# (target, pitch, yaw, seed, expected q, pitch used): recorded from ik_rx200 at commit 5935066, before the
+# over-the-back review, so the choice among solutions for ordinary targets stays as it was.
+RECORDED_CHOICES = [
+    ([0.0, 0.25, 0.05], None, None, None, [0.0, 0.10733035489661802, 0.3565698658668497, 1.1068961060314289, 0.0], DOWN),
+    ([-0.15, 0.2, 0.03], DOWN, 0.4, None, [0.6435011087932843, 0.1551994960527554, 0.4025892596115861, 1.0130075711305553, 0.24350110879328435], DOWN),
+    ([0.2, 0.15, 0.0], DOWN, None, [0.5, 0.3, 0.2, 1.0, 0.0], [-0.9272952180016123, 0.24202742377710784, 0.4536572978452442, 0.8751116051725445, 0.0], DOWN),
+    ([0.1, 0.3, 0.1], 1.0, -0.7, [0.0, 0.0, 0.0, 0.0, 1.0], [-0.32175055439664213, -0.029125524460796193, 0.40010121912661356, 0.6290243053341826, 0.44120184698978004], 1.0),
+    ([-0.25, 0.3, 0.02], None, 0.2, None, [0.6947382761967034, 0.9344337586237277, -0.9112484291337373, 1.547610997304906, 0.49473827619670363], DOWN),
+    ([0.0, 0.45, 0.02], None, None, None, [0.0, 1.1621755319929745, -1.325762094023228, 1.418455513821593, 0.0], 1.2548689517913398),
+    ([0.3, 0.35, 0.04], None, 1.2, [-0.6, 0.5, 0.5, 0.5, 0.0], [-0.7086262721276704, 1.1251018020618204, -1.3257623733958492, 1.3630777473927775, -0.3655690415334272], 1.1624171760587485),
+    ([0.05, 0.2, 0.25], 0.0, None, None, [-0.24497866312686423, -1.0763128571150116, 1.0437876703254936, 0.03252518678951777, 0.0], 0.0),
+    ([-0.1, 0.35, 0.15], 0.3, 0.0, [0.2, 0.0, 0.0, 0.0, -2.0], [0.27829965900511144, -0.025986017415020157, 0.6020144692904488, -0.2760284518754288, -2.3730637415800055], 0.3),
+    ([0.15, 0.05, 0.03], DOWN, None, [2.0, 0.0, 0.0, 0.0, 0.0], [-1.2490457723982544, -0.24619481172735647, 0.9032030513283436, 0.9137880871939092, 0.0], DOWN),
+]  # fmt: skip
+
+
+@pytest.mark.parametrize("target, pitch, yaw, seed, expected, pitch_used", RECORDED_CHOICES)
+def test_default_choice_in_front_is_unchanged(rx200, target, pitch, yaw, seed, expected, pitch_used):
+    q, used = rx200.ik_with_pitch(target, pitch, yaw, seed)
+    assert np.allclose(q, expected, atol=1e-9)
+    assert used == pytest.approx(pitch_used, abs=1e-9)
+    batch, ok = rx200.ik_batch([target], pitch, yaw, q_seed=seed)
+    assert ok[0] and np.allclose(batch[0], expected, atol=1e-6)  # the batch search refines the pitch to ~1e-7
+
+
 @pytest.mark.parametrize(
     "target, pitch, reason",
     [
         ([0.0, 0.7, 0.1], None, "out of reach"),
         ([0.0, 0.7, 0.1], DOWN, "out of reach"),
         ([0.0, 0.0, 0.8], None, "out of reach"),
+        ([0.0, -0.45, 0.5], None, "out of reach"),  # behind and above: too far even over the back
         ([0.0, 0.2, -0.01], None, "below the table"),
         ([0.0, 0.35, 0.0], -0.15, "below the table"),  # the wrist would go under the board
         ([0.0, 0.05, 0.3], DOWN, "joint limit (wrist_angle)"),

@@ -31,10 +31,19 @@ def page(browser, server):
     wait_frames(page, 2)
     yield page
     page.close()
+    _take_control_back(server)
     if server.get("/api/status")["state"] == "auto_sort":
         server.post("/api/jobs/cancel")
         server.wait_status(lambda s: s["state"] != "auto_sort", 60, "the job to end")
     server.post("/api/sim/scene", STARTUP_SCENE)
+
+
+def _take_control_back(server) -> None:
+    """The page drove the station; the tests after this one command it over REST again (when the
+    station leases control, take the lease back for them)."""
+    response = server.request("POST", "/api/sim/scene", STARTUP_SCENE)
+    if response.status_code == 409 and response.json()["error"]["code"] == "not_controller":
+        server.post("/api/control/take")
 
 
 def _ensure_calibrated(page, server) -> None:
