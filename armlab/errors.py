@@ -36,3 +36,31 @@ class CommandRefused(RuntimeError):
         super().__init__(
             f"command '{command}' is not allowed in state '{state}'; allowed: {', '.join(self.allowed) or 'none'}"
         )
+
+
+class NotController(RuntimeError):
+    """A control command from a client that does not hold the control lease (HTTP 409).
+
+    Attributes:
+        controller: who holds the lease.
+    """
+
+    def __init__(self, command: str, controller: str) -> None:
+        self.command = command
+        self.controller = controller
+        super().__init__(
+            f"command '{command}' refused: the station is controlled by '{controller}'; "
+            "take control first (POST /api/control/take; the current controller is told)"
+        )
+
+
+class NeedsConfirmation(RuntimeError):
+    """A command that is dangerous in the current state and was sent without confirm: true (HTTP 409)."""
+
+
+class DeviceLost(ConnectionError):
+    """A device stopped answering (or is still gone when asked to recover); the message names it (HTTP 503)."""
+
+
+class ShuttingDown(ConnectionError):
+    """The station is closing: no new command is accepted (HTTP 503)."""

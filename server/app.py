@@ -8,6 +8,7 @@ from __future__ import annotations
 
 import logging
 from collections.abc import Callable, Iterable
+from concurrent.futures import ThreadPoolExecutor
 from contextlib import asynccontextmanager
 from pathlib import Path
 from typing import Any
@@ -35,6 +36,9 @@ def default_station_factory():
     return make_sim_station(load_station_config())
 
 
+SAFETY_THREADS = 4  # the e-stop's own pool: it never queues behind blocked `?wait=true` requests
+
+
 def _open_station(factory: Callable[[], Any]):
     """(station, closer): a factory may return a Station or a handle with .station and .close()."""
     made = factory()
@@ -47,11 +51,13 @@ def create_app(
     token: str | None = None,
     web_dir: str | Path | None = WEB_DIR,
     allowed_hosts: Iterable[str] = (),
+    on_close: Callable[[dict], None] | None = None,
 ) -> FastAPI:
     """The app. token: the control token (default: $ARMLAB_TOKEN, else generated: read app.state.token).
 
     allowed_hosts: Host names served besides the loopback names (the --host name, config allowed_hosts);
     any other Host, and any foreign Origin, gets 403 (server/guard.py).
+    on_close(report): called at shutdown with the station's close report ({"joined", "alive"} thread names).
     """
     factory = station_factory or default_station_factory
 
@@ -59,14 +65,22 @@ def create_app(
     async def lifespan(app: FastAPI):
         station_obj, close = _open_station(factory)
         app.state.station = station_obj
-        app.state.hub = StreamHub(station_obj, station_obj.config.jpeg_quality)
+        app.state.safety_pool = ThreadPoolExecutor(SAFETY_THREADS, thread_name_prefix="armlab-safety")
+        app.state.hub = StreamHub(station_obj, station_obj.config.jpeg_quality, app.state.safety_pool)
         app.state.hub.start()
         try:
             yield
         finally:
+            station_obj.begin_shutdown()  # halt and end the job first: waiting requests return at once
             app.state.hub.stop()
             app.state.station = None
-            close()
+            report = close() or {}
+            app.state.safety_pool.shutdown(wait=False, cancel_futures=True)
+            app.state.close_report = report
+            if report.get("alive"):
+                log.warning("shutdown: threads still running: %s", ", ".join(report["alive"]))
+            if on_close is not None:
+                on_close(report)
 
     app = FastAPI(
         title="ArmLab Control Station",

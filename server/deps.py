@@ -1,4 +1,8 @@
-"""FastAPI dependencies: the station (StationDep) and the control-token check (ControlAuth)."""
+"""FastAPI dependencies: the station (StationDep) and the control-token check (ControlAuth).
+
+Both are `async def` so they run on the event loop (they do no I/O): an e-stop route never waits for a
+free worker thread just to resolve its dependencies.
+"""
 
 from __future__ import annotations
 
@@ -8,6 +12,7 @@ from fastapi import Depends, Header, Request
 from fastapi.security import HTTPAuthorizationCredentials, HTTPBearer
 
 from armlab.station.core import Station
+from armlab.station.lease import checked_controller
 from server.auth import token_matches
 from server.errors import ApiError
 
@@ -15,29 +20,32 @@ from server.errors import ApiError
 control_token = HTTPBearer(auto_error=False, scheme_name="ControlToken", description="the control token printed at start-up")
 
 
-def get_station(request: Request) -> Station:
+async def get_station(request: Request) -> Station:
     station = getattr(request.app.state, "station", None)
     if station is None:
         raise ApiError(503, "device", "the station is not running")
     return station
 
 
-def require_control(
+async def require_control(
     request: Request,
     credentials: Annotated[HTTPAuthorizationCredentials | None, Depends(control_token)],
-    x_armlab_controller: Annotated[str | None, Header()] = None,
+    x_armlab_controller: Annotated[
+        str | None, Header(description="this client's controller name for the control lease (1-64 of A-Z a-z 0-9 _ . : -)")
+    ] = None,
 ) -> str:
-    """Check 'Authorization: Bearer <token>'; returns who controls: 'ui' or 'api'.
-
-    'ui' when the request says so (X-Armlab-Controller: ui) or comes from a browser page (browsers
-    add Sec-Fetch-Mode to fetch() calls; scripts do not); otherwise 'api'.
-    """
+    """Check 'Authorization: Bearer <token>' (the scheme name in any case, as RFC 7235 says); returns the
+    controller's name for the lease: the X-Armlab-Controller header, else 'ui' for a browser page
+    (browsers add Sec-Fetch-Mode to fetch() calls) and 'api' for a script."""
     given = credentials.credentials.strip() if credentials is not None else None
     if not token_matches(request.app.state.token, given or None):
         raise ApiError(401, "unauthorized", "this command needs the control token: send 'Authorization: Bearer <token>'")
-    declared = (x_armlab_controller or "").strip().lower()
-    if declared in ("ui", "api"):
-        return declared
+    declared = (x_armlab_controller or "").strip()
+    if declared:
+        try:
+            return checked_controller(declared)
+        except ValueError as error:
+            raise ApiError(422, "invalid", f"X-Armlab-Controller: {error}") from error
     return "ui" if "sec-fetch-mode" in request.headers else "api"
 
 

@@ -27,6 +27,8 @@ ERROR_CODES = (
     "not_calibrated",
     "unauthorized",
     "forbidden",
+    "not_controller",
+    "needs_confirmation",
     "device",
     "internal",
 )
@@ -43,6 +45,7 @@ Angle = Annotated[float, Field(ge=-ANGLE_LIMIT_RAD, le=ANGLE_LIMIT_RAD, descript
 Coordinate = Annotated[float, Field(ge=-POSITION_LIMIT_M, le=POSITION_LIMIT_M, description="metres, |value| <= 5")]
 Position = Annotated[list[Coordinate], Field(min_length=3, max_length=3)]
 MovingTime = Annotated[float, Field(gt=0.0, le=MOVING_TIME_LIMIT_S, description="seconds; the station refuses more than its configured maximum")]
+Velocity = Annotated[float, Field(ge=-ANGLE_LIMIT_RAD, le=ANGLE_LIMIT_RAD, description="rad/s, |value| <= 2π; the station applies the joint limits")]
 Pixel = Annotated[float, Field(ge=0.0, le=PIXEL_LIMIT, description="pixel coordinate in the colour image")]
 ProgramId = Annotated[int, Field(ge=0, le=SQLITE_INTEGER_MAX, description="a program id (SQLite integer)")]
 
@@ -80,6 +83,14 @@ class PoseNameRequest(Request):
 
 class TorqueRequest(Request):
     enabled: bool
+    confirm: bool = Field(False, description="torque off outside teach lets the arm fall: needs confirm: true")
+
+
+class JogRequest(Request):
+    """Hold-to-run jog: joint velocities kept for jog_hold_s after each heartbeat (this request, or a
+    heartbeat), then the arm ramps to rest by itself."""
+
+    velocity_rad_s: list[Velocity] = Field(min_length=1, max_length=12, description="joint velocities, joint_names order; zeros stop")
 
 
 class GripperRequest(Request):
@@ -199,7 +210,9 @@ class Status(Wire):
     moving: bool
     calibrated: bool
     backend: Literal["sim", "real"]
-    controller: Literal["ui", "api"] | None
+    controller: str | None = Field(description="who holds the control lease (None: free); only it may command")
+    controller_since_s: float | None = Field(None, description="when it took control (time.time())")
+    devices_lost: dict[str, str] = Field(default_factory=dict, description="devices not answering, with the reason")
     job: JobInfo | None
     allowed_commands: list[str]
     time_s: float
@@ -225,6 +238,8 @@ class DetectionsResponse(Wire):
     count: int
     time_s: float
     frame_sequence: int
+    stale: bool = Field(False, description="True while the camera is lost or perception is old: data is then empty")
+    stale_reason: str | None = None
 
 
 class TagInfo(Wire):
@@ -288,6 +303,7 @@ class FrameHeader(Wire):
 class TelemetryMessage(Status):
     type: Literal["telemetry"] = "telemetry"
     detections: list[Detection]
+    detections_stale: bool = False
 
 
 class EventMessage(Wire):
@@ -340,6 +356,7 @@ class HelloMessage(Wire):
     type: Literal["hello"] = "hello"
     server_time_s: float
     can_control: bool
+    controller: str | None = Field(None, description="this session's controller name (the lease holder's name when it commands)")
     backend: Literal["sim", "real"]
     workcell: WorkcellInfo
 
@@ -357,7 +374,13 @@ class ViewMessage(Request):
 
 class CommandMessage(Request):
     type: Literal["command"]
-    name: Literal["estop", "reset", "cancel"]
+    name: Literal["estop", "reset", "cancel", "take_control", "release_control"]
+
+
+class HeartbeatMessage(Request):
+    """The controlling page is still there: keeps its hold-to-run jog going for another jog_hold_s."""
+
+    type: Literal["heartbeat"]
 
 
 WIRE_MODELS: tuple[type[BaseModel], ...] = (
@@ -380,6 +403,7 @@ WIRE_MODELS: tuple[type[BaseModel], ...] = (
     PoseRequest,
     PoseNameRequest,
     TorqueRequest,
+    JogRequest,
     GripperRequest,
     PixelRequest,
     TargetRequest,
@@ -400,6 +424,7 @@ WIRE_MODELS: tuple[type[BaseModel], ...] = (
     AckMessage,
     ViewMessage,
     CommandMessage,
+    HeartbeatMessage,
 )
 
 

@@ -5,11 +5,17 @@ watches and hands the result to the StreamHub on the event loop. Each client has
 wakes on news and sends the newest telemetry, new events, the newest calibration and — only once the
 client acknowledged the previous frame — the newest frame of its view. Nothing queues per client, so
 a slow or stalled client holds at most one frame in flight and never slows anyone else.
+
+A session with the control token is a controller named by `?controller=` (else a name of its own): it
+may take the control lease, its heartbeats keep its hold-to-run jog going, and when its last session
+closes the lease it holds is released. Calls into the station run off the event loop (e-stop on the
+app's safety pool).
 """
 
 from __future__ import annotations
 
 import asyncio
+import itertools
 import json
 import logging
 import struct
@@ -23,22 +29,24 @@ from pydantic import Field, TypeAdapter, ValidationError
 from starlette.websockets import WebSocket, WebSocketDisconnect
 
 from armlab.station.core import Station
+from armlab.station.lease import checked_controller
 from armlab.station.perception import _Worker
 from armlab.workcell import DEFAULT_WORKCELL, load_workcell
-from server.models import AckMessage, CommandMessage, ViewMessage
+from server.models import AckMessage, CommandMessage, HeartbeatMessage, ViewMessage
 from server.views import ViewKey, compose_view, encode_jpeg
 
 log = logging.getLogger(__name__)
 
 # What a client may send: validated strictly (server/models.py), dispatched on "type".
-CLIENT_MESSAGE = TypeAdapter(Annotated[AckMessage | ViewMessage | CommandMessage, Field(discriminator="type")])
+CLIENT_MESSAGE = TypeAdapter(Annotated[AckMessage | ViewMessage | CommandMessage | HeartbeatMessage, Field(discriminator="type")])
+_SESSION_NUMBERS = itertools.count(1)
 
 
 def _message_error(text: str, error: ValidationError) -> str:
     """One line for the client: what was wrong with its message."""
     first = error.errors()[0]
     where = ".".join(str(part) for part in first.get("loc", ()))
-    return f"bad message {text[:80]!r}: {where + ': ' if where else ''}{first.get('msg')} (expected type ack, view or command)"
+    return f"bad message {text[:80]!r}: {where + ': ' if where else ''}{first.get('msg')} (expected type ack, view, command or heartbeat)"
 
 
 @dataclass(frozen=True)
@@ -120,6 +128,7 @@ class ClientSession:
 
     websocket: WebSocket
     can_control: bool
+    controller: str = ""
     key: ViewKey = field(default_factory=ViewKey)
     wake: asyncio.Event = field(default_factory=asyncio.Event)
     awaiting_ack: int | None = None
@@ -133,8 +142,9 @@ class ClientSession:
 class StreamHub:
     """Lives on the event loop; threads hand it news through call_soon_threadsafe."""
 
-    def __init__(self, station: Station, jpeg_quality: int) -> None:
+    def __init__(self, station: Station, jpeg_quality: int, safety_pool=None) -> None:
         self.station = station
+        self.safety_pool = safety_pool  # None: the loop's default executor
         self.loop: asyncio.AbstractEventLoop | None = None
         self.clients: set[ClientSession] = set()
         self.frames: dict[ViewKey, EncodedFrame] = {}
@@ -209,9 +219,16 @@ class StreamHub:
         name = getattr(self.station.perception_config, "workcell", None) or DEFAULT_WORKCELL
         return load_workcell(name).to_wire()
 
-    async def serve(self, websocket: WebSocket, can_control: bool) -> None:
-        client = ClientSession(websocket, can_control, event_seq=self.station.events.last_seq)
-        hello = {"type": "hello", "server_time_s": time.time(), "can_control": can_control, "backend": self.station.backend,
+    @staticmethod
+    def session_controller(requested: str | None) -> str:
+        """The controller name of a new session: the one it asked for (validated), else its own 'ws-<n>'."""
+        return checked_controller(requested) if requested else f"ws-{next(_SESSION_NUMBERS)}"
+
+    async def serve(self, websocket: WebSocket, can_control: bool, controller: str | None = None) -> None:
+        client = ClientSession(websocket, can_control, controller=controller or self.session_controller(None),
+                               event_seq=self.station.events.last_seq)
+        hello = {"type": "hello", "server_time_s": time.time(), "can_control": can_control,
+                 "controller": client.controller if can_control else None, "backend": self.station.backend,
                  "workcell": self._workcell_info()}
         await websocket.send_text(json.dumps(hello))
         calibration = self.station.calibration_info
@@ -234,6 +251,8 @@ class StreamHub:
             self.clients.discard(client)
             self.encoder.unwatch(client.key)
             self._forget_unwatched()
+            if client.can_control and not any(other.controller == client.controller for other in self.clients):
+                await self._off_loop(self.station.release_control, client.controller, "released (disconnected)")
 
     async def _send_loop(self, client: ClientSession) -> None:
         websocket = client.websocket
@@ -276,6 +295,9 @@ class StreamHub:
                     client.wake.set()
             elif isinstance(parsed, ViewMessage):
                 await self._change_view(client, parsed.view, parsed.layers)
+            elif isinstance(parsed, HeartbeatMessage):
+                if client.can_control:
+                    await self._off_loop(self.station.heartbeat, client.controller)
             else:
                 await self._command(client, parsed.name)
 
@@ -294,16 +316,26 @@ class StreamHub:
             client.last_frame_seq = -1
             client.wake.set()
 
+    async def _off_loop(self, function, *args):
+        """Run a station call on a worker thread (the station's lock is short, but never on the loop)."""
+        return await asyncio.to_thread(function, *args)
+
     async def _command(self, client: ClientSession, name: str) -> None:
         if not client.can_control:
             await self._reply_error(client, f"command '{name}' refused: this connection is view-only (no control token)")
             return
-        actions = {"estop": self.station.estop, "reset": self.station.reset, "cancel": self.station.cancel_job}
+        actions = {
+            "estop": self.station.estop, "reset": self.station.reset, "cancel": self.station.cancel_job,
+            "take_control": self.station.take_control, "release_control": self.station.release_control,
+        }
         if name not in actions:
             await self._reply_error(client, f"unknown command {name!r}; the websocket accepts {', '.join(actions)}")
             return
         try:
-            await asyncio.to_thread(actions[name], "ui")
+            if name == "estop":
+                await asyncio.get_running_loop().run_in_executor(self.safety_pool, actions[name], client.controller)
+            else:
+                await self._off_loop(actions[name], client.controller)
         except Exception as error:  # noqa: BLE001 - reported to the client as an event
             await self._reply_error(client, str(error))
 

@@ -90,6 +90,7 @@ def _issue(station, command: str, program_id: int):
         "sleep": lambda: station.sleep(moving_time_s=1.0),
         "move_joints": lambda: station.move_joints(FAR_Q, moving_time_s=1.0),
         "move_to": lambda: station.move_to([0.0, 0.3, 0.15]),
+        "jog": lambda: station.jog([0.2, 0.0, 0.0, 0.0, 0.0]),
         "torque": lambda: station.set_torque(True),
         "gripper": lambda: station.gripper_command("release", wait=False),
         "calibrate": lambda: skills.calibrate(station),

@@ -25,6 +25,26 @@ class MotionConfig(StrictModel):
     move_time_s: float | None = Field(None, gt=0.0, le=30.0)
     accel_time_s: float | None = Field(None, gt=0.0, le=15.0)
     top_down_pitch_rad: float = Field(math.pi / 2, ge=0.0, le=math.pi / 2 + 1e-9)
+    # Checked by the station for every trajectory it sends (armlab.motion.safety): link points stay in
+    # the box, no joint changes more than max_step_rad between two samples, and a trajectory starts
+    # within start_tolerance_rad of the measured joints.
+    workspace_min_m: tuple[float, float, float] = (-0.55, -0.40, 0.0)
+    workspace_max_m: tuple[float, float, float] = (0.55, 0.60, 0.70)
+    max_step_rad: float = Field(0.1, gt=0.0, le=1.0)
+    start_tolerance_rad: float = Field(0.05, gt=0.0, le=0.5)
+    jog_hold_s: float = Field(0.3, gt=0.0, le=2.0)  # a jog runs this long after its last heartbeat, then stops
+
+    @model_validator(mode="after")
+    def _workspace_box(self) -> "MotionConfig":
+        for axis, low, high in zip("xyz", self.workspace_min_m, self.workspace_max_m):
+            if not (math.isfinite(low) and math.isfinite(high) and low < high):
+                raise ValueError(f"workspace box: {axis} must have finite min < max, got [{low}, {high}]")
+        return self
+
+    @property
+    def workspace_m(self) -> tuple[tuple[float, float, float], tuple[float, float, float]]:
+        """((xmin, ymin, zmin), (xmax, ymax, zmax)): the workspace box, world frame."""
+        return self.workspace_min_m, self.workspace_max_m
 
     @model_validator(mode="after")
     def _accel_within_move(self) -> "MotionConfig":

@@ -1,9 +1,12 @@
-"""The last check before a plan reaches the arm: joint limits, speed limits and the board surface.
+"""The last check before a plan reaches the arm: joint limits, speed limits, the board surface, the
+workspace box and the size of one step.
 
 check_trajectory rejects any trajectory in which a joint leaves its position limits, exceeds its
-velocity or acceleration limit (finite differences of the samples), or any link point (each joint
-origin and the gripper point, world frame) goes below the board surface plus a clearance. Links are
-straight segments between those points, so checking the points checks the links. Pure: no device calls.
+velocity or acceleration limit (finite differences of the samples), jumps more than max_step_rad between
+two samples, or any link point (each joint origin and the gripper point, world frame) goes below the
+board surface plus a clearance or leaves the workspace box. Links are straight segments between those
+points, so checking the points checks the links (the box is convex). check_start rejects a trajectory
+whose first sample is not where the arm is. Pure: no device calls.
 """
 
 from __future__ import annotations
@@ -45,12 +48,29 @@ def finite_difference_rates(trajectory: JointTrajectory) -> tuple[np.ndarray, np
     return velocity, accel
 
 
+def check_start(trajectory: JointTrajectory, q_measured_rad, tolerance_rad: float, names=None) -> None:
+    """UnsafeTrajectory if the first sample is more than tolerance_rad from the measured joints (the arm
+    would jump to it at the servos' full speed)."""
+    first = trajectory.positions_rad[0]
+    q = np.asarray(q_measured_rad, dtype=float)
+    error = np.abs(first - q)
+    joint = int(np.argmax(error))
+    if error[joint] > tolerance_rad:
+        name = names[joint] if names is not None and joint < len(names) else f"joint {joint}"
+        raise UnsafeTrajectory(
+            f"the trajectory starts {error[joint]:.3f} rad from where {name} is (more than {tolerance_rad:.3f} rad): "
+            "the arm would jump; plan from the measured position"
+        )
+
+
 def check_trajectory(
     arm,
     trajectory: JointTrajectory,
     clearance_m: float = 0.0,
     board_z_m: float = 0.0,
     check_rates: bool = True,
+    workspace_m: tuple | None = None,
+    max_step_rad: float | None = None,
 ) -> None:
     """Raise UnsafeTrajectory if the trajectory is not safe to send to `arm`; return None if it is.
 
@@ -58,6 +78,8 @@ def check_trajectory(
     joint_frames(q) -> (dof+1, 4, 4) world frames). clearance_m: how far above the board (z =
     board_z_m in the world frame) every link point must stay. check_rates: also check velocity and
     acceleration by finite differences (off for trajectories that do not start/end at rest on purpose).
+    workspace_m: ((xmin, ymin, zmin), (xmax, ymax, zmax)) world box every link point must stay in (None:
+    no box). max_step_rad: the largest change of any joint between two samples (None: unchecked).
     """
     positions = trajectory.positions_rad
     times = trajectory.times_s
@@ -77,6 +99,16 @@ def check_trajectory(
             f"{_joint_name(arm, joint)} = {positions[sample, joint]:.4f} rad at t = {times[sample]:.3f} s is outside "
             f"its limits [{lower[joint]:.4f}, {upper[joint]:.4f}]"
         )
+
+    if max_step_rad is not None and positions.shape[0] > 1:
+        steps = np.abs(np.diff(positions, axis=0))
+        jumps = np.argwhere(steps > max_step_rad)
+        if jumps.size:
+            sample, joint = (int(v) for v in jumps[0])
+            raise UnsafeTrajectory(
+                f"{_joint_name(arm, joint)} jumps {steps[sample, joint]:.3f} rad between samples at t = {times[sample]:.3f} s "
+                f"(at most {max_step_rad:.3f} rad per step)"
+            )
 
     if check_rates:
         velocity, accel = finite_difference_rates(trajectory)
@@ -98,7 +130,8 @@ def check_trajectory(
             )
 
     floor_z = board_z_m + clearance_m
-    heights = _link_point_heights(arm, positions)  # (N, points)
+    points = _link_points(arm, positions)  # (N, points, 3)
+    heights = points[:, :, 2]
     sample, point = np.unravel_index(int(np.argmin(heights)), heights.shape)
     if heights[sample, point] < floor_z:
         first = int(np.flatnonzero(np.min(heights, axis=1) < floor_z)[0])  # earliest offending sample
@@ -107,11 +140,21 @@ def check_trajectory(
             f"{_point_name(arm, point, heights.shape[1])} at z = {heights[first, point] * 1000:.1f} mm at "
             f"t = {times[first]:.3f} s is below the board surface + clearance ({floor_z * 1000:.1f} mm)"
         )
+    if workspace_m is not None:
+        low, high = (np.asarray(corner, dtype=float) for corner in workspace_m)
+        outside = np.any((points < low - 1e-9) | (points > high + 1e-9), axis=2)  # (N, points)
+        if outside.any():
+            sample, point = (int(v) for v in np.argwhere(outside)[0])
+            where = ", ".join(f"{axis} = {value * 1000:.0f} mm" for axis, value in zip("xyz", points[sample, point]))
+            raise UnsafeTrajectory(
+                f"{_point_name(arm, point, points.shape[1])} at ({where}) at t = {times[sample]:.3f} s leaves the workspace box "
+                f"{np.round(low * 1000).astype(int).tolist()}..{np.round(high * 1000).astype(int).tolist()} mm"
+            )
 
 
-def _link_point_heights(arm, positions: np.ndarray) -> np.ndarray:
-    """World z (N, dof+1) of every joint origin and the gripper point at each sample (batched when the model can)."""
+def _link_points(arm, positions: np.ndarray) -> np.ndarray:
+    """World positions (N, dof+1, 3) of every joint origin and the gripper point at each sample (batched when the model can)."""
     frames = np.asarray(arm.joint_frames(positions))
     if frames.ndim == 4 and frames.shape[0] == positions.shape[0]:
-        return frames[:, :, 2, 3]
-    return np.array([np.asarray(arm.joint_frames(q))[:, 2, 3] for q in positions])
+        return frames[:, :, :3, 3]
+    return np.array([np.asarray(arm.joint_frames(q))[:, :3, 3] for q in positions])

@@ -32,6 +32,10 @@ class StationConfig(StrictModel):
     gripper_settle_timeout_s: float = Field(2.5, gt=0.0, le=10.0)
     database_backups: int = Field(3, ge=0, le=50)
     allowed_hosts: tuple[str, ...] = ()
+    camera_timeout_s: float = Field(2.0, gt=0.0, le=30.0)
+    device_check_rate_hz: float = Field(10.0, ge=1.0, le=100.0)
+    moving_speed_rad_s: float = Field(0.05, gt=0.0, le=1.0)
+    close_timeout_s: float = Field(2.0, gt=0.0, le=30.0)
     sim: SimStartConfig = SimStartConfig()
 
     @field_validator("allowed_hosts")

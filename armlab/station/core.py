@@ -1,13 +1,18 @@
-"""The Station, the gate: state table, lock, devices, job runner, e-stop; the only writer of arm commands.
+"""The Station, the gate: state table, lock, latch, lease, devices, job runner, e-stop; the only writer of arm commands.
 
-Every command is checked against the transition table (states.py) under one lock and every state change
-goes through `_transition`, so an e-stop and a command can never interleave: after estop() returns, no
-job or manual command can reach the arm until reset(). Skills and tasks (armlab.skills, armlab.tasks)
-sit above the gate and use its small public interface: `start_job`, `run_trajectory`, `run_gripper`,
-`fresh_frame`, `fresh_perception`, `joints_rad`, `checked_joints`, `held_block`, `moved_over_since`.
-The camera, perception and telemetry each run on their own thread (perception.py, telemetry.py), except
-in synchronous mode (a fast-mode simulation for evaluations), where frames are captured on demand and
-physics advances only while the gate waits for the devices.
+Every command is checked against the transition table (states.py) and the control lease (lease.py) under
+one lock, and every state change goes through `_transition`. The lock guards state only: it is never
+held across I/O (SQLite, IK, planning, scene changes). E-stop does not take it first: it sets a lock-free
+latch (`_halt`), cancels the job and halts the arm and gripper, and only then records the state; every
+command path checks the latch under the lock before it reaches a device, and every wait checks it, so
+after estop() returns no job or manual command can reach the arm until reset(). A lost device (watch.py)
+latches the same way and puts the station in `fault`; reset is refused while it is still gone.
+Skills and tasks (armlab.skills, armlab.tasks) sit above the gate and use its small public interface:
+`start_job`, `run_trajectory`, `run_gripper`, `fresh_frame`, `fresh_perception`, `joints_rad`,
+`checked_joints`, `held_block`/`set_held_block`, `moved_over_since`, `clock_s`. The camera, perception,
+telemetry and device watch each run on their own thread, except in synchronous mode (a fast-mode
+simulation for evaluations), where frames are captured on demand and physics advances only while the
+gate waits for the devices.
 """
 
 from __future__ import annotations
@@ -24,16 +29,21 @@ import numpy as np
 from armlab.devices.arm import Arm, JointTrajectory
 from armlab.devices.camera import Camera, Frame
 from armlab.devices.gripper import Gripper
+from armlab.errors import CommandRefused, DeviceLost, NeedsConfirmation, ShuttingDown
 from armlab.station.checks import checked_joints, checked_moving_time, checked_position
 from armlab.station.config import StationConfig
 from armlab.station.jobs import Job, JobCancelled, JobContext, start_job_thread
-from armlab.station.perception import FrameSource, Perception, PerceptionLoop, analyse_frame
+from armlab.station.lease import ControlLease
+from armlab.station.perception import DEVICE_ERRORS, FrameSource, Perception, PerceptionLoop, analyse_frame
 from armlab.station.slots import EventLog, NewestSlot
-from armlab.station.states import JOB_STATES, State, allowed_commands, after_event, next_state
+from armlab.station.states import JOB_STATES, State, after_event, allowed_commands, next_state
 from armlab.station.telemetry import TelemetryPublisher, block_to_dict, gripper_pose_from_matrix
+from armlab.station.watch import DeviceWatch
 from armlab.store import Store, Waypoint
 
 log = logging.getLogger(__name__)
+
+__all__ = ["DEVICE_ERRORS", "NotCalibrated", "Station"]
 
 
 class NotCalibrated(RuntimeError):
@@ -43,11 +53,9 @@ class NotCalibrated(RuntimeError):
         super().__init__(f"{what} needs a camera calibration: calibrate first")
 
 
-# Errors that mean a device failed (→ fault), as opposed to a refused or impossible request.
-DEVICE_ERRORS = (ConnectionError, TimeoutError, OSError)
-
 WAIT_CHUNK_S = 0.05  # waits on the devices check cancel/e-stop this often (simulated time in fast mode)
 MOTION_MEMORY = 256  # how many recent arm motions the gate remembers for stale-perception checks
+_UNLATCHED = ("estop",)  # the only command the latch and the lease never refuse
 
 
 class Station:
@@ -56,6 +64,7 @@ class Station:
     model: the armlab.kinematics ArmModel of the arm; perception_config: armlab.vision's config.
     synchronous: the sim runs in fast mode and nothing runs on threads (evaluations); frames are
     captured when a skill asks for one and physics advances only while the gate waits.
+    `source` (every command): the controller's name for the lease (None: an in-process caller, not leased).
     """
 
     def __init__(
@@ -85,15 +94,21 @@ class Station:
         self.backend = backend
         self.synchronous = synchronous
         self._lock = threading.RLock()
+        self._halt = threading.Event()  # the latch: set by e-stop and device loss (before any lock), cleared by reset
+        self._closing = threading.Event()
         self._state = State.IDLE
         self._detail = ""
+        self._lease = ControlLease()
         self._job: Job | None = None
         self._last_job: Job | None = None
         self._teach: list[Waypoint] = []
+        self._teach_saving = False
+        self._jog: dict | None = None  # the running jog: trajectory, start clock, velocity, controller
         self._calibration: Any = None
         self._calibration_info: dict | None = None
-        self._controller: str | None = None
         self._held_block: dict | None = None
+        self._lost: dict[str, str] = {}  # devices not answering: {name: reason}
+        self._last_joints: np.ndarray | None = None
         self._motions: list[tuple[float, np.ndarray]] = []  # (end time_s, xy box [xmin, ymin, xmax, ymax])
         self._pipeline: Any = None  # synchronous mode's perception pipeline
         self.events = EventLog()
@@ -102,13 +117,14 @@ class Station:
         self.telemetry: NewestSlot[dict] = NewestSlot()
         self.calibration_slot: NewestSlot[dict] = NewestSlot()
         self._workers: list = []
+        self._frame_source: FrameSource | None = None
         self._started = False
 
     # Lifecycle ------------------------------------------------------------------------------------
 
     def start(self) -> None:
-        """Connect devices not yet connected and start the camera, perception and telemetry threads
-        (none in synchronous mode)."""
+        """Connect devices not yet connected and start the camera, perception, telemetry and device-watch
+        threads (none in synchronous mode)."""
         if self._started:
             return
         for device in (self.arm, self.gripper, self.camera):
@@ -120,32 +136,57 @@ class Station:
             self.perception_config = load_perception_config()
         if self.config.restore_calibration:
             self._restore_calibration()
+        self._closing.clear()
         if not self.synchronous:
+            self._frame_source = FrameSource(self.camera, self.frames, self.arm, self.gripper)
             self._workers = [
-                FrameSource(self.camera, self.frames, self.arm, self.gripper),
+                self._frame_source,
                 PerceptionLoop(
                     self.frames, self.perception, lambda: self._calibration, self.perception_config, self.config.perception_rate_hz, self.model
                 ),
                 TelemetryPublisher(self.telemetry_snapshot, self.telemetry, self.config.telemetry_rate_hz),
+                DeviceWatch(self.device_problems, self._on_device_problems, 1.0 / self.config.device_check_rate_hz),
             ]
         for worker in self._workers:
             worker.start()
         self._started = True
         self.events.add("info", f"station started ({self.backend})")
 
-    def close(self) -> None:
-        """Stop the job and the threads, halt the arm. The devices (or the sim) are closed by their owner."""
-        with self._lock:
-            if self._job is not None:
-                self._job.cancel()
-            try:
-                self.arm.stop()
-            except DEVICE_ERRORS:
-                pass
+    def begin_shutdown(self) -> None:
+        """Refuse new commands, cancel the job and halt the arm and gripper, at once (a signal handler may
+        call this): waiting requests then return promptly. close() finishes the job."""
+        self._closing.set()
+        self._halt.set()
+        job = self._job
+        if job is not None:
+            job.cancel()
+        self._halt_devices()
+
+    def close(self) -> dict:
+        """Stop the job and the threads (each join bounded by close_timeout_s), halt the arm.
+
+        Returns {"joined": [thread names], "alive": [names still running]} and logs it; the devices (or
+        the sim) are closed by their owner."""
+        self.begin_shutdown()
+        deadline = time.monotonic() + self.config.close_timeout_s
+        joined, alive = [], []
+        job = self._job
+        if job is not None and job.thread is not None:
+            job.thread.join(max(0.0, deadline - time.monotonic()))
+            (alive if job.thread.is_alive() else joined).append(job.thread.name)
+        for worker in self._workers:
+            worker.request_stop()
         for worker in reversed(self._workers):
-            worker.stop()
+            ended = worker.stop(max(0.05, deadline - time.monotonic()))
+            (joined if ended else alive).append(worker.name)
         self._workers = []
         self._started = False
+        report = {"joined": joined, "alive": alive}
+        if alive:
+            log.warning("station closed; threads still running: %s (joined: %s)", ", ".join(alive), ", ".join(joined) or "none")
+        else:
+            log.info("station closed; threads joined: %s", ", ".join(joined) or "none")
+        return report
 
     @property
     def is_running(self) -> bool:
@@ -161,24 +202,77 @@ class Station:
 
     def allowed_commands(self) -> list[str]:
         with self._lock:
-            return allowed_commands(self._state)
+            return allowed_commands(self._effective_state())
 
-    def allowed_or_raise(self, command: str) -> None:
-        """CommandRefused (naming the allowed commands) unless `command` is allowed right now."""
+    def allowed_or_raise(self, command: str, source: str | None = None) -> None:
+        """CommandRefused (naming the allowed commands) unless `command` is allowed right now;
+        NotController if `source` may not command (the lease is not taken by this check)."""
         with self._lock:
-            next_state(self._state, command)
+            self._check(command, source)
+
+    def _effective_state(self) -> State:
+        """The state, or estop while the latch is set ahead of the transition (caller holds the lock)."""
+        if self._halt.is_set() and self._state not in (State.ESTOP, State.FAULT):
+            return State.ESTOP
+        return self._state
+
+    def _check(self, command: str, source: str | None) -> State:
+        """Refusals of an operator command, in order: shutting down, the latch/state table, the lease.
+        Returns the state it would lead to. Caller holds the lock."""
+        if self._closing.is_set() and command not in _UNLATCHED:
+            raise ShuttingDown(f"command '{command}' refused: the station is shutting down")
+        new_state = next_state(self._effective_state(), command)
+        if command not in _UNLATCHED and source is not None and self._lease.holder not in (None, source):
+            self._lease.require(source, command)  # raises NotController naming the holder
+        return new_state
 
     def _transition(self, trigger: str, *, source: str | None = None, detail: str | None = None, event: bool = False) -> State:
-        """The one place the state changes. `trigger` is an operator command (checked against the table:
-        CommandRefused if not allowed) or, with event=True, an internal event (job_ended, device_failed).
-        Caller holds the lock. detail None keeps the detail unless the new state is idle."""
-        new_state = after_event(self._state, trigger) if event else next_state(self._state, trigger)
-        if source is not None:
-            self._controller = source
+        """The one place the state changes. `trigger` is an operator command (checked against the table,
+        the latch and the lease: CommandRefused/NotController; a free lease goes to `source`) or, with
+        event=True, an internal event (job_ended, device_failed). Caller holds the lock. detail None
+        keeps the detail unless the new state is idle."""
+        if event:
+            new_state = after_event(self._state, trigger)
+        else:
+            new_state = self._check(trigger, source)
+            if trigger not in _UNLATCHED and self._lease.require(source, trigger):
+                self.events.add("info", f"control taken by '{source}' (the lease was free)")
         if new_state is not self._state or detail is not None:
             self._detail = detail if detail is not None else ("" if new_state is State.IDLE else self._detail)
         self._state = new_state
         return new_state
+
+    # Control lease --------------------------------------------------------------------------------
+
+    @property
+    def controller(self) -> str | None:
+        """Who holds the control lease (None: free)."""
+        with self._lock:
+            return self._lease.holder
+
+    def take_control(self, source: str) -> str | None:
+        """Take the control lease over (explicitly); the event log tells everyone, the previous holder too.
+        Returns the previous holder."""
+        if self._closing.is_set():
+            raise ShuttingDown("the station is shutting down")
+        with self._lock:
+            previous = self._lease.take(source)
+        if previous != source:
+            taken_from = f" from '{previous}'" if previous else ""
+            self.events.add("warn", f"control taken by '{source}'{taken_from}")
+        return previous
+
+    def release_control(self, source: str, reason: str = "released") -> bool:
+        """Give the lease up if `source` holds it (reason: e.g. 'disconnected'); True if it did."""
+        with self._lock:
+            released = self._lease.release(source)
+            if released and self._jog is not None and self._jog["source"] == source:
+                self._jog = None
+        if released:
+            self.events.add("info", f"control {reason}: '{source}' no longer controls the station")
+        return released
+
+    # Calibration and configuration ----------------------------------------------------------------
 
     @property
     def calibration(self) -> Any:
@@ -229,6 +323,16 @@ class Station:
         with self._lock:
             self._held_block = None if block is None else dict(block)
 
+    def set_scene(self, scene: Any, source: str | None = None) -> None:
+        """Simulation: replace the objects (armlab.scene Scene). Checked (state, lease) under the lock; the
+        scene change itself runs outside it, so an e-stop never waits for it."""
+        if self.sim is None:
+            raise ValueError("set_scene needs the simulation backend")
+        with self._lock:
+            self._transition("set_scene", source=source)
+        self.sim.set_scene(scene)
+        self.set_held_block(None)
+
     # Status ---------------------------------------------------------------------------------------
 
     def joints_rad(self) -> np.ndarray:
@@ -244,66 +348,160 @@ class Station:
         return self.sim.sim_time_s if self.sim is not None else time.monotonic()
 
     def status(self) -> dict:
-        """GET /api/status: the wire dict (SI units)."""
-        q = self.joints_rad()
-        gripper = self.gripper.read_state()
+        """GET /api/status: the wire dict (SI units). Works with a device lost (its last reading is shown)."""
+        moving_measured, gripper_dict = False, {"width_m": 0.0, "holding": False, "command": "release"}
+        try:
+            joint_state = self.arm.read_joint_state()
+            q = np.asarray(joint_state.position_rad, dtype=float)
+            self._last_joints = q
+            speed = np.abs(np.asarray(joint_state.velocity_rad_s, dtype=float))
+            moving_measured = bool(self.arm.is_moving()) or bool(speed.size and speed.max() > self.config.moving_speed_rad_s)
+        except DEVICE_ERRORS:
+            q = self._last_joints if self._last_joints is not None else np.asarray(self.model.home_rad, dtype=float)
+        try:
+            gripper = self.gripper.read_state()
+            gripper_dict = {"width_m": float(gripper.width_m), "holding": bool(gripper.holding), "command": gripper.command}
+        except DEVICE_ERRORS:
+            pass
         with self._lock:
             job = self._job or self._last_job
-            state, detail, controller = self._state, self._detail, self._controller
+            state, detail, lease = self._effective_state(), self._detail, self._lease.to_dict()
             calibrated = self._calibration is not None
+            lost = dict(self._lost)
         return {
             "state": state.value,
             "detail": detail,
             "joints_rad": [float(v) for v in q],
             "joint_names": list(self.model.joint_names),
             "joint_limits_rad": [[float(lo), float(hi)] for lo, hi in zip(self.model.lower_rad, self.model.upper_rad)],
-            "gripper": {"width_m": float(gripper.width_m), "holding": bool(gripper.holding), "command": gripper.command},
+            "gripper": gripper_dict,
             "gripper_pose": gripper_pose_from_matrix(self.model.fk(q)),
-            "moving": bool(self.arm.is_moving()),
+            "moving": moving_measured,
             "calibrated": calibrated,
             "backend": self.backend,
-            "controller": controller,
+            "controller": lease["controller"],
+            "controller_since_s": lease["since_s"],
+            "devices_lost": lost,
             "job": job.to_dict() if job is not None else None,
             "allowed_commands": allowed_commands(state),
             "time_s": time.time(),
         }
 
     def detections(self) -> dict:
-        """GET /api/detections: the newest detected blocks as wire dicts."""
+        """GET /api/detections: the newest detected blocks as wire dicts; none, with stale: true and the
+        reason, while the camera is lost or perception is older than camera_timeout_s."""
         perception, _ = self.perception.get()
         if perception is None:
-            return {"data": [], "count": 0, "time_s": time.time(), "frame_sequence": -1}
-        data = [block_to_dict(index, block) for index, block in enumerate(perception.blocks)]
+            return {"data": [], "count": 0, "time_s": time.time(), "frame_sequence": -1, "stale": False, "stale_reason": None}
+        stale_reason = self._perception_stale_reason(perception)
+        data = [] if stale_reason else [block_to_dict(index, block) for index, block in enumerate(perception.blocks)]
         for block in data:
             block.setdefault("seen_time_s", perception.capture_time_s)
-        return {"data": data, "count": len(data), "time_s": perception.time_s, "frame_sequence": perception.frame_sequence}
+        return {
+            "data": data, "count": len(data), "time_s": perception.time_s, "frame_sequence": perception.frame_sequence,
+            "stale": stale_reason is not None, "stale_reason": stale_reason,
+        }
+
+    def _perception_stale_reason(self, perception: Perception) -> str | None:
+        with self._lock:
+            camera_lost = self._lost.get("camera")
+        if camera_lost is not None:
+            return f"the camera is lost ({camera_lost})"
+        age_s = time.time() - perception.capture_time_s
+        if not self.synchronous and age_s > self.config.camera_timeout_s:
+            return f"the newest perception is {age_s:.1f} s old"
+        return None
 
     def telemetry_snapshot(self) -> dict:
         """Status + detections: one telemetry message (the TelemetryPublisher calls this)."""
         snapshot = self.status()
-        snapshot["detections"] = self.detections()["data"]
+        detections = self.detections()
+        snapshot["detections"] = detections["data"]
+        snapshot["detections_stale"] = detections["stale"]
         return snapshot
 
-    # Safety ---------------------------------------------------------------------------------------
+    # Safety: e-stop, device loss, reset -------------------------------------------------------------
+
+    def _halt_devices(self, gripper: bool = True) -> list[str]:
+        """Stop the arm (and gripper); never raises (a lost device is reported). No lock needed."""
+        failures = []
+        for device in (self.arm, self.gripper) if gripper else (self.arm,):
+            try:
+                device.stop()
+            except DEVICE_ERRORS as error:
+                failures.append(f"{device}: {error}")
+        return failures
 
     def estop(self, source: str | None = None) -> None:
-        """Halt now and latch: cancel the job, stop arm and gripper. Allowed in every state."""
+        """Halt now and latch, from any state and from anyone (no lease needed): latch first, cancel the
+        job, stop arm and gripper, then record the state; a command that was being sent when the latch
+        went up is stopped by a second halt once the lock shows it has finished."""
+        self._halt.set()
+        job = self._job
+        if job is not None:
+            job.cancel()
+        failures = self._halt_devices()
         with self._lock:
-            self._transition("estop", source=source, detail="e-stop pressed: reset to continue")
-            if self._job is not None:
-                self._job.cancel()
-            failures = []
-            for device in (self.arm, self.gripper):
-                try:
-                    device.stop()
-                except DEVICE_ERRORS as error:  # still latched: the state refuses every motion
-                    failures.append(f"{device}: {error}")
-        self.events.add("error", "E-stop: motion halted" + (f" ({'; '.join(failures)})" if failures else ""))
+            self._jog = None
+            by = f" by '{source}'" if source else ""
+            self._transition("estop", source=source, detail=f"e-stop pressed{by}: reset to continue")
+        failures += self._halt_devices()
+        self.events.add("error", "E-stop: motion halted" + (f" ({'; '.join(sorted(set(failures)))})" if failures else ""))
+
+    def device_problems(self) -> dict[str, str]:
+        """{device: reason} for each device not answering now (reads the arm and gripper, checks the
+        camera's frames); empty when all answer."""
+        problems: dict[str, str] = {}
+        for name, read in (("arm", self.arm.read_joint_state), ("gripper", self.gripper.read_state)):
+            try:
+                read()
+            except DEVICE_ERRORS as error:
+                problems[name] = f"{type(error).__name__}: {error}"
+        if self._frame_source is not None and self._started:
+            camera = self._frame_source.health(self.config.camera_timeout_s)
+            if camera is not None:
+                problems["camera"] = camera
+        return problems
+
+    def _on_device_problems(self, problems: dict[str, str]) -> None:
+        """The device watch's report: fault on a new loss, log a recovery (the station stays in fault)."""
+        with self._lock:
+            new = {name: reason for name, reason in problems.items() if name not in self._lost}
+            back = [name for name in self._lost if name not in problems]
+            self._lost = dict(problems)
+        for name in back:
+            self.events.add("info", f"{name} answers again: reset to continue")
+        if new:
+            self.device_failed(", ".join(new), "; ".join(new.values()))
+
+    def device_failed(self, device: str, reason: str) -> None:
+        """A device is lost: latch, cancel the job, hold the arm still, enter fault with the reason."""
+        self._halt.set()
+        job = self._job
+        if job is not None:
+            job.cancel()
+        self._halt_devices()
+        with self._lock:
+            self._jog = None
+            if self._transition("device_failed", event=True) is State.FAULT:
+                self._detail = f"{device} lost: {reason}; reset once it is back"
+        self.events.add("error", f"{device} lost: {reason}: motion halted")
 
     def reset(self, source: str | None = None) -> None:
-        """Leave estop/fault for idle without moving the arm."""
+        """Leave estop/fault for idle without moving the arm; DeviceLost while a device is still gone."""
+        with self._lock:
+            if self._state not in (State.ESTOP, State.FAULT):  # not while an e-stop is still being recorded
+                raise CommandRefused("reset", self._effective_state().value, allowed_commands(self._effective_state()))
+            self._check("reset", source)
+        problems = self.device_problems()  # device reads: outside the lock
+        if problems:
+            with self._lock:
+                self._lost.update(problems)
+            raise DeviceLost("reset refused: " + "; ".join(f"the {name} is still lost ({reason})" for name, reason in problems.items()))
         with self._lock:
             self._transition("reset", source=source, detail="")
+            self._lost = {}
+            self._halt.clear()
         self.events.add("info", "reset: station idle")
 
     def cancel_job(self, source: str | None = None) -> Job:
@@ -312,40 +510,38 @@ class Station:
         A job that registered a cleanup (e.g. put a held block down) runs it on its own thread after the
         cancel; the station stays in the job's state until that ends."""
         with self._lock:
-            next_state(self._state, "cancel")
+            self._check("cancel", source)
             job = self._job
             assert job is not None, "a job state without a job"
-            job.cancel()
-            self._halt_arm()
+            job.cancel()  # under the lock: any command the job is sending has finished or will see it
             if not job.has_cleanup:
                 self._transition("cancel", source=source, detail="")
-            elif source is not None:
-                self._controller = source
+        self._halt_devices(gripper=False)
         self.events.add("warn", f"job '{job.name}' cancelled")
         return job
-
-    def _halt_arm(self) -> None:
-        try:
-            self.arm.stop()
-        except DEVICE_ERRORS as error:
-            log.warning("arm.stop failed: %s", error)
 
     # Waiting on the devices -----------------------------------------------------------------------
 
     def _wait_until(self, predicate: Callable[[], bool], timeout_s: float, ctx: JobContext | None = None) -> bool:
-        """Block until predicate() holds (False after timeout_s of motion-clock time). On the simulation
-        this lets fast mode advance the physics; a job's cancel is checked every WAIT_CHUNK_S."""
+        """Block until predicate() holds (False after timeout_s of motion-clock time, or at once when the
+        latch is set). On the simulation this lets fast mode advance the physics, never beyond one
+        control period after the latch; a job's cancel is checked every WAIT_CHUNK_S."""
         deadline = self.clock_s() + timeout_s
+        latched = self._halt.is_set
         while True:
             if ctx is not None:
                 ctx.check()
+            if latched():
+                if ctx is not None and not ctx.in_cleanup:
+                    raise JobCancelled("the station was e-stopped")
+                return predicate()
             if self.sim is not None:
-                if self.sim.wait_for(predicate, WAIT_CHUNK_S):
+                if self.sim.wait_for(lambda: predicate() or latched(), WAIT_CHUNK_S) and not latched():
                     return True
             elif predicate():
                 return True
             else:
-                time.sleep(0.005)
+                self._halt.wait(0.005)
             if self.clock_s() > deadline:
                 return predicate()
 
@@ -366,24 +562,58 @@ class Station:
 
         self._wait_until(fingers_still, self.config.gripper_settle_timeout_s, ctx)
 
+    # Sending motion: every trajectory from any source passes here ----------------------------------
+
+    def check_motion(self, trajectory: JointTrajectory) -> None:
+        """The full safety check of a trajectory (UnsafeTrajectory says why): joint, velocity and
+        acceleration limits, the table, the workspace box, the per-step jump. No lock needed (pure)."""
+        from armlab.motion import check_trajectory
+
+        config = self.motion_config
+        check_trajectory(
+            self.model, trajectory, clearance_m=config.board_clearance_m, workspace_m=config.workspace_m, max_step_rad=config.max_step_rad
+        )
+
+    def _command_arm(self, trajectory: JointTrajectory, swept_box: np.ndarray) -> None:
+        """Send a checked trajectory and remember where the gripper sweeps. Caller holds the lock and has
+        checked the state; the latch and the start (no jump from the measured joints) are checked here."""
+        from armlab.motion.safety import check_start
+
+        if self._halt.is_set():
+            raise CommandRefused("move", self._effective_state().value, allowed_commands(self._effective_state()))
+        check_start(trajectory, self.joints_rad(), self.motion_config.start_tolerance_rad, self.model.joint_names)
+        self.arm.command_trajectory(trajectory)
+        self._motions.append((time.time() + trajectory.duration_s, swept_box))
+        del self._motions[:-MOTION_MEMORY]
+
+    def _swept_box(self, trajectory: JointTrajectory) -> np.ndarray:
+        """[xmin, ymin, xmax, ymax] of the gripper point along a trajectory (sampled; no lock needed)."""
+        positions = trajectory.positions_rad
+        tips = self.model.fk(positions[:: max(1, len(positions) // 20)])[:, :2, 3]
+        tips = np.vstack([tips, self.model.fk(positions[-1])[:2, 3]])
+        return np.concatenate([tips.min(axis=0), tips.max(axis=0)])
+
     # Manual commands ------------------------------------------------------------------------------
 
     def plan_move(self, q_goal_rad, moving_time_s: float | None = None) -> JointTrajectory:
         """A checked joint move from the current position (ValueError/UnsafeTrajectory: nothing moves)."""
-        from armlab.motion import check_trajectory, plan_joint_move
+        from armlab.motion import plan_joint_move
 
         q_goal = self.checked_joints(q_goal_rad)
         trajectory = plan_joint_move(
             self.joints_rad(), q_goal, self.model, moving_time_s=checked_moving_time(moving_time_s, self.config.max_moving_time_s)
         )
-        check_trajectory(self.model, trajectory)
+        self.check_motion(trajectory)
         return trajectory
 
     def _manual_move(self, command: str, q_goal_rad, moving_time_s: float | None, wait: bool, source: str | None) -> None:
+        self.allowed_or_raise(command, source)  # refuse before planning
+        trajectory = self.plan_move(q_goal_rad, moving_time_s)  # planning and checks: outside the lock
+        swept_box = self._swept_box(trajectory)
         with self._lock:
             self._transition(command, source=source)  # state unchanged: idle/teach stay
-            trajectory = self.plan_move(q_goal_rad, moving_time_s)
-            self._command_arm(trajectory, self._swept_box(trajectory))
+            self._jog = None
+            self._command_arm(trajectory, swept_box)
         if wait:
             self.wait_motion(trajectory.duration_s + 5.0)
 
@@ -405,20 +635,65 @@ class Station:
         return self.model.ik(position, pitch=pitch_rad, yaw=yaw_rad, q_seed=self.joints_rad())
 
     def move_to(self, position_m, pitch_rad=None, yaw_rad=None, moving_time_s=None, wait=False, source=None) -> np.ndarray:
-        """Move the gripper point to a world position (IK, joint move); returns the goal joints."""
-        with self._lock:
-            self.allowed_or_raise("move_to")
-            q_goal = self.solve_pose(position_m, pitch_rad, yaw_rad)
-            self._manual_move("move_to", q_goal, moving_time_s, wait=False, source=source)
+        """Move the gripper point to a world position (IK outside the lock, joint move); returns the goal joints."""
+        self.allowed_or_raise("move_to", source)
+        q_goal = self.solve_pose(position_m, pitch_rad, yaw_rad)
+        self._manual_move("move_to", q_goal, moving_time_s, wait=False, source=source)
         if wait:
             self.wait_motion(self.config.max_moving_time_s + 5.0)
         return q_goal
 
-    def set_torque(self, enabled: bool, source: str | None = None) -> None:
+    def jog(self, velocity_rad_s, source: str | None = None) -> JointTrajectory:
+        """Hold-to-run: move at these joint velocities (rad/s) for motion jog_hold_s, then stop by itself.
+        Sending it again (or heartbeat()) within jog_hold_s keeps it going; zeros ramp down to rest."""
+        from armlab.motion.jog import checked_jog_velocity, plan_jog, reference_velocity
+
+        velocity = checked_jog_velocity(velocity_rad_s, self.model.velocity_limit_rad_s, self.model.joint_names)
+        self.allowed_or_raise("jog", source)
         with self._lock:
+            jog = dict(self._jog) if self._jog is not None else None
+        q0, v0 = self.joints_rad(), np.zeros_like(velocity)
+        if jog is not None and self.arm.is_moving():
+            _, v0 = reference_velocity(jog["trajectory"], self.clock_s() - jog["start_s"])
+        config = self.motion_config
+        trajectory = plan_jog(
+            q0, v0, velocity, config.jog_hold_s, self.model.lower_rad, self.model.upper_rad, self.model.accel_limit_rad_s2,
+            config.sample_rate_hz,
+        )
+        self.check_motion(trajectory)
+        swept_box = self._swept_box(trajectory)
+        with self._lock:
+            self._transition("jog", source=source)
+            self._command_arm(trajectory, swept_box)
+            self._jog = {"trajectory": trajectory, "start_s": self.clock_s(), "velocity": velocity, "source": source}
+        return trajectory
+
+    def heartbeat(self, source: str | None = None) -> bool:
+        """The controlling client is still there: extend its running jog by jog_hold_s. False (nothing
+        moves) when it has no jog running."""
+        with self._lock:
+            jog = self._jog
+        if jog is None or jog["source"] != source or not self.arm.is_moving():
+            return False
+        self.jog(jog["velocity"], source=source)
+        return True
+
+    def set_torque(self, enabled: bool, source: str | None = None, confirm: bool = False) -> None:
+        """Torque on, or off (limp: the arm falls under gravity unless held), which outside teach needs
+        confirm=True (NeedsConfirmation otherwise: nothing changes)."""
+        with self._lock:
+            state = self._check("torque", source)
+            if not enabled and state is not State.TEACH and not confirm:
+                raise NeedsConfirmation(
+                    "torque off outside teach lets the arm fall under gravity: hold the arm and send confirm: true "
+                    "(or start teach first)"
+                )
             self._transition("torque", source=source)
+            self._jog = None
+            if self._halt.is_set():
+                raise CommandRefused("torque", self._effective_state().value, allowed_commands(self._effective_state()))
             self.arm.set_torque(bool(enabled))
-        self.events.add("info", f"torque {'on' if enabled else 'off'}")
+        self.events.add("warn" if not enabled else "info", f"torque {'on' if enabled else 'off'}")
 
     def gripper_command(self, action: str, wait: bool = True, source: str | None = None) -> None:
         """'grasp' or 'release'."""
@@ -440,22 +715,35 @@ class Station:
 
     def teach_record(self, source: str | None = None) -> Waypoint:
         """Add the current joints and gripper command as a waypoint."""
+        self.allowed_or_raise("teach_record", source)
+        q = self.joints_rad()
+        command = self.gripper.read_state().command
+        waypoint = Waypoint(tuple(float(v) for v in q), command if command in ("grasp", "release") else "release")
         with self._lock:
-            next_state(self._state, "teach_record")
-            q = self.joints_rad()
-            command = self.gripper.read_state().command
-            waypoint = Waypoint(tuple(float(v) for v in q), command if command in ("grasp", "release") else "release")
+            if self._teach_saving:
+                raise CommandRefused("teach_record", "teach (saving)", [])
+            self._transition("teach_record", source=source, detail=f"teaching: {len(self._teach) + 1} waypoints")
             self._teach.append(waypoint)
-            self._transition("teach_record", source=source, detail=f"teaching: {len(self._teach)} waypoints")
         return waypoint
 
     def teach_stop(self, name: str, source: str | None = None):
-        """Save the recorded waypoints as a program and return to idle (Program)."""
+        """Save the recorded waypoints as a program (the SQLite write runs outside the lock) and return to
+        idle (Program). An e-stop during the write keeps the program and the latch."""
         with self._lock:
-            next_state(self._state, "teach_stop")
-            program = self.store.save_program(name, self._teach)
-            self._transition("teach_stop", source=source, detail="")
+            self._check("teach_stop", source)
+            if self._teach_saving:
+                raise CommandRefused("teach_stop", "teach (saving)", [])
+            self._teach_saving = True
+            waypoints = list(self._teach)
+        try:
+            program = self.store.save_program(name, waypoints)
+        finally:
+            with self._lock:
+                self._teach_saving = False
+        with self._lock:
             self._teach = []
+            if self._state is State.TEACH:
+                self._transition("teach_stop", source=source, detail="")
         self.events.add("info", f"program '{program.name}' saved ({len(program.waypoints)} waypoints)")
         return program
 
@@ -479,25 +767,25 @@ class Station:
         cleanup(ctx), if given, runs after a cancel (not after an e-stop) with the arm still the job's,
         e.g. to put a held block down; the station returns to idle when it ends."""
         with self._lock:
-            next_state(self._state, command)
+            self._check(command, source)
             if command not in ("calibrate", "grab", "drop", "repeat", "auto"):
                 raise ValueError(f"'{command}' does not start a job")
             job = Job(name=name, detail=detail, has_cleanup=cleanup is not None)
             self._transition(command, source=source, detail=detail or name)
             self._job = job
+            self._jog = None
             start_job_thread(job, function, self._on_job_end, cleanup=cleanup)
         self.events.add("info", f"job '{name}' started" + (f": {detail}" if detail else ""))
         return job
 
     def _on_job_end(self, job: Job, error: BaseException | None) -> None:
+        if isinstance(error, DEVICE_ERRORS) and self._job is job:
+            self.device_failed(f"a device in job '{job.name}'", f"{type(error).__name__}: {error}")
         with self._lock:
             if self._job is job:
                 self._job, self._last_job = None, job
                 if self._state in JOB_STATES:
-                    event = "device_failed" if isinstance(error, DEVICE_ERRORS) else "job_ended"
-                    if self._transition(event, event=True) is State.FAULT:
-                        self._detail = f"device failure in job '{job.name}': {error}"
-                        self._halt_arm()
+                    self._transition("job_ended", event=True)
         try:
             self.store.record_job(job.to_dict())
         except Exception as store_error:  # noqa: BLE001 - the job's outcome matters more than its record
@@ -507,24 +795,12 @@ class Station:
 
     def _owns_arm(self, ctx: JobContext) -> None:
         """Inside a job, under the lock: JobCancelled unless this job may still command the devices
-        (it is current and not cancelled, or it is running its cleanup after a cancel)."""
-        if self._job is not ctx.job or self._state not in JOB_STATES:
+        (it is current and not cancelled, or it is running its cleanup after a cancel), and never
+        once the latch is set."""
+        if self._job is not ctx.job or self._state not in JOB_STATES or self._halt.is_set():
             raise JobCancelled("job is no longer current")
         if not ctx.in_cleanup:
             ctx.check()
-
-    def _swept_box(self, trajectory: JointTrajectory) -> np.ndarray:
-        """[xmin, ymin, xmax, ymax] of the gripper point along a trajectory (sampled; no lock needed)."""
-        positions = trajectory.positions_rad
-        tips = self.model.fk(positions[:: max(1, len(positions) // 20)])[:, :2, 3]
-        tips = np.vstack([tips, self.model.fk(positions[-1])[:2, 3]])
-        return np.concatenate([tips.min(axis=0), tips.max(axis=0)])
-
-    def _command_arm(self, trajectory: JointTrajectory, swept_box: np.ndarray) -> None:
-        """Send a checked trajectory and remember where the gripper sweeps (caller holds the lock)."""
-        self.arm.command_trajectory(trajectory)
-        self._motions.append((time.time() + trajectory.duration_s, swept_box))
-        del self._motions[:-MOTION_MEMORY]
 
     def moved_over_since(self, point_m, since_s: float, radius_m: float = 0.06) -> bool:
         """True if a motion that ended after `since_s` (wall time, like frame timestamps) swept the gripper
@@ -538,14 +814,18 @@ class Station:
         return False
 
     def run_trajectory(self, ctx: JobContext, trajectory: JointTrajectory) -> None:
-        """Inside a job: command a trajectory (only while this job owns the arm) and wait for it."""
+        """Inside a job: check the trajectory (check_motion), command it (only while this job owns the arm)
+        and wait for it."""
+        self.check_motion(trajectory)
         swept_box = self._swept_box(trajectory)
         with self._lock:
             self._owns_arm(ctx)
             self._command_arm(trajectory, swept_box)
         checked = ctx if not ctx.in_cleanup else None
         if not self._wait_until(lambda: not self.arm.is_moving(), trajectory.duration_s + 5.0, checked):
-            self._halt_arm()
+            self._halt_devices(gripper=False)
+            if self._halt.is_set():
+                raise JobCancelled("the station was e-stopped")
             raise TimeoutError(f"the arm did not finish a {trajectory.duration_s:.2f} s move in time")
         with self._lock:
             self._motions[-1] = (time.time(), self._motions[-1][1])

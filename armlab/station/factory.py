@@ -16,11 +16,19 @@ class SimStation:
         self.station = station
         self.cell = cell
 
-    def close(self) -> None:
+    def close(self) -> dict:
+        """Close the station then the simulation; the station's report ({"joined", "alive"} thread names)
+        with the simulation's threads added."""
+        report = {"joined": [], "alive": []}
         try:
-            self.station.close()
+            report = self.station.close() or report
         finally:
             self.cell.close()
+        threads = {"sim-physics": getattr(self.cell, "_physics_thread", None)}
+        for name, thread in threads.items():
+            if thread is not None:
+                report["alive" if thread.is_alive() else "joined"].append(name)
+        return report
 
 
 def make_sim_station(config: StationConfig | None = None, db_path: str | Path | None = None) -> SimStation:
@@ -53,11 +61,13 @@ class DeviceStation:
     def __init__(self, station: Station) -> None:
         self.station = station
 
-    def close(self) -> None:
+    def close(self) -> dict:
+        report = {"joined": [], "alive": []}
         try:
-            self.station.close()
+            report = self.station.close() or report
         finally:
             _close_devices(self.station.arm, self.station.gripper, self.station.camera)
+        return report
 
 
 def _close_devices(*devices) -> None:

@@ -61,6 +61,7 @@ class Job:
     has_cleanup: bool = False  # a cleanup runs after a cancel (the station waits for it)
     extra: dict = field(default_factory=dict)  # job-specific live details (e.g. a task's progress)
     cancel_event: threading.Event = field(default_factory=threading.Event, repr=False)
+    thread: threading.Thread | None = field(default=None, repr=False)  # the job's thread (joined at shutdown)
     done_event: threading.Event = field(default_factory=threading.Event, repr=False)
     _lock: threading.Lock = field(default_factory=threading.Lock, repr=False)
 
@@ -162,5 +163,6 @@ def start_job_thread(
             job.done_event.set()  # after the station's transition, so a waiter sees the final state
 
     thread = threading.Thread(target=run, name=f"job-{job.name}", daemon=True)
+    job.thread = thread
     thread.start()
     return thread

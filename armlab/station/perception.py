@@ -46,6 +46,10 @@ class Perception:
     robot_mask: np.ndarray | None = field(default=None, repr=False)
 
 
+DEVICE_ERRORS = (ConnectionError, TimeoutError, OSError)  # a device failed, as opposed to a bad request
+CAMERA_RETRY_S = 0.5  # a camera that raised is read again after this long
+
+
 class _Worker:
     """A named daemon thread with a stop event and a bounded join."""
 
@@ -62,11 +66,18 @@ class _Worker:
         self._thread = threading.Thread(target=self._run_safely, name=self.name, daemon=True)
         self._thread.start()
 
-    def stop(self, timeout_s: float = 2.0) -> None:
+    def request_stop(self) -> None:
+        """Ask the thread to end (returns at once; stop() also joins)."""
         self._stop.set()
-        if self._thread is not None:
-            self._thread.join(timeout_s)
-            self._thread = None
+
+    def stop(self, timeout_s: float = 2.0) -> bool:
+        """Stop and join (bounded); True if the thread has ended (or never ran)."""
+        self._stop.set()
+        thread, self._thread = self._thread, None
+        if thread is None:
+            return True
+        thread.join(timeout_s)
+        return not thread.is_alive()
 
     def _run_safely(self) -> None:
         while not self._stop.is_set():
@@ -96,6 +107,15 @@ class FrameSource(_Worker):
         self.slot = slot
         self.arm = arm
         self.gripper = gripper
+        self.error: str | None = None  # the camera's last failure, until it delivers a frame again
+        self.last_frame_monotonic_s = time.monotonic()  # when the newest frame arrived (start counts as one)
+
+    def health(self, timeout_s: float) -> str | None:
+        """None while the camera delivers, else why not: it raised, or no frame for more than timeout_s."""
+        if self.error is not None:
+            return self.error
+        age_s = time.monotonic() - self.last_frame_monotonic_s
+        return f"no frame for {age_s:.1f} s" if age_s > timeout_s else None
 
     def _run(self) -> None:
         while not self._stop.is_set():
@@ -103,6 +123,14 @@ class FrameSource(_Worker):
                 frame = self.camera.async_read(timeout_ms=200.0)
             except TimeoutError:
                 continue
+            except DEVICE_ERRORS as error:  # reported (the station faults), read again a little later
+                if self.error is None:
+                    log.warning("%s: camera failed: %s", self.name, error)
+                self.error = f"{type(error).__name__}: {error}"
+                self._stop.wait(CAMERA_RETRY_S)
+                continue
+            self.error = None
+            self.last_frame_monotonic_s = time.monotonic()
             self.slot.publish(with_robot_state(frame, self.arm, self.gripper))
 
 
@@ -116,7 +144,7 @@ def with_robot_state(frame: Frame, arm: Arm | None, gripper: Gripper | None = No
             changes["arm_joints_rad"] = np.array(arm.read_joint_state().position_rad, dtype=float)
         if frame.gripper_closed is None and gripper is not None:
             changes["gripper_closed"] = gripper.read_state().command == "grasp"
-    except (ConnectionError, TimeoutError, OSError) as error:
+    except DEVICE_ERRORS as error:
         log.debug("no robot state for frame %d: %s", frame.sequence, error)
     return replace(frame, **changes) if changes else frame
 

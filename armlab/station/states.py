@@ -33,6 +33,7 @@ COMMANDS = (
     "sleep",
     "move_joints",
     "move_to",
+    "jog",
     "torque",
     "gripper",
     "calibrate",
@@ -48,7 +49,7 @@ COMMANDS = (
 )
 
 _S = State
-_MANUAL_MOVES = ("home", "sleep", "move_joints", "move_to", "torque", "gripper")
+_MANUAL_MOVES = ("home", "sleep", "move_joints", "move_to", "jog", "torque", "gripper")
 
 _TRANSITIONS: dict[State, dict[str, State]] = {
     _S.IDLE: {

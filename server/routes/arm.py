@@ -5,7 +5,7 @@ from __future__ import annotations
 from fastapi import APIRouter
 
 from server.deps import ControlAuth, StationDep
-from server.models import GripperRequest, JointsRequest, PoseNameRequest, PoseRequest, Status, TorqueRequest
+from server.models import GripperRequest, JogRequest, JointsRequest, PoseNameRequest, PoseRequest, Status, TorqueRequest
 
 router = APIRouter(prefix="/api", tags=["arm"])
 
@@ -40,7 +40,16 @@ def post_pose(body: PoseRequest, station: StationDep, controller: ControlAuth, w
 
 @router.post("/arm/torque", response_model=Status)
 def post_torque(body: TorqueRequest, station: StationDep, controller: ControlAuth) -> dict:
-    station.set_torque(body.enabled, source=controller)
+    """Torque on or off; off outside teach lets the arm fall, so it needs confirm: true (409 otherwise)."""
+    station.set_torque(body.enabled, source=controller, confirm=body.confirm)
+    return station.status()
+
+
+@router.post("/arm/jog", response_model=Status)
+def post_jog(body: JogRequest, station: StationDep, controller: ControlAuth) -> dict:
+    """Hold-to-run joint jog: runs for jog_hold_s after this request or the controller's last heartbeat
+    (POST /api/heartbeat or the websocket's heartbeat message), then ramps to rest by itself."""
+    station.jog(body.velocity_rad_s, source=controller)
     return station.status()
 
 

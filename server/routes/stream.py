@@ -35,11 +35,17 @@ def read_frame(
 
 
 @router.websocket("/ws")
-async def websocket_stream(websocket: WebSocket, token: str | None = None) -> None:
-    """Frames (binary, after ack), telemetry, events, calibration; control messages need ?token=."""
+async def websocket_stream(websocket: WebSocket, token: str | None = None, controller: str | None = None) -> None:
+    """Frames (binary, after ack), telemetry, events, calibration; control messages need ?token=.
+    ?controller=NAME names this session for the control lease (default: a name of its own)."""
     app = websocket.app
     await websocket.accept()
     if token is not None and not token_matches(app.state.token, token):  # accepted first so the page sees the code
         await websocket.close(code=4401, reason="wrong control token")
         return
-    await app.state.hub.serve(websocket, can_control=token is not None)
+    try:
+        name = app.state.hub.session_controller(controller)
+    except ValueError as error:
+        await websocket.close(code=4422, reason=str(error)[:120])
+        return
+    await app.state.hub.serve(websocket, can_control=token is not None, controller=name)

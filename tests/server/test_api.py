@@ -186,8 +186,13 @@ def test_gripper_and_torque(http):
     _error(http.post("/api/gripper", json={"action": "squeeze"}, headers=AUTH), 422, "invalid")
     assert http.post("/api/arm/torque", json={"enabled": True}, headers=AUTH).status_code == 200
     assert http.get("/api/status").json()["controller"] == "api"
-    browser = {**AUTH, "Sec-Fetch-Mode": "cors"}  # what a page's fetch() adds
+    # A page (browsers add Sec-Fetch-Mode to fetch()) is another controller: refused until it takes control.
+    browser = {**AUTH, "Sec-Fetch-Mode": "cors"}
+    error = _error(http.post("/api/gripper", json={"action": "release"}, headers=browser), 409, "not_controller")
+    assert "'api'" in error["message"]
+    assert http.post("/api/control/take", headers=browser).json()["controller"] == "ui"
     assert http.post("/api/gripper", json={"action": "release"}, headers=browser).json()["controller"] == "ui"
+    assert http.post("/api/control/release", headers=browser).json()["controller"] is None
 
 
 def test_pixel_to_world_before_calibration_is_409(http):

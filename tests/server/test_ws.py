@@ -155,6 +155,8 @@ def test_control_needs_the_token(url):
         assert event["level"] == "error" and "view-only" in event["message"]
         assert _next(viewer, "telemetry")["state"] == "idle"
     with _open(url, TOKEN) as controller:
+        hello = json.loads(controller.recv(timeout=5))
+        assert hello["can_control"] is True and hello["controller"].startswith("ws-")  # a name of its own
         controller.send(json.dumps({"type": "command", "name": "estop"}))
         deadline = time.monotonic() + 5
         while _next(controller, "telemetry")["state"] != "estop":
@@ -162,7 +164,7 @@ def test_control_needs_the_token(url):
         controller.send(json.dumps({"type": "command", "name": "reset"}))
         while _next(controller, "telemetry")["state"] != "idle":
             assert time.monotonic() < deadline
-        assert _next(controller, "telemetry")["controller"] == "ui"
+        assert _next(controller, "telemetry")["controller"] == hello["controller"]  # reset took the free lease
 
 
 def test_wrong_token_is_rejected(url):

@@ -6,7 +6,7 @@ export const STATES = Object.freeze(["idle", "calibrate", "teach", "repeat", "cl
 export const COMMANDS = Object.freeze(["estop", "reset", "home", "sleep", "move_joints", "move_to", "torque", "gripper", "calibrate", "grab", "drop", "teach_start", "teach_record", "teach_stop", "repeat", "auto", "cancel", "set_scene"]);
 export const VIEWS = Object.freeze(["color", "depth", "topdown"]);
 export const LAYERS = Object.freeze(["tags", "detections", "grid"]);
-export const ERROR_CODES = Object.freeze(["wrong_state", "unreachable", "unsafe", "invalid", "not_found", "not_calibrated", "unauthorized", "forbidden", "device", "internal"]);
+export const ERROR_CODES = Object.freeze(["wrong_state", "unreachable", "unsafe", "invalid", "not_found", "not_calibrated", "unauthorized", "forbidden", "not_controller", "needs_confirmation", "device", "internal"]);
 export const SERVER_MESSAGE_TYPES = Object.freeze(["frame", "telemetry", "event", "calibration", "hello"]);
 export const CLIENT_MESSAGE_TYPES = Object.freeze(["ack", "view", "command"]);
 
@@ -23,7 +23,6 @@ export const CLIENT_MESSAGE_TYPES = Object.freeze(["ack", "view", "command"]);
  * @property {string} summary
  * @property {Array<AutoParam>} params
  * @property {boolean} judged a competition event (DESIGN §7): the simulation scores it with the judge
- * @property {boolean} scored the simulation scores it: the judge (§7), else the job's own scorer
  * @property {boolean} scene POST /api/sim/scene can generate its starting scene
  * @property {(number|null)} [time_limit_s] the event's time limit, simulated seconds
  */
@@ -133,7 +132,7 @@ export const CLIENT_MESSAGE_TYPES = Object.freeze(["ack", "view", "command"]);
 /**
  * @typedef {Object} CommandMessage
  * @property {"command"} type
- * @property {("estop"|"reset"|"cancel")} name
+ * @property {("estop"|"reset"|"cancel"|"take_control"|"release_control")} name
  */
 
 /**
@@ -158,6 +157,8 @@ export const CLIENT_MESSAGE_TYPES = Object.freeze(["ack", "view", "command"]);
  * @property {number} count
  * @property {number} time_s
  * @property {number} frame_sequence
+ * @property {boolean} [stale] True while the camera is lost or perception is old: data is then empty
+ * @property {(string|null)} [stale_reason]
  */
 
 /**
@@ -218,10 +219,17 @@ export const CLIENT_MESSAGE_TYPES = Object.freeze(["ack", "view", "command"]);
  */
 
 /**
+ * The controlling page is still there: keeps its hold-to-run jog going for another jog_hold_s.
+ * @typedef {Object} HeartbeatMessage
+ * @property {"heartbeat"} type
+ */
+
+/**
  * @typedef {Object} HelloMessage
  * @property {"hello"} [type]
  * @property {number} server_time_s
  * @property {boolean} can_control
+ * @property {(string|null)} [controller] this session's controller name (the lease holder's name when it commands)
  * @property {("sim"|"real")} backend
  * @property {WorkcellInfo} workcell
  */
@@ -243,6 +251,13 @@ export const CLIENT_MESSAGE_TYPES = Object.freeze(["ack", "view", "command"]);
 /**
  * @typedef {Object} JobResponse
  * @property {(JobInfo|null)} job
+ */
+
+/**
+ * Hold-to-run jog: joint velocities kept for jog_hold_s after each heartbeat (this request, or a
+ * heartbeat), then the arm ramps to rest by itself.
+ * @typedef {Object} JogRequest
+ * @property {Array<number>} velocity_rad_s joint velocities, joint_names order; zeros stop
  */
 
 /**
@@ -323,6 +338,7 @@ export const CLIENT_MESSAGE_TYPES = Object.freeze(["ack", "view", "command"]);
  * @typedef {Object} ScoreRule
  * @property {string} rule
  * @property {number} points
+ * @property {boolean} scored the simulation scores it: the judge (§7), else the job's own scorer
  * @property {string} detail
  * @property {Array<string>} object_ids
  */
@@ -339,7 +355,9 @@ export const CLIENT_MESSAGE_TYPES = Object.freeze(["ack", "view", "command"]);
  * @property {boolean} moving
  * @property {boolean} calibrated
  * @property {("sim"|"real")} backend
- * @property {(("ui"|"api")|null)} controller
+ * @property {(string|null)} controller who holds the control lease (None: free); only it may command
+ * @property {(number|null)} [controller_since_s] when it took control (time.time())
+ * @property {Object<string, *>} [devices_lost] devices not answering, with the reason
  * @property {(JobInfo|null)} job
  * @property {Array<string>} allowed_commands
  * @property {number} time_s
@@ -390,17 +408,21 @@ export const CLIENT_MESSAGE_TYPES = Object.freeze(["ack", "view", "command"]);
  * @property {boolean} moving
  * @property {boolean} calibrated
  * @property {("sim"|"real")} backend
- * @property {(("ui"|"api")|null)} controller
+ * @property {(string|null)} controller who holds the control lease (None: free); only it may command
+ * @property {(number|null)} [controller_since_s] when it took control (time.time())
+ * @property {Object<string, *>} [devices_lost] devices not answering, with the reason
  * @property {(JobInfo|null)} job
  * @property {Array<string>} allowed_commands
  * @property {number} time_s
  * @property {"telemetry"} [type]
  * @property {Array<Detection>} detections
+ * @property {boolean} [detections_stale]
  */
 
 /**
  * @typedef {Object} TorqueRequest
  * @property {boolean} enabled
+ * @property {boolean} [confirm] torque off outside teach lets the arm fall: needs confirm: true
  */
 
 /**

@@ -133,7 +133,8 @@ class SimCamera(Camera):
         color_bgr, depth_mm = self._noise.apply(images)
         with self._condition:
             self._sequence += 1
-            frame = Frame(color_bgr=color_bgr, depth_mm=depth_mm, timestamp_s=time.time(),
+            captured_s = images.wall_time_s if images.wall_time_s is not None else time.time()  # the state's time, not the drawing's
+            frame = Frame(color_bgr=color_bgr, depth_mm=depth_mm, timestamp_s=captured_s,
                           sequence=self._sequence, intrinsics=self._intrinsics, arm_joints_rad=images.arm_joints_rad,
                           gripper_closed=images.gripper_closed)
             self._latest = frame

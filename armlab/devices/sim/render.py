@@ -23,13 +23,15 @@ logger = logging.getLogger(__name__)
 class RawImages:
     """One render: rgb (H, W, 3) uint8 in RGB order, depth_m (H, W) float32 along the optical axis;
     arm_joints_rad and gripper_closed: the arm's joint positions and whether the gripper was commanded
-    closed in the rendered state (None if the snapshot gave none)."""
+    closed in the rendered state (None if the snapshot gave none). wall_time_s: time.time() when the
+    state was copied (the capture time: the drawing takes a while after it)."""
 
     rgb: np.ndarray
     depth_m: np.ndarray
     sim_time_s: float
     arm_joints_rad: np.ndarray | None = None
     gripper_closed: bool | None = None
+    wall_time_s: float | None = None
 
 
 def depth_from_buffer(buffer: np.ndarray, znear_m: float, zfar_m: float) -> np.ndarray:
@@ -170,8 +172,10 @@ class RenderThread:
 
     def _render_once(self, renderer: _GLRenderer) -> RawImages:
         sim_time_s, arm_joints_rad, gripper_closed = self._snapshot(renderer)
+        captured_s = time.time()
         rgb, depth = renderer.draw()
-        return RawImages(rgb=rgb, depth_m=depth, sim_time_s=sim_time_s, arm_joints_rad=arm_joints_rad, gripper_closed=gripper_closed)
+        return RawImages(rgb=rgb, depth_m=depth, sim_time_s=sim_time_s, arm_joints_rad=arm_joints_rad,
+                         gripper_closed=gripper_closed, wall_time_s=captured_s)
 
     def _run(self) -> None:
         try:

@@ -1,0 +1,92 @@
+"""Hold-to-run jogging: a joint-velocity motion that runs out by itself.
+
+plan_jog turns "move at these joint velocities" into a trajectory that ramps to them within the
+acceleration limit, holds them for `hold_s`, then ramps down to rest, braking early wherever a joint
+would otherwise pass its limit. Each heartbeat of the controlling client re-plans from where the
+previous jog is now, so the arm keeps moving only while heartbeats arrive: when they stop, the last
+plan ends `hold_s` (+ the ramp down) later with no thread or timer involved. Pure: no devices.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from armlab.devices.arm import JointTrajectory
+
+LIMIT_MARGIN_RAD = 0.01  # braking stops this far inside a joint limit
+
+
+def checked_jog_velocity(velocity_rad_s, velocity_limit_rad_s, names) -> np.ndarray:
+    """A finite (dof,) joint velocity within the limits, else ValueError naming the joint."""
+    velocity = np.asarray(velocity_rad_s, dtype=float)
+    limit = np.asarray(velocity_limit_rad_s, dtype=float)
+    if velocity.shape != limit.shape:
+        raise ValueError(f"velocity_rad_s must have {limit.size} values ({', '.join(names)}), got shape {velocity.shape}")
+    if not np.all(np.isfinite(velocity)):
+        raise ValueError("velocity_rad_s must be finite numbers")
+    for index, name in enumerate(names):
+        if abs(velocity[index]) > limit[index] + 1e-9:
+            raise ValueError(f"joint '{name}' jog velocity {velocity[index]:.3f} rad/s is above its limit {limit[index]:.3f} rad/s")
+    return velocity
+
+
+def plan_jog(
+    q0_rad,
+    v0_rad_s,
+    v_target_rad_s,
+    hold_s: float,
+    lower_rad,
+    upper_rad,
+    accel_limit_rad_s2,
+    rate_hz: float = 100.0,
+) -> JointTrajectory:
+    """A trajectory from q0 moving at v0 that reaches v_target, keeps it until hold_s, then stops.
+
+    Per joint: the velocity moves toward its target (v_target before hold_s, 0 after, 0 sooner when the
+    braking distance would carry the joint past limit - LIMIT_MARGIN_RAD) by at most accel·dt per sample.
+    The result starts at q0, ends at rest, stays inside the limits and within the acceleration limit
+    (finite differences). v0: the reference velocity of the jog being replaced (zeros from rest).
+    """
+    q = np.asarray(q0_rad, dtype=float).copy()
+    v = np.asarray(v0_rad_s, dtype=float).copy()
+    target = np.asarray(v_target_rad_s, dtype=float)
+    accel = np.asarray(accel_limit_rad_s2, dtype=float)
+    low = np.asarray(lower_rad, dtype=float) + LIMIT_MARGIN_RAD
+    high = np.asarray(upper_rad, dtype=float) - LIMIT_MARGIN_RAD
+    if not (math.isfinite(hold_s) and hold_s > 0.0 and rate_hz > 0.0):
+        raise ValueError(f"hold_s and rate_hz must be positive, got {hold_s}, {rate_hz}")
+    dt = 1.0 / rate_hz
+    dv_max = accel * dt
+    q = np.clip(q, np.minimum(low, q), np.maximum(high, q))
+    positions, t = [q.copy()], 0.0
+    max_steps = int((hold_s + float(np.max(np.abs(v) / accel)) + float(np.max(np.abs(target) / accel))) * rate_hz) + 10
+    for _ in range(max_steps):
+        goal = target if t < hold_s else np.zeros_like(target)
+        # Brake now where the distance to stop (plus this step) would pass a limit.
+        stopping = v * np.abs(v) / (2.0 * accel) + v * dt
+        goal = np.where((stopping > 0) & (q + stopping > high), 0.0, goal)
+        goal = np.where((stopping < 0) & (q + stopping < low), 0.0, goal)
+        v = v + np.clip(goal - v, -dv_max, dv_max)
+        q = q + v * dt
+        t += dt
+        positions.append(q.copy())
+        if t >= hold_s and not np.any(v):
+            break
+    positions_rad = np.asarray(positions)
+    if len(positions_rad) < 2:
+        positions_rad = np.vstack([positions_rad, positions_rad])
+    times_s = np.arange(len(positions_rad)) * dt
+    return JointTrajectory(times_s, positions_rad)
+
+
+def reference_velocity(trajectory: JointTrajectory, t_s: float) -> tuple[np.ndarray, np.ndarray]:
+    """(position, velocity) of a sampled trajectory at t_s (clamped; zero velocity outside it)."""
+    times, positions = trajectory.times_s, trajectory.positions_rad
+    if t_s <= times[0] or t_s >= times[-1]:
+        index = 0 if t_s <= times[0] else -1
+        return positions[index].copy(), np.zeros(positions.shape[1])
+    i = int(np.searchsorted(times, t_s, side="right")) - 1
+    slope = (positions[i + 1] - positions[i]) / (times[i + 1] - times[i])
+    return positions[i] + slope * (t_s - times[i]), slope

@@ -1,0 +1,31 @@
+"""The device watch: a thread that checks the arm, the gripper and the camera at a fixed rate.
+
+`probe()` returns {device: reason} for every device that is not answering right now (empty when all
+are fine); `on_problems(problems)` is called with each result, so the station can fault on a new loss
+and log a recovery. Device loss is never silent: a lost device shows as a fault with its reason.
+"""
+
+from __future__ import annotations
+
+import logging
+from collections.abc import Callable
+
+from armlab.station.perception import _Worker
+
+log = logging.getLogger(__name__)
+
+
+class DeviceWatch(_Worker):
+    """Calls on_problems(probe()) every period_s on its own thread."""
+
+    name = "station-watch"
+
+    def __init__(self, probe: Callable[[], dict[str, str]], on_problems: Callable[[dict[str, str]], None], period_s: float) -> None:
+        super().__init__()
+        self.probe = probe
+        self.on_problems = on_problems
+        self.period_s = period_s
+
+    def _run(self) -> None:
+        while not self._stop.wait(self.period_s):
+            self.on_problems(self.probe())
