@@ -101,7 +101,9 @@ def _transfer_plan(station: Station, q_start, point_m, yaw_rad: float | None, bo
     seed = q_start
     if finger_axis_rad is not None and yaw_rad is not None:
         seed = _finger_seed(station, q_start, point_m, config.top_down_pitch_rad, yaw_rad, finger_axis_rad)
-    near_m = point_m + np.array([0.0, 0.0, min(config.approach_height_m, max(0.0, max_transfer_z_m - point_m[2]))])
+    # Carrying a block, approach from higher by its edge, so that the block itself clears its neighbours.
+    approach_m = config.approach_height_m + carried
+    near_m = point_m + np.array([0.0, 0.0, min(approach_m, max(0.0, max_transfer_z_m - point_m[2]))])
     pitch, (_q_point, q_near) = solve_approach(model, seed, [point_m, near_m], yaw_rad, config.top_down_pitch_rad)
     if pitch < min_pitch_rad - 1e-9:
         raise Unreachable(f"({point_m[0] * 1000:.0f}, {point_m[1] * 1000:.0f}, {point_m[2] * 1000:.0f}) mm is reachable only at "

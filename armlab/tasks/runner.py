@@ -261,7 +261,8 @@ class TaskRunner:
             self.fail(f"cannot place the {name} at ({to[0] * 1000:.0f}, {to[1] * 1000:.0f}, {to[2] * 1000:.0f}) mm: {error}")
             return False
         self.report(f"picking the {name}: {move.why}")
-        run_steps(self.station, self.ctx, pick, progress=False)
+        if not self.run_or_fail(pick, f"picking the {name}"):
+            return False
         if not self.station.gripper.read_state().holding:
             self.fail(f"missed the {name} (nothing in the gripper)")
             return False
@@ -273,13 +274,29 @@ class TaskRunner:
             self.put_down_held(objects)
             return False
         self.report(f"placing the {name}: {move.why}")
-        run_steps(self.station, self.ctx, place, progress=False)
+        if not self.run_or_fail(place, f"placing the {name}"):
+            return False
         self.station.set_held_block(None)
         self.progress.moves += 1
         placed = {**block, "position_m": [float(to[0]), float(to[1]), float(to[2] + edge)]}
         self.last_objects = [o for o in self.last_objects if o is not block] + [placed]
         if move.on_placed is not None:
             move.on_placed(edge)
+        return True
+
+    def run_or_fail(self, steps: list, what: str) -> bool:
+        """Run planned steps; a step the gate refuses (the arm is not where the plan starts, e.g. it
+        was stopped by a contact) fails the move with the reason, puts down what is held, and the
+        job goes on from a fresh look."""
+        from armlab.motion.safety import UnsafeTrajectory
+
+        try:
+            run_steps(self.station, self.ctx, steps, progress=False)
+        except UnsafeTrajectory as error:
+            self.fail(f"{what}: the gate refused a step ({error})")
+            if self.station.gripper.read_state().holding:
+                self.put_down_held(self.last_objects)
+            return False
         return True
 
     def put_down_held(self, objects: list[dict] | None = None) -> str:
