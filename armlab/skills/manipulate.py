@@ -56,7 +56,7 @@ def run_steps(station: Station, ctx: JobContext, steps: Sequence, replan: Callab
 # Pick and place with a safe transfer height ------------------------------------------------------
 
 TRANSFER_CLEARANCE_M = 0.05  # the held block's bottom (or the fingers) this far above the tallest obstacle
-MAX_PLACE_TILT_RAD = np.radians(5.0)  # a block set down tilted more than this lands on an edge
+MAX_PLACE_TILT_RAD = np.radians(5.0)  # by default a block is released at most this far from top-down
 
 
 def _finger_seed(station: Station, q_start, point_m, pitch_rad: float, yaw_rad: float, finger_axis_rad: float):
@@ -101,7 +101,9 @@ def _transfer_plan(station: Station, q_start, point_m, yaw_rad: float | None, bo
     seed = q_start
     if finger_axis_rad is not None and yaw_rad is not None:
         seed = _finger_seed(station, q_start, point_m, config.top_down_pitch_rad, yaw_rad, finger_axis_rad)
-    near_m = point_m + np.array([0.0, 0.0, min(config.approach_height_m, max(0.0, max_transfer_z_m - point_m[2]))])
+    # Carrying a block, approach from higher by its edge, so that the block itself clears its neighbours.
+    approach_m = config.approach_height_m + carried
+    near_m = point_m + np.array([0.0, 0.0, min(approach_m, max(0.0, max_transfer_z_m - point_m[2]))])
     pitch, (_q_point, q_near) = solve_approach(model, seed, [point_m, near_m], yaw_rad, config.top_down_pitch_rad)
     if pitch < min_pitch_rad - 1e-9:
         raise Unreachable(f"({point_m[0] * 1000:.0f}, {point_m[1] * 1000:.0f}, {point_m[2] * 1000:.0f}) mm is reachable only at "
@@ -170,7 +172,8 @@ def plan_pick(station: Station, top_center_m, yaw_rad: float | None, edge_m: flo
 
 
 def plan_place(station: Station, surface_m, yaw_rad: float | None, edge_m: float, boxes: list, q_start=None,
-               max_transfer_z_m: float = 0.42, finger_axis_rad: float | None = None) -> list:
+               max_transfer_z_m: float = 0.42, finger_axis_rad: float | None = None,
+               max_tilt_rad: float = MAX_PLACE_TILT_RAD) -> list:
     """Plan setting the held block (edge edge_m, grasped as plan_pick does) with its bottom centre on
     surface_m, releasing place_clearance_m above it, then rising. finger_axis_rad: the world direction
     the fingers open along (e.g. across a line of blocks, so they do not push the neighbours)."""
@@ -181,7 +184,7 @@ def plan_place(station: Station, surface_m, yaw_rad: float | None, edge_m: float
     q_start = station.joints_rad() if q_start is None else q_start
     return _transfer_plan(station, q_start, release_m, yaw_rad, boxes, edge_m, "release",
                           ("move above place", "descend to place", "retreat"), max_transfer_z_m, finger_axis_rad,
-                          min_pitch_rad=config.top_down_pitch_rad - MAX_PLACE_TILT_RAD)
+                          min_pitch_rad=config.top_down_pitch_rad - max_tilt_rad)
 
 
 def plan_side_place(station: Station, surface_m, edge_m: float, boxes: list, q_start=None, max_transfer_z_m: float = 0.55) -> list:

@@ -73,7 +73,7 @@ class Perceiving:
             from armlab.vision.pipeline import PerceptionPipeline
 
             if self._pipeline is None:
-                self._pipeline = PerceptionPipeline(self.perception_config)
+                self._pipeline = PerceptionPipeline(self.perception_config, arm_model=self.model)
             frame = self.fresh_frame()
             perception = analyse_frame(self._pipeline, frame, self.calibration)
             self.perception.publish(perception)

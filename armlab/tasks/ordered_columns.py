@@ -7,11 +7,14 @@ column whose top outranks a loose block of its size (a block was hidden, or fell
 
 from __future__ import annotations
 
+import math
+
 from armlab.scene import COLORS
 from armlab.tasks.columns import Column
 from armlab.tasks.runner import Move, Plan, TaskRunner, cubes
 
 RANK = {color: rank for rank, color in enumerate(COLORS)}
+COLUMN_MAX_TILT_RAD = math.radians(20.0)  # the top of a tall column is reachable only slightly tilted
 
 
 def pile_sizes(block: dict) -> list[str]:
@@ -56,6 +59,7 @@ def make_ordered_policy(runner: TaskRunner, bases: dict[str, tuple[float, float]
             if is_next:
                 yaw = column.top["yaw_rad"] if column.top is not None else 0.0
                 moves.append(Move(block, column.surface_m(), f"next on the {column.name}", yaw_rad=yaw,
+                                  max_tilt_rad=COLUMN_MAX_TILT_RAD,
                                   on_placed=lambda edge, c=column, b=block: c.add(b, edge)))
         for block in sorted(loose, key=lambda b: -b.get("stack_level", 1)):
             if block.get("stack_level", 1) > 1:

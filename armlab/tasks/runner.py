@@ -39,6 +39,7 @@ class Move:
     yaw_rad: float | None = 0.0
     finger_axis_rad: float | None = None  # world direction the fingers open along when releasing
     side_ok: bool = False  # may be set down with the gripper horizontal when too high for top-down
+    max_tilt_rad: float = math.radians(5.0)  # how far from top-down the gripper may be when it releases
     on_placed: Callable[[float], None] | None = field(default=None, compare=False)  # called with the edge once placed
 
     def key(self) -> tuple:
@@ -87,6 +88,11 @@ def near(a, b, radius_m: float) -> bool:
 
 
 FINGER_REACH_M = 0.075  # neighbours closer than this (centre to centre) can meet an opening finger
+
+
+def park_pose(model) -> np.ndarray:
+    """Where the arm waits while the camera looks: the sleep pose (folded beside the base, low)."""
+    return np.asarray(model.sleep_rad, float)
 
 
 def pick_end_joints(steps: list) -> np.ndarray:
@@ -142,14 +148,14 @@ class TaskRunner:
     # Arm -------------------------------------------------------------------------------------------
 
     def park(self) -> None:
-        """Move to the sleep pose, where the arm hides no block from the camera, by a path that keeps
+        """Move to the park pose (park_pose: the arm hides no block from the camera) by a path that keeps
         clear of the objects seen last (straight there, else up first, else up and over the base)."""
         from armlab.motion import plan_joint_move
         from armlab.motion.cartesian import plan_vertical_segment
         from armlab.motion.clearance import first_collision
 
         model = self.station.model
-        q_park = np.asarray(model.sleep_rad, float)
+        q_park = park_pose(model)
         self.progress.next_block = self.progress.next_target_m = None  # no move planned until the next look
         q_now = self.station.joints_rad()
         if np.abs(q_now - q_park).max() <= 0.02:
@@ -236,7 +242,7 @@ class TaskRunner:
         def plan_the_place(q_start=None) -> list:
             try:
                 return plan_place(self.station, to, yaw, edge, place_boxes, q_start=q_start,
-                                  max_transfer_z_m=self.max_transfer_z_m, finger_axis_rad=axis)
+                                  max_transfer_z_m=self.max_transfer_z_m, finger_axis_rad=axis, max_tilt_rad=move.max_tilt_rad)
             except (Unreachable, ValueError):
                 if not move.side_ok:
                     raise
@@ -255,7 +261,8 @@ class TaskRunner:
             self.fail(f"cannot place the {name} at ({to[0] * 1000:.0f}, {to[1] * 1000:.0f}, {to[2] * 1000:.0f}) mm: {error}")
             return False
         self.report(f"picking the {name}: {move.why}")
-        run_steps(self.station, self.ctx, pick, progress=False)
+        if not self.run_or_fail(pick, f"picking the {name}"):
+            return False
         if not self.station.gripper.read_state().holding:
             self.fail(f"missed the {name} (nothing in the gripper)")
             return False
@@ -267,13 +274,29 @@ class TaskRunner:
             self.put_down_held(objects)
             return False
         self.report(f"placing the {name}: {move.why}")
-        run_steps(self.station, self.ctx, place, progress=False)
+        if not self.run_or_fail(place, f"placing the {name}"):
+            return False
         self.station.set_held_block(None)
         self.progress.moves += 1
         placed = {**block, "position_m": [float(to[0]), float(to[1]), float(to[2] + edge)]}
         self.last_objects = [o for o in self.last_objects if o is not block] + [placed]
         if move.on_placed is not None:
             move.on_placed(edge)
+        return True
+
+    def run_or_fail(self, steps: list, what: str) -> bool:
+        """Run planned steps; a step the gate refuses (the arm is not where the plan starts, e.g. it
+        was stopped by a contact) fails the move with the reason, puts down what is held, and the
+        job goes on from a fresh look."""
+        from armlab.motion.safety import UnsafeTrajectory
+
+        try:
+            run_steps(self.station, self.ctx, steps, progress=False)
+        except UnsafeTrajectory as error:
+            self.fail(f"{what}: the gate refused a step ({error})")
+            if self.station.gripper.read_state().holding:
+                self.put_down_held(self.last_objects)
+            return False
         return True
 
     def put_down_held(self, objects: list[dict] | None = None) -> str:
@@ -319,7 +342,7 @@ class TaskRunner:
     def clear_of_park(self, xy_m, clearance_m: float = 0.09) -> bool:
         """True if a tall column at (x, y) keeps clear of the arm's way into its park pose (the vertical
         plane through the base axis and the parked gripper, out to 0.22 m)."""
-        park_xy = self.station.model.fk(np.asarray(self.station.model.sleep_rad, float))[:2, 3]
+        park_xy = self.station.model.fk(np.asarray(self.station.model.sleep_rad, float))[:2, 3]  # the way down to it
         direction = park_xy / max(np.linalg.norm(park_xy), 1e-9)
         along = float(np.clip(np.dot(xy_m, direction), 0.0, 0.22))
         return float(np.linalg.norm(np.asarray(xy_m) - along * direction)) >= clearance_m
@@ -332,6 +355,14 @@ class TaskRunner:
         points = np.array([[xy_m[0], xy_m[1], z] for z in (0.0, height_m)])
         pixels = project_points(calibration.T_world_camera, calibration.K, calibration.dist, points)
         return bool(np.all((pixels >= margin_px) & (pixels <= np.array([calibration.width, calibration.height]) - margin_px)))
+
+    def can_place_on(self, surface_m, edge_m: float) -> bool:
+        """True if a block of edge_m can be set down top-down on surface_m from here (obstacles aside)."""
+        try:
+            plan_place(self.station, surface_m, 0.0, edge_m, [], max_transfer_z_m=self.max_transfer_z_m)
+        except (Unreachable, ValueError):
+            return False
+        return True
 
     def feed_spot(self) -> tuple[float, float] | None:
         """The simulated feeder's spot (to keep clear), when the scene has a feeder."""
