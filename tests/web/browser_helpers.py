@@ -5,10 +5,16 @@ from __future__ import annotations
 from pathlib import Path
 
 REPO = Path(__file__).resolve().parents[2]
+# The control lease's name the test pages and the tests' REST helper (conftest.Server) share: one operator
+# driving the station from the page and from a script at once.
+OPERATOR = "operator"
 
 
 def open_page(browser, url: str):
-    """A new page at `url` with page errors collected in page.errors (a test asserts it stays empty)."""
+    """A new page at `url` with page errors collected in page.errors (a test asserts it stays empty).
+    A page opened with the control token is the OPERATOR controller, like the REST helper."""
+    if "token=" in url and "controller=" not in url:
+        url += f"&controller={OPERATOR}"
     page = browser.new_page(viewport={"width": 1600, "height": 1000})
     page.errors = []
     page.on("pageerror", lambda error: page.errors.append(str(error)))

@@ -16,6 +16,7 @@ from pathlib import Path
 
 import httpx
 import pytest
+from browser_helpers import OPERATOR
 
 REPO = Path(__file__).resolve().parents[2]
 CHROMIUM = "/usr/bin/chromium"
@@ -58,7 +59,7 @@ class Server:
     log_path: Path
 
     def request(self, method: str, path: str, json: dict | None = None, timeout_s: float = 30.0) -> httpx.Response:
-        headers = {"Authorization": f"Bearer {self.token}"}
+        headers = {"Authorization": f"Bearer {self.token}", "X-Armlab-Controller": OPERATOR}  # as the test pages
         return httpx.request(method, self.base_url + path, json=json, headers=headers, timeout=timeout_s)
 
     def get(self, path: str) -> dict:

@@ -1,7 +1,11 @@
-// REST client for the station: carries the control token and turns error bodies into ApiError.
-// The token is read from the page URL once, kept in sessionStorage and removed from the address bar.
+// REST client for the station: carries the control token and the page's controller name, and turns
+// error bodies into ApiError. The token is read from the page URL once, kept in sessionStorage and
+// removed from the address bar. The controller name (the control lease's holder name, also sent on the
+// websocket) is ?controller= if given, else a name of this tab's own, kept for reloads.
 
 const TOKEN_KEY = "armlab.token";
+const CONTROLLER_KEY = "armlab.controller";
+const CONTROLLER_NAME = /^[A-Za-z0-9_.:-]{1,64}$/;
 
 /** An HTTP error with the server's code and human message (see the wire protocol's error body). */
 export class ApiError extends Error {
@@ -24,6 +28,26 @@ export function adoptToken(win = window) {
     win.history.replaceState(null, "", url.pathname + url.search + url.hash);
   }
   return win.sessionStorage.getItem(TOKEN_KEY) || null;
+}
+
+/** This tab's controller name: ?controller= (then stripped from the address bar), else the stored one,
+ * else a new "ui-xxxxxx". The REST calls and the websocket of the page carry it. */
+export function adoptController(win = window) {
+  const url = new URL(win.location.href);
+  const fromUrl = url.searchParams.get("controller");
+  if (fromUrl && CONTROLLER_NAME.test(fromUrl)) {
+    win.sessionStorage.setItem(CONTROLLER_KEY, fromUrl);
+  }
+  if (fromUrl !== null) {
+    url.searchParams.delete("controller");
+    win.history.replaceState(null, "", url.pathname + url.search + url.hash);
+  }
+  let name = win.sessionStorage.getItem(CONTROLLER_KEY);
+  if (!name || !CONTROLLER_NAME.test(name)) {
+    name = `ui-${Math.random().toString(16).slice(2, 8)}`;
+    win.sessionStorage.setItem(CONTROLLER_KEY, name);
+  }
+  return name;
 }
 
 /** Parse an error response into an ApiError, tolerating bodies that are not the documented shape. */
@@ -50,9 +74,10 @@ export function dropToken(win = window) {
 
 /** A small REST client bound to one token; every method returns parsed JSON or throws ApiError. */
 export class Api {
-  constructor(token, base = "") {
+  constructor(token, base = "", controller = adoptController()) {
     this.token = token;
     this.base = base;
+    this.controller = controller;
   }
 
   get canControl() {
@@ -60,7 +85,7 @@ export class Api {
   }
 
   async request(method, path, body) {
-    const headers = { Accept: "application/json", "X-Armlab-Controller": "ui" };
+    const headers = { Accept: "application/json", "X-Armlab-Controller": this.controller };
     if (this.token) headers.Authorization = `Bearer ${this.token}`;
     const init = { method, headers };
     if (body !== undefined) {
@@ -86,6 +111,10 @@ export class Api {
   calibration() { return this.get("/api/calibration"); }
   programs() { return this.get("/api/programs"); }
   estop() { return this.post("/api/estop"); }
+  takeControl() { return this.post("/api/control/take"); }
+  releaseControl() { return this.post("/api/control/release"); }
+  heartbeat() { return this.post("/api/heartbeat"); }
+  jog(velocityRadS) { return this.post("/api/arm/jog", { velocity_rad_s: velocityRadS }); }
   reset() { return this.post("/api/reset"); }
   home() { return this.post("/api/arm/home"); }
   sleep() { return this.post("/api/arm/sleep"); }

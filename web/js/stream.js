@@ -1,6 +1,8 @@
 // Websocket link to the server: decodes binary frames and JSON messages, acks drawn frames
 // (the server sends the next frame only after the ack: newest wins), and reconnects on a timer.
 
+import { adoptController } from "./api.js";
+
 const RECONNECT_MIN_S = 0.5;
 const RECONNECT_MAX_S = 5.0;
 const WS_WRONG_TOKEN = 4401; // close code of /ws when ?token= does not match
@@ -62,7 +64,9 @@ export class Stream {
 
   url() {
     const proto = this.win.location.protocol === "https:" ? "wss:" : "ws:";
-    const query = this.token ? `?token=${encodeURIComponent(this.token)}` : "";
+    const query = this.token
+      ? `?token=${encodeURIComponent(this.token)}&controller=${encodeURIComponent(adoptController(this.win))}`
+      : "";
     return `${proto}//${this.win.location.host}/ws${query}`;
   }
 
