@@ -186,6 +186,11 @@ def test_gripper_and_torque(http):
     _error(http.post("/api/gripper", json={"action": "squeeze"}, headers=AUTH), 422, "invalid")
     assert http.post("/api/arm/torque", json={"enabled": True}, headers=AUTH).status_code == 200
     assert http.get("/api/status").json()["controller"] == "api"
+    # Torque off while idle would let the arm fall: 409 unless confirmed, and nothing changes.
+    q_before = _joints(http)
+    _error(http.post("/api/arm/torque", json={"enabled": False}, headers=AUTH), 409, "needs_confirmation")
+    assert not http.get("/api/status").json()["moving"]
+    assert np.allclose(_joints(http), q_before, atol=2e-3)
     # A page (browsers add Sec-Fetch-Mode to fetch()) is another controller: refused until it takes control.
     browser = {**AUTH, "Sec-Fetch-Mode": "cors"}
     error = _error(http.post("/api/gripper", json={"action": "release"}, headers=browser), 409, "not_controller")
