@@ -46,8 +46,10 @@ def plan_jog(
 
     Per joint: the velocity moves toward its target (v_target before hold_s, 0 after, 0 sooner when the
     braking distance would carry the joint past limit - LIMIT_MARGIN_RAD) by at most accel·dt per sample.
-    The result starts at q0, ends at rest, stays inside the limits and within the acceleration limit
-    (finite differences). v0: the reference velocity of the jog being replaced (zeros from rest).
+    The result starts at q0, ends at rest and stays within the acceleration limit (finite differences);
+    it stays inside the limits whenever the start can still stop in time (|v0|²/2a within the distance
+    to the limit ahead, as for the reference state of the jog being replaced). v0: that reference
+    velocity (zeros from rest).
     """
     q = np.asarray(q0_rad, dtype=float).copy()
     v = np.asarray(v0_rad_s, dtype=float).copy()
@@ -59,16 +61,17 @@ def plan_jog(
         raise ValueError(f"hold_s and rate_hz must be positive, got {hold_s}, {rate_hz}")
     dt = 1.0 / rate_hz
     dv_max = accel * dt
-    q = np.clip(q, np.minimum(low, q), np.maximum(high, q))
     positions, t = [q.copy()], 0.0
     max_steps = int((hold_s + float(np.max(np.abs(v) / accel)) + float(np.max(np.abs(target) / accel))) * rate_hz) + 10
     for _ in range(max_steps):
         goal = target if t < hold_s else np.zeros_like(target)
-        # Brake now where the distance to stop (plus this step) would pass a limit.
-        stopping = v * np.abs(v) / (2.0 * accel) + v * dt
-        goal = np.where((stopping > 0) & (q + stopping > high), 0.0, goal)
-        goal = np.where((stopping < 0) & (q + stopping < low), 0.0, goal)
-        v = v + np.clip(goal - v, -dv_max, dv_max)
+        # Take the step toward the goal unless, after it, braking at the limit could no longer stop the joint
+        # before its limit; then brake now. This keeps q + v|v|/2a inside the limits at every sample (true
+        # at the start for a jog that replaces another one), so the joint never passes them.
+        v_try = v + np.clip(goal - v, -dv_max, dv_max)
+        reach = q + v_try * dt + v_try * np.abs(v_try) / (2.0 * accel)
+        over = ((v_try > 0) & (reach > high)) | ((v_try < 0) & (reach < low))
+        v = np.where(over, v + np.clip(-v, -dv_max, dv_max), v_try)
         q = q + v * dt
         t += dt
         positions.append(q.copy())
