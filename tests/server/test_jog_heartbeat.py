@@ -1,0 +1,61 @@
+"""Hold-to-run over the network: a page starts a jog over REST and keeps it going with websocket heartbeats;
+when its heartbeats stop (the page hangs, or its connection drops) the arm stops by itself."""
+
+from __future__ import annotations
+
+import json
+
+import httpx
+import numpy as np
+import pytest
+from websockets.sync.client import connect
+
+import live
+from server.app import create_app
+
+TOKEN = "jog-token"
+PAGE = {"Authorization": f"Bearer {TOKEN}", "X-Armlab-Controller": "pad"}
+VELOCITY = [0.4, 0.0, 0.0, 0.0, 0.0]
+
+
+@pytest.fixture(scope="module")
+def cell():
+    cell = live.start_cell(seed=17)
+    yield cell
+    cell.close()
+
+
+@pytest.fixture(scope="module")
+def url(cell, tmp_path_factory):
+    app = create_app(station_factory=lambda: live.StationOnCell(cell, tmp_path_factory.mktemp("jog") / "db.sqlite3"), token=TOKEN)
+    with live.serve(app) as base_url:
+        yield base_url
+
+
+def _sim_wait(cell, duration_s: float) -> None:
+    start = cell.sim_time_s
+    live.wait_for(lambda: cell.sim_time_s >= start + duration_s, 10, 0.005)
+
+
+@pytest.mark.parametrize("how", ["heartbeats stop", "connection drops"])
+def test_websocket_heartbeats_hold_a_jog_and_their_loss_stops_it(url, cell, how):
+    with httpx.Client(base_url=url, timeout=30) as http:
+        http.post("/api/arm/joints", json={"q_rad": [-1.0, 0, 0, 0, 0], "moving_time_s": 1.0}, params={"wait": "true"}, headers=PAGE)
+        with connect(url.replace("http://", "ws://") + f"/ws?token={TOKEN}&controller=pad", compression=None, max_size=None,
+                     open_timeout=10) as ws:
+            assert json.loads(ws.recv(timeout=5))["controller"] == "pad"
+            q0 = cell.arm.read_joint_state().position_rad[0]
+            assert http.post("/api/arm/jog", json={"velocity_rad_s": VELOCITY}, headers=PAGE).status_code == 200
+            for _ in range(12):  # 1.2 s of sim time with a heartbeat every 0.1 s: far longer than one hold
+                _sim_wait(cell, 0.1)
+                ws.send(json.dumps({"type": "heartbeat"}))
+            live.wait_for(lambda: cell.arm.read_joint_state().position_rad[0] - q0 > 0.8 * 0.4 * 1.2, 5, 0.01)
+            assert cell.arm.is_moving(), "the jog ended although heartbeats arrived"
+            if how == "connection drops":
+                ws.close()
+            last_beat_s = cell.sim_time_s
+            live.wait_for(lambda: not cell.arm.is_moving(), 5, 0.005)
+            assert cell.sim_time_s - last_beat_s < 0.3 + 0.4 / 5.0 + 0.6
+            q_stop = cell.arm.read_joint_state().position_rad
+            _sim_wait(cell, 0.3)
+            assert np.abs(cell.arm.read_joint_state().position_rad - q_stop).max() < 5e-3
