@@ -101,11 +101,20 @@ def _transfer_plan(station: Station, q_start, point_m, yaw_rad: float | None, bo
     seed = q_start
     if finger_axis_rad is not None and yaw_rad is not None:
         seed = _finger_seed(station, q_start, point_m, config.top_down_pitch_rad, yaw_rad, finger_axis_rad)
-    # Carrying a block, approach from higher by its edge, so that the block itself clears its neighbours.
-    approach_m = config.approach_height_m + carried
-    near_m = point_m + np.array([0.0, 0.0, min(approach_m, max(0.0, max_transfer_z_m - point_m[2]))])
-    pitch, (_q_point, q_near) = solve_approach(model, seed, [point_m, near_m], yaw_rad, config.top_down_pitch_rad)
-    if pitch < min_pitch_rad - 1e-9:
+    # Carrying a block, approach from higher by its edge (so the block itself clears its neighbours)
+    # where that is reachable at the pitch wanted; else from the usual approach height.
+    approaches = list(dict.fromkeys((config.approach_height_m + carried, config.approach_height_m)))
+    for index, approach_m in enumerate(approaches):
+        near_m = point_m + np.array([0.0, 0.0, min(approach_m, max(0.0, max_transfer_z_m - point_m[2]))])
+        try:
+            pitch, (_q_point, q_near) = solve_approach(model, seed, [point_m, near_m], yaw_rad, config.top_down_pitch_rad)
+        except Unreachable:
+            if index == len(approaches) - 1:
+                raise
+            continue
+        if pitch >= min_pitch_rad - 1e-9:
+            break
+    else:
         raise Unreachable(f"({point_m[0] * 1000:.0f}, {point_m[1] * 1000:.0f}, {point_m[2] * 1000:.0f}) mm is reachable only at "
                           f"{np.degrees(pitch):.0f}° pitch (at least {np.degrees(min_pitch_rad):.0f}° needed)", "out of reach")
     descend = plan_vertical_segment(model, q_near, float(point_m[2]), pitch_rad=pitch, yaw_rad=yaw_rad, **vertical)
