@@ -455,6 +455,7 @@ class AutoJobInfo(Wire):
     summary: str
     params: list[AutoParam]
     judged: bool = Field(description="a competition event (DESIGN §7): the simulation scores it with the judge")
+    scored: bool = Field(description="the simulation scores it: the judge (§7), else the job's own scorer")
     scene: bool = Field(description="POST /api/sim/scene can generate its starting scene")
     time_limit_s: float | None = Field(None, description="the event's time limit, simulated seconds")
 
@@ -480,7 +481,6 @@ class TaskProgress(Wire):
 class ScoreRule(Wire):
     rule: str
     points: int
-    scored: bool = Field(description="the simulation scores it: the judge (§7), else the job's own scorer")
     detail: str
     object_ids: list[str]
 

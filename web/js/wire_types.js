@@ -3,7 +3,7 @@
 // Binary frames: [uint32 little-endian header length N][N bytes UTF-8 JSON FrameHeader][JPEG bytes].
 
 export const STATES = Object.freeze(["idle", "calibrate", "teach", "repeat", "click_grab", "click_drop", "auto_sort", "estop", "fault"]);
-export const COMMANDS = Object.freeze(["estop", "reset", "home", "sleep", "move_joints", "move_to", "torque", "gripper", "calibrate", "grab", "drop", "teach_start", "teach_record", "teach_stop", "repeat", "auto", "cancel", "set_scene"]);
+export const COMMANDS = Object.freeze(["estop", "reset", "home", "sleep", "move_joints", "move_to", "jog", "torque", "gripper", "calibrate", "grab", "drop", "teach_start", "teach_record", "teach_stop", "repeat", "auto", "cancel", "set_scene"]);
 export const VIEWS = Object.freeze(["color", "depth", "topdown"]);
 export const LAYERS = Object.freeze(["tags", "detections", "grid"]);
 export const ERROR_CODES = Object.freeze(["wrong_state", "unreachable", "unsafe", "invalid", "not_found", "not_calibrated", "unauthorized", "forbidden", "not_controller", "needs_confirmation", "device", "internal"]);
@@ -23,6 +23,7 @@ export const CLIENT_MESSAGE_TYPES = Object.freeze(["ack", "view", "command"]);
  * @property {string} summary
  * @property {Array<AutoParam>} params
  * @property {boolean} judged a competition event (DESIGN §7): the simulation scores it with the judge
+ * @property {boolean} scored the simulation scores it: the judge (§7), else the job's own scorer
  * @property {boolean} scene POST /api/sim/scene can generate its starting scene
  * @property {(number|null)} [time_limit_s] the event's time limit, simulated seconds
  */
@@ -338,7 +339,6 @@ export const CLIENT_MESSAGE_TYPES = Object.freeze(["ack", "view", "command"]);
  * @typedef {Object} ScoreRule
  * @property {string} rule
  * @property {number} points
- * @property {boolean} scored the simulation scores it: the judge (§7), else the job's own scorer
  * @property {string} detail
  * @property {Array<string>} object_ids
  */
