@@ -146,6 +146,14 @@ class SimArm(Arm):
                 self._cell.lock.release()
 
     @property
+    def reference_rad(self) -> np.ndarray:
+        """The position the servos are commanded to hold now (the trajectory's current sample): what the
+        station commanded, even where the physical arm is blocked (by the board, say)."""
+        self._require()
+        with self._cell.lock:
+            return self._cell.arm_reference()
+
+    @property
     def last_halt_sim_s(self) -> tuple[float, float] | None:
         """(requested, applied) simulated times of the last stop(), or None: the halt latency in sim time."""
         return self._last_halt_s

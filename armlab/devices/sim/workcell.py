@@ -203,6 +203,10 @@ class SimWorkcell:
     def arm_positions(self) -> np.ndarray:
         return self._data.qpos[self._arm_qpos].copy()
 
+    def arm_reference(self) -> np.ndarray:
+        """The servos' position references: where the arm is commanded to be now."""
+        return self._data.ctrl[self._pos_act].copy()
+
     def arm_velocities(self) -> np.ndarray:
         return self._data.qvel[self._arm_qvel].copy()
 
