@@ -89,3 +89,10 @@ def wait_for(predicate, timeout_s: float = 10.0, poll_s: float = 0.05):
         if time.monotonic() > deadline:
             raise AssertionError(f"condition not met within {timeout_s} s")
         time.sleep(poll_s)
+
+
+def wait_sim(cell, duration_s: float, timeout_s: float = 30.0) -> None:
+    """Wait until the simulation has advanced duration_s of simulated time: a condition on the sim clock
+    (e.g. "the arm stayed still for 0.3 s"), not a fixed sleep of wall time."""
+    start = cell.sim_time_s
+    wait_for(lambda: cell.sim_time_s >= start + duration_s, timeout_s, 0.005)

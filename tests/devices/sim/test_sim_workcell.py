@@ -203,11 +203,19 @@ def test_realtime_mode_paces_physics_to_the_wall_clock_and_streams_frames():
         assert 0.3 < factor < 1.1, factor  # never faster than the wall clock; lower bound loose for a busy CI
         q1 = sim.arm.read_joint_state().position_rad
         sim.arm.command_trajectory(linear(q1, q1 + [0.8, 0.0, 0.0, 0.0, 0.0], 1.0))
-        time.sleep(0.3)
+        _sim_wait(sim, 0.3)
         sim.arm.stop()
         assert not sim.arm.is_moving()
         stopped = sim.arm.read_joint_state().position_rad
-        time.sleep(0.3)
+        _sim_wait(sim, 0.3)
         assert abs(sim.arm.read_joint_state().position_rad[0] - stopped[0]) < 0.05
         assert sim.camera.read_latest(max_age_ms=1000).color_bgr.shape == (720, 1280, 3)
     assert not [t for t in set(threading.enumerate()) - threads_before if t.name.startswith("sim-")]
+
+
+def _sim_wait(sim, duration_s: float, timeout_s: float = 10.0) -> None:
+    """Until duration_s of simulated time has passed (a condition on the sim clock, not a fixed sleep)."""
+    start, deadline = sim.sim_time_s, time.monotonic() + timeout_s
+    while sim.sim_time_s < start + duration_s:
+        assert time.monotonic() < deadline, "the simulation did not advance"
+        time.sleep(0.005)
