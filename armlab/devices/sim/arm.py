@@ -137,7 +137,8 @@ class SimArm(Arm):
     def stop(self) -> None:
         """Halt: at once if the workcell's lock is free, else at the next control tick (never waits)."""
         self._require()
-        self._halt_requested_s = self._cell.sim_time_s
+        if not self._halt_requested.is_set():  # a halt already pending keeps its (earlier) request time
+            self._halt_requested_s = self._cell.sim_time_s
         self._halt_requested.set()
         if self._cell.lock.acquire(blocking=False):
             try:

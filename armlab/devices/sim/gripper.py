@@ -1,8 +1,10 @@
 """SimGripper: the Gripper interface over the two finger servos. The fingers close with a force capped
-at the configured grasp effort; "holding" means they stopped on something before closing fully."""
+at the configured grasp effort; "holding" means they stopped on something before closing fully. Like the
+arm's, stop() never waits for the workcell's lock: when it is busy the next control tick applies it."""
 
 from __future__ import annotations
 
+import threading
 import time
 from typing import TYPE_CHECKING
 
@@ -31,6 +33,7 @@ class SimGripper(Gripper):
         self._command = "release"
         self._command_s = 0.0
         self._still_since_s: float | None = None
+        self._stop_requested = threading.Event()
 
     def __str__(self) -> str:
         return "SimGripper(rx200)"
@@ -66,6 +69,7 @@ class SimGripper(Gripper):
 
     def _set_command(self, command: str, offset_m: float) -> None:
         with self._cell.lock:
+            self._apply_stop()  # a stop requested before this command came first
             self._command = command
             self._command_s = self._cell.sim_time_s
             self._still_since_s = None
@@ -87,10 +91,22 @@ class SimGripper(Gripper):
             )
 
     def stop(self) -> None:
+        """Hold the fingers where they are: at once if the workcell's lock is free, else at the next tick."""
         self._require()
-        with self._cell.lock:
-            left, right = self._cell.finger_positions()
-            self._cell.apply_finger_reference(0.5 * (left + right))
+        self._stop_requested.set()
+        if self._cell.lock.acquire(blocking=False):
+            try:
+                self._apply_stop()
+            finally:
+                self._cell.lock.release()
+
+    def _apply_stop(self) -> None:
+        """Under the lock: apply a latched stop()."""
+        if not self._stop_requested.is_set():
+            return
+        self._stop_requested.clear()
+        left, right = self._cell.finger_positions()
+        self._cell.apply_finger_reference(0.5 * (left + right))
 
     def _stopped(self) -> bool:
         """Both fingers slower than stop_speed for stop_time (call under the lock or from wait_for)."""
@@ -106,6 +122,7 @@ class SimGripper(Gripper):
 
     def control(self, sim_time_s: float) -> None:
         """Track whether the fingers have stopped (called by the workcell under its lock)."""
+        self._apply_stop()
         speeds = self._cell.finger_velocities()
         if max(abs(v) for v in speeds) < self._stop_speed_m_s and sim_time_s - self._command_s >= self._stop_time_s / 2:
             if self._still_since_s is None:
