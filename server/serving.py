@@ -40,4 +40,7 @@ def run(app, host: str, port: int, log_level: str, log_config: dict | None = Non
         app, host=host, port=port, log_level=log_level, ws_per_message_deflate=False, log_config=log_config,
         timeout_graceful_shutdown=GRACEFUL_S,
     )
-    StationServer(config, app).run()
+    try:
+        StationServer(config, app).run()
+    except KeyboardInterrupt:  # uvicorn re-raises a Ctrl-C after its shutdown: the station is closed by then
+        pass

@@ -92,5 +92,6 @@ def test_signal_mid_job_with_a_waiting_request_exits_promptly_and_joins_threads(
     if "response" in waited:
         assert waited["response"].json()["job"]["state"] in ("cancelled", "failed"), waited["response"].text
     assert "threads joined: " in log and "still running" not in log, log[-3000:]
+    assert "Traceback" not in log, log[-3000:]
     for name in ("job-repeat", "station-camera", "station-perception", "station-telemetry", "station-watch", "sim-physics"):
         assert name in log.split("threads joined: ")[1], log[-3000:]
