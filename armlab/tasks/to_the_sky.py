@@ -26,20 +26,21 @@ def blocked_behind(xy, objects: list[dict]) -> int:
 
 
 def choose_base(runner: TaskRunner, objects: list[dict], feed_xy) -> tuple[float, float]:
-    """A tower base in view up to MAX_TOWER_HEIGHT_M, clear of the park path and the feed spot,
-    standing in front of as few objects as possible, then as far from every object as possible."""
+    """A tower base in view up to MAX_TOWER_HEIGHT_M and clear of the park path; preferably clear of
+    the feed spot and every object, then standing in front of as few objects as possible, then as far
+    from every object as possible."""
     best, best_key = None, None
     for radius in (TOWER_RADIUS_M[0], sum(TOWER_RADIUS_M) / 2, TOWER_RADIUS_M[1]):
         for angle in range(-150, 151, 5):
             xy = (radius * math.sin(math.radians(angle)), radius * math.cos(math.radians(angle)))
             if not (runner.in_view(xy, MAX_TOWER_HEIGHT_M) and runner.clear_of_park(xy)):
                 continue
-            if feed_xy is not None and math.dist(xy, feed_xy) < FEED_CLEARANCE_M:
-                continue
             gap = min([math.dist(xy, o["position_m"][:2]) for o in objects] + [math.dist(xy, t) for t in runner.tag_centres()]
                       + [math.dist(xy, r) for r in runner.reserved_m], default=1.0)
-            key = (blocked_behind(xy, objects) + (0 if feed_xy is None else blocked_behind(xy, [{"position_m": feed_xy}]) * 5), -gap)
-            if gap > 0.06 and (best_key is None or key < best_key):
+            near_feed = feed_xy is not None and math.dist(xy, feed_xy) < FEED_CLEARANCE_M
+            behind = blocked_behind(xy, objects) + (0 if feed_xy is None else blocked_behind(xy, [{"position_m": feed_xy}]) * 5)
+            key = (gap <= 0.06 or near_feed, behind, -gap)  # crowded spots only when nothing else is in view
+            if best_key is None or key < best_key:
                 best, best_key = xy, key
     if best is None:
         raise RuntimeError("no spot for the tower that the camera sees whole")
