@@ -145,6 +145,7 @@ class StreamHub:
     def __init__(self, station: Station, jpeg_quality: int, safety_pool=None) -> None:
         self.station = station
         self.safety_pool = safety_pool  # None: the loop's default executor
+        self._workcell: dict | None = None
         self.loop: asyncio.AbstractEventLoop | None = None
         self.clients: set[ClientSession] = set()
         self.frames: dict[ViewKey, EncodedFrame] = {}
@@ -227,11 +228,13 @@ class StreamHub:
     async def serve(self, websocket: WebSocket, can_control: bool, controller: str | None = None) -> None:
         client = ClientSession(websocket, can_control, controller=controller or self.session_controller(None),
                                event_seq=self.station.events.last_seq)
+        if self._workcell is None:  # read once, off the event loop (a config file)
+            self._workcell = await self._off_loop(self._workcell_info)
         hello = {"type": "hello", "server_time_s": time.time(), "can_control": can_control,
                  "controller": client.controller if can_control else None, "backend": self.station.backend,
-                 "workcell": self._workcell_info()}
+                 "workcell": self._workcell}
         await websocket.send_text(json.dumps(hello))
-        calibration = self.station.calibration_info
+        calibration = await self._off_loop(lambda: self.station.calibration_info)
         await websocket.send_text(json.dumps({"type": "calibration", **calibration}))
         client.calibration_version = self.calibration_version
         self.clients.add(client)
@@ -297,7 +300,10 @@ class StreamHub:
                 await self._change_view(client, parsed.view, parsed.layers)
             elif isinstance(parsed, HeartbeatMessage):
                 if client.can_control:
-                    await self._off_loop(self.station.heartbeat, client.controller)
+                    try:
+                        await self._off_loop(self.station.heartbeat, client.controller)
+                    except Exception as error:  # noqa: BLE001 - reported; the session goes on
+                        await self._reply_error(client, f"heartbeat: {error}")
             else:
                 await self._command(client, parsed.name)
 

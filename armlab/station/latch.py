@@ -94,6 +94,8 @@ class Latch:
             raise DeviceLost("reset refused: " + "; ".join(f"the {name} is still lost ({reason})" for name, reason in problems.items()))
         with self._lock:
             self._transition("reset", source=source, detail="")
-            self._lost = {}
+            back, self._lost = list(self._lost), {}  # the watch may not have seen them come back yet
             self._halt.clear()
+        for name in back:
+            self.events.add("info", f"{name} answers again")
         self.events.add("info", "reset: station idle")

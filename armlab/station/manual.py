@@ -12,7 +12,7 @@ import math
 import numpy as np
 
 from armlab.devices.arm import JointTrajectory
-from armlab.errors import CommandRefused, NeedsConfirmation
+from armlab.errors import CommandRefused, NeedsConfirmation, NotController
 from armlab.station.checks import checked_moving_time, checked_position
 from armlab.station.states import State, allowed_commands
 from armlab.store import Waypoint
@@ -96,12 +96,15 @@ class ManualCommands:
 
     def heartbeat(self, source: str | None = None) -> bool:
         """The controlling client is still there: extend its running jog by jog_hold_s. False (nothing
-        moves) when it has no jog running."""
+        moves) when it has no jog running or the jog may not go on (e-stop, another controller, a limit)."""
         with self._lock:
             jog = self._jog
         if jog is None or jog["source"] != source or not self.arm.is_moving():
             return False
-        self.jog(jog["velocity"], source=source)
+        try:
+            self.jog(jog["velocity"], source=source)
+        except (CommandRefused, NotController, ValueError):  # the jog runs out by itself
+            return False
         return True
 
     def set_torque(self, enabled: bool, source: str | None = None, confirm: bool = False) -> None:

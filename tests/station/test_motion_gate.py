@@ -9,7 +9,7 @@ import math
 import numpy as np
 import pytest
 
-from station_helpers import back_to_idle, make_station, still_for
+from station_helpers import back_to_idle, still_for
 
 from armlab.devices.arm import JointTrajectory
 from armlab.motion.config import MotionConfig
