@@ -83,6 +83,8 @@ def _issue(station, name: str, argument, jobs_moved: list):
         def job(ctx, q=argument):
             try:
                 station.move_in_job(ctx, q)  # a random goal, maybe out of the limits: refused in the job
+            except ValueError:
+                pass  # refused (nothing moved); the job keeps its state, so states change only by commands
             finally:
                 moved.set()
             ctx.sleep(3600)  # hold the job state until cancel or e-stop
