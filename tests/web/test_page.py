@@ -147,7 +147,7 @@ def test_cartesian_jog_moves_the_gripper_by_the_step(page, server):
     start = server.wait_status(lambda s: s["state"] == "idle" and not s["moving"], 10.0, "the arm to settle")
     page.wait_for_function("!document.querySelector(\"[data-jog='z-']\").disabled", timeout=5_000)
     page.wait_for_function(
-        "p => Math.abs(window.armlab.status.gripper_pose.position_m[2] - p) < 1e-4",
+        "p => Math.abs(window.armlab.status.gripper_pose.position_m[2] - p) < 2e-3",  # the page has a fresh status (the held arm drifts a little)
         arg=start["gripper_pose"]["position_m"][2],
     )
     page.select_option("#jog-step", "0.05")
