@@ -13,21 +13,11 @@ sys.path.insert(0, str(Path(__file__).parent / "server"))
 import live  # noqa: E402
 
 from armlab.client import InterbotixManipulatorXS, StationClient, StationError, base_to_world  # noqa: E402
-from server.app import create_app  # noqa: E402
 
 TOKEN = "client-token"
 
 
-@pytest.fixture(scope="module")
-def url(tmp_path_factory):
-    cell = live.start_cell(seed=2)
-    db = tmp_path_factory.mktemp("client") / "station.sqlite3"
-    app = create_app(station_factory=lambda: live.StationOnCell(cell, db), token=TOKEN)
-    try:
-        with live.serve(app) as base_url:
-            yield base_url
-    finally:
-        cell.close()
+cell, url = live.module_fixtures(seed=2, token=TOKEN)
 
 
 @pytest.fixture()

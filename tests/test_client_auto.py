@@ -12,22 +12,12 @@ sys.path.insert(0, str(Path(__file__).parent / "server"))
 import live  # noqa: E402
 
 from armlab.client import StationClient, StationError  # noqa: E402
-from server.app import create_app  # noqa: E402
 
 TOKEN = "client-auto-token"
 ONE_BLOCK = [{"id": "r", "type": "block", "color": "red", "size": "large", "position_m": [0.08, 0.24, 0.019], "yaw_rad": 0.3}]
 
 
-@pytest.fixture(scope="module")
-def url(tmp_path_factory):
-    cell = live.start_cell(seed=4)
-    db = tmp_path_factory.mktemp("client_auto") / "station.sqlite3"
-    app = create_app(station_factory=lambda: live.StationOnCell(cell, db), token=TOKEN)
-    try:
-        with live.serve(app) as base_url:
-            yield base_url
-    finally:
-        cell.close()
+cell, url = live.module_fixtures(seed=4, token=TOKEN)
 
 
 @pytest.fixture()

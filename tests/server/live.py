@@ -12,6 +12,7 @@ import time
 os.environ.setdefault("MUJOCO_GL", "egl")
 
 import httpx
+import pytest
 import uvicorn
 
 from armlab.station import Station, StationConfig
@@ -50,6 +51,34 @@ class StationOnCell:
 
     def close(self) -> None:
         self.station.close()
+
+
+@contextlib.contextmanager
+def station_server(cell, db_path, token: str, **app_options):
+    """A real server (see serve) whose app builds a fresh Station on `cell` with its own database; yields the URL."""
+    from server.app import create_app
+
+    app = create_app(station_factory=lambda: StationOnCell(cell, db_path), token=token, **app_options)
+    with serve(app) as url:
+        yield url
+
+
+def module_fixtures(seed: int, token: str, **app_options):
+    """The module-scoped `cell` (a started real-time simulation) and `url` (a real server on it) fixtures of a
+    test module: `cell, url = live.module_fixtures(seed=3, token=TOKEN)`."""
+
+    @pytest.fixture(scope="module")
+    def cell():
+        started = start_cell(seed)
+        yield started
+        started.close()
+
+    @pytest.fixture(scope="module")
+    def url(cell, tmp_path_factory):
+        with station_server(cell, tmp_path_factory.mktemp("station") / "station.sqlite3", token, **app_options) as base_url:
+            yield base_url
+
+    return cell, url
 
 
 @contextlib.contextmanager

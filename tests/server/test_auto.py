@@ -12,7 +12,6 @@ import numpy as np
 import pytest
 
 import live
-from server.app import create_app
 
 TOKEN = "auto-token-456"
 AUTH = {"Authorization": f"Bearer {TOKEN}"}
@@ -22,19 +21,7 @@ RUN_TIMEOUT_S = 240.0  # wall seconds for a ~35 s simulated run on a busy machin
 SCENE_SEED = 3  # pick_sort L1: three large cubes R, G, B in y > 0
 
 
-@pytest.fixture(scope="module")
-def cell():
-    cell = live.start_cell(seed=7)
-    yield cell
-    cell.close()
-
-
-@pytest.fixture(scope="module")
-def url(cell, tmp_path_factory):
-    db_path = tmp_path_factory.mktemp("auto") / "station.sqlite3"
-    app = create_app(station_factory=lambda: live.StationOnCell(cell, db_path), token=TOKEN)
-    with live.serve(app) as base_url:
-        yield base_url
+cell, url = live.module_fixtures(seed=7, token=TOKEN)
 
 
 @pytest.fixture()

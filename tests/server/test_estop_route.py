@@ -12,7 +12,6 @@ import numpy as np
 import pytest
 
 import live
-from server.app import create_app
 
 TOKEN = "estop-route-token"
 AUTH = {"Authorization": f"Bearer {TOKEN}"}
@@ -20,18 +19,7 @@ BLOCKERS = 48  # more than the server's 40 worker threads
 HANG_S = 4.0  # the blocked moves last 10 s: an e-stop that waited for a thread would take that long
 
 
-@pytest.fixture(scope="module")
-def cell():
-    cell = live.start_cell(seed=11)
-    yield cell
-    cell.close()
-
-
-@pytest.fixture(scope="module")
-def url(cell, tmp_path_factory):
-    app = create_app(station_factory=lambda: live.StationOnCell(cell, tmp_path_factory.mktemp("r") / "db.sqlite3"), token=TOKEN)
-    with live.serve(app) as base_url:
-        yield base_url
+cell, url = live.module_fixtures(seed=11, token=TOKEN)
 
 
 def test_estop_answers_while_every_worker_thread_waits_on_a_move(url, cell):

@@ -13,25 +13,12 @@ from websockets.exceptions import InvalidStatus
 from websockets.sync.client import connect
 
 import live
-from server.app import create_app
 
 TOKEN = "guard-token"
 AUTH = {"Authorization": f"Bearer {TOKEN}"}
 
 
-@pytest.fixture(scope="module")
-def cell():
-    cell = live.start_cell(seed=2)
-    yield cell
-    cell.close()
-
-
-@pytest.fixture(scope="module")
-def url(cell, tmp_path_factory):
-    db = tmp_path_factory.mktemp("guard") / "station.sqlite3"
-    app = create_app(station_factory=lambda: live.StationOnCell(cell, db), token=TOKEN, allowed_hosts=["armlab.lab"])
-    with live.serve(app) as base_url:
-        yield base_url
+cell, url = live.module_fixtures(seed=2, token=TOKEN, allowed_hosts=["armlab.lab"])
 
 
 @pytest.fixture()

@@ -11,25 +11,13 @@ import pytest
 from websockets.sync.client import connect
 
 import live
-from server.app import create_app
 
 TOKEN = "jog-token"
 PAGE = {"Authorization": f"Bearer {TOKEN}", "X-Armlab-Controller": "pad"}
 VELOCITY = [0.4, 0.0, 0.0, 0.0, 0.0]
 
 
-@pytest.fixture(scope="module")
-def cell():
-    cell = live.start_cell(seed=17)
-    yield cell
-    cell.close()
-
-
-@pytest.fixture(scope="module")
-def url(cell, tmp_path_factory):
-    app = create_app(station_factory=lambda: live.StationOnCell(cell, tmp_path_factory.mktemp("jog") / "db.sqlite3"), token=TOKEN)
-    with live.serve(app) as base_url:
-        yield base_url
+cell, url = live.module_fixtures(seed=17, token=TOKEN)
 
 
 def _sim_wait(cell, duration_s: float) -> None:

@@ -15,7 +15,6 @@ import pytest
 from websockets.sync.client import connect
 
 import live
-from server.app import create_app
 
 TOKEN = "lease-token"
 AUTH = {"Authorization": f"Bearer {TOKEN}"}
@@ -26,18 +25,7 @@ GOAL_A = [0.6, 0.2, 0.1, 0.3, 0.0]
 GOAL_B = [-0.6, 0.2, 0.1, 0.3, 0.0]
 
 
-@pytest.fixture(scope="module")
-def cell():
-    cell = live.start_cell(seed=13)
-    yield cell
-    cell.close()
-
-
-@pytest.fixture(scope="module")
-def url(cell, tmp_path_factory):
-    app = create_app(station_factory=lambda: live.StationOnCell(cell, tmp_path_factory.mktemp("lease") / "db.sqlite3"), token=TOKEN)
-    with live.serve(app) as base_url:
-        yield base_url
+cell, url = live.module_fixtures(seed=13, token=TOKEN)
 
 
 @pytest.fixture()

@@ -51,16 +51,7 @@ RECORD: list[dict] = []  # one entry per call, filled by the fuzz test, read by 
 SKIPPED_WAITS: list[str] = []
 
 
-@pytest.fixture(scope="module")
-def base_url(tmp_path_factory):
-    cell = live.start_cell(seed=11)
-    db = tmp_path_factory.mktemp("fuzz") / "station.sqlite3"
-    app = create_app(station_factory=lambda: live.StationOnCell(cell, db), token=TOKEN)
-    try:
-        with live.serve(app) as url:
-            yield url
-    finally:
-        cell.close()
+cell, base_url = live.module_fixtures(seed=11, token=TOKEN)
 
 
 def _load_schema():

@@ -15,7 +15,6 @@ import pytest
 from websockets.sync.client import connect
 
 import live
-from server.app import create_app
 
 TOKEN = "strict-token"
 AUTH = {"Authorization": f"Bearer {TOKEN}"}
@@ -23,19 +22,7 @@ POSE = {"position_m": [0.0, 0.25, 0.12]}
 SQLITE_MAX = 2**63 - 1
 
 
-@pytest.fixture(scope="module")
-def cell():
-    cell = live.start_cell(seed=3)
-    yield cell
-    cell.close()
-
-
-@pytest.fixture(scope="module")
-def url(cell, tmp_path_factory):
-    db = tmp_path_factory.mktemp("strict") / "station.sqlite3"
-    app = create_app(station_factory=lambda: live.StationOnCell(cell, db), token=TOKEN)
-    with live.serve(app) as base_url:
-        yield base_url
+cell, url = live.module_fixtures(seed=3, token=TOKEN)
 
 
 @pytest.fixture()

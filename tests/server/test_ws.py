@@ -14,24 +14,16 @@ from websockets.sync.client import connect
 
 import live
 from armlab.client import unpack_frame
-from server.app import create_app
 
 TOKEN = "ws-token"
 
 
-@pytest.fixture(scope="module")
-def cell():
-    cell = live.start_cell(seed=1)
-    yield cell
-    cell.close()
+cell, http_url = live.module_fixtures(seed=1, token=TOKEN)
 
 
 @pytest.fixture(scope="module")
-def url(cell, tmp_path_factory):
-    db = tmp_path_factory.mktemp("ws") / "station.sqlite3"
-    app = create_app(station_factory=lambda: live.StationOnCell(cell, db), token=TOKEN)
-    with live.serve(app) as base_url:
-        yield base_url.replace("http://", "ws://") + "/ws"
+def url(http_url):
+    return http_url.replace("http://", "ws://") + "/ws"
 
 
 def _open(url: str, token: str | None = None):
