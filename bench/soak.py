@@ -18,9 +18,7 @@ import argparse
 import asyncio
 import json
 import os
-import socket
 import subprocess
-import sys
 import tempfile
 import time
 from pathlib import Path
@@ -28,41 +26,16 @@ from pathlib import Path
 import httpx
 import numpy as np
 import psutil
+from served import free_port, start_server
 from websockets.asyncio.client import connect
 from websockets.exceptions import ConnectionClosed
 
-REPO = Path(__file__).resolve().parents[1]
 TOKEN = "soak-token"
 CONTROLLER = "soak-controller"
 HEADERS = {"Authorization": f"Bearer {TOKEN}", "X-Armlab-Controller": CONTROLLER}
 LAYERS = ["tags", "detections", "grid"]
 NORMAL, SLOW, STALLED = 13, 5, 2  # + the controller = 20 sessions
 SLOW_ACK_S = 0.5
-
-
-def free_port() -> int:
-    with socket.socket() as sock:
-        sock.bind(("127.0.0.1", 0))
-        return sock.getsockname()[1]
-
-
-def start_server(port: int, db_path: Path, log_path: Path) -> subprocess.Popen:
-    command = [sys.executable, "-m", "armlab.cli", "serve", "--port", str(port), "--token", TOKEN, "--db", str(db_path),
-               "--event", "pick_sort", "--level", "3", "--scene-seed", "1", "--log-level", "warning"]
-    env = {**os.environ, "MUJOCO_GL": os.environ.get("MUJOCO_GL", "egl")}
-    log = log_path.open("w")
-    process = subprocess.Popen(command, cwd=REPO, env=env, stdout=log, stderr=subprocess.STDOUT)
-    deadline = time.monotonic() + 90
-    while time.monotonic() < deadline:
-        if process.poll() is not None:
-            raise RuntimeError(f"server exited: {log_path.read_text()[-2000:]}")
-        try:
-            if httpx.get(f"http://127.0.0.1:{port}/api/health", timeout=1).status_code == 200:
-                return process
-        except httpx.HTTPError:
-            time.sleep(0.2)
-    process.kill()
-    raise RuntimeError("server did not start within 90 s")
 
 
 def new_stats() -> dict:
@@ -158,7 +131,7 @@ async def run(args) -> None:
     base, url = f"http://127.0.0.1:{port}", f"ws://127.0.0.1:{port}/ws"
     with tempfile.TemporaryDirectory() as tmp:
         log_path = Path(args.log) if args.log else Path(tmp) / "serve.log"
-        server = start_server(port, Path(tmp) / "soak.sqlite3", log_path)
+        server = start_server(port, TOKEN, Path(tmp) / "soak.sqlite3", log_path, level=3, extra_args=("--log-level", "warning"))
         try:
             calibrated = httpx.post(f"{base}/api/calibrate", params={"wait": "true"}, headers=HEADERS, timeout=120).json()
             print(f"soak: armlab serve (sim, 30 fps camera), calibration {calibrated['job']['state']}; "

@@ -15,9 +15,7 @@ import argparse
 import asyncio
 import json
 import os
-import socket
 import subprocess
-import sys
 import tempfile
 import time
 from pathlib import Path
@@ -25,34 +23,10 @@ from pathlib import Path
 import httpx
 import numpy as np
 import psutil
+from served import free_port, start_server
 from websockets.asyncio.client import connect
 
-REPO = Path(__file__).resolve().parents[1]
 LAYERS = ["tags", "detections", "grid"]
-
-
-def free_port() -> int:
-    with socket.socket() as sock:
-        sock.bind(("127.0.0.1", 0))
-        return sock.getsockname()[1]
-
-
-def start_server(port: int, token: str, db_path: Path) -> subprocess.Popen:
-    command = [sys.executable, "-m", "armlab.cli", "serve", "--port", str(port), "--token", token, "--db", str(db_path),
-               "--event", "pick_sort", "--level", "2", "--scene-seed", "1"]
-    env = {**os.environ, "MUJOCO_GL": os.environ.get("MUJOCO_GL", "egl")}
-    process = subprocess.Popen(command, cwd=REPO, env=env, stdout=subprocess.DEVNULL, stderr=subprocess.PIPE)
-    deadline = time.monotonic() + 60
-    while time.monotonic() < deadline:
-        if process.poll() is not None:
-            raise RuntimeError(f"server exited: {process.stderr.read().decode()[-2000:]}")
-        try:
-            if httpx.get(f"http://127.0.0.1:{port}/api/health", timeout=1).status_code == 200:
-                return process
-        except httpx.HTTPError:
-            time.sleep(0.2)
-    process.kill()
-    raise RuntimeError("server did not start within 60 s")
 
 
 async def reader(url: str, duration_s: float, stats: dict) -> None:
@@ -109,7 +83,7 @@ def camera_fps(stats: dict, duration_s: float) -> float:
 async def run(args) -> None:
     port, token = free_port(), "bench-token"
     with tempfile.TemporaryDirectory() as tmp:
-        server = start_server(port, token, Path(tmp) / "bench.sqlite3")
+        server = start_server(port, token, Path(tmp) / "bench.sqlite3", Path(tmp) / "serve.log")
         try:
             base = f"http://127.0.0.1:{port}"
             job = httpx.post(f"{base}/api/calibrate", params={"wait": "true"}, headers={"Authorization": f"Bearer {token}"}, timeout=60).json()
