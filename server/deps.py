@@ -1,4 +1,5 @@
-"""FastAPI dependencies: the station (StationDep) and the control-token check (ControlAuth).
+"""FastAPI dependencies: the station (StationDep), the control-token check (ControlAuth) and the name of
+whoever stops the arm (StopSource: no token needed, stopping is always allowed).
 
 Both are `async def` so they run on the event loop (they do no I/O): an e-stop route never waits for a
 free worker thread just to resolve its dependencies.
@@ -40,6 +41,11 @@ async def require_control(
     given = credentials.credentials.strip() if credentials is not None else None
     if not token_matches(request.app.state.token, given or None):
         raise ApiError(401, "unauthorized", "this command needs the control token: send 'Authorization: Bearer <token>'")
+    return _client_name(request, x_armlab_controller)
+
+
+def _client_name(request: Request, x_armlab_controller: str | None) -> str:
+    """The X-Armlab-Controller name (validated), else 'ui' for a browser page and 'api' for a script."""
     declared = (x_armlab_controller or "").strip()
     if declared:
         try:
@@ -49,5 +55,15 @@ async def require_control(
     return "ui" if "sec-fetch-mode" in request.headers else "api"
 
 
+async def stop_source(
+    request: Request,
+    x_armlab_controller: Annotated[str | None, Header(description="the caller's name, for the event log")] = None,
+) -> str:
+    """Who asks for the stop. No token: any page the station serves may stop the arm (the Host/Origin
+    guard still keeps other sites out), and stopping never needs the control lease."""
+    return _client_name(request, x_armlab_controller)
+
+
 StationDep = Annotated[Station, Depends(get_station)]
 ControlAuth = Annotated[str, Depends(require_control)]
+StopSource = Annotated[str, Depends(stop_source)]

@@ -327,7 +327,7 @@ class StreamHub:
         return await asyncio.to_thread(function, *args)
 
     async def _command(self, client: ClientSession, name: str) -> None:
-        if not client.can_control:
+        if not client.can_control and name != "estop":  # stopping is always allowed, even view-only
             await self._reply_error(client, f"command '{name}' refused: this connection is view-only (no control token)")
             return
         actions = {

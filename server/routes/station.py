@@ -7,7 +7,7 @@ from functools import partial
 
 from fastapi import APIRouter, Request
 
-from server.deps import ControlAuth, StationDep
+from server.deps import ControlAuth, StationDep, StopSource
 from server.models import Status
 
 router = APIRouter(prefix="/api", tags=["station"])
@@ -32,8 +32,8 @@ def read_status(station: StationDep) -> dict:
 
 
 @router.post("/estop", response_model=Status)
-async def post_estop(request: Request, station: StationDep, controller: ControlAuth) -> dict:
-    """Halt now and latch, in every state, from any client with the token (the control lease is not needed).
+async def post_estop(request: Request, station: StationDep, controller: StopSource) -> dict:
+    """Halt now and latch, in every state, from any client: no token and no control lease needed.
 
     The latch is set and the arm halted before the station's lock is taken, on a dedicated thread pool:
     neither the event loop nor a blocked request can delay it."""

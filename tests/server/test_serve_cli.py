@@ -36,9 +36,10 @@ def test_serve_prints_token_url_and_streams_uncompressed(tmp_path):
         live.wait_for(lambda: _healthy(base), 60, 0.2)
         page = httpx.get(base + "/")
         assert page.status_code == 200 and "<html" in page.text.lower()
-        assert httpx.post(base + "/api/estop").status_code == 401
-        status = httpx.post(base + "/api/estop", headers={"Authorization": f"Bearer {token}"}).json()
+        assert httpx.post(base + "/api/reset").status_code == 401
+        status = httpx.post(base + "/api/estop").json()  # stopping never needs the token (issue 9 item 3)
         assert status["state"] == "estop"
+        assert httpx.post(base + "/api/reset", headers={"Authorization": f"Bearer {token}"}).json()["state"] == "idle"
         with connect(f"ws://127.0.0.1:{port}/ws?token={token}", open_timeout=10, close_timeout=2) as ws:  # offers deflate
             assert "permessage-deflate" not in (ws.response.headers.get("Sec-WebSocket-Extensions") or "")
             assert '"can_control": true' in ws.recv(timeout=10)

@@ -7,6 +7,7 @@ import json
 import time
 
 import cv2
+import httpx
 import numpy as np
 import pytest
 from websockets.exceptions import ConnectionClosed
@@ -142,7 +143,7 @@ def test_view_switch_and_layers(url):
 def test_control_needs_the_token(url):
     with _open(url) as viewer:
         assert json.loads(viewer.recv(timeout=5))["can_control"] is False
-        viewer.send(json.dumps({"type": "command", "name": "estop"}))
+        viewer.send(json.dumps({"type": "command", "name": "reset"}))
         event = _next(viewer, "event")
         assert event["level"] == "error" and "view-only" in event["message"]
         assert _next(viewer, "telemetry")["state"] == "idle"
@@ -163,3 +164,20 @@ def test_wrong_token_is_rejected(url):
     with pytest.raises(ConnectionClosed) as closed, _open(url, "not-the-token") as ws:
         ws.recv(timeout=5)
     assert closed.value.rcvd.code == 4401
+
+
+def test_a_view_only_session_and_a_tokenless_request_can_stop_the_arm(url, http_url):
+    """Stopping never needs the token nor the lease (issue 9 item 3); other sites stay out (the Origin guard)."""
+    auth = {"Authorization": f"Bearer {TOKEN}"}
+    with _open(url) as viewer:
+        assert json.loads(viewer.recv(timeout=5))["can_control"] is False
+        viewer.send(json.dumps({"type": "command", "name": "estop"}))
+        deadline = time.monotonic() + 5
+        while _next(viewer, "telemetry")["state"] != "estop":
+            assert time.monotonic() < deadline
+    assert httpx.post(http_url + "/api/reset", headers=auth).json()["state"] == "idle"
+    foreign = httpx.post(http_url + "/api/estop", headers={"Origin": "http://evil.example"})
+    assert foreign.status_code == 403 and httpx.get(http_url + "/api/status").json()["state"] == "idle"
+    answer = httpx.post(http_url + "/api/estop", headers={"X-Armlab-Controller": "viewer-page"})
+    assert answer.status_code == 200 and answer.json()["state"] == "estop"
+    assert httpx.post(http_url + "/api/reset", headers=auth).json()["state"] == "idle"

@@ -47,3 +47,33 @@ def canvas_point(page, u_px: float, v_px: float) -> tuple[float, float]:
             [u_px, v_px],
         )
     )
+
+
+def teach_program(server, name: str, poses_rad) -> dict:
+    """Teach a program over REST (the calls the page makes): start, move to each pose and record, save.
+    Returns the stored program."""
+    server.post("/api/teach/start")
+    for q in poses_rad:
+        server.post("/api/arm/joints?wait=true", {"q_rad": [float(v) for v in q], "moving_time_s": 0.8})
+        server.wait_status(lambda s: not s["moving"], 10.0, "the arm to settle")
+        server.post("/api/teach/record")
+    return server.post("/api/teach/stop", {"name": name})
+
+
+def in_view_and_on_top(page, selector: str) -> str:
+    """'' when the element is inside the viewport and is what a click at its centre hits; else why not."""
+    return page.evaluate(
+        """(sel) => {
+            const el = document.querySelector(sel);
+            if (!el) return `${sel}: missing`;
+            const r = el.getBoundingClientRect();
+            const w = window.innerWidth, h = window.innerHeight;
+            if (r.width === 0 || r.height === 0) return `${sel}: not shown`;
+            if (r.left < 0 || r.top < 0 || r.right > w || r.bottom > h)
+                return `${sel}: at ${r.left.toFixed(0)},${r.top.toFixed(0)}..${r.right.toFixed(0)},${r.bottom.toFixed(0)} outside ${w}x${h}`;
+            const hit = document.elementFromPoint(r.left + r.width / 2, r.top + r.height / 2);
+            if (!hit || !(hit === el || el.contains(hit))) return `${sel}: covered by ${hit ? hit.outerHTML.slice(0, 80) : 'nothing'}`;
+            return '';
+        }""",
+        selector,
+    )
