@@ -34,6 +34,18 @@ def truth_objects(server) -> list[dict]:
     return truth["objects"] if isinstance(truth, dict) else truth
 
 
+def truth_after(server, sim_s: float, timeout_s: float = 30.0) -> dict:
+    """Ground truth once the simulation has run sim_s seconds past now: a condition on the sim clock, not a sleep."""
+    start_s = server.get("/api/sim/truth")["time_s"]
+    deadline = time.monotonic() + timeout_s
+    while True:
+        truth = server.get("/api/sim/truth")
+        if truth["time_s"] >= start_s + sim_s:
+            return truth
+        assert time.monotonic() < deadline, f"the simulation did not advance {sim_s} s within {timeout_s} s"
+        time.sleep(0.05)
+
+
 def last_job_id(server) -> str | None:
     return (server.get("/api/status").get("job") or {}).get("id")
 
@@ -171,8 +183,7 @@ def test_click_grab_lifts_the_block_and_click_drop_places_it(page, server):
     previous = last_job_id(server)
     page.mouse.click(x, y)
     wait_job_done(server, "drop", previous)
-    time.sleep(0.5)  # let the block settle
-    placed = next(o for o in truth_objects(server) if o["id"] == before["id"])
+    placed = next(o for o in truth_after(server, 0.5)["objects"] if o["id"] == before["id"])  # settled
     error_m = math.dist(placed["position_m"][:2], target_m[:2])
     assert error_m < 0.010, f"dropped {error_m * 1000:.1f} mm from the clicked point {target_m}: {placed}"
     assert placed["position_m"][2] < edge_m, f"block not resting on the board: {placed}"
@@ -226,10 +237,8 @@ def test_estop_during_a_move_stops_the_arm_and_shows_estop(page, server):
     page.wait_for_function("document.getElementById('state-badge').textContent === 'estop'", timeout=2_000)
     assert page.get_attribute("#state-badge", "data-state") == "estop"
     assert page.is_visible("#halt-banner") and "E-STOP" in page.text_content("#halt-banner")
-    time.sleep(0.3)
-    q_a = np.array(server.get("/api/status")["joints_rad"])
-    time.sleep(0.7)
-    q_b = np.array(server.get("/api/status")["joints_rad"])
+    q_a = np.array(truth_after(server, 0.3)["arm"]["position_rad"])
+    q_b = np.array(truth_after(server, 0.7)["arm"]["position_rad"])
     assert np.abs(q_b - q_a).max() < 0.01, f"arm still moving after e-stop: {q_a} -> {q_b}"
     assert np.abs(q_b - target_rad).max() > 0.1, "the move finished: the e-stop did not stop it"
     # Only reset is offered now; reset returns to idle without moving.
