@@ -208,6 +208,7 @@ class Status(Wire):
     gripper: GripperStatus
     gripper_pose: GripperPose
     moving: bool
+    torque_enabled: bool = Field(True, description="motor torque on (the arm holds); off = limp, it falls unless held")
     calibrated: bool
     backend: Literal["sim", "real"]
     controller: str | None = Field(description="who holds the control lease (None: free); only it may command")

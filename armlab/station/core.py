@@ -125,6 +125,7 @@ class Station(Latch, MotionGate, ManualCommands, Perceiving):
         self._held_block: dict | None = None
         self._lost: dict[str, str] = {}  # devices not answering: {name: reason}
         self._last_joints: np.ndarray | None = None
+        self._torque_enabled = True  # connect() leaves the arm holding; set_torque() changes it
         self._motions: list[tuple[float, np.ndarray]] = []  # (end time_s, xy box [xmin, ymin, xmax, ymax])
         self._pipeline: Any = None  # synchronous mode's perception pipeline
         self.events = EventLog()
@@ -397,6 +398,7 @@ class Station(Latch, MotionGate, ManualCommands, Perceiving):
             "gripper": gripper_dict,
             "gripper_pose": gripper_pose_from_matrix(self.model.fk(q)),
             "moving": moving_measured,
+            "torque_enabled": self._torque_enabled,
             "calibrated": calibrated,
             "backend": self.backend,
             "controller": lease["controller"],

@@ -122,6 +122,7 @@ class ManualCommands:
             if self._halt.is_set():
                 raise CommandRefused("torque", self._effective_state().value, allowed_commands(self._effective_state()))
             self.arm.set_torque(bool(enabled))
+            self._torque_enabled = bool(enabled)
         self.events.add("warn" if not enabled else "info", f"torque {'on' if enabled else 'off'}")
 
     def gripper_command(self, action: str, wait: bool = True, source: str | None = None) -> None:

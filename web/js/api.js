@@ -125,6 +125,7 @@ export class Api {
     if (Number.isFinite(yawRad)) body.yaw_rad = yawRad;
     return this.post("/api/arm/pose", body);
   }
+  torque(enabled, confirm = false) { return this.post("/api/arm/torque", confirm ? { enabled, confirm } : { enabled }); }
   gripper(action) { return this.post("/api/gripper", { action }); }
   calibrate() { return this.post("/api/calibrate"); }
   pixelToWorld(u, v) { return this.post("/api/pixel-to-world", { u, v }); }

@@ -16,6 +16,7 @@ import {
   renderStatus,
 } from "./panels.js";
 import { JointPlot } from "./plot.js";
+import { TorqueButton } from "./torque.js";
 import { RateMeter, Stream } from "./stream.js";
 import { COMMANDS, LAYERS, VIEWS } from "./wire_types.js";
 
@@ -43,6 +44,7 @@ class App {
     this.sliders = new JointSliders($("joint-sliders"), (q) => this.sendJoints(q));
     this.sliders.build(DEFAULT_JOINT_NAMES);
     this.plot = new JointPlot($("joint-plot"));
+    this.torque = new TorqueButton({ button: $("btn-torque"), run: (a, c) => this.run(a, c), api: this.api });
     this.live = new LiveView({
       canvas: $("live"),
       wrap: $("view-wrap"),
@@ -169,6 +171,7 @@ class App {
     this.status = s;
     renderStatus(s);
     renderReadouts(s);
+    this.torque.render(s);
     if (!previous || (previous.joint_names || []).join() !== (s.joint_names || []).join()) {
       if (s.joint_names) this.sliders.build(s.joint_names, s.joint_limits_rad);
       this.sliders.follow(s.joints_rad, true);
@@ -357,14 +360,6 @@ class App {
     on("btn-open", () => this.run("gripper open", () => this.api.gripper("release")));
     on("btn-close", () => this.run("gripper close", () => this.api.gripper("grasp")));
     on("btn-reset", () => this.run("reset", () => this.api.reset()));
-    on("btn-torque", () => {
-      const enable = $("btn-torque").dataset.off === "true";
-      this.run(`torque ${enable ? "on" : "off"}`, () => this.api.post("/api/arm/torque", { enabled: enable })).then((r) => {
-        if (r === null) return;
-        $("btn-torque").dataset.off = String(!enable);
-        $("btn-torque").textContent = enable ? "Torque off" : "Torque on";
-      });
-    });
     on("btn-calibrate", () => this.run("calibrate", () => this.api.calibrate()));
     on("btn-cancel-job", () => this.run("cancel job", () => this.api.cancelJob()));
     on("btn-send-joints", () => this.sendJoints(this.sliders.valuesRad()));

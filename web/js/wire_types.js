@@ -353,6 +353,7 @@ export const CLIENT_MESSAGE_TYPES = Object.freeze(["ack", "view", "command"]);
  * @property {GripperStatus} gripper
  * @property {GripperPose} gripper_pose
  * @property {boolean} moving
+ * @property {boolean} [torque_enabled] motor torque on (the arm holds); off = limp, it falls unless held
  * @property {boolean} calibrated
  * @property {("sim"|"real")} backend
  * @property {(string|null)} controller who holds the control lease (None: free); only it may command
@@ -406,6 +407,7 @@ export const CLIENT_MESSAGE_TYPES = Object.freeze(["ack", "view", "command"]);
  * @property {GripperStatus} gripper
  * @property {GripperPose} gripper_pose
  * @property {boolean} moving
+ * @property {boolean} [torque_enabled] motor torque on (the arm holds); off = limp, it falls unless held
  * @property {boolean} calibrated
  * @property {("sim"|"real")} backend
  * @property {(string|null)} controller who holds the control lease (None: free); only it may command
