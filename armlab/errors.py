@@ -64,3 +64,11 @@ class DeviceLost(ConnectionError):
 
 class ShuttingDown(ConnectionError):
     """The station is closing: no new command is accepted (HTTP 503)."""
+
+
+class ArmMoving(CommandRefused):
+    """A jog step sent while the arm still moves (HTTP 409): the next step starts when this one has ended."""
+
+    def __init__(self, command: str, state: str, allowed: list[str] | tuple[str, ...]) -> None:
+        super().__init__(command, state, allowed)
+        self.args = (f"command '{command}' refused: the arm is still moving; send the next step once it has stopped (?wait=true waits)",)

@@ -47,6 +47,7 @@ Position = Annotated[list[Coordinate], Field(min_length=3, max_length=3)]
 MovingTime = Annotated[float, Field(gt=0.0, le=MOVING_TIME_LIMIT_S, description="seconds; the station refuses more than its configured maximum")]
 Velocity = Annotated[float, Field(ge=-ANGLE_LIMIT_RAD, le=ANGLE_LIMIT_RAD, description="rad/s, |value| <= 2π; the station applies the joint limits")]
 Pixel = Annotated[float, Field(ge=0.0, le=PIXEL_LIMIT, description="pixel coordinate in the colour image")]
+SpeedPercent = Annotated[float, Field(ge=10.0, le=100.0, description="speed override, % of the configured speed (10-100)")]
 ProgramId = Annotated[int, Field(ge=0, le=SQLITE_INTEGER_MAX, description="a program id (SQLite integer)")]
 
 
@@ -91,6 +92,36 @@ class JogRequest(Request):
     heartbeat), then the arm ramps to rest by itself."""
 
     velocity_rad_s: list[Velocity] = Field(min_length=1, max_length=12, description="joint velocities, joint_names order; zeros stop")
+    speed_percent: SpeedPercent = 100.0
+
+
+STEP_DISTANCE_LIMIT_M = 0.1
+STEP_ANGLE_LIMIT_RAD = math.pi / 4
+
+
+class StepRequest(Request):
+    """A jog step of the gripper: distance_m along world x|y|z keeping its pitch and yaw (within 0.5°,
+    the point within 1 mm of the line), or angle_rad of pitch (about the gripper point) or wrist roll."""
+
+    axis: Literal["x", "y", "z", "pitch", "roll"]
+    distance_m: float | None = Field(
+        None, ge=-STEP_DISTANCE_LIMIT_M, le=STEP_DISTANCE_LIMIT_M, description="metres along the world axis (x, y, z); non-zero"
+    )
+    angle_rad: float | None = Field(
+        None, ge=-STEP_ANGLE_LIMIT_RAD, le=STEP_ANGLE_LIMIT_RAD, description="radians of pitch (+ = down) or roll; non-zero"
+    )
+    speed_percent: SpeedPercent = 100.0
+
+    @model_validator(mode="after")
+    def _one_amount(self) -> "StepRequest":
+        linear = self.axis in ("x", "y", "z")
+        amount, other = (self.distance_m, self.angle_rad) if linear else (self.angle_rad, self.distance_m)
+        needed = "distance_m" if linear else "angle_rad"
+        if other is not None or amount is None:
+            raise ValueError(f"a {self.axis} step needs {needed} alone")
+        if amount == 0.0:
+            raise ValueError(f"{needed} must not be zero")
+        return self
 
 
 class GripperRequest(Request):
@@ -405,6 +436,7 @@ WIRE_MODELS: tuple[type[BaseModel], ...] = (
     PoseNameRequest,
     TorqueRequest,
     JogRequest,
+    StepRequest,
     GripperRequest,
     PixelRequest,
     TargetRequest,

@@ -49,34 +49,56 @@ def vertical_profile_duration(distance_m: float, speed_m_s: float, accel_m_s2: f
     return minimum_time(speed_m_s / distance_m, accel_m_s2 / distance_m)[0]
 
 
-def _solve_line(arm, q_start, start_m, z_goal_m, s, pitch, yaw) -> np.ndarray:
-    """IK along the line start_m → (x, y, z_goal) at path fractions s (N,); the first row is q_start.
+def solve_path(arm, q_start, targets_m: np.ndarray, pitch, yaw, label: str) -> np.ndarray:
+    """IK at each target (N, 3) with pitch (a number or (N,)) and yaw; the first row is q_start.
 
     Uses the model's vectorised ik_batch (seeded with q_start) when it solves every point, else solves
     sample by sample, each seeded with the previous one (which also raises Unreachable with the reason).
+    DiscontinuousPath (naming `label`, the joint and the height) if IK would switch branch.
     """
-    targets = np.repeat(np.asarray(start_m, float)[None, :], s.size, axis=0)
-    targets[:, 2] = start_m[2] + s * (z_goal_m - start_m[2])
+    pitches = np.broadcast_to(np.asarray(pitch, float), (len(targets_m),))
     positions = None
     if hasattr(arm, "ik_batch"):
-        solved, ok = arm.ik_batch(targets[1:], pitch=pitch, yaw=yaw, q_seed=np.asarray(q_start, float))
+        solved, ok = arm.ik_batch(targets_m[1:], pitch=pitches[1:], yaw=yaw, q_seed=np.asarray(q_start, float))
         if np.all(ok):
             positions = np.vstack([np.asarray(q_start, float)[None, :], np.asarray(solved, float)])
     if positions is None:
-        positions = np.empty((s.size, len(q_start)))
+        positions = np.empty((len(targets_m), len(q_start)))
         positions[0] = q_start
-        for index in range(1, s.size):
-            positions[index] = arm.ik(targets[index], pitch=pitch, yaw=yaw, q_seed=positions[index - 1])
+        for index in range(1, len(targets_m)):
+            positions[index] = arm.ik(targets_m[index], pitch=float(pitches[index]), yaw=yaw, q_seed=positions[index - 1])
     jumps = np.abs(np.diff(positions, axis=0))
     sample, joint = np.unravel_index(int(np.argmax(jumps)), jumps.shape)
     if jumps[sample, joint] > MAX_SAMPLE_STEP_RAD:
         names = getattr(arm, "joint_names", None)
         name = names[joint] if names is not None else f"joint {joint}"
         raise DiscontinuousPath(
-            f"vertical segment to z = {z_goal_m * 1000:.1f} mm: {name} jumps {jumps[sample, joint]:.3f} rad at "
-            f"z = {targets[sample + 1, 2] * 1000:.1f} mm (IK changed branch)"
+            f"{label}: {name} jumps {jumps[sample, joint]:.3f} rad at "
+            f"z = {targets_m[sample + 1, 2] * 1000:.1f} mm (IK changed branch)"
         )
     return positions
+
+
+def plan_path(
+    arm, q_start, targets_at, pitch_at, yaw_rad, duration_s: float, ramp_s: float, label: str, rate_hz: float = DEFAULT_RATE_HZ
+) -> JointTrajectory:
+    """A rest-to-rest trajectory through IK of a path: targets_at(s) (N, 3) and pitch_at(s) (N,) for path
+    fractions s in [0, 1] following a trapezoid of duration_s with ramps of ramp_s; slowed down (and
+    re-solved) while a joint would exceed its velocity or acceleration limit (near a singularity)."""
+    velocity_limit = np.asarray(arm.velocity_limit_rad_s, float) * LIMIT_MARGIN
+    accel_limit = np.asarray(arm.accel_limit_rad_s2, float) * LIMIT_MARGIN
+    for _ in range(_MAX_RETIMES):
+        times = sample_times(duration_s, rate_hz)
+        s = trapezoid_profile(times, duration_s, ramp_s)
+        positions = solve_path(arm, q_start, targets_at(s), pitch_at(s), yaw_rad, label)
+        slow_down = retime_path(positions, times, velocity_limit, accel_limit)
+        if slow_down <= 1.0:
+            return JointTrajectory(times_s=times, positions_rad=positions)
+        # Slowing by k scales velocity by 1/k and acceleration by 1/k²: stretch both phases.
+        factor = slow_down * 1.02
+        duration_s *= factor
+        ramp_s *= factor
+    raise ValueError(f"{label}: joints still too fast after {_MAX_RETIMES} slow-downs (too close to a singularity)")
 
 
 def plan_vertical_segment(
@@ -112,21 +134,14 @@ def plan_vertical_segment(
         times = sample_times(0.0, rate_hz)
         return JointTrajectory(times_s=times, positions_rad=np.repeat(q_start[None, :], times.size, axis=0))
 
-    velocity_limit = np.asarray(arm.velocity_limit_rad_s, float) * LIMIT_MARGIN
-    accel_limit = np.asarray(arm.accel_limit_rad_s2, float) * LIMIT_MARGIN
     ramp_s = minimum_time(speed_m_s / distance_m, accel_m_s2 / distance_m)[1]
-    for _ in range(_MAX_RETIMES):
-        times = sample_times(duration_s, rate_hz)
-        s = trapezoid_profile(times, duration_s, ramp_s)
-        positions = _solve_line(arm, q_start, start_m, z_goal_m, s, pitch, yaw_rad)
-        slow_down = retime_path(positions, times, velocity_limit, accel_limit)
-        if slow_down <= 1.0:
-            return JointTrajectory(times_s=times, positions_rad=positions)
-        # Slowing by k scales velocity by 1/k and acceleration by 1/k²: stretch both phases.
-        factor = slow_down * 1.02
-        duration_s *= factor
-        ramp_s *= factor
-    raise ValueError(
-        f"vertical segment to z = {z_goal_m * 1000:.1f} mm: joints still too fast after {_MAX_RETIMES} slow-downs "
-        f"(too close to a singularity)"
+
+    def targets_at(s: np.ndarray) -> np.ndarray:
+        targets = np.repeat(start_m[None, :], s.size, axis=0)
+        targets[:, 2] = start_m[2] + s * (z_goal_m - start_m[2])
+        return targets
+
+    return plan_path(
+        arm, q_start, targets_at, lambda s: np.full(s.size, pitch), yaw_rad, duration_s, ramp_s,
+        f"vertical segment to z = {z_goal_m * 1000:.1f} mm", rate_hz,
     )

@@ -33,6 +33,11 @@ class MotionConfig(StrictModel):
     max_step_rad: float = Field(0.1, gt=0.0, le=1.0)
     start_tolerance_rad: float = Field(0.05, gt=0.0, le=0.5)
     jog_hold_s: float = Field(0.3, gt=0.0, le=2.0)  # a jog runs this long after its last heartbeat, then stops
+    # Jog steps of the gripper (POST /api/arm/step) at 100 % speed; the operator's override scales the speeds.
+    step_speed_m_s: float = Field(0.05, gt=0.0, le=0.5)
+    step_accel_m_s2: float = Field(0.2, gt=0.0, le=5.0)
+    step_rotation_speed_rad_s: float = Field(0.5, gt=0.0, le=3.0)
+    step_rotation_accel_rad_s2: float = Field(2.0, gt=0.0, le=20.0)
 
     @model_validator(mode="after")
     def _workspace_box(self) -> "MotionConfig":

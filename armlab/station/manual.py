@@ -12,9 +12,11 @@ import math
 import numpy as np
 
 from armlab.devices.arm import JointTrajectory
-from armlab.errors import CommandRefused, NeedsConfirmation, NotController
+from armlab.errors import ArmMoving, CommandRefused, NeedsConfirmation, NotController
 from armlab.station.checks import checked_moving_time, checked_position
 from armlab.station.states import State, allowed_commands
+
+STEP_ANCHOR_TOL_RAD = 0.01  # a step starts from the previous step's commanded end when the arm is this close to it
 from armlab.store import Waypoint
 
 
@@ -69,12 +71,13 @@ class ManualCommands:
             self.wait_motion(self.config.max_moving_time_s + 5.0)
         return q_goal
 
-    def jog(self, velocity_rad_s, source: str | None = None) -> JointTrajectory:
-        """Hold-to-run: move at these joint velocities (rad/s) for motion jog_hold_s, then stop by itself.
-        Sending it again (or heartbeat()) within jog_hold_s keeps it going; zeros ramp down to rest."""
+    def jog(self, velocity_rad_s, source: str | None = None, speed_percent: float = 100.0) -> JointTrajectory:
+        """Hold-to-run: move at these joint velocities (rad/s, scaled by speed_percent) for motion jog_hold_s,
+        then stop by itself. Sending it again (or heartbeat()) within jog_hold_s keeps it going; zeros ramp down to rest."""
         from armlab.motion.jog import checked_jog_velocity, plan_jog, reference_velocity
 
         velocity = checked_jog_velocity(velocity_rad_s, self.model.velocity_limit_rad_s, self.model.joint_names)
+        velocity = velocity * checked_speed_percent(speed_percent) / 100.0
         self.allowed_or_raise("jog", source)
         with self._lock:
             jog = dict(self._jog) if self._jog is not None else None
@@ -92,6 +95,46 @@ class ManualCommands:
             self._transition("jog", source=source)
             self._command_arm(trajectory, swept_box)
             self._jog = {"trajectory": trajectory, "start_s": self.clock_s(), "velocity": velocity, "source": source}
+        return trajectory
+
+    def step_gripper(
+        self, axis: str, amount: float, speed_percent: float = 100.0, wait: bool = False, source: str | None = None
+    ) -> JointTrajectory:
+        """A jog step of the gripper: `amount` m along world x|y|z keeping its pitch and yaw, or rad of
+        pitch|roll (armlab.motion.gripper_step), at speed_percent of the configured step speeds.
+
+        Refused before anything moves: ArmMoving while the arm still moves, StepRefused/Unreachable (the
+        reason) when the step cannot keep the gripper's orientation and line. A step that follows this
+        station's previous step starts from that step's commanded end (the servos' sag does not add up)."""
+        from armlab.motion.gripper_step import StepSpeeds, gripper_pose, plan_gripper_step
+
+        scale = checked_speed_percent(speed_percent) / 100.0
+        self.allowed_or_raise("jog", source)
+        if self.arm.is_moving():
+            raise ArmMoving("jog", self.state.value, allowed_commands(self.state))
+        q_start = self.joints_rad()
+        with self._lock:  # the anchor holds while no other motion was commanded since (nor halted: that replaces the entry)
+            anchor = getattr(self, "_step_anchor", None)
+            last_motion = self._motions[-1] if self._motions else None
+        if anchor is not None and anchor[1] is last_motion and np.max(np.abs(anchor[0] - q_start)) <= STEP_ANCHOR_TOL_RAD:
+            q_start = anchor[0]
+        config = self.motion_config
+        speeds = StepSpeeds(
+            config.step_speed_m_s * scale, config.step_accel_m_s2 * scale,
+            config.step_rotation_speed_rad_s * scale, config.step_rotation_accel_rad_s2 * scale,
+        )
+        pitch = gripper_pose(self.model, q_start).pitch_rad
+        floor_m = config.board_clearance_m + config.pad_reach_m * max(0.0, math.sin(pitch))
+        trajectory = plan_gripper_step(self.model, q_start, axis, amount, speeds, floor_m, config.sample_rate_hz)
+        self.check_motion(trajectory)
+        swept_box = self._swept_box(trajectory)
+        with self._lock:
+            self._transition("jog", source=source)
+            self._jog = None
+            self._command_arm(trajectory, swept_box)
+            self._step_anchor = (trajectory.positions_rad[-1].copy(), self._motions[-1])
+        if wait:
+            self.wait_motion(trajectory.duration_s + 5.0)
         return trajectory
 
     def heartbeat(self, source: str | None = None) -> bool:
@@ -175,3 +218,14 @@ class ManualCommands:
                 self._transition("teach_stop", source=source, detail="")
         self.events.add("info", f"program '{program.name}' saved ({len(program.waypoints)} waypoints)")
         return program
+
+
+def checked_speed_percent(speed_percent) -> float:
+    """The operator's speed override as a finite number in [10, 100] %, else ValueError."""
+    try:
+        value = float(speed_percent)
+    except (TypeError, ValueError) as error:
+        raise ValueError(f"speed_percent must be a number from 10 to 100, got {speed_percent!r}") from error
+    if not (math.isfinite(value) and 10.0 <= value <= 100.0):
+        raise ValueError(f"speed_percent must be from 10 to 100, got {speed_percent!r}")
+    return value

@@ -5,7 +5,7 @@ from __future__ import annotations
 from fastapi import APIRouter
 
 from server.deps import ControlAuth, StationDep
-from server.models import GripperRequest, JogRequest, JointsRequest, PoseNameRequest, PoseRequest, Status, TorqueRequest
+from server.models import GripperRequest, JogRequest, JointsRequest, PoseNameRequest, PoseRequest, Status, StepRequest, TorqueRequest
 
 router = APIRouter(prefix="/api", tags=["arm"])
 
@@ -49,7 +49,16 @@ def post_torque(body: TorqueRequest, station: StationDep, controller: ControlAut
 def post_jog(body: JogRequest, station: StationDep, controller: ControlAuth) -> dict:
     """Hold-to-run joint jog: runs for jog_hold_s after this request or the controller's last heartbeat
     (POST /api/heartbeat or the websocket's heartbeat message), then ramps to rest by itself."""
-    station.jog(body.velocity_rad_s, source=controller)
+    station.jog(body.velocity_rad_s, source=controller, speed_percent=body.speed_percent)
+    return station.status()
+
+
+@router.post("/arm/step", response_model=Status)
+def post_step(body: StepRequest, station: StationDep, controller: ControlAuth, wait: bool = False) -> dict:
+    """Jog step of the gripper: along world x/y/z keeping its pitch and yaw, or a pitch/roll rotation; a step
+    that cannot keep them → 422 with the reason, a step while the arm moves → 409; nothing moves then."""
+    amount = body.distance_m if body.axis in ("x", "y", "z") else body.angle_rad
+    station.step_gripper(body.axis, amount, body.speed_percent, wait=wait, source=controller)
     return station.status()
 
 

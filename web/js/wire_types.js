@@ -259,6 +259,7 @@ export const CLIENT_MESSAGE_TYPES = Object.freeze(["ack", "view", "command"]);
  * heartbeat), then the arm ramps to rest by itself.
  * @typedef {Object} JogRequest
  * @property {Array<number>} velocity_rad_s joint velocities, joint_names order; zeros stop
+ * @property {number} [speed_percent] speed override, % of the configured speed (10-100)
  */
 
 /**
@@ -362,6 +363,16 @@ export const CLIENT_MESSAGE_TYPES = Object.freeze(["ack", "view", "command"]);
  * @property {(JobInfo|null)} job
  * @property {Array<string>} allowed_commands
  * @property {number} time_s
+ */
+
+/**
+ * A jog step of the gripper: distance_m along world x|y|z keeping its pitch and yaw (within 0.5°,
+ * the point within 1 mm of the line), or angle_rad of pitch (about the gripper point) or wrist roll.
+ * @typedef {Object} StepRequest
+ * @property {("x"|"y"|"z"|"pitch"|"roll")} axis
+ * @property {(number|null)} [distance_m] metres along the world axis (x, y, z); non-zero
+ * @property {(number|null)} [angle_rad] radians of pitch (+ = down) or roll; non-zero
+ * @property {number} [speed_percent] speed override, % of the configured speed (10-100)
  */
 
 /**
