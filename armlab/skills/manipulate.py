@@ -74,17 +74,19 @@ def _finger_seed(station: Station, q_start, point_m, pitch_rad: float, yaw_rad: 
 
 def _transfer_plan(station: Station, q_start, point_m, yaw_rad: float | None, boxes: list, held_edge_m: float | None,
                    action: str, words: tuple[str, str, str], max_transfer_z_m: float = 0.42,
-                   finger_axis_rad: float | None = None, min_pitch_rad: float = 0.0) -> list:
+                   finger_axis_rad: float | None = None, min_pitch_rad: float = 0.0, gripper_box=None) -> list:
     """Steps: rise straight up to a transfer height (if low), joint move over point_m at that height,
     down to approach_height_m above point_m, straight down at the steepest pitch that reaches both,
     gripper `action`, straight up and back to the transfer height. The transfer height rises until
     the transfers clear the obstacle boxes; the last approach keeps its own (top-down) pitch however
-    high the transfer. Every trajectory is checked against limits and the table. Unreachable /
-    UnsafeTrajectory before anything moves."""
+    high the transfer. Every trajectory is checked against limits and the table, and, given a
+    gripper_box (armlab.motion.gripper_box), its sampled gripper path against that box (joint moves
+    that bulge out are split along the straight line). Unreachable / UnsafeTrajectory before anything moves."""
     from armlab.kinematics import Unreachable
     from armlab.motion import GripperStep, TrajectoryStep, check_trajectory, plan_joint_move
     from armlab.motion.cartesian import plan_vertical_segment
     from armlab.motion.clearance import first_collision
+    from armlab.motion.gripper_box import joint_moves_inside
     from armlab.motion.pick_place import solve_approach
     from armlab.motion.safety import UnsafeTrajectory
 
@@ -96,6 +98,9 @@ def _transfer_plan(station: Station, q_start, point_m, yaw_rad: float | None, bo
 
     def joint_move(q_a, q_b):
         return plan_joint_move(q_a, q_b, model, config.move_time_s, config.accel_time_s, config.sample_rate_hz)
+
+    def joint_moves(q_a, q_b, name):  # [TrajectoryStep]: one joint move, or several kept inside the gripper box
+        return [TrajectoryStep(name, move) for move in joint_moves_inside(model, q_a, q_b, gripper_box, joint_move)]
 
     q_start = np.asarray(q_start, float)
     seed = q_start
@@ -139,15 +144,12 @@ def _transfer_plan(station: Station, q_start, point_m, yaw_rad: float | None, bo
                     pass
             if z_transfer > near_m[2] + 0.005:  # over the target high, then down to the approach point
                 q_high = model.ik([point_m[0], point_m[1], z_transfer], yaw=yaw_rad, q_seed=q_near)
-                over, lower = joint_move(q_from, q_high), joint_move(q_high, q_near)
-                steps += [TrajectoryStep(words[0], over), TrajectoryStep("lower to approach", lower)]
-                back = [TrajectoryStep("back to transfer height", joint_move(ascend.positions_rad[-1], q_high))]
-                checked += [over, lower, back[0].trajectory]
+                moves = joint_moves(q_from, q_high, words[0]) + joint_moves(q_high, q_near, "lower to approach")
+                back = joint_moves(ascend.positions_rad[-1], q_high, "back to transfer height")
             else:
-                over = joint_move(q_from, q_near)
-                steps.append(TrajectoryStep(words[0], over))
-                checked.append(over)
-                back = []
+                moves, back = joint_moves(q_from, q_near, words[0]), []
+            steps += moves
+            checked += [step.trajectory for step in moves + back]
         except (Unreachable, ValueError) as error:
             last_problem = str(error)
             z_transfer += 0.04
@@ -156,6 +158,10 @@ def _transfer_plan(station: Station, q_start, point_m, yaw_rad: float | None, bo
         for step in steps:
             if isinstance(step, TrajectoryStep):
                 check_trajectory(model, step.trajectory, clearance_m=config.board_clearance_m)
+        outside = None if gripper_box is None else next(
+            (p for p in (gripper_box.first_exit(model, s.trajectory) for s in steps if isinstance(s, TrajectoryStep)) if p), None)
+        if outside is not None:
+            raise UnsafeTrajectory(f"no transfer to ({point_m[0] * 1000:.0f}, {point_m[1] * 1000:.0f}) mm inside the gripper box: {outside}")
         collision = next((c for c in (first_collision(model, t, boxes, held_edge_m=held_edge_m) for t in checked) if c), None)
         if collision is None:
             return steps
@@ -165,9 +171,10 @@ def _transfer_plan(station: Station, q_start, point_m, yaw_rad: float | None, bo
 
 
 def plan_pick(station: Station, top_center_m, yaw_rad: float | None, edge_m: float, boxes: list, q_start=None,
-              max_transfer_z_m: float = 0.42, finger_axis_rad: float | None = None) -> list:
+              max_transfer_z_m: float = 0.42, finger_axis_rad: float | None = None, gripper_box=None) -> list:
     """Plan picking the block whose top-face centre is top_center_m: open, transfer above it, descend
-    to config.grasp_depth_for(edge) below its top, grasp, rise. boxes: other objects."""
+    to config.grasp_depth_for(edge) below its top, grasp, rise. boxes: other objects; gripper_box: a
+    GripperBox the gripper point keeps inside (None: no such limit)."""
     from armlab.motion import GripperStep
 
     config = station.motion_config
@@ -176,13 +183,13 @@ def plan_pick(station: Station, top_center_m, yaw_rad: float | None, edge_m: flo
     grasp_m[2] = max(grasp_m[2], config.board_clearance_m)
     q_start = station.joints_rad() if q_start is None else q_start
     steps = _transfer_plan(station, q_start, grasp_m, yaw_rad, boxes, None, "grasp", ("move above block", "descend to grasp", "lift"),
-                           max_transfer_z_m, finger_axis_rad)
+                           max_transfer_z_m, finger_axis_rad, gripper_box=gripper_box)
     return [GripperStep("open before pick", "release"), *steps]
 
 
 def plan_place(station: Station, surface_m, yaw_rad: float | None, edge_m: float, boxes: list, q_start=None,
                max_transfer_z_m: float = 0.42, finger_axis_rad: float | None = None,
-               max_tilt_rad: float = MAX_PLACE_TILT_RAD) -> list:
+               max_tilt_rad: float = MAX_PLACE_TILT_RAD, gripper_box=None) -> list:
     """Plan setting the held block (edge edge_m, grasped as plan_pick does) with its bottom centre on
     surface_m, releasing place_clearance_m above it, then rising. finger_axis_rad: the world direction
     the fingers open along (e.g. across a line of blocks, so they do not push the neighbours)."""
@@ -193,7 +200,7 @@ def plan_place(station: Station, surface_m, yaw_rad: float | None, edge_m: float
     q_start = station.joints_rad() if q_start is None else q_start
     return _transfer_plan(station, q_start, release_m, yaw_rad, boxes, edge_m, "release",
                           ("move above place", "descend to place", "retreat"), max_transfer_z_m, finger_axis_rad,
-                          min_pitch_rad=config.top_down_pitch_rad - max_tilt_rad)
+                          min_pitch_rad=config.top_down_pitch_rad - max_tilt_rad, gripper_box=gripper_box)
 
 
 def plan_side_place(station: Station, surface_m, edge_m: float, boxes: list, q_start=None, max_transfer_z_m: float = 0.55) -> list:

@@ -422,8 +422,7 @@ class Station(Latch, MotionGate, ManualCommands, Perceiving):
             if not job.has_cleanup:
                 self._transition("cancel", source=source, detail="")
         self._halt_devices(gripper=False)
-        self.events.add("warn", f"job '{job.name}' cancelled")
-        return job
+        return job  # the job's end logs "job '<name>' cancelled: ..." once
 
     # Jobs -----------------------------------------------------------------------------------------
 

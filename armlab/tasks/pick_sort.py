@@ -1,12 +1,13 @@
 """pick_sort (DESIGN §7): every block to the negative half-plane, small ones at x < 0, large at x > 0.
 
 Blocks go to slots in two rows at y < 0, one side per size, away from the calibration tags; pile tops
-are taken first, so the blocks under them show up at the next look.
+are taken first, so the blocks under them show up at the next look. The arm looks from the overhead
+pose: parked low (the sleep pose) it hides, or its self-filter masks, blocks just in front of it.
 """
 
 from __future__ import annotations
 
-from armlab.tasks.runner import Move, Plan, cubes, near
+from armlab.tasks.runner import Move, Plan, TaskRunner, cubes, near, overhead_look_pose
 
 SLOT_XS_M = (0.09, 0.155, 0.22, 0.285, 0.35)
 SLOT_YS_M = (-0.065, -0.13)
@@ -45,3 +46,9 @@ def policy(objects: list[dict], given_up: set) -> Plan:
         claimed.append(target)
         moves.append(Move(block, (target[0], target[1], 0.0), f"to the {block['size']} side"))
     return Plan(moves, done=len(done), left=len(todo) + hidden, finished=not todo)
+
+
+def make_policy(level: int | None, params: dict, runner: TaskRunner):
+    """The policy, with the runner looking from the overhead pose."""
+    runner.look_pose_rad = overhead_look_pose(runner.station.model)
+    return policy

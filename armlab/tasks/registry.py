@@ -26,7 +26,7 @@ class JobSpec:
 JOBS: dict[str, JobSpec] = {
     spec.name: spec
     for spec in (
-        JobSpec("pick_sort", (1, 2, 3), lambda level, params, runner: pick_sort.policy,
+        JobSpec("pick_sort", (1, 2, 3), pick_sort.make_policy,
                 "every block to y < 0: small at x < 0, large at x > 0"),
         JobSpec("pick_stack", (1, 2, 3), pick_stack.make_policy,
                 "every block into columns of three or more on the calibration tags"),

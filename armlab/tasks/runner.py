@@ -95,6 +95,18 @@ def park_pose(model) -> np.ndarray:
     return np.asarray(model.sleep_rad, float)
 
 
+OVERHEAD_LOOK_POINT_M = (0.0, 0.09, 0.22)  # gripper point, pointing down, elbow up over the base
+
+
+def overhead_look_pose(model) -> np.ndarray:
+    """A look pose that hides no block: the arm upright over its base, the gripper pointing down high
+    in front of it. Everything stays within ~0.1 m of the base axis and high above the blocks, so
+    the camera (above the board's far side) sees the arm only over the board strip behind the base,
+    and the self-filter's inflated volume holds no block; the sleep pose's low gripper masks blocks
+    beside it."""
+    return model.ik(OVERHEAD_LOOK_POINT_M, pitch=math.pi / 2, yaw=0.0, q_seed=np.zeros(model.dof))
+
+
 def pick_end_joints(steps: list) -> np.ndarray:
     """The joints a plan's last trajectory ends at."""
     from armlab.motion import TrajectoryStep
@@ -127,6 +139,8 @@ class TaskRunner:
         self.max_transfer_z_m = 0.42  # a job may lower it (pick_stack keeps the gripper under 300 mm)
         self.last_objects: list[dict] = []  # the newest look's detections (obstacles while parking)
         self.reserved_m: list[tuple[float, float]] = []  # spots a job keeps free (column bases, line slots)
+        self.look_pose_rad = park_pose(station.model)  # where the arm waits while the camera looks (a job may change it)
+        self.gripper_box = None  # a GripperBox every planned motion keeps the gripper point inside (pick_stack)
 
     # Reporting -------------------------------------------------------------------------------------
 
@@ -153,9 +167,10 @@ class TaskRunner:
         from armlab.motion import plan_joint_move
         from armlab.motion.cartesian import plan_vertical_segment
         from armlab.motion.clearance import first_collision
+        from armlab.motion.gripper_box import joint_moves_inside
 
         model = self.station.model
-        q_park = park_pose(model)
+        q_park = self.look_pose_rad
         self.progress.next_block = self.progress.next_target_m = None  # no move planned until the next look
         q_now = self.station.joints_rad()
         if np.abs(q_now - q_park).max() <= 0.02:
@@ -165,17 +180,21 @@ class TaskRunner:
         config = self.station.motion_config
         routes = [[]]
         try:
-            rise = plan_vertical_segment(model, q_now, max(PARK_RISE_Z_M, model.fk(q_now)[2, 3]), speed_m_s=config.vertical_speed_m_s,
+            rise_z_m = PARK_RISE_Z_M if self.gripper_box is None else min(PARK_RISE_Z_M, self.gripper_box.max_m[2])
+            rise = plan_vertical_segment(model, q_now, max(rise_z_m, model.fk(q_now)[2, 3]), speed_m_s=config.vertical_speed_m_s,
                                          accel_m_s2=config.vertical_accel_m_s2, rate_hz=config.sample_rate_hz)
             routes.append([rise.positions_rad[-1]])
-            routes.append([rise.positions_rad[-1], model.ik([0.0, 0.12, PARK_RISE_Z_M], q_seed=q_park)])
+            routes.append([rise.positions_rad[-1], model.ik([0.0, 0.12, rise_z_m], q_seed=q_park)])
         except (Unreachable, ValueError):
             pass
+        def joint_move(q_a, q_b):
+            return plan_joint_move(q_a, q_b, model, None, None, config.sample_rate_hz)
+
         for via in routes:
             legs, q_from = [], q_now
             try:
                 for q_to in [*via, q_park]:
-                    legs.append(plan_joint_move(q_from, q_to, model, None, None, config.sample_rate_hz))
+                    legs += joint_moves_inside(model, q_from, q_to, self.gripper_box, joint_move)
                     q_from = q_to
             except ValueError:  # an IK point a hair outside a limit: try the next route
                 continue
@@ -241,8 +260,8 @@ class TaskRunner:
 
         def plan_the_place(q_start=None) -> list:
             try:
-                return plan_place(self.station, to, yaw, edge, place_boxes, q_start=q_start,
-                                  max_transfer_z_m=self.max_transfer_z_m, finger_axis_rad=axis, max_tilt_rad=move.max_tilt_rad)
+                return plan_place(self.station, to, yaw, edge, place_boxes, q_start=q_start, max_transfer_z_m=self.max_transfer_z_m,
+                                  finger_axis_rad=axis, max_tilt_rad=move.max_tilt_rad, gripper_box=self.gripper_box)
             except (Unreachable, ValueError):
                 if not move.side_ok:
                     raise
@@ -250,7 +269,7 @@ class TaskRunner:
 
         try:
             pick = plan_pick(self.station, block["position_m"], block.get("yaw_rad"), edge, self.boxes(objects, block),
-                             max_transfer_z_m=self.max_transfer_z_m,
+                             max_transfer_z_m=self.max_transfer_z_m, gripper_box=self.gripper_box,
                              finger_axis_rad=finger_axis_away(block["position_m"], block.get("yaw_rad") or 0.0, objects, block))
         except (Unreachable, ValueError) as error:
             self.fail(f"cannot pick the {name} at ({block['position_m'][0] * 1000:.0f}, {block['position_m'][1] * 1000:.0f}) mm: {error}")
@@ -309,7 +328,7 @@ class TaskRunner:
         edge = float((held or {}).get("edge_m", self.edges_m["large"]))
         spot = self.free_spot(objects or [], edge)
         place = plan_place(self.station, (spot[0], spot[1], 0.0), 0.0, edge, self.boxes(objects or []),
-                           max_transfer_z_m=self.max_transfer_z_m)
+                           max_transfer_z_m=self.max_transfer_z_m, gripper_box=self.gripper_box)
         run_steps(self.station, self.ctx, place, progress=False)
         self.station.set_held_block(None)
         return f"put the held block down at ({spot[0] * 1000:.0f}, {spot[1] * 1000:.0f}) mm"
@@ -342,7 +361,7 @@ class TaskRunner:
     def clear_of_park(self, xy_m, clearance_m: float = 0.09) -> bool:
         """True if a tall column at (x, y) keeps clear of the arm's way into its park pose (the vertical
         plane through the base axis and the parked gripper, out to 0.22 m)."""
-        park_xy = self.station.model.fk(np.asarray(self.station.model.sleep_rad, float))[:2, 3]  # the way down to it
+        park_xy = self.station.model.fk(self.look_pose_rad)[:2, 3]  # the way down to it
         direction = park_xy / max(np.linalg.norm(park_xy), 1e-9)
         along = float(np.clip(np.dot(xy_m, direction), 0.0, 0.22))
         return float(np.linalg.norm(np.asarray(xy_m) - along * direction)) >= clearance_m
@@ -359,7 +378,7 @@ class TaskRunner:
     def can_place_on(self, surface_m, edge_m: float) -> bool:
         """True if a block of edge_m can be set down top-down on surface_m from here (obstacles aside)."""
         try:
-            plan_place(self.station, surface_m, 0.0, edge_m, [], max_transfer_z_m=self.max_transfer_z_m)
+            plan_place(self.station, surface_m, 0.0, edge_m, [], max_transfer_z_m=self.max_transfer_z_m, gripper_box=self.gripper_box)
         except (Unreachable, ValueError):
             return False
         return True

@@ -37,6 +37,7 @@ class App {
     this.fps = new RateMeter(2.0);
     this.latencyMs = [];
     this.reportedJobs = new Set();
+    this.estopSeen = false; // telemetry showed estop since the last E-STOP press
     this.trackedJob = null;
     this.detections = [];
     this.hoverDetection = -1;
@@ -169,11 +170,13 @@ class App {
   onTelemetry(s) {
     const previous = this.status;
     this.status = s;
+    if (s.state === "estop") this.estopSeen = true;
     renderStatus(s);
     renderReadouts(s);
     this.torque.render(s);
     if (!previous || (previous.joint_names || []).join() !== (s.joint_names || []).join()) {
       if (s.joint_names) this.sliders.build(s.joint_names, s.joint_limits_rad);
+      this.plot.setJoints(s.joint_names, s.joint_limits_rad);
       this.sliders.follow(s.joints_rad, true);
     } else {
       this.sliders.follow(s.joints_rad);
@@ -259,7 +262,9 @@ class App {
   async run(action, call) {
     try {
       const result = await call();
-      if (result && result.job) {
+      // A job's answer is {job}; a status (which carries the last job too) is a manual command's answer.
+      const startedJob = result && result.job && !("state" in result);
+      if (startedJob) {
         this.trackedJob = result.job.id; // the station logs the job's start and end itself
       } else {
         this.log.add("info", `${action}: ok`);
@@ -279,8 +284,10 @@ class App {
       viaRest();
       return;
     }
+    // Fall back to REST unless the station reported estop since the press (a quick Reset must not re-stop it).
+    this.estopSeen = false;
     setTimeout(() => {
-      if (!this.status || this.status.state !== "estop") viaRest();
+      if (!this.estopSeen) viaRest();
     }, ESTOP_REST_FALLBACK_MS);
   }
 
