@@ -13,9 +13,11 @@ from pathlib import Path
 
 from armlab.station.states import COMMANDS, State
 from server.models import ERROR_CODES, WIRE_MODELS
+from server.program_models import PROGRAM_WIRE_MODELS
 from server.views import LAYERS, VIEWS
 
 OUTPUT = Path(__file__).resolve().parents[1] / "web" / "js" / "wire_types.js"
+ALL_WIRE_MODELS = (*WIRE_MODELS, *PROGRAM_WIRE_MODELS)
 
 
 def _js_type(schema: dict) -> str:
@@ -62,13 +64,13 @@ def _typedef(name: str, schema: dict) -> list[str]:
 def render() -> str:
     """The whole generated file's text."""
     definitions: dict[str, dict] = {}
-    for model in WIRE_MODELS:
+    for model in ALL_WIRE_MODELS:
         schema = model.model_json_schema(ref_template="#/$defs/{model}")
         for name, sub in schema.pop("$defs", {}).items():
             definitions.setdefault(name, sub)
         definitions[model.__name__] = schema
     lines = [
-        "// generated, do not edit: made by `python -m server.gen_wire_types` from server/models.py.",
+        "// generated, do not edit: made by `python -m server.gen_wire_types` from server/models.py and server/program_models.py.",
         "// The wire protocol between the station server and the browser (SI units; field names carry them).",
         "// Binary frames: [uint32 little-endian header length N][N bytes UTF-8 JSON FrameHeader][JPEG bytes].",
         "",

@@ -2,7 +2,7 @@
 
 Field names carry their units (SI). Requests forbid unknown fields and NaN/infinity, so malformed
 input is refused with a clear 422 before the station sees it. web/js/wire_types.js is generated from
-these models (server/gen_wire_types.py).
+these models and server/program_models.py's (server/gen_wire_types.py).
 """
 
 from __future__ import annotations
@@ -150,14 +150,6 @@ class TargetRequest(Request):
         return self
 
 
-class TeachStopRequest(Request):
-    name: str = Field(min_length=1, max_length=100)
-
-
-class RepeatRequest(Request):
-    cycles: int = Field(1, ge=1, le=100)
-
-
 class SceneObjectRequest(Request):
     """One object of an explicit scene, in the ground-truth format (quat_wxyz wins over yaw_rad)."""
 
@@ -300,24 +292,6 @@ class PixelToWorldResponse(Wire):
     on: Literal["board", "depth"]
 
 
-class WaypointInfo(Wire):
-    joints_rad: list[float]
-    gripper: Literal["grasp", "release"]
-
-
-class ProgramInfo(Wire):
-    id: int
-    name: str
-    created_s: float
-    waypoints: list[WaypointInfo]
-
-
-class ProgramsResponse(Wire):
-    data: list[ProgramInfo]
-    count: int
-    skipped: list[str] = Field([], description="damaged rows left out of data, one line each (also logged)")
-
-
 # Websocket messages ------------------------------------------------------------------------------
 
 
@@ -428,9 +402,6 @@ WIRE_MODELS: tuple[type[BaseModel], ...] = (
     TagInfo,
     CalibrationInfo,
     PixelToWorldResponse,
-    WaypointInfo,
-    ProgramInfo,
-    ProgramsResponse,
     JointsRequest,
     PoseRequest,
     PoseNameRequest,
@@ -440,8 +411,6 @@ WIRE_MODELS: tuple[type[BaseModel], ...] = (
     GripperRequest,
     PixelRequest,
     TargetRequest,
-    TeachStopRequest,
-    RepeatRequest,
     SceneObjectRequest,
     SceneRequest,
     FrameHeader,

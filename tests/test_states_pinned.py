@@ -5,7 +5,8 @@ reset leaving fault without a device check...) must change this file too.
 §6: states idle, calibrate, teach, repeat, click_grab, click_drop, auto_sort, estop, fault. E-stop is
 reachable from every state and latches; reset returns to idle from estop and fault only. Idle accepts
 the manual commands, the jobs, teach and scene changes; teach accepts the manual commands (jog, torque
-off to move the arm by hand) and its own record/stop; a job state accepts only e-stop and cancel; the
+off to move the arm by hand) and its own record/undo/stop; a job state accepts only e-stop and cancel (repeat
+also its pause, resume, step and speed override, issue 9); the
 job's end returns to idle, a device failure to fault (from any state but estop, which stays latched).
 """
 
@@ -22,7 +23,8 @@ I, CAL, T, R, CG, CD, A, E, F = (
 
 ALL_COMMANDS = [
     "estop", "reset", "home", "sleep", "move_joints", "move_to", "jog", "torque", "gripper", "calibrate", "grab", "drop",
-    "teach_start", "teach_record", "teach_stop", "repeat", "auto", "cancel", "set_scene",
+    "teach_start", "teach_record", "teach_stop", "teach_undo", "repeat", "auto", "cancel", "set_scene",
+    "pause", "resume", "step", "set_speed",
 ]
 
 # EXPECTED[state][command] = the next state; a command absent from a row is refused in that state.
@@ -33,10 +35,10 @@ EXPECTED = {
     },
     T: {
         "estop": E, "home": T, "sleep": T, "move_joints": T, "move_to": T, "jog": T, "torque": T, "gripper": T,
-        "teach_record": T, "teach_stop": I,
+        "teach_record": T, "teach_undo": T, "teach_stop": I,
     },
     CAL: {"estop": E, "cancel": I},
-    R: {"estop": E, "cancel": I},
+    R: {"estop": E, "cancel": I, "pause": R, "resume": R, "step": R, "set_speed": R},
     CG: {"estop": E, "cancel": I},
     CD: {"estop": E, "cancel": I},
     A: {"estop": E, "cancel": I},

@@ -229,20 +229,83 @@ class StationClient:
 
     # Teach and repeat -----------------------------------------------------------------------------
 
-    def teach_start(self) -> dict:
-        return self._post("/api/teach/start")
+    def teach_start(self, discard_draft: bool = False) -> dict:
+        """Enter teach (the status); an unsaved draft left by a stopped station is resumed unless discard_draft."""
+        return self._post("/api/teach/start", {"discard_draft": True} if discard_draft else None)
 
-    def teach_record(self) -> dict:
-        return self._post("/api/teach/record")
+    def teach_record(self, dwell_s: float = 0.0, moving_time_s: float | None = None) -> dict:
+        """Record the current pose and gripper (on disk before this returns): the waypoint and the draft's count."""
+        return self._post("/api/teach/record", {"dwell_s": float(dwell_s), "moving_time_s": moving_time_s})
+
+    def teach_undo(self) -> dict:
+        """Remove the last recorded waypoint: {removed, count}."""
+        return self._post("/api/teach/undo")
+
+    def teach_draft(self) -> dict:
+        """The recorded, unsaved waypoints: {waypoints, count, skipped}."""
+        return self._get("/api/teach/draft")
 
     def teach_stop(self, name: str) -> dict:
+        """Save the draft as a program named `name` (returned) and return to idle."""
         return self._post("/api/teach/stop", {"name": name})
 
     def programs(self) -> list[dict]:
         return self._get("/api/programs")["data"]
 
-    def repeat(self, program_id: int, cycles: int = 1, wait: bool = True) -> dict:
-        return self._post(f"/api/programs/{int(program_id)}/repeat", {"cycles": int(cycles)}, wait=wait, timeout_s=600.0)["job"]
+    def program(self, program_id: int) -> dict:
+        return self._get(f"/api/programs/{int(program_id)}")
+
+    def update_program(self, program_id: int, name: str | None = None, waypoints: list[dict] | None = None) -> dict:
+        """Rename and/or replace the waypoint list ({joints_rad, gripper, dwell_s?, moving_time_s?} each)."""
+        body: dict = {}
+        if name is not None:
+            body["name"] = name
+        if waypoints is not None:
+            body["waypoints"] = waypoints
+        return self._request("PATCH", f"/api/programs/{int(program_id)}", body)
+
+    def duplicate_program(self, program_id: int, name: str | None = None) -> dict:
+        return self._post(f"/api/programs/{int(program_id)}/duplicate", {"name": name} if name else None)
+
+    def delete_program(self, program_id: int) -> dict:
+        return self._request("DELETE", f"/api/programs/{int(program_id)}")
+
+    def export_program(self, program_id: int, format: str = "json") -> str:
+        """The program file's text: JSON, or CSV `t_s, q1..qn, gripper`."""
+        response = self._http.get(f"/api/programs/{int(program_id)}/export", params={"format": format})
+        if response.status_code >= 400:
+            self._request("GET", f"/api/programs/{int(program_id)}/export", params={"format": format})
+        return response.text
+
+    def import_program(self, content: str, format: str = "json", name: str | None = None) -> dict:
+        """Store a program from a file's text (the new program); StationError naming the line if malformed."""
+        body = {"format": format, "content": content}
+        if name is not None:
+            body["name"] = name
+        return self._post("/api/programs/import", body)
+
+    def repeat(self, program_id: int, cycles: int | None = 1, speed_percent: float = 100.0, wait: bool = True,
+               timeout_s: float = 3600.0) -> dict:
+        """Repeat a program `cycles` times (None: until cancel_job()) at `speed_percent` (10-100); the job."""
+        body = {"cycles": None if cycles is None else int(cycles), "speed_percent": float(speed_percent)}
+        return self._post(f"/api/programs/{int(program_id)}/repeat", body, wait=wait, timeout_s=timeout_s)["job"]
+
+    def pause_job(self) -> dict:
+        return self._post("/api/jobs/pause")["job"]
+
+    def resume_job(self) -> dict:
+        return self._post("/api/jobs/resume")["job"]
+
+    def step_job(self) -> dict:
+        return self._post("/api/jobs/step")["job"]
+
+    def set_job_speed(self, speed_percent: float) -> dict:
+        return self._request("PATCH", "/api/jobs/current", {"speed_percent": float(speed_percent)})["job"]
+
+    def job_trace(self, format: str = "json"):
+        """Commanded and measured joints over the last complete repeat cycle: a dict, or the CSV text."""
+        result = self._get("/api/jobs/current/trace", {"format": format})
+        return result.decode() if isinstance(result, bytes) else result
 
     # Simulation -----------------------------------------------------------------------------------
 

@@ -1,4 +1,4 @@
-"""The operator's long actions as jobs: calibrate, click-grab, click-drop, repeat a program.
+"""The operator's long actions as jobs: calibrate, click-grab, click-drop (repeat a program: repeat.py).
 
 Each validates and plans first (bad input, unreachable target, no calibration: an exception before
 anything moves), then starts a job on the gate whose steps run through its guarded
@@ -121,27 +121,3 @@ def drop(station: Station, position_m=None, pixel=None, source: str | None = Non
         return {"target_m": [float(x) for x in surface], "on": on}
 
     return station.start_job("drop", "drop", run, detail=detail, source=source)
-
-
-def repeat(station: Station, program_id: int, cycles: int = 1, source: str | None = None) -> Job:
-    """Play a saved program `cycles` times: joint moves between waypoints, gripper changes where taught."""
-    station.allowed_or_raise("repeat")
-    if not isinstance(cycles, int) or not 1 <= cycles <= 100:
-        raise ValueError(f"cycles must be an integer from 1 to 100, got {cycles!r}")
-    program = station.store.get_program(program_id)
-    for waypoint in program.waypoints:
-        station.checked_joints(waypoint.joints_rad)
-
-    def run(ctx: JobContext) -> dict:
-        total = cycles * len(program.waypoints)
-        done = 0
-        for cycle in range(cycles):
-            for index, waypoint in enumerate(program.waypoints):
-                ctx.progress(done / total, f"cycle {cycle + 1}/{cycles}, waypoint {index + 1}/{len(program.waypoints)}")
-                station.move_in_job(ctx, waypoint.joints_rad)
-                if station.gripper.read_state().command != waypoint.gripper:
-                    station.run_gripper(ctx, waypoint.gripper)
-                done += 1
-        return {"program_id": program.id, "cycles": cycles}
-
-    return station.start_job("repeat", "repeat", run, detail=f"program '{program.name}' × {cycles}", source=source)

@@ -42,9 +42,11 @@ from armlab.station.perceiving import Perceiving
 from armlab.station.perception import DEVICE_ERRORS, FrameSource, Perception, PerceptionLoop
 from armlab.station.slots import EventLog, NewestSlot
 from armlab.station.states import JOB_STATES, State, after_event, allowed_commands, next_state
+from armlab.station.job_control import JobControls
+from armlab.station.teach import TeachCommands
 from armlab.station.telemetry import TelemetryPublisher, gripper_pose_from_matrix
 from armlab.station.watch import DeviceWatch
-from armlab.store import Store, Waypoint
+from armlab.store import Store
 
 log = logging.getLogger(__name__)
 
@@ -74,8 +76,8 @@ class NotCalibrated(RuntimeError):
 _UNLATCHED = ("estop",)  # the only command the latch and the lease never refuse
 
 
-class Station(Latch, MotionGate, ManualCommands, Perceiving):
-    """The control station's gate (its parts: latch.py, motion.py, manual.py, perceiving.py). Backends are injected; `sim` is the SimWorkcell when simulated (else None).
+class Station(Latch, MotionGate, ManualCommands, TeachCommands, JobControls, Perceiving):
+    """The control station's gate (its parts: latch.py, motion.py, manual.py, teach.py, job_control.py, perceiving.py). Backends are injected; `sim` is the SimWorkcell when simulated (else None).
 
     model: the armlab.kinematics ArmModel of the arm; perception_config: armlab.vision's config.
     synchronous: the sim runs in fast mode and nothing runs on threads (evaluations); frames are
@@ -117,7 +119,6 @@ class Station(Latch, MotionGate, ManualCommands, Perceiving):
         self._lease = ControlLease()
         self._job: Job | None = None
         self._last_job: Job | None = None
-        self._teach: list[Waypoint] = []
         self._teach_saving = False
         self._jog: dict | None = None  # the running jog: trajectory, start clock, velocity, controller
         self._calibration: Any = None
@@ -438,8 +439,10 @@ class Station(Latch, MotionGate, ManualCommands, Perceiving):
         detail: str = "",
         source=None,
         cleanup: Callable[[JobContext], Any] | None = None,
+        control: Any = None,
     ) -> Job:
         """Enter the job's state and run function(ctx) on a job thread (CommandRefused if not allowed).
+        control: the job's RunControl (pause, resume, step, speed; job_control.py), if it has one.
 
         cleanup(ctx), if given, runs after a cancel (not after an e-stop) with the arm still the job's,
         e.g. to put a held block down; the station returns to idle when it ends."""
@@ -447,7 +450,7 @@ class Station(Latch, MotionGate, ManualCommands, Perceiving):
             self._check(command, source)
             if command not in ("calibrate", "grab", "drop", "repeat", "auto"):
                 raise ValueError(f"'{command}' does not start a job")
-            job = Job(name=name, detail=detail, has_cleanup=cleanup is not None)
+            job = Job(name=name, detail=detail, has_cleanup=cleanup is not None, control=control)
             self._transition(command, source=source, detail=detail or name)
             self._job = job
             self._jog = None

@@ -60,6 +60,7 @@ class Job:
     finished_s: float | None = None
     has_cleanup: bool = False  # a cleanup runs after a cancel (the station waits for it)
     extra: dict = field(default_factory=dict)  # job-specific live details (e.g. a task's progress)
+    control: Any = field(default=None, repr=False)  # pause/resume/step/speed mailbox (job_control.RunControl) if the job has one
     cancel_event: threading.Event = field(default_factory=threading.Event, repr=False)
     thread: threading.Thread | None = field(default=None, repr=False)  # the job's thread (joined at shutdown)
     done_event: threading.Event = field(default_factory=threading.Event, repr=False)

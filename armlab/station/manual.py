@@ -1,4 +1,4 @@
-"""Manual commands of the gate: joint and pose moves, hold-to-run jog, torque, gripper, teach.
+"""Manual commands of the gate: joint and pose moves, hold-to-run jog, torque, gripper (teach: teach.py).
 
 A mixin of core.Station (it uses the station's lock, transition table, lease and `_command_arm`). Every
 command is refused before planning (state, latch, lease), planned and checked outside the lock, then
@@ -17,7 +17,6 @@ from armlab.station.checks import checked_moving_time, checked_position
 from armlab.station.states import State, allowed_commands
 
 STEP_ANCHOR_TOL_RAD = 0.01  # a step starts from the previous step's commanded end when the arm is this close to it
-from armlab.store import Waypoint
 
 
 class ManualCommands:
@@ -177,47 +176,6 @@ class ManualCommands:
             getattr(self.gripper, action)(wait=False)
         if wait:
             self.wait_gripper()
-
-
-    def teach_start(self, source: str | None = None) -> None:
-        with self._lock:
-            self._transition("teach_start", source=source, detail="teaching: 0 waypoints")
-            self._teach = []
-        self.events.add("info", "teach mode: record waypoints, then stop with a name")
-
-    def teach_record(self, source: str | None = None) -> Waypoint:
-        """Add the current joints and gripper command as a waypoint."""
-        self.allowed_or_raise("teach_record", source)
-        q = self.joints_rad()
-        command = self.gripper.read_state().command
-        waypoint = Waypoint(tuple(float(v) for v in q), command if command in ("grasp", "release") else "release")
-        with self._lock:
-            if self._teach_saving:
-                raise CommandRefused("teach_record", "teach (saving)", [])
-            self._transition("teach_record", source=source, detail=f"teaching: {len(self._teach) + 1} waypoints")
-            self._teach.append(waypoint)
-        return waypoint
-
-    def teach_stop(self, name: str, source: str | None = None):
-        """Save the recorded waypoints as a program (the SQLite write runs outside the lock) and return to
-        idle (Program). An e-stop during the write keeps the program and the latch."""
-        with self._lock:
-            self._check("teach_stop", source)
-            if self._teach_saving:
-                raise CommandRefused("teach_stop", "teach (saving)", [])
-            self._teach_saving = True
-            waypoints = list(self._teach)
-        try:
-            program = self.store.save_program(name, waypoints)
-        finally:
-            with self._lock:
-                self._teach_saving = False
-        with self._lock:
-            self._teach = []
-            if self._state is State.TEACH:
-                self._transition("teach_stop", source=source, detail="")
-        self.events.add("info", f"program '{program.name}' saved ({len(program.waypoints)} waypoints)")
-        return program
 
 
 def checked_speed_percent(speed_percent) -> float:

@@ -115,14 +115,24 @@ class MotionGate:
                 return True
         return False
 
-    def run_trajectory(self, ctx: JobContext, trajectory: JointTrajectory) -> None:
-        """Inside a job: check the trajectory (check_motion), command it (only while this job owns the arm)
-        and wait for it."""
+    def start_trajectory(self, ctx: JobContext, trajectory: JointTrajectory) -> None:
+        """Inside a job: check the trajectory (check_motion) and command it (only while this job owns the
+        arm), without waiting; it replaces a motion in progress (it must start where the arm is)."""
         self.check_motion(trajectory)
         swept_box = self._swept_box(trajectory)
         with self._lock:
             self._owns_arm(ctx)
             self._command_arm(trajectory, swept_box)
+
+    def wait_in_job(self, ctx: JobContext, predicate: Callable[[], bool], timeout_s: float) -> bool:
+        """Inside a job: block until predicate() holds (False after timeout_s of motion-clock time); raises
+        JobCancelled on cancel or e-stop. In fast mode the physics advances meanwhile."""
+        return self._wait_until(predicate, timeout_s, ctx)
+
+    def run_trajectory(self, ctx: JobContext, trajectory: JointTrajectory) -> None:
+        """Inside a job: check the trajectory (check_motion), command it (only while this job owns the arm)
+        and wait for it."""
+        self.start_trajectory(ctx, trajectory)
         checked = ctx if not ctx.in_cleanup else None
         if not self._wait_until(lambda: not self.arm.is_moving(), trajectory.duration_s + 5.0, checked):
             self._halt_devices(gripper=False)

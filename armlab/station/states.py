@@ -42,10 +42,15 @@ COMMANDS = (
     "teach_start",
     "teach_record",
     "teach_stop",
+    "teach_undo",
     "repeat",
     "auto",
     "cancel",
     "set_scene",
+    "pause",
+    "resume",
+    "step",
+    "set_speed",
 )
 
 _S = State
@@ -68,11 +73,13 @@ _TRANSITIONS: dict[State, dict[str, State]] = {
         "estop": _S.ESTOP,
         **{name: _S.TEACH for name in _MANUAL_MOVES},
         "teach_record": _S.TEACH,
+        "teach_undo": _S.TEACH,
         "teach_stop": _S.IDLE,
     },
     # Job states: only e-stop and cancel; the job's end returns to idle (EVENTS below).
     _S.CALIBRATE: {"estop": _S.ESTOP, "cancel": _S.IDLE},
-    _S.REPEAT: {"estop": _S.ESTOP, "cancel": _S.IDLE},
+    # Repeat also takes the job controls: pause, resume, step (one waypoint while paused), speed override.
+    _S.REPEAT: {"estop": _S.ESTOP, "cancel": _S.IDLE, "pause": _S.REPEAT, "resume": _S.REPEAT, "step": _S.REPEAT, "set_speed": _S.REPEAT},
     _S.CLICK_GRAB: {"estop": _S.ESTOP, "cancel": _S.IDLE},
     _S.CLICK_DROP: {"estop": _S.ESTOP, "cancel": _S.IDLE},
     _S.AUTO_SORT: {"estop": _S.ESTOP, "cancel": _S.IDLE},

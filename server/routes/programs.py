@@ -1,33 +1,68 @@
-"""Teach mode and taught programs (saved in the station's SQLite file)."""
+"""Teach mode and taught programs (the station's SQLite file): record, undo, save, edit, duplicate, export, import.
+
+A recorded waypoint is in the database's teach draft before /api/teach/record answers; a station killed
+while teaching resumes the draft on the next /api/teach/start (GET /api/teach/draft shows it).
+"""
 
 from __future__ import annotations
 
-from fastapi import APIRouter
-from fastapi.responses import JSONResponse
+from typing import Literal
 
-from armlab import skills
+from fastapi import APIRouter, Response
+
+from armlab.skills import programs as program_edits
+from armlab.store import Waypoint
 from server.deps import ControlAuth, StationDep
-from server.models import JobResponse, ProgramId, ProgramInfo, ProgramsResponse, RepeatRequest, Status, TeachStopRequest, WaypointInfo
-from server.routes.jobs import job_response
+from server.models import ProgramId, Status
+from server.program_models import (
+    DuplicateRequest,
+    ImportRequest,
+    ProgramInfo,
+    ProgramsResponse,
+    ProgramUpdateRequest,
+    TeachDraftResponse,
+    TeachRecordRequest,
+    TeachRecordResponse,
+    TeachStartRequest,
+    TeachStopRequest,
+    TeachUndoResponse,
+)
 
 router = APIRouter(prefix="/api", tags=["programs"])
 
 
 @router.post("/teach/start", response_model=Status)
-def post_teach_start(station: StationDep, controller: ControlAuth) -> dict:
-    station.teach_start(source=controller)
+def post_teach_start(station: StationDep, controller: ControlAuth, body: TeachStartRequest | None = None) -> dict:
+    """Enter teach; an unsaved draft left by a stopped or killed station is resumed unless discard_draft."""
+    station.teach_start(source=controller, discard_draft=bool(body and body.discard_draft))
     return station.status()
 
 
-@router.post("/teach/record", response_model=WaypointInfo)
-def post_teach_record(station: StationDep, controller: ControlAuth) -> dict:
-    """Add the current pose and gripper state as a waypoint."""
-    return station.teach_record(source=controller).to_dict()
+@router.post("/teach/record", response_model=TeachRecordResponse)
+def post_teach_record(station: StationDep, controller: ControlAuth, body: TeachRecordRequest | None = None) -> dict:
+    """Add the current pose and gripper state as a waypoint; on disk (the draft) before this answers."""
+    body = body or TeachRecordRequest()
+    waypoint, count = station.teach_record(source=controller, dwell_s=body.dwell_s, moving_time_s=body.moving_time_s)
+    return {**waypoint.to_dict(), "count": count}
+
+
+@router.post("/teach/undo", response_model=TeachUndoResponse)
+def post_teach_undo(station: StationDep, controller: ControlAuth) -> dict:
+    """Remove the last recorded waypoint."""
+    removed, count = station.teach_undo(source=controller)
+    return {"removed": removed.to_dict() if removed is not None else None, "count": count}
+
+
+@router.get("/teach/draft", response_model=TeachDraftResponse)
+def read_teach_draft(station: StationDep) -> dict:
+    """The recorded, not yet saved waypoints (kept across restarts until teach/stop saves them)."""
+    waypoints, skipped = station.store.read_draft()
+    return {"waypoints": [w.to_dict() for w in waypoints], "count": len(waypoints), "skipped": skipped}
 
 
 @router.post("/teach/stop", response_model=ProgramInfo)
 def post_teach_stop(body: TeachStopRequest, station: StationDep, controller: ControlAuth) -> dict:
-    """Save the recorded waypoints as a named program and return to idle."""
+    """Save the draft as a named program (one transaction) and return to idle."""
     return station.teach_stop(body.name, source=controller).to_dict()
 
 
@@ -43,16 +78,41 @@ def read_program(program_id: ProgramId, station: StationDep) -> dict:
     return station.store.get_program(program_id).to_dict()
 
 
+@router.patch("/programs/{program_id}", response_model=ProgramInfo)
+def update_program(program_id: ProgramId, body: ProgramUpdateRequest, station: StationDep, controller: ControlAuth) -> dict:
+    """Rename and/or replace the whole waypoint list (every waypoint checked first; nothing changes if one fails)."""
+    waypoints = None
+    if body.waypoints is not None:
+        waypoints = [Waypoint(tuple(w.joints_rad), w.gripper, w.dwell_s, w.moving_time_s) for w in body.waypoints]
+    return program_edits.update_program(station, program_id, name=body.name, waypoints=waypoints).to_dict()
+
+
+@router.post("/programs/{program_id}/duplicate", response_model=ProgramInfo, status_code=201)
+def post_duplicate(program_id: ProgramId, station: StationDep, controller: ControlAuth, body: DuplicateRequest | None = None) -> dict:
+    """Copy a program under a new name (default '<name> (copy)')."""
+    return program_edits.duplicate_program(station, program_id, body.name if body else None).to_dict()
+
+
 @router.delete("/programs/{program_id}")
 def delete_program(program_id: ProgramId, station: StationDep, controller: ControlAuth) -> dict:
     station.store.delete_program(program_id)
     return {"deleted": program_id}
 
 
-@router.post("/programs/{program_id}/repeat", response_model=JobResponse, status_code=202)
-def post_repeat(
-    program_id: ProgramId, station: StationDep, controller: ControlAuth, body: RepeatRequest | None = None, wait: bool = False
-) -> JSONResponse:
-    """Play a program `cycles` times as a job."""
-    cycles = body.cycles if body is not None else 1
-    return job_response(skills.repeat(station, program_id, cycles, source=controller), wait)
+@router.get(
+    "/programs/{program_id}/export",
+    response_class=Response,
+    responses={200: {"content": {"application/json": {}, "text/csv": {}}, "description": "the program file"}},
+)
+def export_program(program_id: ProgramId, station: StationDep, format: Literal["json", "csv"] = "json") -> Response:
+    """The program as a file: JSON (everything) or CSV `t_s, q1..qn, gripper` (radians; t_s when each waypoint is reached)."""
+    text, filename = program_edits.export_program(station, program_id, format)
+    media = "application/json" if format == "json" else "text/csv"
+    return Response(text, media_type=media, headers={"Content-Disposition": f'attachment; filename="{filename}"'})
+
+
+@router.post("/programs/import", response_model=ProgramInfo, status_code=201)
+def post_import(body: ImportRequest, station: StationDep, controller: ControlAuth) -> dict:
+    """Store a program from an exported file's text; a malformed file is refused (422 naming the line and
+    the reason) and nothing stored changes."""
+    return program_edits.import_program(station, body.format, body.content, body.name).to_dict()

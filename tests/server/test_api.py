@@ -303,7 +303,8 @@ def test_programs_survive_a_server_restart(cell, tmp_path):
         assert response.status_code == 200 and response.json()["job"]["state"] == "succeeded", response.text
         status = http.get("/api/status").json()
         assert status["gripper"]["command"] == "grasp"
-        assert np.allclose(status["joints_rad"], program["waypoints"][1]["joints_rad"], atol=0.02)
+        assert response.json()["job"]["extra"]["repeat"]["waypoint"] == 2  # it reached the last waypoint
+        assert np.allclose(status["joints_rad"], 0.0, atol=0.02)  # and went home at the end (issue 9)
         http.post("/api/gripper", json={"action": "release"}, headers=AUTH)
 
 

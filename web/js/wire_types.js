@@ -1,9 +1,9 @@
-// generated, do not edit: made by `python -m server.gen_wire_types` from server/models.py.
+// generated, do not edit: made by `python -m server.gen_wire_types` from server/models.py and server/program_models.py.
 // The wire protocol between the station server and the browser (SI units; field names carry them).
 // Binary frames: [uint32 little-endian header length N][N bytes UTF-8 JSON FrameHeader][JPEG bytes].
 
 export const STATES = Object.freeze(["idle", "calibrate", "teach", "repeat", "click_grab", "click_drop", "auto_sort", "estop", "fault"]);
-export const COMMANDS = Object.freeze(["estop", "reset", "home", "sleep", "move_joints", "move_to", "jog", "torque", "gripper", "calibrate", "grab", "drop", "teach_start", "teach_record", "teach_stop", "repeat", "auto", "cancel", "set_scene"]);
+export const COMMANDS = Object.freeze(["estop", "reset", "home", "sleep", "move_joints", "move_to", "jog", "torque", "gripper", "calibrate", "grab", "drop", "teach_start", "teach_record", "teach_stop", "teach_undo", "repeat", "auto", "cancel", "set_scene", "pause", "resume", "step", "set_speed"]);
 export const VIEWS = Object.freeze(["color", "depth", "topdown"]);
 export const LAYERS = Object.freeze(["tags", "detections", "grid"]);
 export const ERROR_CODES = Object.freeze(["wrong_state", "unreachable", "unsafe", "invalid", "not_found", "not_calibrated", "unauthorized", "forbidden", "not_controller", "needs_confirmation", "device", "internal"]);
@@ -163,6 +163,11 @@ export const CLIENT_MESSAGE_TYPES = Object.freeze(["ack", "view", "command"]);
  */
 
 /**
+ * @typedef {Object} DuplicateRequest
+ * @property {(string|null)} [name] the copy's name; None = '<name> (copy)'
+ */
+
+/**
  * @typedef {Object} ErrorBody
  * @property {string} code
  * @property {string} message
@@ -236,6 +241,14 @@ export const CLIENT_MESSAGE_TYPES = Object.freeze(["ack", "view", "command"]);
  */
 
 /**
+ * POST /api/programs/import: a file's text as exported (JSON or CSV `t_s, q1..qn, gripper`).
+ * @typedef {Object} ImportRequest
+ * @property {("json"|"csv")} format
+ * @property {string} content the file's text
+ * @property {(string|null)} [name] the program's name; None = the JSON's name, else 'imported'
+ */
+
+/**
  * @typedef {Object} JobInfo
  * @property {string} id
  * @property {string} name
@@ -299,7 +312,17 @@ export const CLIENT_MESSAGE_TYPES = Object.freeze(["ack", "view", "command"]);
  * @property {number} id
  * @property {string} name
  * @property {number} created_s
+ * @property {(number|null)} [updated_s]
  * @property {Array<WaypointInfo>} waypoints
+ */
+
+/**
+ * PATCH /api/programs/{id}: a new name and/or the whole new waypoint list (reorder, edit a value,
+ * insert or delete a waypoint or a gripper step: send the list as it should be). Checked against the
+ * joint limits and the table before anything is stored.
+ * @typedef {Object} ProgramUpdateRequest
+ * @property {(string|null)} [name]
+ * @property {(Array<WaypointRequest>|null)} [waypoints]
  */
 
 /**
@@ -310,8 +333,27 @@ export const CLIENT_MESSAGE_TYPES = Object.freeze(["ack", "view", "command"]);
  */
 
 /**
+ * job.extra.repeat of a running repeat (also on the websocket's telemetry).
+ * @typedef {Object} RepeatProgress
+ * @property {number} program_id
+ * @property {number} cycle the cycle running, 1-based
+ * @property {(number|null)} cycles None = until stopped
+ * @property {number} waypoint the waypoint last reached, 1-based
+ * @property {number} waypoints
+ * @property {("ease in"|"cycle"|"home"|"paused")} phase
+ * @property {boolean} paused
+ * @property {number} speed_percent
+ * @property {number} cycle_s one cycle at this speed, seconds
+ * @property {(number|null)} time_left_s None while easing in or when repeating until stopped
+ * @property {Array<number>} last_cycle_times_s the durations of the last cycles (at most 5)
+ * @property {number} blended_runs runs that pass through waypoints without stopping
+ * @property {number} runs
+ */
+
+/**
  * @typedef {Object} RepeatRequest
- * @property {number} [cycles]
+ * @property {(number|null)} [cycles] how many cycles; None = until stopped (cancel)
+ * @property {number} [speed_percent] speed override, % of full speed (10-100)
  */
 
 /**
@@ -342,6 +384,12 @@ export const CLIENT_MESSAGE_TYPES = Object.freeze(["ack", "view", "command"]);
  * @property {number} points
  * @property {string} detail
  * @property {Array<string>} object_ids
+ */
+
+/**
+ * PATCH /api/jobs/current: the running repeat's speed override (takes effect at once, smoothly).
+ * @typedef {Object} SpeedRequest
+ * @property {number} speed_percent speed override, % of full speed (10-100)
  */
 
 /**
@@ -404,8 +452,45 @@ export const CLIENT_MESSAGE_TYPES = Object.freeze(["ack", "view", "command"]);
  */
 
 /**
+ * The waypoints recorded and not yet saved (kept on disk: a restarted station resumes them on teach/start).
+ * @typedef {Object} TeachDraftResponse
+ * @property {Array<WaypointInfo>} waypoints
+ * @property {number} count
+ * @property {Array<string>} [skipped]
+ */
+
+/**
+ * Optional body of POST /api/teach/record: the waypoint's dwell and the time of the move into it.
+ * @typedef {Object} TeachRecordRequest
+ * @property {number} [dwell_s] seconds to hold still at the waypoint
+ * @property {(number|null)} [moving_time_s] least time of the move into this waypoint at 100 %; None = as fast as allowed
+ */
+
+/**
+ * The recorded waypoint (committed to the draft on disk before this answer) and the draft's size.
+ * @typedef {Object} TeachRecordResponse
+ * @property {Array<number>} joints_rad
+ * @property {("grasp"|"release")} gripper
+ * @property {number} [dwell_s]
+ * @property {(number|null)} [moving_time_s]
+ * @property {number} count waypoints in the draft now
+ */
+
+/**
+ * Optional body of POST /api/teach/start: an unsaved draft (from a stopped or killed station) is resumed unless discard_draft.
+ * @typedef {Object} TeachStartRequest
+ * @property {boolean} [discard_draft] start with no waypoints, dropping an unsaved draft
+ */
+
+/**
  * @typedef {Object} TeachStopRequest
  * @property {string} name
+ */
+
+/**
+ * @typedef {Object} TeachUndoResponse
+ * @property {(WaypointInfo|null)} [removed] the waypoint taken off the end (None: the draft was empty)
+ * @property {number} count
  */
 
 /**
@@ -439,6 +524,18 @@ export const CLIENT_MESSAGE_TYPES = Object.freeze(["ack", "view", "command"]);
  */
 
 /**
+ * GET /api/jobs/current/trace: commanded and measured joints over the last complete cycle of the
+ * repeat (the running one until a cycle has completed). samples: [t_s, commanded × dof, measured × dof].
+ * @typedef {Object} TraceResponse
+ * @property {string} job_id
+ * @property {number} cycle
+ * @property {boolean} complete
+ * @property {Array<string>} joint_names
+ * @property {Array<string>} columns
+ * @property {Array<Array<number>>} samples
+ */
+
+/**
  * @typedef {Object} ViewMessage
  * @property {"view"} type
  * @property {("color"|"depth"|"topdown")} [view]
@@ -449,6 +546,17 @@ export const CLIENT_MESSAGE_TYPES = Object.freeze(["ack", "view", "command"]);
  * @typedef {Object} WaypointInfo
  * @property {Array<number>} joints_rad
  * @property {("grasp"|"release")} gripper
+ * @property {number} [dwell_s]
+ * @property {(number|null)} [moving_time_s]
+ */
+
+/**
+ * A waypoint as sent in a program edit: joints (rad, joint_names order), gripper, dwell, move time.
+ * @typedef {Object} WaypointRequest
+ * @property {Array<number>} joints_rad
+ * @property {("grasp"|"release")} gripper
+ * @property {number} [dwell_s] seconds to hold still at the waypoint
+ * @property {(number|null)} [moving_time_s]
  */
 
 /**

@@ -1,0 +1,164 @@
+"""Taught programs as files: JSON (everything) and CSV (`t_s, q1..qn, gripper`, radians), both ways.
+
+CSV rows are the timed path: t_s is when the waypoint is reached (the first row at 0), q1..qn its joints
+in radians, gripper `grasp` or `release`. A row whose joints and gripper equal the previous row's is a
+dwell there (its t_s gap); a row with the previous row's joints and the other gripper command is a gripper
+step; any other row is a move whose moving_time_s is its t_s gap (0 = as fast as allowed). Parsing
+refuses the whole file at the first problem with ProgramFileError naming the line and the reason, so a
+malformed import changes nothing. Pure functions: no station, no database.
+"""
+
+from __future__ import annotations
+
+import csv
+import io
+import json
+import math
+from collections.abc import Sequence
+
+from armlab.store import Waypoint
+
+FORMAT_NAME = "armlab-program"
+FORMAT_VERSION = 1
+MAX_WAYPOINTS = 1000
+SAME_JOINTS_RAD = 1e-9  # rows this close are "the same joints" (a dwell or a gripper step)
+
+
+class ProgramFileError(ValueError):
+    """A program file that cannot be imported; the message names the line (CSV) or the item (JSON) and why."""
+
+
+def to_json(name: str, waypoints: Sequence[Waypoint], joint_names: Sequence[str]) -> str:
+    """The program as a JSON document (round-trips through parse_json)."""
+    return json.dumps(
+        {
+            "format": FORMAT_NAME,
+            "version": FORMAT_VERSION,
+            "name": name,
+            "joint_names": list(joint_names),
+            "waypoints": [waypoint.to_dict() for waypoint in waypoints],
+        },
+        indent=1,
+    )
+
+
+def to_csv(waypoints: Sequence[Waypoint], move_times_s: Sequence[float]) -> str:
+    """The program as CSV. move_times_s[i]: the planned duration of the move into waypoint i (the first is
+    ignored: t_s starts at 0); a dwell adds a repeated row."""
+    out = io.StringIO()
+    dof = len(waypoints[0].joints_rad) if waypoints else 0
+    writer = csv.writer(out, lineterminator="\n")
+    writer.writerow(["t_s", *(f"q{i + 1}" for i in range(dof)), "gripper"])
+    t_s = 0.0
+    for index, waypoint in enumerate(waypoints):
+        if index > 0:
+            t_s += float(move_times_s[index])
+        writer.writerow([f"{t_s:.6f}", *(f"{q:.9f}" for q in waypoint.joints_rad), waypoint.gripper])
+        if waypoint.dwell_s > 0:
+            t_s += waypoint.dwell_s
+            writer.writerow([f"{t_s:.6f}", *(f"{q:.9f}" for q in waypoint.joints_rad), waypoint.gripper])
+    return out.getvalue()
+
+
+def parse_json(text: str, dof: int) -> tuple[str | None, list[Waypoint]]:
+    """(name or None, waypoints) from a JSON document of to_json's form (or a bare list of waypoints)."""
+    try:
+        document = json.loads(text)
+    except json.JSONDecodeError as error:
+        raise ProgramFileError(f"line {error.lineno}: not valid JSON ({error.msg})") from None
+    name = None
+    if isinstance(document, dict):
+        if document.get("format", FORMAT_NAME) != FORMAT_NAME:
+            raise ProgramFileError(f"'format' is {document.get('format')!r}, not {FORMAT_NAME!r}")
+        name = document.get("name")
+        if name is not None and not isinstance(name, str):
+            raise ProgramFileError("'name' must be a string")
+        items = document.get("waypoints")
+    else:
+        items = document
+    if not isinstance(items, list):
+        raise ProgramFileError("'waypoints' must be a list")
+    _check_count(len(items))
+    waypoints = []
+    for index, item in enumerate(items):
+        where = f"waypoint {index + 1}"
+        if not isinstance(item, dict) or "joints_rad" not in item or "gripper" not in item:
+            raise ProgramFileError(f"{where}: needs 'joints_rad' and 'gripper'")
+        joints = item["joints_rad"]
+        if not isinstance(joints, list) or not all(_is_number(v) for v in joints):
+            raise ProgramFileError(f"{where}: 'joints_rad' must be a list of numbers")
+        if len(joints) != dof:
+            raise ProgramFileError(f"{where}: {len(joints)} joint values, the arm has {dof}")
+        for key in ("dwell_s", "moving_time_s"):
+            if item.get(key) is not None and not _is_number(item[key]):
+                raise ProgramFileError(f"{where}: '{key}' must be a number")
+        unknown = set(item) - {"joints_rad", "gripper", "dwell_s", "moving_time_s"}
+        if unknown:
+            raise ProgramFileError(f"{where}: unknown field(s) {', '.join(sorted(unknown))}")
+        try:
+            waypoints.append(Waypoint.from_dict(item))
+        except (KeyError, TypeError, ValueError) as error:
+            raise ProgramFileError(f"{where}: {error}") from None
+    return name, waypoints
+
+
+def parse_csv(text: str, dof: int) -> list[Waypoint]:
+    """Waypoints from CSV of to_csv's form: header `t_s, q1..q<dof>, gripper`, one row per line."""
+    rows = list(csv.reader(io.StringIO(text)))
+    expected = ["t_s", *(f"q{i + 1}" for i in range(dof)), "gripper"]
+    if not rows:
+        raise ProgramFileError("line 1: the file is empty; expected the header " + ",".join(expected))
+    header = [cell.strip() for cell in rows[0]]
+    if header != expected:
+        raise ProgramFileError(f"line 1: the header is {','.join(header)!r}; expected {','.join(expected)!r}")
+    waypoints: list[Waypoint] = []
+    previous_t = None
+    for line, row in enumerate(rows[1:], start=2):
+        if not row or all(not cell.strip() for cell in row):
+            continue
+        if len(row) != len(expected):
+            raise ProgramFileError(f"line {line}: {len(row)} values, expected {len(expected)} ({','.join(expected)})")
+        values = []
+        for column, cell in zip(expected[:-1], row[:-1]):
+            try:
+                value = float(cell)
+            except ValueError:
+                raise ProgramFileError(f"line {line}: {column} = {cell.strip()!r} is not a number") from None
+            if not math.isfinite(value):
+                raise ProgramFileError(f"line {line}: {column} = {cell.strip()!r} is not finite")
+            values.append(value)
+        gripper = row[-1].strip()
+        if gripper not in ("grasp", "release"):
+            raise ProgramFileError(f"line {line}: gripper = {gripper!r}; expected 'grasp' or 'release'")
+        t_s, joints = values[0], tuple(values[1:])
+        if previous_t is None and t_s != 0.0:
+            raise ProgramFileError(f"line {line}: the first t_s must be 0, not {t_s:g}")
+        if previous_t is not None and t_s < previous_t:
+            raise ProgramFileError(f"line {line}: t_s = {t_s:g} goes back in time (previous row {previous_t:g})")
+        gap_s = 0.0 if previous_t is None else t_s - previous_t
+        previous_t = t_s
+        last = waypoints[-1] if waypoints else None
+        same_joints = last is not None and max(abs(a - b) for a, b in zip(last.joints_rad, joints)) <= SAME_JOINTS_RAD
+        try:
+            if same_joints and gripper == last.gripper:  # a dwell on the previous waypoint
+                waypoints[-1] = Waypoint(last.joints_rad, last.gripper, last.dwell_s + gap_s, last.moving_time_s)
+                continue
+            moving_time_s = gap_s if gap_s > 0 and not same_joints else None
+            waypoints.append(Waypoint(joints, gripper, 0.0, moving_time_s))
+        except ValueError as error:
+            raise ProgramFileError(f"line {line}: {error}") from None
+        _check_count(len(waypoints))
+    if not waypoints:
+        raise ProgramFileError("the file has a header but no waypoints")
+    return waypoints
+
+
+def _check_count(count: int) -> None:
+    if count == 0:
+        raise ProgramFileError("the program has no waypoints")
+    if count > MAX_WAYPOINTS:
+        raise ProgramFileError(f"the program has more than {MAX_WAYPOINTS} waypoints")
+
+
+def _is_number(value) -> bool:
+    return isinstance(value, (int, float)) and not isinstance(value, bool) and math.isfinite(float(value))

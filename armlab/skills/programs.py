@@ -1,0 +1,65 @@
+"""Editing taught programs: rename, replace the waypoints, duplicate, export and import (JSON, CSV).
+
+Every waypoint written is checked first (joint limits, above the table, inside the workspace box) and a
+malformed file is refused naming the line and the reason; the database is written only after all
+checks pass, in one transaction, so a refused edit or import changes nothing stored.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+
+from armlab import program_io
+from armlab.skills.repeat_plan import RepeatSettings, check_waypoints, plan_transfer, same_pose
+from armlab.station.core import Station
+from armlab.store import Program, Waypoint
+
+
+def update_program(station: Station, program_id: int, name: str | None = None, waypoints: Sequence[Waypoint] | None = None) -> Program:
+    """Rename and/or replace the waypoints (checked); NotFound, ValueError, UnsafeTrajectory."""
+    if waypoints is not None:
+        check_waypoints(station, list(waypoints))
+    return station.store.update_program(program_id, name=name, waypoints=waypoints)
+
+
+def duplicate_program(station: Station, program_id: int, name: str | None = None) -> Program:
+    program = station.store.get_program(program_id)
+    return station.store.save_program(name or f"{program.name} (copy)", program.waypoints)
+
+
+def move_times_s(station: Station, waypoints: Sequence[Waypoint]) -> list[float]:
+    """The planned time of the move into each waypoint at full speed, rest to rest (0 for the first, a
+    gripper step or a dwell): the CSV export's t_s gaps."""
+    times = [0.0]
+    settings = RepeatSettings(ease_in_speed_fraction=1.0)
+    for previous, waypoint in zip(waypoints, waypoints[1:]):
+        if same_pose(previous, waypoint):
+            times.append(0.0)
+            continue
+        run = plan_transfer(station, previous.joints_rad, waypoint.joints_rad, 100.0, settings, labels=(0, 1))
+        times.append(max(run.duration_s, waypoint.moving_time_s or 0.0))
+    return times
+
+
+def export_program(station: Station, program_id: int, file_format: str) -> tuple[str, str]:
+    """(file text, suggested file name) of a program as JSON or CSV."""
+    program = station.store.get_program(program_id)
+    stem = "".join(c if c.isalnum() or c in "-_" else "_" for c in program.name)[:60] or f"program-{program.id}"
+    if file_format == "json":
+        return program_io.to_json(program.name, program.waypoints, station.model.joint_names), f"{stem}.json"
+    if file_format == "csv":
+        return program_io.to_csv(program.waypoints, move_times_s(station, program.waypoints)), f"{stem}.csv"
+    raise ValueError(f"format must be 'json' or 'csv', not {file_format!r}")
+
+
+def import_program(station: Station, file_format: str, content: str, name: str | None = None) -> Program:
+    """Parse (ProgramFileError naming the line), check every waypoint, then save as a new program."""
+    dof = int(station.model.dof)
+    if file_format == "json":
+        file_name, waypoints = program_io.parse_json(content, dof)
+    elif file_format == "csv":
+        file_name, waypoints = None, program_io.parse_csv(content, dof)
+    else:
+        raise ValueError(f"format must be 'json' or 'csv', not {file_format!r}")
+    check_waypoints(station, waypoints)
+    return station.store.save_program(name or (file_name or "").strip() or "imported", waypoints)

@@ -1,0 +1,316 @@
+"""Repeat a taught program as a job: N cycles or until stopped, paced by absolute deadlines, pausable.
+
+Before anything moves the whole cycle, the ease-in from the current pose and the way home are planned
+and checked (repeat_plan.py); a program that fails is refused with the reason. The job then eases in
+to waypoint 1 at a safe speed, and runs the cycle's steps each at its deadline on the motion clock
+(anchor + cycle × cycle time + the step's offset), so 100 cycles take 100 × one cycle with no drift.
+The job's RunControl (pause, resume, step, speed) is read at every wait: a pause brakes to rest on a
+jerk-limited stop, resume re-plans from where the arm stopped through the waypoints that run had left,
+step goes to the next waypoint only, and a speed change re-plans the rest of the run from the motion
+in progress; each of these re-anchors the deadlines. Progress (cycle, waypoint, time left, speed) is in
+job.extra["repeat"]; commanded and measured joints of the last cycle are kept in the control's trace.
+"""
+
+from __future__ import annotations
+
+import threading
+
+import numpy as np
+
+from armlab.motion.blend import Run, plan_run, plan_stop, reference_state
+from armlab.skills.repeat_plan import HOME_LABEL, CyclePlan, RepeatSettings, Step, plan_cycle, plan_transfer, station_limits, tick_s
+from armlab.station.core import Station
+from armlab.station.job_control import RunControl, checked_speed_percent
+from armlab.station.jobs import Job, JobContext
+
+MAX_CYCLES = 100_000
+WAIT_LIMIT_S = 3600.0  # one wait while paused; the job waits again after it
+TRACE_RATE_HZ = 50.0
+
+
+class CycleTrace:
+    """Commanded and measured joints over the last complete cycle (and the one in progress), for plots."""
+
+    def __init__(self, joint_names) -> None:
+        self.joint_names = tuple(joint_names)
+        self._lock = threading.Lock()
+        self._current: list[tuple] = []
+        self._last: list[tuple] = []
+        self._last_cycle = 0
+        self._cycle = 0
+
+    def start_cycle(self, cycle: int) -> None:
+        with self._lock:
+            if self._current:
+                self._last, self._last_cycle = self._current, self._cycle
+            self._current, self._cycle = [], cycle
+
+    def add(self, t_s: float, commanded, measured) -> None:
+        with self._lock:
+            if self._current and t_s - self._current[-1][0] < 1.0 / TRACE_RATE_HZ:
+                return
+            self._current.append((float(t_s), tuple(float(v) for v in commanded), tuple(float(v) for v in measured)))
+
+    def snapshot(self) -> dict:
+        """{cycle, complete, joint_names, samples: [[t_s (from the cycle's start), commanded..., measured...]]}."""
+        with self._lock:
+            rows, cycle, complete = (self._last, self._last_cycle, True) if self._last else (list(self._current), self._cycle, False)
+        t0 = rows[0][0] if rows else 0.0
+        return {
+            "cycle": cycle,
+            "complete": complete,
+            "joint_names": list(self.joint_names),
+            "samples": [[round(t - t0, 6), *commanded, *measured] for t, commanded, measured in rows],
+        }
+
+
+class _Runner:
+    """The repeat job's loop (one instance per job, used only on the job's thread)."""
+
+    def __init__(self, station: Station, ctx: JobContext, program, cycles: int | None, control: RunControl,
+                 settings: RepeatSettings, trace: CycleTrace) -> None:
+        self.station, self.ctx, self.program, self.cycles = station, ctx, program, cycles
+        self.control, self.settings, self.trace = control, settings, trace
+        self.plans: dict[float, CyclePlan] = {}
+        self.plan = self._plan(control.speed_percent)
+        self.anchor_s = 0.0
+        self.cycle = 0
+        self.cycle_starts_s: list[float] = []
+        self.current: tuple[object, float] | None = None  # (commanded trajectory, its start time) for the trace
+        self.waypoint = 0
+        self.phase = "ease in"
+        self.speed_seen = control.speed_percent
+        self.eps = max(1e-9, 0.5 * tick_s(station))  # clock comparisons: half a control tick
+
+    # Planning and waiting -------------------------------------------------------------------------
+
+    def _plan(self, speed_percent: float) -> CyclePlan:
+        if speed_percent not in self.plans:
+            self.plans[speed_percent] = plan_cycle(self.station, self.program, speed_percent, self.settings)
+        return self.plans[speed_percent]
+
+    def clock(self) -> float:
+        return self.station.clock_s()
+
+    def _sample(self) -> None:
+        if self.current is None:
+            return
+        trajectory, start = self.current
+        now = self.clock()
+        self.trace.add(now, trajectory.sample(now - start), self.station.joints_rad())
+
+    def wait(self, predicate, timeout_s: float) -> bool:
+        def watched() -> bool:
+            self._sample()
+            return predicate()
+
+        return self.station.wait_in_job(self.ctx, watched, timeout_s)
+
+    def command(self, trajectory) -> float:
+        self.station.start_trajectory(self.ctx, trajectory)
+        start = self.clock()
+        self.current = (trajectory, start)
+        return start
+
+    def report(self) -> None:
+        plan, now = self.plan, self.clock()
+        left = None
+        if self.cycles is not None and self.phase != "ease in":
+            end = self.anchor_s + (self.cycles - 1) * plan.cycle_s + plan.last_cycle_s
+            left = max(0.0, end - now)
+        last = np.diff(self.cycle_starts_s[-6:]).round(6).tolist()
+        self.ctx.job.update_extra(repeat={
+            "program_id": self.program.id,
+            "cycle": min(self.cycle + 1, self.cycles or self.cycle + 1),
+            "cycles": self.cycles,
+            "waypoint": self.waypoint + 1,
+            "waypoints": len(self.program.waypoints),
+            "phase": "paused" if self.control.paused else self.phase,
+            "paused": self.control.paused,
+            "speed_percent": self.control.speed_percent,
+            "cycle_s": plan.cycle_s,
+            "time_left_s": left,
+            "last_cycle_times_s": last,
+            "blended_runs": plan.blended_runs,
+            "runs": plan.runs,
+        })
+        total = self.cycles or 0
+        fraction = (self.cycle + min(1.0, max(0.0, (now - self.anchor_s - self.cycle * plan.cycle_s) / plan.cycle_s))) / total if total else 0.0
+        cycles_text = f"{self.cycles}" if self.cycles is not None else "∞"
+        self.ctx.progress(min(fraction, 1.0), f"cycle {min(self.cycle + 1, self.cycles or self.cycle + 1)}/{cycles_text}, waypoint {self.waypoint + 1}/{len(self.program.waypoints)}")
+
+    # Moves with pause, step and speed changes -------------------------------------------------------
+
+    def _wait_paused(self) -> str:
+        """Hold still until resumed ("resume") or asked to step ("step")."""
+        self.phase_before, self.phase = self.phase, "paused"
+        self.report()
+        while True:
+            if self.control.take_step():
+                return "step"
+            if not self.control.paused:
+                return "resume"
+            version = self.control.version
+            self.wait(lambda: self.control.version != version, WAIT_LIMIT_S)
+
+    def _brake(self, trajectory, start: float) -> None:
+        position, velocity, accel = reference_state(trajectory, self.clock() - start)
+        limits = station_limits(self.station, self.settings).scaled(self.control.speed_percent / 100.0)
+        stop = plan_stop(position, velocity, accel, limits, self.settings.rate_hz)
+        begin = self.command(stop)
+        self.wait(lambda: self.clock() >= begin + stop.duration_s - self.eps and not self.station.arm.is_moving(), stop.duration_s + 5.0)
+
+    def _limits(self, speed_percent: float):
+        return station_limits(self.station, self.settings).scaled(speed_percent / 100.0)
+
+    def move(self, points: list, run: Run, labels: list[int]) -> None:
+        """Execute a run through points (the first is where the arm is), reacting to the RunControl."""
+        remaining = list(range(1, len(points)))
+        pending = run
+        while True:
+            if self.control.paused or self.control.steps_pending:
+                action = self._wait_paused()
+                self.phase = self.phase_before
+                here = self.station.joints_rad()
+                targets = remaining[:1] if action == "step" else remaining
+                sub = plan_run(np.vstack([here, [points[i] for i in targets]]), self._limits(self.control.speed_percent),
+                               stop_everywhere=action == "step", tick_s=tick_s(self.station), rate_hz=self.settings.rate_hz)
+                pending = sub
+                if action == "step":
+                    self._run_to_end(sub, targets, labels)
+                    remaining = remaining[1:]
+                    if not remaining:
+                        return
+                    continue
+            outcome = self._run_to_end(pending, remaining, labels)
+            if outcome is None:
+                return
+            trajectory, start, passed = outcome
+            remaining = remaining[passed:]
+            if self.control.paused:
+                self._brake(trajectory, start)
+                continue
+            # a speed change: continue from the motion in progress at the new speed
+            position, velocity, accel = reference_state(trajectory, self.clock() - start)
+            speed = self.control.speed_percent
+            self.speed_seen = speed
+            pending = plan_run(np.vstack([position, [points[i] for i in remaining]]), self._limits(speed),
+                               start_velocity=velocity, start_accel=accel, tick_s=tick_s(self.station), rate_hz=self.settings.rate_hz)
+
+    def _run_to_end(self, run: Run, remaining: list[int], labels: list[int]):
+        """Command `run` and wait for its end (None) or a control change ((trajectory, start, waypoints passed))."""
+        version = self.control.version
+        start = self.command(run.trajectory)
+        self.report()
+        done = self.wait(lambda: self.clock() >= start + run.duration_s - self.eps or self.control.version != version, run.duration_s + 5.0)
+        elapsed = self.clock() - start
+        finished = elapsed >= run.duration_s - self.eps or not done
+        passed = len(remaining) if finished else sum(1 for t in run.arrival_s[1:] if t <= elapsed + self.eps)
+        if passed and 0 <= labels[remaining[passed - 1]] < len(self.program.waypoints):
+            self.waypoint = labels[remaining[passed - 1]]
+        return None if finished else (run.trajectory, start, passed)
+
+    # Steps --------------------------------------------------------------------------------------------
+
+    def deadline(self, step: Step) -> float:
+        return self.anchor_s + self.cycle * self.plan.cycle_s + step.offset_s
+
+    def reanchor(self, step: Step, end_s: float) -> None:
+        """After a disruption: the next step's deadline is `end_s` (the end of this one as it happened)."""
+        self.anchor_s = end_s - (self.cycle * self.plan.cycle_s + step.offset_s + step.duration_s)
+
+    def do_step(self, step: Step) -> None:
+        waypoints = self.program.waypoints
+        self.wait(lambda: self.clock() >= self.deadline(step) - self.eps, max(0.0, self.deadline(step) - self.clock()) + 5.0)
+        disrupted = self.control.version
+        if step.kind != "move" and (self.control.paused or self.control.steps_pending):
+            self._wait_paused()  # a step request is used up by this gripper step or dwell
+            self.phase = self.phase_before
+        if step.kind == "move":
+            points = [waypoints[i].joints_rad for i in step.points]
+            self.move(points, step.run, list(step.points))
+        elif step.kind == "gripper":
+            self.wait(lambda: not self.station.arm.is_moving(), 5.0)
+            self.station.run_gripper(self.ctx, step.action)
+            self.waypoint = step.waypoint
+        if self.control.version != disrupted or self.control.speed_percent != self.plan.speed_percent:
+            self.plan = self._plan(self.control.speed_percent)  # the new speed's plan, anchored where we are
+            self.reanchor(self._same_step(step), self.clock())
+            return
+        end = self.deadline(step) + step.duration_s
+        self.wait(lambda: self.clock() >= end - self.eps, max(0.0, end - self.clock()) + 5.0)
+
+    def _same_step(self, step: Step) -> Step:
+        return self.plan.steps[self._index]
+
+    def run(self) -> dict:
+        station, waypoints = self.station, self.program.waypoints
+        first = np.asarray(waypoints[0].joints_rad)
+        ease = plan_transfer(station, station.joints_rad(), first, self.control.speed_percent, self.settings)
+        self.move([station.joints_rad(), first], ease, [-1, 0])
+        self.wait(lambda: not station.arm.is_moving(), 5.0)
+        if station.gripper.read_state().command != waypoints[0].gripper:
+            station.run_gripper(self.ctx, waypoints[0].gripper)
+        self.phase, self.anchor_s = "cycle", self.clock()
+        while self.cycles is None or self.cycle < self.cycles:
+            if self.control.speed_percent != self.plan.speed_percent:
+                self.plan = self._plan(self.control.speed_percent)
+                self.anchor_s = self.clock() - self.cycle * self.plan.cycle_s
+            self.cycle_starts_s.append(self.clock())
+            self.trace.start_cycle(self.cycle + 1)
+            self.report()
+            last = self.cycles is not None and self.cycle == self.cycles - 1
+            self._index = 0
+            while self._index < len(self.plan.steps):
+                step = self.plan.steps[self._index]
+                if not (last and step.closing):
+                    self.do_step(step)
+                self._index += 1
+            station.events.add("info", f"repeat: cycle {self.cycle + 1} done")
+            self.cycle += 1
+        self.trace.start_cycle(self.cycle + 1)
+        self.phase = "home"
+        home = plan_transfer(station, station.joints_rad(), station.model.home_rad, self.control.speed_percent, self.settings,
+                             labels=(len(waypoints) - 1, HOME_LABEL))
+        self.move([station.joints_rad(), np.asarray(station.model.home_rad)], home, [len(waypoints) - 1, HOME_LABEL])
+        self.wait(lambda: not station.arm.is_moving(), 5.0)
+        self.report()
+        return {
+            "program_id": self.program.id,
+            "cycles_done": self.cycle,
+            "cycle_s": self.plan.cycle_s,
+            "cycle_starts_s": self.cycle_starts_s,
+            "speed_percent": self.control.speed_percent,
+        }
+
+
+def repeat(station: Station, program_id: int, cycles: int | None = 1, speed_percent: float = 100.0,
+           source: str | None = None, settings: RepeatSettings = RepeatSettings()) -> Job:
+    """Start repeating program `program_id` `cycles` times (None: until cancelled) at `speed_percent`.
+
+    Refused before anything moves (ValueError, UnsafeTrajectory, NotFound, CommandRefused) when the state
+    does not allow it, the numbers are out of range, or a waypoint or segment fails the motion check."""
+    station.allowed_or_raise("repeat", source)
+    if cycles is not None and (isinstance(cycles, bool) or not isinstance(cycles, int) or not 1 <= cycles <= MAX_CYCLES):
+        raise ValueError(f"cycles must be an integer from 1 to {MAX_CYCLES} (or none: until stopped), got {cycles!r}")
+    speed_percent = checked_speed_percent(speed_percent)
+    program = station.store.get_program(program_id)
+    plan = plan_cycle(station, program, speed_percent, settings)
+    plan_transfer(station, station.joints_rad(), program.waypoints[0].joints_rad, speed_percent, settings)
+    plan_transfer(station, program.waypoints[-1].joints_rad, station.model.home_rad, speed_percent, settings,
+                  labels=(len(program.waypoints) - 1, HOME_LABEL))
+    control = RunControl(speed_percent)
+    control.trace = CycleTrace(station.model.joint_names)
+
+    def run(ctx: JobContext) -> dict:
+        runner = _Runner(station, ctx, program, cycles, control, settings, control.trace)
+        runner.plans[speed_percent] = plan
+        runner.plan = plan
+        return runner.run()
+
+    times = f"× {cycles}" if cycles is not None else "until stopped"
+    return station.start_job("repeat", "repeat", run, detail=f"program '{program.name}' {times} at {speed_percent:g} %",
+                             source=source, control=control)
+
+
+__all__ = ["CycleTrace", "repeat"]

@@ -1,0 +1,182 @@
+"""Wire models of teach, taught programs and repeat (issue 9): requests strict like every request,
+responses documenting what the routes return. Generated into web/js/wire_types.js with server/models.py's."""
+
+from __future__ import annotations
+
+from typing import Annotated, Literal
+
+from pydantic import Field, model_validator
+
+from server.models import Angle, MovingTime, Request, Wire
+
+DWELL_LIMIT_S = 3600.0
+WAYPOINTS_LIMIT = 1000
+IMPORT_TEXT_LIMIT = 1_000_000
+CYCLES_LIMIT = 100_000
+
+Speed = Annotated[float, Field(ge=10.0, le=100.0, description="speed override, % of full speed (10-100)")]
+Dwell = Annotated[float, Field(ge=0.0, le=DWELL_LIMIT_S, description="seconds to hold still at the waypoint")]
+ProgramName = Annotated[str, Field(min_length=1, max_length=100)]
+
+
+# Requests -----------------------------------------------------------------------------------------
+
+
+class TeachStartRequest(Request):
+    """Optional body of POST /api/teach/start: an unsaved draft (from a stopped or killed station) is resumed unless discard_draft."""
+
+    discard_draft: bool = Field(False, description="start with no waypoints, dropping an unsaved draft")
+
+
+class TeachRecordRequest(Request):
+    """Optional body of POST /api/teach/record: the waypoint's dwell and the time of the move into it."""
+
+    dwell_s: Dwell = 0.0
+    moving_time_s: MovingTime | None = Field(None, description="least time of the move into this waypoint at 100 %; None = as fast as allowed")
+
+
+class TeachStopRequest(Request):
+    name: ProgramName
+
+
+class WaypointRequest(Request):
+    """A waypoint as sent in a program edit: joints (rad, joint_names order), gripper, dwell, move time."""
+
+    joints_rad: list[Angle] = Field(min_length=1, max_length=12)
+    gripper: Literal["grasp", "release"]
+    dwell_s: Dwell = 0.0
+    moving_time_s: MovingTime | None = None
+
+
+class ProgramUpdateRequest(Request):
+    """PATCH /api/programs/{id}: a new name and/or the whole new waypoint list (reorder, edit a value,
+    insert or delete a waypoint or a gripper step: send the list as it should be). Checked against the
+    joint limits and the table before anything is stored."""
+
+    name: ProgramName | None = None
+    waypoints: list[WaypointRequest] | None = Field(None, min_length=1, max_length=WAYPOINTS_LIMIT)
+
+    @model_validator(mode="after")
+    def _something(self) -> "ProgramUpdateRequest":
+        if self.name is None and self.waypoints is None:
+            raise ValueError("give name and/or waypoints")
+        return self
+
+
+class DuplicateRequest(Request):
+    name: ProgramName | None = Field(None, description="the copy's name; None = '<name> (copy)'")
+
+
+class ImportRequest(Request):
+    """POST /api/programs/import: a file's text as exported (JSON or CSV `t_s, q1..qn, gripper`)."""
+
+    format: Literal["json", "csv"]
+    content: str = Field(max_length=IMPORT_TEXT_LIMIT, description="the file's text")
+    name: ProgramName | None = Field(None, description="the program's name; None = the JSON's name, else 'imported'")
+
+
+class RepeatRequest(Request):
+    cycles: int | None = Field(1, ge=1, le=CYCLES_LIMIT, description="how many cycles; None = until stopped (cancel)")
+    speed_percent: Speed = 100.0
+
+
+class SpeedRequest(Request):
+    """PATCH /api/jobs/current: the running repeat's speed override (takes effect at once, smoothly)."""
+
+    speed_percent: Speed
+
+
+# Responses ----------------------------------------------------------------------------------------
+
+
+class WaypointInfo(Wire):
+    joints_rad: list[float]
+    gripper: Literal["grasp", "release"]
+    dwell_s: float = 0.0
+    moving_time_s: float | None = None
+
+
+class ProgramInfo(Wire):
+    id: int
+    name: str
+    created_s: float
+    updated_s: float | None = None
+    waypoints: list[WaypointInfo]
+
+
+class ProgramsResponse(Wire):
+    data: list[ProgramInfo]
+    count: int
+    skipped: list[str] = Field([], description="damaged rows left out of data, one line each (also logged)")
+
+
+class TeachRecordResponse(WaypointInfo):
+    """The recorded waypoint (committed to the draft on disk before this answer) and the draft's size."""
+
+    count: int = Field(description="waypoints in the draft now")
+
+
+class TeachUndoResponse(Wire):
+    removed: WaypointInfo | None = Field(None, description="the waypoint taken off the end (None: the draft was empty)")
+    count: int
+
+
+class TeachDraftResponse(Wire):
+    """The waypoints recorded and not yet saved (kept on disk: a restarted station resumes them on teach/start)."""
+
+    waypoints: list[WaypointInfo]
+    count: int
+    skipped: list[str] = []
+
+
+class RepeatProgress(Wire):
+    """job.extra.repeat of a running repeat (also on the websocket's telemetry)."""
+
+    program_id: int
+    cycle: int = Field(description="the cycle running, 1-based")
+    cycles: int | None = Field(description="None = until stopped")
+    waypoint: int = Field(description="the waypoint last reached, 1-based")
+    waypoints: int
+    phase: Literal["ease in", "cycle", "home", "paused"]
+    paused: bool
+    speed_percent: float
+    cycle_s: float = Field(description="one cycle at this speed, seconds")
+    time_left_s: float | None = Field(description="None while easing in or when repeating until stopped")
+    last_cycle_times_s: list[float] = Field(description="the durations of the last cycles (at most 5)")
+    blended_runs: int = Field(description="runs that pass through waypoints without stopping")
+    runs: int
+
+
+class TraceResponse(Wire):
+    """GET /api/jobs/current/trace: commanded and measured joints over the last complete cycle of the
+    repeat (the running one until a cycle has completed). samples: [t_s, commanded × dof, measured × dof]."""
+
+    job_id: str
+    cycle: int
+    complete: bool
+    joint_names: list[str]
+    columns: list[str]
+    samples: list[list[float]]
+
+
+PROGRAM_WIRE_MODELS = (
+    TeachStartRequest,
+    TeachRecordRequest,
+    TeachStopRequest,
+    WaypointRequest,
+    ProgramUpdateRequest,
+    DuplicateRequest,
+    ImportRequest,
+    RepeatRequest,
+    SpeedRequest,
+    WaypointInfo,
+    ProgramInfo,
+    ProgramsResponse,
+    TeachRecordResponse,
+    TeachUndoResponse,
+    TeachDraftResponse,
+    RepeatProgress,
+    TraceResponse,
+)
+
+__all__ = [model.__name__ for model in PROGRAM_WIRE_MODELS] + ["PROGRAM_WIRE_MODELS"]

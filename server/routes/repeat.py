@@ -1,0 +1,82 @@
+"""Repeat a taught program, and the running repeat's controls: pause, resume, step, speed, joint trace."""
+
+from __future__ import annotations
+
+import csv
+import io
+from typing import Literal
+
+from fastapi import APIRouter, Response
+from fastapi.responses import JSONResponse
+
+from armlab import skills
+from server.deps import ControlAuth, StationDep
+from server.errors import ApiError
+from server.models import JobResponse, ProgramId
+from server.program_models import RepeatRequest, SpeedRequest, TraceResponse
+from server.routes.jobs import job_response
+
+router = APIRouter(prefix="/api", tags=["repeat"])
+
+
+@router.post("/programs/{program_id}/repeat", response_model=JobResponse, status_code=202)
+def post_repeat(
+    program_id: ProgramId, station: StationDep, controller: ControlAuth, body: RepeatRequest | None = None, wait: bool = False
+) -> JSONResponse:
+    """Repeat a program `cycles` times (None: until cancelled) at `speed_percent`, as a job: every waypoint
+    and segment checked first, eased in from the current pose, paced by absolute deadlines, home at the end."""
+    body = body or RepeatRequest()
+    job = skills.repeat(station, program_id, body.cycles, body.speed_percent, source=controller)
+    return job_response(job, wait)
+
+
+def _job(job) -> dict:
+    return {"job": job.to_dict() if job is not None else None}
+
+
+@router.post("/jobs/pause", response_model=JobResponse)
+def post_pause(station: StationDep, controller: ControlAuth) -> dict:
+    """Pause the running repeat: the arm brakes to rest (jerk-limited) and holds."""
+    return _job(station.pause_job(source=controller))
+
+
+@router.post("/jobs/resume", response_model=JobResponse)
+def post_resume(station: StationDep, controller: ControlAuth) -> dict:
+    """Resume a paused repeat from where the arm stopped."""
+    return _job(station.resume_job(source=controller))
+
+
+@router.post("/jobs/step", response_model=JobResponse)
+def post_step(station: StationDep, controller: ControlAuth) -> dict:
+    """Paused: go on to the next waypoint (and do what it says), then pause again; running: pause."""
+    return _job(station.step_job(source=controller))
+
+
+@router.patch("/jobs/current", response_model=JobResponse)
+def patch_current_job(body: SpeedRequest, station: StationDep, controller: ControlAuth) -> dict:
+    """Change the running repeat's speed override (10-100 %); the motion in progress is re-planned smoothly."""
+    return _job(station.set_job_speed(body.speed_percent, source=controller))
+
+
+@router.get(
+    "/jobs/current/trace",
+    response_model=TraceResponse,
+    responses={200: {"content": {"application/json": {}, "text/csv": {}}, "description": "the trace"}},
+)
+def read_trace(station: StationDep, format: Literal["json", "csv"] = "json"):
+    """Commanded and measured joint angles (rad) over the last complete cycle of the current or last repeat."""
+    job = station.current_job()
+    trace = getattr(getattr(job, "control", None), "trace", None)
+    if trace is None:
+        raise ApiError(404, "not_found", "no repeat has run yet: the trace is of the current or last repeat job")
+    snapshot = trace.snapshot()
+    names = snapshot["joint_names"]
+    columns = ["t_s", *(f"{n}_cmd_rad" for n in names), *(f"{n}_meas_rad" for n in names)]
+    if format == "csv":
+        out = io.StringIO()
+        writer = csv.writer(out, lineterminator="\n")
+        writer.writerow(columns)
+        writer.writerows(snapshot["samples"])
+        filename = f"repeat-{job.id}-cycle-{snapshot['cycle']}.csv"
+        return Response(out.getvalue(), media_type="text/csv", headers={"Content-Disposition": f'attachment; filename="{filename}"'})
+    return {"job_id": job.id, "columns": columns, **snapshot}
