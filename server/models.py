@@ -290,6 +290,7 @@ class CalibrationInfo(Wire):
 class PixelToWorldResponse(Wire):
     position_m: Vector3
     on: Literal["board", "depth"]
+    depth_mm: float | None = Field(None, description="the raw depth reading at the pixel, mm (0: no reading; None: no depth image)")
 
 
 # Websocket messages ------------------------------------------------------------------------------
@@ -358,6 +359,12 @@ class WorkcellInfo(Wire):
     bin: BinInfo
 
 
+class LimitsInfo(Wire):
+    """Limits of operator inputs, from the station's config (the page checks inputs against these)."""
+
+    max_moving_time_s: float = Field(description="longest manual move accepted (moving_time_s is in (0, this])")
+
+
 class HelloMessage(Wire):
     type: Literal["hello"] = "hello"
     server_time_s: float
@@ -365,6 +372,7 @@ class HelloMessage(Wire):
     controller: str | None = Field(None, description="this session's controller name (the lease holder's name when it commands)")
     backend: Literal["sim", "real"]
     workcell: WorkcellInfo
+    limits: LimitsInfo | None = None
 
 
 class AckMessage(Request):
@@ -422,6 +430,7 @@ WIRE_MODELS: tuple[type[BaseModel], ...] = (
     BoardTagsInfo,
     BinInfo,
     WorkcellInfo,
+    LimitsInfo,
     HelloMessage,
     AckMessage,
     ViewMessage,

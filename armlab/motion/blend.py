@@ -3,8 +3,8 @@
 A *run* goes from one stop to the next through waypoints it does not stop at. Each segment between two
 waypoints is one ruckig trajectory (time-optimal for its boundary states, every joint within its
 velocity, acceleration and jerk limits, all joints synchronised); at a waypoint the arm passes with a
-velocity chosen per joint (the smaller of the two neighbouring segments' mean velocities when both move
-the joint the same way, else 0) and zero acceleration, so the motion is smooth and never has to brake to
+velocity chosen per joint (about the neighbouring segments' mean velocity when both move the joint the
+same way, else 0) and zero acceleration, so the motion is smooth and never has to brake to
 rest at a pass-through waypoint. `stop_everywhere=True` gives the rest-to-rest run (every waypoint a
 stop). The speed override scales the limits as time scaling does: velocity × s, acceleration × s²,
 jerk × s³. With tick_s > 0 every segment lasts a whole number of ticks (the controller's period), so
@@ -20,7 +20,7 @@ import numpy as np
 
 from armlab.devices.arm import JointTrajectory
 
-DEFAULT_JERK_FACTOR_PER_S = 10.0  # jerk limit = acceleration limit × this (rad/s³ per rad/s²)
+DEFAULT_JERK_FACTOR_PER_S = 30.0  # jerk limit = acceleration limit × this (rad/s³ per rad/s²)
 DEFAULT_RATE_HZ = 100.0
 
 
@@ -97,7 +97,8 @@ def _rest_to_rest_time(delta: np.ndarray, limits: Limits) -> float:
 
 def pass_velocities(points: np.ndarray, limits: Limits, minimum_s=None) -> np.ndarray:
     """Velocity (m, dof) at each point of a run: 0 at both ends and wherever a joint reverses or rests,
-    else the smaller of the neighbouring segments' mean velocities (never above the velocity limit)."""
+    else the mean of the neighbouring segments' mean velocities (each segment timed rest to rest), capped
+    by the velocity limit and by what the shorter neighbour can reach from rest, sqrt(|d| · a_max)."""
     m, dof = points.shape
     velocities = np.zeros((m, dof))
     deltas = np.diff(points, axis=0)
@@ -110,8 +111,9 @@ def pass_velocities(points: np.ndarray, limits: Limits, minimum_s=None) -> np.nd
         if durations[k - 1] <= 0 or durations[k] <= 0:
             continue
         same_way = (np.sign(before) == np.sign(after)) & (before != 0) & (after != 0)
-        mean = np.minimum(np.abs(before) / durations[k - 1], np.abs(after) / durations[k])
-        velocities[k] = np.where(same_way, np.sign(before) * np.minimum(mean, limits.velocity_rad_s), 0.0)
+        mean = 0.5 * (np.abs(before) / durations[k - 1] + np.abs(after) / durations[k])
+        reach = np.sqrt(np.minimum(np.abs(before), np.abs(after)) * limits.accel_rad_s2)
+        velocities[k] = np.where(same_way, np.sign(before) * np.minimum(np.minimum(mean, reach), limits.velocity_rad_s), 0.0)
     return velocities
 
 
@@ -141,7 +143,7 @@ def plan_run(
     offset = 0.0
     for index in range(1, m):
         segment = _ruckig_segment(
-            samples[-1] if index > 1 else points[0], velocity, accel, points[index], passes[index], limits,
+            points[index - 1], velocity, accel, points[index], passes[index], limits,
             minimum_s[index] if minimum_s else None, tick_s,
         )
         duration = float(segment.duration)

@@ -30,7 +30,7 @@ class RepeatSettings:
 
     ease_in_speed_fraction: float = 0.25  # ease in from the current pose, and return home, at most this fast
     gripper_time_s: float = 1.0  # time budget of a gripper step (the arm settles, the fingers close or open)
-    jerk_factor_per_s: float = 10.0  # jerk limit = acceleration limit × this
+    jerk_factor_per_s: float = 30.0  # jerk limit = acceleration limit × this (150 rad/s³ on the rx200)
     limit_margin: float = 0.98  # plans stay this fraction inside the velocity and acceleration limits
     rate_hz: float = 100.0  # trajectory samples per second
 
