@@ -288,8 +288,11 @@ class CalibrationInfo(Wire):
 
 
 class PixelToWorldResponse(Wire):
+    """on: 'depth' (the newest frame, the robot's own readings left out), 'remembered' (under the arm: the
+    depth last seen there without it) or 'board' (the viewing ray meets z = 0)."""
+
     position_m: Vector3
-    on: Literal["board", "depth"]
+    on: Literal["board", "depth", "remembered"]
     depth_mm: float | None = Field(None, description="the raw depth reading at the pixel, mm (0: no reading; None: no depth image)")
 
 

@@ -14,13 +14,16 @@ from typing import Any
 import numpy as np
 
 from armlab.skills.manipulate import plan_pick_steps, plan_place_steps, run_steps
-from armlab.skills.perceive import block_near, finite_pixel, target_point
+from armlab.skills.perceive import block_near, target_point
 from armlab.station.core import Station
 from armlab.station.jobs import Job, JobContext
 from armlab.station.telemetry import tag_to_dict
 
-MAX_SURFACE_HEIGHT_M = 0.25  # a drop surface higher than this is taken for the arm hiding the spot
 BOARD_NOISE_M = 0.006  # depth readings this close to the board are the board
+
+
+class GripperEmpty(RuntimeError):
+    """A grab closed on nothing, or a drop was asked with nothing in the gripper: the job fails saying so."""
 
 
 def block_edge_m(station: Station, size: str | None) -> float:
@@ -88,7 +91,9 @@ def grab(station: Station, position_m=None, pixel=None, source: str | None = Non
         run_steps(station, ctx, steps, replan=lambda: plan_pick_steps(station, top, yaw))
         holding = bool(station.gripper.read_state().holding)
         station.set_held_block({**(block or {}), "edge_m": edge, "yaw_rad": yaw} if holding else None)
-        ctx.job.update(message="holding the block" if holding else "nothing in the gripper")
+        if not holding:
+            raise GripperEmpty(f"nothing in the gripper: the fingers closed on nothing at {detail}")
+        ctx.job.update(message="holding the block")
         return {"target_m": [float(x) for x in top], "yaw_rad": yaw, "block": block, "holding": holding}
 
     return station.start_job("grab", "grab", run, detail=detail, source=source)
@@ -105,10 +110,6 @@ def drop(station: Station, position_m=None, pixel=None, source: str | None = Non
         surface = np.asarray(below["position_m"], dtype=float)
         yaw = below["yaw_rad"]
         on = f"{below['color']} block"
-    elif on == "depth" and surface[2] > MAX_SURFACE_HEIGHT_M:  # the arm (or the held block) hides the spot
-        from armlab.vision import pixel_to_world as vision_pixel_to_world
-
-        surface, on = np.asarray(vision_pixel_to_world(station.calibration, *finite_pixel(*pixel)), dtype=float), "board"
     surface[2] = surface[2] if surface[2] > BOARD_NOISE_M else 0.0  # depth noise on the board reads as board
     held = station.held_block or {}
     edge = float(held.get("edge_m", station.config.default_block_height_m))
@@ -116,6 +117,9 @@ def drop(station: Station, position_m=None, pixel=None, source: str | None = Non
     detail = f"onto {on} at ({surface[0] * 1000:.0f}, {surface[1] * 1000:.0f}, {surface[2] * 1000:.0f}) mm"
 
     def run(ctx: JobContext) -> dict:
+        if not station.gripper.read_state().holding:  # checked in the job: the page shows why it failed
+            station.set_held_block(None)
+            raise GripperEmpty("the gripper is empty: nothing to drop (grab a block first)")
         run_steps(station, ctx, steps, replan=lambda: plan_place_steps(station, surface, yaw, edge))
         station.set_held_block(None)
         return {"target_m": [float(x) for x in surface], "on": on}

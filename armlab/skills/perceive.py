@@ -27,23 +27,38 @@ def finite_pixel(u, v) -> tuple[float, float]:
 
 
 def pixel_to_world(station: Station, u: float, v: float) -> dict:
-    """{position_m, on}: the world point under pixel (u, v); 'depth' from the depth image, else 'board' (z = 0)."""
-    from armlab.vision import pixel_to_world as vision_pixel_to_world
+    """{position_m, on}: the world point under pixel (u, v), never on the robot. 'depth': the newest
+    frame's depth outside the arm's volume (FK of the joints the frame was taken at + the calibration);
+    'remembered': under the arm, the depth last seen there without it; else 'board' (z = 0)."""
+    from armlab.vision.pixel_world import pixel_to_world_off_robot
 
     u, v = finite_pixel(u, v)
     calibration = station.calibration
     if calibration is None:
         raise NotCalibrated("pixel-to-world")
     frame, _ = station.frames.get()
-    if frame is not None and frame.depth_mm is not None:
-        try:
-            point = vision_pixel_to_world(calibration, u, v, depth_mm=frame.depth_mm)
-            return {"position_m": [float(x) for x in point], "on": "depth"}
-        except ValueError as error:
-            if "outside" in str(error):
-                raise
-    point = vision_pixel_to_world(calibration, u, v)
-    return {"position_m": [float(x) for x in point], "on": "board"}
+    perception, _ = station.perception.get()
+    depth = frame.depth_mm if frame is not None else None
+    remembered = perception.surface_depth_mm if perception is not None else None
+    robot = robot_volume_of(station, frame) if depth is not None else None
+    if depth is not None and robot is None:  # the arm's pose is unknown: its depth cannot be told from the board's
+        depth = None
+    point, on = pixel_to_world_off_robot(calibration, u, v, depth, robot, remembered)
+    return {"position_m": [float(x) for x in point], "on": on}
+
+
+def robot_volume_of(station: Station, frame):
+    """The robot's inflated volume (armlab.vision.self_filter) at the joints `frame` was taken at, with a
+    held block unless the gripper was open; None when the frame has no joints or the station no arm model."""
+    from armlab.vision.config import SelfFilterConfig
+    from armlab.vision.self_filter import robot_volume
+
+    joints = getattr(frame, "arm_joints_rad", None)
+    if joints is None or station.model is None:
+        return None
+    config = station.perception_config.self_filter if station.perception_config is not None else SelfFilterConfig()
+    held_edge_m = 0.0 if frame.gripper_closed is False else None
+    return robot_volume(station.model, np.asarray(joints, dtype=float), config, held_edge_m)
 
 
 def target_point(station: Station, position_m, pixel) -> tuple[np.ndarray, str]:

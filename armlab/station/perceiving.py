@@ -75,7 +75,8 @@ class Perceiving:
             if self._pipeline is None:
                 self._pipeline = PerceptionPipeline(self.perception_config, arm_model=self.model)
             frame = self.fresh_frame()
-            perception = analyse_frame(self._pipeline, frame, self.calibration)
+            previous, _ = self.perception.get()
+            perception = analyse_frame(self._pipeline, frame, self.calibration, previous.surface_depth_mm if previous else None)
             self.perception.publish(perception)
             return perception
         asked_s = time.time()

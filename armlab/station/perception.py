@@ -35,6 +35,8 @@ class Perception:
     arm_joints_rad: the arm's measured joints when that frame was captured (None if unknown).
     robot_mask: (H, W) bool pixels of that frame that belong to the robot (the self-filter's mask;
     None without joints, arm model or calibration), e.g. for pixel-to-world to ignore the arm's depth.
+    surface_depth_mm: (H, W) uint16 the newest depth of each pixel while the robot did not cover it
+    (earlier frames' where it does now; 0 = never seen): what pixel-to-world falls back on under the arm.
     """
 
     blocks: tuple = ()
@@ -44,6 +46,7 @@ class Perception:
     time_s: float = field(default_factory=time.time)
     arm_joints_rad: tuple[float, ...] | None = None
     robot_mask: np.ndarray | None = field(default=None, repr=False)
+    surface_depth_mm: np.ndarray | None = field(default=None, repr=False)
 
 
 DEVICE_ERRORS = (ConnectionError, TimeoutError, OSError)  # a device failed, as opposed to a bad request
@@ -180,22 +183,25 @@ class PerceptionLoop(_Worker):
         from armlab.vision.pipeline import PerceptionPipeline
 
         pipeline = PerceptionPipeline(self.config, self.arm_model)  # holds its detectors; tracks tags near calibrated spots
-        version = 0
+        version, surface = 0, None
         while not self._stop.is_set():
             frame, version = self.frames.wait_newer(version, timeout_s=0.5)
             if frame is None:
                 continue
             started = time.monotonic()
-            self.out.publish(analyse_frame(pipeline, frame, self.get_calibration()))
+            perception = analyse_frame(pipeline, frame, self.get_calibration(), surface)
+            surface = perception.surface_depth_mm
+            self.out.publish(perception)
             # At most the configured rate, and at most half of one core (sleep at least as long as we worked).
             elapsed = time.monotonic() - started
             self._stop.wait(max(self.period_s - elapsed, elapsed))
 
 
-def analyse_frame(pipeline: Any, frame: Frame, calibration: Any) -> Perception:
+def analyse_frame(pipeline: Any, frame: Frame, calibration: Any, surface_depth_mm: np.ndarray | None = None) -> Perception:
     """Tags and (with a calibration and depth) blocks of one frame, each block stamped with the
     frame's time and arm joints; the robot is filtered out when the frame carries the arm's joints
     and the pipeline has an arm model (with a held block's volume unless the gripper was open).
+    surface_depth_mm: the previous Perception's, updated with this frame's depth off the robot.
     A failed pass logs and reports none."""
     joints = frame.arm_joints_rad
     filter_joints = joints if getattr(pipeline, "self_filter", None) is not None else None
@@ -216,4 +222,17 @@ def analyse_frame(pipeline: Any, frame: Frame, calibration: Any) -> Perception:
     return Perception(
         blocks=blocks, tags=tags, frame_sequence=frame.sequence, capture_time_s=frame.timestamp_s,
         arm_joints_rad=None if joints is None else tuple(float(v) for v in np.ravel(joints)), robot_mask=robot_mask,
+        surface_depth_mm=surface_off_robot(frame.depth_mm, robot_mask, surface_depth_mm),
     )
+
+
+def surface_off_robot(depth_mm: np.ndarray | None, robot_mask: np.ndarray | None, previous_mm: np.ndarray | None) -> np.ndarray | None:
+    """This frame's depth where the robot is not, the previous surface (or 0: unseen) where it is;
+    None without depth. Without a robot mask the frame's depth stands as it is."""
+    if depth_mm is None:
+        return None
+    surface = np.array(depth_mm, dtype=np.uint16, copy=True)
+    if robot_mask is not None and robot_mask.shape == surface.shape:
+        usable = previous_mm is not None and previous_mm.shape == surface.shape
+        surface[robot_mask] = previous_mm[robot_mask] if usable else 0
+    return surface

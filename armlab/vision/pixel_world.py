@@ -1,5 +1,5 @@
 """Pixel <-> world through a calibration: with depth (back-projection) or without (ray meets a
-horizontal plane), and world -> pixel for drawing."""
+horizontal plane), depth that is not the robot's (pixel_to_world_off_robot), and world -> pixel for drawing."""
 
 from __future__ import annotations
 
@@ -42,6 +42,44 @@ def pixel_to_world(
             raise ValueError(f"depth must be a positive number of mm, got {depth_mm}")
     camera_point = backproject(pixel, np.array([depth / 1000.0]), cal.K, cal.dist)
     return transform_points(cal.T_world_camera, camera_point)[0]
+
+
+def pixel_to_world_off_robot(
+    cal: Calibration, u: float, v: float, depth_mm: np.ndarray | None, robot=None, remembered_depth_mm: np.ndarray | None = None,
+    radius: int = 1,
+) -> tuple[np.ndarray, str]:
+    """(world point (3,), source) at pixel (u, v), never from a depth reading of the robot.
+
+    robot: the robot's inflated volume at the frame's joints (armlab.vision.self_filter.RobotVolume, or
+    anything with contains(points (N, 3)) -> (N,) bool), None when unknown. The depth readings of the
+    (2r+1)² window whose points lie outside it give the median depth ("depth"); when every one is the
+    robot (or missing), remembered_depth_mm, depth (H, W) mm seen there while the robot did not cover
+    the pixel (0 = never seen), gives it ("remembered"); else the viewing ray meets the board plane
+    z = 0 ("board"). ValueError for a non-finite or out-of-image pixel.
+    """
+    board = pixel_to_world(cal, u, v)  # validates the pixel
+    for source, depth in (("depth", depth_mm), ("remembered", remembered_depth_mm)):
+        if depth is None:
+            continue
+        if depth.shape != (cal.height, cal.width):
+            raise ValueError(f"depth image is {depth.shape[::-1]} but the calibration is for {cal.width}x{cal.height}")
+        ui, vi = int(round(u)), int(round(v))
+        rows, cols = np.mgrid[max(0, vi - radius) : vi + radius + 1, max(0, ui - radius) : ui + radius + 1]
+        rows, cols = rows.ravel(), cols.ravel()
+        inside = (rows < cal.height) & (cols < cal.width)
+        rows, cols = rows[inside], cols[inside]
+        readings_m = depth[rows, cols].astype(np.float64) / 1000.0
+        valid = readings_m > 0
+        if not valid.any():
+            continue
+        pixels = np.column_stack([cols[valid], rows[valid]]).astype(np.float64)
+        points = transform_points(cal.T_world_camera, backproject(pixels, readings_m[valid], cal.K, cal.dist))
+        keep = ~robot.contains(points) if (robot is not None and source == "depth") else np.ones(len(points), bool)
+        if keep.any():
+            median_m = float(np.median(readings_m[valid][keep]))
+            camera_point = backproject(np.array([[u, v]], dtype=np.float64), np.array([median_m]), cal.K, cal.dist)
+            return transform_points(cal.T_world_camera, camera_point)[0], source
+    return board, "board"
 
 
 def world_to_pixel(cal: Calibration, points_m: np.ndarray) -> np.ndarray:

@@ -238,6 +238,7 @@ export const CLIENT_MESSAGE_TYPES = Object.freeze(["ack", "view", "command"]);
  * @property {(string|null)} [controller] this session's controller name (the lease holder's name when it commands)
  * @property {("sim"|"real")} backend
  * @property {WorkcellInfo} workcell
+ * @property {(LimitsInfo|null)} [limits]
  */
 
 /**
@@ -282,15 +283,24 @@ export const CLIENT_MESSAGE_TYPES = Object.freeze(["ack", "view", "command"]);
  */
 
 /**
+ * Limits of operator inputs, from the station's config (the page checks inputs against these).
+ * @typedef {Object} LimitsInfo
+ * @property {number} max_moving_time_s longest manual move accepted (moving_time_s is in (0, this])
+ */
+
+/**
  * @typedef {Object} PixelRequest
  * @property {number} u pixel column in the colour image
  * @property {number} v pixel row in the colour image
  */
 
 /**
+ * on: 'depth' (the newest frame, the robot's own readings left out), 'remembered' (under the arm: the
+ * depth last seen there without it) or 'board' (the viewing ray meets z = 0).
  * @typedef {Object} PixelToWorldResponse
  * @property {Array<number>} position_m
- * @property {("board"|"depth")} on
+ * @property {("board"|"depth"|"remembered")} on
+ * @property {(number|null)} [depth_mm] the raw depth reading at the pixel, mm (0: no reading; None: no depth image)
  */
 
 /**
