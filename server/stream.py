@@ -232,7 +232,7 @@ class StreamHub:
             self._workcell = await self._off_loop(self._workcell_info)
         hello = {"type": "hello", "server_time_s": time.time(), "can_control": can_control,
                  "controller": client.controller if can_control else None, "backend": self.station.backend,
-                 "workcell": self._workcell}
+                 "workcell": self._workcell, "limits": {"max_moving_time_s": float(self.station.config.max_moving_time_s)}}
         await websocket.send_text(json.dumps(hello))
         calibration = await self._off_loop(lambda: self.station.calibration_info)
         await websocket.send_text(json.dumps({"type": "calibration", **calibration}))

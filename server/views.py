@@ -36,8 +36,8 @@ class ViewKey:
         return cls.make(view or "color", names)
 
 
-def depth_to_bgr(depth_mm: np.ndarray) -> np.ndarray:
-    """A colour-mapped depth image (near = warm); no reading = black."""
+def depth_to_bgr(depth_mm: np.ndarray, scale_bar: bool = True) -> np.ndarray:
+    """A colour-mapped depth image (near = warm); no reading = black; with a colour scale (mm) at the right edge."""
     valid = depth_mm > 0
     if not np.any(valid):
         return np.zeros((*depth_mm.shape, 3), np.uint8)
@@ -45,7 +45,29 @@ def depth_to_bgr(depth_mm: np.ndarray) -> np.ndarray:
     scaled = np.clip((far - depth_mm.astype(np.float32)) / max(far - near, 1.0), 0.0, 1.0)
     image = cv2.applyColorMap((scaled * 255).astype(np.uint8), cv2.COLORMAP_TURBO)
     image[~valid] = 0
+    if scale_bar:
+        draw_depth_scale(image, float(near), float(far))
     return image
+
+
+def draw_depth_scale(image: np.ndarray, near_mm: float, far_mm: float) -> None:
+    """A vertical colour bar at the right edge, near (warm, top) to far (cold, bottom), labelled in mm."""
+    h, w = image.shape[:2]
+    bar_w, margin = max(12, w // 64), max(8, h // 40)
+    top, bottom = margin + 24, h - margin - 24
+    if bottom - top < 20:
+        return
+    ramp = np.linspace(255, 0, bottom - top).astype(np.uint8)[:, None]
+    bar = cv2.applyColorMap(np.repeat(ramp, bar_w, axis=1), cv2.COLORMAP_TURBO)
+    x0 = w - margin - bar_w
+    image[top:bottom, x0 : x0 + bar_w] = bar
+    cv2.rectangle(image, (x0 - 1, top - 1), (x0 + bar_w, bottom), (255, 255, 255), 1)
+    font, scale = cv2.FONT_HERSHEY_SIMPLEX, max(0.45, h / 1200)
+    for text, y in ((f"{near_mm:.0f} mm", top - 8), (f"{far_mm:.0f} mm", bottom + 18)):
+        (tw, _), _ = cv2.getTextSize(text, font, scale, 1)
+        origin = (w - margin - tw, y)
+        cv2.putText(image, text, origin, font, scale, (0, 0, 0), 3, cv2.LINE_AA)
+        cv2.putText(image, text, origin, font, scale, (255, 255, 255), 1, cv2.LINE_AA)
 
 
 def compose_view(frame: Frame, key: ViewKey, perception=None, calibration=None, config=None) -> np.ndarray:

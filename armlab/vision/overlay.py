@@ -71,9 +71,51 @@ def draw_overlay(
                 cv2.putText(out, str(tag.id), (int(u) - 6, int(v) - 14), cv2.FONT_HERSHEY_SIMPLEX, 0.5, (0, 255, 0), 1, cv2.LINE_AA)
     if layers.detections and blocks:
         camera = PlaneCamera(calibration.T_world_camera, calibration.K, calibration.dist) if calibration is not None else None
-        for block in blocks:
-            _draw_block(out, block, camera, layers.labels)
+        labels = [_draw_block(out, block, camera, layers.labels) for block in blocks]
+        placed: list[tuple[int, int, int, int]] = []
+        for label in labels:
+            if label is not None:
+                placed.append(_draw_label(out, *label, placed))
     return out
+
+
+LABEL_SCALE = 0.6  # FONT_HERSHEY_SIMPLEX scale: ~13 px capitals at 1280 x 720, readable in the page's scaled view
+LABEL_PAD_PX = 3
+
+
+def place_label(
+    anchor_px: tuple[int, int], size_px: tuple[int, int], placed: list[tuple[int, int, int, int]], image_wh: tuple[int, int]
+) -> tuple[int, int, int, int]:
+    """A label box (x, y, w, h) beside anchor_px (right-up first, then other sides, then further out) that
+    overlaps no box in `placed` and stays inside the image when it can; the first candidate otherwise."""
+    (u, v), (w, h) = anchor_px, size_px
+    sides = [(10, -10 - h), (10, 10), (-10 - w, -10 - h), (-10 - w, 10), (-w // 2, -16 - h), (-w // 2, 16)]
+    first = None
+    for ring in range(6):
+        for dx, dy in sides:
+            x, y = u + dx, v + dy + (ring * (h + 2) if dy > 0 else -ring * (h + 2))
+            box = (x, y, w, h)
+            first = first or box
+            inside = x >= 0 and y >= 0 and x + w <= image_wh[0] and y + h <= image_wh[1]
+            if inside and not any(_boxes_overlap(box, other) for other in placed):
+                return box
+    return first
+
+
+def _boxes_overlap(a: tuple[int, int, int, int], b: tuple[int, int, int, int]) -> bool:
+    return a[0] < b[0] + b[2] and b[0] < a[0] + a[2] and a[1] < b[1] + b[3] and b[1] < a[1] + a[3]
+
+
+def _draw_label(out: np.ndarray, text: str, anchor: tuple[int, int], colour, placed) -> tuple[int, int, int, int]:
+    """Draw `text` on a dark box placed clear of the labels already drawn; returns its box."""
+    (tw, th), baseline = cv2.getTextSize(text, cv2.FONT_HERSHEY_SIMPLEX, LABEL_SCALE, 1)
+    w, h = tw + 2 * LABEL_PAD_PX, th + baseline + 2 * LABEL_PAD_PX
+    x, y, w, h = place_label(anchor, (w, h), placed, (out.shape[1], out.shape[0]))
+    x0, y0, x1, y1 = max(x, 0), max(y, 0), min(x + w, out.shape[1]), min(y + h, out.shape[0])
+    if x1 > x0 and y1 > y0:
+        out[y0:y1, x0:x1] = (out[y0:y1, x0:x1] * 0.35).astype(out.dtype)
+    cv2.putText(out, text, (x + LABEL_PAD_PX, y + LABEL_PAD_PX + th), cv2.FONT_HERSHEY_SIMPLEX, LABEL_SCALE, colour, 1, cv2.LINE_AA)
+    return (x, y, w, h)
 
 
 def grid_pixels(cal: Calibration, grid_points_m: np.ndarray | None, image_hw: tuple[int, int]) -> np.ndarray:
@@ -86,7 +128,8 @@ def grid_pixels(cal: Calibration, grid_points_m: np.ndarray | None, image_hw: tu
     return ((px[:, 1] * w + px[:, 0])[:, None] + offsets[None, :]).ravel()
 
 
-def _draw_block(out: np.ndarray, block: Block, camera: PlaneCamera | None, labels: bool) -> None:
+def _draw_block(out: np.ndarray, block: Block, camera: PlaneCamera | None, labels: bool):
+    """Outline, centre and yaw arrow of a block; returns its label (text, anchor px, colour) or None."""
     colour = DRAW_BGR.get(block.color, (255, 255, 255)) if block.is_cube else (160, 160, 160)
     cv2.drawContours(out, [np.round(block.contour_px).astype(np.int32)], -1, colour, 2, cv2.LINE_AA)
     centre = tuple(int(round(x)) for x in block.center_px)
@@ -104,9 +147,8 @@ def _draw_block(out: np.ndarray, block: Block, camera: PlaneCamera | None, label
             text += f" #{block.aruco_id}"
         if block.occluded:
             text += " (occluded)"
-        origin = (centre[0] + 8, centre[1] - 8)
-        cv2.putText(out, text, origin, cv2.FONT_HERSHEY_SIMPLEX, 0.4, (0, 0, 0), 3, cv2.LINE_AA)
-        cv2.putText(out, text, origin, cv2.FONT_HERSHEY_SIMPLEX, 0.4, colour, 1, cv2.LINE_AA)
+        return text, centre, tuple(min(255, c + 60) for c in colour)
+    return None
 
 
 def top_down_view(

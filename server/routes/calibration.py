@@ -27,5 +27,18 @@ def read_calibration(station: StationDep) -> dict:
 
 @router.post("/pixel-to-world", response_model=PixelToWorldResponse)
 def post_pixel_to_world(body: PixelRequest, station: StationDep) -> dict:
-    """World point under a pixel of the colour image (read-only: no token needed)."""
-    return skills.pixel_to_world(station, body.u, body.v)
+    """World point under a pixel of the colour image, and the raw depth reading there (read-only: no token needed)."""
+    result = skills.pixel_to_world(station, body.u, body.v)
+    return {**result, "depth_mm": raw_depth_mm(station, body.u, body.v)}
+
+
+def raw_depth_mm(station, u: float, v: float) -> float | None:
+    """The newest frame's depth reading at pixel (u, v) in mm (0: no reading), None without a depth image."""
+    frame, _ = station.frames.get()
+    depth = getattr(frame, "depth_mm", None)
+    if depth is None:
+        return None
+    row, col = int(round(v)), int(round(u))
+    if not (0 <= row < depth.shape[0] and 0 <= col < depth.shape[1]):
+        return None
+    return float(depth[row, col])

@@ -3,6 +3,7 @@ real Chromium (Debian's /usr/bin/chromium) driven by Playwright, and a small RES
 
 from __future__ import annotations
 
+import contextlib
 import os
 import secrets
 import shutil
@@ -90,13 +91,14 @@ class Server:
         raise AssertionError(f"timed out after {timeout_s} s waiting for {what}; last status: {status}")
 
 
-@pytest.fixture(scope="session")
-def server(tmp_path_factory) -> Iterator[Server]:
+@contextlib.contextmanager
+def running_server(folder: Path) -> Iterator[Server]:
+    """A fresh `armlab serve` (its own port, token and SQLite file in `folder`) until the block ends."""
     port = free_port()
     token = secrets.token_urlsafe(16)
-    log_path = tmp_path_factory.mktemp("server") / "serve.log"
+    log_path = folder / "serve.log"
     env = dict(os.environ, MUJOCO_GL=os.environ.get("MUJOCO_GL", "egl"))
-    db_path = log_path.parent / "armlab.sqlite3"  # a fresh store: no calibration or programs from earlier runs
+    db_path = folder / "armlab.sqlite3"  # a fresh store: no calibration or programs from earlier runs
     with log_path.open("wb") as log:
         process = subprocess.Popen(
             [*armlab_command(), "serve", "--host", "127.0.0.1", "--port", str(port), "--token", token,
@@ -128,6 +130,12 @@ def server(tmp_path_factory) -> Iterator[Server]:
         except subprocess.TimeoutExpired:
             process.kill()
             process.wait(timeout=5)
+
+
+@pytest.fixture(scope="session")
+def server(tmp_path_factory) -> Iterator[Server]:
+    with running_server(tmp_path_factory.mktemp("server")) as srv:
+        yield srv
 
 
 @pytest.fixture(scope="session")

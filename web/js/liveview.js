@@ -1,8 +1,9 @@
 // The live view: draws streamed frames on the canvas with client-side markers (hovered detection,
 // last click target), reports the world point under the cursor, and turns clicks into targets.
 
+import { cameraModel, worldToCameraPx } from "./projection.js";
+import { drawTopdownDetections, drawTopdownGrid, drawTopdownTags } from "./topdown.js";
 import {
-  blockEdgeM,
   boardBoundsFromWorkcell,
   boundsFromHeader,
   elementToImagePx,
@@ -46,6 +47,7 @@ export class LiveView {
     this.overlays = []; // functions (liveView) => void drawn over every frame (e.g. the competition plan)
     this.workcell = null; // WorkcellInfo from the server's hello: board bounds, block sizes
     this.boardBounds = null;
+    this.cameraModel = null; // from the calibration: world → camera pixels (top-down hover reads z there)
     canvas.addEventListener("mousemove", (e) => this.onMove(e));
     canvas.addEventListener("mouseleave", () => this.onLeave());
     canvas.addEventListener("click", (e) => this.onClick(e));
@@ -96,7 +98,7 @@ export class LiveView {
       const c = det && this.cameraToFramePx(det.center_px);
       if (c) this.ring(c.u, c.v, 26 * Math.max(scale, 0.5), "#ffffff");
     }
-    if (this.view() === "topdown" && this.layers.includes("detections")) this.drawTopdownDetections();
+    if (this.view() === "topdown") this.drawTopdownLayers();
     if (this.marker) {
       const p = this.markerFramePx(this.marker);
       if (p) this.cross(p.u, p.v, this.marker.color, this.marker.label, Math.max(scale, 0.5));
@@ -104,40 +106,22 @@ export class LiveView {
     for (const draw of this.overlays) draw(this);
   }
 
-  /** The view the shown frame really is: the server falls back to colour for top-down until calibrated. */
-  /**
-   * The server draws overlays on the camera views only; on the top-down warp the page marks the
-   * detections itself from their world positions (outline sized like the block, colour + size label).
-   */
-  drawTopdownDetections() {
-    const { ctx, canvas } = this;
+  /** The page's own overlays on the top-down warp: the layers the operator ticked (the server draws them on camera views). */
+  drawTopdownLayers() {
     const b = this.topdownBounds();
-    if (!b) return;
-    const pxPerM = canvas.width / (b.xMax - b.xMin);
-    ctx.save();
-    ctx.lineWidth = 2;
-    ctx.font = `bold ${Math.max(12, Math.round(canvas.width / 60))}px sans-serif`;
-    this.detections.forEach((det, i) => {
-      if (!Array.isArray(det.position_m)) return;
-      const p = worldToTopdownPx(det.position_m[0], det.position_m[1], canvas.width, canvas.height, b);
-      const edge = blockEdgeM(this.workcell, det.size) ?? blockEdgeM(this.workcell, "large");
-      if (edge === null) return;
-      const half = (edge * pxPerM) / 2 + 4;
-      ctx.strokeStyle = i === this.hoverDetection ? "#ffffff" : "#00e5ff";
-      ctx.save();
-      ctx.translate(p.u, p.v);
-      ctx.rotate(-(det.yaw_rad || 0)); // world yaw is counter-clockwise; image v grows downwards
-      ctx.strokeRect(-half, -half, 2 * half, 2 * half);
-      ctx.restore();
-      const label = `${det.color || "?"} ${det.size || ""}`.trim();
-      ctx.fillStyle = "#000000";
-      ctx.fillText(label, p.u + half + 3, p.v - half + 1);
-      ctx.fillStyle = "#00e5ff";
-      ctx.fillText(label, p.u + half + 2, p.v - half);
-    });
-    ctx.restore();
+    if (this.layers.includes("grid")) drawTopdownGrid(this.ctx, this.canvas, b, this.workcell);
+    if (this.layers.includes("tags")) drawTopdownTags(this.ctx, this.canvas, b, this.workcell);
+    if (this.layers.includes("detections")) {
+      drawTopdownDetections(this.ctx, this.canvas, b, this.workcell, this.detections, this.hoverDetection);
+    }
   }
 
+  /** The calibration (for projecting world points into the camera image); null/uncalibrated clears it. */
+  setCalibration(calibration) {
+    this.cameraModel = cameraModel(calibration);
+  }
+
+  /** The view the shown frame really is: the server falls back to colour for top-down until calibrated. */
   view() {
     const v = (this.header && this.header.view) || "color";
     return v === "topdown" && !this.calibrated ? "color" : v;
@@ -236,25 +220,36 @@ export class LiveView {
     if (this.view() === "topdown") {
       const w = topdownPxToWorld(px.frame.u, px.frame.v, this.canvas.width, this.canvas.height, this.topdownBounds());
       if (!w) return;
-      this.showWorld(w, "board");
       const world = this.detections.map((d) => ({ center_px: d.position_m ? [d.position_m[0], d.position_m[1]] : null }));
       this.setHoverDetection(nearestDetection(world, w[0], w[1], 0.03));
+      // z (and the camera pixel and depth) from the server at the camera pixel that sees this board point.
+      const cam = worldToCameraPx(w, this.cameraModel);
+      if (!cam) {
+        this.showWorld(w, "board");
+        return;
+      }
+      this.hoverPending = { u: cam.u, v: cam.v, xyM: [w[0], w[1]] };
+      this.pumpHover();
       return;
     }
     this.setHoverDetection(nearestDetection(this.detections, px.camera.u, px.camera.v, PICK_RADIUS_PX));
-    this.hoverPending = px.camera;
+    this.hoverPending = { u: px.camera.u, v: px.camera.v };
     this.pumpHover();
   }
 
   /** At most one pixel-to-world request in flight (read-only, no token needed); the newest pointer wins. */
   pumpHover() {
     if (this.hoverBusy || this.hoverTimer || !this.hoverPending) return;
-    const { u, v } = this.hoverPending;
+    const { u, v, xyM } = this.hoverPending;
     this.hoverPending = null;
     this.hoverBusy = true;
     this.api
       .pixelToWorld(u, v)
-      .then((r) => this.showWorld(r.position_m, r.on))
+      .then((r) => {
+        // On the top-down view the board point under the pointer keeps its x, y; the server gives z there.
+        const position = xyM ? [xyM[0], xyM[1], r.position_m[2]] : r.position_m;
+        this.showWorld(position, r.on, { u, v, depthMm: r.depth_mm });
+      })
       .catch((e) => {
         delete this.hoverLabel.dataset.positionM;
         this.hoverLabel.textContent = e.code === "not_calibrated" ? "calibrate to read world mm" : e.message;
@@ -268,15 +263,25 @@ export class LiveView {
       });
   }
 
-  showWorld(positionM, on) {
+  /** The readout: camera pixel u, v and its raw depth (when known), then the world point in mm. */
+  showWorld(positionM, on, pixel = null) {
     if (!Array.isArray(positionM)) return;
     const [x, y, z] = positionM;
-    this.hoverLabel.textContent = `x ${fmtMm(x)}  y ${fmtMm(y)}  z ${fmtMm(z)} mm${on ? ` (${on})` : ""}`;
+    let text = "";
+    if (pixel) {
+      const depth = Number.isFinite(pixel.depthMm) ? (pixel.depthMm > 0 ? `${Math.round(pixel.depthMm)} mm` : "none") : "—";
+      text = `u ${Math.round(pixel.u)} v ${Math.round(pixel.v)} depth ${depth} · `;
+      this.hoverLabel.dataset.pixel = JSON.stringify([pixel.u, pixel.v, pixel.depthMm ?? null]);
+    } else {
+      delete this.hoverLabel.dataset.pixel;
+    }
+    this.hoverLabel.textContent = `${text}x ${fmtMm(x)}  y ${fmtMm(y)}  z ${fmtMm(z)} mm${on ? ` (${on})` : ""}`;
     this.hoverLabel.dataset.positionM = JSON.stringify(positionM);
   }
 
   onClick(event) {
     if (this.mode !== "grab" && this.mode !== "drop") return;
+    if (event.detail > 1) return; // the second click of a double-click: one target only
     const px = this.pointerToPx(event);
     if (!px) return;
     const color = this.mode === "grab" ? "#2fbf71" : "#e0a030";

@@ -15,6 +15,7 @@ import {
   renderReadouts,
   renderStatus,
 } from "./panels.js";
+import { applyMovingTimeLimits, emptyDetectionsReason, readMovingTimeS } from "./inputs.js";
 import { JointPlot } from "./plot.js";
 import { TorqueButton } from "./torque.js";
 import { RateMeter, Stream } from "./stream.js";
@@ -143,6 +144,7 @@ class App {
     switch (msg.type) {
       case "hello":
         this.helloSeen = true;
+        applyMovingTimeLimits($("jog-time"), msg.limits);
         this.live.setWorkcell(msg.workcell);
         this.competition.setBackend(msg.backend);
         this.canControl = Boolean(msg.can_control) && this.api.canControl;
@@ -199,16 +201,18 @@ class App {
 
   showCalibration(calibration) {
     renderCalibration(calibration);
+    this.live.setCalibration(calibration);
     this.competition.setCalibration(calibration);
   }
 
   setDetections(detections) {
     this.detections = detections;
     this.live.setDetections(detections);
-    const key = JSON.stringify(detections.map((d) => [d.id, d.color, d.size, d.position_m?.map((v) => Math.round(v * 1000))]));
+    const why = emptyDetectionsReason(this.status);
+    const key = why + JSON.stringify(detections.map((d) => [d.id, d.color, d.size, d.position_m?.map((v) => Math.round(v * 1000))]));
     if (key === this.detectionsKey) return;
     this.detectionsKey = key;
-    renderDetections(detections, this.hoverDetection, (d) => this.detectionClicked(d));
+    renderDetections(detections, this.hoverDetection, (d) => this.detectionClicked(d), why);
   }
 
   /** Report a job's end once, and move the click mode along grab → drop → grab. */
@@ -292,8 +296,12 @@ class App {
   }
 
   sendJoints(qRad) {
-    const movingTimeS = Number($("jog-time").value);
-    return this.run("move joints", () => this.api.joints(qRad, Number.isFinite(movingTimeS) ? movingTimeS : undefined));
+    const time = readMovingTimeS($("jog-time"));
+    if (!time.ok) {
+      this.log.toast("error", "move time", time.message);
+      return Promise.resolve(null);
+    }
+    return this.run("move joints", () => this.api.joints(qRad, time.valueS));
   }
 
   jogCartesian(axis, sign) {
@@ -326,11 +334,19 @@ class App {
     this.stream.setView(this.view, this.layers);
   }
 
+  /** One grab/drop per target: a double-click's second click, or a click while the last is pending, sends nothing. */
   clickTarget(t) {
+    if (this.targetPending) return;
+    this.targetPending = true;
+    this.clickTargetNow(t).finally(() => { this.targetPending = false; });
+  }
+
+  clickTargetNow(t) {
     const body = t.positionM ? { position_m: t.positionM } : { u: t.u, v: t.v };
     const where = t.positionM ? t.positionM.map((v) => Math.round(v * 1000)).join(", ") + " mm" : `pixel (${t.u.toFixed(0)}, ${t.v.toFixed(0)})`;
-    if (t.mode === "grab") this.run(`grab at ${where}`, () => this.api.grab(body));
-    else if (t.mode === "drop") this.run(`drop at ${where}`, () => this.api.drop(body));
+    if (t.mode === "grab") return this.run(`grab at ${where}`, () => this.api.grab(body));
+    if (t.mode === "drop") return this.run(`drop at ${where}`, () => this.api.drop(body));
+    return Promise.resolve(null);
   }
 
   detectionClicked(d) {

@@ -50,10 +50,17 @@ export function renderStatus(s) {
   $("halt-banner").hidden = !halted;
   if (halted) {
     $("halt-title").textContent = s.state === "estop" ? "E-STOP LATCHED" : "FAULT";
-    $("halt-text").textContent = `${s.detail || "Motion halted."} Press Reset when it is safe.`;
+    $("halt-text").textContent = haltText(s.detail);
   }
   $("backend").textContent = s.backend ? `backend: ${s.backend}` : "—";
   $("backend").title = s.controller ? `last commanded by: ${s.controller}` : "Device backend";
+}
+
+/** The banner's sentence: the station's reason, capitalised and ended, then what to do (once). */
+export function haltText(detail) {
+  const reason = String(detail || "").trim().replace(/[.:;,\s]+$/, "");
+  const said = reason ? `${reason[0].toUpperCase()}${reason.slice(1)}.` : "Motion halted.";
+  return /reset/i.test(reason) ? said : `${said} Press Reset when it is safe.`;
 }
 
 /** Joint table (deg) and the gripper pose/width readout. */
@@ -143,10 +150,19 @@ export class JointSliders {
 }
 
 /** Detections table; rows carry data-index so hovering on the canvas can highlight one. */
-export function renderDetections(detections, hoverIndex, onRowClick) {
+export function renderDetections(detections, hoverIndex, onRowClick, why = "") {
   const body = $("det-body");
   const list = Array.isArray(detections) ? detections : [];
   $("det-count").textContent = String(list.length);
+  if (!list.length) {
+    const tr = document.createElement("tr");
+    tr.className = "det-empty";
+    const td = tr.insertCell();
+    td.colSpan = 7;
+    td.textContent = why || "no blocks in view";
+    body.replaceChildren(tr);
+    return;
+  }
   const rows = list.map((d, i) => {
     const tr = document.createElement("tr");
     tr.dataset.index = String(i);
