@@ -2,6 +2,7 @@
 
 import { Api, adoptToken, dropToken } from "./api.js";
 import { CompetitionPanel } from "./competition.js";
+import { ControlLease } from "./control.js";
 import { LiveView } from "./liveview.js";
 import { EventLog } from "./log.js";
 import {
@@ -46,6 +47,7 @@ class App {
     this.sliders = new JointSliders($("joint-sliders"), (q) => this.sendJoints(q));
     this.sliders.build(DEFAULT_JOINT_NAMES);
     this.plot = new JointPlot($("joint-plot"));
+    this.lease = new ControlLease({ api: this.api, log: this.log, onChange: () => this.refreshAllowed() });
     this.torque = new TorqueButton({ button: $("btn-torque"), run: (a, c) => this.run(a, c), api: this.api });
     this.live = new LiveView({
       canvas: $("live"),
@@ -176,6 +178,7 @@ class App {
     renderStatus(s);
     renderReadouts(s);
     this.torque.render(s);
+    this.lease.render(s);
     if (!previous || (previous.joint_names || []).join() !== (s.joint_names || []).join()) {
       if (s.joint_names) this.sliders.build(s.joint_names, s.joint_limits_rad);
       this.plot.setJoints(s.joint_names, s.joint_limits_rad);
@@ -241,7 +244,7 @@ class App {
 
   refreshAllowed() {
     const allowed = this.connected && this.status ? this.status.allowed_commands : [];
-    const control = this.connected && this.api.canControl && (this.helloSeen ? this.canControl : true);
+    const control = this.connected && this.api.canControl && (this.helloSeen ? this.canControl : true) && this.lease.mine;
     applyAllowed(document, allowed, control);
     this.sliders.setDisabled(!control || !(allowed || []).includes("move_joints"));
     // E-stop is never disabled: without a connection it goes over REST.
