@@ -149,6 +149,16 @@ class StationClient:
     def torque(self, enabled: bool) -> dict:
         return self._post("/api/arm/torque", {"enabled": bool(enabled)})
 
+    def jog_step(self, axis: str, amount: float, speed_percent: float = 100.0, wait: bool = True) -> dict:
+        """One jog step of the gripper: `amount` metres along world x|y|z (pitch and yaw kept) or radians of
+        pitch|roll; a step that cannot keep them raises StationError 422 with the reason (nothing moves)."""
+        key = "distance_m" if axis in ("x", "y", "z") else "angle_rad"
+        return self._post("/api/arm/step", {"axis": axis, key: float(amount), "speed_percent": float(speed_percent)}, wait=wait)
+
+    def jog(self, velocity_rad_s: Sequence[float], speed_percent: float = 100.0) -> dict:
+        """Hold-to-run joint jog: runs jog_hold_s after this call or the last heartbeat, then ramps to rest."""
+        return self._post("/api/arm/jog", {"velocity_rad_s": _floats(velocity_rad_s, "velocity_rad_s"), "speed_percent": float(speed_percent)})
+
     def grasp(self) -> dict:
         return self._post("/api/gripper", {"action": "grasp"})
 

@@ -78,3 +78,18 @@ def test_rotation_steps_and_speed_override(url, cell):
         T2, _ = gripper(cell)
         assert math.asin(-T2[2, 0]) == pytest.approx(math.asin(-T1[2, 0]) - 0.2, abs=math.radians(0.5))
         assert np.linalg.norm(T2[:3, 3] - T1[:3, 3]) < 0.001
+
+
+def test_the_python_client_steps_and_reports_refusals(url, cell):
+    from armlab.client.station_client import StationClient, StationError
+
+    httpx.post(url + "/api/control/release", headers=PAGE, timeout=10)  # the client commands as 'api'
+    with StationClient(url, token=TOKEN) as client:
+        client.home()
+        T0, _ = gripper(cell)
+        client.jog_step("y", 0.02, speed_percent=50)
+        T1, _ = gripper(cell)
+        assert (T1[:3, 3] - T0[:3, 3]) == pytest.approx([0.0, 0.02, 0.0], abs=0.001)
+        with pytest.raises(StationError) as refused:
+            client.jog_step("x", 0.01)
+        assert refused.value.status_code == 422 and "yaw" in str(refused.value)
