@@ -114,6 +114,7 @@ export class Api {
   takeControl() { return this.post("/api/control/take"); }
   releaseControl() { return this.post("/api/control/release"); }
   heartbeat() { return this.post("/api/heartbeat"); }
+  step(body) { return this.post("/api/arm/step", body); }
   jog(velocityRadS) { return this.post("/api/arm/jog", { velocity_rad_s: velocityRadS }); }
   reset() { return this.post("/api/reset"); }
   home() { return this.post("/api/arm/home"); }

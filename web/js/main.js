@@ -17,6 +17,7 @@ import {
   renderStatus,
 } from "./panels.js";
 import { applyMovingTimeLimits, emptyDetectionsReason, readMovingTimeS } from "./inputs.js";
+import { CartesianJog } from "./jog.js";
 import { JointPlot } from "./plot.js";
 import { TorqueButton } from "./torque.js";
 import { RateMeter, Stream } from "./stream.js";
@@ -47,6 +48,11 @@ class App {
     this.sliders = new JointSliders($("joint-sliders"), (q) => this.sendJoints(q));
     this.sliders.build(DEFAULT_JOINT_NAMES);
     this.plot = new JointPlot($("joint-plot"));
+    this.jog = new CartesianJog({
+      api: this.api,
+      run: (a, c) => this.run(a, c),
+      canJog: () => !$("btn-send-joints").disabled && (this.status?.allowed_commands || []).includes("jog"),
+    });
     this.lease = new ControlLease({ api: this.api, log: this.log, onChange: () => this.refreshAllowed() });
     this.torque = new TorqueButton({ button: $("btn-torque"), run: (a, c) => this.run(a, c), api: this.api });
     this.live = new LiveView({
@@ -307,18 +313,6 @@ class App {
     return this.run("move joints", () => this.api.joints(qRad, time.valueS));
   }
 
-  jogCartesian(axis, sign) {
-    const gp = this.status && this.status.gripper_pose;
-    if (!gp || !Array.isArray(gp.position_m)) {
-      this.log.toast("error", "jog", "no gripper pose from the station yet");
-      return;
-    }
-    const stepM = Number($("jog-step").value);
-    const target = [...gp.position_m];
-    target["xyz".indexOf(axis)] += sign * stepM;
-    this.run(`jog ${axis}${sign > 0 ? "+" : "−"}`, () => this.api.pose(target, gp.pitch_rad, gp.yaw_rad));
-  }
-
   setMode(mode) {
     this.live.setMode(mode);
     document.querySelectorAll("#click-mode button").forEach((b) => b.classList.toggle("on", b.dataset.mode === mode));
@@ -390,8 +384,6 @@ class App {
     on("btn-cancel-job", () => this.run("cancel job", () => this.api.cancelJob()));
     on("btn-send-joints", () => this.sendJoints(this.sliders.valuesRad()));
     on("btn-sliders-from-arm", () => this.status && this.sliders.follow(this.status.joints_rad, true));
-    document.querySelectorAll("[data-jog]").forEach((b) =>
-      b.addEventListener("click", () => this.jogCartesian(b.dataset.jog[0], b.dataset.jog[1] === "+" ? 1 : -1)));
     document.querySelectorAll("#click-mode button").forEach((b) => b.addEventListener("click", () => this.setMode(b.dataset.mode)));
     document.querySelectorAll("#view-select button").forEach((b) => b.addEventListener("click", () => this.setView(b.dataset.view)));
     document.querySelectorAll("[data-layer]").forEach((c) => c.addEventListener("change", () => this.setLayers()));

@@ -1,0 +1,47 @@
+"""Keyboard jogging (issue 9 item 2, page side): PageDown steps the gripper down, an arrow key along x, Shift+arrow
+turns the pitch; each through POST /api/arm/step, the gripper keeping its orientation on the straight steps."""
+
+from __future__ import annotations
+
+import math
+
+import pytest
+
+from browser_helpers import open_page, wait_frames
+
+pytestmark = pytest.mark.browser
+
+STEP_M = 0.01  # the panel's default step
+
+
+def settled_pose(server) -> dict:
+    return server.wait_status(lambda s: not s["moving"] and s["state"] == "idle", 20.0, "the arm still")["gripper_pose"]
+
+
+def test_keys_step_the_gripper(browser, server):
+    if server.get("/api/status")["state"] in ("estop", "fault"):
+        server.post("/api/reset")
+    server.post("/api/arm/joints?wait=true", {"q_rad": [0.0, 0.0, 0.3, 0.9, 0.0], "moving_time_s": 1.5})
+    page = open_page(browser, f"{server.base_url}/?token={server.token}")
+    try:
+        wait_frames(page, 2)
+        page.wait_for_function("!document.querySelector(\"[data-jog='z-']\").disabled", timeout=10_000)
+        page.click("#live")  # focus on the page, not a field
+        for key, axis, sign in (("PageDown", 2, -1), ("ArrowRight", 0, 1), ("ArrowUp", 1, 1)):
+            before = settled_pose(server)
+            page.keyboard.press(key)
+            server.wait_status(lambda s: s["moving"], 5.0, f"{key} to start a step")
+            after = settled_pose(server)
+            moved = [a - b for a, b in zip(after["position_m"], before["position_m"])]
+            assert moved[axis] == pytest.approx(sign * STEP_M, abs=0.002), (key, moved)
+            assert all(abs(m) < 0.002 for i, m in enumerate(moved) if i != axis), (key, moved)
+            assert abs(after["pitch_rad"] - before["pitch_rad"]) < math.radians(0.5)
+        before = settled_pose(server)
+        page.keyboard.press("Shift+ArrowDown")  # pitch down 5°
+        server.wait_status(lambda s: s["moving"], 5.0, "the pitch step to start")
+        after = settled_pose(server)
+        assert after["pitch_rad"] - before["pitch_rad"] == pytest.approx(math.radians(5), abs=math.radians(0.5))
+        assert page.errors == []
+    finally:
+        page.close()
+        server.post("/api/arm/home?wait=true", {"moving_time_s": 1.5})

@@ -1,0 +1,60 @@
+// Cartesian jog of the gripper through POST /api/arm/step (the station keeps pitch and yaw and moves along
+// the asked axis, or refuses with the reason): the panel's buttons and the keyboard. Arrow keys move in x/y,
+// PageUp/PageDown in z, Shift+Up/Down pitch and Shift+Left/Right wrist roll; one step per key press.
+
+const $ = (id) => document.getElementById(id);
+const ROTATION_STEP_DEG = 5;
+
+/** The step a key asks for: {axis, sign} or null. */
+export function keyToStep(event) {
+  if (event.ctrlKey || event.metaKey || event.altKey) return null;
+  if (event.shiftKey) {
+    return { ArrowUp: { axis: "pitch", sign: -1 }, ArrowDown: { axis: "pitch", sign: 1 },
+      ArrowLeft: { axis: "roll", sign: -1 }, ArrowRight: { axis: "roll", sign: 1 } }[event.key] || null;
+  }
+  return { ArrowUp: { axis: "y", sign: 1 }, ArrowDown: { axis: "y", sign: -1 }, ArrowLeft: { axis: "x", sign: -1 },
+    ArrowRight: { axis: "x", sign: 1 }, PageUp: { axis: "z", sign: 1 }, PageDown: { axis: "z", sign: -1 } }[event.key] || null;
+}
+
+/** True when a key press belongs to a form field (typing), not to the page's shortcuts. */
+export function typingIn(target) {
+  const tag = target && target.tagName;
+  return tag === "INPUT" || tag === "TEXTAREA" || tag === "SELECT" || Boolean(target && target.isContentEditable);
+}
+
+export class CartesianJog {
+  /** api: Api; run(action, call): the page's REST runner; canJog(): whether the station allows a jog now. */
+  constructor({ api, run, canJog }) {
+    this.api = api;
+    this.run = run;
+    this.canJog = canJog;
+    this.busy = false;
+    document.querySelectorAll("[data-jog]").forEach((b) =>
+      b.addEventListener("click", () => this.step(b.dataset.jog.slice(0, -1), b.dataset.jog.endsWith("+") ? 1 : -1)));
+    document.addEventListener("keydown", (e) => this.onKey(e));
+  }
+
+  onKey(event) {
+    if (typingIn(event.target) || document.querySelector("dialog[open]")) return;
+    const step = keyToStep(event);
+    if (!step) return;
+    event.preventDefault(); // arrows and page keys would scroll the page
+    if (event.repeat || !this.canJog()) return;
+    this.step(step.axis, step.sign);
+  }
+
+  /** One step along axis x|y|z (the chosen mm) or pitch|roll (5°) at the chosen speed. */
+  async step(axis, sign) {
+    if (this.busy) return null;
+    this.busy = true;
+    const speed = Number($("jog-speed").value) || 100;
+    const body = { axis, speed_percent: speed };
+    if ("xyz".includes(axis)) body.distance_m = sign * Number($("jog-step").value);
+    else body.angle_rad = (sign * ROTATION_STEP_DEG * Math.PI) / 180;
+    try {
+      return await this.run(`jog ${axis}${sign > 0 ? "+" : "−"}`, () => this.api.step(body));
+    } finally {
+      this.busy = false;
+    }
+  }
+}
