@@ -35,6 +35,20 @@ class TeachRecordRequest(Request):
     moving_time_s: MovingTime | None = Field(None, description="least time of the move into this waypoint at 100 %; None = as fast as allowed")
 
 
+class ContinuousRequest(Request):
+    """POST /api/teach/continuous: trajectory mode, recording the pose at rate_hz while it changes."""
+
+    rate_hz: float = Field(ge=0.5, le=20.0, description="records per second (0.5-20)")
+    min_change_rad: float = Field(0.01, gt=0.0, le=1.0, description="record only when a joint moved this much (or the gripper changed)")
+
+
+class ContinuousResponse(Wire):
+    recording: bool
+    rate_hz: float | None = None
+    recorded: int = Field(description="waypoints this recording added")
+    count: int = Field(description="waypoints in the draft now")
+
+
 class TeachStopRequest(Request):
     name: ProgramName
 
@@ -163,6 +177,8 @@ PROGRAM_WIRE_MODELS = (
     TeachStartRequest,
     TeachRecordRequest,
     TeachStopRequest,
+    ContinuousRequest,
+    ContinuousResponse,
     WaypointRequest,
     ProgramUpdateRequest,
     DuplicateRequest,

@@ -247,6 +247,14 @@ class StationClient:
         """Record the current pose and gripper (on disk before this returns): the waypoint and the draft's count."""
         return self._post("/api/teach/record", {"dwell_s": float(dwell_s), "moving_time_s": moving_time_s})
 
+    def teach_continuous(self, rate_hz: float, min_change_rad: float = 0.01) -> dict:
+        """Trajectory mode: record the pose at rate_hz while it changes, until teach_continuous_stop()."""
+        return self._post("/api/teach/continuous", {"rate_hz": float(rate_hz), "min_change_rad": float(min_change_rad)})
+
+    def teach_continuous_stop(self) -> dict:
+        """End trajectory mode: {recording: false, recorded, count}."""
+        return self._post("/api/teach/continuous/stop")
+
     def teach_undo(self) -> dict:
         """Remove the last recorded waypoint: {removed, count}."""
         return self._post("/api/teach/undo")

@@ -120,6 +120,7 @@ class Station(Latch, MotionGate, ManualCommands, TeachCommands, JobControls, Per
         self._job: Job | None = None
         self._last_job: Job | None = None
         self._teach_saving = False
+        self._recorder: Any = None  # teach's continuous recorder thread (teach.py), if running
         self._jog: dict | None = None  # the running jog: trajectory, start clock, velocity, controller
         self._calibration: Any = None
         self._calibration_info: dict | None = None

@@ -4,18 +4,71 @@ A mixin of core.Station. The waypoints being taught live only in the store's tea
 in memory: teach_record returns once the row is committed, so a waypoint the API acknowledged survives a
 SIGKILL. teach_start resumes a draft left by a killed or restarted station (discard_draft=True starts
 empty); teach_stop turns the draft into a program and empties it in one transaction. SQLite runs outside
-the station lock; a `_teach_saving` flag keeps two teach writes from interleaving.
+the station lock; a `_teach_saving` flag keeps two teach writes from interleaving. Trajectory mode
+(teach_continuous) records on its own thread at a chosen rate through the same teach_record.
 """
 
 from __future__ import annotations
 
-from armlab.errors import CommandRefused
+import threading
+import time
+
+import numpy as np
+
+from armlab.errors import CommandRefused, NotController, ShuttingDown
 from armlab.station.states import State
 from armlab.store import Program, Waypoint
 
+RATE_LIMITS_HZ = (0.5, 20.0)
+
+
+class ContinuousRecorder(threading.Thread):
+    """Trajectory mode: records the pose at `rate_hz` while the arm moves (a joint changed by min_change_rad
+    or the gripper command changed since the last record), each record committed like teach_record, with
+    moving_time_s = the time since the previous one so repeat follows the recorded pace. Ends on stop(),
+    on leaving teach (a refused record) or at shutdown."""
+
+    def __init__(self, station, rate_hz: float, min_change_rad: float, source: str | None) -> None:
+        super().__init__(name="teach-recorder", daemon=True)
+        self.station, self.period_s, self.min_change_rad, self.source = station, 1.0 / rate_hz, min_change_rad, source
+        self.rate_hz = rate_hz
+        self.recorded = 0
+        self.error: str | None = None
+        self._stop_event = threading.Event()
+
+    def stop(self, timeout_s: float = 2.0) -> None:
+        self._stop_event.set()
+        if self is not threading.current_thread():
+            self.join(timeout_s)
+
+    def run(self) -> None:
+        station = self.station
+        last_q, last_gripper, last_t = station.joints_rad(), station.gripper.read_state().command, time.monotonic()
+        next_t = last_t + self.period_s
+        while not self._stop_event.wait(max(0.0, next_t - time.monotonic())):
+            next_t += self.period_s
+            if station._closing.is_set():
+                return
+            q, gripper = station.joints_rad(), station.gripper.read_state().command
+            if np.max(np.abs(q - last_q)) < self.min_change_rad and gripper == last_gripper:
+                continue
+            now = time.monotonic()
+            try:
+                station.teach_record(source=self.source, moving_time_s=max(self.period_s, now - last_t))
+            except CommandRefused as error:
+                if station.state is State.TEACH and not station._halt.is_set():
+                    continue  # a record or undo from the operator was being written: record at the next tick
+                self.error = str(error)
+                return
+            except (NotController, ShuttingDown) as error:
+                self.error = str(error)
+                return
+            self.recorded += 1
+            last_q, last_gripper, last_t = q, gripper, now
+
 
 class TeachCommands:
-    """teach_start, teach_record, teach_undo, teach_stop, teach_draft."""
+    """teach_start, teach_record, teach_continuous(_stop), teach_undo, teach_stop, teach_draft."""
 
     def _teach_write(self, command: str, source: str | None, write, detail):
         """Check `command` (state, latch, lease), run write() outside the lock with the teach flag held,
@@ -76,6 +129,44 @@ class TeachCommands:
             self.events.add("info", f"teach: last waypoint removed ({left} left)")
         return removed, left
 
+    def teach_continuous(self, rate_hz: float, min_change_rad: float = 0.01, source: str | None = None) -> ContinuousRecorder:
+        """Start trajectory mode: record the pose at rate_hz (0.5-20 Hz) while it changes, until
+        teach_continuous_stop() or teach_stop (ValueError for a bad rate or on a synchronous station)."""
+        rate_hz = float(rate_hz)
+        if not RATE_LIMITS_HZ[0] <= rate_hz <= RATE_LIMITS_HZ[1]:
+            raise ValueError(f"rate_hz must be from {RATE_LIMITS_HZ[0]:g} to {RATE_LIMITS_HZ[1]:g} Hz, got {rate_hz:g}")
+        if not 0.0 < float(min_change_rad) <= 1.0:
+            raise ValueError(f"min_change_rad must be in (0, 1] rad, got {min_change_rad!r}")
+        if self.synchronous:
+            raise ValueError("continuous recording needs the real-time station (the fast-mode simulation runs no threads)")
+        self.allowed_or_raise("teach_record", source)
+        self.teach_continuous_stop()
+        recorder = ContinuousRecorder(self, rate_hz, float(min_change_rad), source)
+        with self._lock:
+            self._recorder = recorder
+        recorder.start()
+        self.events.add("info", f"teach: recording continuously at {rate_hz:g} Hz")
+        return recorder
+
+    def teach_continuous_stop(self) -> int:
+        """Stop trajectory mode (no-op when not recording); returns how many waypoints it recorded."""
+        with self._lock:
+            recorder, self._recorder = self._recorder, None
+        if recorder is None:
+            return 0
+        recorder.stop()
+        self.events.add("info", f"teach: continuous recording stopped ({recorder.recorded} waypoints)")
+        return recorder.recorded
+
+    @property
+    def teach_recording(self) -> dict | None:
+        """{rate_hz, recorded} while trajectory mode runs, else None."""
+        with self._lock:
+            recorder = self._recorder
+        if recorder is None or not recorder.is_alive():
+            return None
+        return {"rate_hz": recorder.rate_hz, "recorded": recorder.recorded}
+
     def teach_draft(self) -> list[Waypoint]:
         """The recorded, not yet saved waypoints (the draft; kept across restarts)."""
         return self.store.read_draft()[0]
@@ -83,6 +174,9 @@ class TeachCommands:
     def teach_stop(self, name: str, source: str | None = None) -> Program:
         """Save the draft as a program named `name` and return to idle (ValueError for an empty name or
         no waypoints: nothing changes, teach goes on). An e-stop during the write keeps the program and the latch."""
+
+        self.allowed_or_raise("teach_stop", source)
+        self.teach_continuous_stop()  # its last record is in the draft before the save reads it
 
         def save() -> Program:
             waypoints, _ = self.store.read_draft()

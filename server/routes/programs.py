@@ -15,6 +15,8 @@ from armlab.store import Waypoint
 from server.deps import ControlAuth, StationDep
 from server.models import ProgramId, Status
 from server.program_models import (
+    ContinuousRequest,
+    ContinuousResponse,
     DuplicateRequest,
     ImportRequest,
     ProgramInfo,
@@ -44,6 +46,22 @@ def post_teach_record(station: StationDep, controller: ControlAuth, body: TeachR
     body = body or TeachRecordRequest()
     waypoint, count = station.teach_record(source=controller, dwell_s=body.dwell_s, moving_time_s=body.moving_time_s)
     return {**waypoint.to_dict(), "count": count}
+
+
+@router.post("/teach/continuous", response_model=ContinuousResponse)
+def post_teach_continuous(body: ContinuousRequest, station: StationDep, controller: ControlAuth) -> dict:
+    """Trajectory mode: record the pose at rate_hz while it changes (each record on disk, with the time
+    since the previous as its moving_time_s), until /api/teach/continuous/stop or teach/stop."""
+    station.teach_continuous(body.rate_hz, body.min_change_rad, source=controller)
+    return {"recording": True, "rate_hz": body.rate_hz, "recorded": 0, "count": len(station.teach_draft())}
+
+
+@router.post("/teach/continuous/stop", response_model=ContinuousResponse)
+def post_teach_continuous_stop(station: StationDep, controller: ControlAuth) -> dict:
+    """End trajectory mode (a no-op when it is not running)."""
+    station.allowed_or_raise("teach_record", controller)
+    recorded = station.teach_continuous_stop()
+    return {"recording": False, "rate_hz": None, "recorded": recorded, "count": len(station.teach_draft())}
 
 
 @router.post("/teach/undo", response_model=TeachUndoResponse)

@@ -104,6 +104,29 @@ def test_record_undo_and_the_draft_on_disk(http):
     _error(http.post("/api/teach/undo", headers=AUTH), 409, "wrong_state")  # not teaching
 
 
+def test_trajectory_mode_records_the_motion_at_the_chosen_rate(http, cell):
+    http.post("/api/teach/start", json={"discard_draft": True}, headers=AUTH)
+    _move(http, [0.0, 0.0, 0.0, 0.0, 0.0])
+    started = http.post("/api/teach/continuous", json={"rate_hz": 10}, headers=AUTH)
+    assert started.status_code == 200 and started.json()["recording"], started.text
+    _error(http.post("/api/teach/continuous", json={"rate_hz": 50}, headers=AUTH), 422, "invalid")
+    response = http.post("/api/arm/joints", params={"wait": "true"}, json={"q_rad": [0.8, 0.0, 0.0, 0.0, 0.0], "moving_time_s": 1.5}, headers=AUTH)
+    assert response.status_code in (200, 202)
+    stopped = http.post("/api/teach/continuous/stop", headers=AUTH).json()
+    draft = http.get("/api/teach/draft").json()["waypoints"]
+    assert stopped["recording"] is False and stopped["count"] == len(draft)
+    waist = [w["joints_rad"][0] for w in draft]
+    assert 8 <= len(draft) <= 20, waist  # ~10 Hz over the 1.5 s move, none while still
+    assert all(b > a for a, b in zip(waist, waist[1:])) and waist[-1] > 0.7  # along the motion, in order
+    assert all(0.09 <= w["moving_time_s"] <= 0.3 for w in draft[1:])  # the recorded pace
+    count = len(draft)
+    http.post("/api/arm/joints", params={"wait": "true"}, json={"q_rad": [0.6, 0.0, 0.0, 0.0, 0.0], "moving_time_s": 0.5}, headers=AUTH)
+    live.wait_sim(cell, 0.3)
+    assert http.get("/api/teach/draft").json()["count"] == count  # stopped: the move after it was not recorded
+    program = http.post("/api/teach/stop", json={"name": "recorded"}, headers=AUTH).json()
+    assert len(program["waypoints"]) == count
+
+
 def test_teach_start_resumes_an_unsaved_draft_unless_discarded(http):
     http.post("/api/teach/start", json={"discard_draft": True}, headers=AUTH)
     _move(http, POSE_C)

@@ -137,6 +137,21 @@ export const CLIENT_MESSAGE_TYPES = Object.freeze(["ack", "view", "command"]);
  */
 
 /**
+ * POST /api/teach/continuous: trajectory mode, recording the pose at rate_hz while it changes.
+ * @typedef {Object} ContinuousRequest
+ * @property {number} rate_hz records per second (0.5-20)
+ * @property {number} [min_change_rad] record only when a joint moved this much (or the gripper changed)
+ */
+
+/**
+ * @typedef {Object} ContinuousResponse
+ * @property {boolean} recording
+ * @property {(number|null)} [rate_hz]
+ * @property {number} recorded waypoints this recording added
+ * @property {number} count waypoints in the draft now
+ */
+
+/**
  * @typedef {Object} Detection
  * @property {number} id
  * @property {(string|null)} color
