@@ -7,11 +7,14 @@ pose: parked low (the sleep pose) it hides, or its self-filter masks, blocks jus
 
 from __future__ import annotations
 
+from collections.abc import Callable
+
 from armlab.tasks.runner import Move, Plan, TaskRunner, cubes, near, overhead_look_pose
 
 SLOT_XS_M = (0.09, 0.155, 0.22, 0.285, 0.35)
 SLOT_YS_M = (-0.065, -0.13)
 SLOT_FREE_RADIUS_M = 0.04
+SLOT_EMPTY_HEIGHT_M = 0.010  # a slot whose measured height is above this holds something
 
 
 def side_sign(size: str) -> float:
@@ -29,26 +32,35 @@ def slots(size: str) -> list[tuple[float, float]]:
     return [(sign * x, y) for y in SLOT_YS_M for x in SLOT_XS_M]
 
 
-def policy(objects: list[dict], given_up: set) -> Plan:
+def policy(objects: list[dict], given_up: set, standing_at: Callable[[tuple[float, float]], float] | None = None) -> Plan:
+    """The next moves. standing_at(xy): the measured height of what stands at a spot (None: not measured);
+    a slot is free when no detection is near it and nothing measurably stands on it (a block the arm
+    partly hides at the look goes undetected, but the depth image still shows it there)."""
     blocks = cubes(objects)
     done = [b for b in blocks if is_sorted(b)]
     todo = [b for b in blocks if not is_sorted(b)]
     hidden = sum(b.get("stack_level", 1) - 1 for b in todo)
-    moves, claimed = [], []
+    moves, claimed, occupied = [], [], []
+
+    def free(slot) -> bool:
+        if any(near(o["position_m"], slot, SLOT_FREE_RADIUS_M) for o in objects) or any(near(c, slot, SLOT_FREE_RADIUS_M) for c in claimed):
+            return False
+        if slot in occupied or standing_at is not None and standing_at(slot) > SLOT_EMPTY_HEIGHT_M:
+            occupied.append(slot)
+            return False
+        return True
+
     # Pile tops first (they uncover blocks), then nearest the board's middle.
     for block in sorted(todo, key=lambda b: (-b.get("stack_level", 1), abs(b["position_m"][0]))):
-        free = [s for s in slots(block["size"])
-                if not any(near(o["position_m"], s, SLOT_FREE_RADIUS_M) for o in objects)
-                and not any(near(c, s, SLOT_FREE_RADIUS_M) for c in claimed)]
-        if not free:
+        target = next((s for s in slots(block["size"]) if free(s)), None)
+        if target is None:
             continue
-        target = free[0]
         claimed.append(target)
         moves.append(Move(block, (target[0], target[1], 0.0), f"to the {block['size']} side"))
     return Plan(moves, done=len(done), left=len(todo) + hidden, finished=not todo)
 
 
 def make_policy(level: int | None, params: dict, runner: TaskRunner):
-    """The policy, with the runner looking from the overhead pose."""
+    """The policy, with the runner looking from the overhead pose and slots checked in the depth image."""
     runner.look_pose_rad = overhead_look_pose(runner.station.model)
-    return policy
+    return lambda objects, given_up: policy(objects, given_up, runner.height_at)

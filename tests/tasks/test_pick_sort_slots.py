@@ -1,0 +1,26 @@
+"""pick_sort's slots (hand-made inputs): a slot where the depth image measures something standing is not
+free even when no detection is there (the arm partly hid a block placed there: pick_sort L3 seed 9 put
+a second block on it)."""
+
+from __future__ import annotations
+
+import math
+
+from armlab.tasks import pick_sort
+
+
+def block(color, size, x, y, z_top):
+    return {"color": color, "size": size, "position_m": [x, y, z_top], "stack_level": 1, "is_cube": True, "yaw_rad": 0.0}
+
+
+def test_a_slot_with_something_measured_standing_on_it_is_skipped():
+    objects = [block("red", "large", -0.157, 0.138, 0.038)]
+    hidden_slot = (0.09, -0.065)  # a large block stands here, undetected
+
+    def standing_at(xy):
+        return 0.038 if math.dist(xy, hidden_slot) < 0.01 else 0.0
+
+    target = pick_sort.policy(objects, set(), standing_at).moves[0].to_m
+    assert math.dist(target[:2], hidden_slot) > 0.05
+    assert target[0] > 0 and target[1] < 0  # still the large side
+    assert math.dist(pick_sort.policy(objects, set(), lambda xy: 0.0).moves[0].to_m[:2], hidden_slot) < 1e-9
