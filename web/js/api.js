@@ -133,10 +133,16 @@ export class Api {
   grab(target) { return this.post("/api/grab", target); }
   drop(target) { return this.post("/api/drop", target); }
   teachStart() { return this.post("/api/teach/start"); }
-  teachRecord() { return this.post("/api/teach/record"); }
+  teachRecord(body) { return this.post("/api/teach/record", body); }
+  teachUndo() { return this.post("/api/teach/undo"); }
+  teachDraft() { return this.get("/api/teach/draft"); }
+  updateProgram(id, body) { return this.request("PATCH", `/api/programs/${encodeURIComponent(id)}`, body); }
+  duplicateProgram(id) { return this.post(`/api/programs/${encodeURIComponent(id)}/duplicate`); }
+  deleteProgram(id) { return this.request("DELETE", `/api/programs/${encodeURIComponent(id)}`); }
+  setJobSpeed(speedPercent) { return this.request("PATCH", "/api/jobs/current", { speed_percent: speedPercent }); }
   teachStop(name) { return this.post("/api/teach/stop", { name }); }
-  repeat(programId, cycles) {
-    return this.post(`/api/programs/${encodeURIComponent(programId)}/repeat`, { cycles });
+  repeat(programId, cycles, speedPercent = 100) {
+    return this.post(`/api/programs/${encodeURIComponent(programId)}/repeat`, { cycles, speed_percent: speedPercent });
   }
   cancelJob() { return this.post("/api/jobs/cancel"); }
   simScene(event, level, seed) { return this.post("/api/sim/scene", { event, level, seed }); }

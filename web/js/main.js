@@ -12,13 +12,14 @@ import {
   highlightDetectionRow,
   renderCalibration,
   renderDetections,
-  renderPrograms,
   renderReadouts,
   renderStatus,
 } from "./panels.js";
 import { applyMovingTimeLimits, emptyDetectionsReason, readMovingTimeS } from "./inputs.js";
 import { CartesianJog } from "./jog.js";
 import { JointPlot } from "./plot.js";
+import { RepeatPanel } from "./repeat.js";
+import { TeachPanel } from "./teach.js";
 import { TorqueButton } from "./torque.js";
 import { RateMeter, Stream } from "./stream.js";
 import { COMMANDS, LAYERS, VIEWS } from "./wire_types.js";
@@ -52,6 +53,15 @@ class App {
       api: this.api,
       run: (a, c) => this.run(a, c),
       canJog: () => !$("btn-send-joints").disabled && (this.status?.allowed_commands || []).includes("jog"),
+    });
+    this.repeat = new RepeatPanel({ api: this.api, run: (a, c) => this.run(a, c), log: this.log });
+    this.teach = new TeachPanel({
+      api: this.api,
+      run: (a, c) => this.run(a, c),
+      log: this.log,
+      status: () => this.status,
+      onRepeat: (program) => this.repeat.start(program),
+      afterChange: () => this.refreshAllowed(),
     });
     this.lease = new ControlLease({ api: this.api, log: this.log, onChange: () => this.refreshAllowed() });
     this.torque = new TorqueButton({ button: $("btn-torque"), run: (a, c) => this.run(a, c), api: this.api });
@@ -185,9 +195,12 @@ class App {
     renderReadouts(s);
     this.torque.render(s);
     this.lease.render(s);
+    this.repeat.onStatus(s);
+    if (previous && previous.state !== s.state && s.state === "teach") this.teach.refreshDraft();
     if (!previous || (previous.joint_names || []).join() !== (s.joint_names || []).join()) {
       if (s.joint_names) this.sliders.build(s.joint_names, s.joint_limits_rad);
       this.plot.setJoints(s.joint_names, s.joint_limits_rad);
+      this.teach.setJointNames(s.joint_names);
       this.sliders.follow(s.joints_rad, true);
     } else {
       this.sliders.follow(s.joints_rad);
@@ -353,17 +366,7 @@ class App {
   }
 
   refreshPrograms() {
-    this.api.programs()
-      .then((p) => {
-        renderPrograms(p, (prog) => this.repeatProgram(prog));
-        this.refreshAllowed();
-      })
-      .catch(() => renderPrograms([], () => {}));
-  }
-
-  repeatProgram(prog) {
-    const cycles = Math.max(1, Math.round(Number($("repeat-cycles").value) || 1));
-    this.run(`repeat ${prog.name || prog.id}`, () => this.api.repeat(prog.id ?? prog.name, cycles));
+    return this.teach.refresh();
   }
 
   bindControls() {
@@ -387,17 +390,6 @@ class App {
     document.querySelectorAll("#click-mode button").forEach((b) => b.addEventListener("click", () => this.setMode(b.dataset.mode)));
     document.querySelectorAll("#view-select button").forEach((b) => b.addEventListener("click", () => this.setView(b.dataset.view)));
     document.querySelectorAll("[data-layer]").forEach((c) => c.addEventListener("change", () => this.setLayers()));
-    on("btn-teach-start", () => this.run("teach start", () => this.api.teachStart()));
-    on("btn-teach-record", () => this.run("record waypoint", () => this.api.teachRecord()));
-    on("btn-teach-stop", async () => {
-      const name = $("teach-name").value.trim();
-      if (!name) {
-        this.log.toast("error", "teach", "give the program a name first");
-        return;
-      }
-      if (await this.run(`save program '${name}'`, () => this.api.teachStop(name))) this.refreshPrograms();
-    });
-    on("btn-programs-refresh", () => this.refreshPrograms());
     on("btn-sim-scene", () => {
       const event = $("sim-event").value;
       const level = Number($("sim-level").value);

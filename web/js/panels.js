@@ -212,34 +212,6 @@ export function renderCalibration(c) {
   });
 }
 
-/** Programs list with a Repeat button each (enabled by the "repeat" command). */
-export function renderPrograms(payload, onRepeat) {
-  const list = Array.isArray(payload) ? payload : payload?.data || payload?.programs || [];
-  const ul = $("program-list");
-  if (!list.length) {
-    const li = document.createElement("li");
-    li.innerHTML = "<small>no programs yet</small>";
-    ul.replaceChildren(li);
-    return;
-  }
-  ul.replaceChildren(...list.map((p) => {
-    const li = document.createElement("li");
-    const name = document.createElement("span");
-    name.textContent = p.name || String(p.id);
-    const n = p.waypoints?.length ?? p.waypoint_count ?? p.n_waypoints;
-    const small = document.createElement("small");
-    small.textContent = n !== undefined ? `${n} wp` : "";
-    const btn = document.createElement("button");
-    btn.className = "btn small";
-    btn.type = "button";
-    btn.dataset.command = "repeat";
-    btn.textContent = "Repeat";
-    btn.addEventListener("click", () => onRepeat(p));
-    li.append(name, small, btn);
-    return li;
-  }));
-}
-
 function escapeHtml(s) {
   return String(s).replace(/[&<>"']/g, (c) => ({ "&": "&amp;", "<": "&lt;", ">": "&gt;", '"': "&quot;", "'": "&#39;" })[c]);
 }

@@ -1,0 +1,297 @@
+// The teach panel: record (button or R key), undo, save; the draft and saved programs as waypoint tables
+// (joints in degrees, gripper, dwell, move time) that can be edited in place, reordered, deleted, set to the
+// current pose, gone to; rename, duplicate, delete, export. Every edit is one PATCH of the whole program
+// (the server checks it against the limits and the table before storing anything).
+
+import { typingIn } from "./jog.js";
+
+const $ = (id) => document.getElementById(id);
+const DEG = 180 / Math.PI;
+
+function cell(tr, content) {
+  const td = tr.insertCell();
+  if (content instanceof Node) td.append(content);
+  else td.textContent = content;
+  return td;
+}
+
+function smallButton(text, title, onClick, command) {
+  const b = document.createElement("button");
+  Object.assign(b, { type: "button", className: "btn small", textContent: text, title });
+  if (command) b.dataset.command = command;
+  b.addEventListener("click", onClick);
+  return b;
+}
+
+/** Waypoint as sent back in a PATCH (the request model's fields only). */
+function toRequest(w) {
+  const out = { joints_rad: w.joints_rad.map(Number), gripper: w.gripper, dwell_s: Number(w.dwell_s) || 0 };
+  if (Number.isFinite(w.moving_time_s) && w.moving_time_s > 0) out.moving_time_s = w.moving_time_s;
+  return out;
+}
+
+export class TeachPanel {
+  /** api: Api; run(action, call); log: EventLog; status(): the newest status; onRepeat(program): start a repeat. */
+  constructor({ api, run, log, status, onRepeat, afterChange }) {
+    this.api = api;
+    this.run = run;
+    this.log = log;
+    this.status = status;
+    this.onRepeat = onRepeat;
+    this.afterChange = afterChange || (() => {});
+    this.programs = [];
+    this.selectedId = null;
+    this.jointNames = [];
+    this.bind();
+  }
+
+  bind() {
+    const on = (id, fn) => $(id).addEventListener("click", fn);
+    on("btn-teach-start", () => this.run("teach start", () => this.api.teachStart()).then(() => this.refreshDraft()));
+    on("btn-teach-record", () => this.record());
+    on("btn-teach-undo", () => this.run("undo waypoint", () => this.api.teachUndo()).then(() => this.refreshDraft()));
+    on("btn-teach-stop", () => this.save());
+    on("btn-programs-refresh", () => this.refresh());
+    on("btn-program-rename", () => this.rename());
+    on("btn-program-duplicate", () => this.duplicate());
+    on("btn-program-delete", () => this.remove());
+    on("btn-program-gripper", () => this.insertGripperStep());
+    document.addEventListener("keydown", (e) => {
+      if ((e.key === "r" || e.key === "R") && !e.ctrlKey && !e.metaKey && !e.altKey && !typingIn(e.target)
+          && !$("btn-teach-record").disabled) {
+        e.preventDefault();
+        this.record();
+      }
+    });
+  }
+
+  setJointNames(names) {
+    if (Array.isArray(names)) this.jointNames = names;
+  }
+
+  async record() {
+    const dwellS = Number($("teach-dwell").value);
+    const body = Number.isFinite(dwellS) && dwellS > 0 ? { dwell_s: dwellS } : undefined;
+    const r = await this.run("record waypoint", () => this.api.teachRecord(body));
+    if (r) this.refreshDraft();
+    return r;
+  }
+
+  async save() {
+    const name = $("teach-name").value.trim();
+    if (!name) {
+      this.log.toast("error", "teach", "give the program a name first");
+      return;
+    }
+    const saved = await this.run(`save program '${name}'`, () => this.api.teachStop(name));
+    if (saved) {
+      this.selectedId = saved.id;
+      $("draft-table").replaceChildren();
+      await this.refresh();
+    }
+  }
+
+  async refreshDraft() {
+    try {
+      const draft = await this.api.teachDraft();
+      this.renderTable($("draft-table"), draft.waypoints || [], null);
+    } catch {
+      /* not teaching: no draft to show */
+    }
+  }
+
+  async refresh() {
+    try {
+      const payload = await this.api.programs();
+      this.programs = payload.data || [];
+    } catch {
+      this.programs = [];
+    }
+    this.renderList();
+    this.renderEditor();
+    this.afterChange();
+  }
+
+  get selected() {
+    return this.programs.find((p) => p.id === this.selectedId) || null;
+  }
+
+  renderList() {
+    const ul = $("program-list");
+    if (!this.programs.length) {
+      const li = document.createElement("li");
+      li.innerHTML = "<small>no programs yet</small>";
+      ul.replaceChildren(li);
+      return;
+    }
+    ul.replaceChildren(...this.programs.map((p) => {
+      const li = document.createElement("li");
+      li.dataset.programId = String(p.id);
+      li.classList.toggle("selected", p.id === this.selectedId);
+      const name = document.createElement("span");
+      name.textContent = p.name;
+      name.addEventListener("click", () => this.select(p.id));
+      const small = document.createElement("small");
+      small.textContent = `${p.waypoints.length} wp`;
+      li.append(name, small, smallButton("Edit", "show and edit the waypoints", () => this.select(p.id)),
+        smallButton("Repeat", "repeat with the cycles and speed above", () => this.onRepeat(p), "repeat"));
+      return li;
+    }));
+  }
+
+  select(id) {
+    this.selectedId = id;
+    this.renderList();
+    this.renderEditor();
+    this.afterChange();
+  }
+
+  renderEditor() {
+    const p = this.selected;
+    $("program-editor").hidden = !p;
+    if (!p) return;
+    $("program-name").value = p.name;
+    $("program-export-csv").href = `/api/programs/${p.id}/export?format=csv`;
+    $("program-export-json").href = `/api/programs/${p.id}/export?format=json`;
+    this.renderTable($("program-table"), p.waypoints, p);
+  }
+
+  /** A waypoint table; with `program` its cells are editable and rows carry actions. */
+  renderTable(table, waypoints, program) {
+    const names = this.jointNames.length ? this.jointNames : (waypoints[0]?.joints_rad || []).map((_, i) => `q${i + 1}`);
+    table.replaceChildren();
+    const head = table.createTHead().insertRow();
+    ["#", ...names.map((n) => `${n}°`), "gripper", "dwell s", "time s", ""].forEach((h) => { head.insertCell().textContent = h; });
+    const body = table.createTBody();
+    waypoints.forEach((w, i) => {
+      const tr = body.insertRow();
+      tr.dataset.index = String(i);
+      cell(tr, String(i + 1));
+      w.joints_rad.forEach((q, j) => cell(tr, program ? this.input((q * DEG).toFixed(1), (v) => this.edit(i, (x) => { x.joints_rad[j] = v / DEG; }), `q${j}`) : (q * DEG).toFixed(1)));
+      if (program) {
+        const select = document.createElement("select");
+        select.dataset.field = "gripper";
+        ["release", "grasp"].forEach((g) => select.add(new Option(g, g, false, g === w.gripper)));
+        select.addEventListener("change", () => this.edit(i, (x) => { x.gripper = select.value; }));
+        cell(tr, select);
+      } else {
+        cell(tr, w.gripper);
+      }
+      cell(tr, program ? this.input(String(w.dwell_s ?? 0), (v) => this.edit(i, (x) => { x.dwell_s = v; }), "dwell") : String(w.dwell_s ?? 0));
+      const t = w.moving_time_s ?? "";
+      cell(tr, program ? this.input(String(t), (v) => this.edit(i, (x) => { x.moving_time_s = v > 0 ? v : null; }), "time", true) : String(t || "auto"));
+      if (program) {
+        const actions = document.createElement("span");
+        actions.className = "wp-actions";
+        actions.append(
+          smallButton("↑", "move up", () => this.move(i, -1)),
+          smallButton("↓", "move down", () => this.move(i, 1)),
+          smallButton("set", "set to the current pose", () => this.setToCurrent(i)),
+          smallButton("go", "go to this waypoint", () => this.goTo(w), "move_joints"),
+          smallButton("✕", "delete this waypoint", () => this.deleteRow(i)),
+        );
+        cell(tr, actions);
+      } else {
+        cell(tr, "");
+      }
+    });
+  }
+
+  input(value, onCommit, field, allowEmpty = false) {
+    const input = document.createElement("input");
+    Object.assign(input, { type: "text", value, className: "num wp-input" });
+    input.inputMode = "decimal";
+    input.dataset.field = field;
+    input.addEventListener("change", () => {
+      const text = input.value.trim();
+      const v = text === "" && allowEmpty ? 0 : Number(text);
+      if (text === "" && !allowEmpty) return this.refusal(input, "a number is needed");
+      if (!/^[-+]?(\d+\.?\d*|\.\d+)$/.test(text) && !(allowEmpty && text === "")) return this.refusal(input, `'${text}' is not a number`);
+      onCommit(v);
+      return null;
+    });
+    return input;
+  }
+
+  refusal(input, message) {
+    this.log.toast("error", "edit waypoint", message);
+    this.renderEditor();
+    return null;
+  }
+
+  /** PATCH the selected program with waypoint i changed by `change` (a copy); the table shows what the server stored. */
+  async edit(i, change) {
+    const p = this.selected;
+    const waypoints = p.waypoints.map((w) => ({ ...w, joints_rad: [...w.joints_rad] }));
+    change(waypoints[i]);
+    await this.patch(p, { waypoints: waypoints.map(toRequest) }, `edit waypoint ${i + 1}`);
+  }
+
+  async patch(p, body, action) {
+    const updated = await this.run(`${action} of '${p.name}'`, () => this.api.updateProgram(p.id, body));
+    const index = this.programs.findIndex((x) => x.id === p.id);
+    if (updated && index >= 0) this.programs[index] = updated;
+    this.renderList();
+    this.renderEditor();
+    this.afterChange();
+    return updated;
+  }
+
+  move(i, delta) {
+    const p = this.selected;
+    const j = i + delta;
+    if (j < 0 || j >= p.waypoints.length) return;
+    const w = p.waypoints.map(toRequest);
+    [w[i], w[j]] = [w[j], w[i]];
+    this.patch(p, { waypoints: w }, `move waypoint ${i + 1}`);
+  }
+
+  deleteRow(i) {
+    const p = this.selected;
+    if (p.waypoints.length <= 1) {
+      this.log.toast("error", "edit", "a program keeps at least one waypoint: delete the program instead");
+      return;
+    }
+    this.patch(p, { waypoints: p.waypoints.filter((_, k) => k !== i).map(toRequest) }, `delete waypoint ${i + 1}`);
+  }
+
+  setToCurrent(i) {
+    const q = this.status()?.joints_rad;
+    if (!Array.isArray(q)) return;
+    this.edit(i, (x) => { x.joints_rad = [...q]; });
+  }
+
+  goTo(w) {
+    const time = Number($("jog-time").value);
+    this.run("go to waypoint", () => this.api.joints(w.joints_rad, Number.isFinite(time) && time > 0 ? time : undefined));
+  }
+
+  /** A gripper step after the last waypoint: the same pose with the gripper toggled. */
+  insertGripperStep() {
+    const p = this.selected;
+    const last = p.waypoints[p.waypoints.length - 1];
+    const step = { ...last, joints_rad: [...last.joints_rad], gripper: last.gripper === "grasp" ? "release" : "grasp", dwell_s: 0 };
+    this.patch(p, { waypoints: [...p.waypoints, step].map(toRequest) }, "insert a gripper step");
+  }
+
+  rename() {
+    const name = $("program-name").value.trim();
+    if (name) this.patch(this.selected, { name }, "rename");
+  }
+
+  async duplicate() {
+    const copy = await this.run(`duplicate '${this.selected.name}'`, () => this.api.duplicateProgram(this.selected.id));
+    if (copy) {
+      this.selectedId = copy.id;
+      await this.refresh();
+    }
+  }
+
+  async remove() {
+    const p = this.selected;
+    if (await this.run(`delete '${p.name}'`, () => this.api.deleteProgram(p.id))) {
+      this.selectedId = null;
+      await this.refresh();
+    }
+  }
+}
