@@ -38,6 +38,11 @@ class MotionConfig(StrictModel):
     step_accel_m_s2: float = Field(0.2, gt=0.0, le=5.0)
     step_rotation_speed_rad_s: float = Field(0.5, gt=0.0, le=3.0)
     step_rotation_accel_rad_s2: float = Field(2.0, gt=0.0, le=20.0)
+    # The open fingers as a box in the gripper frame (across: the arm's finger_offset_max_m + finger_thickness_m):
+    # jog steps keep its lowest corner board_clearance_m above the board.
+    finger_back_m: float = Field(0.07, ge=0.0, le=0.3)  # the fingers reach this far back from the gripper point
+    finger_thickness_m: float = Field(0.008, ge=0.0, le=0.05)
+    finger_half_height_m: float = Field(0.012, ge=0.0, le=0.1)
 
     @model_validator(mode="after")
     def _workspace_box(self) -> "MotionConfig":

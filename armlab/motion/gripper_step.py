@@ -27,6 +27,8 @@ AXES = ("x", "y", "z", "pitch", "roll")
 LINEAR_AXES = ("x", "y", "z")
 POSITION_TOL_M = 0.001  # the gripper point stays this close to the asked motion
 ORIENTATION_TOL_RAD = math.radians(0.5)  # pitch and yaw kept (or changed by the asked step) this closely
+EXACT_TOL_RAD = math.radians(0.02)  # a plan that keeps the wrist roll must keep the yaw this closely, else it rolls
+FALLBACK_TOL_RAD = math.radians(0.3)  # ... unless rolling is impossible: then this much (the servos add < 0.2°)
 MAX_STEP_M = 0.1
 MAX_STEP_RAD = math.pi / 4
 # Holding the yaw while the waist turns by w rolls the wrist by about w / sin(pitch) and tilts the fingers:
@@ -93,21 +95,38 @@ def _profile(distance: float, speed: float, accel: float) -> tuple[float, float]
     return minimum_time(speed / distance, accel / distance)
 
 
+@dataclass(frozen=True)
+class FingerBox:
+    """A box around the open fingers in the gripper frame (x = approach, y = closing axis), metres: from
+    back_m behind the gripper point to reach_m beyond it, ±half_width_m across, ±half_height_m."""
+
+    back_m: float
+    reach_m: float
+    half_width_m: float
+    half_height_m: float
+
+    def corners_m(self) -> np.ndarray:
+        """(8, 3) corners in the gripper frame."""
+        return np.array([[x, y, z] for x in (-self.back_m, self.reach_m) for y in (-self.half_width_m, self.half_width_m)
+                         for z in (-self.half_height_m, self.half_height_m)])
+
+
 def plan_gripper_step(
     arm,
     q_start_rad,
     axis: str,
     amount: float,
     speeds: StepSpeeds,
-    min_height_m: float = 0.0,
+    fingers: FingerBox | None = None,
+    clearance_m: float = 0.0,
     rate_hz: float = DEFAULT_RATE_HZ,
 ) -> JointTrajectory:
     """A checked jog step from q_start: `amount` metres along world axis x|y|z, or radians of pitch|roll.
 
-    min_height_m: the gripper point's floor for Cartesian steps (the caller adds the pads' reach).
-    ValueError for malformed input; StepRefused / Unreachable (with the reason and numbers) when the
-    step cannot be made keeping the gripper's pitch and yaw within ORIENTATION_TOL_RAD and the point
-    within POSITION_TOL_M of the asked motion.
+    fingers: the box the fingers occupy; every sample keeps its lowest corner clearance_m above the board
+    (None: the gripper point itself). ValueError for malformed input; StepRefused / Unreachable (with the
+    reason and numbers) when the step cannot be made keeping the gripper's pitch and yaw within
+    ORIENTATION_TOL_RAD and the point within POSITION_TOL_M of the asked motion, or the fingers above the board.
     """
     if axis not in AXES:
         raise ValueError(f"axis must be one of {', '.join(AXES)}, got {axis!r}")
@@ -122,14 +141,29 @@ def plan_gripper_step(
     start = gripper_pose(arm, q_start)
     if axis == "roll":
         trajectory = _plan_roll(arm, q_start, amount, speeds, rate_hz)
+        verify_step(arm, trajectory.positions_rad, axis, amount)
     elif axis == "pitch":
         trajectory = _plan_pitch(arm, q_start, start, amount, speeds, rate_hz)
     else:
-        trajectory = _plan_linear(arm, q_start, start, axis, amount, speeds, min_height_m, rate_hz)
-    if axis == "roll":
-        verify_step(arm, trajectory.positions_rad, axis, amount)
+        trajectory = _plan_linear(arm, q_start, start, axis, amount, speeds, rate_hz)
+    check_fingers_above_board(arm, trajectory.positions_rad, fingers, clearance_m, _step_text(axis, amount))
     return trajectory
 
+
+def check_fingers_above_board(arm, positions_rad: np.ndarray, fingers: FingerBox | None, clearance_m: float, label: str) -> None:
+    """StepRefused ('below the table') if at some sample the fingers' lowest corner (or the gripper point,
+    without a finger box) comes closer than clearance_m to the board."""
+    T = np.asarray(arm.fk(np.asarray(positions_rad, float)), float).reshape(-1, 4, 4)
+    corners = np.zeros((1, 3)) if fingers is None else fingers.corners_m()
+    lowest = np.einsum("nj,kj->nk", T[:, 2, :3], corners) + T[:, 2, 3][:, None]  # world z of each corner
+    sample = int(np.argmin(lowest.min(axis=1)))
+    low_m = float(lowest[sample].min())
+    if low_m < clearance_m:
+        raise StepRefused(
+            f"{label}: the fingers would come down to z = {low_m * 1000:.1f} mm with the gripper point at "
+            f"z = {T[sample, 2, 3] * 1000:.1f} mm, below the {clearance_m * 1000:.1f} mm kept above the board",
+            "below the table",
+        )
 
 def _step_text(axis: str, amount: float) -> str:
     if axis in LINEAR_AXES:
@@ -137,17 +171,13 @@ def _step_text(axis: str, amount: float) -> str:
     return f"{axis} step of {math.degrees(amount):+.1f}°"
 
 
-def _plan_linear(arm, q_start, start: GripperPose, axis: str, amount: float, speeds: StepSpeeds, min_height_m: float, rate_hz: float):
+def _plan_linear(arm, q_start, start: GripperPose, axis: str, amount: float, speeds: StepSpeeds, rate_hz: float):
     direction = np.zeros(3)
     direction[LINEAR_AXES.index(axis)] = 1.0
     goal = start.position_m + amount * direction
     label = _step_text(axis, amount)
-    if goal[2] < min_height_m:
-        raise StepRefused(
-            f"{label}: the gripper point would go to z = {goal[2] * 1000:.1f} mm, below the {min_height_m * 1000:.1f} mm "
-            "the fingers need above the board",
-            "below the table",
-        )
+    if goal[2] < 0.0:
+        raise StepRefused(f"{label}: the gripper point would go to z = {goal[2] * 1000:.1f} mm, below the board", "below the table")
     duration_s, ramp_s = _profile(abs(amount), speeds.linear_m_s, speeds.linear_accel_m_s2)
 
     def targets_at(s: np.ndarray) -> np.ndarray:
@@ -156,26 +186,35 @@ def _plan_linear(arm, q_start, start: GripperPose, axis: str, amount: float, spe
     def pitch_at(s: np.ndarray) -> np.ndarray:
         return np.full(s.size, start.pitch_rad)
 
-    # Keep the wrist roll when that keeps the yaw (a step that leaves the waist alone), else let IK roll
-    # the wrist to hold the closing axis' heading.
+    # Keep the wrist roll when that keeps the yaw exactly (a step that leaves the waist alone), else let IK
+    # roll the wrist to hold the closing axis' heading; the uncompensated plan only if that is impossible.
+    def attempt(yaw, tol_rad):
+        return _checked_path(arm, q_start, targets_at, pitch_at, yaw, duration_s, ramp_s, label, axis, amount, rate_hz, tol_rad)
+
     try:
-        return _checked_path(arm, q_start, targets_at, pitch_at, None, duration_s, ramp_s, label, axis, amount, rate_hz)
+        return attempt(None, EXACT_TOL_RAD)
     except StepRefused as kept_roll:
         if kept_roll.reason != "orientation":
             raise
         try:
-            return _checked_path(arm, q_start, targets_at, pitch_at, start.yaw_rad, duration_s, ramp_s, label, axis, amount, rate_hz)
+            return attempt(start.yaw_rad, ORIENTATION_TOL_RAD)
         except Unreachable as rolled:
+            try:
+                return attempt(None, FALLBACK_TOL_RAD)
+            except StepRefused:
+                pass
             raise StepRefused(f"{kept_roll}; rolling the wrist to hold it: {rolled}", kept_roll.reason) from rolled
 
 
-def _checked_path(arm, q_start, targets_at, pitch_at, yaw, duration_s, ramp_s, label, axis, amount, rate_hz) -> JointTrajectory:
+def _checked_path(
+    arm, q_start, targets_at, pitch_at, yaw, duration_s, ramp_s, label, axis, amount, rate_hz, tol_rad=ORIENTATION_TOL_RAD
+) -> JointTrajectory:
     """plan_path, then verify_step; an IK branch switch along the way is refused (StepRefused) too."""
     try:
         trajectory = plan_path(arm, q_start, targets_at, pitch_at, yaw, duration_s, ramp_s, label, rate_hz)
     except DiscontinuousPath as error:
         raise StepRefused(f"the arm cannot follow the step continuously: {error}", "discontinuous") from error
-    verify_step(arm, trajectory.positions_rad, axis, amount)
+    verify_step(arm, trajectory.positions_rad, axis, amount, tol_rad)
     return trajectory
 
 
@@ -206,7 +245,7 @@ def _plan_roll(arm, q_start, amount: float, speeds: StepSpeeds, rate_hz: float):
     return plan_joint_move(q_start, q_goal, arm, moving_time_s=duration_s, rate_hz=rate_hz)
 
 
-def verify_step(arm, positions_rad: np.ndarray, axis: str, amount: float) -> None:
+def verify_step(arm, positions_rad: np.ndarray, axis: str, amount: float, tol_rad: float = ORIENTATION_TOL_RAD) -> None:
     """StepRefused unless every sample keeps the gripper on the asked motion (FK of the planned joints):
     Cartesian: on the line within POSITION_TOL_M, pitch and yaw within ORIENTATION_TOL_RAD of the start's,
     ending within POSITION_TOL_M of the goal; pitch: the point kept, ending at start + amount; roll: the
@@ -231,11 +270,11 @@ def verify_step(arm, positions_rad: np.ndarray, axis: str, amount: float) -> Non
         worst_off_m = max(worst_off_m, end_error_m)
     if axis == "pitch":
         end_error = abs(angle_difference_rad(end.pitch_rad, start.pitch_rad + amount))
-        if end_error > ORIENTATION_TOL_RAD:
+        if end_error > tol_rad:
             raise StepRefused(f"{label}: the pitch would end {math.degrees(end_error):.2f}° off", "orientation")
     if worst_off_m > POSITION_TOL_M:
         raise StepRefused(f"{label}: the gripper point would leave the asked motion by {worst_off_m * 1000:.1f} mm", "off the line")
-    if worst_pitch > ORIENTATION_TOL_RAD:
+    if worst_pitch > tol_rad:
         raise StepRefused(f"{label}: the gripper's pitch would change by {math.degrees(worst_pitch):.2f}°", "orientation")
     if axis in LINEAR_AXES:
         waist_turn, roll = abs(positions_rad[-1][0] - positions_rad[0][0]), abs(positions_rad[-1][-1] - positions_rad[0][-1])
@@ -246,7 +285,7 @@ def verify_step(arm, positions_rad: np.ndarray, axis: str, amount: float) -> Non
                 "a 5-joint arm keeps its heading sideways only pointing (nearly) down; pitch it down first, or step along the arm",
                 "orientation",
             )
-    if worst_yaw > ORIENTATION_TOL_RAD:
+    if worst_yaw > tol_rad:
         raise StepRefused(
             f"{label}: the gripper's yaw would change by {math.degrees(worst_yaw):.2f}° (a 5-joint arm turns the gripper "
             "with the waist)",

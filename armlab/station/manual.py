@@ -105,7 +105,7 @@ class ManualCommands:
         Refused before anything moves: ArmMoving while the arm still moves, StepRefused/Unreachable (the
         reason) when the step cannot keep the gripper's orientation and line. A step that follows this
         station's previous step starts from that step's commanded end (the servos' sag does not add up)."""
-        from armlab.motion.gripper_step import StepSpeeds, gripper_pose, plan_gripper_step
+        from armlab.motion.gripper_step import FingerBox, StepSpeeds, plan_gripper_step
 
         scale = checked_speed_percent(speed_percent) / 100.0
         self.allowed_or_raise("jog", source)
@@ -122,9 +122,12 @@ class ManualCommands:
             config.step_speed_m_s * scale, config.step_accel_m_s2 * scale,
             config.step_rotation_speed_rad_s * scale, config.step_rotation_accel_rad_s2 * scale,
         )
-        pitch = gripper_pose(self.model, q_start).pitch_rad
-        floor_m = config.board_clearance_m + config.pad_reach_m * max(0.0, math.sin(pitch))
-        trajectory = plan_gripper_step(self.model, q_start, axis, amount, speeds, floor_m, config.sample_rate_hz)
+        gripper = getattr(self.model.config, "gripper", None)
+        fingers = FingerBox(
+            config.finger_back_m, config.pad_reach_m,
+            (gripper.finger_offset_max_m if gripper is not None else 0.0) + config.finger_thickness_m, config.finger_half_height_m,
+        )
+        trajectory = plan_gripper_step(self.model, q_start, axis, amount, speeds, fingers, config.board_clearance_m, config.sample_rate_hz)
         self.check_motion(trajectory)
         swept_box = self._swept_box(trajectory)
         with self._lock:

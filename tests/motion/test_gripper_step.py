@@ -13,12 +13,13 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from armlab.kinematics import Unreachable, load_arm
-from armlab.motion.gripper_step import StepRefused, StepSpeeds, plan_gripper_step
+from armlab.motion.gripper_step import FingerBox, StepRefused, StepSpeeds, plan_gripper_step
 
 ARM = load_arm("rx200")
 SPEEDS = StepSpeeds(0.05, 0.2, 0.5, 2.0)
 TOL_M, TOL_RAD = 0.001, math.radians(0.5)
-FLOOR_M = 0.012
+FINGERS = FingerBox(back_m=0.07, reach_m=0.009, half_width_m=0.045, half_height_m=0.012)  # the rx200's open fingers
+CLEARANCE_M = 0.003
 
 
 def pose(q) -> tuple[np.ndarray, float, float]:
@@ -75,7 +76,7 @@ def test_a_step_moves_only_along_its_axis_and_keeps_pitch_and_yaw(start, axis, a
     q0 = START_POSES[start]
     if start == "home" and axis == "x":
         pytest.skip("refused: see test_refusals")
-    trajectory = plan_gripper_step(ARM, q0, axis, amount, SPEEDS, FLOOR_M)
+    trajectory = plan_gripper_step(ARM, q0, axis, amount, SPEEDS, FINGERS, CLEARANCE_M)
     assert np.allclose(trajectory.positions_rad[0], q0)
     assert_step_kept(trajectory.positions_rad, axis, amount)
 
@@ -84,7 +85,7 @@ def test_z_from_home_keeps_the_wrist_and_the_yaw():
     """The reported defect: a 10 mm -Z step from home turned wrist_rotate 0 -> 90° and the yaw 180° -> 0°."""
     q = np.zeros(5)
     for _ in range(2):
-        q = plan_gripper_step(ARM, q, "z", -0.01, SPEEDS, FLOOR_M).positions_rad[-1]
+        q = plan_gripper_step(ARM, q, "z", -0.01, SPEEDS, FINGERS, CLEARANCE_M).positions_rad[-1]
     assert abs(q[4]) < 1e-9
     assert abs(wrap(pose(q)[2] - math.pi)) <= TOL_RAD
     assert pose(q)[0][2] == pytest.approx(pose(np.zeros(5))[0][2] - 0.02, abs=TOL_M)
@@ -102,21 +103,30 @@ def test_z_from_home_keeps_the_wrist_and_the_yaw():
 )
 def test_refusals_say_why(start, axis, amount, words):
     with pytest.raises(ValueError, match=words):
-        plan_gripper_step(ARM, START_POSES[start], axis, amount, SPEEDS, FLOOR_M)
+        plan_gripper_step(ARM, START_POSES[start], axis, amount, SPEEDS, FINGERS, CLEARANCE_M)
 
 
 def test_roll_past_the_wrist_limit_is_refused():
     q = START_POSES["near the table"].copy()
     q[4] = math.radians(175)
     with pytest.raises(StepRefused, match="wrist_rotate"):
-        plan_gripper_step(ARM, q, "roll", 0.2, SPEEDS, FLOOR_M)
+        plan_gripper_step(ARM, q, "roll", 0.2, SPEEDS, FINGERS, CLEARANCE_M)
+
+
+def test_fingers_that_would_touch_the_board_are_refused():
+    """Tilted 29° and rolled -47°, 46 mm up: 10 mm down puts the lower open finger into the board (the
+    simulation stopped it 2.4 mm short); the gripper point alone would still be 36 mm up."""
+    q0 = np.radians([34.2, -11.8, 82.3, -41.8, -47.0])
+    with pytest.raises(StepRefused, match="fingers would come down"):
+        plan_gripper_step(ARM, q0, "z", -0.01, SPEEDS, FINGERS, CLEARANCE_M)
+    plan_gripper_step(ARM, q0, "z", -0.01, SPEEDS, None, CLEARANCE_M)  # the point alone: accepted
 
 
 def test_a_tilted_gripper_low_over_the_table_is_refused_not_bent_up():
     """A 50 mm -Z step with the gripper tilted near the table must not end higher with another pitch."""
     q0 = ARM.ik([0.0, 0.3, 0.06], pitch=0.3)
     try:
-        trajectory = plan_gripper_step(ARM, q0, "z", -0.05, SPEEDS, FLOOR_M)
+        trajectory = plan_gripper_step(ARM, q0, "z", -0.05, SPEEDS, FINGERS, CLEARANCE_M)
     except Unreachable as error:
         assert str(error)
         return
@@ -137,9 +147,12 @@ def test_property_every_step_is_exact_or_refused_with_a_reason(x, y, z, pitch, y
     if axis in ("pitch", "roll"):
         amount *= 10  # radians: up to 0.5 rad
     try:
-        trajectory = plan_gripper_step(ARM, q0, axis, amount, SPEEDS, FLOOR_M)
+        trajectory = plan_gripper_step(ARM, q0, axis, amount, SPEEDS, FINGERS, CLEARANCE_M)
     except ValueError as error:  # Unreachable, StepRefused, a joint limit: all say why
         assert len(str(error)) > 20
         return
     assert_step_kept(trajectory.positions_rad, axis, amount)
     assert ARM.within_limits(trajectory.positions_rad)
+    T = ARM.fk(trajectory.positions_rad)
+    lowest = (T[:, 2, :3] @ FINGERS.corners_m().T + T[:, 2, 3][:, None]).min()
+    assert lowest >= CLEARANCE_M - 1e-9

@@ -113,3 +113,13 @@ def test_speed_override_slows_the_step(station):
     assert slow > 2.5 * full
     with pytest.raises(ValueError, match="speed_percent"):
         station.step_gripper("z", 0.01, speed_percent=5)
+
+
+def test_a_step_that_would_put_a_finger_into_the_board_is_refused(station):
+    """Tilted 29°, rolled -47°, 46 mm up: 10 mm down drove the lower open finger into the board (the arm
+    stopped 2.4 mm short, silently); now refused, and nothing moves."""
+    station.move_joints(np.radians([34.2, -11.8, 82.3, -41.8, -47.0]), wait=True)
+    q0 = measured_pose(station)[3]
+    with pytest.raises(Unreachable, match="fingers would come down"):
+        station.step_gripper("z", -0.01, wait=True)
+    assert np.abs(measured_pose(station)[3] - q0).max() < 2e-3
