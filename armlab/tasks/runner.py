@@ -17,6 +17,7 @@ import numpy as np
 from armlab import skills
 from armlab.kinematics import Unreachable
 from armlab.motion.clearance import box_around
+from armlab.skills import side_grasp
 from armlab.skills.manipulate import plan_pick, plan_place, plan_side_place, run_steps
 from armlab.station.core import Station
 from armlab.station.jobs import JobContext
@@ -40,6 +41,7 @@ class Move:
     finger_axis_rad: float | None = None  # world direction the fingers open along when releasing
     side_ok: bool = False  # may be set down with the gripper horizontal when too high for top-down
     max_tilt_rad: float = math.radians(5.0)  # how far from top-down the gripper may be when it releases
+    grasp_pitches_rad: tuple[float, ...] = ()  # pick and place at the first that plans, fingers horizontal (skills.side_grasp)
     on_placed: Callable[[float], None] | None = field(default=None, compare=False)  # called with the edge once placed
 
     def key(self) -> tuple:
@@ -257,11 +259,15 @@ class TaskRunner:
         if axis is None:
             axis = finger_axis_away(to, yaw or 0.0, [o for o in objects if o is not block and o not in below], block)
         self.progress.next_block, self.progress.next_target_m = block, [float(v) for v in to]
+        grasp = None  # how a side-grasped block sits in the gripper (move.grasp_pitches_rad)
         if skills.is_stale(self.station, block):
             self.fail(f"the {name} was seen before the arm last moved over it: looking again")
             return False
 
         def plan_the_place(q_start=None) -> list:
+            if move.grasp_pitches_rad:
+                return side_grasp.plan_side_place(self.station, to, edge, grasp, place_boxes, q_start=q_start,
+                                                  then_rad=park_pose(self.station.model))
             try:
                 return plan_place(self.station, to, yaw, edge, place_boxes, q_start=q_start, max_transfer_z_m=self.max_transfer_z_m,
                                   finger_axis_rad=axis, max_tilt_rad=move.max_tilt_rad, gripper_box=self.gripper_box)
@@ -271,9 +277,13 @@ class TaskRunner:
                 return plan_side_place(self.station, to, edge, place_boxes, q_start=q_start)
 
         try:
-            pick = plan_pick(self.station, block["position_m"], block.get("yaw_rad"), edge, self.boxes(objects, block),
-                             max_transfer_z_m=self.max_transfer_z_m, gripper_box=self.gripper_box,
-                             finger_axis_rad=finger_axis_away(block["position_m"], block.get("yaw_rad") or 0.0, objects, block))
+            if move.grasp_pitches_rad:
+                pick, grasp = side_grasp.plan_side_pick_place(self.station, block["position_m"], to, edge, self.boxes(objects, block),
+                                                              place_boxes, move.grasp_pitches_rad, then_rad=park_pose(self.station.model))
+            else:
+                pick = plan_pick(self.station, block["position_m"], block.get("yaw_rad"), edge, self.boxes(objects, block),
+                                 max_transfer_z_m=self.max_transfer_z_m, gripper_box=self.gripper_box,
+                                 finger_axis_rad=finger_axis_away(block["position_m"], block.get("yaw_rad") or 0.0, objects, block))
         except (Unreachable, ValueError) as error:
             self.fail(f"cannot pick the {name} at ({block['position_m'][0] * 1000:.0f}, {block['position_m'][1] * 1000:.0f}) mm: {error}")
             return False

@@ -1,21 +1,35 @@
 """to_the_sky (DESIGN §7): the tallest column of large blocks the arm can build, fed by the feeder.
 
 One tower near the arm, where the camera sees all of it, clear of the park path and of the way to the
-feed spot; the nearest loose large block goes on top, top-down. The job ends when no loose block is
-left or the tower's top is out of top-down reach (six blocks for the RX200). Placing higher needs the
-gripper horizontal (skills.plan_side_place), but a block picked top-down and set down that way lies on
-its side, which §7 does not count as upright: that needs a side grasp from the board first (not yet)."""
+feed spot. While the tower's top is in top-down reach (about six blocks for the RX200) the nearest loose
+large block goes on top, top-down. Higher up the gripper must come in shallow; a block picked top-down
+and set down that way would lie on its side (not upright for §7), so there each block is picked and
+placed at one and the same pitch with the fingers closing horizontally (skills.side_grasp): its tilt is
+place pitch − grasp pitch = 0. Those grasps close across two faces only for a block whose yaw lines up
+with its bearing from the base: the feeder's blocks do (the feed spot lies on the arm's +y axis and a
+fed block has yaw 0); any other loose block is first set down on a free spot turned to face the arm.
+The job ends when no loose block is left or no pitch reaches the tower's top.
+
+Tried before: a top-down grasp and a horizontal place (skills.plan_side_place) lays the block on its
+side; the tower stopped at five blocks."""
 
 from __future__ import annotations
 
 import math
 
-from armlab.tasks.columns import Column
-from armlab.tasks.runner import Move, Plan, TaskRunner, cubes
+import numpy as np
 
-TOWER_RADIUS_M = (0.13, 0.2)  # distance of the tower from the arm's base axis
+from armlab.skills import side_grasp
+from armlab.tasks.columns import Column
+from armlab.tasks.runner import Move, Plan, TaskRunner, cubes, near
+
+TOWER_RADIUS_M = (0.21, 0.25)  # distance of the tower from the arm's base axis
 MAX_TOWER_HEIGHT_M = 0.55
-FEED_CLEARANCE_M = 0.15  # the tower stands this far from the feed spot, out of the way to it
+TOWER_FOOTPRINT_M = 0.05  # detections this close to the tower's base (x-y) are the tower
+FEED_CLEARANCE_M = 0.15
+CORRIDOR_MARGIN_RAD = math.radians(20.0)
+FEED_APPROACH_HALF_WIDTH_M = 0.10  # blocks this close to the way in to the feed spot (its inner half) are in the way
+ASIDE_REGION_M = ((-0.30, 0.30), (-0.15, 0.0))  # where blocks in the way are put: the half the tower never uses  # the tower stands this far from the feed spot, out of the way to it
 
 
 def blocked_behind(xy, objects: list[dict]) -> int:
@@ -47,29 +61,103 @@ def choose_base(runner: TaskRunner, objects: list[dict], feed_xy) -> tuple[float
     return best
 
 
+def on_board(block: dict, edge_m: float) -> bool:
+    """True if the detection stands on the board (its top one edge above it), not on another block."""
+    return abs(block["position_m"][2] - edge_m) < 0.008
+
+
+def side_moves(runner: TaskRunner, tower: Column, surface, loose: list[dict], feed_xy) -> list[Move]:
+    """Moves putting a loose, aligned block on the tower at a pitch both ends reach (feed spot first)."""
+    edge = runner.edges_m["large"]
+    moves = []
+    candidates = [b for b in loose if on_board(b, edge) and side_grasp.aligned(b)]
+    anchor = feed_xy if feed_xy is not None else tower.base_xy_m
+    for block in sorted(candidates, key=lambda b: math.dist(b["position_m"][:2], anchor)):
+        pitches = side_grasp.reachable_pitches(runner.station, block["position_m"], surface, edge)
+        if pitches:
+            moves.append(Move(block, surface, f"block {tower.height + 1} of the tower, picked and placed from the side",
+                              yaw_rad=None, grasp_pitches_rad=tuple(pitches), on_placed=lambda e, b=block: tower.add(b, e)))
+    return moves
+
+
+def turn_moves(runner: TaskRunner, loose: list[dict], objects: list[dict]) -> list[Move]:
+    """Moves setting a loose block that is not aligned (or not on the board) down on a free spot,
+    turned to face the arm, so a side grasp can take it next."""
+    edge = runner.edges_m["large"]
+    moves = []
+    for block in loose:
+        if on_board(block, edge) and side_grasp.aligned(block):
+            continue
+        spot = runner.free_spot([o for o in objects if o is not block], edge)
+        moves.append(Move(block, (spot[0], spot[1], 0.0), "turned to face the arm for a side grasp",
+                          yaw_rad=side_grasp.bearing_rad(spot)))
+    return moves
+
+
+def in_the_way(block: dict, feed_xy, tower_xy) -> bool:
+    """True if a block (not the one at the feed spot) stands where the arm sweeps carrying a block from
+    the feed spot to the tower: between their bearings from the base (widened by CORRIDOR_MARGIN_RAD)."""
+    xy = block["position_m"][:2]
+    if near(xy, feed_xy, 0.02) or math.hypot(*xy) < 0.06 or math.hypot(*xy) > max(math.hypot(*feed_xy), math.hypot(*tower_xy)) + 0.07:
+        return False
+    low, high = sorted((side_grasp.bearing_rad(feed_xy), side_grasp.bearing_rad(tower_xy)))
+    bearing = side_grasp.bearing_rad(xy)
+    # The gripper comes to the feed spot from the base side, its palm wide across the way.
+    feed, point = np.asarray(feed_xy, float), np.asarray(xy, float)
+    along = float(np.clip(np.dot(point - feed, -feed) / float(np.dot(feed, feed)), 0.0, 0.5))
+    beside_approach = float(np.linalg.norm(point - feed * (1.0 - along))) < FEED_APPROACH_HALF_WIDTH_M
+    return beside_approach or low - CORRIDOR_MARGIN_RAD <= bearing <= high + CORRIDOR_MARGIN_RAD
+
+
+def aside_moves(runner: TaskRunner, blocking: list[dict], objects: list[dict]) -> list[Move]:
+    """Moves setting blocks that stand in the arm's way down on free spots in y < 0, out of it (turned to
+    face the arm, so they can still be side-grasped later)."""
+    edge = runner.edges_m["large"]
+    moves, taken = [], []
+    for block in blocking:
+        try:
+            spot = runner.free_spot([o for o in objects if o is not block], edge, region=ASIDE_REGION_M, avoid_m=taken)
+        except RuntimeError:
+            continue
+        taken.append(spot)
+        moves.append(Move(block, (spot[0], spot[1], 0.0), "moved out of the arm's way to the tower", yaw_rad=side_grasp.bearing_rad(spot)))
+    return moves
+
+
 def make_policy(level: int | None, params: dict, runner: TaskRunner):
     state: dict = {}
 
     def policy(objects: list[dict], given_up: set) -> Plan:
+        feed = runner.feed_spot()
         if "tower" not in state:
-            feed = runner.feed_spot()
             if feed is not None:
                 runner.reserved_m.append(feed)
             state["tower"] = Column("tower", choose_base(runner, objects, feed))
             runner.reserved_m.append(state["tower"].base_xy_m)
         tower: Column = state["tower"]
         tower.observe(objects, runner.height_at)
-        loose = [b for b in cubes(objects) if b["size"] == "large" and not tower.holds(b)]
         base = tower.base_xy_m
-        surface = tower.surface_m()
-        if not runner.can_place_on(surface, runner.edges_m["large"]):
-            runner.note_once(f"the tower stops at {tower.height} blocks: its top ({surface[2] * 1000:.0f} mm) is out of "
-                             "the arm's top-down reach")
-            return Plan([], done=tower.height, left=len(loose), finished=True)
-        moves = [Move(block, surface, f"block {tower.height + 1} of the tower",
-                      yaw_rad=tower.top["yaw_rad"] if tower.top is not None else 0.0,
-                      on_placed=lambda edge, b=block: tower.add(b, edge))
-                 for block in sorted(loose, key=lambda b: (b.get("stack_level", 1) == 1, math.dist(b["position_m"][:2], base)))]
-        return Plan(moves, done=tower.height, left=len(loose), finished=not loose)
+        # Whatever stands near the base is the tower (a tall one's top is seen up to a few cm off its
+        # base): never a block to pick. Each block goes straight above the base at the measured height,
+        # not on the seen top's centre, so the camera's error at height does not stair-step the tower.
+        at_tower = [o for o in objects if near(o["position_m"], base, TOWER_FOOTPRINT_M)]
+        loose = [b for b in cubes(objects) if b["size"] == "large" and not any(b is o for o in at_tower)]
+        surface = (float(base[0]), float(base[1]), float(tower.height_m if tower.height_m > 0.005 else 0.0))
+        edge = runner.edges_m["large"]
+        blocking = [b for b in loose if feed is not None and in_the_way(b, feed, base)]
+        if runner.can_place_on(surface, edge):  # blocks in the arm's way from the feed spot go in first
+            yaw = tower.top["yaw_rad"] if tower.top is not None else side_grasp.bearing_rad(base)
+            order = sorted(loose, key=lambda b: (b.get("stack_level", 1) == 1, not any(b is o for o in blocking),
+                                                 math.dist(b["position_m"][:2], base)))
+            moves = [Move(block, surface, f"block {tower.height + 1} of the tower", yaw_rad=yaw,
+                          on_placed=lambda edge, b=block: tower.add(b, edge)) for block in order]
+            return Plan(moves, done=tower.height, left=len(loose), finished=not loose)
+        moves = aside_moves(runner, blocking, objects) + side_moves(runner, tower, surface, loose, feed)
+        if not moves and feed is not None and side_grasp.reachable_pitches(runner.station, (*feed, edge), surface, edge):
+            moves = turn_moves(runner, loose, objects)  # the top is in reach, but no loose block faces the arm
+        if not moves:
+            runner.note_once(f"the tower stops at {tower.height} blocks: no loose block can reach its top "
+                             f"({surface[2] * 1000:.0f} mm) at a pitch it was picked at")
+        return Plan(moves, done=tower.height, left=len(loose), finished=not moves)
 
     return policy

@@ -17,7 +17,8 @@ from armlab.workcell import load_workcell
 WORKCELL = load_workcell()
 SPOT = WORKCELL.feeder.spot_m
 EDGE = WORKCELL.block_edge_m("large")
-ELSEWHERE = [(0.0, 0.30), (-0.10, 0.30), (-0.20, 0.25), (0.05, 0.20)]
+# Board spots clear of the feed spot (relative to it, so the test follows the workcell config).
+ELSEWHERE = [(SPOT[0] + dx, SPOT[1] + dy) for dx, dy in ((-0.15, 0.0), (-0.10, -0.12), (0.12, -0.10), (0.05, -0.15))]
 
 
 @pytest.fixture(scope="module")
@@ -88,7 +89,7 @@ def test_a_real_pick_empties_the_spot_and_the_arm_at_the_spot_holds_the_feeder_b
     truth = cell.truth()
     assert truth["gripper"]["holding_id"] == "feed_0"
     assert truth["feeder"]["fed"] == 1, "the held block above the spot keeps it occupied"
-    place = np.array([0.02, 0.25, EDGE / 2])
+    place = np.array([SPOT[0] + 0.02, SPOT[1] - 0.10, EDGE / 2])
     move_to(cell, place + [0, 0, 0.12], speed_rad_s=2.0)
     truth = cell.truth()
     assert truth["feeder"]["fed"] == 2 and at_spot(truth) == ["feed_1"], "the spot refilled once the block left"
@@ -99,7 +100,7 @@ def test_a_real_pick_empties_the_spot_and_the_arm_at_the_spot_holds_the_feeder_b
     # The open gripper around the spot: take feed_1 away from under it; nothing is fed while it stays.
     move_to(cell, block + [0, 0, 0.08])
     move_to(cell, block + [0, 0, 0.005])
-    teleport(cell, "feed_1", (-0.12, 0.30))
+    teleport(cell, "feed_1", (SPOT[0] - 0.12, SPOT[1]))
     cell.step(0.5)
     assert cell.truth()["feeder"]["fed"] == 2 and at_spot(cell.truth()) == []
     move_to(cell, block + [0, 0, 0.10])
