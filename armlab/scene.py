@@ -219,6 +219,7 @@ class Scene:
 
     objects: tuple[SceneObject, ...] = field(default_factory=tuple)
     feeder: Feeder | None = None
+    origin: tuple[str, int, int] | None = field(default=None, compare=False)  # (event, level, seed) of generate_scene
 
     def __post_init__(self) -> None:
         objects = tuple(self.objects)
@@ -385,7 +386,13 @@ def _into_piles(items: list, max_height: int, stack_probability: float, rng: np.
 
 def generate_scene(event: str, level: int = 1, seed: int = 0) -> Scene:
     """A starting layout for a job and level, reproducible from (event, level, seed): the competition
-    events of DESIGN §7 (EVENTS) and the sort_by_tag and clear_table jobs (JOBS)."""
+    events of DESIGN §7 (EVENTS) and the sort_by_tag and clear_table jobs (JOBS). The scene remembers
+    (event, level, seed) as its origin (the page's scene picker shows it)."""
+    scene = _generate_scene(event, level, seed)
+    return Scene(scene.objects, scene.feeder, origin=(event, int(level), int(seed)))
+
+
+def _generate_scene(event: str, level: int, seed: int) -> Scene:
     if event not in JOBS:
         raise ValueError(f"unknown event {event!r}; events: {', '.join(JOBS)}")
     if level not in JOBS[event]:

@@ -35,6 +35,14 @@ def post_scene(body: SceneRequest, station: StationDep, controller: ControlAuth)
     return {"objects": len(scene.objects), "event": body.event, "level": body.level, "seed": body.seed}
 
 
+@router.get("/scene")
+def read_scene(station: StationDep) -> dict:
+    """The scene loaded now: its generator's event, level and seed (None for an explicit scene) and object count."""
+    scene = _cell(station).scene
+    event, level, seed = scene.origin if scene.origin is not None else (None, None, None)
+    return {"event": event, "level": level, "seed": seed, "objects": len(scene.objects)}
+
+
 @router.get("/truth")
 def read_truth(station: StationDep) -> dict:
     """Ground truth: object poses, camera pose and intrinsics, gripper contacts."""

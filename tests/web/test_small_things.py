@@ -180,3 +180,14 @@ def test_depth_view_has_a_colour_scale(page, fresh):
     assert colours >= 8, colours  # a ramp from warm to cold, not the board's flat depth
     page.click("#view-select button[data-view='color']")
     assert page.errors == []
+
+
+def test_scene_picker_shows_the_current_scene(page, fresh):
+    # The fresh station was started with pick_sort level 1, scene seed 3 (conftest SCENE_ARGS).
+    page.wait_for_function("document.getElementById('sim-current').dataset.scene === 'pick_sort/1/3'", timeout=10_000)
+    assert page.input_value("#sim-event") == "pick_sort" and page.input_value("#sim-level") == "1"
+    assert page.input_value("#sim-seed") == "3"
+    fresh.post("/api/sim/scene", {"event": "pick_stack", "level": 2, "seed": 7})  # another client changes it
+    page.wait_for_function("document.getElementById('sim-current').dataset.scene === 'pick_stack/2/7'", timeout=10_000)
+    assert page.input_value("#sim-event") == "pick_stack" and page.input_value("#sim-seed") == "7"
+    assert page.errors == []

@@ -168,6 +168,7 @@ class App {
         this.canControl = Boolean(msg.can_control) && this.api.canControl;
         $("control-mode").textContent = this.canControl ? "control" : "view only";
         $("sim-panel").hidden = msg.backend !== "sim";
+        if (msg.backend === "sim") this.refreshScene();
         this.refreshAllowed();
         break;
       case "telemetry":
@@ -175,6 +176,7 @@ class App {
         break;
       case "event":
         this.log.add(msg.level || "info", msg.message || "", msg.time_s);
+        if (String(msg.message || "").startsWith("scene set")) this.refreshScene();
         break;
       case "calibration":
         this.showCalibration(msg);
@@ -363,6 +365,24 @@ class App {
     if (this.live.mode === "grab" && Array.isArray(d.position_m)) {
       this.run(`grab ${d.color || ""} block ${d.id ?? ""}`, () => this.api.grab({ position_m: d.position_m }));
     }
+  }
+
+  /** The scene picker shows the scene loaded now (GET /api/sim/scene): event, level, seed. */
+  async refreshScene() {
+    let scene;
+    try {
+      scene = await this.api.get("/api/sim/scene");
+    } catch {
+      return;
+    }
+    const known = scene.event && [...$("sim-event").options].some((o) => o.value === scene.event);
+    if (known) {
+      $("sim-event").value = scene.event;
+      $("sim-level").value = String(scene.level);
+      $("sim-seed").value = String(scene.seed);
+    }
+    $("sim-current").textContent = scene.event ? `now: ${scene.event} L${scene.level} seed ${scene.seed}` : `now: custom (${scene.objects} objects)`;
+    $("sim-current").dataset.scene = scene.event ? `${scene.event}/${scene.level}/${scene.seed}` : "custom";
   }
 
   refreshPrograms() {
