@@ -104,7 +104,8 @@ def pass_velocities(points: np.ndarray, limits: Limits, minimum_s=None) -> np.nd
     deltas = np.diff(points, axis=0)
     durations = []
     for index, delta in enumerate(deltas):
-        duration = max(_rest_to_rest_time(delta, limits), (minimum_s[index + 1] if minimum_s else 0.0) or 0.0)
+        cruise_s = float(np.max(np.abs(delta) / limits.velocity_rad_s))  # at full velocity, no ramps
+        duration = max(cruise_s, (minimum_s[index + 1] if minimum_s else 0.0) or 0.0)
         durations.append(duration)
     for k in range(1, m - 1):
         before, after = deltas[k - 1], deltas[k]
@@ -117,7 +118,7 @@ def pass_velocities(points: np.ndarray, limits: Limits, minimum_s=None) -> np.nd
     return velocities
 
 
-def plan_run(
+def _plan_run_once(
     points_rad,
     limits: Limits,
     *,
@@ -127,16 +128,14 @@ def plan_run(
     minimum_s=None,
     tick_s: float = 0.0,
     rate_hz: float = DEFAULT_RATE_HZ,
+    pass_scale: float = 1.0,
 ) -> Run:
-    """A run through points_rad (m ≥ 2, dof), ending at rest on the last point. The first point is the
-    start; start_velocity/start_accel (default rest) let a run continue a motion in progress (a speed
-    change). minimum_s[i]: the least time of the segment into point i (a waypoint's moving_time_s; [0]
-    unused). ValueError if ruckig fails."""
+    """One run with the pass-through velocities × pass_scale (see plan_run)."""
     points = np.asarray(points_rad, dtype=float)
     if points.ndim != 2 or points.shape[0] < 2:
         raise ValueError("a run needs at least two points")
     m, dof = points.shape
-    passes = np.zeros((m, dof)) if stop_everywhere else pass_velocities(points, limits, minimum_s)
+    passes = np.zeros((m, dof)) if stop_everywhere else pass_scale * pass_velocities(points, limits, minimum_s)
     velocity = np.zeros(dof) if start_velocity is None else np.asarray(start_velocity, dtype=float)
     accel = np.zeros(dof) if start_accel is None else np.asarray(start_accel, dtype=float)
     times, samples, arrivals = [0.0], [points[0].copy()], [0.0]
@@ -161,6 +160,33 @@ def plan_run(
         times.append(1.0 / rate_hz)
         samples.append(points[-1].copy())
     return Run(JointTrajectory(np.asarray(times), np.asarray(samples)), tuple(arrivals), bool(np.any(passes)))
+
+
+PASS_SCALES = (1.0, 0.6, 0.3)  # pass-through velocities tried (× the heuristic's); the quickest run wins
+
+
+def plan_run(
+    points_rad,
+    limits: Limits,
+    *,
+    start_velocity=None,
+    start_accel=None,
+    stop_everywhere: bool = False,
+    minimum_s=None,
+    tick_s: float = 0.0,
+    rate_hz: float = DEFAULT_RATE_HZ,
+) -> Run:
+    """A run through points_rad (m ≥ 2, dof), ending at rest on the last point. The first point is the
+    start; start_velocity/start_accel (default rest) let a run continue a motion in progress (a speed
+    change). minimum_s[i]: the least time of the segment into point i (a waypoint's moving_time_s; [0]
+    unused). Blended runs try the pass-through velocities at a few scales (PASS_SCALES) and keep the
+    quickest: per-segment planning with zero acceleration at the waypoints can be slower with the
+    heuristic's full velocities on short segments. ValueError if ruckig fails."""
+    options = dict(start_velocity=start_velocity, start_accel=start_accel, minimum_s=minimum_s, tick_s=tick_s, rate_hz=rate_hz)
+    if stop_everywhere or len(points_rad) <= 2:
+        return _plan_run_once(points_rad, limits, stop_everywhere=stop_everywhere, **options)
+    runs = [_plan_run_once(points_rad, limits, pass_scale=scale, **options) for scale in PASS_SCALES]
+    return min(runs, key=lambda run: run.duration_s)
 
 
 def plan_stop(position_rad, velocity_rad_s, accel_rad_s2, limits: Limits, rate_hz: float = DEFAULT_RATE_HZ) -> JointTrajectory:
