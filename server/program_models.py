@@ -60,6 +60,9 @@ class WaypointRequest(Request):
     gripper: Literal["grasp", "release"]
     dwell_s: Dwell = 0.0
     moving_time_s: MovingTime | None = None
+    gripper_position_m: list[Annotated[float, Field(ge=-5.0, le=5.0)]] | None = Field(
+        None, max_length=3, description="read-only (computed from joints_rad): accepted so a waypoint read can be sent back, ignored"
+    )
 
 
 class ProgramUpdateRequest(Request):
@@ -108,6 +111,9 @@ class WaypointInfo(Wire):
     gripper: Literal["grasp", "release"]
     dwell_s: float = 0.0
     moving_time_s: float | None = None
+    gripper_position_m: list[float] | None = Field(
+        None, description="the gripper point at these joints (FK), world frame: project it through the calibration to draw the path"
+    )
 
 
 class ProgramInfo(Wire):
@@ -116,6 +122,14 @@ class ProgramInfo(Wire):
     created_s: float
     updated_s: float | None = None
     waypoints: list[WaypointInfo]
+
+
+class ProgramPath(Wire):
+    """GET /api/programs/{id}/path: each waypoint's gripper point (world frame, metres) and gripper state."""
+
+    program_id: int
+    points_m: list[list[float]]
+    gripper: list[Literal["grasp", "release"]]
 
 
 class ProgramsResponse(Wire):
@@ -188,6 +202,7 @@ PROGRAM_WIRE_MODELS = (
     WaypointInfo,
     ProgramInfo,
     ProgramsResponse,
+    ProgramPath,
     TeachRecordResponse,
     TeachUndoResponse,
     TeachDraftResponse,

@@ -8,6 +8,7 @@ from __future__ import annotations
 
 from typing import Literal
 
+import numpy as np
 from fastapi import APIRouter, Response
 
 from armlab.skills import programs as program_edits
@@ -20,6 +21,7 @@ from server.program_models import (
     DuplicateRequest,
     ImportRequest,
     ProgramInfo,
+    ProgramPath,
     ProgramsResponse,
     ProgramUpdateRequest,
     TeachDraftResponse,
@@ -31,6 +33,16 @@ from server.program_models import (
 )
 
 router = APIRouter(prefix="/api", tags=["programs"])
+
+
+def waypoint_out(station, waypoint) -> dict:
+    """A waypoint's wire dict with its gripper point (FK, world frame) for drawing the program's path."""
+    position = station.model.fk(waypoint.joints_rad)[:3, 3]
+    return {**waypoint.to_dict(), "gripper_position_m": [float(v) for v in position]}
+
+
+def program_out(station, program) -> dict:
+    return {**program.to_dict(), "waypoints": [waypoint_out(station, w) for w in program.waypoints]}
 
 
 @router.post("/teach/start", response_model=Status)
@@ -45,7 +57,7 @@ def post_teach_record(station: StationDep, controller: ControlAuth, body: TeachR
     """Add the current pose and gripper state as a waypoint; on disk (the draft) before this answers."""
     body = body or TeachRecordRequest()
     waypoint, count = station.teach_record(source=controller, dwell_s=body.dwell_s, moving_time_s=body.moving_time_s)
-    return {**waypoint.to_dict(), "count": count}
+    return {**waypoint_out(station, waypoint), "count": count}
 
 
 @router.post("/teach/continuous", response_model=ContinuousResponse)
@@ -68,32 +80,41 @@ def post_teach_continuous_stop(station: StationDep, controller: ControlAuth) -> 
 def post_teach_undo(station: StationDep, controller: ControlAuth) -> dict:
     """Remove the last recorded waypoint."""
     removed, count = station.teach_undo(source=controller)
-    return {"removed": removed.to_dict() if removed is not None else None, "count": count}
+    return {"removed": waypoint_out(station, removed) if removed is not None else None, "count": count}
 
 
 @router.get("/teach/draft", response_model=TeachDraftResponse)
 def read_teach_draft(station: StationDep) -> dict:
     """The recorded, not yet saved waypoints (kept across restarts until teach/stop saves them)."""
     waypoints, skipped = station.store.read_draft()
-    return {"waypoints": [w.to_dict() for w in waypoints], "count": len(waypoints), "skipped": skipped}
+    return {"waypoints": [waypoint_out(station, w) for w in waypoints], "count": len(waypoints), "skipped": skipped}
 
 
 @router.post("/teach/stop", response_model=ProgramInfo)
 def post_teach_stop(body: TeachStopRequest, station: StationDep, controller: ControlAuth) -> dict:
     """Save the draft as a named program (one transaction) and return to idle."""
-    return station.teach_stop(body.name, source=controller).to_dict()
+    return program_out(station, station.teach_stop(body.name, source=controller))
 
 
 @router.get("/programs", response_model=ProgramsResponse)
 def read_programs(station: StationDep) -> dict:
     """Saved programs; a damaged row is left out and named in `skipped`, never hiding the others."""
     programs, skipped = station.store.read_programs()
-    return {"data": [program.to_dict() for program in programs], "count": len(programs), "skipped": skipped}
+    return {"data": [program_out(station, program) for program in programs], "count": len(programs), "skipped": skipped}
 
 
 @router.get("/programs/{program_id}", response_model=ProgramInfo)
 def read_program(program_id: ProgramId, station: StationDep) -> dict:
-    return station.store.get_program(program_id).to_dict()
+    return program_out(station, station.store.get_program(program_id))
+
+
+@router.get("/programs/{program_id}/path", response_model=ProgramPath)
+def read_program_path(program_id: ProgramId, station: StationDep) -> dict:
+    """The gripper point of each waypoint in the world frame (forward kinematics of the station's arm model),
+    for drawing a program's path on the live view."""
+    program = station.store.get_program(program_id)
+    points = [station.model.fk(np.asarray(w.joints_rad, dtype=float))[:3, 3].tolist() for w in program.waypoints]
+    return {"program_id": program_id, "points_m": points, "gripper": [w.gripper for w in program.waypoints]}
 
 
 @router.patch("/programs/{program_id}", response_model=ProgramInfo)
@@ -102,13 +123,13 @@ def update_program(program_id: ProgramId, body: ProgramUpdateRequest, station: S
     waypoints = None
     if body.waypoints is not None:
         waypoints = [Waypoint(tuple(w.joints_rad), w.gripper, w.dwell_s, w.moving_time_s) for w in body.waypoints]
-    return program_edits.update_program(station, program_id, name=body.name, waypoints=waypoints).to_dict()
+    return program_out(station, program_edits.update_program(station, program_id, name=body.name, waypoints=waypoints))
 
 
 @router.post("/programs/{program_id}/duplicate", response_model=ProgramInfo, status_code=201)
 def post_duplicate(program_id: ProgramId, station: StationDep, controller: ControlAuth, body: DuplicateRequest | None = None) -> dict:
     """Copy a program under a new name (default '<name> (copy)')."""
-    return program_edits.duplicate_program(station, program_id, body.name if body else None).to_dict()
+    return program_out(station, program_edits.duplicate_program(station, program_id, body.name if body else None))
 
 
 @router.delete("/programs/{program_id}")
@@ -133,4 +154,4 @@ def export_program(program_id: ProgramId, station: StationDep, format: Literal["
 def post_import(body: ImportRequest, station: StationDep, controller: ControlAuth) -> dict:
     """Store a program from an exported file's text; a malformed file is refused (422 naming the line and
     the reason) and nothing stored changes."""
-    return program_edits.import_program(station, body.format, body.content, body.name).to_dict()
+    return program_out(station, program_edits.import_program(station, body.format, body.content, body.name))

@@ -342,6 +342,14 @@ export const CLIENT_MESSAGE_TYPES = Object.freeze(["ack", "view", "command"]);
  */
 
 /**
+ * GET /api/programs/{id}/path: each waypoint's gripper point (world frame, metres) and gripper state.
+ * @typedef {Object} ProgramPath
+ * @property {number} program_id
+ * @property {Array<Array<number>>} points_m
+ * @property {Array<("grasp"|"release")>} gripper
+ */
+
+/**
  * PATCH /api/programs/{id}: a new name and/or the whole new waypoint list (reorder, edit a value,
  * insert or delete a waypoint or a gripper step: send the list as it should be). Checked against the
  * joint limits and the table before anything is stored.
@@ -498,6 +506,7 @@ export const CLIENT_MESSAGE_TYPES = Object.freeze(["ack", "view", "command"]);
  * @property {("grasp"|"release")} gripper
  * @property {number} [dwell_s]
  * @property {(number|null)} [moving_time_s]
+ * @property {(Array<number>|null)} [gripper_position_m] the gripper point at these joints (FK), world frame: project it through the calibration to draw the path
  * @property {number} count waypoints in the draft now
  */
 
@@ -573,6 +582,7 @@ export const CLIENT_MESSAGE_TYPES = Object.freeze(["ack", "view", "command"]);
  * @property {("grasp"|"release")} gripper
  * @property {number} [dwell_s]
  * @property {(number|null)} [moving_time_s]
+ * @property {(Array<number>|null)} [gripper_position_m] the gripper point at these joints (FK), world frame: project it through the calibration to draw the path
  */
 
 /**
@@ -582,6 +592,7 @@ export const CLIENT_MESSAGE_TYPES = Object.freeze(["ack", "view", "command"]);
  * @property {("grasp"|"release")} gripper
  * @property {number} [dwell_s] seconds to hold still at the waypoint
  * @property {(number|null)} [moving_time_s]
+ * @property {(Array<number>|null)} [gripper_position_m] read-only (computed from joints_rad): accepted so a waypoint read can be sent back, ignored
  */
 
 /**
