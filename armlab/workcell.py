@@ -13,7 +13,7 @@ from typing import Annotated
 import numpy as np
 from pydantic import Field, field_validator, model_validator
 
-from armlab.config import StrictModel, load_config, resolve_config_path
+from armlab.config import StrictModel, load_config, read_config_file, resolve_config_path
 
 DEFAULT_WORKCELL = "rx200_armlab"
 _REPO_CONFIG_DIR = str(Path(__file__).resolve().parents[1] / "config")
@@ -39,10 +39,33 @@ def _known_dictionary(name: str) -> str:
 
 
 def dictionary_size(name: str) -> int:
-    """Number of markers in an OpenCV predefined dictionary (ids are 0 .. size - 1)."""
+    """Number of markers in an OpenCV predefined dictionary or AprilTag family (ids are 0 .. size - 1)."""
+    if name in APRILTAG_FAMILY_SIZES:
+        return APRILTAG_FAMILY_SIZES[name]
     import cv2
 
     return int(cv2.aruco.getPredefinedDictionary(getattr(cv2.aruco, name)).bytesList.shape[0])
+
+
+# AprilTag families the AprilTag 3 library decodes, and their number of codes (ids 0 .. n - 1).
+APRILTAG_FAMILY_SIZES = {"tag36h11": 587, "tagStandard41h12": 2115, "tag25h9": 35, "tag16h5": 30,
+                         "tagCircle21h7": 38, "tagCircle49h12": 65535, "tagStandard52h13": 48714, "tagCustom48h12": 42211}
+
+
+def is_apriltag_family(name: str) -> bool:
+    """True for an AprilTag library family name (tag36h11, tagStandard41h12, ...), False for DICT_ names."""
+    return name in APRILTAG_FAMILY_SIZES
+
+
+def known_family(name: str) -> str:
+    """The name if the AprilTag library (family) or OpenCV's ArUco module (DICT_...) decodes it."""
+    if is_apriltag_family(name):
+        return name
+    try:
+        return _known_dictionary(name)
+    except ValueError:
+        raise ValueError(f"unknown tag family '{name}': AprilTag families {sorted(APRILTAG_FAMILY_SIZES)} "
+                         "or an OpenCV ArUco dictionary (DICT_APRILTAG_36h11, DICT_4X4_250, ...)") from None
 
 
 class GridSpec(StrictModel):
@@ -100,28 +123,48 @@ class BoardSpec(StrictModel):
 
 
 class BoardTagsSpec(StrictModel):
-    """Calibration tags printed on the board: family (for the AprilTag library), the OpenCV dictionary
-    that decodes it, edge length and id -> centre (x, y) at z = 0."""
+    """Calibration tags printed on the board: family, edge length (the side of the square a detector
+    reports) and id -> centre (x, y) at z = 0. `dictionary` (optional): an OpenCV ArUco dictionary
+    that decodes the family, used instead of the AprilTag library when set. Either inline in the
+    workcell or the name of a config/boards/<name>.yaml file holding this mapping."""
 
     family: str
-    dictionary: str
+    dictionary: str | None = None
     size_m: Length
     centres_m: dict[int, Point2]
 
+    @field_validator("family")
+    @classmethod
+    def _family_known(cls, name: str) -> str:
+        return known_family(name)
+
     @field_validator("dictionary")
     @classmethod
-    def _dictionary_known(cls, name: str) -> str:
-        return _known_dictionary(name)
+    def _dictionary_known(cls, name: str | None) -> str | None:
+        return None if name is None else _known_dictionary(name)
+
+    @property
+    def detector(self) -> str:
+        """What decodes the tags: the OpenCV dictionary when one is set, else the family."""
+        return self.dictionary or self.family
 
     @model_validator(mode="after")
     def _check(self) -> BoardTagsSpec:
         if len(self.centres_m) < 3:
             raise ValueError("centres_m needs at least 3 tags for a calibration")
-        size = dictionary_size(self.dictionary)
+        size = dictionary_size(self.detector)
         bad = [tag_id for tag_id in self.centres_m if not 0 <= tag_id < size]
         if bad:
-            raise ValueError(f"centres_m: ids {bad} are not in {self.dictionary} (0..{size - 1})")
+            raise ValueError(f"centres_m: ids {bad} are not in {self.detector} (0..{size - 1})")
         return self
+
+
+def board_file(name: str) -> dict:
+    """The board_tags mapping of config/boards/<name>.yaml (ConfigError listing the boards if absent)."""
+    data = read_config_file(resolve_config_path(name, "boards"))
+    if not isinstance(data.get("board_tags"), dict):
+        raise ValueError(f"config/boards/{name}.yaml has no board_tags mapping")
+    return data["board_tags"]
 
 
 class BlockSpec(StrictModel):
@@ -223,6 +266,11 @@ class Workcell(StrictModel):
     feeder: FeederSpec
     bin: BinSpec
 
+    @field_validator("board_tags", mode="before")
+    @classmethod
+    def _board_by_name(cls, value):
+        return board_file(value) if isinstance(value, str) else value
+
     @model_validator(mode="after")
     def _spots_on_the_board(self) -> Workcell:
         half_tag = 0.5 * self.board_tags.size_m
@@ -238,7 +286,7 @@ class Workcell(StrictModel):
                     f"block_tags.ids.{tag_id}.destination: place {entry.destination} is not in places_m {sorted(self.places_m)}"
                 )
         overlap = set(self.board_tags.centres_m) & set(self.block_tags.ids)
-        if overlap and self.board_tags.dictionary == self.block_tags.dictionary:
+        if overlap and self.board_tags.detector == self.block_tags.dictionary:
             raise ValueError(f"block_tags.ids: {sorted(overlap)} are also board tags of the same dictionary")
         if not self.board.contains(*self.feeder.spot_m, 0.5 * self.blocks.edges_m["large"]):
             raise ValueError(f"feeder.spot_m: {list(self.feeder.spot_m)} is not on the board")

@@ -12,7 +12,8 @@ from pathlib import Path
 def register(subparsers: argparse._SubParsersAction) -> None:
     tags = subparsers.add_parser("tags", help="detect fiducial tags in an image (JSON list of id + corners)")
     tags.add_argument("image")
-    tags.add_argument("--dict", default=None, help="OpenCV dictionary name (default from config/vision.yaml: DICT_APRILTAG_36h11)")
+    tags.add_argument("--family", "--dict", dest="dict", default=None,
+                      help="tag36h11 | tagStandard41h12 (AprilTag library) | DICT_... (OpenCV ArUco); default: the workcell's board tags")
     tags.set_defaults(func=run_tags)
 
     intr = subparsers.add_parser("calibrate-intrinsics", help="camera intrinsics from checkerboard images")
@@ -88,7 +89,8 @@ def run_tags(args: argparse.Namespace) -> int:
         tags = detect_tags(_read_color(args.image), load_perception_config(), dictionary=args.dict)
     except ValueError as error:
         return _fail(str(error))
-    print(json.dumps([{"id": t.id, "corners_px": t.corners_px.round(3).tolist()} for t in tags]))
+    print(json.dumps([{"id": t.id, "corners_px": t.corners_px.round(3).tolist(), "hamming": t.hamming,
+                       "decision_margin": None if t.decision_margin is None else round(t.decision_margin, 2)} for t in tags]))
     return 0
 
 

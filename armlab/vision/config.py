@@ -13,13 +13,28 @@ from pydantic import Field, field_validator, model_validator
 
 from armlab.config import StrictModel, config_dir, read_config_file, validate_config
 from armlab.errors import ConfigError
-from armlab.workcell import DEFAULT_WORKCELL, BlockTagEntry, Workcell, load_workcell
+from armlab.workcell import DEFAULT_WORKCELL, BlockTagEntry, Workcell, is_apriltag_family, known_family, load_workcell
 
-__all__ = ["BlockTagEntry", "PerceptionConfig", "load_perception_config", "workcell_sections"]
+__all__ = ["BlockTagEntry", "PerceptionConfig", "TagDetectionConfig", "is_apriltag_family", "load_perception_config",
+           "workcell_sections"]
+
+
+class TagDetectionConfig(StrictModel):
+    """Tag decoder thresholds (vision.yaml tag_detection). AprilTag library: detections with more
+    corrected bits than max_hamming or a decision margin below min_decision_margin are dropped;
+    quad_decimate 1 keeps ~20 px tags readable. ArUco: aruco_error_correction_rate (OpenCV's)."""
+
+    max_hamming: int = Field(1, ge=0, le=3)
+    min_decision_margin: float = Field(25.0, ge=0.0)
+    quad_decimate: float = Field(1.0, ge=1.0, le=4.0)
+    quad_sigma: float = Field(0.0, ge=0.0, le=2.0)
+    decode_sharpening: float = Field(0.25, ge=0.0, le=1.0)
+    aruco_error_correction_rate: float = Field(0.6, ge=0.0, le=1.0)
 
 
 class TagConfig(StrictModel):
-    """Filled from the workcell: board tags (dictionary, size, id -> centre) and block-top tags."""
+    """Filled from the workcell: board tags (dictionary = what decodes them: an AprilTag family or an
+    OpenCV DICT_ name; size, id -> centre) and block-top tags."""
 
     dictionary: str
     board_tag_size_m: float = Field(gt=0.0, lt=1.0)
@@ -27,7 +42,12 @@ class TagConfig(StrictModel):
     block_tag_dictionary: str
     block_tags: dict[int, BlockTagEntry] = {}
 
-    @field_validator("dictionary", "block_tag_dictionary")
+    @field_validator("dictionary")
+    @classmethod
+    def _known_family(cls, name: str) -> str:
+        return known_family(name)
+
+    @field_validator("block_tag_dictionary")
     @classmethod
     def _known_dictionary(cls, name: str) -> str:
         if not name.startswith("DICT_") or not hasattr(cv2.aruco, name):
@@ -136,6 +156,7 @@ class PerceptionConfig(StrictModel):
 
     workcell: str = DEFAULT_WORKCELL
     tags: TagConfig
+    tag_detection: TagDetectionConfig = TagDetectionConfig()
     calibration: CalibrationLimits = CalibrationLimits()
     board: BoardConfig
     blocks: BlockConfig
@@ -169,7 +190,7 @@ def workcell_sections(workcell: Workcell) -> dict[str, dict]:
     board = workcell.board
     return {
         "tags": {
-            "dictionary": workcell.board_tags.dictionary,
+            "dictionary": workcell.board_tags.detector,
             "board_tag_size_m": workcell.board_tags.size_m,
             "board_tags": dict(workcell.board_tags.centres_m),
             "block_tag_dictionary": workcell.block_tags.dictionary,

@@ -11,7 +11,7 @@ import numpy as np
 
 from armlab.vision.blocks import Block, BlockGeometry, detect_blocks
 from armlab.vision.calibration import Calibration
-from armlab.vision.config import PerceptionConfig
+from armlab.vision.config import PerceptionConfig, is_apriltag_family
 from armlab.vision.geometry import project_points
 from armlab.vision.overlay import OverlayLayers, draw_overlay, grid_pixels
 from armlab.vision.self_filter import RobotSelfFilter
@@ -38,13 +38,14 @@ class PerceptionPipeline:
     def __init__(self, cfg: PerceptionConfig, arm_model=None) -> None:
         self.cfg = cfg
         self.self_filter = RobotSelfFilter(arm_model, cfg.self_filter) if arm_model is not None else None
-        self._board_detector = make_detector(cfg.tags.dictionary)
-        # Tracking known tags in small windows: one threshold scale is enough and three times cheaper.
-        self._tracking_detector = make_detector(cfg.tags.dictionary)
-        params = self._tracking_detector.getDetectorParameters()
-        params.adaptiveThreshWinSizeMin = params.adaptiveThreshWinSizeMax = 7
-        self._tracking_detector.setDetectorParameters(params)
-        self._block_detector = make_detector(cfg.tags.block_tag_dictionary)
+        self._board_detector = make_detector(cfg.tags.dictionary, cfg.tag_detection)
+        self._tracking_detector = make_detector(cfg.tags.dictionary, cfg.tag_detection)
+        if not is_apriltag_family(cfg.tags.dictionary):
+            # ArUco tracking known tags in small windows: one threshold scale is enough and three times cheaper.
+            params = self._tracking_detector.getDetectorParameters()
+            params.adaptiveThreshWinSizeMin = params.adaptiveThreshWinSizeMax = 7
+            self._tracking_detector.setDetectorParameters(params)
+        self._block_detector = make_detector(cfg.tags.block_tag_dictionary, cfg.tag_detection)
         self._grid_m = cfg.board.grid_points_m()
         self._tag_ids = list(cfg.tags.board_tags)
         self._tag_centres_m = np.array([[x, y, 0.0] for x, y in cfg.tags.board_tags.values()])

@@ -1,5 +1,7 @@
-"""Fiducial tag detection (AprilTag 36h11 by default, any OpenCV ArUco dictionary by name) with
-sub-pixel corners, tuned for small (~20 px), tilted and unevenly lit tags."""
+"""Fiducial tag detection: AprilTag families (tag36h11, tagStandard41h12, ...) through the AprilTag 3
+library (pupil-apriltags, the detector apriltag_ros uses), OpenCV ArUco dictionaries (DICT_..., e.g.
+DICT_APRILTAG_36h11) through OpenCV. Every instance is reported (many blocks may carry one id), with
+sub-pixel corners, the decoder's hamming distance and, for AprilTag, its decision margin."""
 
 from __future__ import annotations
 
@@ -8,19 +10,32 @@ from dataclasses import dataclass
 import cv2
 import numpy as np
 
-from armlab.vision.config import PerceptionConfig
+from armlab.vision.config import PerceptionConfig, TagDetectionConfig, is_apriltag_family
+
+# AprilTag corners run counter-clockwise from the tag's bottom-left (image y down); OpenCV's run
+# TL, TR, BR, BL. This reorders the first into the second for an upright tag.
+_APRILTAG_TO_OPENCV = [3, 2, 1, 0]
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, eq=False)
 class Tag:
-    """One detected tag: corners (4, 2) in OpenCV order (the marker's TL, TR, BR, BL) and their mean."""
+    """One detected tag: corners (4, 2) in OpenCV order (the marker's TL, TR, BR, BL) and their mean;
+    hamming: bits the decoder corrected (None: ArUco does not say); decision_margin: AprilTag's
+    confidence (higher is surer; None for ArUco)."""
 
     id: int
     corners_px: np.ndarray
     center_px: np.ndarray
+    hamming: int | None = None
+    decision_margin: float | None = None
 
     def to_dict(self) -> dict:
-        return {"id": self.id, "corners_px": self.corners_px.tolist(), "center_px": self.center_px.tolist()}
+        return {"id": self.id, "corners_px": self.corners_px.tolist(), "center_px": self.center_px.tolist(),
+                "hamming": self.hamming, "decision_margin": self.decision_margin}
+
+    def shifted(self, offset_px: np.ndarray) -> "Tag":
+        """The same tag with its pixels moved by offset_px (a crop's origin)."""
+        return Tag(self.id, self.corners_px + offset_px, self.center_px + offset_px, self.hamming, self.decision_margin)
 
 
 def check_color_image(color_bgr: np.ndarray, name: str = "color_bgr") -> np.ndarray:
@@ -38,10 +53,38 @@ def check_color_image(color_bgr: np.ndarray, name: str = "color_bgr") -> np.ndar
     return color_bgr
 
 
-def make_detector(dictionary: str) -> cv2.aruco.ArucoDetector:
-    """An ArucoDetector for a dictionary name, with parameters for small tags and sub-pixel corners."""
-    if not dictionary.startswith("DICT_") or not hasattr(cv2.aruco, dictionary):
-        raise ValueError(f"unknown OpenCV ArUco dictionary '{dictionary}'")
+class AprilTagDetector:
+    """The AprilTag 3 library's detector for one family, with the config's thresholds applied."""
+
+    def __init__(self, family: str, settings: TagDetectionConfig | None = None) -> None:
+        from pupil_apriltags import Detector
+
+        self.family = family
+        self.settings = settings or TagDetectionConfig()
+        s = self.settings
+        self._detector = Detector(families=family, nthreads=1, quad_decimate=s.quad_decimate,
+                                  quad_sigma=s.quad_sigma, refine_edges=1, decode_sharpening=s.decode_sharpening)
+
+    def detect(self, grey: np.ndarray) -> list[tuple[int, np.ndarray, int | None, float | None]]:
+        """(id, corners (4, 1, 2) float32 in OpenCV order, hamming, decision margin) per instance."""
+        found = []
+        for det in self._detector.detect(np.ascontiguousarray(grey)):
+            if det.hamming > self.settings.max_hamming or det.decision_margin < self.settings.min_decision_margin:
+                continue
+            # The library puts pixel centres at +0.5 (image corner = 0, 0); OpenCV at integers.
+            corners = (np.asarray(det.corners, dtype=np.float32)[_APRILTAG_TO_OPENCV] - 0.5).reshape(4, 1, 2)
+            found.append((int(det.tag_id), corners, int(det.hamming), float(det.decision_margin)))
+        return found
+
+
+def make_detector(name: str, settings: TagDetectionConfig | None = None):
+    """A detector for an AprilTag family name (AprilTagDetector) or an OpenCV dictionary name
+    (cv2.aruco.ArucoDetector, parameters for small tags; corners refined in detect_tags)."""
+    if is_apriltag_family(name):
+        return AprilTagDetector(name, settings)
+    if not name.startswith("DICT_") or not hasattr(cv2.aruco, name):
+        raise ValueError(f"unknown tag family '{name}' (AprilTag: tag36h11, tagStandard41h12, ...; "
+                         f"OpenCV ArUco: DICT_APRILTAG_36h11, DICT_4X4_50, ...)")
     params = cv2.aruco.DetectorParameters()
     params.minMarkerPerimeterRate = 0.01
     params.adaptiveThreshWinSizeMin = 7  # two threshold scales: small tags and shaded ones
@@ -51,7 +94,9 @@ def make_detector(dictionary: str) -> cv2.aruco.ArucoDetector:
     params.cornerRefinementMethod = cv2.aruco.CORNER_REFINE_NONE  # refined in detect_tags, sized to the tag
     params.perspectiveRemovePixelPerCell = 8
     params.perspectiveRemoveIgnoredMarginPerCell = 0.2
-    return cv2.aruco.ArucoDetector(cv2.aruco.getPredefinedDictionary(getattr(cv2.aruco, dictionary)), params)
+    if settings is not None:
+        params.errorCorrectionRate = settings.aruco_error_correction_rate
+    return cv2.aruco.ArucoDetector(cv2.aruco.getPredefinedDictionary(getattr(cv2.aruco, name)), params)
 
 
 def _log_grey(grey: np.ndarray) -> np.ndarray:
@@ -61,61 +106,73 @@ def _log_grey(grey: np.ndarray) -> np.ndarray:
     return lut[grey]
 
 
-def _markers(detector: cv2.aruco.ArucoDetector, grey: np.ndarray) -> dict[int, np.ndarray]:
+def _markers(detector, grey: np.ndarray) -> list[tuple[int, np.ndarray, int | None, float | None]]:
+    """Every instance the detector finds: (id, corners (4, 1, 2), hamming, decision margin)."""
+    if isinstance(detector, AprilTagDetector):
+        return detector.detect(grey)
     corners, ids, _ = detector.detectMarkers(grey)
-    found: dict[int, np.ndarray] = {}
-    if ids is not None:
-        for tag_corners, tag_id in zip(corners, ids.ravel()):
-            found.setdefault(int(tag_id), np.asarray(tag_corners, dtype=np.float32).reshape(4, 1, 2))
-    return found
+    if ids is None:
+        return []
+    return [(int(i), np.asarray(c, dtype=np.float32).reshape(4, 1, 2), None, None) for c, i in zip(corners, ids.ravel())]
+
+
+def _same_instance(a: np.ndarray, b: np.ndarray) -> bool:
+    """Two detections of one printed tag: centres closer than a quarter of the smaller tag's side."""
+    side = min(np.linalg.norm(a[0, 0] - a[1, 0]), np.linalg.norm(b[0, 0] - b[1, 0]))
+    return float(np.linalg.norm(a[:, 0].mean(axis=0) - b[:, 0].mean(axis=0))) < 0.25 * side
+
+
+def _refine(grey: np.ndarray, pts: np.ndarray) -> np.ndarray:
+    """Corners refined to sub-pixel with a window ~1/10 of the tag (on the corner, off the code cells)."""
+    sides = pts[:, 0] - pts[[3, 0, 1, 2], 0]
+    side_px = float(np.sqrt((sides * sides).sum(axis=1)).min())
+    half_window = int(min(max(side_px / 10.0, 2), 5))
+    criteria = (cv2.TERM_CRITERIA_EPS + cv2.TERM_CRITERIA_COUNT, 40, 0.001)
+    return cv2.cornerSubPix(grey, pts.copy(), (half_window, half_window), (-1, -1), criteria)
 
 
 def detect_tags(
     color_bgr: np.ndarray,
     cfg: PerceptionConfig | None = None,
     dictionary: str | None = None,
-    detector: cv2.aruco.ArucoDetector | None = None,
+    detector=None,
     expected_ids: set[int] | None = None,
 ) -> list[Tag]:
-    """All tags in the image (one per id), sorted by id. The dictionary comes from `dictionary`, else
-    cfg, else 36h11. If some expected tag (default: cfg's board tags) is missing, or nothing was found,
-    the search is repeated on a log-scaled image, which reads tags that lie partly in shadow.
+    """Every tag instance in the image, sorted by id then image position (row, column). The family
+    comes from `dictionary` (an AprilTag family or OpenCV DICT_ name), else cfg, else
+    DICT_APRILTAG_36h11. If some expected tag (default: cfg's board tags) is missing, or nothing was
+    found, the search is repeated on a log-scaled image, which reads tags partly in shadow.
 
     Pass a prebuilt `detector` (make_detector) to save its construction in a per-frame loop.
     """
     check_color_image(color_bgr)
     if detector is None:
         name = dictionary or (cfg.tags.dictionary if cfg is not None else "DICT_APRILTAG_36h11")
-        detector = make_detector(name)
+        detector = make_detector(name, cfg.tag_detection if cfg is not None else None)
     if expected_ids is None and cfg is not None and dictionary in (None, cfg.tags.dictionary):
         expected_ids = set(cfg.tags.board_tags)
     grey = color_bgr if color_bgr.ndim == 2 else cv2.cvtColor(color_bgr, cv2.COLOR_BGR2GRAY)
     found = _markers(detector, grey)
-    if not found or (expected_ids and not expected_ids <= set(found)):
-        for tag_id, pts in _markers(detector, _log_grey(grey)).items():
-            found.setdefault(tag_id, pts)
+    if not found or (expected_ids and not expected_ids <= {f[0] for f in found}):
+        for extra in _markers(detector, _log_grey(grey)):
+            if not any(f[0] == extra[0] and _same_instance(f[1], extra[1]) for f in found):
+                found.append(extra)
+    apriltag = isinstance(detector, AprilTagDetector)
     tags = []
-    criteria = (cv2.TERM_CRITERIA_EPS + cv2.TERM_CRITERIA_COUNT, 40, 0.001)
-    for tag_id, pts in sorted(found.items()):
-        sides = pts[:, 0] - pts[[3, 0, 1, 2], 0]
-        side_px = float(np.sqrt((sides * sides).sum(axis=1)).min())
-        half_window = int(min(max(side_px / 10.0, 2), 5))  # ~1/10 of the tag: on the corner, off the code cells
-        refined = cv2.cornerSubPix(grey, pts.copy(), (half_window, half_window), (-1, -1), criteria)
-        refined = refined.reshape(4, 2).astype(np.float64)
-        tags.append(Tag(id=tag_id, corners_px=refined, center_px=refined.mean(axis=0)))
-    return tags
+    for tag_id, pts, hamming, margin in found:
+        refined = (pts if apriltag else _refine(grey, pts)).reshape(4, 2).astype(np.float64)  # AprilTag: edges refined
+        tags.append(Tag(tag_id, refined, refined.mean(axis=0), hamming, margin))
+    return sorted(tags, key=lambda t: (t.id, round(float(t.center_px[1])), float(t.center_px[0])))
 
 
-def detect_tags_near(
-    color_bgr: np.ndarray, centers_px: np.ndarray, half_size_px: int, detector: cv2.aruco.ArucoDetector
-) -> list[Tag]:
+def detect_tags_near(color_bgr: np.ndarray, centers_px: np.ndarray, half_size_px: int, detector) -> list[Tag]:
     """Tags searched only in square windows around expected centres (tracking known tags cheaply).
 
-    Each window is searched separately; a tag is kept once (the first window that sees it).
+    Each window is searched separately; a tag seen by two overlapping windows is kept once.
     """
     check_color_image(color_bgr)
     h, w = color_bgr.shape[:2]
-    found: dict[int, Tag] = {}
+    found: list[Tag] = []
     for u, v in np.asarray(centers_px, dtype=np.float64).reshape(-1, 2):
         if not (np.isfinite(u) and np.isfinite(v)):
             continue
@@ -124,7 +181,7 @@ def detect_tags_near(
         if x1 - x0 < 16 or y1 - y0 < 16:
             continue
         for tag in detect_tags(color_bgr[y0:y1, x0:x1], detector=detector):
-            if tag.id not in found:
-                offset = np.array([x0, y0], dtype=np.float64)
-                found[tag.id] = Tag(tag.id, tag.corners_px + offset, tag.center_px + offset)
-    return sorted(found.values(), key=lambda tag: tag.id)
+            tag = tag.shifted(np.array([x0, y0], dtype=np.float64))
+            if not any(t.id == tag.id and _same_instance(t.corners_px[:, None], tag.corners_px[:, None]) for t in found):
+                found.append(tag)
+    return sorted(found, key=lambda t: (t.id, round(float(t.center_px[1])), float(t.center_px[0])))

@@ -248,13 +248,12 @@ def build_model_xml(
     workcell = workcell or load_workcell()
     board = workcell.board
     assets = {"board.png": textures.encode_png(textures.board_texture(board))}
-    tag_cells = textures.TAG_CELLS + 2 * textures.TAG_QUIET_CELLS
-    tag_half_m = 0.5 * workcell.board_tags.size_m * tag_cells / textures.TAG_CELLS
-    tag_dictionary = getattr(cv2.aruco, workcell.board_tags.dictionary)
     block_dictionary = getattr(cv2.aruco, workcell.block_tags.dictionary)
     tag_assets, tag_geoms = [], []
     for tag_id, (x, y) in workcell.board_tags.centres_m.items():
-        assets[f"tag{tag_id}.png"] = textures.encode_png(textures.tag_texture(tag_id, tag_dictionary))
+        image, span = textures.tag_texture(tag_id, workcell.board_tags.detector)
+        tag_half_m = 0.5 * workcell.board_tags.size_m * span
+        assets[f"tag{tag_id}.png"] = textures.encode_png(image)
         tag_assets.append(
             f'<texture name="tag{tag_id}" type="2d" file="tag{tag_id}.png"/>'
             f'<material name="tag{tag_id}" texture="tag{tag_id}" specular="0" shininess="0"/>'

@@ -9,11 +9,11 @@ from __future__ import annotations
 import cv2
 import numpy as np
 
+from armlab.devices.sim.tag_bitmaps import tag_bitmap
 from armlab.workcell import BoardSpec
 
 BOARD_RGB = (150, 150, 146)
 GRID_RGB = (70, 70, 70)
-TAG_CELLS = 8  # AprilTag 36h11: 6x6 data cells + a one-cell black border
 TAG_QUIET_CELLS = 2  # white quiet zone around each tag, in cells
 
 
@@ -38,13 +38,17 @@ def board_texture(board: BoardSpec, px_per_m: float = 2000.0, line_width_m: floa
     return image
 
 
-def tag_texture(tag_id: int, dictionary: int = cv2.aruco.DICT_APRILTAG_36h11, cell_px: int = 10,
-                cells: int = TAG_CELLS, quiet_cells: int = TAG_QUIET_CELLS) -> np.ndarray:
-    """One tag with its white quiet zone, RGB, upright (the marker's top row first)."""
-    aruco_dict = cv2.aruco.getPredefinedDictionary(dictionary)
-    marker = cv2.aruco.generateImageMarker(aruco_dict, int(tag_id), cells * cell_px, borderBits=1)
-    padded = cv2.copyMakeBorder(marker, *(4 * [quiet_cells * cell_px]), cv2.BORDER_CONSTANT, value=255)
-    return cv2.cvtColor(padded, cv2.COLOR_GRAY2RGB)
+def tag_texture(tag_id: int, family: str = "DICT_APRILTAG_36h11", cell_px: int = 10,
+                quiet_cells: int = TAG_QUIET_CELLS) -> tuple[np.ndarray, float]:
+    """One tag of `family` (AprilTag family or OpenCV DICT_ name) with a white quiet zone reaching
+    quiet_cells beyond the detected square (at least one cell beyond the printed bitmap), RGB,
+    upright (the tag's top row first); and the texture's width in units of the detected square's side."""
+    bitmap = tag_bitmap(family, tag_id)
+    n = bitmap.cells.shape[0]
+    pad = max(1, quiet_cells - (n - bitmap.edge_cells) // 2)
+    image = cv2.resize(bitmap.cells, (n * cell_px, n * cell_px), interpolation=cv2.INTER_NEAREST)
+    padded = cv2.copyMakeBorder(image, *(4 * [pad * cell_px]), cv2.BORDER_CONSTANT, value=255)
+    return cv2.cvtColor(padded, cv2.COLOR_GRAY2RGB), (n + 2 * pad) / bitmap.edge_cells
 
 
 def block_top_texture(aruco_id: int, color_rgb: tuple[int, int, int], edge_px: int = 60,
