@@ -372,7 +372,7 @@ def reachable_pitches(station: Station, top_center_m, surface_m, edge_m: float) 
             point = grasp_point(station, top_center_m, edge_m, pitch)
             for target in (point, point + np.array([0.0, 0.0, station.motion_config.approach_height_m])):
                 model.ik(target, pitch=pitch, yaw=None, q_seed=_seed(model.home_rad))
-            fake = SideGrasp(pitch, *_nominal_hold(station, top_center_m, edge_m, pitch))
+            fake = SideGrasp(pitch, *nominal_hold(station, top_center_m, edge_m, pitch))
             release = release_point(station, surface_m, edge_m, fake, pitch)
             model.ik(release, pitch=pitch, yaw=None, q_seed=_seed(model.home_rad))
             if not any(_reaches(model, way_in, pitch) and all(_reaches(model, p, pitch) for p in way_out)
@@ -395,7 +395,7 @@ def _reaches(model, point_m, pitch_rad: float) -> bool:
     return True
 
 
-def _nominal_hold(station: Station, top_center_m, edge_m: float, pitch_rad: float) -> tuple[np.ndarray, np.ndarray]:
+def nominal_hold(station: Station, top_center_m, edge_m: float, pitch_rad: float) -> tuple[np.ndarray, np.ndarray]:
     """(block centre, block axes) in the gripper frame for a grasp at pitch_rad, without solving IK."""
     top = np.asarray(top_center_m, float)
     heading = bearing_rad(top)

@@ -1,21 +1,25 @@
 """to_the_sky (DESIGN §7): the tallest column of large blocks the arm can build, fed by the feeder.
 
-One tower near the arm, where the camera sees all of it, clear of the park path and of the way to the
-feed spot. While the tower's top is in top-down reach (about six blocks for the RX200) the nearest loose
-large block goes on top, top-down. Higher up the gripper must come in shallow; a block picked top-down
-and set down that way would lie on its side (not upright for §7), so there each block is picked and
-placed at one and the same pitch with the fingers closing horizontally (skills.side_grasp): its tilt is
-place pitch − grasp pitch = 0. Those grasps close across two faces only for a block whose yaw lines up
-with its bearing from the base: the feeder's blocks do (the feed spot lies on the arm's +y axis and a
-fed block has yaw 0); any other loose block is first set down on a free spot turned to face the arm.
-The job ends when no loose block is left or no pitch reaches the tower's top.
+One tower 0.21-0.25 m from the base axis, where the camera sees all of it, clear of the park path and
+of the way to the feed spot. While the tower's top is in top-down reach (about six blocks for the
+RX200) the loose large blocks go on top, top-down, those standing in the arm's way from the feed spot
+first. Higher up the gripper must come in shallow; a block picked top-down and set down that way lies
+on its side (not upright for §7), so there each block is picked and placed at one and the same pitch
+with the fingers closing horizontally (skills.side_grasp): its tilt is place pitch − grasp pitch = 0.
+Those grasps close across two faces only for a block whose yaw lines up with its bearing from the
+base: the feeder's blocks do (the feed spot lies on the arm's +y axis and a fed block has yaw 0), and
+blocks still in the arm's way are first set down in y < 0, turned to face the arm. Each block goes
+straight above the tower's base at the depth-measured height (the job's own column memory), not on
+the seen top's centre, which drifts with height. The job ends when no loose block is left or no pitch
+reaches the top: 13 blocks (494 mm), the RX200's reach with the gripper level.
 
-Tried before: a top-down grasp and a horizontal place (skills.plan_side_place) lays the block on its
+Tried before: top-down picks and a horizontal place (skills.plan_side_place) lay the block on its
 side; the tower stopped at five blocks."""
 
 from __future__ import annotations
 
 import math
+from dataclasses import dataclass
 
 import numpy as np
 
@@ -66,6 +70,18 @@ def on_board(block: dict, edge_m: float) -> bool:
     return abs(block["position_m"][2] - edge_m) < 0.008
 
 
+@dataclass(frozen=True)
+class LevelMove(Move):
+    """A move onto the tower counted per tower level: the feeder puts blocks of the same colour on the
+    same spot again and again, and the runner's attempt count (by colour and place) must not add up
+    placements that succeeded at lower levels."""
+
+    level: int = 0
+
+    def key(self) -> tuple:
+        return (*super().key(), self.level)
+
+
 def side_moves(runner: TaskRunner, tower: Column, surface, loose: list[dict], feed_xy) -> list[Move]:
     """Moves putting a loose, aligned block on the tower at a pitch both ends reach (feed spot first)."""
     edge = runner.edges_m["large"]
@@ -75,8 +91,9 @@ def side_moves(runner: TaskRunner, tower: Column, surface, loose: list[dict], fe
     for block in sorted(candidates, key=lambda b: math.dist(b["position_m"][:2], anchor)):
         pitches = side_grasp.reachable_pitches(runner.station, block["position_m"], surface, edge)
         if pitches:
-            moves.append(Move(block, surface, f"block {tower.height + 1} of the tower, picked and placed from the side",
-                              yaw_rad=None, grasp_pitches_rad=tuple(pitches), on_placed=lambda e, b=block: tower.add(b, e)))
+            moves.append(LevelMove(block, surface, f"block {tower.height + 1} of the tower, picked and placed from the side",
+                                   yaw_rad=None, grasp_pitches_rad=tuple(pitches), on_placed=lambda e, b=block: tower.add(b, e),
+                                   level=tower.height + 1))
     return moves
 
 
@@ -149,8 +166,8 @@ def make_policy(level: int | None, params: dict, runner: TaskRunner):
             yaw = tower.top["yaw_rad"] if tower.top is not None else side_grasp.bearing_rad(base)
             order = sorted(loose, key=lambda b: (b.get("stack_level", 1) == 1, not any(b is o for o in blocking),
                                                  math.dist(b["position_m"][:2], base)))
-            moves = [Move(block, surface, f"block {tower.height + 1} of the tower", yaw_rad=yaw,
-                          on_placed=lambda edge, b=block: tower.add(b, edge)) for block in order]
+            moves = [LevelMove(block, surface, f"block {tower.height + 1} of the tower", yaw_rad=yaw,
+                               on_placed=lambda edge, b=block: tower.add(b, edge), level=tower.height + 1) for block in order]
             return Plan(moves, done=tower.height, left=len(loose), finished=not loose)
         moves = aside_moves(runner, blocking, objects) + side_moves(runner, tower, surface, loose, feed)
         if not moves and feed is not None and side_grasp.reachable_pitches(runner.station, (*feed, edge), surface, edge):

@@ -94,7 +94,7 @@ def test_a_block_side_grasped_from_the_board_stands_upright_on_a_tower_out_of_to
 def test_tilt_at_release_is_place_pitch_minus_grasp_pitch(station):
     """The plan-level relation the skill relies on: the same pitch keeps the block level; 30° more tilts it 30°."""
     top_m = np.array([*LOOSE_XY_M, EDGE_M])
-    grasp = side_grasp.SideGrasp(math.radians(20.0), *side_grasp._nominal_hold(station, top_m, EDGE_M, math.radians(20.0)))
+    grasp = side_grasp.SideGrasp(math.radians(20.0), *side_grasp.nominal_hold(station, top_m, EDGE_M, math.radians(20.0)))
     for place_pitch_deg in (20.0, 50.0):
         release = side_grasp.release_point(station, (0.0, 0.25, 0.1), EDGE_M, grasp, math.radians(place_pitch_deg))
         q = station.model.ik(release, pitch=math.radians(place_pitch_deg), yaw=None, q_seed=np.zeros(5))
