@@ -8,11 +8,14 @@ reachable), so the block stands as it stood on the board. The fingers close alon
 tangent (wrist_rotate 0), so a block is taken across two faces only when its yaw lines up with its
 bearing from the base (mod 90°); `aligned` says whether it does.
 
-High on a tower there is no room above the release point: the held block slides in from the base side
-over the tower top and the gripper slides back out after releasing. Every trajectory is checked against
-joint limits and the table (check_trajectory), the arm's links against the obstacle boxes (first_collision)
-and the held block's corners against them and the tower under it. Unreachable / UnsafeTrajectory before
-anything moves.
+High on a tower there is no room above the release point: the held block slides in over the tower top
+(from the base side or across it), and after releasing the open fingers slide back along themselves;
+it gets there rising far from the tower and turning in about the waist, and leaves turning away about
+the waist before the arm folds to park (folding straight down swings the elbow into a tall tower).
+Every trajectory is checked against joint limits and the table (check_trajectory), the arm's links
+against the obstacle boxes (first_collision), the gripper's wide palm and open fingers against them,
+and the held block's corners against them and the tower under it. Unreachable / UnsafeTrajectory
+before anything moves.
 """
 
 from __future__ import annotations
