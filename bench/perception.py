@@ -150,6 +150,60 @@ def run(args) -> int:
     return 0
 
 
+def workcell_with_board(board: str | None) -> str:
+    """A temporary workcell file: the default workcell with board_tags = config/boards/<board>.yaml."""
+    import tempfile
+
+    import yaml
+
+    from armlab.config import config_dir
+
+    data = yaml.safe_load((config_dir() / "workcells" / "rx200_armlab.yaml").read_text())
+    if board is not None:
+        data["board_tags"] = board
+    handle = tempfile.NamedTemporaryFile("w", suffix=".yaml", delete=False)
+    handle.write(yaml.safe_dump(data))
+    handle.close()
+    return handle.name
+
+
+def compare_boards(args) -> None:
+    """The default 36h11 board against the course's rob550 board (tagStandard41h12, AprilTag library):
+    calibration accuracy on the same bumped rigs, and the tag step's time per frame (full search, and
+    tracking near the calibrated positions as the live pass does)."""
+    from armlab.workcell import load_workcell
+
+    cv2.setNumThreads(1)
+    for label, board in (("36h11 (default board, OpenCV ArUco)", None), ("tagStandard41h12 (rob550 board, AprilTag library)", "rob550")):
+        path = workcell_with_board(board)
+        cfg = load_perception_config(workcell=load_workcell(path))
+        pipeline = PerceptionPipeline(cfg)
+        cams, clicks, full_s, tracked_s = [], [], [], []
+        for seed in range(args.first_seed, args.first_seed + args.board_scenes):
+            cell = SimWorkcell(SimWorkcellConfig(realtime=False, seed=seed, camera_pose_error=True, workcell=path))
+            cell.start()
+            try:
+                cell.set_scene(generate_scene("pick_sort", level=2, seed=seed))
+                cell.step(0.5)
+                frame, truth = cell.render(), cell.truth()
+            finally:
+                cell.close()
+            cal = calibrate_extrinsics(frame.color_bgr, frame.intrinsics, cfg, depth_mm=frame.depth_mm)
+            cams.append(np.linalg.norm(cal.camera_position_m - np.asarray(truth["camera"]["T_world_camera"])[:3, 3]))
+            clicks.append(click_grid_errors(cal, truth))
+            for store, c in ((full_s, None), (tracked_s, cal)):
+                for _ in range(args.repeats):
+                    start = time.thread_time()
+                    pipeline.find_tags(frame.color_bgr, c)
+                    store.append(time.thread_time() - start)
+        click = np.concatenate(clicks) * 1000
+        print(f"board {label}, {args.board_scenes} bumped rigs: camera position error mean {np.mean(cams) * 1000:.2f} mm "
+              f"max {np.max(cams) * 1000:.2f} mm; click-to-world mean {click.mean():.3f} mm max {click.max():.3f} mm; "
+              f"tag step CPU per frame: full search median {statistics.median(full_s) * 1000:.2f} ms, "
+              f"tracked median {statistics.median(tracked_s) * 1000:.2f} ms")
+        os.unlink(path)
+
+
 def pct(a: int, b: int) -> str:
     return f"{100.0 * a / b:.2f} % ({a}/{b})" if b else "n/a (0)"
 
@@ -230,7 +284,12 @@ def main(argv=None) -> int:
     parser.add_argument("--timing-frames", type=int, default=5)
     parser.add_argument("--repeats", type=int, default=20)
     parser.add_argument("--verbose", action="store_true")
-    return run(parser.parse_args(argv))
+    parser.add_argument("--board-scenes", type=int, default=5, help="rigs per board in the 36h11 vs 41h12 comparison (0: skip)")
+    args = parser.parse_args(argv)
+    status = run(args) if args.scenes > 0 else 0
+    if args.board_scenes > 0:
+        compare_boards(args)
+    return status
 
 
 if __name__ == "__main__":

@@ -57,13 +57,44 @@ class AprilTagDetector:
     """The AprilTag 3 library's detector for one family, with the config's thresholds applied."""
 
     def __init__(self, family: str, settings: TagDetectionConfig | None = None) -> None:
+        import ctypes
+
         from pupil_apriltags import Detector
+        from pupil_apriltags.bindings import _ApriltagFamily
 
         self.family = family
         self.settings = settings or TagDetectionConfig()
         s = self.settings
-        self._detector = Detector(families=family, nthreads=1, quad_decimate=s.quad_decimate,
-                                  quad_sigma=s.quad_sigma, refine_edges=1, decode_sharpening=s.decode_sharpening)
+        # pupil-apriltags always decodes up to 2 corrected bits, whose lookup table costs ~1 s to build
+        # for tagStandard41h12; built here with the family at max_hamming bits instead (0-1: ~10x less).
+        self._detector = Detector(families="tag16h5", nthreads=1, quad_decimate=s.quad_decimate,
+                                  quad_sigma=s.quad_sigma, refine_edges=1)
+        libc, pointer = self._detector.libc, self._detector.tag_detector_ptr
+        libc.apriltag_detector_clear_families.restype = None
+        libc.apriltag_detector_clear_families(pointer)
+        libc.tag16h5_destroy.restype = None
+        libc.tag16h5_destroy(self._detector.tag_families.pop("tag16h5"))
+        create = getattr(libc, f"{family}_create")
+        create.restype = ctypes.POINTER(_ApriltagFamily)
+        self._detector.tag_families[family] = create()
+        libc.apriltag_detector_add_family_bits(pointer, self._detector.tag_families[family], s.max_hamming)
+        pointer.contents.decode_sharpening = float(s.decode_sharpening)  # the wrapper truncates it to an int
+
+    def __del__(self) -> None:
+        """Free the library's detector before its families: pupil-apriltags' own __del__ frees the
+        families first, and the detector's teardown then reads them (an intermittent segfault,
+        pupil-labs/apriltags#46, duckietown/lib-dt-apriltags#33)."""
+        detector = getattr(self, "_detector", None)
+        if detector is None or getattr(detector, "tag_detector_ptr", None) is None:
+            return
+        libc = detector.libc
+        libc.apriltag_detector_destroy.restype = None
+        libc.apriltag_detector_destroy(detector.tag_detector_ptr)
+        detector.tag_detector_ptr = None  # its own __del__ then does nothing
+        for family, pointer in detector.tag_families.items():
+            destroy = getattr(libc, f"{family}_destroy")
+            destroy.restype = None
+            destroy(pointer)
 
     def detect(self, grey: np.ndarray) -> list[tuple[int, np.ndarray, int | None, float | None]]:
         """(id, corners (4, 1, 2) float32 in OpenCV order, hamming, decision margin) per instance."""
