@@ -65,8 +65,15 @@ class TagConfig(StrictModel):
 
 
 class CalibrationLimits(StrictModel):
+    """Limits a new calibration must meet, and the camera-moved check of a calibration in use: every
+    drift_check_period_s the board tags' image centres are compared with where the calibration puts
+    them; a median drift above drift_threshold_px on drift_confirm_checks checks in a row warns."""
+
     max_reprojection_error_px: float = Field(3.0, gt=0.0)
     max_depth_check_error_m: float = Field(0.02, gt=0.0)
+    drift_threshold_px: float = Field(2.0, gt=0.0)
+    drift_check_period_s: float = Field(3.0, gt=0.0)
+    drift_confirm_checks: int = Field(2, ge=1, le=10)
 
 
 class BoardConfig(StrictModel):

@@ -28,7 +28,7 @@ from armlab.devices.sim.config import (
 )
 from armlab.devices.sim.feeder import FeederRuntime, parked_objects
 from armlab.devices.sim.gripper import SimGripper
-from armlab.devices.sim.mjcf import CAMERA_NAME, GRIPPER_SITE, OBJECT_PREFIX, ArmGeometry, build_model_xml
+from armlab.devices.sim.mjcf import CAMERA_NAME, GRIPPER_SITE, OBJECT_PREFIX, ArmGeometry, build_model_xml, quat_wxyz_from_matrix
 from armlab.devices.sim.path import MAX_DURATION_S, PathRecorder
 from armlab.devices.sim.render import RawImages, RenderThread
 from armlab.scene import Scene, SceneObject
@@ -403,6 +403,18 @@ class SimWorkcell:
         Each sample is gripper_point_m() as it read at that simulated time."""
         with self.lock:
             return self._path.samples() if self._path is not None else np.empty((0, 4))
+
+    def bump_camera(self, T_old_new: np.ndarray) -> None:
+        """Move the camera mount by T_old_new (4x4, in the camera's own OpenCV frame), as a knock on
+        the rig would: later frames and truth() use the new pose; scene changes keep it."""
+        with self.lock:
+            self._T_world_camera = self._T_world_camera @ np.asarray(T_old_new, dtype=float)
+            camera_id = mujoco.mj_name2id(self._model, mujoco.mjtObj.mjOBJ_CAMERA, CAMERA_NAME)
+            self._model.cam_pos[camera_id] = self._T_world_camera[:3, 3]
+            R_world_mj = self._T_world_camera[:3, :3] @ np.diag([1.0, -1.0, -1.0])  # MuJoCo cameras look along -z, y up
+            self._model.cam_quat[camera_id] = quat_wxyz_from_matrix(R_world_mj)
+            self._data.cam_xpos[camera_id] = self._T_world_camera[:3, 3]  # the next physics step would recompute these
+            self._data.cam_xmat[camera_id] = R_world_mj.ravel()
 
     def feeder_status(self) -> dict | None:
         """to_the_sky feeder: {spot_m, count, fed, remaining}, or None if the scene has no feeder."""
