@@ -124,14 +124,6 @@ class ProgramInfo(Wire):
     waypoints: list[WaypointInfo]
 
 
-class ProgramPath(Wire):
-    """GET /api/programs/{id}/path: each waypoint's gripper point (world frame, metres) and gripper state."""
-
-    program_id: int
-    points_m: list[list[float]]
-    gripper: list[Literal["grasp", "release"]]
-
-
 class ProgramsResponse(Wire):
     data: list[ProgramInfo]
     count: int
@@ -202,7 +194,6 @@ PROGRAM_WIRE_MODELS = (
     WaypointInfo,
     ProgramInfo,
     ProgramsResponse,
-    ProgramPath,
     TeachRecordResponse,
     TeachUndoResponse,
     TeachDraftResponse,

@@ -8,7 +8,6 @@ from __future__ import annotations
 
 from typing import Literal
 
-import numpy as np
 from fastapi import APIRouter, Response
 
 from armlab.skills import programs as program_edits
@@ -21,7 +20,6 @@ from server.program_models import (
     DuplicateRequest,
     ImportRequest,
     ProgramInfo,
-    ProgramPath,
     ProgramsResponse,
     ProgramUpdateRequest,
     TeachDraftResponse,
@@ -106,15 +104,6 @@ def read_programs(station: StationDep) -> dict:
 @router.get("/programs/{program_id}", response_model=ProgramInfo)
 def read_program(program_id: ProgramId, station: StationDep) -> dict:
     return program_out(station, station.store.get_program(program_id))
-
-
-@router.get("/programs/{program_id}/path", response_model=ProgramPath)
-def read_program_path(program_id: ProgramId, station: StationDep) -> dict:
-    """The gripper point of each waypoint in the world frame (forward kinematics of the station's arm model),
-    for drawing a program's path on the live view."""
-    program = station.store.get_program(program_id)
-    points = [station.model.fk(np.asarray(w.joints_rad, dtype=float))[:3, 3].tolist() for w in program.waypoints]
-    return {"program_id": program_id, "points_m": points, "gripper": [w.gripper for w in program.waypoints]}
 
 
 @router.patch("/programs/{program_id}", response_model=ProgramInfo)

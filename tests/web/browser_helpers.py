@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import time
 from pathlib import Path
 
 REPO = Path(__file__).resolve().parents[2]
@@ -77,3 +78,18 @@ def in_view_and_on_top(page, selector: str) -> str:
         }""",
         selector,
     )
+
+
+def ready_idle(server, timeout_s: float = 60.0) -> dict:
+    """Wait for idle with the arm still, resetting estop, and a fault whose devices are back (a loaded machine
+    can starve the simulated camera past its watchdog); fails naming the last status."""
+    deadline = time.monotonic() + timeout_s
+    status = {}
+    while time.monotonic() < deadline:
+        status = server.get("/api/status")
+        if status["state"] == "idle" and not status["moving"]:
+            return status
+        if status["state"] in ("estop", "fault") and not status.get("devices_lost"):
+            server.request("POST", "/api/reset")
+        time.sleep(0.1)
+    raise AssertionError(f"not idle after {timeout_s} s; last status: {status}")

@@ -101,7 +101,7 @@ def running_server(folder: Path) -> Iterator[Server]:
     db_path = folder / "armlab.sqlite3"  # a fresh store: no calibration or programs from earlier runs
     with log_path.open("wb") as log:
         process = subprocess.Popen(
-            [*armlab_command(), "serve", "--host", "127.0.0.1", "--port", str(port), "--token", token,
+            [*armlab_command(), "serve", "--host", "127.0.0.1", "--port", str(port), f"--token={token}",
              "--db", str(db_path), *SCENE_ARGS],
             cwd=REPO,
             env=env,

@@ -9,7 +9,7 @@ import math
 
 import pytest
 
-from browser_helpers import in_view_and_on_top, open_page, teach_program, wait_frames
+from browser_helpers import in_view_and_on_top, open_page, ready_idle, teach_program, wait_frames
 
 pytestmark = pytest.mark.browser
 
@@ -19,8 +19,7 @@ RAISED_AWAY_RAD = [-2.5, 0.0, 0.0, 0.0, 0.0]
 
 @pytest.fixture()
 def page(browser, server):
-    if server.get("/api/status")["state"] in ("estop", "fault"):
-        server.post("/api/reset")
+    ready_idle(server)
     page = open_page(browser, f"{server.base_url}/?token={server.token}")
     wait_frames(page, 2)
     page.wait_for_function("window.armlab.status && window.armlab.connected")

@@ -5,7 +5,7 @@ from __future__ import annotations
 
 import pytest
 
-from browser_helpers import OPERATOR, open_page, wait_frames
+from browser_helpers import OPERATOR, open_page, ready_idle, wait_frames
 
 pytestmark = pytest.mark.browser
 
@@ -13,8 +13,7 @@ OTHER = "bench-2"
 
 
 def test_take_control_moves_the_lease_and_the_previous_controller_sees_it(browser, server):
-    if server.get("/api/status")["state"] in ("estop", "fault"):
-        server.post("/api/reset")
+    ready_idle(server)
     server.post("/api/control/take")  # the operator (this page's name) holds the lease
     first = open_page(browser, f"{server.base_url}/?token={server.token}")
     second = open_page(browser, f"{server.base_url}/?token={server.token}&controller={OTHER}")

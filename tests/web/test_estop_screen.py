@@ -6,7 +6,7 @@ from __future__ import annotations
 
 import pytest
 
-from browser_helpers import in_view_and_on_top, open_page, teach_program, wait_frames
+from browser_helpers import in_view_and_on_top, open_page, ready_idle, teach_program, wait_frames
 
 pytestmark = pytest.mark.browser
 
@@ -15,9 +15,7 @@ FIXED_ON_SCREEN = ("#btn-estop", "#state-badge", "#btn-cancel-job")
 
 
 def wait_idle(server) -> None:
-    if server.get("/api/status")["state"] in ("estop", "fault"):
-        server.post("/api/reset")
-    server.wait_status(lambda s: s["state"] == "idle" and not s["moving"], 30.0, "idle and still")
+    ready_idle(server)
 
 
 def start_slow_move(server) -> None:

@@ -7,7 +7,7 @@ import math
 
 import pytest
 
-from browser_helpers import open_page, wait_frames
+from browser_helpers import open_page, ready_idle, wait_frames
 
 pytestmark = pytest.mark.browser
 
@@ -19,8 +19,7 @@ def settled_pose(server) -> dict:
 
 
 def test_keys_step_the_gripper(browser, server):
-    if server.get("/api/status")["state"] in ("estop", "fault"):
-        server.post("/api/reset")
+    ready_idle(server)
     server.post("/api/arm/joints?wait=true", {"q_rad": [0.0, 0.0, 0.3, 0.9, 0.0], "moving_time_s": 1.5})
     page = open_page(browser, f"{server.base_url}/?token={server.token}")
     try:

@@ -11,7 +11,7 @@ import math
 import numpy as np
 import pytest
 
-from browser_helpers import open_page, wait_frames
+from browser_helpers import open_page, ready_idle, wait_frames
 
 pytestmark = pytest.mark.browser
 
@@ -34,8 +34,7 @@ def stored(server, name: str) -> dict:
 
 
 def test_teach_edit_repeat_pause_plot_and_csv(browser, server, tmp_path):
-    if server.get("/api/status")["state"] in ("estop", "fault"):
-        server.post("/api/reset")
+    ready_idle(server)
     server.wait_status(lambda s: s["state"] == "idle", 30.0, "idle")
     page = open_page(browser, f"{server.base_url}/?token={server.token}")
     try:
@@ -43,8 +42,10 @@ def test_teach_edit_repeat_pause_plot_and_csv(browser, server, tmp_path):
         page.wait_for_function("!document.getElementById('btn-teach-start').disabled", timeout=10_000)
         page.click("#btn-teach-start")
         page.wait_for_function("!document.getElementById('btn-teach-record').disabled", timeout=5_000)
+        gripper_at_m = []
         for i, q in enumerate(POSES_RAD):
             move_to(server, q)
+            gripper_at_m.append(server.get("/api/status")["gripper_pose"]["position_m"])
             if i == 1:
                 page.click("#live")  # the page has the focus, not a field: R records
                 page.keyboard.press("r")
@@ -62,6 +63,10 @@ def test_teach_edit_repeat_pause_plot_and_csv(browser, server, tmp_path):
         page.wait_for_function("document.querySelectorAll('#program-table tbody tr').length === 3", timeout=5_000)
         program = stored(server, "panel-wave")
         assert np.allclose([w["joints_rad"] for w in program["waypoints"]], POSES_RAD, atol=0.02)
+        # The program's path is drawn on the live view: one point per waypoint, where the gripper was.
+        page.wait_for_function("document.getElementById('live').dataset.pathPoints === '3'", timeout=5_000)
+        shown = page.evaluate("window.armlab.programPath.path.points_m")
+        assert np.allclose(shown, gripper_at_m, atol=0.003)
 
         # Edit: waypoint 2's dwell to 0.5 s, waypoint 1's waist to 10°.
         page.fill("#program-table tbody tr[data-index='1'] input[data-field='dwell']", "0.5")

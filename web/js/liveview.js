@@ -222,12 +222,11 @@ export class LiveView {
       if (!w) return;
       const world = this.detections.map((d) => ({ center_px: d.position_m ? [d.position_m[0], d.position_m[1]] : null }));
       this.setHoverDetection(nearestDetection(world, w[0], w[1], 0.03));
-      // z (and the camera pixel and depth) from the server at the camera pixel that sees this board point.
+      // x, y at once; z (and the camera pixel and depth) from the server at the camera pixel that sees this point.
+      this.topdownHoverXY = [w[0], w[1]];
+      this.showWorld([w[0], w[1], NaN], null);
       const cam = worldToCameraPx(w, this.cameraModel);
-      if (!cam) {
-        this.showWorld(w, "board");
-        return;
-      }
+      if (!cam) return;
       this.hoverPending = { u: cam.u, v: cam.v, xyM: [w[0], w[1]] };
       this.pumpHover();
       return;
@@ -246,7 +245,9 @@ export class LiveView {
     this.api
       .pixelToWorld(u, v)
       .then((r) => {
-        // On the top-down view the board point under the pointer keeps its x, y; the server gives z there.
+        // On the top-down view the board point under the pointer keeps its x, y; the server gives z there
+        // (an answer for a point the pointer has left is dropped).
+        if (xyM && (this.view() !== "topdown" || this.topdownHoverXY?.join() !== xyM.join())) return;
         const position = xyM ? [xyM[0], xyM[1], r.position_m[2]] : r.position_m;
         this.showWorld(position, r.on, { u, v, depthMm: r.depth_mm });
       })

@@ -17,6 +17,7 @@ import {
 } from "./panels.js";
 import { applyMovingTimeLimits, emptyDetectionsReason, readMovingTimeS } from "./inputs.js";
 import { CartesianJog } from "./jog.js";
+import { ProgramPathOverlay } from "./path.js";
 import { JointPlot } from "./plot.js";
 import { RepeatPanel } from "./repeat.js";
 import { TeachPanel } from "./teach.js";
@@ -62,6 +63,7 @@ class App {
       status: () => this.status,
       onRepeat: (program) => this.repeat.start(program),
       afterChange: () => this.refreshAllowed(),
+      onPath: (path) => this.programPath.set(path),
     });
     this.lease = new ControlLease({ api: this.api, log: this.log, onChange: () => this.refreshAllowed() });
     this.torque = new TorqueButton({ button: $("btn-torque"), run: (a, c) => this.run(a, c), api: this.api });
@@ -77,6 +79,7 @@ class App {
         highlightDetectionRow(i);
       },
     });
+    this.programPath = new ProgramPathOverlay(this.live);
     this.stream = new Stream({
       token: this.api.token,
       handlers: {

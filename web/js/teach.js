@@ -32,13 +32,14 @@ function toRequest(w) {
 
 export class TeachPanel {
   /** api: Api; run(action, call); log: EventLog; status(): the newest status; onRepeat(program): start a repeat. */
-  constructor({ api, run, log, status, onRepeat, afterChange }) {
+  constructor({ api, run, log, status, onRepeat, afterChange, onPath }) {
     this.api = api;
     this.run = run;
     this.log = log;
     this.status = status;
     this.onRepeat = onRepeat;
     this.afterChange = afterChange || (() => {});
+    this.onPath = onPath || (() => {}); // the selected program's path (or null) for the live view
     this.programs = [];
     this.selectedId = null;
     this.jointNames = [];
@@ -149,11 +150,18 @@ export class TeachPanel {
   renderEditor() {
     const p = this.selected;
     $("program-editor").hidden = !p;
+    this.showPath(p);
     if (!p) return;
     $("program-name").value = p.name;
     $("program-export-csv").href = `/api/programs/${p.id}/export?format=csv`;
     $("program-export-json").href = `/api/programs/${p.id}/export?format=json`;
     this.renderTable($("program-table"), p.waypoints, p);
+  }
+
+  /** Hand the program's gripper points (the server's gripper_position_m of each waypoint) to the live view. */
+  showPath(p) {
+    const points = p ? p.waypoints.map((w) => w.gripper_position_m) : [];
+    this.onPath(points.length && points.every(Array.isArray) ? { points_m: points, gripper: p.waypoints.map((w) => w.gripper) } : null);
   }
 
   /** A waypoint table; with `program` its cells are editable and rows carry actions. */

@@ -342,14 +342,6 @@ export const CLIENT_MESSAGE_TYPES = Object.freeze(["ack", "view", "command"]);
  */
 
 /**
- * GET /api/programs/{id}/path: each waypoint's gripper point (world frame, metres) and gripper state.
- * @typedef {Object} ProgramPath
- * @property {number} program_id
- * @property {Array<Array<number>>} points_m
- * @property {Array<("grasp"|"release")>} gripper
- */
-
-/**
  * PATCH /api/programs/{id}: a new name and/or the whole new waypoint list (reorder, edit a value,
  * insert or delete a waypoint or a gripper step: send the list as it should be). Checked against the
  * joint limits and the table before anything is stored.
