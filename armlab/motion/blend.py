@@ -97,8 +97,9 @@ def _rest_to_rest_time(delta: np.ndarray, limits: Limits) -> float:
 
 def pass_velocities(points: np.ndarray, limits: Limits, minimum_s=None) -> np.ndarray:
     """Velocity (m, dof) at each point of a run: 0 at both ends and wherever a joint reverses or rests,
-    else the mean of the neighbouring segments' mean velocities (each segment timed rest to rest), capped
-    by the velocity limit and by what the shorter neighbour can reach from rest, sqrt(|d| · a_max)."""
+    else the mean of the neighbouring segments' mean velocities (each segment timed by its slowest joint at
+    full velocity, or its minimum_s if longer), capped by the velocity limit and by what the shorter
+    neighbour can reach from rest, sqrt(|d| · a_max)."""
     m, dof = points.shape
     velocities = np.zeros((m, dof))
     deltas = np.diff(points, axis=0)
