@@ -26,6 +26,7 @@ from armlab.station.jobs import Job, JobContext
 MAX_CYCLES = 100_000
 WAIT_LIMIT_S = 3600.0  # one wait while paused; the job waits again after it
 TRACE_RATE_HZ = 50.0
+TRACE_MAX_SAMPLES = 30_000  # 10 min at TRACE_RATE_HZ: a cycle paused for hours keeps its first 10 min
 
 
 class CycleTrace:
@@ -47,7 +48,7 @@ class CycleTrace:
 
     def add(self, t_s: float, commanded, measured) -> None:
         with self._lock:
-            if self._current and t_s - self._current[-1][0] < 1.0 / TRACE_RATE_HZ:
+            if len(self._current) >= TRACE_MAX_SAMPLES or (self._current and t_s - self._current[-1][0] < 1.0 / TRACE_RATE_HZ):
                 return
             self._current.append((float(t_s), tuple(float(v) for v in commanded), tuple(float(v) for v in measured)))
 
