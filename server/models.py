@@ -233,6 +233,7 @@ class Status(Wire):
     moving: bool
     torque_enabled: bool = Field(True, description="motor torque on (the arm holds); off = limp, it falls unless held")
     calibrated: bool
+    camera_warning: str | None = Field(None, description='"camera moved: recalibrate (...)" when the board tags no longer sit where the calibration puts them')
     backend: Literal["sim", "real"]
     controller: str | None = Field(description="who holds the control lease (None: free); only it may command")
     controller_since_s: float | None = Field(None, description="when it took control (time.time())")

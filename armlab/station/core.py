@@ -391,6 +391,8 @@ class Station(Latch, MotionGate, ManualCommands, TeachCommands, JobControls, Per
             state, detail, lease = self._effective_state(), self._detail, self._lease.to_dict()
             calibrated = self._calibration is not None
             lost = dict(self._lost)
+        perception, _ = self.perception.get()
+        camera_warning = perception.camera_warning if calibrated and perception is not None else None
         return {
             "state": state.value,
             "detail": detail,
@@ -402,6 +404,7 @@ class Station(Latch, MotionGate, ManualCommands, TeachCommands, JobControls, Per
             "moving": moving_measured,
             "torque_enabled": self._torque_enabled,
             "calibrated": calibrated,
+            "camera_warning": camera_warning,
             "backend": self.backend,
             "controller": lease["controller"],
             "controller_since_s": lease["since_s"],

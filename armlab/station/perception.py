@@ -47,6 +47,7 @@ class Perception:
     arm_joints_rad: tuple[float, ...] | None = None
     robot_mask: np.ndarray | None = field(default=None, repr=False)
     surface_depth_mm: np.ndarray | None = field(default=None, repr=False)
+    camera_warning: str | None = None  # "camera moved: recalibrate (...)" while the calibration no longer fits the board tags
 
 
 DEVICE_ERRORS = (ConnectionError, TimeoutError, OSError)  # a device failed, as opposed to a bad request
@@ -180,16 +181,22 @@ class PerceptionLoop(_Worker):
         self.period_s = 1.0 / rate_hz
 
     def _run(self) -> None:
+        from armlab.vision.drift import DriftMonitor
         from armlab.vision.pipeline import PerceptionPipeline
 
         pipeline = PerceptionPipeline(self.config, self.arm_model)  # holds its detectors; tracks tags near calibrated spots
+        drift = DriftMonitor(self.config.calibration)  # the camera-moved check of the calibration in use
         version, surface = 0, None
         while not self._stop.is_set():
             frame, version = self.frames.wait_newer(version, timeout_s=0.5)
             if frame is None:
                 continue
             started = time.monotonic()
-            perception = analyse_frame(pipeline, frame, self.get_calibration(), surface)
+            calibration = self.get_calibration()
+            perception = analyse_frame(pipeline, frame, calibration, surface)
+            warning = drift.update(frame.timestamp_s, list(perception.tags), calibration, self.config)
+            if warning is not None:
+                perception = replace(perception, camera_warning=warning)
             surface = perception.surface_depth_mm
             self.out.publish(perception)
             # At most the configured rate, and at most half of one core (sleep at least as long as we worked).
