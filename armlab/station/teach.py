@@ -92,6 +92,7 @@ class TeachCommands:
         (its waypoints are returned) unless discard_draft. CommandRefused outside idle."""
         with self._lock:
             self._check("teach_start", source)
+        self.teach_continuous_stop()  # a recorder left from a teach session that ended by e-stop stops here
         if discard_draft:
             self.store.clear_draft()
         waypoints, skipped = self.store.read_draft()
