@@ -133,6 +133,17 @@ class PixelRequest(Request):
     v: Pixel = Field(description="pixel row in the colour image")
 
 
+class ClickedPoint(Request):
+    pixel: list[float] = Field(min_length=2, max_length=2, description="(u, v) in the colour image")
+    world_m: list[float] = Field(min_length=2, max_length=3, description="its known world point: (x, y) on the board or (x, y, z)")
+
+
+class PointsCalibrationRequest(Request):
+    """Calibration without tags: >= 4 clicked pixels whose world points are known (board grid corners or typed)."""
+
+    points: list[ClickedPoint] = Field(min_length=1, max_length=200)
+
+
 class TargetRequest(Request):
     """A grab/drop target: a world point, or a pixel of the colour image (exactly one)."""
 
@@ -286,6 +297,8 @@ class CalibrationInfo(Wire):
     grid_points_px: list[list[float]] | None = None
     tags: list[TagInfo] | None = None
     time: float | None = None
+    method: str | None = Field(None, description="'points' for a calibration from clicked points (tags otherwise)")
+    points: dict | None = Field(None, description="clicked-point fit: homography, reprojection and per-point errors (px)")
 
 
 class PixelToWorldResponse(Wire):

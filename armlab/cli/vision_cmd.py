@@ -1,4 +1,4 @@
-"""`armlab tags | calibrate-intrinsics | calibrate-extrinsics | detect`: perception on image files,
+"""`armlab tags | calibrate-intrinsics | calibrate-extrinsics | calibrate-points | detect`: perception on image files,
 for offline use and scripts. Output is JSON on stdout; errors are one sentence on stderr, exit 2."""
 
 from __future__ import annotations
@@ -29,6 +29,14 @@ def register(subparsers: argparse._SubParsersAction) -> None:
     extr.add_argument("--out", required=True, help="calibration JSON to write")
     extr.add_argument("--intrinsics", default=None, help="camera YAML (config/cameras format) or intrinsics JSON (default sim_l515)")
     extr.set_defaults(func=run_calibrate_extrinsics)
+
+    pts = subparsers.add_parser("calibrate-points", help="camera pose from >= 4 clicked pixels with known world points (no tags)")
+    pts.add_argument("--point", action="append", default=[], metavar="U,V,X,Y[,Z]",
+                     help="a clicked pixel (u, v) and its world point in metres (z = 0 if left out); repeat >= 4 times")
+    pts.add_argument("--depth", default=None, help="16-bit PNG depth in mm, aligned to colour (cross-check)")
+    pts.add_argument("--out", required=True, help="calibration JSON to write")
+    pts.add_argument("--intrinsics", default=None, help="camera YAML (config/cameras format) or intrinsics JSON (default sim_l515)")
+    pts.set_defaults(func=run_calibrate_points)
 
     det = subparsers.add_parser("detect", help="blocks in a colour + depth frame (JSON)")
     det.add_argument("color")
@@ -116,6 +124,26 @@ def run_calibrate_extrinsics(args: argparse.Namespace) -> int:
         return _fail(str(error))
     cal.save(Path(args.out))
     print(json.dumps(cal.to_dict()))
+    return 0
+
+
+def run_calibrate_points(args: argparse.Namespace) -> int:
+    from armlab.vision import load_perception_config
+    from armlab.vision.click_calibration import calibrate_from_points
+
+    try:
+        rows = [[float(v) for v in point.split(",")] for point in args.point]
+        bad = [point for point, row in zip(args.point, rows) if len(row) not in (4, 5)]
+        if bad:
+            raise ValueError(f"--point {bad[0]!r}: expected U,V,X,Y or U,V,X,Y,Z")
+        world = [row[2:] + [0.0] * (5 - len(row)) for row in rows]
+        depth = _read_depth(args.depth) if args.depth else None
+        cal, report = calibrate_from_points([row[:2] for row in rows], world, load_intrinsics(args.intrinsics),
+                                            load_perception_config(), depth_mm=depth)
+    except ValueError as error:
+        return _fail(str(error))
+    cal.save(Path(args.out))
+    print(json.dumps({"calibration": cal.to_dict(), "fit": report}))
     return 0
 
 

@@ -55,6 +55,31 @@ def calibrate(station: Station, source: str | None = None) -> Job:
     return station.start_job("calibrate", "calibrate", run, source=source)
 
 
+def calibrate_points(station: Station, pixels_px: Sequence, world_m: Sequence, source: str | None = None) -> Job:
+    """Start a calibration job from >= 4 clicked pixels and their known world points (no tags needed):
+    homography + PnP with the camera's intrinsics, cross-checked with the newest depth; saved and
+    installed. A bad set of points fails the job saying why and keeps the old calibration."""
+    from armlab.vision.calibration import project_grid
+    from armlab.vision.click_calibration import calibrate_from_points
+
+    def run(ctx: JobContext) -> dict:
+        frame = station.fresh_frame()
+        intrinsics = frame.intrinsics or station.camera.intrinsics
+        ctx.progress(0.3, f"fitting the camera pose to {len(pixels_px)} clicked points")
+        calibration, report = calibrate_from_points(pixels_px, world_m, intrinsics, station.perception_config, frame.depth_mm)
+        info = {**calibration_summary(calibration, [], project_grid(calibration, station.perception_config)),
+                "method": "points", "points": report}
+        ctx.check()
+        station.store.save_calibration({"calibration": calibration.to_dict(), "info": info})
+        station.set_calibration(calibration, info)
+        ctx.job.update(message=f"calibrated from {len(pixels_px)} points: reprojection error {calibration.reprojection_error_px:.2f} px")
+        return {"reprojection_error_px": report["reprojection_error_px"], "homography_error_px": report.get("homography_error_px"),
+                "point_errors_px": report["point_errors_px"], "camera_position_m": [float(x) for x in calibration.camera_position_m],
+                "depth_check_error_m": report["depth_check_error_m"]}
+
+    return station.start_job("calibrate", "calibrate", run, detail="from clicked points", source=source)
+
+
 def calibration_summary(calibration: Any, tags: Sequence, grid_px: np.ndarray) -> dict:
     """The wire dict of GET /api/calibration (without 'calibrated')."""
     depth_error = calibration.depth_check_error_m

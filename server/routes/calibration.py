@@ -8,7 +8,7 @@ from fastapi.responses import JSONResponse
 from armlab import skills
 
 from server.deps import ControlAuth, StationDep
-from server.models import CalibrationInfo, JobResponse, PixelRequest, PixelToWorldResponse
+from server.models import CalibrationInfo, JobResponse, PixelRequest, PixelToWorldResponse, PointsCalibrationRequest
 from server.routes.jobs import job_response
 
 router = APIRouter(prefix="/api", tags=["calibration"])
@@ -18,6 +18,15 @@ router = APIRouter(prefix="/api", tags=["calibration"])
 def post_calibrate(station: StationDep, controller: ControlAuth, wait: bool = False) -> JSONResponse:
     """Find the board tags, solve the camera pose (cross-checked with depth), save and use it."""
     return job_response(skills.calibrate(station, source=controller), wait)
+
+
+@router.post("/calibrate/points", response_model=JobResponse, status_code=202)
+def post_calibrate_points(body: PointsCalibrationRequest, station: StationDep, controller: ControlAuth, wait: bool = False) -> JSONResponse:
+    """Calibrate from >= 4 clicked pixels with known world points (no tags needed): homography + PnP,
+    reprojection error per point; too few, collinear or inconsistent points fail the job saying why."""
+    pixels = [p.pixel for p in body.points]
+    world = [p.world_m for p in body.points]
+    return job_response(skills.calibrate_points(station, pixels, world, source=controller), wait)
 
 
 @router.get("/calibration", response_model=CalibrationInfo)
