@@ -102,6 +102,11 @@ def _issue(station, command: str, program_id: int):
         "auto": lambda: station.start_job("auto", "noop", lambda ctx: None),
         "cancel": lambda: station.cancel_job(),
         "set_scene": lambda: station.allowed_or_raise("set_scene"),
+        "teach_undo": lambda: station.teach_undo(),
+        "pause": lambda: station.pause_job(),
+        "resume": lambda: station.resume_job(),
+        "step": lambda: station.step_job(),
+        "set_speed": lambda: station.set_job_speed(50),
     }
     assert set(calls) == set(COMMANDS)
     return calls[command]()
@@ -247,9 +252,10 @@ def test_teach_record_stop_saves_a_program_that_repeats(idle):
     station = idle
     station.teach_start()
     station.move_joints([0.3, 0.0, 0.0, 0.0, 0.0], moving_time_s=0.6, wait=True)
-    first = station.teach_record()
+    first, count = station.teach_record()
+    assert count == 1
     station.move_joints([-0.3, 0.1, 0.0, 0.0, 0.0], moving_time_s=0.6, wait=True)
-    station.teach_record()
+    assert station.teach_record()[1] == 2
     program = station.teach_stop("two points")
     assert station.state is State.IDLE
     assert [w.joints_rad for w in program.waypoints][0] == first.joints_rad
@@ -257,7 +263,8 @@ def test_teach_record_stop_saves_a_program_that_repeats(idle):
     job = skills.repeat(station, program.id, cycles=1)
     assert station.state is State.REPEAT
     assert job.wait(30) and job.state == "succeeded", job.message
-    assert np.allclose(_joints(station), program.waypoints[-1].joints_rad, atol=0.02)
+    assert job.extra["repeat"]["waypoint"] == 2  # it reached the last waypoint, then went home (issue 9)
+    assert np.allclose(_joints(station), station.model.home_rad, atol=0.02)
     assert station.state is State.IDLE
 
 
