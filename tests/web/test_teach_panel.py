@@ -113,6 +113,8 @@ def test_teach_edit_repeat_pause_plot_and_csv(browser, server, tmp_path):
         assert final["job"]["state"] == "succeeded", final["job"]
         page.wait_for_function("Number(document.getElementById('cycle-plot').dataset.samples || 0) > 10", timeout=10_000)
 
+        png = page.get_attribute("#btn-cycle-png", "href")
+        assert png and png.startswith("data:image/png;base64,") and len(png) > 2000
         page.wait_for_selector("#btn-cycle-csv:not([hidden])")
         with page.expect_download() as info:
             page.click("#btn-cycle-csv")
@@ -120,6 +122,36 @@ def test_teach_edit_repeat_pause_plot_and_csv(browser, server, tmp_path):
         info.value.save_as(path)
         table = list(csv.reader(io.StringIO(path.read_text())))
         assert table[0][0] == "t_s" and any("waist" in c for c in table[0]) and len(table) > 10
+        assert page.errors == []
+    finally:
+        page.close()
+
+
+def test_record_continuously_at_a_rate(browser, server):
+    ready_idle(server)
+    page = open_page(browser, f"{server.base_url}/?token={server.token}")
+    try:
+        wait_frames(page, 2)
+        page.wait_for_function("!document.getElementById('btn-teach-start').disabled", timeout=10_000)
+        page.click("#btn-teach-start")
+        page.wait_for_function("!document.getElementById('btn-teach-continuous').disabled", timeout=5_000)
+        if rows(page, "draft-table"):  # a draft left over: start from none
+            server.post("/api/teach/stop", {"name": "leftover"})
+            page.click("#btn-teach-start")
+        page.fill("#teach-rate", "5")
+        page.click("#btn-teach-continuous")
+        page.wait_for_function("document.getElementById('btn-teach-continuous').dataset.recording === 'true'")
+        for q in POSES_RAD[:2]:
+            server.post("/api/arm/joints?wait=true", {"q_rad": q, "moving_time_s": 1.5})
+        page.click("#btn-teach-continuous")
+        page.wait_for_function("document.getElementById('btn-teach-continuous').dataset.recording === 'false'")
+        page.wait_for_function("document.querySelectorAll('#draft-table tbody tr').length >= 5", timeout=5_000)
+        draft = server.get("/api/teach/draft")
+        assert draft["count"] == rows(page, "draft-table") and draft["count"] >= 5
+        assert np.allclose(draft["waypoints"][-1]["joints_rad"], POSES_RAD[1], atol=0.03)
+        page.fill("#teach-name", "continuous-wave")
+        page.click("#btn-teach-stop")
+        page.wait_for_function("document.getElementById('state-badge').textContent === 'idle'", timeout=5_000)
         assert page.errors == []
     finally:
         page.close()

@@ -101,6 +101,12 @@ export class RepeatPanel {
       series,
     }, columns, container);
     container.dataset.samples = String(trace.samples.length);
+    const canvas = container.querySelector("canvas");
+    if (canvas) {
+      $("btn-cycle-png").href = canvas.toDataURL("image/png");
+      $("btn-cycle-png").download = `repeat-cycle-${trace.cycle}.png`;
+      $("btn-cycle-png").hidden = false;
+    }
     container.dataset.cycle = String(trace.cycle);
   }
 }

@@ -52,6 +52,7 @@ export class TeachPanel {
     on("btn-teach-record", () => this.record());
     on("btn-teach-undo", () => this.run("undo waypoint", () => this.api.teachUndo()).then(() => this.refreshDraft()));
     on("btn-teach-stop", () => this.save());
+    on("btn-teach-continuous", () => this.toggleContinuous());
     on("btn-programs-refresh", () => this.refresh());
     on("btn-program-rename", () => this.rename());
     on("btn-program-duplicate", () => this.duplicate());
@@ -78,6 +79,34 @@ export class TeachPanel {
     return r;
   }
 
+  /** Trajectory mode: the station records the pose at the chosen rate while it changes, until stopped. */
+  async toggleContinuous() {
+    const button = $("btn-teach-continuous");
+    const recording = button.dataset.recording === "true";
+    if (recording) {
+      const r = await this.run("stop recording", () => this.api.post("/api/teach/continuous/stop"));
+      this.showRecording(false);
+      if (r) this.log.add("info", `recorded ${r.recorded} waypoints continuously`);
+      this.refreshDraft();
+      return;
+    }
+    const rateHz = Number($("teach-rate").value);
+    if (!(rateHz > 0)) {
+      this.log.toast("error", "record continuously", `rate '${$("teach-rate").value}' is not a number of Hz`);
+      return;
+    }
+    if (await this.run(`record at ${rateHz} Hz`, () => this.api.post("/api/teach/continuous", { rate_hz: rateHz }))) this.showRecording(true);
+  }
+
+  showRecording(on) {
+    clearInterval(this.draftTimer);
+    if (on) this.draftTimer = setInterval(() => this.refreshDraft(), 1000); // the table follows the recording
+    const button = $("btn-teach-continuous");
+    button.dataset.recording = String(on);
+    button.textContent = on ? "Stop recording" : "Start recording";
+    button.classList.toggle("warn", on);
+  }
+
   async save() {
     const name = $("teach-name").value.trim();
     if (!name) {
@@ -85,6 +114,7 @@ export class TeachPanel {
       return;
     }
     const saved = await this.run(`save program '${name}'`, () => this.api.teachStop(name));
+    this.showRecording(false);
     if (saved) {
       this.selectedId = saved.id;
       $("draft-table").replaceChildren();
