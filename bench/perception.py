@@ -2,10 +2,12 @@
 perturbed per scene (the sim's "bumped rig"), against ground truth; then the per-frame time of the
 whole perception pass on one core and the JPEG encode time.
 
-    MUJOCO_GL=egl .venv/bin/python bench/perception.py [--scenes 110] [--first-seed 0]
+    MUJOCO_GL=egl .venv/bin/python bench/perception.py [--scenes 110] [--first-seed 0] [--board-scenes 5]
 
 Each scene is calibrated from a frame with the arm parked (as the station does), then perceived with
 the robot self-filter on (the frame's arm joints, as the station passes them).
+Then (--board-scenes rigs): the default 36h11 board against the course's rob550 board (tagStandard41h12)
+for calibration accuracy and the tag step's CPU time, and click calibration accuracy by number of points.
 Scene variants by index: i % 5 == 2 puts ArUco tags (DICT_4X4_250, drawn by the sim) on some blocks' tops, i % 5 == 4 swings the arm over a
 block (occlusion), i % 10 == 6 adds a touching same-colour twin next to a single block.
 """
@@ -204,6 +206,46 @@ def compare_boards(args) -> None:
         os.unlink(path)
 
 
+CLICK_SETS = {  # board points an operator clicks, by count (spread over the board's view)
+    4: [(x, y) for y in (-0.125, 0.425) for x in (-0.4, 0.4)],
+    6: [(x, y) for y in (-0.125, 0.425) for x in (-0.4, 0.0, 0.4)],
+    9: [(x, y) for y in (-0.125, 0.15, 0.425) for x in (-0.4, 0.0, 0.4)],
+    16: [(x, y) for y in (-0.125, 0.05, 0.25, 0.425) for x in (-0.4, -0.15, 0.15, 0.4)],
+}
+
+
+def click_calibration_accuracy(args) -> None:
+    """Calibration from clicked points (whole pixels where the true camera sees known board points) on
+    bumped rigs, against truth, by the number of points."""
+    from armlab.vision.click_calibration import calibrate_from_points
+    from armlab.vision.geometry import project_points
+
+    cfg = load_perception_config()
+    views = []
+    for seed in range(args.first_seed, args.first_seed + args.board_scenes):
+        cell = make_cell(seed)
+        cell.start()
+        try:
+            cell.step(0.3)
+            views.append((cell.render(), cell.truth()))
+        finally:
+            cell.close()
+    for count, points in CLICK_SETS.items():
+        cams, clicks, reproj = [], [], []
+        for frame, truth in views:
+            T_true = np.asarray(truth["camera"]["T_world_camera"])
+            world = np.array([[x, y, 0.0] for x, y in points])
+            pixels = np.round(project_points(T_true, frame.intrinsics.K, np.asarray(frame.intrinsics.dist), world))
+            cal, report = calibrate_from_points(pixels, world, frame.intrinsics, cfg, depth_mm=frame.depth_mm)
+            cams.append(np.linalg.norm(cal.camera_position_m - T_true[:3, 3]))
+            clicks.append(click_grid_errors(cal, truth))
+            reproj.append(report["reprojection_error_px"])
+        click = np.concatenate(clicks) * 1000
+        print(f"click calibration, {count:2d} points (whole-pixel clicks), {len(views)} bumped rigs: camera position error "
+              f"mean {np.mean(cams) * 1000:.2f} mm max {np.max(cams) * 1000:.2f} mm; click-to-world mean {click.mean():.3f} mm "
+              f"max {click.max():.3f} mm; reprojection mean {np.mean(reproj):.2f} px")
+
+
 def pct(a: int, b: int) -> str:
     return f"{100.0 * a / b:.2f} % ({a}/{b})" if b else "n/a (0)"
 
@@ -289,6 +331,7 @@ def main(argv=None) -> int:
     status = run(args) if args.scenes > 0 else 0
     if args.board_scenes > 0:
         compare_boards(args)
+        click_calibration_accuracy(args)
     return status
 
 
