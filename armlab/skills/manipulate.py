@@ -56,6 +56,7 @@ def run_steps(station: Station, ctx: JobContext, steps: Sequence, replan: Callab
 # Pick and place with a safe transfer height ------------------------------------------------------
 
 TRANSFER_CLEARANCE_M = 0.05  # the held block's bottom (or the fingers) this far above the tallest obstacle
+TALL_OVER_TARGET_M = 0.16  # obstacles this much above the target (taller than a pile of four) are checked on the way down too
 MAX_PLACE_TILT_RAD = np.radians(5.0)  # by default a block is released at most this far from top-down
 
 
@@ -125,12 +126,21 @@ def _transfer_plan(station: Station, q_start, point_m, yaw_rad: float | None, bo
     descend = plan_vertical_segment(model, q_near, float(point_m[2]), pitch_rad=pitch, yaw_rad=yaw_rad, **vertical)
     ascend = plan_vertical_segment(model, descend.positions_rad[-1], float(near_m[2]), pitch_rad=pitch, yaw_rad=yaw_rad, **vertical)
     final = [TrajectoryStep(words[1], descend), GripperStep(action, action), TrajectoryStep(words[2], ascend)]
+    # The straight descent and rise skip the neighbours the fingers pass beside, but not a tall column:
+    # reaching far past one, the stretched arm comes down onto its top.
+    tall = [box for box in boxes if box.top_z_m > point_m[2] + TALL_OVER_TARGET_M]
+    down = next((c for c in (first_collision(model, t, tall, held_edge_m=held_edge_m) for t in (descend, ascend)) if c), None)
+    if down is not None:
+        raise UnsafeTrajectory(f"no safe way down to ({point_m[0] * 1000:.0f}, {point_m[1] * 1000:.0f}) mm: {down}")
 
     start_m = model.fk(q_start)[:3, 3]
     tallest = max([box.top_z_m for box in boxes] + [0.0])
-    z_transfer = min(max(near_m[2], tallest + carried + TRANSFER_CLEARANCE_M), max_transfer_z_m)
+    z_first = min(max(near_m[2], tallest + carried + TRANSFER_CLEARANCE_M), max_transfer_z_m)
+    # From over the tallest obstacle upward; when none of those works (over a tall column the transfer
+    # is too high to reach a block near the base), lower ones, which must then pass beside it.
+    heights = [*np.arange(z_first, max_transfer_z_m + 1e-9, 0.04), *np.arange(near_m[2], z_first - 0.02, 0.04)]
     last_problem = "no transfer height tried"
-    while z_transfer <= max_transfer_z_m + 1e-9:
+    for z_transfer in map(float, heights):
         try:
             steps, checked = [], []
             q_from = q_start
@@ -152,7 +162,6 @@ def _transfer_plan(station: Station, q_start, point_m, yaw_rad: float | None, bo
             checked += [step.trajectory for step in moves + back]
         except (Unreachable, ValueError) as error:
             last_problem = str(error)
-            z_transfer += 0.04
             continue
         steps += final + back
         for step in steps:
@@ -166,7 +175,6 @@ def _transfer_plan(station: Station, q_start, point_m, yaw_rad: float | None, bo
         if collision is None:
             return steps
         last_problem = collision
-        z_transfer += 0.04
     raise UnsafeTrajectory(f"no safe transfer to ({point_m[0] * 1000:.0f}, {point_m[1] * 1000:.0f}) mm: {last_problem}")
 
 

@@ -13,7 +13,7 @@ from dataclasses import dataclass, field
 
 from armlab.tasks.runner import near
 
-COLUMN_RADIUS_M = 0.02  # a detection this close to the base (x-y) is the column's top
+COLUMN_RADIUS_M = 0.03  # a detection this close to the base (x-y) is the column's top (a tall column leans a little)
 HEIGHT_TOLERANCE_M = 0.012
 
 

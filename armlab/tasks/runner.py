@@ -145,6 +145,7 @@ class TaskRunner:
         self.last_objects: list[dict] = []  # the newest look's detections (obstacles while parking)
         self.reserved_m: list[tuple[float, float]] = []  # spots a job keeps free (column bases, line slots)
         self.look_pose_rad = park_pose(station.model)  # where the arm waits while the camera looks (a job may change it)
+        self.keep_occluded = False  # a job that must find every block acts also on those the parked arm partly hides
         self.gripper_box = None  # a GripperBox every planned motion keeps the gripper point inside (pick_stack)
 
     # Reporting -------------------------------------------------------------------------------------
@@ -211,11 +212,12 @@ class TaskRunner:
         self.station.move_in_job(self.ctx, q_park)
 
     def look(self) -> list[dict]:
-        """Detections of a fresh frame taken with the arm parked (occluded ones left out)."""
+        """Detections of a fresh frame taken with the arm parked (occluded ones left out, unless the job
+        keeps the blocks among them: keep_occluded)."""
         self.park()
         self.report("looking")
         seen = skills.look(self.station, self.ctx)
-        objects = [o for o in seen if not o.get("occluded")]
+        objects = [o for o in seen if not o.get("occluded") or (self.keep_occluded and o.get("is_cube", True))]
         self.last_objects = objects + self.unseen_columns(objects)
         return self.last_objects
 
@@ -348,9 +350,10 @@ class TaskRunner:
 
     # Space -----------------------------------------------------------------------------------------
 
-    def free_spot(self, objects: list[dict], edge_m: float, region=None, avoid_m: list | None = None) -> tuple[float, float]:
+    def free_spot(self, objects: list[dict], edge_m: float, region=None, avoid_m: list | None = None,
+                  allowed: Callable[[tuple[float, float]], bool] | None = None) -> tuple[float, float]:
         """A reachable board spot in `region` ((x_min, x_max), (y_min, y_max); default y > 0.06) at least
-        one block plus a finger gap from every object and `avoid_m` point."""
+        one block plus a finger gap from every object and `avoid_m` point (and where allowed(x, y), if given)."""
         (x_min, x_max), (y_min, y_max) = region or ((-0.30, 0.30), (0.08, 0.32))
         taken = [o["position_m"][:2] for o in objects] + [p[:2] for p in (avoid_m or [])] + list(self.reserved_m)
         gap = edge_m / 2 + 0.019 + 0.03
@@ -359,6 +362,8 @@ class TaskRunner:
             for y in np.arange(y_min, y_max + 1e-9, 0.02):
                 r = math.hypot(x, y)
                 if not 0.14 <= r <= 0.34 or any(math.dist((x, y), tag) < 0.045 for tag in self.tag_centres()):
+                    continue
+                if allowed is not None and not allowed((float(x), float(y))):
                     continue
                 clearance = min((math.dist((x, y), t) for t in taken), default=1.0)
                 if clearance >= gap and clearance > best_score:
