@@ -72,7 +72,7 @@ export class JointPlot {
           incrs: [1, 2, 5, 10],
           values: (u, ticks) => ticks.map((t) => `${t.toFixed(0)}s`),
         },
-        { stroke: "#8a96a6", grid: { stroke: "#232933" }, size: 44, space: 18, incrs: [15, 30, 45, 90, 180, 360], values: (u, ticks) => ticks.map((t) => `${t.toFixed(0)}°`) },
+        { stroke: "#8a96a6", grid: { stroke: "#232933" }, size: 52, space: 18, incrs: [15, 30, 45, 90, 180, 360], values: (u, ticks) => ticks.map((t) => `${t.toFixed(0)}°`) },
       ],
       series: [
         { label: "t" },
