@@ -78,3 +78,10 @@ def test_41h12_calibrates_as_well_as_36h11_and_blocks_are_found(runs, seed):
     assert score41.false_negatives == 0 and score41.false_positives == 0 and score41.true_positives >= 3
     assert score41.color_correct == score41.size_correct == score41.true_positives
     assert max(score41.position_errors_m) < 0.003
+
+
+def test_an_unknown_board_name_is_a_clear_error(tmp_path):
+    from armlab.errors import ConfigError
+
+    with pytest.raises(ConfigError, match="board_tags.*'no_such_board'.*rob550"):
+        load_workcell(_workcell_file(tmp_path, "no_such_board"))
