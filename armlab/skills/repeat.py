@@ -18,7 +18,9 @@ import threading
 import numpy as np
 
 from armlab.motion.blend import Run, plan_run, plan_stop, reference_state
-from armlab.skills.repeat_plan import HOME_LABEL, CyclePlan, RepeatSettings, Step, plan_cycle, plan_transfer, station_limits, tick_s
+from armlab.skills.repeat_plan import (
+    HOME_LABEL, CyclePlan, RepeatSettings, Step, plan_cycle, plan_ease_in, plan_transfer, station_limits, tick_s,
+)
 from armlab.station.core import Station
 from armlab.station.job_control import RunControl, checked_speed_percent
 from armlab.station.jobs import Job, JobContext
@@ -247,8 +249,8 @@ class _Runner:
     def run(self) -> dict:
         station, waypoints = self.station, self.program.waypoints
         first = np.asarray(waypoints[0].joints_rad)
-        ease = plan_transfer(station, station.joints_rad(), first, self.control.speed_percent, self.settings)
-        self.move([station.joints_rad(), first], ease, [-1, 0])
+        points, ease, labels = plan_ease_in(station, station.joints_rad(), first, self.control.speed_percent, self.settings)
+        self.move(points, ease, labels)
         self.wait(lambda: not station.arm.is_moving(), 5.0)
         if station.gripper.read_state().command != waypoints[0].gripper:
             station.run_gripper(self.ctx, waypoints[0].gripper)
@@ -297,7 +299,7 @@ def repeat(station: Station, program_id: int, cycles: int | None = 1, speed_perc
     speed_percent = checked_speed_percent(speed_percent)
     program = station.store.get_program(program_id)
     plan = plan_cycle(station, program, speed_percent, settings)
-    plan_transfer(station, station.joints_rad(), program.waypoints[0].joints_rad, speed_percent, settings)
+    plan_ease_in(station, station.joints_rad(), program.waypoints[0].joints_rad, speed_percent, settings)
     plan_transfer(station, program.waypoints[-1].joints_rad, station.model.home_rad, speed_percent, settings,
                   labels=(len(program.waypoints) - 1, HOME_LABEL))
     control = RunControl(speed_percent)

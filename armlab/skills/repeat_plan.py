@@ -191,4 +191,25 @@ def plan_transfer(station, q_from, q_to, speed_percent: float, settings: RepeatS
     return checked_run(station, points, list(labels), limits, None, settings, allow_blend=False)
 
 
+def plan_ease_in(station, q_from, q_to, speed_percent: float, settings: RepeatSettings, labels=(-1, 0)):
+    """The ease-in (or any transfer) as (points, run, labels): straight in joint space when that passes the
+    motion check, else by way of home (stopping there), e.g. from the sleep pose, whose straight path to a
+    low waypoint can sweep through the table; the straight path's refusal when neither passes."""
+    q_from, q_to = np.asarray(q_from, dtype=float), np.asarray(q_to, dtype=float)
+    try:
+        return [q_from, q_to], plan_transfer(station, q_from, q_to, speed_percent, settings, labels), list(labels)
+    except UnsafeTrajectory as direct:
+        home = np.asarray(station.model.home_rad, dtype=float)
+        if np.allclose(home, q_from) or np.allclose(home, q_to):
+            raise
+        fraction = min(float(speed_percent) / 100.0, settings.ease_in_speed_fraction)
+        limits = station_limits(station, settings).scaled(fraction)
+        via = [labels[0], HOME_LABEL, labels[1]]
+        try:
+            run = checked_run(station, np.array([q_from, home, q_to]), via, limits, None, settings, allow_blend=False)
+        except UnsafeTrajectory:
+            raise direct from None
+        return [q_from, home, q_to], run, via
+
+
 HOME_LABEL = 10**9
