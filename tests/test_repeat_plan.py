@@ -87,3 +87,16 @@ def _moving_at_a_waypoint(trajectory) -> bool:
     q = trajectory.positions_rad
     near = np.flatnonzero(np.abs(q[:, 0] - 0.5) < 1e-9)
     return any(0 < i < len(q) - 1 and abs(q[i + 1, 0] - q[i - 1, 0]) > 1e-4 for i in near)
+
+
+def test_the_ease_in_is_at_the_safe_speed_whatever_the_override():
+    from armlab.motion.safety import finite_difference_rates
+
+    settings = RepeatSettings()
+    for speed in (100.0, 60.0):
+        _, run, _ = plan_ease_in(FakeStation(), LOW, SIDE, speed, settings)
+        velocity, accel = finite_difference_rates(run.trajectory)
+        assert np.all(np.abs(velocity).max(axis=0) <= np.asarray(ARM.velocity_limit_rad_s) * settings.ease_in_speed_fraction + 1e-9)
+        assert np.all(np.abs(accel).max(axis=0) <= np.asarray(ARM.accel_limit_rad_s2) * settings.ease_in_speed_fraction**2 + 1e-9)
+    _, slow, _ = plan_ease_in(FakeStation(), LOW, SIDE, 10.0, settings)  # slower still when the override is lower
+    assert slow.duration_s > run.duration_s

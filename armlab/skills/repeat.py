@@ -44,7 +44,7 @@ class CycleTrace:
 
     def start_cycle(self, cycle: int) -> None:
         with self._lock:
-            if self._current:
+            if self._current and self._cycle >= 1:  # the ease-in before cycle 1 is not a cycle
                 self._last, self._last_cycle = self._current, self._cycle
             self._current, self._cycle = [], cycle
 
