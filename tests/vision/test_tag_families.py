@@ -119,3 +119,24 @@ def test_apriltag_detectors_are_built_and_freed_safely_and_cheaply():
             "    d.detect(np.zeros((64, 64), np.uint8))\n    del d\nprint('ok')\n")
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=60)
     assert out.returncode == 0 and out.stdout.strip() == "ok", out.stderr[-2000:]
+
+
+def test_tags_command_prints_every_instance_of_the_chosen_family(tmp_path):
+    import json
+    import subprocess
+    import sys
+    from pathlib import Path
+
+    quads = _grid(5)
+    path = tmp_path / "tags41h12.png"
+    cv2.imwrite(str(path), _scene("tagStandard41h12", [(100, q) for q in quads[:4]] + [(2, quads[4])]))
+    run = lambda *a: subprocess.run([sys.executable, "-m", "armlab.cli", "tags", str(path), *a], capture_output=True,  # noqa: E731
+                                    text=True, timeout=120, cwd=Path(__file__).resolve().parents[2])
+    out = run("--family", "tagStandard41h12")
+    assert out.returncode == 0, out.stderr
+    tags = json.loads(out.stdout)
+    assert [t["id"] for t in tags] == [2, 100, 100, 100, 100]
+    assert all(t["hamming"] == 0 and t["decision_margin"] > 40 for t in tags)
+    assert json.loads(run().stdout) == []  # the default board family (36h11) does not read them
+    bad = run("--family", "tag41h12")
+    assert bad.returncode == 2 and "unknown tag family" in bad.stderr
