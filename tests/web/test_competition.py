@@ -29,6 +29,11 @@ def page(browser, server):
     page.on("pageerror", lambda error: page.errors.append(str(error)))
     page.goto(f"{server.base_url}/?token={server.token}")
     wait_frames(page, 2)
+    # This page is a controller of its own: when another holds the lease, it takes control as an operator would.
+    page.wait_for_function("document.getElementById('control-holder').dataset.holder !== undefined", timeout=10_000)
+    if page.is_enabled("#btn-take-control"):
+        page.click("#btn-take-control")
+        page.wait_for_function("document.getElementById('control-holder').dataset.mine === 'true'", timeout=5_000)
     yield page
     page.close()
     _take_control_back(server)

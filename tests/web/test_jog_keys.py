@@ -18,6 +18,15 @@ def settled_pose(server) -> dict:
     return server.wait_status(lambda s: not s["moving"] and s["state"] == "idle", 20.0, "the arm still")["gripper_pose"]
 
 
+def press_and_wait_answer(page, key: str) -> None:
+    """Press `key` and wait for the page's log line of its step ('jog …: ok'); a refusal fails with its message."""
+    page.evaluate("window.armlab.log.clear()")
+    page.keyboard.press(key)
+    page.wait_for_function("document.querySelectorAll('#event-log li').length > 0", timeout=10_000)
+    line = page.text_content("#event-log li")
+    assert ": ok" in line, f"{key}: {line}"
+
+
 def test_keys_step_the_gripper(browser, server):
     ready_idle(server)
     server.post("/api/arm/joints?wait=true", {"q_rad": [0.0, 0.0, 0.3, 0.9, 0.0], "moving_time_s": 1.5})
@@ -28,16 +37,14 @@ def test_keys_step_the_gripper(browser, server):
         page.click("#live")  # focus on the page, not a field
         for key, axis, sign in (("PageDown", 2, -1), ("ArrowRight", 0, 1), ("ArrowUp", 1, 1)):
             before = settled_pose(server)
-            page.keyboard.press(key)
-            server.wait_status(lambda s: s["moving"], 5.0, f"{key} to start a step")
+            press_and_wait_answer(page, key)
             after = settled_pose(server)
             moved = [a - b for a, b in zip(after["position_m"], before["position_m"])]
             assert moved[axis] == pytest.approx(sign * STEP_M, abs=0.002), (key, moved)
             assert all(abs(m) < 0.002 for i, m in enumerate(moved) if i != axis), (key, moved)
             assert abs(after["pitch_rad"] - before["pitch_rad"]) < math.radians(0.5)
         before = settled_pose(server)
-        page.keyboard.press("Shift+ArrowDown")  # pitch down 5°
-        server.wait_status(lambda s: s["moving"], 5.0, "the pitch step to start")
+        press_and_wait_answer(page, "Shift+ArrowDown")  # pitch down 5°
         after = settled_pose(server)
         assert after["pitch_rad"] - before["pitch_rad"] == pytest.approx(math.radians(5), abs=math.radians(0.5))
         assert page.errors == []
