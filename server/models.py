@@ -282,6 +282,8 @@ class TagInfo(Wire):
     id: int
     center_px: list[float]
     corners_px: list[list[float]]
+    hamming: int | None = Field(None, description="bits the decoder corrected (None: an OpenCV ArUco dictionary does not say)")
+    decision_margin: float | None = Field(None, description="the AprilTag library's confidence (higher is surer; None for ArUco)")
 
 
 class CalibrationInfo(Wire):

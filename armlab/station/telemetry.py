@@ -65,6 +65,8 @@ def tag_to_dict(tag) -> dict:
         "id": int(tag.id),
         "center_px": _floats(tag.center_px),
         "corners_px": np.asarray(tag.corners_px, dtype=float).round(2).tolist(),
+        "hamming": getattr(tag, "hamming", None),  # bits the decoder corrected (None: ArUco does not say)
+        "decision_margin": None if getattr(tag, "decision_margin", None) is None else round(float(tag.decision_margin), 2),
     }
 
 
