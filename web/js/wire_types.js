@@ -111,6 +111,8 @@ export const CLIENT_MESSAGE_TYPES = Object.freeze(["ack", "view", "command"]);
  * @property {(Array<Array<number>>|null)} [grid_points_px]
  * @property {(Array<TagInfo>|null)} [tags]
  * @property {(number|null)} [time]
+ * @property {(string|null)} [method] 'points' for a calibration from clicked points (tags otherwise)
+ * @property {(Object<string, *>|null)} [points] clicked-point fit: homography, reprojection and per-point errors (px)
  */
 
 /**
@@ -127,6 +129,8 @@ export const CLIENT_MESSAGE_TYPES = Object.freeze(["ack", "view", "command"]);
  * @property {(Array<Array<number>>|null)} [grid_points_px]
  * @property {(Array<TagInfo>|null)} [tags]
  * @property {(number|null)} [time]
+ * @property {(string|null)} [method] 'points' for a calibration from clicked points (tags otherwise)
+ * @property {(Object<string, *>|null)} [points] clicked-point fit: homography, reprojection and per-point errors (px)
  * @property {"calibration"} [type]
  */
 
@@ -429,6 +433,7 @@ export const CLIENT_MESSAGE_TYPES = Object.freeze(["ack", "view", "command"]);
  * @property {boolean} moving
  * @property {boolean} [torque_enabled] motor torque on (the arm holds); off = limp, it falls unless held
  * @property {boolean} calibrated
+ * @property {(string|null)} [camera_warning] "camera moved: recalibrate (...)" when the board tags no longer sit where the calibration puts them
  * @property {("sim"|"real")} backend
  * @property {(string|null)} controller who holds the control lease (None: free); only it may command
  * @property {(number|null)} [controller_since_s] when it took control (time.time())
@@ -453,6 +458,8 @@ export const CLIENT_MESSAGE_TYPES = Object.freeze(["ack", "view", "command"]);
  * @property {number} id
  * @property {Array<number>} center_px
  * @property {Array<Array<number>>} corners_px
+ * @property {(number|null)} [hamming] bits the decoder corrected (None: an OpenCV ArUco dictionary does not say)
+ * @property {(number|null)} [decision_margin] the AprilTag library's confidence (higher is surer; None for ArUco)
  */
 
 /**
@@ -531,6 +538,7 @@ export const CLIENT_MESSAGE_TYPES = Object.freeze(["ack", "view", "command"]);
  * @property {boolean} moving
  * @property {boolean} [torque_enabled] motor torque on (the arm holds); off = limp, it falls unless held
  * @property {boolean} calibrated
+ * @property {(string|null)} [camera_warning] "camera moved: recalibrate (...)" when the board tags no longer sit where the calibration puts them
  * @property {("sim"|"real")} backend
  * @property {(string|null)} controller who holds the control lease (None: free); only it may command
  * @property {(number|null)} [controller_since_s] when it took control (time.time())
