@@ -41,6 +41,7 @@ export class LiveView {
     this.hoverDetection = -1;
     this.marker = null; // {u, v, label, color} in frame pixels (camera views) or world (topdown)
     this.hoverPending = null;
+    this.hoverSeq = 0; // pointer events so far: an answer is shown only for the newest
     this.hoverBusy = false;
     this.hoverTimer = null;
     this.framesDrawn = 0;
@@ -200,6 +201,7 @@ export class LiveView {
   }
 
   onLeave() {
+    this.hoverSeq += 1;
     this.hoverPending = null;
     this.setHoverDetection(-1);
     this.hoverLabel.textContent = "x — y — z — mm";
@@ -212,6 +214,7 @@ export class LiveView {
   }
 
   onMove(event) {
+    this.hoverSeq += 1; // a server answer for an earlier pointer position (or view) is dropped
     const px = this.pointerToPx(event);
     if (!px) {
       this.onLeave();
@@ -223,35 +226,38 @@ export class LiveView {
       const world = this.detections.map((d) => ({ center_px: d.position_m ? [d.position_m[0], d.position_m[1]] : null }));
       this.setHoverDetection(nearestDetection(world, w[0], w[1], 0.03));
       // x, y at once; z (and the camera pixel and depth) from the server at the camera pixel that sees this point.
-      this.topdownHoverXY = [w[0], w[1]];
       this.showWorld([w[0], w[1], NaN], null);
       const cam = worldToCameraPx(w, this.cameraModel);
       if (!cam) return;
-      this.hoverPending = { u: cam.u, v: cam.v, xyM: [w[0], w[1]] };
+      this.hoverPending = { u: cam.u, v: cam.v, xyM: [w[0], w[1]], seq: this.hoverSeq };
       this.pumpHover();
       return;
     }
     this.setHoverDetection(nearestDetection(this.detections, px.camera.u, px.camera.v, PICK_RADIUS_PX));
-    this.hoverPending = { u: px.camera.u, v: px.camera.v };
+    this.hoverPending = { u: px.camera.u, v: px.camera.v, seq: this.hoverSeq };
     this.pumpHover();
   }
 
   /** At most one pixel-to-world request in flight (read-only, no token needed); the newest pointer wins. */
   pumpHover() {
     if (this.hoverBusy || this.hoverTimer || !this.hoverPending) return;
-    const { u, v, xyM } = this.hoverPending;
+    const { u, v, xyM, seq } = this.hoverPending;
+    const view = this.view();
     this.hoverPending = null;
     this.hoverBusy = true;
     this.api
       .pixelToWorld(u, v)
       .then((r) => {
-        // On the top-down view the board point under the pointer keeps its x, y; the server gives z there
-        // (an answer for a point the pointer has left is dropped).
-        if (xyM && (this.view() !== "topdown" || this.topdownHoverXY?.join() !== xyM.join())) return;
+        // On the top-down view the board point under the pointer keeps its x, y; the server gives z there.
+        // An answer for a point the pointer has left is dropped when it is of another view, of the top-down
+        // view (x, y are shown at once), or when the newer point's request is waiting to go.
+        const stale = seq !== this.hoverSeq && (view !== this.view() || xyM || this.hoverPending);
+        if (stale) return;
         const position = xyM ? [xyM[0], xyM[1], r.position_m[2]] : r.position_m;
         this.showWorld(position, r.on, { u, v, depthMm: r.depth_mm });
       })
       .catch((e) => {
+        if (seq !== this.hoverSeq) return;
         delete this.hoverLabel.dataset.positionM;
         this.hoverLabel.textContent = e.code === "not_calibrated" ? "calibrate to read world mm" : e.message;
       })
