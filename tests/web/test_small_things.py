@@ -178,6 +178,32 @@ def test_depth_view_has_a_colour_scale(page, fresh):
         }"""
     )
     assert colours >= 8, colours  # a ramp from warm to cold, not the board's flat depth
+    # Near (warm, red) at the top of the scale, far (cold, blue) at its bottom, with the range in mm beside it.
+    top, bottom = page.evaluate(
+        """() => {
+            const c = document.getElementById('live'), ctx = c.getContext('2d');
+            const x = Math.round(c.width * (1 - 1 / 64 - 8 / 1280) - 2);
+            return [Array.from(ctx.getImageData(x, Math.round(c.height * 0.08), 1, 1).data),
+                    Array.from(ctx.getImageData(x, Math.round(c.height * 0.92), 1, 1).data)];
+        }"""
+    )
+    assert top[0] > 2 * top[2] and bottom[2] > bottom[0], (top, bottom)
+    # The scale's white frame: a light column just left of the bar over its whole height.
+    light = page.evaluate(
+        """() => {
+            const c = document.getElementById('live'), ctx = c.getContext('2d'), w = c.width, h = c.height;
+            const margin = Math.max(8, Math.floor(h / 40)), barW = Math.max(12, Math.floor(w / 64));
+            const x = w - margin - barW - 1, top = margin + 24, bottom = h - margin - 24;
+            let n = 0, total = 0;
+            for (let y = top + 4; y < bottom - 4; y += 4) {
+                const [r, g, b] = ctx.getImageData(x, y, 1, 1).data;
+                total += 1;
+                if (Math.min(r, g, b) > 150) n += 1;
+            }
+            return n / total;
+        }"""
+    )
+    assert light > 0.8, light
     page.click("#view-select button[data-view='color']")
     assert page.errors == []
 
