@@ -3,6 +3,8 @@
 import { Api, adoptToken, dropToken } from "./api.js";
 import { CompetitionPanel } from "./competition.js";
 import { ControlLease } from "./control.js";
+import { applyMovingTimeLimits, emptyDetectionsReason, readMovingTimeS } from "./inputs.js";
+import { CartesianJog } from "./jog.js";
 import { LiveView } from "./liveview.js";
 import { EventLog } from "./log.js";
 import {
@@ -15,14 +17,12 @@ import {
   renderReadouts,
   renderStatus,
 } from "./panels.js";
-import { applyMovingTimeLimits, emptyDetectionsReason, readMovingTimeS } from "./inputs.js";
-import { CartesianJog } from "./jog.js";
 import { ProgramPathOverlay } from "./path.js";
 import { JointPlot } from "./plot.js";
 import { RepeatPanel } from "./repeat.js";
+import { RateMeter, Stream } from "./stream.js";
 import { TeachPanel } from "./teach.js";
 import { TorqueButton } from "./torque.js";
-import { RateMeter, Stream } from "./stream.js";
 import { COMMANDS, LAYERS, VIEWS } from "./wire_types.js";
 
 const $ = (id) => document.getElementById(id);
