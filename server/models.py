@@ -176,6 +176,15 @@ class SceneObjectRequest(Request):
     aruco_id: int | None = Field(None, ge=0, le=249, description="ArUco tag (DICT_4X4_250) on a block's top face")
 
 
+class CameraBumpRequest(Request):
+    """Simulation only: knock the camera mount, as a bump on the rig would (the camera's own OpenCV frame)."""
+
+    translation_m: Annotated[list[Annotated[float, Field(ge=-0.05, le=0.05)]], Field(min_length=3, max_length=3)] = Field(
+        description="shift of the camera, metres (each |value| <= 0.05)")
+    rotation_rad: Annotated[list[Annotated[float, Field(ge=-0.1, le=0.1)]], Field(min_length=3, max_length=3)] = Field(
+        description="rotation vector of the turn, radians (each |value| <= 0.1)")
+
+
 class SceneRequest(Request):
     """A generated competition scene (event, level, seed) or explicit objects (ground-truth format)."""
 

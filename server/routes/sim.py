@@ -8,7 +8,7 @@ from armlab.station.core import Station
 from armlab.station.jobs import jsonable
 from server.deps import ControlAuth, StationDep
 from server.errors import ApiError
-from server.models import SceneRequest
+from server.models import CameraBumpRequest, SceneRequest
 
 router = APIRouter(prefix="/api/sim", tags=["sim"])
 
@@ -47,3 +47,20 @@ def read_scene(station: StationDep) -> dict:
 def read_truth(station: StationDep) -> dict:
     """Ground truth: object poses, camera pose and intrinsics, gripper contacts."""
     return jsonable(_cell(station).truth())
+
+
+@router.post("/camera/bump")
+def post_camera_bump(body: CameraBumpRequest, station: StationDep, controller: ControlAuth) -> dict:
+    """Knock the simulated camera mount (translation, then rotation vector, in the camera's frame): a
+    calibrated station then warns 'camera moved: recalibrate' in its status until recalibrated."""
+    import cv2
+    import numpy as np
+
+    cell = _cell(station)
+    station.allowed_or_raise("set_scene", controller)
+    T_old_new = np.eye(4)
+    T_old_new[:3, :3] = cv2.Rodrigues(np.asarray(body.rotation_rad, dtype=float))[0]
+    T_old_new[:3, 3] = body.translation_m
+    cell.bump_camera(T_old_new)
+    station.events.add("warn", f"simulated camera mount bumped by {controller}")
+    return {"translation_m": body.translation_m, "rotation_rad": body.rotation_rad}

@@ -52,6 +52,9 @@ export function renderStatus(s) {
     $("halt-title").textContent = s.state === "estop" ? "E-STOP LATCHED" : "FAULT";
     $("halt-text").textContent = haltText(s.detail);
   }
+  const warning = $("camera-warning");
+  warning.hidden = !s.camera_warning;
+  warning.textContent = s.camera_warning ? `⚠ ${s.camera_warning[0].toUpperCase()}${s.camera_warning.slice(1)}` : "";
   $("backend").textContent = s.backend ? `backend: ${s.backend}` : "—";
   $("backend").title = s.controller ? `last commanded by: ${s.controller}` : "Device backend";
 }
