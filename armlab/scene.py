@@ -58,6 +58,9 @@ def yaw_from_quat(quat_wxyz) -> float:
     return math.atan2(2.0 * (w * z + x * y), 1.0 - 2.0 * (y * y + z * z))
 
 
+WORKCELL_BOUND_M = 5.0  # |coordinate| of anything placed in a scene
+
+
 @dataclass(frozen=True)
 class SceneObject:
     """One object: `position_m` is the body centre in the world (board) frame, `quat_wxyz` its orientation.
@@ -89,7 +92,7 @@ class SceneObject:
             raise ValueError(f"SceneObject {self.id}: position_m needs 3 values and quat_wxyz 4")
         if not (np.all(np.isfinite(position)) and np.all(np.isfinite(quat))):
             raise ValueError(f"SceneObject {self.id}: position_m and quat_wxyz must be finite")
-        if np.any(np.abs(position) > 5.0):
+        if np.any(np.abs(position) > WORKCELL_BOUND_M):
             raise ValueError(f"SceneObject {self.id}: position_m {position.tolist()} is far outside the workcell")
         norm = float(np.linalg.norm(quat))
         if norm < 1e-6:
@@ -115,6 +118,11 @@ class SceneObject:
         """Radius of the circle that holds the footprint at any yaw."""
         extent_x, extent_y, _ = self.dimensions_m
         return 0.5 * math.hypot(extent_x, extent_y)
+
+    def posed_dict(self, position_m, quat_wxyz) -> dict:
+        """to_dict at a simulated pose. Not validated: a body pushed off the table falls on without end."""
+        return {**self.to_dict(), "position_m": [float(x) for x in position_m], "yaw_rad": yaw_from_quat(quat_wxyz),
+                "quat_wxyz": [float(x) for x in quat_wxyz]}
 
     def to_dict(self) -> dict:
         """The ground-truth object format (render CLI, sim-only API, scene files)."""
@@ -175,7 +183,7 @@ class Feeder:
 
     def __post_init__(self) -> None:
         spot = np.asarray(self.spot_m, dtype=float)
-        if spot.shape != (2,) or not np.all(np.isfinite(spot)) or np.any(np.abs(spot) > 5.0):
+        if spot.shape != (2,) or not np.all(np.isfinite(spot)) or np.any(np.abs(spot) > WORKCELL_BOUND_M):
             raise ValueError(f"Feeder: spot_m must be 2 finite values (x, y) in metres, got {self.spot_m!r}")
         if isinstance(self.count, bool) or not isinstance(self.count, int | np.integer) or not 0 <= self.count <= 100:
             raise ValueError(f"Feeder: count must be an integer in 0..100, got {self.count!r}")

@@ -36,7 +36,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from armlab.scene import COLORS, EVENTS, Scene, SceneObject
+from armlab.scene import COLORS, EVENTS, WORKCELL_BOUND_M, Scene, SceneObject
 
 # Simulated seconds allowed per event (DESIGN §7).
 EVENT_LIMITS_S: dict[str, float] = {
@@ -104,7 +104,17 @@ class Score:
 
 
 def _as_object(obj) -> SceneObject:
-    return obj if isinstance(obj, SceneObject) else SceneObject.from_dict(obj)
+    return obj if isinstance(obj, SceneObject) else SceneObject.from_dict(_within_bound(obj))
+
+
+def _within_bound(data):
+    """A truth object with its position clamped to the scene bound: a body pushed off the simulated table falls
+    on without end, and is judged where it is, far off the board, not refused as a malformed scene."""
+    if not isinstance(data, Mapping) or not isinstance(data.get("position_m"), (list, tuple)):
+        return data
+    bound = WORKCELL_BOUND_M - 1e-6
+    position = [min(bound, max(-bound, x)) if isinstance(x, (int, float)) and math.isfinite(x) else x for x in data["position_m"]]
+    return {**data, "position_m": position}
 
 
 def tilt_rad(obj) -> float:
@@ -210,7 +220,7 @@ def _check_truth(truth) -> tuple[SceneObject, ...]:
     if not isinstance(truth, Mapping) or not isinstance(truth.get("objects"), list):
         raise ValueError("judge: truth must be a mapping with an 'objects' list (the SimWorkcell.truth() format)")
     try:
-        return Scene.from_dict({"objects": truth["objects"]}).objects
+        return Scene.from_dict({"objects": [_within_bound(obj) for obj in truth["objects"]]}).objects
     except (ValueError, TypeError) as error:
         raise ValueError(f"judge: malformed truth object: {error}") from error
 

@@ -465,3 +465,19 @@ def test_judge_leaves_the_truth_unchanged():
 def test_bad_input_is_refused_clearly(call, match):
     with pytest.raises(ValueError, match=match):
         call()
+
+
+def test_a_body_fallen_far_off_the_table_is_judged_not_refused():
+    """The simulated table has no floor below it: a block pushed off it falls on without end. Its truth
+    (tens of metres down) is judged where it is, off the board, instead of failing the run as malformed."""
+    from armlab.tasks.scorers import score_job
+
+    objects = sorted_six()
+    objects[0]["position_m"] = [-0.45, 0.2, -42.0]  # fell off the table's edge on the wrong side
+    score = judge("pick_sort", 2, truth(objects), sim_time_s=100.0)
+    assert {r.object_ids[0]: r.points for r in rules_of(score, "sorted")}["L1"] == 0
+    assert score.points == 5 * 30 and score.max_points == 200 and not score.full
+    fallen = [distractor("c", 0.0, 0.0)]
+    fallen[0]["position_m"] = [0.6, 0.1, -17.0]
+    cleared = score_job("clear_table", truth(fallen), sim_time_s=30.0)
+    assert cleared.points == 0

@@ -31,7 +31,7 @@ from armlab.devices.sim.gripper import SimGripper
 from armlab.devices.sim.mjcf import CAMERA_NAME, GRIPPER_SITE, OBJECT_PREFIX, ArmGeometry, build_model_xml, quat_wxyz_from_matrix
 from armlab.devices.sim.path import MAX_DURATION_S, PathRecorder
 from armlab.devices.sim.render import RawImages, RenderThread
-from armlab.scene import Scene, SceneObject
+from armlab.scene import Scene
 from armlab.workcell import load_workcell
 
 logger = logging.getLogger(__name__)
@@ -431,10 +431,7 @@ class SimWorkcell:
             if self._feeder is not None:
                 on_board += self._feeder.fed_bodies()
             for body, obj in on_board:
-                quat = data.xquat[body].copy()
-                entry = SceneObject(obj.id, obj.type, obj.color, obj.size, tuple(data.xpos[body]), tuple(quat),
-                                    obj.aruco_id).to_dict()
-                objects.append(entry)
+                objects.append(obj.posed_dict(data.xpos[body], data.xquat[body]))
             contacts = {"left_pad": set(), "right_pad": set()}
             for contact in data.contact[: data.ncon]:
                 for pad_geom, other_geom in ((contact.geom1, contact.geom2), (contact.geom2, contact.geom1)):
