@@ -97,27 +97,42 @@ def test_topdown_view_hover_maps_the_board(page, server):
     page.wait_for_function("document.getElementById('live').dataset.view === 'topdown'", timeout=15_000)
     size = page.evaluate("[document.getElementById('live').width, document.getElementById('live').height]")
     assert abs(size[0] / size[1] - 1000 / 650) < 0.01  # the whole board, 1000 x 650 mm
-    box = page.locator("#live").bounding_box()
-    scale = min(box["width"] / size[0], box["height"] / size[1])  # object-fit: contain
-    left = box["x"] + (box["width"] - size[0] * scale) / 2
-    top = box["y"] + (box["height"] - size[1] * scale) / 2
+    try:
+        hover_the_top_down_view(page)
+    finally:  # later tests click on the camera view
+        page.click("#view-select button[data-view='color']")
+        page.wait_for_function("document.getElementById('live').dataset.view === 'color'", timeout=15_000)
+
+
+def hover_the_top_down_view(page) -> None:
     # Image centre → board centre (0, 150) mm; a quarter from the left and top → (-250, 312.5) mm.
     for fx, fy, expected in ((0.5, 0.5, (0.0, 0.15)), (0.25, 0.25, (-0.25, 0.3125))):
+        x, y = topdown_point(page, fx, fy)
         page.evaluate("delete document.getElementById('hover-world').dataset.positionM")
-        page.mouse.move(left + size[0] * scale * fx, top + size[1] * scale * fy)
+        page.mouse.move(x, y)
         page.wait_for_function("document.getElementById('hover-world').dataset.positionM !== undefined")
         x_m, y_m, _ = page.evaluate("JSON.parse(document.getElementById('hover-world').dataset.positionM)")
-        assert abs(x_m - expected[0]) < 0.005 and abs(y_m - expected[1]) < 0.005, (x_m, y_m, expected)
+        assert abs(x_m - expected[0]) < 0.005 and abs(y_m - expected[1]) < 0.005, (
+            x_m, y_m, expected, (x, y), topdown_point(page, fx, fy), page.evaluate(CANVAS_STATE))
     # Hovering a block's world position in the warp highlights its row in the detections list.
     page.wait_for_function("window.armlab.detections.length > 0", timeout=20_000)
     det = page.evaluate("window.armlab.detections[0]")
-    u = (det["position_m"][0] + 0.5) / 1.0 * size[0]
-    v = (0.475 - det["position_m"][1]) / 0.65 * size[1]
-    page.mouse.move(left + u * scale, top + v * scale)
+    page.mouse.move(*topdown_point(page, (det["position_m"][0] + 0.5) / 1.0, (0.475 - det["position_m"][1]) / 0.65))
     page.wait_for_function("document.querySelector('#det-body tr.hover') !== null", timeout=5_000)
     assert page.get_attribute("#det-body tr.hover", "data-index") == "0"
-    page.click("#view-select button[data-view='color']")
-    page.wait_for_function("document.getElementById('live').dataset.view === 'color'", timeout=15_000)
+
+
+CANVAS_STATE = ("(() => { const c = document.getElementById('live'); const r = c.getBoundingClientRect();"
+                " return {w: c.width, h: c.height, view: c.dataset.view, rect: [r.x, r.y, r.width, r.height]}; })()")
+
+
+def topdown_point(page, fx: float, fy: float) -> tuple[float, float]:
+    """The page point at fractions (fx, fy) of the top-down image, as drawn now (object-fit: contain)."""
+    state = page.evaluate(CANVAS_STATE)
+    x0, y0, width, height = state["rect"]
+    scale = min(width / state["w"], height / state["h"])
+    return (x0 + (width - state["w"] * scale) / 2 + state["w"] * scale * fx,
+            y0 + (height - state["h"] * scale) / 2 + state["h"] * scale * fy)
 
 
 def nearest_truth(objects: list[dict], position_m) -> dict:
