@@ -12,6 +12,7 @@ import numpy as np
 
 from armlab.config import read_config_file, resolve_config_path
 from armlab.devices.sim import textures
+from armlab.devices.sim.checkerboard import BODY_NAME as CHECKERBOARD, checkerboard_texture, checkerboard_xml, load_checkerboard_target
 from armlab.devices.sim.config import SimCameraConfig, SimConfig
 from armlab.devices.sim.feeder import FEEDER_PROBE, parked_objects
 from armlab.scene import Scene, SceneObject
@@ -262,6 +263,9 @@ def build_model_xml(
             f'<geom name="tag{tag_id}" type="plane" size="{tag_half_m:.9g} {tag_half_m:.9g} 0.001" '
             f'pos="{x} {y} 0.0003" material="tag{tag_id}" contype="0" conaffinity="0"/>'
         )
+    target = load_checkerboard_target()  # intrinsics target, parked out of sight (checkerboard.py)
+    assets[f"{CHECKERBOARD}.png"] = textures.encode_png(checkerboard_texture(target))
+    checker_asset, checker_body = checkerboard_xml(target)
     colors = "".join(
         f'<material name="c_{name}" rgba="{_fmt(rgba)}" specular="0.1" shininess="0.1"/>' for name, rgba in COLOR_RGBA.items()
     )
@@ -312,6 +316,7 @@ def build_model_xml(
     <material name="pad" rgba="0.2 0.2 0.2 1" specular="0"/>
     {colors}
     {''.join(object_assets)}
+    {checker_asset}
   </asset>
   <worldbody>
     <light name="sun" directional="true" pos="0.2 0.3 2" dir="-0.1 -0.15 -1" castshadow="false" diffuse="0.55 0.55 0.55" specular="0 0 0"/>
@@ -323,6 +328,7 @@ def build_model_xml(
     <camera name="{CAMERA_NAME}" mode="fixed" {camera_xml_attributes(T_world_camera, camera)}/>
     {_arm_xml(arm, sim)}
     {''.join(object_bodies)}
+    {checker_body}
   </worldbody>
   <actuator>
     {''.join(actuators)}

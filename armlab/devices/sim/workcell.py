@@ -19,6 +19,7 @@ import numpy as np
 from armlab.devices.camera import Frame
 from armlab.devices.sim.arm import SimArm
 from armlab.devices.sim.camera import NoiseModel, SimCamera
+from armlab.devices.sim.checkerboard import BODY_NAME as CHECKERBOARD, PARKED_POSITION_M, checked_pose
 from armlab.devices.sim.config import (
     SimWorkcellConfig,
     draw_pose_error,
@@ -150,6 +151,7 @@ class SimWorkcell:
             self._feeder.tick(model, data)  # a clear spot starts filled
         self._model, self._data, self._scene = model, data, scene
         self._torque = True if previous is None else previous["torque"]
+        self._show_checkerboard()  # a placed intrinsics target stays where it was across scene changes
 
     def set_scene(self, scene: Scene | dict) -> None:
         """Replace all objects (thread-safe; the arm and gripper keep their state). Accepts a Scene or
@@ -415,6 +417,23 @@ class SimWorkcell:
             self._model.cam_quat[camera_id] = quat_wxyz_from_matrix(R_world_mj)
             self._data.cam_xpos[camera_id] = self._T_world_camera[:3, 3]  # the next physics step would recompute these
             self._data.cam_xmat[camera_id] = R_world_mj.ravel()
+
+    def place_checkerboard(self, position_m=None, R_world_board=None) -> None:
+        """Put the intrinsics checkerboard (checkerboard.py: board frame, z out of the printed face) at a world
+        pose, or park it out of sight with no arguments. Contact-free: nothing else in the cell moves."""
+        pose = None if position_m is None else checked_pose(position_m, np.eye(3) if R_world_board is None else R_world_board)
+        with self.lock:
+            self._checkerboard_pose = pose
+            self._show_checkerboard()
+
+    def _show_checkerboard(self) -> None:
+        """Move the checkerboard's mocap body to its pose (or parked) and update the drawn positions (under the lock)."""
+        pose = getattr(self, "_checkerboard_pose", None)
+        position, R = (np.asarray(PARKED_POSITION_M), np.eye(3)) if pose is None else pose
+        mocap = self._model.body_mocapid[self._model.body(CHECKERBOARD).id]
+        self._data.mocap_pos[mocap] = position
+        self._data.mocap_quat[mocap] = quat_wxyz_from_matrix(R)
+        mujoco.mj_kinematics(self._model, self._data)
 
     def feeder_status(self) -> dict | None:
         """to_the_sky feeder: {spot_m, count, fed, remaining}, or None if the scene has no feeder."""
