@@ -1,6 +1,7 @@
-"""The workcell (config/workcells/<name>.yaml): board and grid, board tags, block and distractor sizes,
-block-top ArUco ids, and the spots the jobs use (sort_by_tag places, the to_the_sky feeder, the
-clear_table bin). One fact, one place: vision, scenes, the simulation, skills and the browser read it
+"""The workcell (config/workcells/<name>.yaml): the arm (config/arms/<arm>.yaml) and its gripper type,
+the arm's base pose on the board, the camera and its mount, board and grid, board tags, block and
+distractor sizes, block-top ArUco ids, the spots the jobs use (sort_by_tag places, the to_the_sky
+feeder, the clear_table bin) and the approach heights (overrides of config/motion.yaml). One fact, one place: vision, scenes, the simulation, skills and the browser read it
 from here (DESIGN §3). Validated at load; errors name the file and the field."""
 
 from __future__ import annotations
@@ -8,7 +9,7 @@ from __future__ import annotations
 import functools
 import os
 from pathlib import Path
-from typing import Annotated
+from typing import Annotated, Literal
 
 import numpy as np
 from pydantic import Field, field_validator, model_validator
@@ -253,10 +254,55 @@ class BinSpec(StrictModel):
         return self.x_range_m[0] <= x_m <= self.x_range_m[1] and self.y_range_m[0] <= y_m <= self.y_range_m[1]
 
 
+GRIPPER_TYPES = ("fingers", "suction")
+
+
+class GripperChoice(StrictModel):
+    """The end effector on the arm: `fingers` (a parallel gripper: the arm file's `gripper:` width range)
+    or `suction` (a vacuum cup: the arm file's `suction_cup:`)."""
+
+    type: Literal["fingers", "suction"] = "fingers"
+
+
+class ArmBaseSpec(StrictModel):
+    """The arm's base frame on the board: origin position_m (world), rotated yaw_deg about world z."""
+
+    position_m: tuple[float, float, float] = (0.0, 0.0, 0.0)
+    yaw_deg: Annotated[float, Field(ge=-180.0, le=180.0)] = 0.0
+
+    @property
+    def T_world_base(self) -> np.ndarray:
+        yaw = np.radians(self.yaw_deg)
+        T = np.eye(4)
+        T[:2, :2] = [[np.cos(yaw), -np.sin(yaw)], [np.sin(yaw), np.cos(yaw)]]
+        T[:3, 3] = self.position_m
+        return T
+
+
+class CameraMountSpec(StrictModel):
+    """Nominal overhead camera mount (what software may assume before calibrating): camera centre in the
+    world frame and tilt about the camera x axis toward -y. Overrides the camera file's `mount`."""
+
+    position_m: tuple[float, float, float]
+    tilt_deg: Annotated[float, Field(ge=0.0, le=45.0)]
+
+
+class CameraSpec(StrictModel):
+    """The overhead RGB-D camera: config/cameras/<name>.yaml, and this workcell's mount (None = the file's)."""
+
+    name: str = "sim_l515"
+    mount: CameraMountSpec | None = None
+
+
 class Workcell(StrictModel):
     """config/workcells/<name>.yaml, validated. World frame = board frame, metres (DESIGN §3)."""
 
     name: str
+    arm: str = "rx200"                      # config/arms/<arm>.yaml
+    gripper: GripperChoice = GripperChoice()
+    arm_base: ArmBaseSpec | None = None     # None: the arm file's T_world_base
+    camera: CameraSpec = CameraSpec()
+    motion: dict[str, object] = {}          # overrides of config/motion.yaml (approach heights, workspace box)
     board: BoardSpec
     board_tags: BoardTagsSpec
     blocks: BlockSpec
@@ -270,6 +316,17 @@ class Workcell(StrictModel):
     @classmethod
     def _board_by_name(cls, value):
         return board_file(value) if isinstance(value, str) else value
+
+    @model_validator(mode="after")
+    def _motion_overrides_valid(self) -> Workcell:
+        if self.motion:
+            from armlab.motion.config import MotionConfig
+
+            try:
+                MotionConfig.model_validate(self.motion)
+            except Exception as error:  # pydantic ValidationError: name the field under motion
+                raise ValueError(f"motion: {error}") from None
+        return self
 
     @model_validator(mode="after")
     def _spots_on_the_board(self) -> Workcell:
@@ -329,11 +386,35 @@ class Workcell(StrictModel):
             raise ValueError(f"no place {destination!r}; places: {sorted(self.places_m)}")
         return self.places_m[destination]
 
+    def check_arm_fits(self) -> None:
+        """ConfigError unless the arm file exists and carries what the gripper type needs (a finger width
+        range for `fingers`, a suction cup for `suction`). Called when a station or simulation starts."""
+        from armlab.errors import ConfigError
+
+        arm_file = resolve_config_path(self.arm, "arms")  # ConfigError listing the arms
+        arm_data = read_config_file(arm_file)
+        needs = {"fingers": ("gripper", "a finger width range (finger_offset_min_m, finger_offset_max_m)"),
+                 "suction": ("suction_cup", "a suction cup (lip_radius_m, body_radius_m, body_length_m)")}
+        section, what = needs[self.gripper.type]
+        if not isinstance(arm_data.get(section), dict):
+            raise ConfigError(
+                f"workcell '{self.name}': gripper.type: '{self.gripper.type}' needs {what}, but {arm_file} has no "
+                f"`{section}:` section (arm '{self.arm}'); choose the gripper the arm carries or add the section"
+            )
+
+    def T_world_base(self, arm_file_T_world_base) -> np.ndarray:
+        """The arm's base pose on the board: arm_base if given, else the arm file's T_world_base."""
+        if self.arm_base is None:
+            return np.asarray(arm_file_T_world_base, dtype=float)
+        return self.arm_base.T_world_base
+
     def to_wire(self) -> dict:
         """JSON-ready geometry for the browser (sent in the websocket hello)."""
         board = self.board
         return {
             "name": self.name,
+            "arm": self.arm,
+            "gripper_type": self.gripper.type,
             "board": {
                 "x_range_m": list(board.x_range_m),
                 "y_range_m": list(board.y_range_m),
@@ -368,9 +449,48 @@ def load_workcell(name: str | Path = DEFAULT_WORKCELL) -> Workcell:
     try:
         stat = os.stat(path)
     except OSError:
-        path = str(resolve_config_path(name, "workcells"))  # raises ConfigError listing what exists
+        from armlab.errors import ConfigError
+
+        try:
+            path = str(resolve_config_path(name, "workcells"))
+        except ConfigError:
+            folder = Path(os.environ.get("ARMLAB_CONFIG_DIR") or _REPO_CONFIG_DIR) / "workcells"
+            raise ConfigError(f"unknown workcell '{name}': no config '{name}' in {folder} "
+                              f"(available: {', '.join(known_workcells())})") from None
         stat = os.stat(path)
     return _load_cached(path, stat.st_mtime_ns, stat.st_size)
+
+
+def known_workcells() -> list[str]:
+    """Names of the workcell files in config/workcells/."""
+    from armlab.config import config_dir
+
+    return sorted(path.stem for path in (config_dir() / "workcells").glob("*.yaml"))
+
+
+def load_workcell_arm(workcell: Workcell | str | Path = DEFAULT_WORKCELL):
+    """The workcell's arm model: load_arm(workcell.arm) with the base pose the workcell gives it."""
+    from armlab.kinematics import load_arm
+    from armlab.kinematics.arm_model import ArmModel
+
+    cell = workcell if isinstance(workcell, Workcell) else load_workcell(workcell)
+    cell.check_arm_fits()
+    model = load_arm(cell.arm)
+    if cell.arm_base is None:
+        return model
+    config = model.config.model_copy(update={"T_world_base": cell.arm_base.T_world_base.tolist()})
+    return ArmModel(config, f"{model.name} in workcell {cell.name}")
+
+
+def load_workcell_motion_config(workcell: Workcell | str | Path = DEFAULT_WORKCELL, path: str | Path | None = None):
+    """config/motion.yaml (or `path`) with the workcell's `motion:` overrides applied (approach heights...)."""
+    from armlab.motion.config import MotionConfig, load_motion_config
+
+    cell = workcell if isinstance(workcell, Workcell) else load_workcell(workcell)
+    base = load_motion_config(path)
+    if not cell.motion:
+        return base
+    return MotionConfig.model_validate({**base.model_dump(), **cell.motion})
 
 
 def block_edge_m(size: str, workcell: Workcell | None = None) -> float:

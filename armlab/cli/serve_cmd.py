@@ -16,6 +16,8 @@ def register(subparsers: argparse._SubParsersAction) -> None:
     parser.add_argument("--event", default=None, help="starting scene: pick_sort, pick_stack, line_up, stack_high, to_the_sky")
     parser.add_argument("--level", type=int, default=None, help="starting scene level (1-3)")
     parser.add_argument("--scene-seed", type=int, default=None, help="starting scene seed")
+    parser.add_argument("--workcell", default=None,
+                        help="workcell (config/workcells/<name>.yaml: arm, gripper, board, camera); default from the config, rx200_armlab")
     parser.add_argument("--backend", choices=("sim", "real"), default="sim", help="sim (default) or real devices")
     parser.add_argument("--arm", default="interbotix_arm", help="real backend: arm config (config/devices/)")
     parser.add_argument("--gripper", default="interbotix_gripper", help="real backend: gripper config (config/devices/)")
@@ -26,9 +28,14 @@ def register(subparsers: argparse._SubParsersAction) -> None:
 
 def build_station_config(args: argparse.Namespace):
     """config/station.yaml (or --config) with the command-line overrides applied."""
-    from armlab.station import load_station_config
+    from armlab.config import config_dir, read_config_file, validate_config
+    from armlab.station import StationConfig, load_station_config
 
     config = load_station_config(args.config)
+    workcell = getattr(args, "workcell", None)
+    if workcell is not None:  # the workcell decides the arm: re-validate the file's own fields with it
+        path = args.config or config_dir() / "station.yaml"
+        config = validate_config({**read_config_file(path), "workcell": workcell}, StationConfig, f"{path} with --workcell {workcell}")
     sim_updates = {
         key: value
         for key, value in (("seed", args.seed), ("event", args.event), ("level", args.level), ("scene_seed", args.scene_seed))

@@ -124,6 +124,16 @@ class GripperConfig(StrictModel):
         return self
 
 
+class SuctionCupConfig(StrictModel):
+    """A vacuum suction cup at the tool point: the lip (a ring of radius lip_radius_m around the approach
+    axis, at the tool point) and the cup body behind it (body_radius_m, body_length_m back toward the
+    flange). The tool point itself (the lip centre) is dh.tool."""
+
+    lip_radius_m: float = Field(gt=0.0, le=0.1)
+    body_radius_m: float = Field(gt=0.0, le=0.1)
+    body_length_m: float = Field(gt=0.0, le=0.3)
+
+
 class ArmConfig(StrictModel):
     """One arm file. `family: rx200` enables the closed-form IK; `generic` uses the numerical IK only."""
 
@@ -136,6 +146,7 @@ class ArmConfig(StrictModel):
     limits: LimitsConfig
     poses: PosesConfig
     gripper: GripperConfig | None = None
+    suction_cup: SuctionCupConfig | None = None
     T_world_base: list[FloatRow] = Field(default_factory=lambda: np.eye(4).tolist())
     payload_kg: float | None = Field(default=None, gt=0.0)
     reach_m: float | None = Field(default=None, gt=0.0)
@@ -178,6 +189,13 @@ class ArmConfig(StrictModel):
                     raise ValueError(f"urdf_origins.{key}: expected [x, y, z], got {len(origin)} numbers")
             if self.pox is None:
                 raise ValueError("urdf_origins: needs pox (the joint axes come from its screw axes)")
+        if self.suction_cup is not None and self.dh is not None:
+            reach = float(np.linalg.norm(np.asarray(self.dh.tool, dtype=float)[:3, 3]))
+            if self.suction_cup.body_length_m > reach + 1e-9:
+                raise ValueError(
+                    f"suction_cup.body_length_m: {self.suction_cup.body_length_m} m is longer than the flange-to-tool-point "
+                    f"distance of dh.tool ({reach:.4f} m): the cup would reach behind the flange"
+                )
         if self.family == "rx200" and (self.pox is None or dof != 5):
             raise ValueError("family: 'rx200' needs a pox description and 5 joints")
         return self

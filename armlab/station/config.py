@@ -4,7 +4,7 @@ from __future__ import annotations
 
 from pathlib import Path
 
-from pydantic import Field, field_validator
+from pydantic import Field, field_validator, model_validator
 
 from armlab.config import StrictModel, config_dir, load_config
 
@@ -20,7 +20,10 @@ class SimStartConfig(StrictModel):
 
 
 class StationConfig(StrictModel):
-    arm: str = "rx200"
+    # The workcell (config/workcells/<name>.yaml) decides the arm, its gripper, board and camera. `arm`
+    # is filled in from it; a config that names a different arm is refused (one place decides the arm).
+    workcell: str = "rx200_armlab"
+    arm: str | None = None
     telemetry_rate_hz: float = Field(30.0, ge=20.0, le=200.0)
     perception_rate_hz: float = Field(5.0, gt=0.0, le=60.0)
     jpeg_quality: int = Field(80, ge=10, le=100)
@@ -47,10 +50,47 @@ class StationConfig(StrictModel):
                 raise ValueError(f"allowed_hosts: {name!r} is not a bare host name (no scheme, port or path)")
         return tuple(name.strip() for name in names)
 
+    @model_validator(mode="before")
+    @classmethod
+    def _arm_from_workcell(cls, data):
+        """arm := the workcell's arm; an `arm:` that contradicts the workcell is an error naming both."""
+        if not isinstance(data, dict):
+            return data
+        from armlab.errors import ConfigError
+        from armlab.workcell import DEFAULT_WORKCELL, load_workcell
+
+        name = data.get("workcell", DEFAULT_WORKCELL)
+        if not isinstance(name, str):
+            return data  # the field check reports the wrong type
+        try:
+            workcell = load_workcell(name)
+        except ConfigError as error:
+            raise ValueError(f"workcell: {error}") from None
+        arm = data.get("arm")
+        if arm is not None and arm != workcell.arm:
+            raise ValueError(
+                f"arm: '{arm}' contradicts workcell '{name}', whose arm is '{workcell.arm}'; the workcell decides "
+                f"the arm: remove `arm:` or choose a workcell with that arm ({', '.join(_workcells_with_arm(arm)) or 'none'})"
+            )
+        return {**data, "arm": workcell.arm}
+
     def database_file(self) -> Path:
         """database_path; a relative path is relative to the repository root."""
         path = Path(self.database_path)
         return path if path.is_absolute() else config_dir().parent / path
+
+
+def _workcells_with_arm(arm: str) -> list[str]:
+    from armlab.workcell import known_workcells, load_workcell
+
+    names = []
+    for name in known_workcells():
+        try:
+            if load_workcell(name).arm == arm:
+                names.append(name)
+        except Exception:  # noqa: BLE001 - a broken file elsewhere is not this error
+            pass
+    return names
 
 
 def load_station_config(path: str | Path | None = None) -> StationConfig:

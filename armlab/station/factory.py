@@ -34,10 +34,11 @@ class SimStation:
 def make_sim_station(config: StationConfig | None = None, db_path: str | Path | None = None) -> SimStation:
     """Start a real-time SimWorkcell (seed and starting scene from config.sim) and a started Station on it."""
     from armlab.devices.sim import SimWorkcell, SimWorkcellConfig
-    from armlab.kinematics import load_arm
+    from armlab.workcell import load_workcell_arm
 
     config = config or StationConfig()
-    cell = SimWorkcell(SimWorkcellConfig(realtime=True, seed=config.sim.seed, camera_fps=config.sim.camera_fps))
+    cell = SimWorkcell(SimWorkcellConfig(realtime=True, seed=config.sim.seed, camera_fps=config.sim.camera_fps,
+                                         workcell=config.workcell))
     cell.start()
     try:
         if config.sim.event:
@@ -46,7 +47,8 @@ def make_sim_station(config: StationConfig | None = None, db_path: str | Path | 
             cell.set_scene(generate_scene(config.sim.event, level=config.sim.level, seed=config.sim.scene_seed))
         store = Store(db_path if db_path is not None else config.database_file())
         station = Station(
-            cell.arm, cell.gripper, cell.camera, model=load_arm(config.arm), config=config, store=store, sim=cell, backend="sim"
+            cell.arm, cell.gripper, cell.camera, model=load_workcell_arm(config.workcell), config=config, store=store, sim=cell,
+            backend="sim",
         )
         station.start()
     except BaseException:
@@ -90,13 +92,13 @@ def make_device_station(
     Connect failures (no hardware, missing SDK) raise the device's clear error; whatever was opened is closed.
     """
     from armlab.devices.factory import make_devices
-    from armlab.kinematics import load_arm
+    from armlab.workcell import load_workcell_arm
 
     config = config or StationConfig()
     devices = make_devices(arm, gripper, camera)
     store = Store(db_path if db_path is not None else config.database_file())
     station = Station(
-        devices.arm, devices.gripper, devices.camera, model=load_arm(config.arm), config=config, store=store, backend="real"
+        devices.arm, devices.gripper, devices.camera, model=load_workcell_arm(config.workcell), config=config, store=store, backend="real"
     )
     try:
         station.start()

@@ -71,9 +71,10 @@ def test_pitch_is_the_sum_of_the_pitch_joints(rx200):
 
 
 def test_ur3_official_dh_zero_pose(ur3):
-    # UR's DH at q = 0: tool flange at (a2 + a3, -(d4 + d6), d1 - d5); approach axis (flange z) = -y.
+    # UR's DH at q = 0: tool flange at (a2 + a3, -(d4 + d6), d1 - d5); approach axis (flange z) = -y;
+    # the suction cup's lip (the tool point) 50 mm beyond the flange along it.
     pose = ur3.fk(np.zeros(6))
-    assert np.allclose(pose[:3, 3], [-0.4569, -0.19425, 0.06655], atol=1e-12)
+    assert np.allclose(pose[:3, 3], [-0.4569, -0.19425 - 0.050, 0.06655], atol=1e-12)
     assert np.allclose(pose[:3, 0], [0.0, -1.0, 0.0], atol=1e-12)
 
 
