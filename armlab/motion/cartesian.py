@@ -116,7 +116,8 @@ def plan_vertical_segment(
     pitch_rad: approach pitch below horizontal to hold (None: the start pose's). yaw_rad: the world yaw
     passed to IK for the wrist (None: IK keeps the seed's wrist). The first sample is q_start exactly.
     Raises ValueError for bad input, armlab.kinematics.Unreachable if a point of the line cannot be
-    reached, DiscontinuousPath if IK would jump between branches.
+    reached, DiscontinuousPath if IK would jump between branches. An arm with six joints or more holds
+    the start's whole tool orientation instead (ik_pose; pitch_rad and yaw_rad are then the start's).
     """
     q_start = np.asarray(q_start_rad, dtype=float)
     if q_start.shape != (int(arm.dof),) or not np.all(np.isfinite(q_start)):
@@ -127,6 +128,11 @@ def plan_vertical_segment(
     if speed_m_s <= 0 or accel_m_s2 <= 0:
         raise ValueError(f"speed_m_s and accel_m_s2 must be > 0, got {speed_m_s}, {accel_m_s2}")
     start_m = gripper_position_m(arm, q_start)
+    from armlab.motion.pose_path import holds_full_pose, plan_straight_pose_segment
+
+    if holds_full_pose(arm):
+        return plan_straight_pose_segment(arm, q_start, [start_m[0], start_m[1], z_goal_m], speed_m_s, accel_m_s2,
+                                          f"vertical segment to z = {z_goal_m * 1000:.1f} mm", rate_hz)
     pitch = gripper_pitch_rad(arm, q_start) if pitch_rad is None else float(pitch_rad)
     distance_m = abs(z_goal_m - start_m[2])
     duration_s = vertical_profile_duration(distance_m, speed_m_s, accel_m_s2)

@@ -43,6 +43,8 @@ class MotionConfig(StrictModel):
     finger_back_m: float = Field(0.07, ge=0.0, le=0.3)  # the fingers reach this far back from the gripper point
     finger_thickness_m: float = Field(0.008, ge=0.0, le=0.05)
     finger_half_height_m: float = Field(0.012, ge=0.0, le=0.1)
+    # A suction cup lands on the block's top face and presses this far into its seal (the tool point below the face).
+    suction_press_m: float = Field(0.002, ge=0.0, le=0.01)
 
     @model_validator(mode="after")
     def _workspace_box(self) -> "MotionConfig":
@@ -66,6 +68,15 @@ class MotionConfig(StrictModel):
         """How far below a block's top face the gripper point closes: grasp_depth_m, but never so deep
         that the pads (reaching pad_reach_m below the gripper point) touch what the block stands on."""
         return max(0.0, min(self.grasp_depth_m, edge_m - self.pad_reach_m))
+
+    def held_below_top_m(self, edge_m: float, gripper_type: str = "fingers") -> float:
+        """Where the tool point holds a block, below its top face: grasp_depth_for(edge) between fingers,
+        suction_press_m for a suction cup (which holds the top face)."""
+        if gripper_type == "suction":
+            return self.suction_press_m
+        if gripper_type != "fingers":
+            raise ValueError(f"gripper type must be 'fingers' or 'suction', got {gripper_type!r}")
+        return self.grasp_depth_for(edge_m)
 
 
 def load_motion_config(path: str | Path | None = None) -> MotionConfig:

@@ -8,7 +8,8 @@ gripper with the waist, so a step that changes the waist keeps the yaw by rollin
 gripper level (pitch ≈ 0) the roll cannot do that and such a step is refused. A pitch step turns the
 approach axis about the gripper point (wrist roll unchanged); a roll step turns wrist_rotate only.
 Whatever cannot be kept within the tolerances (1 mm off the asked motion, 0.5° of pitch or yaw) is
-refused with StepRefused (an Unreachable) naming the numbers. Pure: no devices.
+refused with StepRefused (an Unreachable) naming the numbers. An arm with six joints or more keeps
+the tool's whole orientation instead (armlab.motion.pose_step, through ik_pose). Pure: no devices.
 """
 
 from __future__ import annotations
@@ -21,6 +22,8 @@ import numpy as np
 from armlab.devices.arm import JointTrajectory
 from armlab.kinematics.errors import Unreachable
 from armlab.motion.cartesian import DiscontinuousPath, plan_path
+from armlab.motion.pose_path import holds_full_pose
+from armlab.motion.pose_step import plan_pose_step
 from armlab.motion.trajectory import DEFAULT_RATE_HZ, START_TOLERANCE_RAD, check_joint_positions, minimum_time, plan_joint_move
 
 AXES = ("x", "y", "z", "pitch", "roll")
@@ -142,6 +145,9 @@ def plan_gripper_step(
     if axis == "roll":
         trajectory = _plan_roll(arm, q_start, amount, speeds, rate_hz)
         verify_step(arm, trajectory.positions_rad, axis, amount)
+    elif holds_full_pose(arm):  # six joints or more: the whole orientation is kept (ik_pose)
+        trajectory = plan_pose_step(arm, q_start, axis, amount, speeds, _step_text(axis, amount), rate_hz,
+                                    POSITION_TOL_M, ORIENTATION_TOL_RAD)
     elif axis == "pitch":
         trajectory = _plan_pitch(arm, q_start, start, amount, speeds, rate_hz)
     else:

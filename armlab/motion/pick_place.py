@@ -4,7 +4,11 @@ A plan is a list of steps the station executes in order: TrajectoryStep (send to
 GripperStep (grasp/release, wait). Heights come from MotionConfig (config/motion.yaml). The gripper
 pitch is top-down when the whole approach is reachable that way, else the steepest pitch (in 5°
 steps) that reaches the grasp, approach and lift points alike, so the vertical segments keep one
-pitch. Pure: no device calls; armlab.kinematics.Unreachable when no pitch works.
+pitch. A suction cup (gripper_type "suction") only works flat on the top face: it approaches straight
+down along its axis (top-down pitch only, no tilted fallback) onto the top face's centre, pressing
+suction_press_m into the seal, with no grasp depth or finger width involved; an arm with six joints
+or more holds the tool's whole orientation along the straight segments (armlab.motion.pose_path).
+Pure: no device calls; armlab.kinematics.Unreachable when no pitch works.
 """
 
 from __future__ import annotations
@@ -67,20 +71,37 @@ def _check_finite(name: str, value: float) -> float:
     return value
 
 
-def _pitch_candidates(preferred_rad: float) -> list[float]:
-    count = int(math.floor(preferred_rad / PITCH_STEP_RAD + 1e-9))
-    return [preferred_rad - k * PITCH_STEP_RAD for k in range(count + 1)]
+GRIPPER_TYPES = ("fingers", "suction")
 
 
-def solve_approach(arm, q_seed_rad, points_m: list[np.ndarray], yaw_rad: float | None, preferred_pitch_rad: float):
-    """(pitch, [q per point]) for the steepest pitch ≤ preferred at which IK reaches every point.
+def checked_gripper_type(gripper_type: str) -> str:
+    """gripper_type if it is one the planners know ('fingers', 'suction'), else ValueError."""
+    if gripper_type not in GRIPPER_TYPES:
+        raise ValueError(f"gripper type must be one of {', '.join(GRIPPER_TYPES)}, got {gripper_type!r}")
+    return gripper_type
+
+
+def lowest_pitch_rad(config: MotionConfig, gripper_type: str) -> float:
+    """The shallowest approach pitch a plan may fall back to: 0 (horizontal) for fingers; none below
+    top-down for a suction cup, whose seal holds only flat on a face."""
+    return config.top_down_pitch_rad if checked_gripper_type(gripper_type) == "suction" else 0.0
+
+
+def _pitch_candidates(preferred_rad: float, lowest_rad: float = 0.0) -> list[float]:
+    count = int(math.floor((preferred_rad - lowest_rad) / PITCH_STEP_RAD + 1e-9))
+    return [preferred_rad - k * PITCH_STEP_RAD for k in range(max(count, 0) + 1)]
+
+
+def solve_approach(arm, q_seed_rad, points_m: list[np.ndarray], yaw_rad: float | None, preferred_pitch_rad: float,
+                   lowest_pitch_rad: float = 0.0):
+    """(pitch, [q per point]) for the steepest pitch ≤ preferred (and ≥ lowest) at which IK reaches every point.
 
     Points are solved in order, each seeded with the previous solution (so they share an IK branch).
     Raises Unreachable (from armlab.kinematics) with the first point's failure at the preferred pitch.
     """
     unreachable = _unreachable_type()
     first_error = None
-    for pitch in _pitch_candidates(preferred_pitch_rad):
+    for pitch in _pitch_candidates(preferred_pitch_rad, lowest_pitch_rad):
         seed = np.asarray(q_seed_rad, float)
         solutions = []
         try:
@@ -91,9 +112,11 @@ def solve_approach(arm, q_seed_rad, points_m: list[np.ndarray], yaw_rad: float |
             first_error = first_error or error
             continue
         return pitch, solutions
+    pitches = (f"the gripper at {math.degrees(preferred_pitch_rad):.0f}° pitch (a suction cup seals only flat on a face) does not reach "
+               if lowest_pitch_rad >= preferred_pitch_rad - 1e-9 else
+               f"no gripper pitch between {math.degrees(preferred_pitch_rad):.0f}° and {math.degrees(lowest_pitch_rad):.0f}° reaches ")
     raise unreachable(
-        f"no gripper pitch between {math.degrees(preferred_pitch_rad):.0f}° and 0° reaches "
-        f"{', '.join(f'({p[0] * 1000:.0f}, {p[1] * 1000:.0f}, {p[2] * 1000:.0f}) mm' for p in points_m)}: {first_error}",
+        pitches + f"{', '.join(f'({p[0] * 1000:.0f}, {p[1] * 1000:.0f}, {p[2] * 1000:.0f}) mm' for p in points_m)}: {first_error}",
         getattr(first_error, "reason", "out of reach"),
     )
 
@@ -106,13 +129,14 @@ def _approach_steps(
     config: MotionConfig,
     action: Literal["grasp", "release"],
     words: tuple[str, str, str],
+    gripper_type: str = "fingers",
 ) -> list[Step]:
     """Move above point_m, descend to it, do `action`, lift; all trajectories checked."""
     above_m = point_m + np.array([0.0, 0.0, config.approach_height_m])
     lift_m = point_m + np.array([0.0, 0.0, config.lift_height_m])
     # Solving the low point first fixes the pitch and IK branch; the descent itself reaches it.
     pitch, (_q_point, q_above, _q_lift) = solve_approach(
-        arm, q_now_rad, [point_m, above_m, lift_m], yaw_rad, config.top_down_pitch_rad
+        arm, q_now_rad, [point_m, above_m, lift_m], yaw_rad, config.top_down_pitch_rad, lowest_pitch_rad(config, gripper_type)
     )
     vertical = dict(pitch_rad=pitch, yaw_rad=yaw_rad, speed_m_s=config.vertical_speed_m_s,
                     accel_m_s2=config.vertical_accel_m_s2, rate_hz=config.sample_rate_hz)
@@ -132,30 +156,35 @@ def _approach_steps(
 
 
 def plan_pick(
-    arm, q_now_rad, position_m, yaw_rad: float, config: MotionConfig, block_height_m: float | None = None
+    arm, q_now_rad, position_m, yaw_rad: float, config: MotionConfig, block_height_m: float | None = None,
+    gripper_type: str = "fingers",
 ) -> list[Step]:
     """Steps to pick the block whose top-face centre is position_m (world, metres) with yaw yaw_rad.
 
     Open the gripper, move above the block (approach_height_m over the grasp point), go straight down
     to grasp_depth_for(block_height_m) below the top face (pads clear of what it stands on), grasp,
-    go straight up lift_height_m. The grasp point is never lower than board_clearance_m.
+    go straight up lift_height_m. The grasp point is never lower than board_clearance_m. A suction cup
+    goes straight down along its axis (pointing down) onto the top face centre, suction_press_m into
+    it, and "grasp" turns the vacuum on ("release": off).
     """
+    checked_gripper_type(gripper_type)
     top_m = _check_point("position_m", position_m)
     yaw = _check_finite("yaw_rad", yaw_rad)
-    depth_m = config.grasp_depth_m
+    depth_m = config.grasp_depth_m if gripper_type == "fingers" else config.suction_press_m
     if block_height_m is not None:
         height = _check_finite("block_height_m", block_height_m)
         if height <= 0.0:
             raise ValueError(f"block_height_m must be > 0, got {height}")
-        depth_m = config.grasp_depth_for(height)
+        depth_m = config.held_below_top_m(height, gripper_type)
     grasp_m = top_m - np.array([0.0, 0.0, depth_m])
     grasp_m[2] = max(grasp_m[2], config.board_clearance_m)
-    steps = _approach_steps(arm, q_now_rad, grasp_m, yaw, config, "grasp", ("move above block", "descend to grasp", "lift"))
-    return [GripperStep("open before pick", "release"), *steps]
+    steps = _approach_steps(arm, q_now_rad, grasp_m, yaw, config, "grasp", ("move above block", "descend to grasp", "lift"),
+                            gripper_type)
+    return [GripperStep("open before pick" if gripper_type == "fingers" else "vacuum off before pick", "release"), *steps]
 
 
 def plan_place(
-    arm, q_now_rad, position_m, yaw_rad: float, config: MotionConfig, block_height_m: float
+    arm, q_now_rad, position_m, yaw_rad: float, config: MotionConfig, block_height_m: float, gripper_type: str = "fingers",
 ) -> list[Step]:
     """Steps to set the held block down with its bottom-face centre at position_m (world, metres).
 
@@ -168,10 +197,11 @@ def plan_place(
     height = _check_finite("block_height_m", block_height_m)
     if height <= 0.0:
         raise ValueError(f"block_height_m must be > 0, got {height}")
-    held_below_top_m = config.grasp_depth_for(height)  # as plan_pick grasped it
+    held_below_top_m = config.held_below_top_m(height, checked_gripper_type(gripper_type))  # as plan_pick grasped it
     release_m = surface_m + np.array([0.0, 0.0, height - held_below_top_m + config.place_clearance_m])
     release_m[2] = max(release_m[2], config.board_clearance_m)
-    return _approach_steps(arm, q_now_rad, release_m, yaw, config, "release", ("move above place", "descend to place", "retreat"))
+    return _approach_steps(arm, q_now_rad, release_m, yaw, config, "release", ("move above place", "descend to place", "retreat"),
+                           gripper_type)
 
 
 def plan_move_to_pose(

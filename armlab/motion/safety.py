@@ -131,7 +131,8 @@ def check_trajectory(
 
     floor_z = board_z_m + clearance_m
     points = _link_points(arm, positions)  # (N, points, 3)
-    heights = points[:, :, 2]
+    heights = points[:, :, 2].copy()
+    heights[:, 0] = np.inf  # the first joint's origin is fixed to the base (the UR3's stands on the board at z = 0)
     sample, point = np.unravel_index(int(np.argmin(heights)), heights.shape)
     if heights[sample, point] < floor_z:
         first = int(np.flatnonzero(np.min(heights, axis=1) < floor_z)[0])  # earliest offending sample

@@ -1,0 +1,121 @@
+"""Cartesian paths that keep the tool's full orientation, for arms with six or more joints (ik_pose).
+
+A 5-joint arm cannot hold an arbitrary orientation, so its Cartesian paths hold pitch and yaw
+(armlab.motion.cartesian); an arm with ik_pose and at least six joints holds the whole rotation
+matrix of the tool frame instead: each sample is a full world pose, solved by the model's numerical
+ik_pose (batched, seeded with the start; sample by sample when the batch misses one), then retimed
+like any Cartesian path. Pure: no devices.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from armlab.devices.arm import JointTrajectory
+from armlab.motion.cartesian import MAX_SAMPLE_STEP_RAD, DiscontinuousPath
+from armlab.motion.trajectory import (
+    DEFAULT_RATE_HZ,
+    LIMIT_MARGIN,
+    minimum_time,
+    retime_path,
+    sample_times,
+    trapezoid_profile,
+)
+
+FULL_POSE_MIN_DOF = 6  # arms with at least this many joints hold the whole tool orientation
+_MAX_RETIMES = 6
+
+
+def holds_full_pose(arm) -> bool:
+    """True when the arm model can hold a full tool pose along a path (>= 6 joints and ik_pose)."""
+    return int(getattr(arm, "dof", 0)) >= FULL_POSE_MIN_DOF and hasattr(arm, "ik_pose")
+
+
+def top_down_rotation(yaw_rad: float) -> np.ndarray:
+    """World rotation of a tool pointing straight down (tool x = world -z) with its y axis at yaw_rad
+    from world +x in the board plane; tool z = x × y."""
+    x_axis = np.array([0.0, 0.0, -1.0])
+    y_axis = np.array([math.cos(yaw_rad), math.sin(yaw_rad), 0.0])
+    return np.stack([x_axis, y_axis, np.cross(x_axis, y_axis)], axis=1)
+
+
+def rotation_about(axis, angle_rad: float) -> np.ndarray:
+    """Rotation matrix of angle_rad about the unit vector `axis` (Rodrigues)."""
+    k = np.asarray(axis, float) / np.linalg.norm(axis)
+    K = np.array([[0.0, -k[2], k[1]], [k[2], 0.0, -k[0]], [-k[1], k[0], 0.0]])
+    return np.eye(3) + math.sin(angle_rad) * K + (1.0 - math.cos(angle_rad)) * (K @ K)
+
+
+def rotation_angle_rad(R_a, R_b) -> float:
+    """Angle of the rotation taking R_a to R_b (0 .. π)."""
+    cosine = (float(np.trace(np.asarray(R_a, float).T @ np.asarray(R_b, float))) - 1.0) / 2.0
+    return math.acos(max(-1.0, min(1.0, cosine)))
+
+
+def solve_pose_path(arm, q_start, poses: np.ndarray, label: str) -> np.ndarray:
+    """ik_pose of each world pose (N, 4, 4), the first row replaced by q_start; DiscontinuousPath if
+    the joints would jump (IK changed branch), Unreachable (from the model) if a pose has no solution."""
+    q_start = np.asarray(q_start, float)
+    solved, ok = arm.ik_pose_batch(poses[1:], q_seed=q_start)
+    positions = np.vstack([q_start[None, :], np.asarray(solved, float)])
+    if not np.all(ok):  # seed each miss with the previous sample (raises Unreachable with the residual)
+        for index in range(1, len(poses)):
+            if not ok[index - 1] or np.abs(positions[index] - positions[index - 1]).max() > MAX_SAMPLE_STEP_RAD:
+                positions[index] = arm.ik_pose(poses[index], q_seed=positions[index - 1])
+    jumps = np.abs(np.diff(positions, axis=0))
+    sample, joint = np.unravel_index(int(np.argmax(jumps)), jumps.shape)
+    if jumps[sample, joint] > MAX_SAMPLE_STEP_RAD:
+        raise DiscontinuousPath(
+            f"{label}: {arm.joint_names[joint]} jumps {jumps[sample, joint]:.3f} rad at "
+            f"({', '.join(f'{v * 1000:.1f}' for v in poses[sample + 1, :3, 3])}) mm (IK changed branch)"
+        )
+    return positions
+
+
+def plan_pose_path(arm, q_start, poses_at, duration_s: float, ramp_s: float, label: str,
+                   rate_hz: float = DEFAULT_RATE_HZ) -> JointTrajectory:
+    """A rest-to-rest trajectory through ik_pose of poses_at(s) (N, 4, 4) for path fractions s in [0, 1]
+    on a trapezoid of duration_s (ramps ramp_s), slowed down while a joint would pass its velocity or
+    acceleration limit (as armlab.motion.cartesian.plan_path)."""
+    velocity_limit = np.asarray(arm.velocity_limit_rad_s, float) * LIMIT_MARGIN
+    accel_limit = np.asarray(arm.accel_limit_rad_s2, float) * LIMIT_MARGIN
+    for _ in range(_MAX_RETIMES):
+        times = sample_times(duration_s, rate_hz)
+        s = trapezoid_profile(times, duration_s, ramp_s)
+        positions = solve_pose_path(arm, q_start, poses_at(s), label)
+        slow_down = retime_path(positions, times, velocity_limit, accel_limit)
+        if slow_down <= 1.0:
+            return JointTrajectory(times_s=times, positions_rad=positions)
+        factor = slow_down * 1.02
+        duration_s *= factor
+        ramp_s *= factor
+    raise ValueError(f"{label}: joints still too fast after {_MAX_RETIMES} slow-downs (too close to a singularity)")
+
+
+def plan_straight_pose_segment(arm, q_start_rad, goal_m, speed_m_s: float, accel_m_s2: float, label: str | None = None,
+                               rate_hz: float = DEFAULT_RATE_HZ) -> JointTrajectory:
+    """The tool point on a straight line from fk(q_start) to goal_m (world, metres) with the start's
+    rotation held at every sample (full pose). The first sample is q_start exactly."""
+    q_start = np.asarray(q_start_rad, float)
+    T_start = np.asarray(arm.fk(q_start), float)
+    goal = np.asarray(goal_m, float)
+    if goal.shape != (3,) or not np.all(np.isfinite(goal)):
+        raise ValueError(f"goal_m must be 3 finite coordinates in metres, got {np.asarray(goal_m).tolist()}")
+    if not (speed_m_s > 0.0 and accel_m_s2 > 0.0):
+        raise ValueError(f"speed_m_s and accel_m_s2 must be > 0, got {speed_m_s}, {accel_m_s2}")
+    offset = goal - T_start[:3, 3]
+    distance_m = float(np.linalg.norm(offset))
+    label = label or f"straight segment to ({', '.join(f'{v * 1000:.1f}' for v in goal)}) mm"
+    if distance_m < 1e-9:
+        times = sample_times(0.0, rate_hz)
+        return JointTrajectory(times_s=times, positions_rad=np.repeat(q_start[None, :], times.size, axis=0))
+    duration_s, ramp_s = minimum_time(speed_m_s / distance_m, accel_m_s2 / distance_m)
+
+    def poses_at(s: np.ndarray) -> np.ndarray:
+        poses = np.repeat(T_start[None], s.size, axis=0)
+        poses[:, :3, 3] = T_start[:3, 3][None, :] + s[:, None] * offset[None, :]
+        return poses
+
+    return plan_pose_path(arm, q_start, poses_at, duration_s, ramp_s, label, rate_hz)
