@@ -1,4 +1,4 @@
-"""SQLite persistence for the station: taught programs, calibrations and job results.
+"""SQLite persistence for the station: taught programs, calibrations, camera intrinsics and job results.
 
 One real file (default var/armlab.sqlite3). Each call opens its own short-lived connection, so the
 store is safe to use from the station's job threads and the server's threads alike.
@@ -357,6 +357,29 @@ class Store:
                 return value
             except _ROW_ERRORS as error:
                 self._skip(f"calibration {calibration_id}", error)
+        return None
+
+    # Intrinsics ----------------------------------------------------------------------------------
+
+    def save_intrinsics(self, camera: str, data: dict) -> int:
+        """Save measured intrinsics (their JSON dict) for a camera key; returns the row id."""
+        rows = self._run("INSERT INTO intrinsics (camera, created_s, data_json) VALUES (?, ?, ?) RETURNING id",
+                         (camera, time.time(), json.dumps(data)))
+        return int(rows[0][0])
+
+    def latest_intrinsics(self, camera: str) -> dict | None:
+        """The newest intrinsics of a camera key that read back ({"created_s", **data}; damaged rows are
+        logged and skipped), else None."""
+        rows = self._run("SELECT id, created_s, data_json FROM intrinsics WHERE camera = ? ORDER BY id DESC LIMIT 20",
+                         (camera,), raw_text=True)
+        for row_id, created_s, data in rows:
+            try:
+                value = json.loads(data.decode("utf-8"))
+                if not isinstance(value, dict):
+                    raise ValueError("not a JSON object")
+                return {**value, "created_s": float(created_s)}
+            except _ROW_ERRORS as error:
+                self._skip(f"intrinsics {row_id}", error)
         return None
 
     # Job results ----------------------------------------------------------------------------------

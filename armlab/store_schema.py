@@ -45,6 +45,17 @@ MIGRATIONS: tuple[str, ...] = (
         waypoint_json TEXT NOT NULL
     );
     """,
+    # 3: intrinsics measured by the station's checkerboard capture, per camera (its name/serial and
+    # image size); the newest row of a camera is the one in use (issue 11 item 4).
+    """
+    CREATE TABLE IF NOT EXISTS intrinsics (
+        id INTEGER PRIMARY KEY AUTOINCREMENT,
+        camera TEXT NOT NULL,
+        created_s REAL NOT NULL,
+        data_json TEXT NOT NULL
+    );
+    CREATE INDEX IF NOT EXISTS intrinsics_by_camera ON intrinsics (camera, id);
+    """,
 )
 
 SCHEMA_VERSION = len(MIGRATIONS)

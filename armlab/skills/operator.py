@@ -41,7 +41,7 @@ def calibrate(station: Station, source: str | None = None) -> Job:
     def run(ctx: JobContext) -> dict:
         ctx.progress(0.1, "finding the board tags")
         frame = station.fresh_frame()
-        intrinsics = frame.intrinsics or station.camera.intrinsics
+        intrinsics = station.intrinsics.current()  # measured for this camera, else its own
         tags = detect_tags(frame.color_bgr, station.perception_config)
         ctx.progress(0.4, f"{len(tags)} tags found; solving the camera pose")
         calibration = calibrate_extrinsics(frame.color_bgr, intrinsics, station.perception_config, frame.depth_mm, tags=tags)
@@ -64,7 +64,7 @@ def calibrate_points(station: Station, pixels_px: Sequence, world_m: Sequence, s
 
     def run(ctx: JobContext) -> dict:
         frame = station.fresh_frame()
-        intrinsics = frame.intrinsics or station.camera.intrinsics
+        intrinsics = station.intrinsics.current()  # measured for this camera, else its own
         ctx.progress(0.3, f"fitting the camera pose to {len(pixels_px)} clicked points")
         calibration, report = calibrate_from_points(pixels_px, world_m, intrinsics, station.perception_config, frame.depth_mm)
         info = {**calibration_summary(calibration, [], project_grid(calibration, station.perception_config)),

@@ -2,13 +2,16 @@
 
 from __future__ import annotations
 
+from typing import Annotated, Literal
+
 from fastapi import APIRouter
+from pydantic import Field
 
 from armlab.station.core import Station
 from armlab.station.jobs import jsonable
 from server.deps import ControlAuth, StationDep
 from server.errors import ApiError
-from server.models import CameraBumpRequest, SceneRequest
+from server.models import CameraBumpRequest, Request, SceneRequest
 
 router = APIRouter(prefix="/api/sim", tags=["sim"])
 
@@ -64,3 +67,42 @@ def post_camera_bump(body: CameraBumpRequest, station: StationDep, controller: C
     cell.bump_camera(T_old_new)
     station.events.add("warn", f"simulated camera mount bumped by {controller}")
     return {"translation_m": body.translation_m, "rotation_rad": body.rotation_rad}
+
+
+class CheckerboardRequest(Request):
+    """Simulation only: where to put the intrinsics checkerboard (config/intrinsics.yaml target)."""
+
+    position_m: Annotated[list[Annotated[float, Field(ge=-3.0, le=3.0)]], Field(min_length=3, max_length=3)] = Field(
+        description="the board's centre, metres, in `frame`")
+    rotation_rad: Annotated[list[Annotated[float, Field(ge=-3.2, le=3.2)]], Field(min_length=3, max_length=3)] = Field(
+        [0.0, 0.0, 0.0], description="rotation vector, radians: frame 'camera': the turn from squarely facing the camera "
+        "(camera axes); frame 'world': the board's orientation (zero: lying face up)")
+    frame: Literal["camera", "world"] = Field("camera", description="'camera': the camera's OpenCV frame (z along the optical axis)")
+
+
+@router.post("/checkerboard")
+def post_checkerboard(body: CheckerboardRequest, station: StationDep, controller: ControlAuth) -> dict:
+    """Hold the intrinsics checkerboard at a pose (contact-free: nothing else moves), for the Intrinsics capture."""
+    import cv2
+    import numpy as np
+
+    from armlab.devices.sim.checkerboard import pose_in_camera_frame
+
+    cell = _cell(station)
+    station.allowed_or_raise("set_scene", controller)
+    if body.frame == "camera":
+        T_world_camera = np.asarray(cell.truth()["camera"]["T_world_camera"], dtype=float)
+        position, R = pose_in_camera_frame(T_world_camera, body.position_m, body.rotation_rad)
+    else:
+        position, R = np.asarray(body.position_m, dtype=float), cv2.Rodrigues(np.asarray(body.rotation_rad, dtype=float))[0]
+    cell.place_checkerboard(position, R)
+    return {"position_m": [float(x) for x in position], "frame": "world"}
+
+
+@router.delete("/checkerboard")
+def delete_checkerboard(station: StationDep, controller: ControlAuth) -> dict:
+    """Put the intrinsics checkerboard away (out of sight)."""
+    cell = _cell(station)
+    station.allowed_or_raise("set_scene", controller)
+    cell.place_checkerboard()
+    return {"placed": False}
