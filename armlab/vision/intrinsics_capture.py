@@ -192,7 +192,8 @@ class IntrinsicsCapture:
         covered = self.coverage()
         return {"image_size": list(self.image_size), "views": [v.to_dict(i) for i, v in enumerate(self.views)],
                 "coverage": covered.tolist(), "coverage_fraction": float((covered > 0).mean()),
-                "min_views": self.config.capture.min_views, "grid": list(self.config.capture.coverage_grid)}
+                "min_views": self.config.capture.min_views, "grid": list(self.config.capture.coverage_grid),
+                "target": {"inner_corners": list(self.config.target.pattern), "square_m": self.config.target.square_m}}
 
 
 def solve_intrinsics(corners_px: list[np.ndarray], target: TargetConfig, image_size: tuple[int, int],

@@ -4,6 +4,7 @@ import { Api, adoptToken, dropToken } from "./api.js";
 import { CompetitionPanel } from "./competition.js";
 import { ControlLease } from "./control.js";
 import { applyMovingTimeLimits, emptyDetectionsReason, readMovingTimeS } from "./inputs.js";
+import { IntrinsicsPanel } from "./intrinsics.js";
 import { CartesianJog } from "./jog.js";
 import { LiveView } from "./liveview.js";
 import { EventLog } from "./log.js";
@@ -66,6 +67,7 @@ class App {
       onPath: (path) => this.programPath.set(path),
     });
     this.lease = new ControlLease({ api: this.api, log: this.log, onChange: () => this.refreshAllowed() });
+    this.intrinsics = new IntrinsicsPanel({ root: $("intrinsics-panel"), api: this.api, log: this.log });
     this.torque = new TorqueButton({ button: $("btn-torque"), run: (a, c) => this.run(a, c), api: this.api });
     this.live = new LiveView({
       canvas: $("live"),
