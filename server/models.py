@@ -387,6 +387,20 @@ class WorkcellInfo(Wire):
     bin: BinInfo
 
 
+class ArmInfo(Wire):
+    """The station's arm and gripper (armlab.station.arm_info), sent once in the hello: the page builds its
+    jog sliders, joint readouts, plot and teach table from these, never from names of its own."""
+
+    name: str = Field(description="config/arms/<name>.yaml")
+    vendor: str | None = Field(None, description="who makes the arm (interbotix, universal_robots); None = not said")
+    joint_names: list[str]
+    joint_limits_rad: list[list[float]] = Field(description="[lower, upper] per joint, joint_names order")
+    velocity_limits_rad_s: list[float]
+    home_rad: list[float]
+    gripper_type: Literal["fingers", "suction"]
+    full_pose: bool = Field(description="Cartesian moves keep the tool's whole orientation (six joints or more), else pitch and yaw")
+
+
 class LimitsInfo(Wire):
     """Limits of operator inputs, from the station's config (the page checks inputs against these)."""
 
@@ -400,6 +414,7 @@ class HelloMessage(Wire):
     controller: str | None = Field(None, description="this session's controller name (the lease holder's name when it commands)")
     backend: Literal["sim", "real"]
     workcell: WorkcellInfo
+    arm: ArmInfo
     limits: LimitsInfo | None = None
 
 

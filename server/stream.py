@@ -28,6 +28,7 @@ from typing import Annotated
 from pydantic import Field, TypeAdapter, ValidationError
 from starlette.websockets import WebSocket, WebSocketDisconnect
 
+from armlab.station.arm_info import arm_info
 from armlab.station.core import Station
 from armlab.station.lease import checked_controller
 from armlab.station.perception import _Worker
@@ -216,8 +217,9 @@ class StreamHub:
     # One client -----------------------------------------------------------------------------------
 
     def _workcell_info(self) -> dict:
-        """The geometry of the workcell perception uses (HelloMessage.workcell)."""
-        name = getattr(self.station.perception_config, "workcell", None) or DEFAULT_WORKCELL
+        """The geometry of the station's workcell (HelloMessage.workcell): its config's, else perception's."""
+        name = (getattr(self.station.config, "workcell", None) or getattr(self.station.perception_config, "workcell", None)
+                or DEFAULT_WORKCELL)
         return load_workcell(name).to_wire()
 
     @staticmethod
@@ -232,7 +234,7 @@ class StreamHub:
             self._workcell = await self._off_loop(self._workcell_info)
         hello = {"type": "hello", "server_time_s": time.time(), "can_control": can_control,
                  "controller": client.controller if can_control else None, "backend": self.station.backend,
-                 "workcell": self._workcell, "limits": {"max_moving_time_s": float(self.station.config.max_moving_time_s)}}
+                 "workcell": self._workcell, "arm": arm_info(self.station), "limits": {"max_moving_time_s": float(self.station.config.max_moving_time_s)}}
         await websocket.send_text(json.dumps(hello))
         calibration = await self._off_loop(lambda: self.station.calibration_info)
         await websocket.send_text(json.dumps({"type": "calibration", **calibration}))

@@ -7,6 +7,10 @@
 
 Coordinates follow Interbotix: set_ee_pose_components takes x, y, z in the arm's BASE frame (x
 forward, y left); the station works in the world frame (world_x = -base_y, world_y = base_x).
+
+Only for Interbotix arms: the facade asks the station which arm it runs (GET /api/arm) and refuses,
+with NotInterbotixArm, a station whose arm is not made by Interbotix or is not the robot_model asked
+for (a UR3 has six joints, another base frame and a suction cup: use StationClient there).
 """
 
 from __future__ import annotations
@@ -97,6 +101,22 @@ class InterbotixGripperFacade:
         self._client.release()
 
 
+class NotInterbotixArm(RuntimeError):
+    """The station's arm is not the Interbotix arm the facade was asked for."""
+
+
+def check_interbotix_arm(arm: dict, robot_model: str) -> None:
+    """NotInterbotixArm unless the station's arm (GET /api/arm) is made by Interbotix and is robot_model."""
+    name, vendor = arm.get("name"), arm.get("vendor")
+    what = f"the station runs the {name} ({vendor or 'vendor not given'}, {len(arm.get('joint_names', []))} joints, {arm.get('gripper_type')})"
+    if vendor != "interbotix":
+        raise NotInterbotixArm(
+            f"{what}: InterbotixManipulatorXS drives only Interbotix arms; use armlab.client.StationClient for this arm"
+        )
+    if name != robot_model:
+        raise NotInterbotixArm(f"{what}, not the {robot_model!r} asked for: pass robot_model={name!r}")
+
+
 class InterbotixManipulatorXS:
     """bot = InterbotixManipulatorXS(robot_model="rx200", group_name="arm", gripper_name="gripper", url=..., token=...)."""
 
@@ -113,6 +133,11 @@ class InterbotixManipulatorXS:
     ) -> None:
         self.robot_model = robot_model
         self.client = StationClient(url, token)
+        try:
+            check_interbotix_arm(self.client.arm(), robot_model)
+        except BaseException:
+            self.client.close()
+            raise
         self.arm = InterbotixArmFacade(self.client, moving_time, accel_time)
         self.gripper = InterbotixGripperFacade(self.client)
 

@@ -117,6 +117,10 @@ class StationClient:
     def status(self) -> dict:
         return self._get("/api/status")
 
+    def arm(self) -> dict:
+        """The arm and gripper the station runs: name, vendor, joint_names, joint_limits_rad, gripper_type, ..."""
+        return self._get("/api/arm")
+
     def estop(self) -> dict:
         return self._post("/api/estop")
 

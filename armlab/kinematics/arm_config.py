@@ -139,6 +139,7 @@ class ArmConfig(StrictModel):
 
     name: str = Field(min_length=1)
     family: Literal["rx200", "generic"] = "generic"
+    vendor: str | None = None  # who makes it ("interbotix", "universal_robots"): the Interbotix client facade needs "interbotix"
     joint_names: list[str] = Field(min_length=1)
     pox: PoxConfig | None = None
     dh: DhConfig | None = None

@@ -7,6 +7,7 @@ from collections.abc import Callable, Sequence
 
 import numpy as np
 
+from armlab.station.arm_info import station_gripper_type
 from armlab.station.core import Station
 from armlab.station.jobs import JobContext
 
@@ -19,7 +20,8 @@ def plan_pick_steps(station: Station, top_center_m, yaw_rad: float | None, q_sta
     from armlab.motion import plan_pick
 
     q_start = station.joints_rad() if q_start_rad is None else np.asarray(q_start_rad, float)
-    return plan_pick(station.model, q_start, np.asarray(top_center_m, float), 0.0 if yaw_rad is None else yaw_rad, station.motion_config)
+    return plan_pick(station.model, q_start, np.asarray(top_center_m, float), 0.0 if yaw_rad is None else yaw_rad, station.motion_config,
+                     gripper_type=station_gripper_type(station))
 
 
 def plan_place_steps(station: Station, surface_m, yaw_rad: float | None, held_height_m: float, q_start_rad=None) -> list:
@@ -28,7 +30,8 @@ def plan_place_steps(station: Station, surface_m, yaw_rad: float | None, held_he
 
     q_start = station.joints_rad() if q_start_rad is None else np.asarray(q_start_rad, float)
     yaw = 0.0 if yaw_rad is None else yaw_rad
-    return plan_place(station.model, q_start, np.asarray(surface_m, float), yaw, station.motion_config, held_height_m)
+    return plan_place(station.model, q_start, np.asarray(surface_m, float), yaw, station.motion_config, held_height_m,
+                      gripper_type=station_gripper_type(station))
 
 
 def run_steps(station: Station, ctx: JobContext, steps: Sequence, replan: Callable[[], list] | None = None,
@@ -82,17 +85,23 @@ def _transfer_plan(station: Station, q_start, point_m, yaw_rad: float | None, bo
     the transfers clear the obstacle boxes; the last approach keeps its own (top-down) pitch however
     high the transfer. Every trajectory is checked against limits and the table, and, given a
     gripper_box (armlab.motion.gripper_box), its sampled gripper path against that box (joint moves
-    that bulge out are split along the straight line). Unreachable / UnsafeTrajectory before anything moves."""
+    that bulge out are split along the straight line). Unreachable / UnsafeTrajectory before anything moves.
+    A suction cup comes straight down only (no tilted approach: it seals flat on a face), with no finger
+    seed and no finger tips in the clearance check."""
     from armlab.kinematics import Unreachable
     from armlab.motion import GripperStep, TrajectoryStep, check_trajectory, plan_joint_move
     from armlab.motion.cartesian import plan_vertical_segment
     from armlab.motion.clearance import first_collision
     from armlab.motion.gripper_box import joint_moves_inside
-    from armlab.motion.pick_place import solve_approach
+    from armlab.motion.pick_place import lowest_pitch_rad, solve_approach
     from armlab.motion.safety import UnsafeTrajectory
 
     config = station.motion_config
     model = station.model
+    gripper_type = station_gripper_type(station)
+    suction = gripper_type == "suction"
+    lowest_pitch = lowest_pitch_rad(config, gripper_type)
+    finger_length_m = 0.0 if suction else 0.03  # the finger tips below the gripper point (clearance.first_collision)
     point_m = np.asarray(point_m, float)
     carried = 0.0 if held_edge_m is None else held_edge_m
     vertical = dict(speed_m_s=config.vertical_speed_m_s, accel_m_s2=config.vertical_accel_m_s2, rate_hz=config.sample_rate_hz)
@@ -105,7 +114,7 @@ def _transfer_plan(station: Station, q_start, point_m, yaw_rad: float | None, bo
 
     q_start = np.asarray(q_start, float)
     seed = q_start
-    if finger_axis_rad is not None and yaw_rad is not None:
+    if finger_axis_rad is not None and yaw_rad is not None and not suction:
         seed = _finger_seed(station, q_start, point_m, config.top_down_pitch_rad, yaw_rad, finger_axis_rad)
     # Carrying a block, approach from higher by its edge (so the block itself clears its neighbours)
     # where that is reachable at the pitch wanted; else from the usual approach height.
@@ -113,7 +122,7 @@ def _transfer_plan(station: Station, q_start, point_m, yaw_rad: float | None, bo
     for index, approach_m in enumerate(approaches):
         near_m = point_m + np.array([0.0, 0.0, min(approach_m, max(0.0, max_transfer_z_m - point_m[2]))])
         try:
-            pitch, (_q_point, q_near) = solve_approach(model, seed, [point_m, near_m], yaw_rad, config.top_down_pitch_rad)
+            pitch, (_q_point, q_near) = solve_approach(model, seed, [point_m, near_m], yaw_rad, config.top_down_pitch_rad, lowest_pitch)
         except Unreachable:
             if index == len(approaches) - 1:
                 raise
@@ -129,7 +138,8 @@ def _transfer_plan(station: Station, q_start, point_m, yaw_rad: float | None, bo
     # The straight descent and rise skip the neighbours the fingers pass beside, but not a tall column:
     # reaching far past one, the stretched arm comes down onto its top.
     tall = [box for box in boxes if box.top_z_m > point_m[2] + TALL_OVER_TARGET_M]
-    down = next((c for c in (first_collision(model, t, tall, held_edge_m=held_edge_m) for t in (descend, ascend)) if c), None)
+    down = next((c for c in (first_collision(model, t, tall, held_edge_m=held_edge_m, finger_length_m=finger_length_m)
+                             for t in (descend, ascend)) if c), None)
     if down is not None:
         raise UnsafeTrajectory(f"no safe way down to ({point_m[0] * 1000:.0f}, {point_m[1] * 1000:.0f}) mm: {down}")
 
@@ -171,7 +181,8 @@ def _transfer_plan(station: Station, q_start, point_m, yaw_rad: float | None, bo
             (p for p in (gripper_box.first_exit(model, s.trajectory) for s in steps if isinstance(s, TrajectoryStep)) if p), None)
         if outside is not None:
             raise UnsafeTrajectory(f"no transfer to ({point_m[0] * 1000:.0f}, {point_m[1] * 1000:.0f}) mm inside the gripper box: {outside}")
-        collision = next((c for c in (first_collision(model, t, boxes, held_edge_m=held_edge_m) for t in checked) if c), None)
+        collision = next((c for c in (first_collision(model, t, boxes, held_edge_m=held_edge_m, finger_length_m=finger_length_m)
+                                      for t in checked) if c), None)
         if collision is None:
             return steps
         last_problem = collision
@@ -181,18 +192,19 @@ def _transfer_plan(station: Station, q_start, point_m, yaw_rad: float | None, bo
 def plan_pick(station: Station, top_center_m, yaw_rad: float | None, edge_m: float, boxes: list, q_start=None,
               max_transfer_z_m: float = 0.42, finger_axis_rad: float | None = None, gripper_box=None) -> list:
     """Plan picking the block whose top-face centre is top_center_m: open, transfer above it, descend
-    to config.grasp_depth_for(edge) below its top, grasp, rise. boxes: other objects; gripper_box: a
+    to config.held_below_top_m(edge) below its top (a suction cup: onto it), grasp, rise. boxes: other objects; gripper_box: a
     GripperBox the gripper point keeps inside (None: no such limit)."""
     from armlab.motion import GripperStep
 
     config = station.motion_config
     top = np.asarray(top_center_m, float)
-    grasp_m = top - np.array([0.0, 0.0, config.grasp_depth_for(edge_m)])
+    gripper_type = station_gripper_type(station)
+    grasp_m = top - np.array([0.0, 0.0, config.held_below_top_m(edge_m, gripper_type)])
     grasp_m[2] = max(grasp_m[2], config.board_clearance_m)
     q_start = station.joints_rad() if q_start is None else q_start
     steps = _transfer_plan(station, q_start, grasp_m, yaw_rad, boxes, None, "grasp", ("move above block", "descend to grasp", "lift"),
                            max_transfer_z_m, finger_axis_rad, gripper_box=gripper_box)
-    return [GripperStep("open before pick", "release"), *steps]
+    return [GripperStep("open before pick" if gripper_type == "fingers" else "vacuum off before pick", "release"), *steps]
 
 
 def plan_place(station: Station, surface_m, yaw_rad: float | None, edge_m: float, boxes: list, q_start=None,
@@ -203,7 +215,7 @@ def plan_place(station: Station, surface_m, yaw_rad: float | None, edge_m: float
     the fingers open along (e.g. across a line of blocks, so they do not push the neighbours)."""
     config = station.motion_config
     surface = np.asarray(surface_m, float)
-    held_below_top = config.grasp_depth_for(edge_m)
+    held_below_top = config.held_below_top_m(edge_m, station_gripper_type(station))
     release_m = surface + np.array([0.0, 0.0, edge_m - held_below_top + config.place_clearance_m])
     q_start = station.joints_rad() if q_start is None else q_start
     return _transfer_plan(station, q_start, release_m, yaw_rad, boxes, edge_m, "release",
@@ -222,6 +234,9 @@ def plan_side_place(station: Station, surface_m, edge_m: float, boxes: list, q_s
     from armlab.motion.clearance import first_collision
     from armlab.motion.safety import UnsafeTrajectory
 
+    if station_gripper_type(station) != "fingers":
+        raise Unreachable(f"a side place needs fingers: a {station_gripper_type(station)} gripper holds the block by its top face, "
+                          "which would turn sideways", "out of reach")
     config = station.motion_config
     model = station.model
     surface = np.asarray(surface_m, float)

@@ -1,6 +1,7 @@
 """sort_by_tag (the UR3 write-up): every block whose top carries an ArUco id goes to the place its id
 names (workcell config: block_tags → places_m), stacked there when several blocks share an id
-(large ones first); blocks without a known id stay where they are."""
+(large ones first). A block whose id has no destination in the workcell config stays where it is, and
+the job fails once the others are sorted, naming that block (UnknownTagDestination)."""
 
 from __future__ import annotations
 
@@ -8,10 +9,19 @@ from armlab.tasks.columns import Column
 from armlab.tasks.runner import Move, Plan, TaskRunner, cubes
 
 
-def make_policy(level: int | None, params: dict, runner: TaskRunner):
-    from armlab.workcell import load_workcell
+class UnknownTagDestination(ValueError):
+    """sort_by_tag met blocks whose ArUco id names no place in the workcell config (block_tags.ids)."""
 
-    workcell = load_workcell()
+
+def _describe(block: dict) -> str:
+    x, y = block["position_m"][0] * 1000, block["position_m"][1] * 1000
+    return f"id {block['aruco_id']} on the {block.get('color') or ''} {block.get('size') or ''} block at ({x:.0f}, {y:.0f}) mm".replace("  ", " ")
+
+
+def make_policy(level: int | None, params: dict, runner: TaskRunner):
+    from armlab.workcell import DEFAULT_WORKCELL, load_workcell
+
+    workcell = load_workcell(getattr(runner.station.config, "workcell", None) or DEFAULT_WORKCELL)  # the station's
     columns = {int(dest): Column(f"place {dest}", tuple(map(float, xy))) for dest, xy in workcell.places_m.items()}
     runner.reserved_m.extend(column.base_xy_m for column in columns.values())
 
@@ -28,8 +38,12 @@ def make_policy(level: int | None, params: dict, runner: TaskRunner):
             moves.append(Move(block, column.surface_m(), f"id {block['aruco_id']} → place {block['destination']}", yaw_rad=yaw,
                               on_placed=lambda edge, c=column, b=block: c.add(b, edge)))
         for block in unknown:
-            runner.note_once(f"block with id {block['aruco_id']} at ({block['position_m'][0] * 1000:.0f}, "
-                             f"{block['position_m'][1] * 1000:.0f}) mm: no destination for that id in the workcell config")
+            runner.note_once(f"block with {_describe(block)}: no destination for that id in the workcell config")
+        if not tagged and unknown:  # everything it can sort is sorted: fail, naming what it had to leave
+            known = ", ".join(str(i) for i in sorted(workcell.block_tags.ids))
+            raise UnknownTagDestination(
+                f"no destination for {'; '.join(_describe(b) for b in unknown)}: the workcell "
+                f"'{workcell.name}' maps only ids {known} to places (block_tags.ids); the block stays where it is")
         done = sum(column.height for column in columns.values())
         return Plan(moves, done=done, left=len(tagged), finished=not tagged)
 

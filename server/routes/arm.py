@@ -4,10 +4,17 @@ from __future__ import annotations
 
 from fastapi import APIRouter
 
+from armlab.station.arm_info import arm_info
 from server.deps import ControlAuth, StationDep
-from server.models import GripperRequest, JogRequest, JointsRequest, PoseNameRequest, PoseRequest, Status, StepRequest, TorqueRequest
+from server.models import ArmInfo, GripperRequest, JogRequest, JointsRequest, PoseNameRequest, PoseRequest, Status, StepRequest, TorqueRequest
 
 router = APIRouter(prefix="/api", tags=["arm"])
+
+
+@router.get("/arm", response_model=ArmInfo)
+def get_arm(station: StationDep) -> dict:
+    """The arm and gripper the station runs: joint names and limits, vendor, gripper type (as in the hello)."""
+    return arm_info(station)
 
 
 @router.post("/arm/home", response_model=Status)

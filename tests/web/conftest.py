@@ -92,8 +92,9 @@ class Server:
 
 
 @contextlib.contextmanager
-def running_server(folder: Path) -> Iterator[Server]:
-    """A fresh `armlab serve` (its own port, token and SQLite file in `folder`) until the block ends."""
+def running_server(folder: Path, args: tuple[str, ...] = tuple(SCENE_ARGS)) -> Iterator[Server]:
+    """A fresh `armlab serve` (its own port, token and SQLite file in `folder`) until the block ends;
+    args: the scene and workcell options (default: the RX200 workcell with SCENE_ARGS)."""
     port = free_port()
     token = secrets.token_urlsafe(16)
     log_path = folder / "serve.log"
@@ -102,7 +103,7 @@ def running_server(folder: Path) -> Iterator[Server]:
     with log_path.open("wb") as log:
         process = subprocess.Popen(
             [*armlab_command(), "serve", "--host", "127.0.0.1", "--port", str(port), f"--token={token}",
-             "--db", str(db_path), *SCENE_ARGS],
+             "--db", str(db_path), *args],
             cwd=REPO,
             env=env,
             stdout=log,

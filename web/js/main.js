@@ -9,10 +9,10 @@ import { CartesianJog } from "./jog.js";
 import { LiveView } from "./liveview.js";
 import { EventLog } from "./log.js";
 import {
-  DEFAULT_JOINT_NAMES,
   JointSliders,
   applyAllowed,
   highlightDetectionRow,
+  renderArm,
   renderCalibration,
   renderDetections,
   renderReadouts,
@@ -48,8 +48,7 @@ class App {
     this.detections = [];
     this.hoverDetection = -1;
     this.detectionsKey = "";
-    this.sliders = new JointSliders($("joint-sliders"), (q) => this.sendJoints(q));
-    this.sliders.build(DEFAULT_JOINT_NAMES);
+    this.sliders = new JointSliders($("joint-sliders"), (q) => this.sendJoints(q)); // built from the hello's arm
     this.plot = new JointPlot($("joint-plot"));
     this.jog = new CartesianJog({
       api: this.api,
@@ -169,6 +168,7 @@ class App {
         this.helloSeen = true;
         applyMovingTimeLimits($("jog-time"), msg.limits);
         this.live.setWorkcell(msg.workcell);
+        this.setArm(msg.arm);
         this.competition.setBackend(msg.backend);
         this.canControl = Boolean(msg.can_control) && this.api.canControl;
         $("control-mode").textContent = this.canControl ? "control" : "view only";
@@ -192,6 +192,15 @@ class App {
       default:
         break;
     }
+  }
+
+  /** Sliders, readouts, plot and teach table from the arm the server runs (its joint names and limits). */
+  setArm(arm) {
+    renderArm(arm);
+    this.sliders.build(arm.joint_names, arm.joint_limits_rad);
+    this.plot.setJoints(arm.joint_names, arm.joint_limits_rad);
+    this.teach.setJointNames(arm.joint_names);
+    if (this.status) this.sliders.follow(this.status.joints_rad, true);
   }
 
   onTelemetry(s) {

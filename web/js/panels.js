@@ -5,16 +5,6 @@ import { fmtDeg, fmtMm } from "./geometry.js";
 
 const $ = (id) => document.getElementById(id);
 
-/** Default joint limits (deg) of the RX200 (DESIGN §4), used when the status carries none. */
-export const DEFAULT_LIMITS_DEG = {
-  waist: [-180, 180],
-  shoulder: [-108, 113],
-  elbow: [-108, 93],
-  wrist_angle: [-100, 123],
-  wrist_rotate: [-180, 180],
-};
-export const DEFAULT_JOINT_NAMES = Object.keys(DEFAULT_LIMITS_DEG);
-
 const SWATCH = {
   red: "#e5484d", orange: "#f08c2e", yellow: "#f2d13c", green: "#2fbf71", blue: "#3d8bfd", violet: "#9b6bff",
   purple: "#9b6bff",
@@ -68,7 +58,7 @@ export function haltText(detail) {
 
 /** Joint table (deg) and the gripper pose/width readout. */
 export function renderReadouts(s) {
-  const names = s.joint_names || DEFAULT_JOINT_NAMES;
+  const names = s.joint_names || [];
   const table = $("joint-readout");
   if (table.rows.length !== names.length) {
     table.replaceChildren();
@@ -104,13 +94,12 @@ export class JointSliders {
     this.names = [];
   }
 
+  /** One slider per joint the server named (hello arm / status joint_names), over its limits (rad). */
   build(names, limitsRad) {
     this.names = names;
     this.container.replaceChildren();
     this.inputs = names.map((name, i) => {
-      const lim = limitsRad && limitsRad[i]
-        ? limitsRad[i].map((r) => (r * 180) / Math.PI)
-        : DEFAULT_LIMITS_DEG[name] || [-180, 180];
+      const lim = limitsRad[i].map((r) => (r * 180) / Math.PI);
       const label = document.createElement("label");
       label.textContent = name;
       const input = document.createElement("input");
@@ -150,6 +139,15 @@ export class JointSliders {
   setDisabled(disabled) {
     this.inputs.forEach(({ input }) => { input.disabled = disabled; });
   }
+}
+
+/** The arm and gripper the server runs (hello arm): gripper button labels follow the gripper type. */
+export function renderArm(arm) {
+  const suction = arm.gripper_type === "suction";
+  document.body.dataset.gripperType = arm.gripper_type;
+  $("btn-open").textContent = suction ? "Vacuum off" : "Open";
+  $("btn-close").textContent = suction ? "Vacuum on" : "Close";
+  $("arm-name").textContent = `${arm.name} · ${arm.joint_names.length} joints · ${suction ? "suction cup" : "fingers"}`;
 }
 
 /** Detections table; rows carry data-index so hovering on the canvas can highlight one. */

@@ -17,6 +17,20 @@ export const CLIENT_MESSAGE_TYPES = Object.freeze(["ack", "view", "command"]);
  */
 
 /**
+ * The station's arm and gripper (armlab.station.arm_info), sent once in the hello: the page builds its
+ * jog sliders, joint readouts, plot and teach table from these, never from names of its own.
+ * @typedef {Object} ArmInfo
+ * @property {string} name config/arms/<name>.yaml
+ * @property {(string|null)} [vendor] who makes the arm (interbotix, universal_robots); None = not said
+ * @property {Array<string>} joint_names
+ * @property {Array<Array<number>>} joint_limits_rad [lower, upper] per joint, joint_names order
+ * @property {Array<number>} velocity_limits_rad_s
+ * @property {Array<number>} home_rad
+ * @property {("fingers"|"suction")} gripper_type
+ * @property {boolean} full_pose Cartesian moves keep the tool's whole orientation (six joints or more), else pitch and yaw
+ */
+
+/**
  * @typedef {Object} AutoJobInfo
  * @property {string} name
  * @property {Array<number>} levels [] = the job has no levels
@@ -257,6 +271,7 @@ export const CLIENT_MESSAGE_TYPES = Object.freeze(["ack", "view", "command"]);
  * @property {(string|null)} [controller] this session's controller name (the lease holder's name when it commands)
  * @property {("sim"|"real")} backend
  * @property {WorkcellInfo} workcell
+ * @property {ArmInfo} arm
  * @property {(LimitsInfo|null)} [limits]
  */
 

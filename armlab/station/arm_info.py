@@ -1,0 +1,38 @@
+"""What the station's arm and gripper are, from configuration: the gripper type of its workcell and the
+arm's joints as the browser receives them (websocket hello `arm`). One place for both, so nothing else
+guesses from the number of joints or the arm's name."""
+
+from __future__ import annotations
+
+from armlab.motion.pose_path import holds_full_pose
+
+
+def station_gripper_type(station) -> str:
+    """'fingers' or 'suction': the station's own `gripper_type` when it has one, else its workcell's
+    (config/workcells/<workcell>.yaml gripper.type), else 'fingers' (a station without a workcell)."""
+    explicit = getattr(station, "gripper_type", None)
+    if isinstance(explicit, str):
+        return explicit
+    workcell_name = getattr(getattr(station, "config", None), "workcell", None)
+    if not workcell_name:
+        return "fingers"
+    from armlab.workcell import load_workcell
+
+    return load_workcell(workcell_name).gripper.type
+
+
+def arm_info(station) -> dict:
+    """The arm as the page builds its jog sliders, readouts, plot and teach table from it: name, vendor, joint
+    names, [lower, upper] limits (rad), velocity limits (rad/s), home (rad), gripper type, and whether
+    Cartesian moves keep the tool's whole orientation (six joints or more) or its pitch and yaw."""
+    model = station.model
+    return {
+        "name": model.name,
+        "vendor": getattr(model.config, "vendor", None),
+        "joint_names": list(model.joint_names),
+        "joint_limits_rad": [[float(lo), float(hi)] for lo, hi in zip(model.lower_rad, model.upper_rad)],
+        "velocity_limits_rad_s": [float(v) for v in model.velocity_limit_rad_s],
+        "home_rad": [float(v) for v in model.home_rad],
+        "gripper_type": station_gripper_type(station),
+        "full_pose": holds_full_pose(model),
+    }
