@@ -38,6 +38,7 @@ class RealSenseCamera(ThreadedCamera):
 
     def __init__(self, config: RealSenseCameraConfig) -> None:
         self.config = config
+        self._device_serial: str | None = None  # read at connect: names the camera (stored intrinsics are keyed by it)
         super().__init__()
         self._rs = None
         self._pipeline = None
@@ -45,7 +46,7 @@ class RealSenseCamera(ThreadedCamera):
         self._depth_scale_mm = 1.0
 
     def __str__(self) -> str:
-        return f"RealSenseCamera({self.config.serial or 'first'})"
+        return f"RealSenseCamera({self.config.serial or self._device_serial or 'first'})"
 
     def connect(self) -> None:
         """Start the pipeline, read the factory intrinsics, start the reader; all-or-nothing."""
@@ -63,6 +64,10 @@ class RealSenseCamera(ThreadedCamera):
                 rs_config.enable_stream(rs.stream.depth, cfg.depth_width, cfg.depth_height, rs.format.z16, cfg.fps)
             self._pipeline = rs.pipeline()
             profile = self._pipeline.start(rs_config)
+            try:
+                self._device_serial = str(profile.get_device().get_info(rs.camera_info.serial_number))
+            except (AttributeError, RuntimeError):  # an SDK or device that does not report it
+                self._device_serial = None
             if cfg.use_depth:
                 self._align = rs.align(rs.stream.color)
                 depth_scale_m = profile.get_device().first_depth_sensor().get_depth_scale()
