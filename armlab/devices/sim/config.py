@@ -26,10 +26,10 @@ class SimWorkcellConfig(StrictModel):
     color_noise: bool = True
     depth_noise: bool = True
     camera_fps: Positive = 30.0
-    arm: str = "rx200"
-    camera: str = "sim_l515"
+    arm: str | None = None  # None: the workcell's arm; another arm than the workcell's is refused
+    camera: str | None = None  # None: the workcell's camera (config/cameras/<name>.yaml)
     sim: str = "sim"  # config/<sim>.yaml
-    workcell: str = "rx200_armlab"  # config/workcells/<workcell>.yaml: board, tags, object sizes, feeder
+    workcell: str = "rx200_armlab"  # config/workcells/<workcell>.yaml: arm, gripper, board, tags, camera, feeder
 
 
 class PhysicsConfig(StrictModel):
@@ -56,13 +56,35 @@ class ArmServoConfig(StrictModel):
     damping: list[NonNegative]
     force_limit_nm: list[Positive]
     link_masses_kg: list[Positive]
+    link_radius_m: list[Positive] | None = None  # DH-built arms: the capsule radius of each link
 
     @model_validator(mode="after")
     def _same_lengths(self) -> ArmServoConfig:
         lengths = {len(self.kp), len(self.kv), len(self.armature), len(self.damping), len(self.force_limit_nm)}
         if len(lengths) != 1 or len(self.link_masses_kg) != len(self.kp):
             raise ValueError("arm: kp, kv, armature, damping, force_limit_nm, link_masses_kg need one value per joint")
+        if self.link_radius_m is not None and len(self.link_radius_m) != len(self.kp):
+            raise ValueError("link_radius_m needs one value per joint")
         return self
+
+
+class SuctionSimConfig(StrictModel):
+    """The simulated vacuum cup (armlab.devices.sim.suction): the lip is a ring of lip_points small spheres;
+    the vacuum (MuJoCo adhesion actuator, adhesion_force_n at full vacuum) builds only while every lip point
+    is within lip_compliance_m of one object's face (the bellows conform that far: a cup of lip radius r
+    seals up to a tilt of about asin(lip_compliance_m / 2r)). While holding, a cup accelerating harder than
+    max_acceleration_m_s2 (low-passed over acceleration_filter_s) breaks the seal: the block is lost."""
+
+    adhesion_force_n: Positive
+    lip_points: Annotated[int, Field(ge=4, le=32)] = 8
+    lip_sphere_radius_m: Positive
+    lip_compliance_m: Positive
+    lip_friction: list[NonNegative] = Field(min_length=3, max_length=3)
+    lip_solref: list[float] = Field(min_length=2, max_length=2)
+    cup_mass_kg: Positive
+    max_acceleration_m_s2: Positive
+    acceleration_filter_s: Positive
+    settle_time_s: Positive  # grasp(wait=True) waits this long for the seal to form (release: to vent)
 
 
 class GripperSimConfig(StrictModel):
@@ -101,10 +123,21 @@ class SimConfig(StrictModel):
 
     render: RenderConfig = RenderConfig()
     physics: PhysicsConfig
-    arm: ArmServoConfig
+    arm: ArmServoConfig  # the RX200's servos
+    arms: dict[str, ArmServoConfig] = {}  # other arms' servos, by arm name (config/arms/<name>.yaml)
     gripper: GripperSimConfig
+    suction: SuctionSimConfig | None = None
     objects: ObjectsConfig
     camera_pose_error: PoseErrorConfig
+
+
+    def servos(self, arm: str) -> ArmServoConfig:
+        """The servo settings of `arm`: `arm:` for the RX200, else `arms.<name>` (ValueError naming the field)."""
+        if arm == "rx200":
+            return self.arm
+        if arm not in self.arms:
+            raise ValueError(f"config/sim.yaml: arms.{arm}: no servo settings for arm '{arm}' (have: rx200, {', '.join(self.arms)})")
+        return self.arms[arm]
 
 
 class IntrinsicsConfig(StrictModel):

@@ -1,5 +1,6 @@
 """Build the MuJoCo model of the workcell (MJCF text + in-memory texture assets) from config and a
-Scene: the RX200 from its URDF joint origins, a two-finger gripper with pads, the board and its tags
+Scene: the RX200 from its URDF joint origins, a two-finger gripper with pads (or a DH-described arm
+with a suction cup: armlab.devices.sim.mjcf_dh), the board and its tags
 (from the workcell config), the overhead camera, the scene's objects as free bodies and the feeder's
 blocks parked out of sight. Pure: same inputs, same XML."""
 
@@ -15,6 +16,7 @@ from armlab.devices.sim import textures
 from armlab.devices.sim.checkerboard import BODY_NAME as CHECKERBOARD, checkerboard_texture, checkerboard_xml, load_checkerboard_target
 from armlab.devices.sim.config import SimCameraConfig, SimConfig
 from armlab.devices.sim.feeder import FEEDER_PROBE, parked_objects
+from armlab.devices.sim.mjcf_dh import DhArmGeometry
 from armlab.scene import Scene, SceneObject
 from armlab.workcell import Workcell, load_workcell
 
@@ -64,6 +66,11 @@ class ArmGeometry:
             T_world_base=np.asarray(data["T_world_base"], dtype=float),
             sleep_rad=np.asarray(data["poses"]["sleep_rad"], dtype=float),
         )
+
+
+    def mjcf(self, sim: SimConfig) -> tuple[str, str]:
+        """(worldbody xml of the arm with its fingers, actuator xml)."""
+        return _arm_xml(self, sim), _finger_arm_actuators(self, sim)
 
 
 def _fmt(values) -> str:
@@ -154,6 +161,24 @@ def _arm_xml(arm: ArmGeometry, sim: SimConfig) -> str:
     </body>"""
 
 
+def _finger_arm_actuators(arm: ArmGeometry, sim: SimConfig) -> str:
+    """Position + velocity servo per joint, a position servo per finger capped at the grasp effort."""
+    actuators = []
+    for i, name in enumerate(arm.joint_names):
+        actuators.append(
+            f'<position name="{name}_pos" joint="{name}" kp="{sim.arm.kp[i]}" '
+            f'ctrlrange="{arm.lower_rad[i]:.9g} {arm.upper_rad[i]:.9g}"/>'
+        )
+        actuators.append(f'<velocity name="{name}_vel" joint="{name}" kv="{sim.arm.kv[i]}" ctrlrange="-10 10"/>')
+    for side in ("left", "right"):
+        actuators.append(
+            f'<position name="{side}_finger" joint="{side}_finger" kp="{sim.gripper.kp_n_m}" '
+            f'ctrlrange="{arm.finger_offset_min_m} {arm.finger_offset_max_m}" '
+            f'forcerange="{-arm.grasp_effort_n} {arm.grasp_effort_n}"/>'
+        )
+    return "".join(actuators)
+
+
 def _prism_vertices(outline_xy: list[tuple[float, float]], height_m: float) -> str:
     """Vertices of a vertical prism over a convex outline (MuJoCo takes their convex hull)."""
     points = [(x, y, z) for x, y in outline_xy for z in (-0.5 * height_m, 0.5 * height_m)]
@@ -240,7 +265,7 @@ def _feeder_xml(scene: Scene, workcell: Workcell) -> str:
 
 
 def build_model_xml(
-    arm: ArmGeometry, sim: SimConfig, camera: SimCameraConfig, T_world_camera: np.ndarray, scene: Scene,
+    arm: ArmGeometry | DhArmGeometry, sim: SimConfig, camera: SimCameraConfig, T_world_camera: np.ndarray, scene: Scene,
     workcell: Workcell | None = None,
 ) -> tuple[str, dict[str, bytes]]:
     """The whole workcell as MJCF text plus the texture PNGs it references (MuJoCo in-memory assets)."""
@@ -280,19 +305,7 @@ def build_model_xml(
                                   workcell, parked=is_parked)
         object_assets.append(asset)
         object_bodies.append(body)
-    actuators = []
-    for i, name in enumerate(arm.joint_names):
-        actuators.append(
-            f'<position name="{name}_pos" joint="{name}" kp="{sim.arm.kp[i]}" '
-            f'ctrlrange="{arm.lower_rad[i]:.9g} {arm.upper_rad[i]:.9g}"/>'
-        )
-        actuators.append(f'<velocity name="{name}_vel" joint="{name}" kv="{sim.arm.kv[i]}" ctrlrange="-10 10"/>')
-    for side in ("left", "right"):
-        actuators.append(
-            f'<position name="{side}_finger" joint="{side}_finger" kp="{sim.gripper.kp_n_m}" '
-            f'ctrlrange="{arm.finger_offset_min_m} {arm.finger_offset_max_m}" '
-            f'forcerange="{-arm.grasp_effort_n} {arm.grasp_effort_n}"/>'
-        )
+    arm_bodies, actuators = arm.mjcf(sim)  # the RX200 with fingers (above) or a DH arm with a cup (mjcf_dh)
     p = sim.physics
     xml = f"""<mujoco model="armlab_workcell">
   <compiler angle="radian" autolimits="true"/>
@@ -326,12 +339,12 @@ def build_model_xml(
     {''.join(tag_geoms)}
     {_feeder_xml(scene, workcell)}
     <camera name="{CAMERA_NAME}" mode="fixed" {camera_xml_attributes(T_world_camera, camera)}/>
-    {_arm_xml(arm, sim)}
+    {arm_bodies}
     {''.join(object_bodies)}
     {checker_body}
   </worldbody>
   <actuator>
-    {''.join(actuators)}
+    {actuators}
   </actuator>
 </mujoco>"""
     return xml, assets

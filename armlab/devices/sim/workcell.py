@@ -7,6 +7,7 @@ clock (servo references updated every control period) and a render thread at the
 
 from __future__ import annotations
 
+import dataclasses
 import logging
 import math
 import threading
@@ -21,6 +22,7 @@ from armlab.devices.sim.arm import SimArm
 from armlab.devices.sim.camera import NoiseModel, SimCamera
 from armlab.devices.sim.checkerboard import BODY_NAME as CHECKERBOARD, PARKED_POSITION_M, checked_pose
 from armlab.devices.sim.config import (
+    MountConfig,
     SimWorkcellConfig,
     draw_pose_error,
     load_camera_config,
@@ -30,6 +32,9 @@ from armlab.devices.sim.config import (
 from armlab.devices.sim.feeder import FeederRuntime, parked_objects
 from armlab.devices.sim.gripper import SimGripper
 from armlab.devices.sim.mjcf import CAMERA_NAME, GRIPPER_SITE, OBJECT_PREFIX, ArmGeometry, build_model_xml, quat_wxyz_from_matrix
+from armlab.devices.sim.mjcf_dh import CUP_BODY, LIP_PREFIX, SUCTION_ACTUATOR, DhArmGeometry
+from armlab.devices.sim.suction import SuctionGripper, lip_touching, seal_object
+from armlab.errors import ConfigError
 from armlab.devices.sim.path import MAX_DURATION_S, PathRecorder
 from armlab.devices.sim.render import RawImages, RenderThread
 from armlab.scene import Scene
@@ -42,15 +47,19 @@ PAD_GEOMS = ("left_pad", "right_pad")
 
 
 class SimWorkcell:
-    """The simulated RX200 workcell. See the module docstring for the clock semantics."""
+    """The simulated workcell (the RX200 with fingers, or a DH arm with a suction cup, per the workcell config). See the module docstring for the clock semantics."""
 
     def __init__(self, config: SimWorkcellConfig | None = None, scene: Scene | None = None) -> None:
         self.config = config or SimWorkcellConfig()
         self.lock = threading.RLock()
-        self._geometry = ArmGeometry.load(self.config.arm)
         self._workcell = load_workcell(self.config.workcell)
         self._sim = load_sim_config(self.config.sim)
-        self._camera_config = load_camera_config(self.config.camera)
+        self._geometry = self._arm_geometry()
+        self._camera_config = load_camera_config(self.config.camera or self._workcell.camera.name)
+        if self._workcell.camera.mount is not None:  # the workcell's mount replaces the camera file's
+            mount = self._workcell.camera.mount
+            self._camera_config = self._camera_config.model_copy(
+                update={"mount": MountConfig(position_m=list(mount.position_m), tilt_deg=mount.tilt_deg)})
         pose_rng, noise_rng = (np.random.default_rng(s) for s in np.random.SeedSequence(self.config.seed).spawn(2))
         T_nominal = nominal_T_world_camera(self._camera_config.mount)
         self._T_world_camera = (
@@ -65,9 +74,12 @@ class SimWorkcell:
         physics = self._sim.physics
         self.arm = SimArm(self, self._geometry.joint_names, self._geometry.lower_rad, self._geometry.upper_rad,
                           physics.settle_tolerance_rad, physics.settle_timeout_s)
-        self.gripper = SimGripper(self, self._geometry.finger_offset_min_m, self._geometry.finger_offset_max_m,
-                                  self._geometry.pad_thickness_m, self._sim.gripper.stop_speed_m_s,
-                                  self._sim.gripper.stop_time_s)
+        if self._suction:
+            self.gripper = SuctionGripper(self, self._sim.suction, self._workcell.arm)
+        else:
+            self.gripper = SimGripper(self, self._geometry.finger_offset_min_m, self._geometry.finger_offset_max_m,
+                                      self._geometry.pad_thickness_m, self._sim.gripper.stop_speed_m_s,
+                                      self._sim.gripper.stop_time_s)
         noise = NoiseModel(self._camera_config, noise_rng, self.config.color_noise, self.config.depth_noise)
         self.camera = SimCamera(self, self._camera_config, noise, self.config.camera_fps)
         self._render_thread: RenderThread | None = None
@@ -77,6 +89,30 @@ class SimWorkcell:
         self._closed = False
 
     # ------------------------------------------------------------------ model
+    def _arm_geometry(self) -> ArmGeometry | DhArmGeometry:
+        """The workcell's arm and gripper: the RX200 with fingers, or a DH arm with a suction cup. ConfigError
+        for an arm other than the workcell's, or an arm without what its gripper type needs."""
+        workcell = self._workcell
+        if self.config.arm is not None and self.config.arm != workcell.arm:
+            raise ConfigError(f"SimWorkcellConfig.arm: '{self.config.arm}' contradicts workcell '{workcell.name}', whose arm "
+                              f"is '{workcell.arm}' (the workcell decides the arm: leave arm unset)")
+        workcell.check_arm_fits()
+        self._suction = workcell.gripper.type == "suction"
+        T_world_base = None if workcell.arm_base is None else workcell.arm_base.T_world_base
+        try:
+            if self._suction:
+                if self._sim.suction is None:
+                    raise ValueError(f"config/{self.config.sim}.yaml: suction: missing (the simulated cup's parameters)")
+                self._sim.servos(workcell.arm)  # ValueError naming arms.<name> if the servos are not configured
+                return DhArmGeometry.load(workcell.arm, T_world_base)
+            if workcell.arm != "rx200":
+                raise ValueError(f"workcell '{workcell.name}': the simulation builds finger grippers on the RX200 only, "
+                                 f"not on '{workcell.arm}'")
+            geometry = ArmGeometry.load(workcell.arm)
+        except ValueError as error:
+            raise ConfigError(str(error)) from None
+        return geometry if T_world_base is None else dataclasses.replace(geometry, T_world_base=T_world_base)
+
     def _build(self, scene: Scene, previous: dict | None) -> None:
         """(Re)build model and data for a scene; `previous` carries the arm/gripper state across."""
         self._install(self._compile(scene), scene, previous)
@@ -93,21 +129,26 @@ class SimWorkcell:
         vel_act = np.array([model.actuator(f"{n}_vel").id for n in names])
         object_bodies = {obj.id: model.body(OBJECT_PREFIX + obj.id).id for obj in scene.objects}
         parked = parked_objects(scene.feeder, self._workcell) if scene.feeder is not None else []
+        sides = () if self._suction else ("left", "right")
+        lip_points = self._sim.suction.lip_points if self._suction else 0
         return {
             "model": model,
             "data": mujoco.MjData(model),
             "_arm_qpos": np.array([model.jnt_qposadr[model.joint(n).id] for n in names]),
             "_arm_qvel": np.array([model.jnt_dofadr[model.joint(n).id] for n in names]),
-            "_finger_qpos": np.array([model.jnt_qposadr[model.joint(f"{s}_finger").id] for s in ("left", "right")]),
-            "_finger_qvel": np.array([model.jnt_dofadr[model.joint(f"{s}_finger").id] for s in ("left", "right")]),
+            "_finger_qpos": np.array([model.jnt_qposadr[model.joint(f"{s}_finger").id] for s in sides], dtype=int),
+            "_finger_qvel": np.array([model.jnt_dofadr[model.joint(f"{s}_finger").id] for s in sides], dtype=int),
             "_pos_act": pos_act,
             "_vel_act": vel_act,
-            "_finger_act": np.array([model.actuator(f"{s}_finger").id for s in ("left", "right")]),
+            "_finger_act": np.array([model.actuator(f"{s}_finger").id for s in sides], dtype=int),
             "_arm_gains": (model.actuator_gainprm[pos_act, 0].copy(), model.actuator_gainprm[vel_act, 0].copy()),
             "_arm_body_ids": np.flatnonzero((model.body_gravcomp > 0) & (model.body_rootid == arm_root)),
             "_gripper_site": model.site(GRIPPER_SITE).id,
             "_gripper_body": model.body("gripper_link").id,
-            "_pad_geoms": {model.geom(name).id: name for name in PAD_GEOMS},
+            "_pad_geoms": {model.geom(name).id: name for name in PAD_GEOMS} if sides else {},
+            "_lip_geoms": {model.geom(f"{LIP_PREFIX}{k}").id: k for k in range(lip_points)},
+            "_suction_act": model.actuator(SUCTION_ACTUATOR).id if self._suction else -1,
+            "_cup_body": model.body(CUP_BODY).id if self._suction else -1,
             "_object_bodies": object_bodies,
             "parked_bodies": [(model.body(OBJECT_PREFIX + obj.id).id, obj) for obj in parked],
             "arm_root": arm_root,
@@ -123,6 +164,9 @@ class SimWorkcell:
         parked_bodies, arm_root = compiled["parked_bodies"], compiled["arm_root"]
         self._body_to_object = {body: obj_id for obj_id, body in self._object_bodies.items()}
         self._body_to_object.update({body: obj.id for body, obj in parked_bodies})
+        solid = (model.geom_contype > 0) | (model.geom_conaffinity > 0)
+        self._object_geoms = {obj_id: np.flatnonzero((model.geom_bodyid == body) & solid).tolist()
+                              for body, obj_id in self._body_to_object.items()} if self._suction else {}
         if previous is None:
             # The arm powers up in its sleep pose, fingers open.
             data.qpos[self._arm_qpos] = np.clip(self._geometry.sleep_rad, self._geometry.lower_rad, self._geometry.upper_rad)
@@ -226,6 +270,21 @@ class SimWorkcell:
 
     def apply_finger_reference(self, offset_m: float) -> None:
         self._data.ctrl[self._finger_act] = offset_m
+
+    def apply_suction(self, level: float) -> None:
+        """Vacuum level of the cup's adhesion actuator: 0 vented .. 1 full."""
+        self._data.ctrl[self._suction_act] = level
+
+    def cup_velocity_m_s(self) -> np.ndarray:
+        """World linear velocity of the suction cup."""
+        velocity = np.zeros(6)
+        mujoco.mj_objectVelocity(self._model, self._data, mujoco.mjtObj.mjOBJ_BODY, self._cup_body, velocity, 0)
+        return velocity[3:].copy()
+
+    def cup_seal_object(self) -> str | None:
+        """The object whose face the whole lip rests on (within the lip's compliance), else None."""
+        return seal_object(self._model, self._data, self._lip_geoms, self._object_geoms, self._cup_body,
+                           self._sim.suction.lip_compliance_m)
 
     def _apply_torque(self, model: mujoco.MjModel, enabled: bool) -> None:
         kp, kv = self._arm_gains if enabled else (np.zeros(len(self._pos_act)), np.zeros(len(self._vel_act)))
@@ -435,6 +494,19 @@ class SimWorkcell:
         self._data.mocap_quat[mocap] = quat_wxyz_from_matrix(R)
         mujoco.mj_kinematics(self._model, self._data)
 
+    def _suction_truth(self) -> dict:
+        """Ground truth of the cup (under the lock): the objects the lip touches, what the vacuum holds."""
+        data = self._data
+        return {
+            "left_contacts": [], "right_contacts": [],
+            "lip_contacts": lip_touching(self._model, self._data, self._lip_geoms, self._body_to_object),
+            "holding_id": self.gripper.holding_id,
+            "vacuum": self.gripper.command == "grasp",
+            "width_m": 0.0,
+            "position_m": data.site_xpos[self._gripper_site].tolist(),
+            "quat_wxyz": data.xquat[self._gripper_body].tolist(),
+        }
+
     def feeder_status(self) -> dict | None:
         """to_the_sky feeder: {spot_m, count, fed, remaining}, or None if the scene has no feeder."""
         with self.lock:
@@ -451,6 +523,8 @@ class SimWorkcell:
                 on_board += self._feeder.fed_bodies()
             for body, obj in on_board:
                 objects.append(obj.posed_dict(data.xpos[body], data.xquat[body]))
+            if self._suction:
+                state = self._suction_truth()
             contacts = {"left_pad": set(), "right_pad": set()}
             for contact in data.contact[: data.ncon]:
                 for pad_geom, other_geom in ((contact.geom1, contact.geom2), (contact.geom2, contact.geom1)):
@@ -459,8 +533,8 @@ class SimWorkcell:
                     if pad is not None and obj_id is not None:
                         contacts[pad].add(obj_id)
             both = sorted(contacts["left_pad"] & contacts["right_pad"])
-            left, right = self.finger_positions()
-            state = {
+            left, right = self.finger_positions() if not self._suction else (0.0, 0.0)
+            state = state if self._suction else {
                 "left_contacts": sorted(contacts["left_pad"]),
                 "right_contacts": sorted(contacts["right_pad"]),
                 "holding_id": both[0] if both and self.gripper.command == "grasp" else None,
