@@ -328,11 +328,12 @@ class Station(Latch, MotionGate, ManualCommands, TeachCommands, JobControls, Per
 
     @property
     def motion_config(self) -> Any:
-        """armlab.motion's MotionConfig (config/motion.yaml unless one was injected)."""
+        """armlab.motion's MotionConfig (config/motion.yaml with the workcell's `motion:` overrides, unless one
+        was injected)."""
         if self._motion_config is None:
-            from armlab.motion.config import load_motion_config
+            from armlab.workcell import load_workcell_motion_config
 
-            self._motion_config = load_motion_config()
+            self._motion_config = load_workcell_motion_config(self.config.workcell)
         return self._motion_config
 
     @property

@@ -59,7 +59,7 @@ def lip_touching(model, data, lip_geoms: dict[int, int], body_to_object: dict[in
 class SuctionGripper(Gripper):
     """The simulated vacuum suction cup. width_m is always 0 (a cup has no width)."""
 
-    kind = "suction"
+    gripper_type = "suction"
     min_width_m = 0.0
     max_width_m = 0.0
 
