@@ -68,7 +68,13 @@ def run_serve(args: argparse.Namespace) -> int:
     from server.logging_config import log_config
     from server.serving import run
 
-    config = build_station_config(args)
+    from armlab.errors import ConfigError
+
+    try:
+        config = build_station_config(args)  # the workcell decides the arm: unknown or contradicting names stop here
+    except ConfigError as error:
+        print(f"armlab serve: {error}", file=sys.stderr, flush=True)
+        return 2
     problem = open_checked_store(args.db if args.db is not None else config.database_file(), config.database_backups)
     if problem is not None:
         print(f"armlab serve: {problem}", file=sys.stderr, flush=True)
