@@ -29,6 +29,9 @@ class StationConfig(StrictModel):
     jpeg_quality: int = Field(80, ge=10, le=100)
     database_path: str = "var/armlab.sqlite3"
     restore_calibration: bool = False
+    self_recalibrate: bool = False
+    self_recalibrate_min_board_tags: int = Field(4, ge=3, le=64)
+    self_recalibrate_retry_s: float = Field(10.0, gt=0.0, le=3600.0)
     click_snap_radius_m: float = Field(0.03, gt=0.0, le=0.2)
     max_moving_time_s: float = Field(30.0, gt=0.0)
     default_block_height_m: float = Field(0.038, gt=0.0, le=0.2)

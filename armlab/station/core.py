@@ -31,6 +31,7 @@ from armlab.devices.arm import Arm
 from armlab.devices.camera import Camera, Frame
 from armlab.devices.gripper import Gripper
 from armlab.errors import ShuttingDown
+from armlab.station.calibration_trust import CalibrationTrust
 from armlab.station.checks import checked_joints
 from armlab.station.config import StationConfig
 from armlab.station.intrinsics import CameraIntrinsics
@@ -77,7 +78,7 @@ class NotCalibrated(RuntimeError):
 _UNLATCHED = ("estop",)  # the only command the latch and the lease never refuse
 
 
-class Station(Latch, MotionGate, ManualCommands, TeachCommands, JobControls, Perceiving):
+class Station(Latch, MotionGate, ManualCommands, TeachCommands, JobControls, Perceiving, CalibrationTrust):
     """The control station's gate (its parts: latch.py, motion.py, manual.py, teach.py, job_control.py, perceiving.py). Backends are injected; `sim` is the SimWorkcell when simulated (else None).
 
     model: the armlab.kinematics ArmModel of the arm; perception_config: armlab.vision's config.
@@ -164,7 +165,8 @@ class Station(Latch, MotionGate, ManualCommands, TeachCommands, JobControls, Per
             self._workers = [
                 self._frame_source,
                 PerceptionLoop(
-                    self.frames, self.perception, lambda: self._calibration, self.perception_config, self.config.perception_rate_hz, self.model
+                    self.frames, self.perception, lambda: self._calibration, self.perception_config, self.config.perception_rate_hz, self.model,
+                    get_check_calibration=self._calibration_to_check, on_check=self._on_calibration_check,
                 ),
                 TelemetryPublisher(self.telemetry_snapshot, self.telemetry, self.config.telemetry_rate_hz),
                 DeviceWatch(self.device_problems, self._on_device_problems, 1.0 / self.config.device_check_rate_hz),
@@ -311,20 +313,8 @@ class Station(Latch, MotionGate, ManualCommands, TeachCommands, JobControls, Per
         with self._lock:
             self._calibration = calibration
             self._calibration_info = {"calibrated": True, **info}
+            self._restored = None  # a restored calibration still being checked is superseded (calibration_trust.py)
         self.calibration_slot.publish(self.calibration_info)
-
-    def _restore_calibration(self) -> None:
-        from armlab.vision import Calibration
-
-        data = self.store.latest_calibration()
-        if data is None:
-            return
-        try:
-            calibration = Calibration.from_dict(data["calibration"])
-        except (KeyError, ValueError, TypeError) as error:
-            self.events.add("warn", f"saved calibration not restored: {error}")
-            return
-        self.set_calibration(calibration, data["info"])
 
     @property
     def motion_config(self) -> Any:
@@ -394,9 +384,10 @@ class Station(Latch, MotionGate, ManualCommands, TeachCommands, JobControls, Per
             job = self._job or self._last_job
             state, detail, lease = self._effective_state(), self._detail, self._lease.to_dict()
             calibrated = self._calibration is not None
+            checked = calibrated or self._restored is not None
             lost = dict(self._lost)
         perception, _ = self.perception.get()
-        camera_warning = perception.camera_warning if calibrated and perception is not None else None
+        camera_warning = perception.camera_warning if checked and perception is not None else None
         return {
             "state": state.value,
             "detail": detail,
@@ -409,6 +400,8 @@ class Station(Latch, MotionGate, ManualCommands, TeachCommands, JobControls, Per
             "torque_enabled": self._torque_enabled,
             "calibrated": calibrated,
             "camera_warning": camera_warning,
+            "calibration_state": self.calibration_state,
+            "self_recalibrate": self.self_recalibrate,
             "backend": self.backend,
             "controller": lease["controller"],
             "controller_since_s": lease["since_s"],

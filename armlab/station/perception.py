@@ -159,6 +159,9 @@ class PerceptionLoop(_Worker):
     `get_calibration()` returns the current armlab.vision Calibration or None; blocks need it, tags
     do not. `config` is the armlab.vision PerceptionConfig. `arm_model` (armlab.kinematics ArmModel)
     turns on the robot self-filter for frames that carry the arm's joints.
+    `get_check_calibration()` (default: get_calibration) is the calibration the camera-moved check
+    compares the board tags with (a restored one is checked before it is used); after each check
+    `on_check(calibration, drift_px, warning, perception)` is called, if given.
     """
 
     name = "station-perception"
@@ -171,8 +174,12 @@ class PerceptionLoop(_Worker):
         config: Any,
         rate_hz: float,
         arm_model: Any = None,
+        get_check_calibration: Callable[[], Any] | None = None,
+        on_check: Callable[[Any, float | None, str | None, Perception], None] | None = None,
     ) -> None:
         super().__init__()
+        self.get_check_calibration = get_check_calibration or get_calibration
+        self.on_check = on_check
         self.frames = frames
         self.out = out
         self.get_calibration = get_calibration
@@ -194,9 +201,15 @@ class PerceptionLoop(_Worker):
             started = time.monotonic()
             calibration = self.get_calibration()
             perception = analyse_frame(pipeline, frame, calibration, surface)
-            warning = drift.update(frame.timestamp_s, list(perception.tags), calibration, self.config)
+            checked = self.get_check_calibration()
+            warning = drift.update(frame.timestamp_s, list(perception.tags), checked, self.config)
             if warning is not None:
                 perception = replace(perception, camera_warning=warning)
+            if drift.checked_now and self.on_check is not None:
+                try:
+                    self.on_check(checked, drift.last_drift_px, warning, perception)
+                except Exception:  # noqa: BLE001 - the station's reaction failing must not stop perception
+                    log.exception("the camera-moved check's handler failed")
             surface = perception.surface_depth_mm
             self.out.publish(perception)
             # At most the configured rate, and at most half of one core (sleep at least as long as we worked).

@@ -38,12 +38,14 @@ class DriftMonitor:
     limits: CalibrationLimits
     warning: str | None = None
     last_drift_px: float | None = None
+    checked_now: bool = False  # the last update() made a check (else it returned the standing verdict)
     _last_check_s: float | None = None
     _over: int = 0
     _calibration: object = None
 
     def update(self, now_s: float, tags: list[Tag], cal: Calibration | None, cfg: PerceptionConfig) -> str | None:
         """The current warning (None: none) after looking at this frame's tags if a check is due."""
+        self.checked_now = False
         if cal is None:
             self.warning, self._calibration, self._over = None, None, 0
             return None
@@ -52,6 +54,7 @@ class DriftMonitor:
         if self._last_check_s is not None and now_s - self._last_check_s < self.limits.drift_check_period_s - 1e-3:
             return self.warning
         self._last_check_s = now_s
+        self.checked_now = True
         drift = board_tag_drift_px(tags, cal, cfg)
         self.last_drift_px = drift
         if drift is None:

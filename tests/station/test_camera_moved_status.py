@@ -39,27 +39,4 @@ def test_status_says_camera_moved_after_a_bump_and_not_before(tmp_path):
         cell.close()
 
 
-def test_a_restored_calibration_is_checked_before_it_is_trusted(tmp_path):
-    """Restart with restore_calibration: the saved calibration is loaded, and a camera that moved in
-    between is caught by the same check."""
-    cell = live.start_cell(seed=9)
-    db = tmp_path / "station.sqlite3"
-    try:
-        station = live.make_station(cell, db)
-        try:
-            job = skills.calibrate(station)
-            assert job.wait(30) and job.state == "succeeded", job.message
-        finally:
-            station.close()
-        bump = np.eye(4)
-        bump[:3, 3] = (0.005, 0.0, 0.0)
-        cell.bump_camera(bump)
-        station = live.make_station(cell, db, restore_calibration=True)
-        try:
-            assert station.status()["calibrated"]
-            warning = live.wait_for(lambda: station.status()["camera_warning"], timeout_s=60)
-            assert warning.startswith("camera moved: recalibrate")
-        finally:
-            station.close()
-    finally:
-        cell.close()
+# A restored calibration checked before it is trusted, and self-recalibration: test_calibration_trust.py.

@@ -449,6 +449,8 @@ export const CLIENT_MESSAGE_TYPES = Object.freeze(["ack", "view", "command"]);
  * @property {boolean} [torque_enabled] motor torque on (the arm holds); off = limp, it falls unless held
  * @property {boolean} calibrated
  * @property {(string|null)} [camera_warning] "camera moved: recalibrate (...)" when the board tags no longer sit where the calibration puts them
+ * @property {(("checking"|"trusted"|"rejected")|null)} [calibration_state] trusted: in use; checking: restored at start, not used until the board tags confirm it; rejected: restored but the camera moved since (recalibrate); None: no calibration
+ * @property {boolean} [self_recalibrate] the station recalibrates itself from the board tags when idle once the camera moved (PUT /api/calibration/settings)
  * @property {("sim"|"real")} backend
  * @property {(string|null)} controller who holds the control lease (None: free); only it may command
  * @property {(number|null)} [controller_since_s] when it took control (time.time())
@@ -554,6 +556,8 @@ export const CLIENT_MESSAGE_TYPES = Object.freeze(["ack", "view", "command"]);
  * @property {boolean} [torque_enabled] motor torque on (the arm holds); off = limp, it falls unless held
  * @property {boolean} calibrated
  * @property {(string|null)} [camera_warning] "camera moved: recalibrate (...)" when the board tags no longer sit where the calibration puts them
+ * @property {(("checking"|"trusted"|"rejected")|null)} [calibration_state] trusted: in use; checking: restored at start, not used until the board tags confirm it; rejected: restored but the camera moved since (recalibrate); None: no calibration
+ * @property {boolean} [self_recalibrate] the station recalibrates itself from the board tags when idle once the camera moved (PUT /api/calibration/settings)
  * @property {("sim"|"real")} backend
  * @property {(string|null)} controller who holds the control lease (None: free); only it may command
  * @property {(number|null)} [controller_since_s] when it took control (time.time())
