@@ -7,7 +7,6 @@ clock (servo references updated every control period) and a render thread at the
 
 from __future__ import annotations
 
-import dataclasses
 import logging
 import math
 import threading
@@ -31,10 +30,10 @@ from armlab.devices.sim.config import (
 )
 from armlab.devices.sim.feeder import FeederRuntime, parked_objects
 from armlab.devices.sim.gripper import SimGripper
-from armlab.devices.sim.mjcf import CAMERA_NAME, GRIPPER_SITE, OBJECT_PREFIX, ArmGeometry, build_model_xml, quat_wxyz_from_matrix
+from armlab.devices.sim.arm_select import select_arm
+from armlab.devices.sim.mjcf import CAMERA_NAME, GRIPPER_SITE, OBJECT_PREFIX, build_model_xml, quat_wxyz_from_matrix
 from armlab.devices.sim.mjcf_dh import CUP_BODY, LIP_PREFIX, SUCTION_ACTUATOR, DhArmGeometry
 from armlab.devices.sim.suction import SuctionGripper, lip_touching, seal_object
-from armlab.errors import ConfigError
 from armlab.devices.sim.path import MAX_DURATION_S, PathRecorder
 from armlab.devices.sim.render import RawImages, RenderThread
 from armlab.scene import Scene
@@ -54,7 +53,8 @@ class SimWorkcell:
         self.lock = threading.RLock()
         self._workcell = load_workcell(self.config.workcell)
         self._sim = load_sim_config(self.config.sim)
-        self._geometry = self._arm_geometry()
+        self._geometry = select_arm(self._workcell, self.config.arm, self._sim, self.config.sim)
+        self._suction = isinstance(self._geometry, DhArmGeometry)
         self._camera_config = load_camera_config(self.config.camera or self._workcell.camera.name)
         if self._workcell.camera.mount is not None:  # the workcell's mount replaces the camera file's
             mount = self._workcell.camera.mount
@@ -89,30 +89,6 @@ class SimWorkcell:
         self._closed = False
 
     # ------------------------------------------------------------------ model
-    def _arm_geometry(self) -> ArmGeometry | DhArmGeometry:
-        """The workcell's arm and gripper: the RX200 with fingers, or a DH arm with a suction cup. ConfigError
-        for an arm other than the workcell's, or an arm without what its gripper type needs."""
-        workcell = self._workcell
-        if self.config.arm is not None and self.config.arm != workcell.arm:
-            raise ConfigError(f"SimWorkcellConfig.arm: '{self.config.arm}' contradicts workcell '{workcell.name}', whose arm "
-                              f"is '{workcell.arm}' (the workcell decides the arm: leave arm unset)")
-        workcell.check_arm_fits()
-        self._suction = workcell.gripper.type == "suction"
-        T_world_base = None if workcell.arm_base is None else workcell.arm_base.T_world_base
-        try:
-            if self._suction:
-                if self._sim.suction is None:
-                    raise ValueError(f"config/{self.config.sim}.yaml: suction: missing (the simulated cup's parameters)")
-                self._sim.servos(workcell.arm)  # ValueError naming arms.<name> if the servos are not configured
-                return DhArmGeometry.load(workcell.arm, T_world_base)
-            if workcell.arm != "rx200":
-                raise ValueError(f"workcell '{workcell.name}': the simulation builds finger grippers on the RX200 only, "
-                                 f"not on '{workcell.arm}'")
-            geometry = ArmGeometry.load(workcell.arm)
-        except ValueError as error:
-            raise ConfigError(str(error)) from None
-        return geometry if T_world_base is None else dataclasses.replace(geometry, T_world_base=T_world_base)
-
     def _build(self, scene: Scene, previous: dict | None) -> None:
         """(Re)build model and data for a scene; `previous` carries the arm/gripper state across."""
         self._install(self._compile(scene), scene, previous)
