@@ -39,10 +39,10 @@ def model():
     return load_workcell_arm("ur3_suction")
 
 
-def _over_the_board(server, model, position_m=(0.05, 0.30, 0.15)) -> dict:
-    """The cup pointing straight down over the board (a joint move there), settled."""
+def _over_the_board(server, model, position_m=(0.05, 0.30, 0.15), pitch_rad=math.pi / 2) -> dict:
+    """The cup over the board (a joint move there), pointing down at pitch_rad below the horizontal, settled."""
     q_now = np.asarray(server.get("/api/status")["joints_rad"])
-    q = model.ik(list(position_m), pitch=math.pi / 2, yaw=0.0, q_seed=q_now)
+    q = model.ik(list(position_m), pitch=pitch_rad, yaw=0.0, q_seed=q_now)
     server.post("/api/arm/joints?wait=true", {"q_rad": q.tolist(), "moving_time_s": 2.0})
     return server.wait_status(lambda s: s["state"] == "idle" and not s["moving"], 15.0, "the UR3 over the board")
 
@@ -90,7 +90,7 @@ def test_the_page_builds_six_sliders_and_the_sixth_moves_the_sixth_joint(ur3_ser
 
 def test_a_cartesian_jog_step_from_the_page_keeps_the_tool_orientation(ur3_server, browser, model):
     ready_idle(ur3_server)
-    start = _over_the_board(ur3_server, model)
+    start = _over_the_board(ur3_server, model, pitch_rad=1.2)  # tilted: a pitch-and-yaw step would turn the cup's heading
     page = open_page(browser, f"{ur3_server.base_url}/?token={ur3_server.token}")
     try:
         page.wait_for_function("!document.querySelector(\"[data-jog='x+']\").disabled", timeout=15_000)
