@@ -155,7 +155,7 @@ class Station(Latch, MotionGate, ManualCommands, TeachCommands, JobControls, Per
         if self.perception_config is None:
             from armlab.vision import load_perception_config
 
-            self.perception_config = load_perception_config()
+            self.perception_config = load_perception_config(workcell=self.config.workcell)  # the station's board and tags
         self.intrinsics.restore()
         if self.config.restore_calibration:
             self._restore_calibration()
