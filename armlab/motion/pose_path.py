@@ -119,3 +119,57 @@ def plan_straight_pose_segment(arm, q_start_rad, goal_m, speed_m_s: float, accel
         return poses
 
     return plan_pose_path(arm, q_start, poses_at, duration_s, ramp_s, label, rate_hz)
+
+
+def pose_rotation(arm, position_m, pitch_rad: float, heading_rad: float) -> np.ndarray:
+    """World rotation of a tool at position_m whose approach axis (x) is pitch_rad below the horizontal in
+    the vertical plane through the arm's base axis, pointing away from it, and whose y axis lies as close
+    to the board-plane heading heading_rad as that allows (exactly on it when pointing straight down)."""
+    radial = np.asarray(position_m, float)[:2] - np.asarray(arm.T_world_base, float)[:2, 3]
+    radial = radial / np.linalg.norm(radial) if np.linalg.norm(radial) > 1e-9 else np.array([1.0, 0.0])
+    approach = np.array([math.cos(pitch_rad) * radial[0], math.cos(pitch_rad) * radial[1], -math.sin(pitch_rad)])
+    heading = np.array([math.cos(heading_rad), math.sin(heading_rad), 0.0])
+    y_axis = heading - float(heading @ approach) * approach
+    if np.linalg.norm(y_axis) < 1e-6:  # the heading lies along the approach: any perpendicular
+        y_axis = np.cross([0.0, 0.0, 1.0], approach)
+    y_axis /= np.linalg.norm(y_axis)
+    return np.stack([approach, y_axis, np.cross(approach, y_axis)], axis=1)
+
+
+def tool_heading_rad(T_world_tool: np.ndarray) -> float:
+    """Heading in the board plane of the tool's y axis (the closing axis of fingers; the cup's own y axis),
+    or of its z axis when y stands (nearly) vertical."""
+    axis = T_world_tool[:3, 1] if np.hypot(*T_world_tool[:2, 1]) > 0.2 else T_world_tool[:3, 2]
+    return math.atan2(float(axis[1]), float(axis[0]))
+
+
+def solve_pose_move(arm, position_m, pitch_rad: float | None, yaw_rad: float | None, q_seed) -> np.ndarray:
+    """Joints of a pose move on an arm that holds a full pose (ik_pose): the tool at position_m with its
+    approach pitch_rad below the horizontal (None: straight down, else the steepest the arm reaches, as
+    ArmModel.ik searches) and its y axis at heading yaw_rad (None: the heading it has now, kept; a
+    yaw takes the quarter turn nearest the seed, the faces of a block being a quarter turn apart).
+    Raises Unreachable (from the model) when no such pose is reachable."""
+    from armlab.kinematics.errors import Unreachable
+
+    q_seed = np.asarray(q_seed, float)
+    target = np.asarray(position_m, float)
+    headings = [tool_heading_rad(np.asarray(arm.fk(q_seed), float))] if yaw_rad is None else \
+        [float(yaw_rad) + k * math.pi / 2 for k in range(4)]
+    best, best_cost, error = None, math.inf, None
+    for heading in headings:
+        T = np.eye(4)
+        T[:3, :3] = pose_rotation(arm, target, math.pi / 2 if pitch_rad is None else float(pitch_rad), heading)
+        T[:3, 3] = target
+        try:
+            q = arm.ik_pose(T, q_seed=q_seed)
+        except Unreachable as failure:
+            error = error or failure
+            continue
+        cost = float(np.abs(q - q_seed).sum())
+        if cost < best_cost:
+            best, best_cost = q, cost
+    if best is not None:
+        return best
+    if pitch_rad is None:  # not straight down: the steepest pitch that reaches (the model's search)
+        return np.asarray(arm.ik(target, pitch=None, yaw=yaw_rad, q_seed=q_seed), float)
+    raise error

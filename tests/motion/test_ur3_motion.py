@@ -127,3 +127,39 @@ def test_suction_never_falls_back_to_a_tilted_approach():
 def test_unknown_gripper_type_is_refused():
     with pytest.raises(ValueError, match="gripper type"):
         plan_pick(UR3, START_POSES["pointing down"], [-0.3, -0.15, 0.038], 0.0, CONFIG, 0.038, gripper_type="magnet")
+
+
+def _heading_deg(T) -> float:
+    return math.degrees(math.atan2(T[1, 1], T[0, 1]))
+
+
+def test_a_pose_move_without_a_yaw_keeps_the_tools_heading():
+    from armlab.motion.pose_path import solve_pose_move
+
+    q0 = START_POSES["pointing down"]
+    heading0 = _heading_deg(UR3.fk_dh(q0))
+    target = [-0.15, -0.30, 0.12]
+    q = solve_pose_move(UR3, target, None, None, q0)
+    T = UR3.fk_dh(q)
+    assert np.linalg.norm(T[:3, 3] - target) < 1e-4
+    assert math.degrees(math.acos(np.clip(T[:3, 0] @ DOWN, -1, 1))) < 0.1  # straight down
+    assert abs(math.remainder(_heading_deg(T) - heading0, 360.0)) < 0.1
+    # the premise: a pitch-and-yaw solve (ArmModel.ik without a yaw) would turn the tool to another heading
+    assert abs(math.remainder(_heading_deg(UR3.fk_dh(UR3.ik(target, pitch=math.pi / 2, q_seed=q0))) - heading0, 360.0)) > 5.0
+
+
+def test_a_pose_move_with_a_pitch_and_a_yaw_reaches_them():
+    from armlab.motion.pose_path import solve_pose_move
+
+    target = [-0.25, -0.20, 0.15]
+    T = UR3.fk_dh(solve_pose_move(UR3, target, 1.0, 0.4, START_POSES["pointing down"]))
+    radial = np.asarray(target[:2]) / np.linalg.norm(target[:2])  # the UR3's base axis is the world z axis
+    assert math.atan2(-T[2, 0], T[:2, 0] @ radial) == pytest.approx(1.0, abs=1e-3)  # pitch in the arm's plane
+    assert abs(T[:2, 0] @ np.array([-radial[1], radial[0]])) < 1e-3  # no sideways tilt
+    # the y axis: the heading 0.4 (or a quarter turn of it) made perpendicular to the approach axis
+    closest = []
+    for k in range(4):
+        heading = np.array([math.cos(0.4 + k * math.pi / 2), math.sin(0.4 + k * math.pi / 2), 0.0])
+        wanted = heading - (heading @ T[:3, 0]) * T[:3, 0]
+        closest.append(math.acos(np.clip(T[:3, 1] @ wanted / np.linalg.norm(wanted), -1, 1)))
+    assert min(closest) < 1e-3, np.degrees(closest)

@@ -116,3 +116,17 @@ def test_the_interbotix_facade_refuses_the_ur3_and_nothing_moves(ur3_server):
         InterbotixManipulatorXS("rx200", "arm", "gripper", url=ur3_server.base_url, token=ur3_server.token)
     status = ur3_server.get("/api/status")
     assert not status["moving"] and np.allclose(status["joints_rad"], q_before, atol=1e-3)
+
+
+def test_a_pose_move_over_rest_keeps_the_cup_heading_and_points_down(ur3_server, model):
+    ready_idle(ur3_server)
+    start = _over_the_board(ur3_server, model)
+    T0 = model.fk(np.asarray(start["joints_rad"]))
+    target = [-0.12, 0.36, 0.12]
+    ur3_server.post("/api/arm/pose?wait=true", {"position_m": target, "moving_time_s": 2.0})
+    end = ur3_server.wait_status(lambda s: s["state"] == "idle" and not s["moving"], 15.0, "the pose move to end")
+    T1 = model.fk(np.asarray(end["joints_rad"]))
+    assert np.linalg.norm(T1[:3, 3] - target) < 0.002
+    assert math.degrees(math.acos(np.clip(-T1[2, 0], -1.0, 1.0))) < 0.5  # the cup's axis straight down
+    heading = [math.degrees(math.atan2(T[1, 1], T[0, 1])) for T in (T0, T1)]
+    assert abs(math.remainder(heading[1] - heading[0], 360.0)) < 0.5, heading
