@@ -15,6 +15,7 @@ import numpy as np
 
 from armlab.skills.manipulate import plan_pick_steps, plan_place_steps, run_steps
 from armlab.skills.perceive import block_near, target_point
+from armlab.station.arm_info import station_gripper_type
 from armlab.station.core import Station
 from armlab.station.jobs import Job, JobContext
 from armlab.station.telemetry import tag_to_dict
@@ -117,7 +118,8 @@ def grab(station: Station, position_m=None, pixel=None, source: str | None = Non
         holding = bool(station.gripper.read_state().holding)
         station.set_held_block({**(block or {}), "edge_m": edge, "yaw_rad": yaw} if holding else None)
         if not holding:
-            raise GripperEmpty(f"nothing in the gripper: the fingers closed on nothing at {detail}")
+            how = "the suction cup did not seal" if station_gripper_type(station) == "suction" else "the fingers closed on nothing"
+            raise GripperEmpty(f"nothing in the gripper: {how} at {detail}")
         ctx.job.update(message="holding the block")
         return {"target_m": [float(x) for x in top], "yaw_rad": yaw, "block": block, "holding": holding}
 
