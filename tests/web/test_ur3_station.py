@@ -73,6 +73,8 @@ def test_the_page_builds_six_sliders_and_the_sixth_moves_the_sixth_joint(ur3_ser
         page.wait_for_function("document.querySelectorAll('#joint-readout tr').length === 6")
         assert page.eval_on_selector_all("#joint-readout tr", "rows => rows.map(r => r.cells[0].textContent)") == NAMES
         assert page.text_content("#btn-close") == "Vacuum on" and page.text_content("#btn-open") == "Vacuum off"
+        page.wait_for_function("document.getElementById('pose-readout').textContent.includes('vacuum off')")
+        assert "width" not in page.text_content("#pose-readout")  # a cup has no grasp width
 
         page.wait_for_function("window.armlab.status && !document.getElementById('btn-send-joints').disabled", timeout=10_000)
         q_before = np.asarray(ur3_server.get("/api/status")["joints_rad"])

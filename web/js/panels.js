@@ -78,7 +78,11 @@ export function renderReadouts(s) {
     parts.push(`xyz ${gp.position_m.map(fmtMm).join(" ")} mm`);
     parts.push(`pitch ${fmtDeg(gp.pitch_rad, 0)}° yaw ${fmtDeg(gp.yaw_rad, 0)}°`);
   }
-  if (Number.isFinite(g.width_m)) parts.push(`width ${(g.width_m * 1000).toFixed(1)} mm`);
+  if (document.body.dataset.gripperType === "suction") {  // a cup has no width: its vacuum instead
+    if (g.command) parts.push(g.command === "grasp" ? "vacuum on" : "vacuum off");
+  } else if (Number.isFinite(g.width_m)) {
+    parts.push(`width ${(g.width_m * 1000).toFixed(1)} mm`);
+  }
   if (g.holding !== undefined) parts.push(g.holding ? "holding" : "empty");
   $("pose-readout").textContent = parts.length ? parts.join(" · ") : "gripper —";
   $("pose-readout").dataset.holding = String(Boolean(g.holding));
