@@ -1,7 +1,7 @@
 """Calibration without tags: the operator clicks >= 4 image points whose world coordinates are known
 (board grid corners, or typed). The board homography is fitted from them and, with the intrinsics,
 the camera pose (PnP); with depth, cross-checked by a rigid fit of the back-projected clicks.
-Bad input (too few, collinear, repeated, off-image points) is a CalibrationError saying why."""
+Bad input (too few, collinear, repeated, off-image or off-board points) is a CalibrationError saying why."""
 
 from __future__ import annotations
 
@@ -45,6 +45,17 @@ def _checked_points(pixels_px, world_m, intrinsics: Intrinsics) -> tuple[np.ndar
     return pixels, world
 
 
+def _check_on_board(world: np.ndarray, cfg: PerceptionConfig) -> None:
+    """CalibrationError naming the world points whose x, y lie off the board (a typo, or the wrong corner)."""
+    (x0, x1), (y0, y1) = cfg.board.x_range_m, cfg.board.y_range_m
+    tol = 1e-3
+    off = [i for i, (x, y, _) in enumerate(world) if not (x0 - tol <= x <= x1 + tol and y0 - tol <= y <= y1 + tol)]
+    if off:
+        shown = ", ".join(f"{i} at ({world[i, 0] * 1000:.0f}, {world[i, 1] * 1000:.0f}) mm" for i in off)
+        raise CalibrationError(f"point{'s' if len(off) > 1 else ''} {shown} off the board (x {x0 * 1000:.0f} to "
+                               f"{x1 * 1000:.0f} mm, y {y0 * 1000:.0f} to {y1 * 1000:.0f} mm): check the world coordinates")
+
+
 def calibrate_from_points(
     pixels_px, world_m, intrinsics: Intrinsics, cfg: PerceptionConfig, depth_mm: np.ndarray | None = None,
 ) -> tuple[Calibration, dict]:
@@ -52,6 +63,7 @@ def calibrate_from_points(
     and a report: homography (board xy -> undistorted pixels) with its RMS error, PnP reprojection
     error, per-point errors (px). CalibrationError when the points cannot give a trustworthy pose."""
     pixels, world = _checked_points(pixels_px, world_m, intrinsics)
+    _check_on_board(world, cfg)
     K = intrinsics.K
     dist = np.asarray(intrinsics.dist, dtype=np.float64)
     undistorted = cv2.undistortPoints(pixels.reshape(-1, 1, 2), K, dist, P=K).reshape(-1, 2)

@@ -67,8 +67,10 @@ def test_typed_xy_points_mean_the_board_plane(sim_view):
         (lambda px, w: (px + np.array([2000.0, 0.0]), w), "outside"),
         (lambda px, w: (px, w[[1, 0, 2, 3]]), "reproject"),
         (lambda px, w: (px.astype(float) * np.nan, w), "finite"),
+        (lambda px, w: (px, w + np.array([0.0, 1.5, 0.0])), "off the board"),
     ],
-    ids=["three points", "collinear world", "one pixel clicked four times", "count mismatch", "off the image", "swapped points", "nan"],
+    ids=["three points", "collinear world", "one pixel clicked four times", "count mismatch", "off the image", "swapped points", "nan",
+         "off the board"],
 )
 def test_bad_clicks_are_refused_saying_why(sim_view, mutate, message):
     frame, truth = sim_view

@@ -1,6 +1,7 @@
 // Page controller: connects the stream, the REST client and the panels; one dispatch on message type.
 
 import { Api, adoptToken, dropToken } from "./api.js";
+import { ClickCalibration } from "./clickcal.js";
 import { CompetitionPanel } from "./competition.js";
 import { ControlLease } from "./control.js";
 import { applyMovingTimeLimits, emptyDetectionsReason, readMovingTimeS } from "./inputs.js";
@@ -81,6 +82,7 @@ class App {
       },
     });
     this.programPath = new ProgramPathOverlay(this.live);
+    this.clickcal = new ClickCalibration({ api: this.api, live: this.live, log: this.log });
     this.stream = new Stream({
       token: this.api.token,
       handlers: {
@@ -168,6 +170,7 @@ class App {
         this.helloSeen = true;
         applyMovingTimeLimits($("jog-time"), msg.limits);
         this.live.setWorkcell(msg.workcell);
+        this.clickcal.setWorkcell(msg.workcell);
         this.setArm(msg.arm);
         this.competition.setBackend(msg.backend);
         this.canControl = Boolean(msg.can_control) && this.api.canControl;
@@ -209,6 +212,7 @@ class App {
     if (s.state === "estop") this.estopSeen = true;
     renderStatus(s);
     renderReadouts(s);
+    this.clickcal.onStatus(s);
     this.torque.render(s);
     this.lease.render(s);
     this.repeat.onStatus(s);
@@ -344,6 +348,7 @@ class App {
 
   setMode(mode) {
     this.live.setMode(mode);
+    this.clickcal.setActive(mode === "points");
     document.querySelectorAll("#click-mode button").forEach((b) => b.classList.toggle("on", b.dataset.mode === mode));
     $("live").dataset.mode = mode;
   }
