@@ -345,10 +345,15 @@ def plan_side_place(station: Station, surface_m, edge_m: float, grasp: SideGrasp
 def plan_side_pick_place(station: Station, top_center_m, surface_m, edge_m: float, pick_boxes: list, place_boxes: list,
                          pitches_rad, q_start=None, then_rad=None) -> tuple[list, SideGrasp]:
     """The pick steps and grasp for the first of pitches_rad at which both the pick (from q_start) and
-    the place after it (plan_side_place from the pick's end) plan and pass every check."""
+    the place after it (plan_side_place from the pick's end) plan and pass every check. Fingers only:
+    another gripper type is refused (Unreachable) before anything is planned."""
     from armlab.kinematics import Unreachable
     from armlab.motion import TrajectoryStep
+    from armlab.station.arm_info import station_gripper_type
 
+    if station_gripper_type(station) != "fingers":
+        raise Unreachable(f"a side grasp needs fingers closing on the block's sides: this station's gripper is a "
+                          f"{station_gripper_type(station)} gripper", "out of reach")
     problems = []
     for pitch in pitches_rad:
         try:
