@@ -70,9 +70,10 @@ class ArmServoConfig(StrictModel):
 
 class SuctionSimConfig(StrictModel):
     """The simulated vacuum cup (armlab.devices.sim.suction): the lip is a ring of lip_points small spheres;
-    the vacuum (MuJoCo adhesion actuator, adhesion_force_n at full vacuum) builds only while every lip point
-    is within lip_compliance_m of one object's face (the bellows conform that far: a cup of lip radius r
-    seals up to a tilt of about asin(lip_compliance_m / 2r)). While holding, a cup accelerating harder than
+    the vacuum (MuJoCo adhesion actuator, adhesion_force_n at full vacuum) builds only while one object's face
+    lies beneath every lip point along the cup's axis within lip_compliance_m of the lip plane (the bellows
+    conform that far: a cup of lip radius r seals up to a tilt of about asin(lip_compliance_m / 2r); a lip
+    point over an edge has no face beneath it). While holding, a cup accelerating harder than
     max_acceleration_m_s2 (low-passed over acceleration_filter_s) breaks the seal: the block is lost."""
 
     adhesion_force_n: Positive

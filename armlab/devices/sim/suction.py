@@ -24,24 +24,31 @@ if TYPE_CHECKING:
     from armlab.devices.sim.workcell import SimWorkcell
 
 
-SEAL_SEARCH_RADIUS_M = 0.1  # objects whose origin is farther than this from the cup cannot be under its lip
+RAY_BACK_M = 0.01  # each lip point's ray starts this far behind it (outside a block even when pressed in)
+MAX_PRESS_M = 0.005  # a face more than this far inside the lip plane is not a seal (something went through)
+OBJECT_GROUP = np.array([1, 0, 0, 0, 0, 0], dtype=np.uint8)  # rays see group 0: objects and the board
 
 
-def seal_object(model, data, lip_geoms: dict[int, int], object_geoms: dict[str, list[int]], cup_body: int,
-                compliance_m: float) -> str | None:
-    """The object every lip sphere is within compliance_m of (signed distance to its nearest solid geom), else
-    None: a cup flat on a face seals; on an edge, tilted beyond the lip's reach, or beside the block it does not."""
+def seal_object(model, data, lip_geoms: dict[int, int], cup_body: int, body_to_object: dict[int, str],
+                compliance_m: float, lip_margin_m: float) -> str | None:
+    """The object whose face lies beneath every lip point along the cup's axis, no farther than compliance_m
+    beyond the lip plane (the lip conforms that far), else None. A lip point over an edge or beside the
+    block sees the board (or nothing) beneath it; a cup tilted too far leaves its far side out of reach."""
     import mujoco
 
-    cup_m = data.xpos[cup_body]
-    for obj_id in sorted(object_geoms):
-        geoms = object_geoms[obj_id]
-        if not geoms or np.linalg.norm(data.geom_xpos[geoms[0]] - cup_m) > SEAL_SEARCH_RADIUS_M:
-            continue
-        if all(min(mujoco.mj_geomDistance(model, data, lip, geom, compliance_m, None) for geom in geoms) < compliance_m
-               for lip in lip_geoms):
-            return obj_id
-    return None
+    axis = data.xmat[cup_body].reshape(3, 3)[:, 0].copy()  # the approach axis (tool x)
+    hit = np.zeros(1, dtype=np.int32)
+    sealed_on = None
+    for lip in lip_geoms:
+        behind_plane = model.geom_size[lip][0] + 0.5 * lip_margin_m  # sphere centre -> lip plane along the axis
+        origin = data.geom_xpos[lip] - RAY_BACK_M * axis
+        distance = mujoco.mj_ray(model, data, origin, axis, OBJECT_GROUP, 1, -1, hit)
+        obj_id = body_to_object.get(int(model.geom_bodyid[hit[0]])) if distance >= 0.0 else None
+        gap = distance - RAY_BACK_M - behind_plane
+        if obj_id is None or not -MAX_PRESS_M <= gap <= compliance_m or sealed_on not in (None, obj_id):
+            return None
+        sealed_on = obj_id
+    return sealed_on
 
 
 def lip_touching(model, data, lip_geoms: dict[int, int], body_to_object: dict[int, str]) -> list[str]:

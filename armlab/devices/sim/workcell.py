@@ -32,7 +32,7 @@ from armlab.devices.sim.feeder import FeederRuntime, parked_objects
 from armlab.devices.sim.gripper import SimGripper
 from armlab.devices.sim.arm_select import select_arm
 from armlab.devices.sim.mjcf import CAMERA_NAME, GRIPPER_SITE, OBJECT_PREFIX, build_model_xml, quat_wxyz_from_matrix
-from armlab.devices.sim.mjcf_dh import CUP_BODY, LIP_PREFIX, SUCTION_ACTUATOR, DhArmGeometry
+from armlab.devices.sim.mjcf_dh import CUP_BODY, LIP_MARGIN_M, LIP_PREFIX, SUCTION_ACTUATOR, DhArmGeometry
 from armlab.devices.sim.suction import SuctionGripper, lip_touching, seal_object
 from armlab.devices.sim.path import MAX_DURATION_S, PathRecorder
 from armlab.devices.sim.render import RawImages, RenderThread
@@ -96,6 +96,9 @@ class SimWorkcell:
     def _compile(self, scene: Scene) -> dict:
         """The slow half of a scene change (XML, compile, index look-ups): touches no shared state, so it
         runs outside the lock and the physics, the devices and an e-stop never wait for it."""
+        if scene.workcell is not None and scene.workcell != self._workcell.name:
+            raise ValueError(f"the scene was made for workcell '{scene.workcell}' (its board, reach and sizes); this "
+                             f"simulation runs workcell '{self._workcell.name}': generate the scene for it")
         xml, assets = build_model_xml(self._geometry, self._sim, self._camera_config, self._T_world_camera, scene,
                                       self._workcell)
         model = mujoco.MjModel.from_xml_string(xml, assets)
@@ -140,9 +143,6 @@ class SimWorkcell:
         parked_bodies, arm_root = compiled["parked_bodies"], compiled["arm_root"]
         self._body_to_object = {body: obj_id for obj_id, body in self._object_bodies.items()}
         self._body_to_object.update({body: obj.id for body, obj in parked_bodies})
-        solid = (model.geom_contype > 0) | (model.geom_conaffinity > 0)
-        self._object_geoms = {obj_id: np.flatnonzero((model.geom_bodyid == body) & solid).tolist()
-                              for body, obj_id in self._body_to_object.items()} if self._suction else {}
         if previous is None:
             # The arm powers up in its sleep pose, fingers open.
             data.qpos[self._arm_qpos] = np.clip(self._geometry.sleep_rad, self._geometry.lower_rad, self._geometry.upper_rad)
@@ -177,7 +177,7 @@ class SimWorkcell:
         """Replace all objects (thread-safe; the arm and gripper keep their state). Accepts a Scene or
         its dict form ({"objects": [...]}, the ground-truth format)."""
         if isinstance(scene, dict):
-            scene = Scene.from_dict(scene)
+            scene = Scene.from_dict(scene, workcell=self._workcell.name)
         if not isinstance(scene, Scene):
             raise ValueError(f"set_scene expects a Scene or a dict with 'objects', got {type(scene).__name__}")
         compiled = self._compile(scene)  # outside the lock: physics, devices and e-stop go on meanwhile
@@ -259,8 +259,8 @@ class SimWorkcell:
 
     def cup_seal_object(self) -> str | None:
         """The object whose face the whole lip rests on (within the lip's compliance), else None."""
-        return seal_object(self._model, self._data, self._lip_geoms, self._object_geoms, self._cup_body,
-                           self._sim.suction.lip_compliance_m)
+        return seal_object(self._model, self._data, self._lip_geoms, self._cup_body, self._body_to_object,
+                           self._sim.suction.lip_compliance_m, LIP_MARGIN_M)
 
     def _apply_torque(self, model: mujoco.MjModel, enabled: bool) -> None:
         kp, kv = self._arm_gains if enabled else (np.zeros(len(self._pos_act)), np.zeros(len(self._vel_act)))

@@ -133,6 +133,15 @@ def test_cup_on_the_edge_does_not_lift(ur3_cell):
     assert result["block_z"] < EDGE_M / 2 + 0.005
 
 
+@pytest.mark.parametrize(("dx_m", "lifted"), [(0.006, True), (0.013, False)])
+def test_the_whole_lip_must_rest_on_the_face(ur3_cell, dx_m, lifted):
+    # a 38 mm block and a 9 mm lip radius: 6 mm off centre the lip is on the face; 13 mm off, part of it
+    # hangs 3 mm beyond the edge (within the lip's compliance of the edge, yet no face beneath it)
+    result = _pick(ur3_cell, dx_m=dx_m)
+    assert result["state"].holding is lifted
+    assert bool(result["block_z"] > 0.1) is lifted
+
+
 def test_cup_beside_the_block_picks_nothing(ur3_cell):
     result = _pick(ur3_cell, dx_m=0.06)
     assert not result["state"].holding and result["truth"]["lip_contacts"] == []
