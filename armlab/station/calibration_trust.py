@@ -89,16 +89,18 @@ class CalibrationTrust:
             self._restored_at_s = time.time()
         self.events.add("info", "saved calibration restored, checking it against the board tags before use")
         if self.synchronous:  # no perception thread: one look now
+            from armlab.station.perception import Perception
             from armlab.vision.drift import CAMERA_MOVED, board_tag_drift_px
             from armlab.vision.tags import detect_tags
-
-            from armlab.station.perception import Perception
 
             frame = self.sim.capture_next_frame()
             tags = tuple(detect_tags(frame.color_bgr, self.perception_config))
             drift_px = board_tag_drift_px(list(tags), calibration, self.perception_config)
-            over = drift_px is None or drift_px > self.perception_config.calibration.drift_threshold_px
-            warning = f"{CAMERA_MOVED} (restored calibration: board tags off by {drift_px} px)" if over else None
+            over = drift_px is not None and drift_px > self.perception_config.calibration.drift_threshold_px
+            if drift_px is None:  # nothing later will check it: not trusted
+                warning = "cannot be checked: fewer than two board tags in view: recalibrate"
+            else:
+                warning = f"{CAMERA_MOVED} (board tags {drift_px:.1f} px from where it puts them)" if over else None
             self._on_calibration_check(calibration, drift_px, warning, Perception(tags=tags, capture_time_s=time.time()))
 
     @property

@@ -190,3 +190,35 @@ def test_self_recalibration_waits_for_the_board_tags_and_for_the_arm_to_stop(cel
         assert pose_error(station.calibration, cell)[0] < POSITION_TOLERANCE_M
     finally:
         station.close()
+
+
+def test_synchronous_mode_checks_a_restored_calibration_with_one_look(tmp_path):
+    """Evaluations run the station synchronously (no perception thread): the check is one look at start."""
+    from armlab.devices.sim import SimWorkcell, SimWorkcellConfig
+
+    fast = SimWorkcell(SimWorkcellConfig(realtime=False, seed=3))
+    fast.start()
+    db = tmp_path / "station.sqlite3"
+
+    def start(**config) -> Station:
+        station = Station(fast.arm, fast.gripper, fast.camera, model=load_arm("rx200"), sim=fast, synchronous=True,
+                          config=StationConfig(database_path=str(db), **config))
+        station.start()
+        return station
+
+    try:
+        station = start()
+        job = skills.calibrate(station)
+        while job.state == "running":
+            fast.step(0.05)
+        assert job.state == "succeeded", job.message
+        station.close()
+        station = start(restore_calibration=True)
+        assert station.calibration_state == "trusted" and station.calibration is not None
+        station.close()
+        bump(fast, (0.005, 0.0, 0.0), (0.0, 0.0, 0.0))
+        station = start(restore_calibration=True)
+        assert station.calibration_state == "rejected" and station.calibration is None
+        station.close()
+    finally:
+        fast.close()
