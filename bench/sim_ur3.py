@@ -20,8 +20,8 @@ import numpy as np  # noqa: E402
 
 from armlab.devices.arm import JointTrajectory  # noqa: E402
 from armlab.devices.sim import SimWorkcell, SimWorkcellConfig  # noqa: E402
-from armlab.scene import Scene, random_scene  # noqa: E402
-from suction_helpers import WORKCELL, block_scene, cup_pose, move_line, move_to_pose  # noqa: E402
+from armlab.scene import random_scene  # noqa: E402
+from suction_helpers import WORKCELL, cup_pose, move_line, move_to_pose  # noqa: E402
 
 SEED = 3
 SWEEP_RAD = np.array([0.6, 0.2, 0.2, 0.3, 0.3, 0.8])
@@ -41,18 +41,21 @@ def physics_factor(cell: SimWorkcell, sim_seconds: float = 5.0) -> float:
 
 
 def main() -> None:  # noqa: D103
-    scene = random_scene(seed=SEED, n_blocks=12, n_distractors=0)
-    carry = block_scene(0.0, 0.30, block_id="held")
-    scene = Scene(objects=[*scene.objects, *[o for o in carry.objects]]) if not scene.overlapping_pairs() else scene
+    scene = random_scene(seed=SEED, n_blocks=12, n_distractors=0, workcell=WORKCELL)
+    # a large block on the board in front of the arm (the helper's IK starts from the upright home pose)
+    target = min((o for o in scene.objects if o.type == "block" and o.size == "large" and o.position_m[2] < 0.03),
+                 key=lambda o: np.hypot(o.position_m[0], o.position_m[1] - 0.30))
     with SimWorkcell(SimWorkcellConfig(workcell=WORKCELL, seed=SEED), scene=scene) as cell:
         cell.step(0.5)
-        start = cell.arm.read_joint_state().position_rad
         print(f"{WORKCELL}: UR3 + suction cup + {len(scene.objects)} blocks, physics dt {cell.model.opt.timestep * 1000:.1f} ms")
         print(f"physics real-time factor, arm sweeping (no rendering):   {physics_factor(cell):.1f}x")
-        move_to_pose(cell, cup_pose([0.0, 0.30, 0.138]), 2.0)
-        move_line(cell, cup_pose([0.0, 0.30, 0.138]), cup_pose([0.0, 0.30, 0.037]), 1.0)
+        x, y, z = next(o for o in cell.truth()["objects"] if o["id"] == target.id)["position_m"]
+        top, yaw = z + 0.5 * target.dimensions_m[2], target.yaw_rad
+        move_to_pose(cell, cup_pose([x, y, top + 0.10]), 2.0)  # elbow up first; then only the wrist turns to the yaw
+        move_to_pose(cell, cup_pose([x, y, top + 0.10], yaw_rad=yaw), 1.0)
+        move_line(cell, cup_pose([x, y, top + 0.10], yaw_rad=yaw), cup_pose([x, y, top - 0.001], yaw_rad=yaw), 1.0)
         cell.gripper.grasp()
-        move_line(cell, cup_pose([0.0, 0.30, 0.037]), cup_pose([0.0, 0.30, 0.20]), 1.0)
+        move_line(cell, cup_pose([x, y, top - 0.001], yaw_rad=yaw), cup_pose([x, y, 0.20], yaw_rad=yaw), 1.0)
         held = cell.gripper.read_state().holding
         print(f"physics real-time factor, carrying a block (held={held}):  {physics_factor(cell):.1f}x")
         cell.render()
@@ -67,7 +70,6 @@ def main() -> None:  # noqa: D103
         while cell.sim_time_s < end_s:
             cell.camera.read()
         print(f"fast-mode loop with 30 fps rendering: {3.0 / (time.perf_counter() - t):.2f}x real time")
-        del start
     with SimWorkcell(SimWorkcellConfig(workcell=WORKCELL, realtime=True, seed=SEED), scene=scene) as cell:
         cell.camera.async_read(timeout_ms=5000)
         cell.arm.command_trajectory(sweep(cell.arm.read_joint_state().position_rad, 3.0))
