@@ -14,8 +14,19 @@ from armlab.scene import generate_scene
 from armlab.vision import PerceptionPipeline, calibrate_extrinsics, load_perception_config
 from armlab.vision.drift import CAMERA_MOVED, DriftMonitor
 
-# Arm poses swept over the board (waist left to right, reaching over the tag rows), 4 s apart.
+# Arm poses swept over the board (waist left to right, reaching over the tag rows); the arm moves
+# smoothly from each to the next over MOVE_S, never resting, so every check sees it in motion.
 WORK_POSES_RAD = [np.array([w, 0.35, 0.25, 1.0, 0.0]) for w in (-1.3, -0.7, 0.0, 0.7, 1.3, 0.7, 0.0, -0.7)]
+MOVE_S = 4.5  # not a multiple of the 3 s check period: checks fall at every phase of a move
+SERVO_STEP_S = 0.1
+
+
+def work_reference(t_s: float) -> tuple[np.ndarray, np.ndarray]:
+    """The working arm's joint reference (position, velocity) at time t_s: smooth-step moves between the poses."""
+    k, phase = divmod(t_s / MOVE_S, 1.0)
+    a, b = WORK_POSES_RAD[int(k) % len(WORK_POSES_RAD)], WORK_POSES_RAD[(int(k) + 1) % len(WORK_POSES_RAD)]
+    blend, rate = 3 * phase**2 - 2 * phase**3, (6 * phase - 6 * phase**2) / MOVE_S
+    return a + (b - a) * blend, (b - a) * rate
 
 
 @pytest.fixture()
@@ -32,16 +43,22 @@ def station_like():
     cell.close()
 
 
-def _checks(cell, cfg, pipeline, monitor, cal, duration_s: float, arm_working: bool = False) -> list[str | None]:
-    """Run the cell for duration_s of simulated time, looking once per check period; the warnings seen."""
+def _checks(cell, cfg, pipeline, monitor, cal, duration_s: float, arm_working: bool = False, seen: list | None = None) -> list[str | None]:
+    """Run the cell for duration_s of simulated time, looking once per check period; the warnings seen.
+    arm_working: the arm keeps moving over the board (servo references every 0.1 s). seen, if given,
+    collects (board tags found, arm joints rad) at each check."""
     period_s = cfg.calibration.drift_check_period_s
     warnings = []
-    for k in range(int(round(duration_s / period_s))):
-        if arm_working:
-            cell.apply_arm_reference(WORK_POSES_RAD[k % len(WORK_POSES_RAD)], np.zeros(5))
-        cell.step(period_s)
+    for _ in range(int(round(duration_s / period_s))):
+        for _ in range(int(round(period_s / SERVO_STEP_S))):
+            if arm_working:
+                cell.apply_arm_reference(*work_reference(cell.sim_time_s))
+            cell.step(SERVO_STEP_S)
         frame = cell.render()
-        warnings.append(monitor.update(cell.sim_time_s, pipeline.find_tags(frame.color_bgr, cal), cal, cfg))
+        tags = pipeline.find_tags(frame.color_bgr, cal)
+        if seen is not None:
+            seen.append((len({t.id for t in tags if t.id in cfg.tags.board_tags}), cell.arm_positions()))
+        warnings.append(monitor.update(cell.sim_time_s, tags, cal, cfg))
     return warnings
 
 
@@ -54,9 +71,14 @@ def _bump(translation_m=(0.0, 0.0, 0.0), rotation_deg=(0.0, 0.0, 0.0)) -> np.nda
 
 def test_quiet_for_ten_minutes_with_the_arm_working_in_view(station_like):
     cell, cfg, pipeline, monitor, cal = station_like
-    warnings = _checks(cell, cfg, pipeline, monitor, cal, 600.0, arm_working=True)
+    seen = []
+    warnings = _checks(cell, cfg, pipeline, monitor, cal, 600.0, arm_working=True, seen=seen)
     assert len(warnings) == 200 and not any(warnings), [w for w in warnings if w][:3]
     assert monitor.last_drift_px is not None and monitor.last_drift_px < 0.5
+    # The arm was working in view: at a new place at (nearly) every check, and now and then hiding a board tag.
+    moved_rad = [float(np.abs(b - a).max()) for (_, a), (_, b) in zip(seen, seen[1:])]
+    assert sum(m > 0.05 for m in moved_rad) >= 150, sorted(moved_rad)[:10]
+    assert any(count < len(cfg.tags.board_tags) for count, _ in seen)
 
 
 @pytest.mark.parametrize("bump", [_bump(translation_m=(0.005, 0.0, 0.0)), _bump(rotation_deg=(1.0, 0.0, 0.0)),
