@@ -139,6 +139,13 @@ def server(tmp_path_factory) -> Iterator[Server]:
         yield srv
 
 
+@pytest.fixture(scope="module")
+def ur3_server(tmp_path_factory) -> Iterator[Server]:
+    """`armlab serve --workcell ur3_suction` (the UR3 with its suction cup) for one test module."""
+    with running_server(tmp_path_factory.mktemp("ur3"), ("--workcell", "ur3_suction", "--seed", "1")) as srv:
+        yield srv
+
+
 @pytest.fixture(scope="session")
 def browser():
     from playwright.sync_api import sync_playwright

@@ -13,8 +13,7 @@ import math
 import numpy as np
 import pytest
 import yaml
-from browser_helpers import open_page, ready_idle, wait_frames
-from conftest import REPO, running_server
+from browser_helpers import REPO, open_page, ready_idle, wait_frames
 from websockets.sync.client import connect
 
 from armlab.client import InterbotixManipulatorXS, NotInterbotixArm
@@ -26,12 +25,6 @@ ARM_FILE = yaml.safe_load((REPO / "config/arms/ur3.yaml").read_text())
 WORKCELL_FILE = yaml.safe_load((REPO / "config/workcells/ur3_suction.yaml").read_text())
 NAMES = ARM_FILE["joint_names"]
 LIMITS_RAD = [[math.radians(lo), math.radians(hi)] for lo, hi in zip(ARM_FILE["limits"]["lower_deg"], ARM_FILE["limits"]["upper_deg"])]
-
-
-@pytest.fixture(scope="module")
-def ur3_server(tmp_path_factory):
-    with running_server(tmp_path_factory.mktemp("ur3"), ("--workcell", "ur3_suction", "--seed", "1")) as srv:
-        yield srv
 
 
 @pytest.fixture(scope="module")
