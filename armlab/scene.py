@@ -12,7 +12,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from armlab.workcell import DISTRACTOR_SHAPES, Workcell, load_workcell
+from armlab.workcell import DEFAULT_SCENE_REACH_M, DEFAULT_WORKCELL, DISTRACTOR_SHAPES, Workcell, load_workcell
 
 _ID_PATTERN = re.compile(r"[A-Za-z0-9_.:-]{1,64}")
 OBJECT_TYPES = ("block", *DISTRACTOR_SHAPES)
@@ -33,18 +33,27 @@ EVENTS: dict[str, tuple[int, ...]] = {
 # Every job with a scene generator: the judged events plus sort_by_tag and clear_table (not judged by §7).
 JOBS: dict[str, tuple[int, ...]] = {**EVENTS, "sort_by_tag": (1, 2, 3), "clear_table": (1, 2, 3)}
 
-# Generator choices (not workcell facts): where a top-down grasp reaches comfortably (radius from the
-# base axis, m), the margin kept from the board edges (x, y), the tag keep-out and the gap between piles.
-REACH_MIN_M = 0.13
-REACH_MAX_M = 0.36
+# Generator choices (not workcell facts): the margin kept from the board edges (x, y), the tag keep-out and
+# the gap between piles. Where a top-down grasp reaches comfortably (radius from the base axis) is the
+# workcell's scene.reach_m (the RX200's 0.13-0.36 m by default).
+REACH_MIN_M, REACH_MAX_M = DEFAULT_SCENE_REACH_M
 BOARD_MARGIN_M = (0.02, 0.015)
 TAG_KEEPOUT_M = 0.035
 SPACING_MARGIN_M = 0.03  # free gap between footprints so fingers fit between neighbours
 
 
-def object_dimensions_m(obj_type: str, size: str | None, workcell: Workcell | None = None) -> tuple[float, float, float]:
+def as_workcell(workcell: Workcell | str | None) -> Workcell:
+    """A Workcell from itself, its name, or None (the default workcell)."""
+    return workcell if isinstance(workcell, Workcell) else load_workcell(workcell or DEFAULT_WORKCELL)
+
+
+def workcell_name(workcell: Workcell | str | None) -> str:
+    return workcell.name if isinstance(workcell, Workcell) else str(workcell or DEFAULT_WORKCELL)
+
+
+def object_dimensions_m(obj_type: str, size: str | None, workcell: Workcell | str | None = None) -> tuple[float, float, float]:
     """(extent_x, extent_y, height) of an object in its body frame, metres (default workcell if None)."""
-    return (workcell or load_workcell()).object_dimensions_m(obj_type, size)
+    return as_workcell(workcell).object_dimensions_m(obj_type, size)
 
 
 def quat_from_yaw(yaw_rad: float) -> tuple[float, float, float, float]:
@@ -67,6 +76,8 @@ class SceneObject:
 
     size is "large"/"small" for blocks (required) and distractors (optional, None = large).
     aruco_id, if set, puts an ArUco tag (DICT_4X4_250) on the block's top face.
+    workcell names the workcell config whose sizes it has (None = the default workcell); it is not part
+    of the ground-truth dict (to_dict) nor of equality.
     """
 
     id: str
@@ -76,6 +87,7 @@ class SceneObject:
     position_m: tuple[float, float, float]
     quat_wxyz: tuple[float, float, float, float] = (1.0, 0.0, 0.0, 0.0)
     aruco_id: int | None = None
+    workcell: str | None = field(default=None, compare=False, repr=False)
 
     def __post_init__(self) -> None:
         if not isinstance(self.id, str) or not _ID_PATTERN.fullmatch(self.id):
@@ -102,7 +114,7 @@ class SceneObject:
         object.__setattr__(self, "position_m", tuple(float(v) for v in position))
         object.__setattr__(self, "quat_wxyz", tuple(float(v) for v in quat / norm))
         # Looked up once (the workcell config); not a dataclass field, so equality ignores it.
-        object.__setattr__(self, "_dimensions_m", object_dimensions_m(self.type, self.size))
+        object.__setattr__(self, "_dimensions_m", object_dimensions_m(self.type, self.size, self.workcell))
 
     @property
     def yaw_rad(self) -> float:
@@ -140,8 +152,9 @@ class SceneObject:
         return data
 
     @classmethod
-    def from_dict(cls, data: dict) -> SceneObject:
-        """Accepts the ground-truth format; quat_wxyz wins over yaw_rad, which is used if it is alone."""
+    def from_dict(cls, data: dict, workcell: str | None = None) -> SceneObject:
+        """Accepts the ground-truth format; quat_wxyz wins over yaw_rad, which is used if it is alone.
+        `workcell`: the workcell whose sizes the object has (None = the default)."""
         if not isinstance(data, dict):
             raise ValueError(f"scene object must be a mapping, got {type(data).__name__}")
         allowed = {"id", "type", "color", "size", "position_m", "yaw_rad", "quat_wxyz", "aruco_id"}
@@ -168,6 +181,7 @@ class SceneObject:
             position_m=tuple(data["position_m"]),
             quat_wxyz=quat,
             aruco_id=None if aruco is None else int(aruco),
+            workcell=workcell,
         )
 
 
@@ -228,6 +242,7 @@ class Scene:
     objects: tuple[SceneObject, ...] = field(default_factory=tuple)
     feeder: Feeder | None = None
     origin: tuple[str, int, int] | None = field(default=None, compare=False)  # (event, level, seed) of generate_scene
+    workcell: str | None = field(default=None, compare=False)  # the workcell it was made for (None = the default)
 
     def __post_init__(self) -> None:
         objects = tuple(self.objects)
@@ -247,12 +262,14 @@ class Scene:
         return data
 
     @classmethod
-    def from_dict(cls, data: dict) -> Scene:
-        """From to_dict()'s format or a ground-truth dict (its other keys are ignored)."""
+    def from_dict(cls, data: dict, workcell: str | None = None) -> Scene:
+        """From to_dict()'s format or a ground-truth dict (its other keys are ignored); `workcell` names the
+        workcell whose sizes its objects have (None = the default)."""
         if not isinstance(data, dict) or not isinstance(data.get("objects"), list):
             raise ValueError("scene must be a mapping with an 'objects' list")
         feeder = Feeder.from_dict(data["feeder"]) if data.get("feeder") is not None else None
-        return cls(objects=tuple(SceneObject.from_dict(item) for item in data["objects"]), feeder=feeder)
+        return cls(objects=tuple(SceneObject.from_dict(item, workcell) for item in data["objects"]), feeder=feeder,
+                   workcell=workcell)
 
     def overlapping_pairs(self) -> list[tuple[str, str]]:
         """Pairs of objects whose bounding boxes intersect in 3-D (stacked objects only touch)."""
@@ -291,7 +308,8 @@ class _Region:
 
     def contains(self, x: float, y: float, radius: float, workcell: Workcell) -> bool:
         r = math.hypot(x, y)
-        if not (REACH_MIN_M <= r <= REACH_MAX_M):
+        reach_min_m, reach_max_m = workcell.scene.reach_m
+        if not (reach_min_m <= r <= reach_max_m):
             return False
         if not (self.x_m[0] + radius <= x <= self.x_m[1] - radius and self.y_m[0] + radius <= y <= self.y_m[1] - radius):
             return False
@@ -320,13 +338,14 @@ def _regions(workcell: Workcell) -> dict[str, _Region]:
 
 def _stack_objects(
     pile: list[tuple[str, str | None, str]], x: float, y: float, yaw: float, first_index: int,
-    aruco_ids: list[int | None] | None = None,
+    aruco_ids: list[int | None] | None = None, workcell: Workcell | None = None,
 ) -> list[SceneObject]:
     """Objects of one footprint, bottom first (pile: (type, size, colour)); optional ArUco id per object."""
+    workcell = as_workcell(workcell)
     objects = []
     z_bottom = 0.0
     for offset, (obj_type, size, color) in enumerate(pile):
-        height = object_dimensions_m(obj_type, size)[2]
+        height = object_dimensions_m(obj_type, size, workcell)[2]
         prefix = "block" if obj_type == "block" else obj_type
         objects.append(
             SceneObject(
@@ -337,6 +356,7 @@ def _stack_objects(
                 position_m=(x, y, z_bottom + 0.5 * height),
                 quat_wxyz=quat_from_yaw(yaw),
                 aruco_id=aruco_ids[offset] if aruco_ids else None,
+                workcell=workcell.name,
             )
         )
         z_bottom += height
@@ -347,7 +367,8 @@ def _place_piles(piles: list[list[tuple]], region: _Region, rng: np.random.Gener
                  workcell: Workcell | None = None, feeder: Feeder | None = None) -> Scene:
     """Place each pile (a stack of 1+ objects, bottom first) at a random reachable, non-overlapping spot.
     A pile item is (type, size, colour) or (type, size, colour, aruco_id)."""
-    workcell = workcell or load_workcell()
+    workcell = as_workcell(workcell)
+    reach_max_m = workcell.scene.reach_m[1]
     for _attempt in range(50):
         placed: list[tuple[float, float, float]] = []  # x, y, footprint radius
         objects: list[SceneObject] = []
@@ -355,8 +376,8 @@ def _place_piles(piles: list[list[tuple]], region: _Region, rng: np.random.Gener
         for pile in piles:
             radius = max(0.5 * math.hypot(*object_dimensions_m(item[0], item[1], workcell)[:2]) for item in pile)
             for _try in range(400):
-                x = rng.uniform(-REACH_MAX_M, REACH_MAX_M)
-                y = rng.uniform(-REACH_MAX_M, REACH_MAX_M)
+                x = rng.uniform(-reach_max_m, reach_max_m)
+                y = rng.uniform(-reach_max_m, reach_max_m)
                 if not region.contains(x, y, radius, workcell):
                     continue
                 if all(math.dist((x, y), (px, py)) >= radius + pr + SPACING_MARGIN_M for px, py, pr in placed):
@@ -367,9 +388,9 @@ def _place_piles(piles: list[list[tuple]], region: _Region, rng: np.random.Gener
             yaw = float(rng.uniform(-math.pi / 4.0, math.pi / 4.0))
             placed.append((x, y, radius))
             ids = [item[3] if len(item) > 3 else None for item in pile]
-            objects.extend(_stack_objects([item[:3] for item in pile], x, y, yaw, len(objects), ids))
+            objects.extend(_stack_objects([item[:3] for item in pile], x, y, yaw, len(objects), ids, workcell))
         if ok:
-            return Scene(objects=tuple(objects), feeder=feeder)
+            return Scene(objects=tuple(objects), feeder=feeder, workcell=workcell.name)
     raise RuntimeError("could not place the scene's objects without overlap; ask for fewer objects")
 
 
@@ -392,21 +413,22 @@ def _into_piles(items: list, max_height: int, stack_probability: float, rng: np.
     return piles
 
 
-def generate_scene(event: str, level: int = 1, seed: int = 0) -> Scene:
-    """A starting layout for a job and level, reproducible from (event, level, seed): the competition
+def generate_scene(event: str, level: int = 1, seed: int = 0, workcell: Workcell | str | None = None) -> Scene:
+    """A starting layout for a job and level on `workcell` (its board, tags, reach, places, block tags and
+    sizes; None = the default workcell), reproducible from (event, level, seed, workcell): the competition
     events of DESIGN §7 (EVENTS) and the sort_by_tag and clear_table jobs (JOBS). The scene remembers
-    (event, level, seed) as its origin (the page's scene picker shows it)."""
-    scene = _generate_scene(event, level, seed)
-    return Scene(scene.objects, scene.feeder, origin=(event, int(level), int(seed)))
+    (event, level, seed) as its origin (the page's scene picker shows it) and the workcell it is for."""
+    cell = as_workcell(workcell)
+    scene = _generate_scene(event, level, seed, cell)
+    return Scene(scene.objects, scene.feeder, origin=(event, int(level), int(seed)), workcell=cell.name)
 
 
-def _generate_scene(event: str, level: int, seed: int) -> Scene:
+def _generate_scene(event: str, level: int, seed: int, workcell: Workcell) -> Scene:
     if event not in JOBS:
         raise ValueError(f"unknown event {event!r}; events: {', '.join(JOBS)}")
     if level not in JOBS[event]:
         raise ValueError(f"event {event!r} has levels {JOBS[event]}, not {level!r}")
     rng = np.random.default_rng([int(seed), list(JOBS).index(event), int(level)])
-    workcell = load_workcell()
     regions = _regions(workcell)
 
     def random_colors(count: int) -> list[str]:
@@ -507,20 +529,20 @@ def _clear_table(level: int, rng: np.random.Generator, workcell: Workcell, board
 def aruco_ids_by_color(workcell: Workcell | None = None) -> dict[str, int]:
     """Colour -> ArUco id of the workcell's block tags (the first id of each colour)."""
     ids: dict[str, int] = {}
-    for tag_id, entry in sorted((workcell or load_workcell()).block_tags.ids.items()):
+    for tag_id, entry in sorted(as_workcell(workcell).block_tags.ids.items()):
         ids.setdefault(entry.color, tag_id)
     return ids
 
 
 def with_aruco_tops(scene: Scene, ids_by_color: dict[str, int] | None = None) -> Scene:
     """The same scene with an ArUco tag on the top face of every block whose colour has an id
-    (default: the workcell's block_tags, e.g. the UR3 write-up's yellow 100, red 150, blue 200)."""
-    ids = aruco_ids_by_color() if ids_by_color is None else ids_by_color
+    (default: the scene's workcell's block_tags, e.g. the UR3 write-up's yellow 100, red 150, blue 200)."""
+    ids = aruco_ids_by_color(scene.workcell) if ids_by_color is None else ids_by_color
     return Scene(tuple(
         SceneObject(o.id, o.type, o.color, o.size, o.position_m, o.quat_wxyz,
-                    ids.get(o.color) if o.type == "block" else None)
+                    ids.get(o.color) if o.type == "block" else None, workcell=o.workcell)
         for o in scene.objects
-    ), feeder=scene.feeder)
+    ), feeder=scene.feeder, origin=scene.origin, workcell=scene.workcell)
 
 
 def random_scene(
@@ -529,10 +551,11 @@ def random_scene(
     n_distractors: int | None = None,
     max_stack: int = 1,
     aruco: bool = False,
+    workcell: Workcell | str | None = None,
 ) -> Scene:
-    """A random reachable layout: n_blocks (default 3..10) blocks of random size and colour,
-    n_distractors (default 0..2) distractors, stacks up to max_stack high; aruco=True puts the
-    workcell's block tags on blocks of their colours (aruco_ids_by_color)."""
+    """A random reachable layout on `workcell` (None = the default): n_blocks (default 3..10) blocks of
+    random size and colour, n_distractors (default 0..2) distractors, stacks up to max_stack high;
+    aruco=True puts the workcell's block tags on blocks of their colours (aruco_ids_by_color)."""
     if max_stack < 1:
         raise ValueError("max_stack must be >= 1")
     rng = np.random.default_rng([int(seed), 99])
@@ -544,6 +567,6 @@ def random_scene(
     colors = [str(c) for c in rng.choice(COLORS, size=n_blocks)]
     piles = _into_piles(_blocks(sizes, colors), max_stack, 0.35, rng)
     piles += [[(str(kind), None, str(rng.choice(COLORS)))] for kind in rng.choice(DISTRACTOR_TYPES, size=n_distractors)]
-    workcell = load_workcell()
+    workcell = as_workcell(workcell)
     scene = _place_piles(piles, _regions(workcell)["whole_board"], rng, workcell)
     return with_aruco_tops(scene) if aruco else scene

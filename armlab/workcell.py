@@ -294,6 +294,22 @@ class CameraSpec(StrictModel):
     mount: CameraMountSpec | None = None
 
 
+DEFAULT_SCENE_REACH_M = (0.13, 0.36)  # the RX200's comfortable top-down reach (radius from the base axis)
+
+
+class SceneSpec(StrictModel):
+    """Where the scene generators (armlab.scene) put objects: reach_m = (min, max) radius from the arm's
+    base axis within which a top-down pick reaches comfortably."""
+
+    reach_m: tuple[float, float] = DEFAULT_SCENE_REACH_M
+
+    @model_validator(mode="after")
+    def _check(self) -> SceneSpec:
+        if not 0.0 <= self.reach_m[0] < self.reach_m[1] <= 5.0:
+            raise ValueError(f"reach_m: need 0 <= min < max <= 5 m, got {list(self.reach_m)}")
+        return self
+
+
 class Workcell(StrictModel):
     """config/workcells/<name>.yaml, validated. World frame = board frame, metres (DESIGN §3)."""
 
@@ -311,6 +327,10 @@ class Workcell(StrictModel):
     places_m: dict[int, Point2] = {}
     feeder: FeederSpec
     bin: BinSpec
+    scene: SceneSpec = SceneSpec()          # where the scene generators put objects
+    # Where an autonomous job parks the arm while the camera looks (joints, rad): hides no block, place or
+    # column from this workcell's camera. None = the arm file's sleep pose.
+    look_pose_rad: tuple[float, ...] | None = None
 
     @field_validator("board_tags", mode="before")
     @classmethod

@@ -20,6 +20,8 @@ def register(subparsers: argparse._SubParsersAction) -> None:
                     "every run with the competition judge. Results are identical however the seeds are spread.")
     parser.add_argument("event", help="job name, e.g. pick_sort (see armlab.tasks.JOBS)")
     parser.add_argument("--level", help="the job's level (required for jobs that have levels)")
+    parser.add_argument("--workcell", default=None,
+                        help="workcell (config/workcells/<name>.yaml: arm, gripper, board, places); default rx200_armlab")
     parser.add_argument("--seeds", required=True, help="seeds: 1,2,3 or 1-20 or a mix (0-9,42); at most 10000")
     where = parser.add_mutually_exclusive_group()
     where.add_argument("--workers", default="1", help="processes running seeds in parallel (default 1: this process)")
@@ -46,11 +48,11 @@ def run_eval(args: argparse.Namespace) -> int:
     )
 
     try:
-        level = check_request(args.event, _int_option("--level", args.level))
+        level = check_request(args.event, _int_option("--level", args.level), args.workcell)
         seeds = parse_seeds(args.seeds)
         workers = _int_option("--workers", args.workers)
         runs_iter = evaluate(args.event, level, seeds, workers=workers, ray_address=args.ray,
-                             keep_truth=args.truth_out is not None)
+                             keep_truth=args.truth_out is not None, workcell=args.workcell)
         if args.truth_out is not None:
             if args.truth_out.exists() and not args.truth_out.is_dir():
                 raise EvalError(f"--truth-out {args.truth_out} exists and is not a directory")
@@ -61,7 +63,7 @@ def run_eval(args: argparse.Namespace) -> int:
     if not args.json:
         backend = f"Ray cluster {args.ray}" if args.ray else f"{workers} worker process(es)" if workers > 1 else "this process"
         print(f"{args.event}" + (f" L{level}" if level is not None else "") +
-              f": {len(seeds)} seed(s) {_seed_text(seeds)} on {backend}", flush=True)
+              (f" on workcell {args.workcell}" if args.workcell else "") + f": {len(seeds)} seed(s) {_seed_text(seeds)} on {backend}", flush=True)
     started = time.monotonic()
     runs = []
     try:

@@ -3,6 +3,7 @@ through the gate (armlab.station), which refuses them once the job is cancelled 
 
 from __future__ import annotations
 
+import math
 from collections.abc import Callable, Sequence
 
 import numpy as np
@@ -76,6 +77,26 @@ def _finger_seed(station: Station, q_start, point_m, pitch_rad: float, yaw_rad: 
     return seed
 
 
+def _facing_seed(model, q, point_m) -> np.ndarray:
+    """q with the first (base) joint turned so the tool's azimuth about the base axis points at point_m.
+    A numerical IK (6-DoF arms) seeded from a pose facing elsewhere (e.g. a look pose folded beside the
+    base) otherwise lands on another branch (the shoulder flipped over the back) that cannot go straight down."""
+    q = np.asarray(q, float).copy()
+    base = model.joint_frames(q)[0][:2, 3]
+    tool = model.fk(q)[:2, 3] - base
+    target = np.asarray(point_m, float)[:2] - base
+    if np.linalg.norm(tool) < 0.02 or np.linalg.norm(target) < 0.02:
+        return q
+    turn = math.atan2(target[1], target[0]) - math.atan2(tool[1], tool[0])
+    turn = (turn + math.pi) % (2 * math.pi) - math.pi
+    lower, upper = model.lower_rad[0], model.upper_rad[0]
+    for candidate in (q[0] + turn, q[0] + turn - 2 * math.pi, q[0] + turn + 2 * math.pi):
+        if lower <= candidate <= upper:
+            q[0] = candidate
+            break
+    return q
+
+
 def _transfer_plan(station: Station, q_start, point_m, yaw_rad: float | None, boxes: list, held_edge_m: float | None,
                    action: str, words: tuple[str, str, str], max_transfer_z_m: float = 0.42,
                    finger_axis_rad: float | None = None, min_pitch_rad: float = 0.0, gripper_box=None) -> list:
@@ -113,7 +134,7 @@ def _transfer_plan(station: Station, q_start, point_m, yaw_rad: float | None, bo
         return [TrajectoryStep(name, move) for move in joint_moves_inside(model, q_a, q_b, gripper_box, joint_move)]
 
     q_start = np.asarray(q_start, float)
-    seed = q_start
+    seed = _facing_seed(model, q_start, point_m) if suction else q_start
     if finger_axis_rad is not None and yaw_rad is not None and not suction:
         seed = _finger_seed(station, q_start, point_m, config.top_down_pitch_rad, yaw_rad, finger_axis_rad)
     # Carrying a block, approach from higher by its edge (so the block itself clears its neighbours)

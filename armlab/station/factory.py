@@ -44,7 +44,8 @@ def make_sim_station(config: StationConfig | None = None, db_path: str | Path | 
         if config.sim.event:
             from armlab.scene import generate_scene
 
-            cell.set_scene(generate_scene(config.sim.event, level=config.sim.level, seed=config.sim.scene_seed))
+            cell.set_scene(generate_scene(config.sim.event, level=config.sim.level, seed=config.sim.scene_seed,
+                                          workcell=config.workcell))
         store = Store(db_path if db_path is not None else config.database_file())
         station = Station(
             cell.arm, cell.gripper, cell.camera, model=load_workcell_arm(config.workcell), config=config, store=store, sim=cell,

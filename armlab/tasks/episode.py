@@ -16,18 +16,19 @@ CALIBRATION_TIMEOUT_S = 60.0
 JOB_TIMEOUT_S = 1800.0  # wall time; a job that runs longer is cancelled and scored as it stands
 
 
-def episode_scene(event: str, level: int | None, seed: int):
-    """The starting scene of a headless run: the event's generator; stack_here (no levels, no
-    generator of its own) stacks pick_sort L2's six blocks."""
+def episode_scene(event: str, level: int | None, seed: int, workcell=None):
+    """The starting scene of a headless run on `workcell` (None = the default): the event's generator;
+    stack_here (no levels, no generator of its own) stacks pick_sort L2's six blocks."""
     from armlab.scene import generate_scene
 
     if event == "stack_here":
-        return generate_scene("pick_sort", level=2, seed=int(seed))
-    return generate_scene(event, level=level, seed=int(seed))
+        return generate_scene("pick_sort", level=2, seed=int(seed), workcell=workcell)
+    return generate_scene(event, level=level, seed=int(seed), workcell=workcell)
 
 
-def score_run(event: str, level: int | None, truth: dict, sim_time_s: float, gripper_path_m):
-    """The judge's score for the competition events (DESIGN §7), armlab.tasks.scorers' for the others."""
+def score_run(event: str, level: int | None, truth: dict, sim_time_s: float, gripper_path_m, workcell=None):
+    """The judge's score for the competition events (DESIGN §7), armlab.tasks.scorers' for the others
+    (on `workcell`: its places, block tags and sizes; None = the default)."""
     from armlab.tasks.judge import EVENT_LIMITS_S, judge
     from armlab.tasks.scorers import score_job
 
@@ -36,28 +37,30 @@ def score_run(event: str, level: int | None, truth: dict, sim_time_s: float, gri
         available = None if not feeder else sum(o["size"] == "large" for o in truth["objects"]) + int(feeder.get("remaining", 0))
         return judge(event, level, truth, sim_time_s=sim_time_s, gripper_path_m=gripper_path_m,
                      **({"blocks_available": available} if event == "to_the_sky" and available else {}))
-    return score_job(event, truth, sim_time_s=sim_time_s)
+    return score_job(event, truth, sim_time_s=sim_time_s, workcell=workcell)
 
 
-def run_episode(event: str, level: int | None, seed: int, *, keep_truth: bool = False) -> dict:
-    """Run job `event` at `level` on the scene of `seed`; return the judged result as a JSON-ready dict:
-    {event, level, seed, points, max_points, sim_time_s, wall_time_s, breakdown, failures, full,
-    within_limit} (+ truth with gripper_path_m when keep_truth)."""
+def run_episode(event: str, level: int | None, seed: int, *, keep_truth: bool = False, workcell: str | None = None) -> dict:
+    """Run job `event` at `level` on the scene of `seed` on `workcell` (config/workcells/<name>.yaml: its
+    arm, gripper, board and scene; None = the default, the RX200); return the judged result as a
+    JSON-ready dict: {event, level, seed, workcell, points, max_points, sim_time_s, wall_time_s, breakdown,
+    failures, full, within_limit} (+ truth with gripper_path_m when keep_truth)."""
     from armlab import skills
     from armlab.devices.sim import SimWorkcell, SimWorkcellConfig
-    from armlab.kinematics import load_arm
     from armlab.station.config import StationConfig
     from armlab.station.core import Station
     from armlab.store import Store
     from armlab.tasks.registry import checked_request, start_auto
+    from armlab.workcell import load_workcell_arm
 
     checked_request(event, level, None)
     wall_start = time.monotonic()
-    config = StationConfig()
+    config = StationConfig() if workcell is None else StationConfig(workcell=workcell)
     with tempfile.TemporaryDirectory(prefix="armlab-eval-") as tmp, SimWorkcell(
-        SimWorkcellConfig(realtime=False, seed=int(seed)), scene=episode_scene(event, level, seed)
+        SimWorkcellConfig(realtime=False, seed=int(seed), workcell=config.workcell),
+        scene=episode_scene(event, level, seed, config.workcell),
     ) as cell:
-        station = Station(cell.arm, cell.gripper, cell.camera, model=load_arm(config.arm), config=config,
+        station = Station(cell.arm, cell.gripper, cell.camera, model=load_workcell_arm(config.workcell), config=config,
                           store=Store(Path(tmp) / "eval.sqlite3"), sim=cell, backend="sim", synchronous=True)
         station.start()
         try:
@@ -79,12 +82,12 @@ def run_episode(event: str, level: int | None, seed: int, *, keep_truth: bool = 
         finally:
             station.close()
     gripper_path_m = None if path is None else [list(map(float, row[1:4])) for row in path]
-    score = score_run(event, level, truth, sim_time_s, _after_first_motion(path))
+    score = score_run(event, level, truth, sim_time_s, _after_first_motion(path), config.workcell)
     failures = list((job.to_dict().get("extra", {}).get("task") or {}).get("failures", []))
     if job.state != "succeeded":
         failures.append(f"job {job.state}: {job.message}")
     result = {
-        "event": event, "level": level, "seed": int(seed), **{k: v for k, v in score.to_dict().items() if k != "breakdown"},
+        "event": event, "level": level, "seed": int(seed), "workcell": config.workcell, **{k: v for k, v in score.to_dict().items() if k != "breakdown"},
         "sim_time_s": round(sim_time_s, 3), "wall_time_s": round(time.monotonic() - wall_start, 3),
         "breakdown": score.to_dict()["breakdown"], "failures": failures,
     }

@@ -55,9 +55,9 @@ def parse_seeds(text: str) -> list[int]:
     return seeds
 
 
-def check_request(event: str, level: int | None) -> int | None:
-    """The level to run `event` at; EvalError for an unknown job, a missing or out-of-range level, or a
-    job the headless episode cannot run yet (no scene generator or judge for it)."""
+def check_request(event: str, level: int | None, workcell: str | None = None) -> int | None:
+    """The level to run `event` at; EvalError for an unknown job or workcell, a missing or out-of-range
+    level, or a job the headless episode cannot run yet (no scene generator or judge for it)."""
     from armlab.tasks.registry import JOBS, checked_request
 
     if event in JOBS and JOBS[event].levels and level is None:
@@ -67,13 +67,21 @@ def check_request(event: str, level: int | None) -> int | None:
         _, level, _ = checked_request(event, level, None)
     except ValueError as error:
         raise EvalError(str(error)) from None
-    reason = episode_unsupported(event, level)
+    if workcell is not None:
+        from armlab.errors import ConfigError
+        from armlab.workcell import load_workcell
+
+        try:
+            load_workcell(workcell).check_arm_fits()
+        except ConfigError as error:
+            raise EvalError(str(error)) from None
+    reason = episode_unsupported(event, level, workcell)
     if reason:
         raise EvalError(f"job '{event}' cannot be evaluated headless yet: {reason}")
     return level
 
 
-def episode_unsupported(event: str, level: int | None) -> str | None:
+def episode_unsupported(event: str, level: int | None, workcell: str | None = None) -> str | None:
     """Why a headless episode of (event, level) cannot run yet, or None when it can: the episode needs a
     scene generator for the pair and a judge for the event. Cheap (generates one scene, judges nothing)."""
     from armlab.tasks.episode import episode_scene
@@ -81,7 +89,7 @@ def episode_unsupported(event: str, level: int | None) -> str | None:
     from armlab.tasks.scorers import SCORED_JOBS
 
     try:
-        episode_scene(event, level, 0)
+        episode_scene(event, level, 0, workcell)
     except (ValueError, TypeError) as error:
         return f"no scene generator ({error})"
     if event not in EVENT_LIMITS_S and event not in SCORED_JOBS:
@@ -89,14 +97,14 @@ def episode_unsupported(event: str, level: int | None) -> str | None:
     return None
 
 
-def run_one(event: str, level: int | None, seed: int, keep_truth: bool = False) -> dict:
+def run_one(event: str, level: int | None, seed: int, keep_truth: bool = False, workcell: str | None = None) -> dict:
     """One episode, in whichever process runs it; an exception becomes a crashed run with no points."""
     os.environ.setdefault("MUJOCO_GL", "egl")
     from armlab.tasks.episode import run_episode
 
     started, cpu_started = time.monotonic(), time.process_time()
     try:
-        result = run_episode(event, level, seed, keep_truth=keep_truth)
+        result = run_episode(event, level, seed, keep_truth=keep_truth, workcell=workcell)
         # CPU seconds of this process (all its threads): a speed figure that other load on the machine
         # does not inflate, unlike wall time.
         result["cpu_time_s"] = round(time.process_time() - cpu_started, 3)
@@ -104,7 +112,7 @@ def run_one(event: str, level: int | None, seed: int, keep_truth: bool = False) 
     except Exception as error:  # noqa: BLE001 - any failure of one seed is that seed's result
         where = traceback.extract_tb(error.__traceback__)[-1]
         return {
-            "event": event, "level": level, "seed": int(seed), "points": 0, "max_points": None,
+            "event": event, "level": level, "seed": int(seed), "workcell": workcell, "points": 0, "max_points": None,
             "within_limit": False, "full": False, "sim_time_s": None,
             "wall_time_s": round(time.monotonic() - started, 3), "breakdown": [],
             "failures": [f"crashed: {type(error).__name__}: {error} ({os.path.basename(where.filename)}:{where.lineno})"],
@@ -113,34 +121,35 @@ def run_one(event: str, level: int | None, seed: int, keep_truth: bool = False) 
 
 
 def evaluate(event: str, level: int | None, seeds: Sequence[int], *, workers: int = 1,
-             ray_address: str | None = None, keep_truth: bool = False) -> Iterator[dict]:
+             ray_address: str | None = None, keep_truth: bool = False, workcell: str | None = None) -> Iterator[dict]:
     """Run every seed and yield the results in seed order as they become available. workers = 1 runs in
     this process; more use a spawn-context process pool (MuJoCo's GL context and threads do not survive
-    fork); ray_address ("auto" or host:port) runs each seed as a Ray task on that cluster instead."""
+    fork); ray_address ("auto" or host:port) runs each seed as a Ray task on that cluster instead.
+    workcell: config/workcells/<name>.yaml to run on (None = the default, the RX200)."""
     seeds = sorted(int(s) for s in seeds)
     if isinstance(workers, bool) or not isinstance(workers, int) or not 1 <= workers <= MAX_WORKERS:
         raise EvalError(f"workers must be an integer in 1..{MAX_WORKERS}, not {workers!r}")
     if ray_address is not None:
-        return _over_ray(event, level, seeds, ray_address, keep_truth)
+        return _over_ray(event, level, seeds, ray_address, keep_truth, workcell)
     if workers == 1 or len(seeds) <= 1:
-        return (run_one(event, level, seed, keep_truth) for seed in seeds)
-    return _over_processes(event, level, seeds, min(workers, len(seeds)), keep_truth)
+        return (run_one(event, level, seed, keep_truth, workcell) for seed in seeds)
+    return _over_processes(event, level, seeds, min(workers, len(seeds)), keep_truth, workcell)
 
 
-def _over_processes(event, level, seeds, workers, keep_truth) -> Iterator[dict]:
+def _over_processes(event, level, seeds, workers, keep_truth, workcell=None) -> Iterator[dict]:
     import multiprocessing
     from concurrent.futures import ProcessPoolExecutor
 
     executor = ProcessPoolExecutor(max_workers=workers, mp_context=multiprocessing.get_context("spawn"))
     try:
-        futures = [executor.submit(run_one, event, level, seed, keep_truth) for seed in seeds]
+        futures = [executor.submit(run_one, event, level, seed, keep_truth, workcell) for seed in seeds]
         for future in futures:
             yield future.result()
     finally:
         executor.shutdown(wait=True, cancel_futures=True)
 
 
-def _over_ray(event, level, seeds, address, keep_truth) -> Iterator[dict]:
+def _over_ray(event, level, seeds, address, keep_truth, workcell=None) -> Iterator[dict]:
     try:
         import ray
     except ImportError:
@@ -151,7 +160,7 @@ def _over_ray(event, level, seeds, address, keep_truth) -> Iterator[dict]:
         ray.init(address=address, log_to_driver=False, logging_level="warning")
     try:
         task = ray.remote(num_cpus=1, max_retries=0)(run_one)
-        refs = [task.remote(event, level, seed, keep_truth) for seed in seeds]
+        refs = [task.remote(event, level, seed, keep_truth, workcell) for seed in seeds]
         for ref in refs:
             yield ray.get(ref)
     finally:

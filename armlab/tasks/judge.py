@@ -103,8 +103,9 @@ class Score:
 # Definitions used by every event
 
 
-def _as_object(obj) -> SceneObject:
-    return obj if isinstance(obj, SceneObject) else SceneObject.from_dict(_within_bound(obj))
+def _as_object(obj, workcell: str | None = None) -> SceneObject:
+    """A SceneObject, or a truth dict read with `workcell`'s sizes (None = the default workcell)."""
+    return obj if isinstance(obj, SceneObject) else SceneObject.from_dict(_within_bound(obj), workcell)
 
 
 def _within_bound(data):
@@ -145,10 +146,11 @@ def on_board(obj) -> bool:
     return abs(_bottom_z_m(_as_object(obj))) <= SURFACE_TOLERANCE_M + 1e-12
 
 
-def columns(objects) -> list[tuple[SceneObject, ...]]:
+def columns(objects, workcell: str | None = None) -> list[tuple[SceneObject, ...]]:
     """Stacks of the given blocks, each bottom first: a column starts with a block on the board, and a block joins
-    the column whose top block's centre is within 15 mm (xy) and whose top is within ±6 mm of its bottom."""
-    blocks = [obj for obj in map(_as_object, objects) if obj.type == "block"]
+    the column whose top block's centre is within 15 mm (xy) and whose top is within ±6 mm of its bottom.
+    Truth dicts are read with `workcell`'s block sizes (None = the default workcell)."""
+    blocks = [obj for obj in (_as_object(o, workcell) for o in objects) if obj.type == "block"]
     stacks = [[block] for block in blocks if on_board(block)]
     rest = sorted((b for b in blocks if not on_board(b)), key=lambda b: (_bottom_z_m(b), b.id))
     for block in rest:

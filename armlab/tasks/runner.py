@@ -97,6 +97,19 @@ def park_pose(model) -> np.ndarray:
     return np.asarray(model.sleep_rad, float)
 
 
+def look_pose(station: Station) -> np.ndarray:
+    """Where a job parks the arm while the camera looks: the station's workcell's look_pose_rad (one that
+    hides nothing from that workcell's camera), else the arm's sleep pose (park_pose)."""
+    from armlab.scene import as_workcell
+
+    q = as_workcell(getattr(station.config, "workcell", None)).look_pose_rad
+    if q is None:
+        return park_pose(station.model)
+    if len(q) != station.model.dof:
+        raise ValueError(f"workcell look_pose_rad has {len(q)} joints; the arm has {station.model.dof}")
+    return np.asarray(q, float)
+
+
 OVERHEAD_LOOK_POINT_M = (0.0, 0.09, 0.22)  # gripper point, pointing down, elbow up over the base
 
 
@@ -144,7 +157,7 @@ class TaskRunner:
         self.max_transfer_z_m = 0.42  # a job may lower it (pick_stack keeps the gripper under 300 mm)
         self.last_objects: list[dict] = []  # the newest look's detections (obstacles while parking)
         self.reserved_m: list[tuple[float, float]] = []  # spots a job keeps free (column bases, line slots)
-        self.look_pose_rad = park_pose(station.model)  # where the arm waits while the camera looks (a job may change it)
+        self.look_pose_rad = look_pose(station)  # where the arm waits while the camera looks (a job may change it)
         self.keep_occluded = False  # a job that must find every block acts also on those the parked arm partly hides
         self.gripper_box = None  # a GripperBox every planned motion keeps the gripper point inside (pick_stack)
 

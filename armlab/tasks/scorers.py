@@ -20,10 +20,11 @@ SCORED_JOBS = ("sort_by_tag", "clear_table", "stack_here")
 
 
 def score_job(job: str, truth: dict, *, sim_time_s: float, params: dict | None = None, workcell=None) -> Score:
-    """The score of a non-competition job's final ground truth (ValueError for another job)."""
-    from armlab.workcell import load_workcell
+    """The score of a non-competition job's final ground truth on `workcell` (a Workcell or its name: its
+    places, block tags, bin and block sizes; None = the default workcell). ValueError for another job."""
+    from armlab.scene import as_workcell
 
-    workcell = workcell or load_workcell()
+    workcell = as_workcell(workcell)
     objects = truth["objects"]
     rules: list[Rule] = []
     if job == "sort_by_tag":
@@ -49,7 +50,7 @@ def score_job(job: str, truth: dict, *, sim_time_s: float, params: dict | None =
         def wanted(obj) -> bool:
             return obj["type"] == "block" and params.get("color") in (None, obj["color"]) and params.get("size") in (None, obj["size"])
 
-        column = next((c for c in columns([o for o in objects if upright(o)])
+        column = next((c for c in columns([o for o in objects if upright(o)], workcell.name)
                        if math.dist(c[0].position_m[:2], point) <= PLACE_TOLERANCE_M), ())
         in_column = {obj.id for obj in column}
         for obj in objects:

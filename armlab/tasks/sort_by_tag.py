@@ -19,9 +19,9 @@ def _describe(block: dict) -> str:
 
 
 def make_policy(level: int | None, params: dict, runner: TaskRunner):
-    from armlab.workcell import DEFAULT_WORKCELL, load_workcell
+    from armlab.scene import as_workcell
 
-    workcell = load_workcell(getattr(runner.station.config, "workcell", None) or DEFAULT_WORKCELL)  # the station's
+    workcell = as_workcell(getattr(runner.station.config, "workcell", None))  # the station's
     columns = {int(dest): Column(f"place {dest}", tuple(map(float, xy))) for dest, xy in workcell.places_m.items()}
     runner.reserved_m.extend(column.base_xy_m for column in columns.values())
 

@@ -8,9 +8,10 @@ from armlab.tasks.runner import Move, Plan, TaskRunner, cubes
 
 
 def make_policy(level: int | None, params: dict, runner: TaskRunner):
-    from armlab.workcell import load_workcell
+    from armlab.scene import as_workcell
 
-    default = min(load_workcell().places_m.values(), key=lambda xy: xy[0] ** 2 + xy[1] ** 2)
+    workcell = as_workcell(getattr(runner.station.config, "workcell", None))  # the station's
+    default = min(workcell.places_m.values(), key=lambda xy: xy[0] ** 2 + xy[1] ** 2)
     column = Column("stack", (float(params.get("x_m", default[0])), float(params.get("y_m", default[1]))))
     runner.reserved_m.append(column.base_xy_m)
 

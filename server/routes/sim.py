@@ -30,9 +30,10 @@ def post_scene(body: SceneRequest, station: StationDep, controller: ControlAuth)
     _cell(station)
     station.allowed_or_raise("set_scene", controller)
     if body.objects is not None:
-        scene = Scene.from_dict({"objects": [item.model_dump(exclude_none=True) for item in body.objects]})
+        scene = Scene.from_dict({"objects": [item.model_dump(exclude_none=True) for item in body.objects]},
+                                workcell=station.config.workcell)
     else:
-        scene = generate_scene(body.event, level=body.level or 1, seed=body.seed or 0)
+        scene = generate_scene(body.event, level=body.level or 1, seed=body.seed or 0, workcell=station.config.workcell)
     station.set_scene(scene, source=controller)  # checked under the station lock, changed outside it
     station.events.add("info", f"scene set: {body.event or 'custom'} ({len(scene.objects)} objects)")
     return {"objects": len(scene.objects), "event": body.event, "level": body.level, "seed": body.seed}

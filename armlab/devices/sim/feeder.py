@@ -29,7 +29,8 @@ def parked_objects(feeder: Feeder, workcell: Workcell) -> list[SceneObject]:
     for index in range(feeder.fed, feeder.count):
         position = (PARK_ORIGIN_M[0] + PARK_PITCH_M * (index % 10), PARK_ORIGIN_M[1] + PARK_PITCH_M * (index // 10),
                     PARK_ORIGIN_M[2])
-        objects.append(SceneObject(feeder.block_id(index), "block", COLORS[index % len(COLORS)], "large", position))
+        objects.append(SceneObject(feeder.block_id(index), "block", COLORS[index % len(COLORS)], "large", position,
+                                   workcell=workcell.name))
     return objects
 
 

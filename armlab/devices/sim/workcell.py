@@ -96,6 +96,9 @@ class SimWorkcell:
     def _compile(self, scene: Scene) -> dict:
         """The slow half of a scene change (XML, compile, index look-ups): touches no shared state, so it
         runs outside the lock and the physics, the devices and an e-stop never wait for it."""
+        if scene.workcell is not None and scene.workcell != self._workcell.name:
+            raise ValueError(f"the scene was made for workcell '{scene.workcell}' (its board, reach and sizes); this "
+                             f"simulation runs workcell '{self._workcell.name}': generate the scene for it")
         xml, assets = build_model_xml(self._geometry, self._sim, self._camera_config, self._T_world_camera, scene,
                                       self._workcell)
         model = mujoco.MjModel.from_xml_string(xml, assets)
@@ -174,7 +177,7 @@ class SimWorkcell:
         """Replace all objects (thread-safe; the arm and gripper keep their state). Accepts a Scene or
         its dict form ({"objects": [...]}, the ground-truth format)."""
         if isinstance(scene, dict):
-            scene = Scene.from_dict(scene)
+            scene = Scene.from_dict(scene, workcell=self._workcell.name)
         if not isinstance(scene, Scene):
             raise ValueError(f"set_scene expects a Scene or a dict with 'objects', got {type(scene).__name__}")
         compiled = self._compile(scene)  # outside the lock: physics, devices and e-stop go on meanwhile
