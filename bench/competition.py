@@ -11,9 +11,12 @@ every failure grouped with counts. Targets, printed next to the figures:
 - pick_sort L3 in <= 120 s simulated (mean; the rule allows 180);
 - to_the_sky >= 12 large blocks standing in one tower (mean; the judge's "tower" rule names them);
 - eval at >= 10x real time per worker.
+- sort_by_tag L3 and stack_here (issue 12, the UR3 write-up's jobs) full points in >= 95 % of seeds on every
+  workcell run (--workcells rx200_armlab,ur3_suction: the RX200 with fingers, the UR3 with the suction cup).
 Prints figures; asserts nothing.
 
     MUJOCO_GL=egl .venv/bin/python bench/competition.py [--seeds 0-19] [--workers 2] [--jobs pick_sort,line_up]
+        [--workcells rx200_armlab,ur3_suction]
 """
 
 from __future__ import annotations
@@ -31,12 +34,14 @@ os.environ.setdefault("MUJOCO_GL", "egl")
 from armlab.scene import COLORS  # noqa: E402
 from armlab.tasks import JOBS  # noqa: E402
 from armlab.tasks.evaluate import EvalError, episode_unsupported, evaluate, parse_seeds, summarize  # noqa: E402
+from armlab.workcell import DEFAULT_WORKCELL, known_workcells  # noqa: E402
 
 DEFAULT_SEEDS = "0-19"
 FULL_RATE_TARGETS = {("pick_sort", 3): 0.95, ("pick_stack", 3): 0.95, ("line_up", 3): 0.95,
                      ("stack_high", 2): 0.95, ("sort_stack", 3): 0.95}
 SIM_TIME_TARGETS_S = {("pick_sort", 3): 120.0}  # mean simulated seconds
 TOWER_TARGET_BLOCKS = 12.0  # to_the_sky, mean over seeds
+WORKCELL_FULL_RATE_TARGETS = {("sort_by_tag", 3): 0.95, ("stack_here", None): 0.95}  # on every workcell run
 REALTIME_TARGET = 10.0  # per worker
 LEVELLESS_JOBS = ("sort_by_tag", "clear_table", "stack_here")  # success rates on random scenes
 _NUMBER = re.compile(r"-?\d+(?:\.\d+)?")
@@ -51,10 +56,12 @@ class Cell:
     level: int | None
     runs: list[dict] = field(default_factory=list)
     skipped: str = ""
+    workcell: str = DEFAULT_WORKCELL
 
     @property
     def name(self) -> str:
-        return self.job if self.level is None else f"{self.job} L{self.level}"
+        name = self.job if self.level is None else f"{self.job} L{self.level}"
+        return name if self.workcell == DEFAULT_WORKCELL else f"{name} @{self.workcell}"
 
 
 def reason_key(text: str) -> str:
@@ -98,26 +105,27 @@ def seconds(value, digits: int = 1) -> str:
 
 
 def run_cell(cell: Cell, seeds: list[int], workers: int, ray_address: str | None) -> None:
-    reason = episode_unsupported(cell.job, cell.level)
+    reason = episode_unsupported(cell.job, cell.level, cell.workcell)
     if reason:
         cell.skipped = f"not run: {reason}"
         return
-    for run in evaluate(cell.job, cell.level, seeds, workers=workers, ray_address=ray_address):
+    for run in evaluate(cell.job, cell.level, seeds, workers=workers, ray_address=ray_address, workcell=cell.workcell):
         cell.runs.append(run)
         print(".", end="", flush=True)
 
 
 def print_row(cell: Cell) -> None:
     if cell.skipped:
-        print(f"{cell.name:<16} {cell.skipped}")
+        print(f"{cell.name:<28} {cell.skipped}")
         return
     s = summarize(cell.runs)
     rtf = "-" if s["realtime_factor_per_worker"] is None else f"{s['realtime_factor_per_worker']:.1f}x"
     rtf_cpu = "-" if s["realtime_factor_per_cpu_s"] is None else f"{s['realtime_factor_per_cpu_s']:.1f}x"
     notes = []
     key = (cell.job, cell.level)
-    if key in FULL_RATE_TARGETS:
-        notes.append(f"full >= {100 * FULL_RATE_TARGETS[key]:.0f} %: {mark(s['full_rate'] >= FULL_RATE_TARGETS[key])}")
+    targets = {**FULL_RATE_TARGETS, **WORKCELL_FULL_RATE_TARGETS}
+    if key in targets and not (key in FULL_RATE_TARGETS and cell.workcell != DEFAULT_WORKCELL):
+        notes.append(f"full >= {100 * targets[key]:.0f} %: {mark(s['full_rate'] >= targets[key])}")
     if key in SIM_TIME_TARGETS_S and s["mean_sim_time_s"] is not None:
         notes.append(f"sim <= {SIM_TIME_TARGETS_S[key]:.0f} s: {mark(s['mean_sim_time_s'] <= SIM_TIME_TARGETS_S[key])}")
     if cell.job == "to_the_sky":
@@ -129,7 +137,7 @@ def print_row(cell: Cell) -> None:
                          f"{mark(mean_tower >= TOWER_TARGET_BLOCKS)}")
     if s["crashed"]:
         notes.append(f"{s['crashed']} crashed")
-    print(f"{cell.name:<16} {s['runs']:>4}  {percent(s['mean_points_fraction']):>8}  {percent(s['min_points_fraction']):>8}  "
+    print(f"{cell.name:<28} {s['runs']:>4}  {percent(s['mean_points_fraction']):>8}  {percent(s['min_points_fraction']):>8}  "
           f"{percent(s['full_rate']):>8}  {seconds(s['mean_sim_time_s']):>8}  {seconds(s['mean_wall_time_s'], 2):>8}  "
           f"{rtf:>6}  {rtf_cpu:>7}  {'; '.join(notes)}")
 
@@ -149,13 +157,15 @@ def print_reasons(cells: list[Cell]) -> None:
         print("  none")
 
 
-def print_targets(cells: dict[tuple[str, int | None], Cell], all_runs: list[dict]) -> None:
+def print_targets(cells: dict[tuple[str, str, int | None], Cell], all_runs: list[dict], workcells: list[str]) -> None:
     print("\ntargets:")
 
-    def cell_or_reason(key):
-        cell = cells.get(key)
+    def cell_or_reason(key, workcell=DEFAULT_WORKCELL):
+        cell = cells.get((workcell, *key))
         if cell is None:
-            return None, "not in armlab.tasks.JOBS yet" if key[0] not in JOBS else "not in this run (--jobs)"
+            if key[0] not in JOBS:
+                return None, "not in armlab.tasks.JOBS yet"
+            return None, "not in this run (--workcells)" if workcell not in workcells else "not in this run (--jobs, --levels)"
         return (None, cell.skipped) if cell.skipped else (cell, "")
 
     for key, target in FULL_RATE_TARGETS.items():
@@ -188,13 +198,28 @@ def print_targets(cells: dict[tuple[str, int | None], Cell], all_runs: list[dict
     label = f"eval real-time factor per worker >= {REALTIME_TARGET:.0f}x (all runs)"
     print(f"  {label:<66} {'-' if rtf is None else f'{rtf:.1f}x':>8}  {mark(rtf is not None and rtf >= REALTIME_TARGET)}"
           f"   (per CPU second: {'-' if rtf_cpu is None else f'{rtf_cpu:.1f}x'}, which other load does not lower)")
-    for job in LEVELLESS_JOBS:
-        cell, why = cell_or_reason((job, None))
-        label = f"{job} success rate on random scenes (full points or no failure)"
-        if cell is None:
-            print(f"  {label:<66} {why}")
-        else:
-            print(f"  {label:<66} {percent(success_rate(cell.runs)):>8}")
+    for workcell in workcells:
+        for job in LEVELLESS_JOBS:
+            if job in JOBS and JOBS[job].levels:
+                continue  # judged per level above (e.g. sort_by_tag L1-L3)
+            cell, why = cell_or_reason((job, None), workcell)
+            label = f"{job} success rate on random scenes (full points or no failure)" + (
+                "" if workcell == DEFAULT_WORKCELL else f" @{workcell}")
+            if cell is None:
+                print(f"  {label:<66} {why}")
+            else:
+                print(f"  {label:<66} {percent(success_rate(cell.runs)):>8}")
+    print("\nissue 12 (the UR3 write-up's jobs) on each workcell: full points rate, mean simulated time")
+    for workcell in workcells:
+        for key, target in WORKCELL_FULL_RATE_TARGETS.items():
+            cell, why = cell_or_reason(key, workcell)
+            label = f"{key[0]}{'' if key[1] is None else f' L{key[1]}'} @{workcell} full points >= {100 * target:.0f} %"
+            if cell is None:
+                print(f"  {label:<66} {why}")
+            else:
+                s = summarize(cell.runs)
+                print(f"  {label:<66} {percent(s['full_rate']):>8}  {mark(s['full_rate'] >= target)}   "
+                      f"mean sim {seconds(s['mean_sim_time_s'])} over {s['runs']} seeds")
 
 
 def success_rate(runs: list[dict]) -> float | None:
@@ -211,6 +236,9 @@ def main() -> int:
     parser.add_argument("--workers", type=int, default=2, help="worker processes (default 2)")
     parser.add_argument("--ray", metavar="ADDRESS", help="run on a Ray cluster instead of local processes")
     parser.add_argument("--jobs", help="comma-separated job names (default: every job in armlab.tasks.JOBS)")
+    parser.add_argument("--levels", help="comma-separated levels run for jobs that have them (default: all)")
+    parser.add_argument("--workcells", default=DEFAULT_WORKCELL,
+                        help=f"comma-separated workcells (config/workcells; default {DEFAULT_WORKCELL}): each job runs on each")
     args = parser.parse_args()
     try:
         seeds = parse_seeds(args.seeds)
@@ -222,29 +250,43 @@ def main() -> int:
     if unknown:
         print(f"competition: unknown job(s) {', '.join(unknown)}; jobs: {', '.join(JOBS)}", file=sys.stderr)
         return 2
+    workcells = [name.strip() for name in args.workcells.split(",")]
+    unknown = [name for name in workcells if name not in known_workcells()]
+    if unknown:
+        print(f"competition: unknown workcell(s) {', '.join(unknown)}; workcells: {', '.join(known_workcells())}", file=sys.stderr)
+        return 2
+    try:
+        levels = None if args.levels is None else {int(level) for level in args.levels.split(",")}
+    except ValueError:
+        print(f"competition: --levels takes comma-separated integers, not {args.levels!r}", file=sys.stderr)
+        return 2
     where = f"Ray cluster {args.ray}" if args.ray else f"{args.workers} worker process(es)"
     print(f"seeds ({len(seeds)}): {', '.join(map(str, seeds))}")
     print(f"jobs in armlab.tasks.JOBS: {', '.join(f'{n} L{min(s.levels)}-{max(s.levels)}' if s.levels else n for n, s in JOBS.items())}")
+    print(f"workcells: {', '.join(workcells)}")
     print(f"running on {where}; one dot per run", flush=True)
 
-    cells: dict[tuple[str, int | None], Cell] = {}
+    cells: dict[tuple[str, str, int | None], Cell] = {}
     load_start = os.getloadavg()[0]
     started = time.monotonic()
-    for name in names:
-        for level in JOBS[name].levels or (None,):
-            cell = cells[(name, level)] = Cell(name, level)
-            print(f"{cell.name}: ", end="", flush=True)
-            run_cell(cell, seeds, args.workers, args.ray)
-            print(f" {cell.skipped or 'done'}", flush=True)
+    for workcell in workcells:
+        for name in names:
+            for level in [lv for lv in JOBS[name].levels if levels is None or lv in levels] or (None,):
+                if level is None and JOBS[name].levels:
+                    continue  # none of its levels asked for
+                cell = cells[(workcell, name, level)] = Cell(name, level, workcell=workcell)
+                print(f"{cell.name}: ", end="", flush=True)
+                run_cell(cell, seeds, args.workers, args.ray)
+                print(f" {cell.skipped or 'done'}", flush=True)
     elapsed_s = time.monotonic() - started
 
-    print(f"\n{'job':<16} {'runs':>4}  {'mean pts':>8}  {'min pts':>8}  {'full':>8}  {'mean sim':>8}  "
+    print(f"\n{'job':<28} {'runs':>4}  {'mean pts':>8}  {'min pts':>8}  {'full':>8}  {'mean sim':>8}  "
           f"{'wall/run':>8}  {'rtf':>6}  {'rtf cpu':>7}  targets")
     for cell in cells.values():
         print_row(cell)
     print_reasons(list(cells.values()))
     all_runs = [run for cell in cells.values() for run in cell.runs]
-    print_targets(cells, all_runs)
+    print_targets(cells, all_runs, workcells)
     print(f"\n{len(all_runs)} runs in {elapsed_s:.0f} s wall on {where}; load average (1 min) "
           f"{load_start:.1f} at the start, {os.getloadavg()[0]:.1f} at the end, on {os.cpu_count()} CPUs")
     return 0
