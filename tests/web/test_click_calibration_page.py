@@ -8,6 +8,7 @@ reason, and the old calibration is kept. Also the self-recalibration toggle (PUT
 from __future__ import annotations
 
 import cv2
+import httpx
 import numpy as np
 import pytest
 
@@ -130,5 +131,7 @@ def test_self_recalibration_toggle_sets_the_station(browser, fresh):
     fresh.request("PUT", "/api/calibration/settings", json={"self_recalibrate": False}).raise_for_status()
     page.wait_for_function("!document.getElementById('self-recal').checked", timeout=10_000)  # the status says so
     assert fresh.request("PUT", "/api/calibration/settings", json={"self_recalibrate": "yes"}).status_code == 422
+    no_token = httpx.put(fresh.base_url + "/api/calibration/settings", json={"self_recalibrate": True}, timeout=10.0)
+    assert no_token.status_code == 401 and fresh.get("/api/calibration/settings")["self_recalibrate"] is False
     assert page.errors == []
     page.close()
