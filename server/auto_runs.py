@@ -35,6 +35,7 @@ class AutoRun:
     cell: Any  # the SimWorkcell: sim_time_s, gripper_point_m(), truth()
     sim_start_s: float
     path: list[list[float]] = field(default_factory=list)  # rows [sim time s, x, y, z] of the gripper point
+    workcell: str | None = None  # the station's workcell (its places, block tags and sizes); None = the default
     sim_end_s: float | None = None
     score: dict | None = None
     note: str = ""
@@ -75,7 +76,7 @@ class AutoRun:
             path = _after_first_motion(self.path)
             score = score_run(self.name, self.level, truth, sim_time_s, None if path is None else path.tolist())
             return jsonable(score.to_dict()), ""
-        score = score_job(self.name, truth, sim_time_s=sim_time_s, params=self.params)
+        score = score_job(self.name, truth, sim_time_s=sim_time_s, params=self.params, workcell=self.workcell)
         return jsonable(score.to_dict()), "not a competition event: scored by the job's own scorer, not the §7 judge"
 
     def to_dict(self, wait_s: float = 0.0) -> dict:
@@ -101,6 +102,8 @@ def is_scored(name: str) -> bool:
     return is_judged(name) or name in SCORED_JOBS
 
 
-def watch_run(job: Job, name: str, level: int | None, params: dict | None, cell: Any, sim_start_s: float) -> AutoRun:
-    """Start watching `job` (begun at simulated time sim_start_s on `cell`) to score it when it ends."""
-    return AutoRun(job, name, level, dict(params or {}), cell, sim_start_s).start()
+def watch_run(job: Job, name: str, level: int | None, params: dict | None, cell: Any, sim_start_s: float,
+              workcell: str | None = None) -> AutoRun:
+    """Start watching `job` (begun at simulated time sim_start_s on `cell`, the station's `workcell`) to score
+    it when it ends."""
+    return AutoRun(job, name, level, dict(params or {}), cell, sim_start_s, workcell=workcell).start()

@@ -77,7 +77,8 @@ def post_auto(body: AutoRequest, request: Request, station: StationDep, controll
     job = start_auto(station, body.job, level, params, source=controller)
     run = None
     if station.sim is not None:
-        run = request.app.state.auto_run = watch_run(job, body.job, level, params, station.sim, sim_start_s)
+        run = request.app.state.auto_run = watch_run(job, body.job, level, params, station.sim, sim_start_s,
+                                                     workcell=station.config.workcell)
     if not wait:
         return JSONResponse({"job": job.to_dict(), "score": None}, status_code=202)
     job.wait(AUTO_WAIT_TIMEOUT_S)
