@@ -11,6 +11,7 @@ face is then measured on a full-resolution region of interest.
 from __future__ import annotations
 
 import math
+from collections import Counter
 from dataclasses import dataclass, field, replace
 from functools import lru_cache
 
@@ -564,21 +565,37 @@ def _face_looks_tagged(color_bgr: np.ndarray, block: Block, roi=None, roi_hsv: n
     return bool(np.mean((hsv[..., 1] < 60) | (hsv[..., 2] < 60)) > 0.5)
 
 
-def _with_tag(block: Block, color_bgr: np.ndarray, roi, detector, cfg: PerceptionConfig) -> Block:
-    """The block with its top tag's id, colour and destination (config), if a tag is found on it."""
+TAG_RETRY_SCALES = (3.0, 4.0, 1.0)  # when the 2x read finds no tag on a face: a tag of ~2 px per bit reads at some scales only
+
+
+def _tag_ids_on(block: Block, color_bgr: np.ndarray, roi, detector, scale: float) -> list[int]:
+    """Ids of the tags whose centre lies on the block's face, read from the ROI resized by `scale`."""
     x0, y0, x1, y1 = roi
-    crop = cv2.resize(color_bgr[y0:y1, x0:x1], None, fx=2.0, fy=2.0, interpolation=cv2.INTER_CUBIC)
-    for tag in detect_tags(crop, detector=detector) if min(crop.shape[:2]) >= 16 else []:
-        centre = tag.center_px / 2.0 + np.array([x0, y0])
-        if np.linalg.norm(centre - block.center_px) < 0.5 * np.ptp(block.contour_px, axis=0).max():
-            entry = cfg.tags.block_tags.get(tag.id)
-            return replace(
-                block,
-                aruco_id=tag.id,
-                color=entry.color if entry else block.color,
-                destination=entry.destination if entry else None,
-            )
-    return block
+    crop = color_bgr[y0:y1, x0:x1]
+    if scale != 1.0:
+        crop = cv2.resize(crop, None, fx=scale, fy=scale, interpolation=cv2.INTER_CUBIC)
+    if min(crop.shape[:2]) < 16:
+        return []
+    reach_px = 0.5 * np.ptp(block.contour_px, axis=0).max()
+    return [tag.id for tag in detect_tags(crop, detector=detector)
+            if np.linalg.norm(tag.center_px / scale + np.array([x0, y0]) - block.center_px) < reach_px]
+
+
+def _with_tag(block: Block, color_bgr: np.ndarray, roi, detector, cfg: PerceptionConfig) -> Block:
+    """The block with its top tag's id, colour and destination (config), if a tag is found on it: read
+    from the ROI at 2x; if that finds none, at TAG_RETRY_SCALES, where an id counts when it is one of the
+    configured block tags or read at two scales (a tiny tag misreads now and then, never the same way)."""
+    ids = _tag_ids_on(block, color_bgr, roi, detector, 2.0)[:1]
+    if not ids:
+        reads = [tag_id for scale in TAG_RETRY_SCALES for tag_id in _tag_ids_on(block, color_bgr, roi, detector, scale)]
+        counts = Counter(reads)
+        ids = sorted((tag_id for tag_id, n in counts.items() if tag_id in cfg.tags.block_tags or n >= 2),
+                     key=lambda tag_id: (-counts[tag_id], tag_id not in cfg.tags.block_tags))[:1]
+    if not ids:
+        return block
+    entry = cfg.tags.block_tags.get(ids[0])
+    return replace(block, aruco_id=ids[0], color=entry.color if entry else block.color,
+                   destination=entry.destination if entry else None)
 
 
 def _make_block(face: _Face, color: str, camera: PlaneCamera, cfg, z_small, step, z_roi=None, classified: _Classified | None = None,
