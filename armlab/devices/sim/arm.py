@@ -13,7 +13,7 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 from armlab.devices.arm import Arm, JointState, JointTrajectory
-from armlab.errors import DeviceAlreadyConnectedError, DeviceNotConnectedError
+from armlab.devices.sim.device import SimDevice
 
 if TYPE_CHECKING:
     from armlab.devices.sim.workcell import SimWorkcell
@@ -35,7 +35,7 @@ def sample_trajectory(trajectory: JointTrajectory, t_s: float) -> tuple[np.ndarr
     return positions[i] + slope * (t_s - times[i]), slope
 
 
-class SimArm(Arm):
+class SimArm(SimDevice, Arm):
     """The simulated RX200 arm (joint order = the arm config's joint_names)."""
 
     def __init__(self, cell: SimWorkcell, joint_names: tuple[str, ...], lower_rad: np.ndarray, upper_rad: np.ndarray,
@@ -46,7 +46,6 @@ class SimArm(Arm):
         self.upper_rad = np.asarray(upper_rad, dtype=float)
         self._settle_tolerance_rad = settle_tolerance_rad
         self._settle_timeout_s = settle_timeout_s
-        self._connected = False
         self._trajectory: JointTrajectory | None = None
         self._start_s = 0.0
         self._hold_rad: np.ndarray | None = None
@@ -58,28 +57,18 @@ class SimArm(Arm):
     def __str__(self) -> str:
         return "SimArm(rx200)"
 
-    @property
-    def is_connected(self) -> bool:
-        return self._connected
-
-    def connect(self) -> None:
-        if self._connected:
-            raise DeviceAlreadyConnectedError(f"{self} is already connected")
+    def _on_connect(self) -> None:
+        """Hold where the arm is, torque on."""
         with self._cell.lock:
             self._hold_rad = self._cell.arm_positions()
             self._trajectory = None
             self._cell.set_arm_torque(True)
             self._torque = True
-        self._connected = True
 
     def close(self) -> None:
         if self._connected:
             self.stop()
-        self._connected = False
-
-    def _require(self) -> None:
-        if not self._connected:
-            raise DeviceNotConnectedError(f"{self} is not connected: call connect() (or SimWorkcell.start()) first")
+        super().close()
 
     def read_joint_state(self) -> JointState:
         self._require()

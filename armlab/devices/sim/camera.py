@@ -14,8 +14,8 @@ import numpy as np
 
 from armlab.devices.camera import Camera, Frame, Intrinsics
 from armlab.devices.sim.config import SimCameraConfig
+from armlab.devices.sim.device import SimDevice
 from armlab.devices.sim.render import RawImages
-from armlab.errors import DeviceAlreadyConnectedError, DeviceNotConnectedError
 
 if TYPE_CHECKING:
     from armlab.devices.sim.workcell import SimWorkcell
@@ -83,7 +83,7 @@ class NoiseModel:
         return color_bgr, out
 
 
-class SimCamera(Camera):
+class SimCamera(SimDevice, Camera):
     """The workcell's overhead RGB-D camera. In fast mode read()/async_read() advance the physics to the
     next frame time and render; in real time a render thread publishes frames at the camera rate."""
 
@@ -93,7 +93,6 @@ class SimCamera(Camera):
         self._noise = noise
         self._fps = fps
         self._intrinsics = config.to_intrinsics()
-        self._connected = False
         self._condition = threading.Condition()
         self._latest: Frame | None = None
         self._sequence = 0
@@ -107,26 +106,13 @@ class SimCamera(Camera):
         return self._fps
 
     @property
-    def is_connected(self) -> bool:
-        return self._connected
-
-    @property
     def intrinsics(self) -> Intrinsics:
         return self._intrinsics
 
-    def connect(self) -> None:
-        if self._connected:
-            raise DeviceAlreadyConnectedError(f"{self} is already connected")
-        self._connected = True
-
     def close(self) -> None:
-        self._connected = False
+        super().close()
         with self._condition:
-            self._condition.notify_all()
-
-    def _require(self) -> None:
-        if not self._connected:
-            raise DeviceNotConnectedError(f"{self} is not connected: call connect() (or SimWorkcell.start()) first")
+            self._condition.notify_all()  # a reader waiting for a frame sees the camera closed
 
     def publish(self, images: RawImages) -> Frame:
         """Add noise, stamp and store a render as the newest frame (called by the workcell)."""

@@ -9,7 +9,7 @@ import time
 from typing import TYPE_CHECKING
 
 from armlab.devices.gripper import Gripper, GripperState
-from armlab.errors import DeviceAlreadyConnectedError, DeviceNotConnectedError
+from armlab.devices.sim.device import SimDevice
 
 if TYPE_CHECKING:
     from armlab.devices.sim.workcell import SimWorkcell
@@ -18,7 +18,7 @@ MOTION_TIMEOUT_S = 2.0
 HOLDING_MARGIN_M = 0.001  # stopped at least this far from fully closed = holding something
 
 
-class SimGripper(Gripper):
+class SimGripper(SimDevice, Gripper):
     """The simulated parallel gripper; width_m is the span between the pad faces."""
 
     def __init__(self, cell: SimWorkcell, offset_min_m: float, offset_max_m: float, pad_thickness_m: float,
@@ -29,7 +29,6 @@ class SimGripper(Gripper):
         self._pad_thickness_m = pad_thickness_m
         self._stop_speed_m_s = stop_speed_m_s
         self._stop_time_s = stop_time_s
-        self._connected = False
         self._command = "release"
         self._command_s = 0.0
         self._still_since_s: float | None = None
@@ -37,10 +36,6 @@ class SimGripper(Gripper):
 
     def __str__(self) -> str:
         return "SimGripper(rx200)"
-
-    @property
-    def is_connected(self) -> bool:
-        return self._connected
 
     @property
     def command(self) -> str:
@@ -54,18 +49,6 @@ class SimGripper(Gripper):
     @property
     def max_width_m(self) -> float:
         return 2.0 * (self._offset_max_m - self._pad_thickness_m)
-
-    def connect(self) -> None:
-        if self._connected:
-            raise DeviceAlreadyConnectedError(f"{self} is already connected")
-        self._connected = True
-
-    def close(self) -> None:
-        self._connected = False
-
-    def _require(self) -> None:
-        if not self._connected:
-            raise DeviceNotConnectedError(f"{self} is not connected: call connect() (or SimWorkcell.start()) first")
 
     def _set_command(self, command: str, offset_m: float) -> None:
         with self._cell.lock:

@@ -17,7 +17,7 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 from armlab.devices.gripper import Gripper, GripperState
-from armlab.errors import DeviceAlreadyConnectedError, DeviceNotConnectedError
+from armlab.devices.sim.device import SimDevice
 
 if TYPE_CHECKING:
     from armlab.devices.sim.config import SuctionSimConfig
@@ -63,7 +63,7 @@ def lip_touching(model, data, lip_geoms: dict[int, int], body_to_object: dict[in
     return sorted(touching)
 
 
-class SuctionGripper(Gripper):
+class SuctionGripper(SimDevice, Gripper):
     """The simulated vacuum suction cup. width_m is always 0 (a cup has no width)."""
 
     gripper_type = "suction"
@@ -74,7 +74,6 @@ class SuctionGripper(Gripper):
         self._cell = cell
         self._config = config
         self._arm_name = arm_name
-        self._connected = False
         self._command = "release"
         self._command_s = 0.0
         self._sealed_on: str | None = None  # the object id the lip seals on (vacuum on), else None
@@ -86,10 +85,6 @@ class SuctionGripper(Gripper):
 
     def __str__(self) -> str:
         return f"SuctionGripper({self._arm_name})"
-
-    @property
-    def is_connected(self) -> bool:
-        return self._connected
 
     @property
     def command(self) -> str:
@@ -106,18 +101,6 @@ class SuctionGripper(Gripper):
         """Magnitude of the cup's low-passed acceleration (gravity excluded), m/s^2."""
         return float(np.linalg.norm(self._accel_m_s2))
 
-    def connect(self) -> None:
-        if self._connected:
-            raise DeviceAlreadyConnectedError(f"{self} is already connected")
-        self._connected = True
-
-    def close(self) -> None:
-        self._connected = False
-
-    def _require(self) -> None:
-        if not self._connected:
-            raise DeviceNotConnectedError(f"{self} is not connected: call connect() (or SimWorkcell.start()) first")
-
     def _set_command(self, command: str) -> None:
         with self._cell.lock:
             self._command = command
@@ -132,18 +115,20 @@ class SuctionGripper(Gripper):
         self._require()
         self._set_command("grasp")
         if wait:
-            start = self._command_s
-            self._cell.wait_for(lambda: self._sealed_on is not None or self._cell.sim_time_s - start >= self._config.settle_time_s,
-                                2.0 * self._config.settle_time_s + 1.0)
+            self._wait_settle(until=lambda: self._sealed_on is not None)
 
     def release(self, wait: bool = True) -> None:
         """Vent the cup; with wait=True, block settle_time_s (simulated) for the object to come free."""
         self._require()
         self._set_command("release")
         if wait:
-            start = self._command_s
-            self._cell.wait_for(lambda: self._cell.sim_time_s - start >= self._config.settle_time_s,
-                                2.0 * self._config.settle_time_s + 1.0)
+            self._wait_settle()
+
+    def _wait_settle(self, until=lambda: False) -> None:
+        """Block until until() holds or settle_time_s of simulated time has passed since the last command."""
+        start = self._command_s
+        self._cell.wait_for(lambda: until() or self._cell.sim_time_s - start >= self._config.settle_time_s,
+                            2.0 * self._config.settle_time_s + 1.0)
 
     def stop(self) -> None:
         """A cup has nothing to halt: the vacuum stays as commanded (dropping a held block is not a stop)."""
