@@ -74,7 +74,7 @@ class AutoRun:
         sim_time_s = self.sim_end_s - self.sim_start_s
         if self.name in EVENT_LIMITS_S:
             path = _after_first_motion(self.path)
-            score = score_run(self.name, self.level, truth, sim_time_s, None if path is None else path.tolist())
+            score = score_run(self.name, self.level, truth, sim_time_s, None if path is None else path.tolist(), self.workcell)
             return jsonable(score.to_dict()), ""
         score = score_job(self.name, truth, sim_time_s=sim_time_s, params=self.params, workcell=self.workcell)
         return jsonable(score.to_dict()), "not a competition event: scored by the job's own scorer, not the §7 judge"

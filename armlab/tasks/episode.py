@@ -36,6 +36,7 @@ def score_run(event: str, level: int | None, truth: dict, sim_time_s: float, gri
         feeder = truth.get("feeder")
         available = None if not feeder else sum(o["size"] == "large" for o in truth["objects"]) + int(feeder.get("remaining", 0))
         return judge(event, level, truth, sim_time_s=sim_time_s, gripper_path_m=gripper_path_m,
+                     workcell=None if workcell is None else getattr(workcell, "name", workcell),
                      **({"blocks_available": available} if event == "to_the_sky" and available else {}))
     return score_job(event, truth, sim_time_s=sim_time_s, workcell=workcell)
 

@@ -198,11 +198,11 @@ def tower_points(height: int) -> int:
     return 30 * min(height, 8) + 50 * max(height - 8, 0)
 
 
-def board_tag_centres_m() -> tuple[tuple[float, float], ...]:
-    """pick_stack's tag centres (x, y), from the board layout in configuration."""
+def board_tag_centres_m(workcell: str | None = None) -> tuple[tuple[float, float], ...]:
+    """pick_stack's tag centres (x, y), from the board layout in configuration (`workcell`'s; None = the default)."""
     from armlab.vision import load_perception_config  # config lookup kept here, in one place
 
-    return tuple((float(x), float(y)) for x, y in load_perception_config().tags.board_tags.values())
+    return tuple((float(x), float(y)) for x, y in load_perception_config(workcell=workcell).tags.board_tags.values())
 
 
 # ---------------------------------------------------------------------------------------------------
@@ -218,11 +218,11 @@ def _check_event_level(event: str, level: int) -> float:
     return EVENT_LIMITS_S[event]
 
 
-def _check_truth(truth) -> tuple[SceneObject, ...]:
+def _check_truth(truth, workcell: str | None = None) -> tuple[SceneObject, ...]:
     if not isinstance(truth, Mapping) or not isinstance(truth.get("objects"), list):
         raise ValueError("judge: truth must be a mapping with an 'objects' list (the SimWorkcell.truth() format)")
     try:
-        return Scene.from_dict({"objects": [_within_bound(obj) for obj in truth["objects"]]}).objects
+        return Scene.from_dict({"objects": [_within_bound(obj) for obj in truth["objects"]]}, workcell=workcell).objects
     except (ValueError, TypeError) as error:
         raise ValueError(f"judge: malformed truth object: {error}") from error
 
@@ -491,6 +491,7 @@ def judge(
     gripper_path_m=None,
     blocks_available: int | None = None,
     tag_centres_m=None,
+    workcell: str | None = None,
 ) -> Score:
     """Score a finished run of `event` at `level` from the final ground truth (DESIGN §7).
 
@@ -498,18 +499,19 @@ def judge(
     from the end of the job's first motion to the end (pick_stack's bonus; None = not recorded, bonus not earned).
     blocks_available: to_the_sky's block count (board + feeder; default the large blocks in truth).
     tag_centres_m: pick_stack's tag centres, (x, y) pairs or {id: (x, y)}; None = from configuration.
+    workcell: the workcell run on (its block sizes and board tags; None = the default).
     Raises ValueError for an unknown event or level, malformed truth, or bad arguments.
     """
     limit_s = _check_event_level(event, level)
     time_s = _check_time(sim_time_s)
-    objects = _check_truth(truth)
+    objects = _check_truth(truth, workcell)
     path = _check_path(gripper_path_m)
     if blocks_available is not None and event != "to_the_sky":
         raise ValueError(f"judge: blocks_available applies to to_the_sky only, not {event!r}")
     if tag_centres_m is not None:
         tags = _check_tag_centres(tag_centres_m)
     elif event == "pick_stack":
-        tags = _check_tag_centres(board_tag_centres_m())
+        tags = _check_tag_centres(board_tag_centres_m(workcell))
     level = int(level)
     within_limit = time_s <= limit_s
     blocks = [obj for obj in objects if obj.type == "block"]
