@@ -7,18 +7,16 @@ run_trajectory/run_gripper.
 
 from __future__ import annotations
 
-import time
 from collections.abc import Sequence
-from typing import Any
 
 import numpy as np
 
 from armlab.skills.manipulate import plan_pick_steps, plan_place_steps, run_steps
 from armlab.skills.perceive import block_near, target_point
 from armlab.station.arm_info import station_gripper_type
+from armlab.station.calibration_trust import calibration_summary
 from armlab.station.core import Station
 from armlab.station.jobs import Job, JobContext
-from armlab.station.telemetry import tag_to_dict
 
 BOARD_NOISE_M = 0.006  # depth readings this close to the board are the board
 
@@ -79,24 +77,6 @@ def calibrate_points(station: Station, pixels_px: Sequence, world_m: Sequence, s
                 "depth_check_error_m": report["depth_check_error_m"]}
 
     return station.start_job("calibrate", "calibrate", run, detail="from clicked points", source=source)
-
-
-def calibration_summary(calibration: Any, tags: Sequence, grid_px: np.ndarray) -> dict:
-    """The wire dict of GET /api/calibration (without 'calibrated')."""
-    depth_error = calibration.depth_check_error_m
-    return {
-        "reprojection_error_px": float(calibration.reprojection_error_px),
-        "camera_position_m": [float(x) for x in calibration.camera_position_m],
-        "T_world_camera": np.asarray(calibration.T_world_camera, dtype=float).tolist(),
-        "K": np.asarray(calibration.K, dtype=float).tolist(),
-        "dist": np.asarray(calibration.dist, dtype=float).ravel().tolist(),
-        "width": int(calibration.width),
-        "height": int(calibration.height),
-        "depth_check_error_m": None if depth_error is None else float(depth_error),
-        "grid_points_px": np.asarray(grid_px, dtype=float).round(2).tolist(),
-        "tags": [tag_to_dict(tag) for tag in tags],
-        "time": time.time(),
-    }
 
 
 def grab(station: Station, position_m=None, pixel=None, source: str | None = None) -> Job:
