@@ -31,6 +31,38 @@ class DiscontinuousPath(ValueError):
     """IK switched branch along a Cartesian segment (the joints would jump); the message names the joint."""
 
 
+def branch_jump(positions: np.ndarray) -> tuple[int, int, float] | None:
+    """(sample, joint, jump_rad) of the largest joint change between consecutive samples when it is more
+    than MAX_SAMPLE_STEP_RAD (IK changed branch: sample is the index of the step's first row), else None."""
+    jumps = np.abs(np.diff(positions, axis=0))
+    if not jumps.size:
+        return None
+    sample, joint = np.unravel_index(int(np.argmax(jumps)), jumps.shape)
+    jump = jumps[sample, joint]
+    return (int(sample), int(joint), float(jump)) if jump > MAX_SAMPLE_STEP_RAD else None
+
+
+def plan_retimed(arm, solve_at, duration_s: float, ramp_s: float, label: str, rate_hz: float = DEFAULT_RATE_HZ) -> JointTrajectory:
+    """A rest-to-rest trajectory through solve_at(s) (joint rows for path fractions s in [0, 1]) on a
+    trapezoid of duration_s with ramps of ramp_s; stretched (and re-solved) while a joint would exceed
+    its velocity or acceleration limit (near a singularity). ValueError naming `label` when
+    _MAX_RETIMES stretches are not enough."""
+    velocity_limit = np.asarray(arm.velocity_limit_rad_s, float) * LIMIT_MARGIN
+    accel_limit = np.asarray(arm.accel_limit_rad_s2, float) * LIMIT_MARGIN
+    for _ in range(_MAX_RETIMES):
+        times = sample_times(duration_s, rate_hz)
+        s = trapezoid_profile(times, duration_s, ramp_s)
+        positions = solve_at(s)
+        slow_down = retime_path(positions, times, velocity_limit, accel_limit)
+        if slow_down <= 1.0:
+            return JointTrajectory(times_s=times, positions_rad=positions)
+        # Slowing by k scales velocity by 1/k and acceleration by 1/k²: stretch both phases.
+        factor = slow_down * 1.02
+        duration_s *= factor
+        ramp_s *= factor
+    raise ValueError(f"{label}: joints still too fast after {_MAX_RETIMES} slow-downs (too close to a singularity)")
+
+
 def gripper_position_m(arm, q_rad) -> np.ndarray:
     """World position (3,) of the gripper point at q."""
     return np.asarray(arm.fk(np.asarray(q_rad, float)), float)[:3, 3]
@@ -67,13 +99,13 @@ def solve_path(arm, q_start, targets_m: np.ndarray, pitch, yaw, label: str) -> n
         positions[0] = q_start
         for index in range(1, len(targets_m)):
             positions[index] = arm.ik(targets_m[index], pitch=float(pitches[index]), yaw=yaw, q_seed=positions[index - 1])
-    jumps = np.abs(np.diff(positions, axis=0))
-    sample, joint = np.unravel_index(int(np.argmax(jumps)), jumps.shape)
-    if jumps[sample, joint] > MAX_SAMPLE_STEP_RAD:
+    jump = branch_jump(positions)
+    if jump is not None:
+        sample, joint, jump_rad = jump
         names = getattr(arm, "joint_names", None)
         name = names[joint] if names is not None else f"joint {joint}"
         raise DiscontinuousPath(
-            f"{label}: {name} jumps {jumps[sample, joint]:.3f} rad at "
+            f"{label}: {name} jumps {jump_rad:.3f} rad at "
             f"z = {targets_m[sample + 1, 2] * 1000:.1f} mm (IK changed branch)"
         )
     return positions
@@ -85,20 +117,8 @@ def plan_path(
     """A rest-to-rest trajectory through IK of a path: targets_at(s) (N, 3) and pitch_at(s) (N,) for path
     fractions s in [0, 1] following a trapezoid of duration_s with ramps of ramp_s; slowed down (and
     re-solved) while a joint would exceed its velocity or acceleration limit (near a singularity)."""
-    velocity_limit = np.asarray(arm.velocity_limit_rad_s, float) * LIMIT_MARGIN
-    accel_limit = np.asarray(arm.accel_limit_rad_s2, float) * LIMIT_MARGIN
-    for _ in range(_MAX_RETIMES):
-        times = sample_times(duration_s, rate_hz)
-        s = trapezoid_profile(times, duration_s, ramp_s)
-        positions = solve_path(arm, q_start, targets_at(s), pitch_at(s), yaw_rad, label)
-        slow_down = retime_path(positions, times, velocity_limit, accel_limit)
-        if slow_down <= 1.0:
-            return JointTrajectory(times_s=times, positions_rad=positions)
-        # Slowing by k scales velocity by 1/k and acceleration by 1/k²: stretch both phases.
-        factor = slow_down * 1.02
-        duration_s *= factor
-        ramp_s *= factor
-    raise ValueError(f"{label}: joints still too fast after {_MAX_RETIMES} slow-downs (too close to a singularity)")
+    return plan_retimed(arm, lambda s: solve_path(arm, q_start, targets_at(s), pitch_at(s), yaw_rad, label),
+                        duration_s, ramp_s, label, rate_hz)
 
 
 def plan_vertical_segment(

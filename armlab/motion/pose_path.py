@@ -14,18 +14,10 @@ import math
 import numpy as np
 
 from armlab.devices.arm import JointTrajectory
-from armlab.motion.cartesian import MAX_SAMPLE_STEP_RAD, DiscontinuousPath
-from armlab.motion.trajectory import (
-    DEFAULT_RATE_HZ,
-    LIMIT_MARGIN,
-    minimum_time,
-    retime_path,
-    sample_times,
-    trapezoid_profile,
-)
+from armlab.motion.cartesian import MAX_SAMPLE_STEP_RAD, DiscontinuousPath, branch_jump, plan_retimed
+from armlab.motion.trajectory import DEFAULT_RATE_HZ, minimum_time, sample_times
 
 FULL_POSE_MIN_DOF = 6  # arms with at least this many joints hold the whole tool orientation
-_MAX_RETIMES = 6
 
 
 def holds_full_pose(arm) -> bool:
@@ -64,11 +56,11 @@ def solve_pose_path(arm, q_start, poses: np.ndarray, label: str) -> np.ndarray:
         for index in range(1, len(poses)):
             if not ok[index - 1] or np.abs(positions[index] - positions[index - 1]).max() > MAX_SAMPLE_STEP_RAD:
                 positions[index] = arm.ik_pose(poses[index], q_seed=positions[index - 1])
-    jumps = np.abs(np.diff(positions, axis=0))
-    sample, joint = np.unravel_index(int(np.argmax(jumps)), jumps.shape)
-    if jumps[sample, joint] > MAX_SAMPLE_STEP_RAD:
+    jump = branch_jump(positions)
+    if jump is not None:
+        sample, joint, jump_rad = jump
         raise DiscontinuousPath(
-            f"{label}: {arm.joint_names[joint]} jumps {jumps[sample, joint]:.3f} rad at "
+            f"{label}: {arm.joint_names[joint]} jumps {jump_rad:.3f} rad at "
             f"({', '.join(f'{v * 1000:.1f}' for v in poses[sample + 1, :3, 3])}) mm (IK changed branch)"
         )
     return positions
@@ -79,19 +71,7 @@ def plan_pose_path(arm, q_start, poses_at, duration_s: float, ramp_s: float, lab
     """A rest-to-rest trajectory through ik_pose of poses_at(s) (N, 4, 4) for path fractions s in [0, 1]
     on a trapezoid of duration_s (ramps ramp_s), slowed down while a joint would pass its velocity or
     acceleration limit (as armlab.motion.cartesian.plan_path)."""
-    velocity_limit = np.asarray(arm.velocity_limit_rad_s, float) * LIMIT_MARGIN
-    accel_limit = np.asarray(arm.accel_limit_rad_s2, float) * LIMIT_MARGIN
-    for _ in range(_MAX_RETIMES):
-        times = sample_times(duration_s, rate_hz)
-        s = trapezoid_profile(times, duration_s, ramp_s)
-        positions = solve_pose_path(arm, q_start, poses_at(s), label)
-        slow_down = retime_path(positions, times, velocity_limit, accel_limit)
-        if slow_down <= 1.0:
-            return JointTrajectory(times_s=times, positions_rad=positions)
-        factor = slow_down * 1.02
-        duration_s *= factor
-        ramp_s *= factor
-    raise ValueError(f"{label}: joints still too fast after {_MAX_RETIMES} slow-downs (too close to a singularity)")
+    return plan_retimed(arm, lambda s: solve_pose_path(arm, q_start, poses_at(s), label), duration_s, ramp_s, label, rate_hz)
 
 
 def plan_straight_pose_segment(arm, q_start_rad, goal_m, speed_m_s: float, accel_m_s2: float, label: str | None = None,
