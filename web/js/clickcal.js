@@ -7,6 +7,7 @@
 // (PUT /api/calibration/settings) and the calibration's trust state from the status.
 
 import { fmtMm } from "./geometry.js";
+import { appendRows } from "./panels.js";
 
 export const MIN_POINTS = 4;
 const MAX_POINTS = 200;
@@ -200,14 +201,7 @@ export class ClickCalibration {
     ];
     const dl = $("clickcal-result");
     dl.replaceChildren();
-    for (const [k, v] of rows) {
-      const dt = document.createElement("dt");
-      dt.textContent = k;
-      const dd = document.createElement("dd");
-      dd.textContent = v;
-      dd.dataset.key = k;
-      dl.append(dt, dd);
-    }
+    appendRows(dl, rows);
     dl.dataset.result = JSON.stringify(result);
   }
 

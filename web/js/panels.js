@@ -207,14 +207,19 @@ export function renderCalibration(c) {
   if (Array.isArray(c.tags)) rows.push(["tags", String(c.tags.length)]);
   if (Array.isArray(c.grid_points_px)) rows.push(["grid points", String(c.grid_points_px.length)]);
   if (c.time) rows.push(["at", typeof c.time === "number" ? new Date(c.time * 1000).toTimeString().slice(0, 8) : String(c.time)]);
-  rows.forEach(([k, v]) => {
+  appendRows(dl, rows);
+}
+
+/** Append a <dt>key</dt><dd data-key="key">value</dd> pair to the <dl> for each [key, value] row. */
+export function appendRows(dl, rows) {
+  for (const [k, v] of rows) {
     const dt = document.createElement("dt");
     dt.textContent = k;
     const dd = document.createElement("dd");
     dd.textContent = v;
     dd.dataset.key = k;
     dl.append(dt, dd);
-  });
+  }
 }
 
 function escapeHtml(s) {

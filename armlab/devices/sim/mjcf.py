@@ -17,6 +17,7 @@ from armlab.devices.sim.checkerboard import BODY_NAME as CHECKERBOARD, checkerbo
 from armlab.devices.sim.config import SimCameraConfig, SimConfig
 from armlab.devices.sim.feeder import FEEDER_PROBE, parked_objects
 from armlab.devices.sim.mjcf_dh import DhArmGeometry
+from armlab.devices.sim.mjcf_numbers import fmt_numbers as _fmt, quat_wxyz_from_matrix
 from armlab.scene import Scene, SceneObject
 from armlab.workcell import Workcell, load_workcell
 
@@ -71,19 +72,6 @@ class ArmGeometry:
     def mjcf(self, sim: SimConfig) -> tuple[str, str]:
         """(worldbody xml of the arm with its fingers, actuator xml)."""
         return _arm_xml(self, sim), _finger_arm_actuators(self, sim)
-
-
-def _fmt(values) -> str:
-    return " ".join(f"{float(v):.9g}" for v in np.ravel(values))
-
-
-def quat_wxyz_from_matrix(R: np.ndarray) -> np.ndarray:
-    """Unit quaternion (w, x, y, z) of a rotation matrix."""
-    import mujoco
-
-    quat = np.zeros(4)
-    mujoco.mju_mat2Quat(quat, np.ascontiguousarray(R, dtype=float).ravel())
-    return quat
 
 
 def _arm_xml(arm: ArmGeometry, sim: SimConfig) -> str:

@@ -19,6 +19,7 @@ import numpy as np
 
 from armlab.config import read_config_file, resolve_config_path
 from armlab.devices.sim.config import ArmServoConfig, SimConfig
+from armlab.devices.sim.mjcf_numbers import fmt_numbers as _fmt, quat_wxyz_from_matrix as _quat
 
 GRIPPER_SITE = "gripper_point"  # same name as the RX200 model's (armlab.devices.sim.mjcf)
 CUP_BODY = "suction_cup"
@@ -30,18 +31,6 @@ SUCTION_ACTUATOR = "suction"
 # contact for the vacuum to pull through.
 LIP_MARGIN_M = 0.001
 ARM_GEOM = 'contype="2" conaffinity="1" group="1"'
-
-
-def _fmt(values) -> str:
-    return " ".join(f"{float(v):.9g}" for v in np.ravel(values))
-
-
-def _quat(R: np.ndarray) -> np.ndarray:
-    import mujoco
-
-    quat = np.zeros(4)
-    mujoco.mju_mat2Quat(quat, np.ascontiguousarray(R, dtype=float).ravel())
-    return quat
 
 
 def _rx(angle: float) -> np.ndarray:
