@@ -1,0 +1,129 @@
+"""Response bodies of the REST routes: errors, the station's status, jobs, detections, calibration."""
+
+from __future__ import annotations
+
+from typing import Any, Literal
+
+from pydantic import Field
+
+from server.wire_base import Vector3, Wire
+
+class ErrorBody(Wire):
+    code: str
+    message: str
+    allowed: list[str] | None = None
+
+
+class ErrorResponse(Wire):
+    error: ErrorBody
+
+
+class GripperStatus(Wire):
+    width_m: float
+    holding: bool
+    command: str
+
+
+class GripperPose(Wire):
+    position_m: Vector3
+    pitch_rad: float
+    yaw_rad: float
+
+
+class JobInfo(Wire):
+    id: str
+    name: str
+    detail: str = ""
+    state: Literal["running", "succeeded", "failed", "cancelled"]
+    progress: float
+    message: str
+    started_s: float
+    finished_s: float | None = None
+    result: Any = None
+    extra: dict[str, Any] | None = Field(None, description="job-specific live details; autonomous jobs: {task: TaskProgress}")
+
+
+class JobResponse(Wire):
+    job: JobInfo | None
+
+
+class Status(Wire):
+    state: Literal["idle", "calibrate", "teach", "repeat", "click_grab", "click_drop", "auto_sort", "estop", "fault"]
+    detail: str
+    joints_rad: list[float]
+    joint_names: list[str]
+    joint_limits_rad: list[list[float]] = Field(description="[lower, upper] per joint")
+    gripper: GripperStatus
+    gripper_pose: GripperPose
+    moving: bool
+    torque_enabled: bool = Field(True, description="motor torque on (the arm holds); off = limp, it falls unless held")
+    calibrated: bool
+    camera_warning: str | None = Field(None, description='"camera moved: recalibrate (...)" when the board tags no longer sit where the calibration puts them')
+    calibration_state: Literal["checking", "trusted", "rejected"] | None = Field(
+        None, description="trusted: in use; checking: restored at start, not used until the board tags confirm it; rejected: restored but the camera moved since (recalibrate); None: no calibration")
+    self_recalibrate: bool = Field(False, description="the station recalibrates itself from the board tags when idle once the camera moved (PUT /api/calibration/settings)")
+    backend: Literal["sim", "real"]
+    controller: str | None = Field(description="who holds the control lease (None: free); only it may command")
+    controller_since_s: float | None = Field(None, description="when it took control (time.time())")
+    devices_lost: dict[str, str] = Field(default_factory=dict, description="devices not answering, with the reason")
+    job: JobInfo | None
+    allowed_commands: list[str]
+    time_s: float
+
+
+class Detection(Wire):
+    id: int
+    color: str | None
+    size: str | None
+    position_m: Vector3 = Field(description="top face centre, world frame")
+    yaw_rad: float
+    height_m: float
+    stack_level: int
+    center_px: list[float]
+    is_cube: bool
+    occluded: bool
+    aruco_id: int | None = None
+    destination: Any = None
+
+
+class DetectionsResponse(Wire):
+    data: list[Detection]
+    count: int
+    time_s: float
+    frame_sequence: int
+    stale: bool = Field(False, description="True while the camera is lost or perception is old: data is then empty")
+    stale_reason: str | None = None
+
+
+class TagInfo(Wire):
+    id: int
+    center_px: list[float]
+    corners_px: list[list[float]]
+    hamming: int | None = Field(None, description="bits the decoder corrected (None: an OpenCV ArUco dictionary does not say)")
+    decision_margin: float | None = Field(None, description="the AprilTag library's confidence (higher is surer; None for ArUco)")
+
+
+class CalibrationInfo(Wire):
+    calibrated: bool
+    reprojection_error_px: float | None = None
+    camera_position_m: Vector3 | None = None
+    T_world_camera: list[list[float]] | None = None
+    K: list[list[float]] | None = None
+    dist: list[float] | None = None
+    width: int | None = None
+    height: int | None = None
+    depth_check_error_m: float | None = None
+    grid_points_px: list[list[float]] | None = None
+    tags: list[TagInfo] | None = None
+    time: float | None = None
+    method: str | None = Field(None, description="'points' for a calibration from clicked points (tags otherwise)")
+    points: dict | None = Field(None, description="clicked-point fit: homography, reprojection and per-point errors (px)")
+
+
+class PixelToWorldResponse(Wire):
+    """on: 'depth' (the newest frame, the robot's own readings left out), 'remembered' (under the arm: the
+    depth last seen there without it) or 'board' (the viewing ray meets z = 0)."""
+
+    position_m: Vector3
+    on: Literal["board", "depth", "remembered"]
+    depth_mm: float | None = Field(None, description="the raw depth reading at the pixel, mm (0: no reading; None: no depth image)")
