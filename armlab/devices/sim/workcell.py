@@ -1,5 +1,6 @@
 """SimWorkcell: the MuJoCo workcell that owns the model, its lock, the clock (real-time threads or
-deterministic fast stepping) and the ground truth, and hands out the sim Arm, Gripper and Camera.
+deterministic fast stepping) and the ground truth (its queries: armlab.devices.sim.truth), and hands out
+the sim Arm, Gripper and Camera.
 
 Fast mode (realtime=False): physics advances only in step() and in blocking device calls, so a seed and
 a sequence of calls always give the same result. Real-time mode: a physics thread paced to the wall
@@ -33,9 +34,10 @@ from armlab.devices.sim.gripper import SimGripper
 from armlab.devices.sim.arm_select import select_arm
 from armlab.devices.sim.mjcf import CAMERA_NAME, GRIPPER_SITE, OBJECT_PREFIX, build_model_xml, quat_wxyz_from_matrix
 from armlab.devices.sim.mjcf_dh import CUP_BODY, LIP_MARGIN_M, LIP_PREFIX, SUCTION_ACTUATOR, DhArmGeometry
-from armlab.devices.sim.suction import SuctionGripper, lip_touching, seal_object
-from armlab.devices.sim.path import MAX_DURATION_S, PathRecorder
+from armlab.devices.sim.suction import SuctionGripper, seal_object
+from armlab.devices.sim.path import PathRecorder
 from armlab.devices.sim.render import RawImages, RenderThread
+from armlab.devices.sim.truth import SimTruth
 from armlab.scene import Scene
 from armlab.workcell import load_workcell
 
@@ -45,7 +47,7 @@ MAX_CATCH_UP_S = 0.1  # real time: if physics falls this far behind the wall clo
 PAD_GEOMS = ("left_pad", "right_pad")
 
 
-class SimWorkcell:
+class SimWorkcell(SimTruth):
     """The simulated workcell (the RX200 with fingers, or a DH arm with a suction cup, per the workcell config). See the module docstring for the clock semantics."""
 
     def __init__(self, config: SimWorkcellConfig | None = None, scene: Scene | None = None) -> None:
@@ -413,34 +415,7 @@ class SimWorkcell:
     def __exit__(self, *exc) -> None:
         self.close()
 
-    # ----------------------------------------------------------- ground truth
-    def gripper_point_m(self) -> np.ndarray:
-        """True world position of the gripper point (for tests and scorers)."""
-        with self.lock:
-            return self._data.site_xpos[self._gripper_site].copy()
-
-    def start_path_recording(self, period_s: float = 0.05, max_duration_s: float = MAX_DURATION_S) -> None:
-        """Record the gripper point every period_s of simulated time from now on (inside the physics
-        stepping, so fast mode records too), replacing any earlier recording. Memory is bounded: beyond
-        max_duration_s of samples the oldest are dropped."""
-        recorder = PathRecorder(period_s, max_duration_s)  # validates before anything changes
-        with self.lock:
-            recorder.record(float(self._data.time), self._data.site_xpos[self._gripper_site])
-            self._path = recorder
-
-    def stop_path_recording(self) -> np.ndarray:
-        """Stop recording; returns the samples (as gripper_path())."""
-        with self.lock:
-            path = self.gripper_path()
-            self._path = None
-            return path
-
-    def gripper_path(self) -> np.ndarray:
-        """(N, 4) samples (sim_time_s, x, y, z) of the gripper point, oldest first; (0, 4) if not recording.
-        Each sample is gripper_point_m() as it read at that simulated time."""
-        with self.lock:
-            return self._path.samples() if self._path is not None else np.empty((0, 4))
-
+    # ------------------------------------------------------------ the rig (camera mount, checkerboard)
     def bump_camera(self, T_old_new: np.ndarray) -> None:
         """Move the camera mount by T_old_new (4x4, in the camera's own OpenCV frame), as a knock on
         the rig would: later frames and truth() use the new pose; scene changes keep it."""
@@ -469,70 +444,3 @@ class SimWorkcell:
         self._data.mocap_pos[mocap] = position
         self._data.mocap_quat[mocap] = quat_wxyz_from_matrix(R)
         mujoco.mj_kinematics(self._model, self._data)
-
-    def _suction_truth(self) -> dict:
-        """Ground truth of the cup (under the lock): the objects the lip touches, what the vacuum holds."""
-        data = self._data
-        return {
-            "left_contacts": [], "right_contacts": [],
-            "lip_contacts": lip_touching(self._model, self._data, self._lip_geoms, self._body_to_object),
-            "holding_id": self.gripper.holding_id,
-            "vacuum": self.gripper.command == "grasp",
-            "width_m": 0.0,
-            "position_m": data.site_xpos[self._gripper_site].tolist(),
-            "quat_wxyz": data.xquat[self._gripper_body].tolist(),
-        }
-
-    def feeder_status(self) -> dict | None:
-        """to_the_sky feeder: {spot_m, count, fed, remaining}, or None if the scene has no feeder."""
-        with self.lock:
-            return self._feeder.status() if self._feeder is not None else None
-
-    def truth(self) -> dict:
-        """Ground truth: camera (K, size, true T_world_camera), objects (pose; feeder blocks only once
-        fed, as feed_0, feed_1, ...), the feeder's state (None without one), gripper contacts, arm."""
-        with self.lock:
-            data = self._data
-            objects = []
-            on_board = [(self._object_bodies[obj.id], obj) for obj in self._scene.objects]
-            if self._feeder is not None:
-                on_board += self._feeder.fed_bodies()
-            for body, obj in on_board:
-                objects.append(obj.posed_dict(data.xpos[body], data.xquat[body]))
-            if self._suction:
-                state = self._suction_truth()
-            contacts = {"left_pad": set(), "right_pad": set()}
-            for contact in data.contact[: data.ncon]:
-                for pad_geom, other_geom in ((contact.geom1, contact.geom2), (contact.geom2, contact.geom1)):
-                    pad = self._pad_geoms.get(int(pad_geom))
-                    obj_id = self._body_to_object.get(int(self._model.geom_bodyid[other_geom]))
-                    if pad is not None and obj_id is not None:
-                        contacts[pad].add(obj_id)
-            both = sorted(contacts["left_pad"] & contacts["right_pad"])
-            left, right = self.finger_positions() if not self._suction else (0.0, 0.0)
-            state = state if self._suction else {
-                "left_contacts": sorted(contacts["left_pad"]),
-                "right_contacts": sorted(contacts["right_pad"]),
-                "holding_id": both[0] if both and self.gripper.command == "grasp" else None,
-                "width_m": left + right - 2.0 * self._geometry.pad_thickness_m,
-                "position_m": data.site_xpos[self._gripper_site].tolist(),
-                "quat_wxyz": data.xquat[self._gripper_body].tolist(),
-            }
-            arm = {"joint_names": list(self._geometry.joint_names), "position_rad": self.arm_positions().tolist()}
-            sim_time = float(data.time)
-            feeder = self._feeder.status() if self._feeder is not None else None
-        K = self.camera.intrinsics.K
-        return {
-            "camera": {
-                "K": K.tolist(),
-                "width": self.camera.intrinsics.width,
-                "height": self.camera.intrinsics.height,
-                "T_world_camera": self._T_world_camera.tolist(),
-                "dist": list(self.camera.intrinsics.dist),
-            },
-            "objects": objects,
-            "feeder": feeder,
-            "gripper": state,
-            "arm": arm,
-            "time_s": sim_time,
-        }
