@@ -22,6 +22,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
+from functools import lru_cache
 
 import numpy as np
 
@@ -30,13 +31,6 @@ from armlab.station.core import Station
 PITCH_STEP_RAD = math.radians(5.0)
 MIN_PITCH_RAD = 0.0  # never grasp from the board pointing upward (the wrist would be below the fingers)
 ALIGN_TOLERANCE_RAD = math.radians(8.0)  # a block this far off its bearing (mod 90°) still closes across faces
-# The RX200 gripper's parts around the finger plane (the simulation's mjcf: palm 18 mm either side of it,
-# its front 68.6 mm behind the gripper point; finger links 12 mm either side, tips 8 mm beyond the point).
-PALM_HALF_HEIGHT_M = 0.018
-PALM_FRONT_BEHIND_M = 0.0686
-FINGER_HALF_HEIGHT_M = 0.012
-FINGER_TIP_BEYOND_M = 0.008
-OPEN_FINGER_OUTER_M = 0.049  # the palm's and the open fingers' outer faces from the finger plane's centre
 TABLE_MARGIN_M = 0.004  # the gripper's lowest part keeps this far above the board when grasping
 SLIDE_IN_M = 0.05  # high places: the held block starts this far toward the base from its release point ...
 SLIDE_RISE_M = 0.01  # ... and this much higher, then slides in over the tower top
@@ -84,11 +78,22 @@ def gripper_rotation(model, pitch_rad: float, bearing: float) -> np.ndarray:
     return np.asarray(model.fk(q), float)[:3, :3]
 
 
+@lru_cache(maxsize=1)
+def gripper_outline():
+    """The RX200 finger gripper's palm and fingers around the finger plane (armlab.devices.sim.mjcf's
+    FingerGripperOutline, from config/arms/rx200.yaml and config/sim.yaml: the sizes the simulation builds)."""
+    from armlab.devices.sim.config import load_sim_config
+    from armlab.devices.sim.mjcf import ArmGeometry, finger_gripper_outline
+
+    return finger_gripper_outline(ArmGeometry.load("rx200"), load_sim_config())
+
+
 def lowest_below_gripper_point_m(pitch_rad: float) -> float:
     """How far below the gripper point the gripper's lowest part (palm or finger) reaches at this pitch."""
     s, c = math.sin(pitch_rad), math.cos(pitch_rad)
-    palm = PALM_HALF_HEIGHT_M * c - PALM_FRONT_BEHIND_M * s
-    finger = FINGER_HALF_HEIGHT_M * c + FINGER_TIP_BEYOND_M * s
+    outline = gripper_outline()
+    palm = outline.palm_half_height_m * c - outline.palm_front_behind_m * s
+    finger = outline.finger_half_height_m * c + outline.finger_tip_beyond_m * s
     return max(palm, finger)
 
 
@@ -139,8 +144,10 @@ def gripper_points(model, positions_rad: np.ndarray) -> np.ndarray:
     frames = np.asarray(model.fk(np.asarray(positions_rad, float)))
     if frames.ndim == 2:
         frames = frames[None]
-    local = np.array([[x, side * y, 0.0] for x, y in ((FINGER_TIP_BEYOND_M, OPEN_FINGER_OUTER_M), (-PALM_FRONT_BEHIND_M, OPEN_FINGER_OUTER_M),
-                                                    (-PALM_FRONT_BEHIND_M - 0.025, OPEN_FINGER_OUTER_M)) for side in (-1.0, 1.0)])
+    outline = gripper_outline()
+    local = np.array([[x, side * outline.open_outer_m, 0.0]
+                      for x in (outline.finger_tip_beyond_m, -outline.palm_front_behind_m, -outline.palm_back_behind_m)
+                      for side in (-1.0, 1.0)])
     return frames[:, None, :3, 3] + np.einsum("nij,kj->nki", frames[:, :3, :3], local)
 
 
@@ -159,7 +166,7 @@ def _check(station: Station, trajectories: list, boxes: list, grasp: SideGrasp |
         positions = trajectory.positions_rad[:: max(1, len(trajectory.positions_rad) // 40)]
         if collision is None:
             sides = gripper_points(model, positions)
-            collision = _corner_hit(sides[1:], boxes, FINGER_HALF_HEIGHT_M, skip=sides[0])
+            collision = _corner_hit(sides[1:], boxes, gripper_outline().finger_half_height_m, skip=sides[0])
         if collision is None and grasp is not None:
             collision = _corner_hit(held_block_corners(model, positions, grasp, edge_m), block_boxes or boxes, BLOCK_MARGIN_M)
         if collision is not None:

@@ -96,6 +96,10 @@ class GripperSimConfig(StrictModel):
     pad_width_m: Positive
     pad_length_m: Positive
     tip_beyond_gripper_point_m: float
+    palm_depth_m: Positive
+    palm_half_height_m: Positive
+    palm_side_margin_m: NonNegative
+    finger_link_margin_m: NonNegative
     pad_friction: list[NonNegative] = Field(min_length=3, max_length=3)
     pad_solref: list[float] = Field(min_length=2, max_length=2)
     pad_solimp: list[float] = Field(min_length=3, max_length=5)

@@ -74,6 +74,33 @@ class ArmGeometry:
         return _arm_xml(self, sim), _finger_arm_actuators(self, sim)
 
 
+@dataclass(frozen=True)
+class FingerGripperOutline:
+    """The finger gripper's parts around the finger plane, relative to the gripper point (x = approach axis),
+    as _arm_xml builds them: for planners that keep the palm and open fingers clear of things."""
+
+    palm_half_height_m: float  # palm extent either side of the finger plane
+    palm_front_behind_m: float  # the palm's front face, this far behind the gripper point
+    palm_back_behind_m: float  # the palm's back face (the wrist_rotate joint), this far behind it
+    finger_half_height_m: float  # finger link extent either side of the finger plane
+    finger_tip_beyond_m: float  # the finger tips, this far beyond the gripper point
+    open_outer_m: float  # the palm's and the open fingers' outer faces from the finger plane's centre
+
+
+def finger_gripper_outline(arm: ArmGeometry, sim: SimConfig) -> FingerGripperOutline:
+    """The outline of `arm`'s simulated finger gripper (config/arms/<arm>.yaml gripper, config/sim.yaml gripper)."""
+    g = sim.gripper
+    gripper_point_m = arm.origins_m["gripper_point"][0]
+    return FingerGripperOutline(
+        palm_half_height_m=g.palm_half_height_m,
+        palm_front_behind_m=gripper_point_m - g.palm_depth_m,
+        palm_back_behind_m=gripper_point_m,
+        finger_half_height_m=0.5 * g.pad_width_m + g.finger_link_margin_m,
+        finger_tip_beyond_m=g.tip_beyond_gripper_point_m,
+        open_outer_m=arm.finger_offset_max_m + g.palm_side_margin_m,
+    )
+
+
 def _arm_xml(arm: ArmGeometry, sim: SimConfig) -> str:
     """The arm's kinematic tree. Joint axes: waist z; shoulder, elbow, wrist_angle +y (positive pitches the
     arm forward and down); wrist_rotate +x. Fingers slide along the gripper's +-y axis."""
@@ -95,7 +122,7 @@ def _arm_xml(arm: ArmGeometry, sim: SimConfig) -> str:
     gp = o["gripper_point"][0]
     tip = gp + g.tip_beyond_gripper_point_m
     pad_x = tip - 0.5 * g.pad_length_m
-    finger_start = 0.025
+    finger_start = g.palm_depth_m
     finger_len = tip - finger_start
     pad_t = arm.pad_thickness_m
     fmax = arm.finger_offset_max_m
@@ -108,7 +135,7 @@ def _arm_xml(arm: ArmGeometry, sim: SimConfig) -> str:
                   <inertial pos="{finger_start + 0.5 * finger_len:.9g} {sign * 0.004:.9g} 0" mass="{g.finger_mass_kg}" diaginertia="4e-6 4e-6 1e-6"/>
                   <joint name="{side}_finger" type="slide" axis="0 {sign:g} 0" range="{fmin} {fmax}" ref="{fmax}"
                          armature="{g.armature_kg}" damping="{g.damping_n_s_m}"/>
-                  <geom name="{side}_finger_link" type="box" size="{0.5 * finger_len:.9g} 0.004 {0.5 * g.pad_width_m + 0.002:.9g}"
+                  <geom name="{side}_finger_link" type="box" size="{0.5 * finger_len:.9g} 0.004 {0.5 * g.pad_width_m + g.finger_link_margin_m:.9g}"
                         pos="{finger_start + 0.5 * finger_len:.9g} {sign * 0.004:.9g} 0" material="arm_dark" {arm_geom}/>
                   <geom name="{side}_pad" type="box" size="{0.5 * g.pad_length_m:.9g} {0.5 * pad_t:.9g} {0.5 * g.pad_width_m:.9g}"
                         pos="{pad_x:.9g} {-sign * 0.5 * pad_t:.9g} 0" material="pad" condim="4" friction="{_fmt(g.pad_friction)}"
@@ -137,7 +164,7 @@ def _arm_xml(arm: ArmGeometry, sim: SimConfig) -> str:
               <body name="gripper_link" pos="{_fmt(o['wrist_rotate'])}" gravcomp="1">
                 <inertial pos="0.03 0 0" mass="{m[4]}" diaginertia="1e-4 1e-4 1e-4"/>
                 {joint(4, "1 0 0")}
-                <geom name="palm" type="box" size="0.0125 {fmax + 0.012:.9g} 0.018" pos="0.0125 0 0" material="arm_dark" {arm_geom}/>
+                <geom name="palm" type="box" size="{0.5 * finger_start:.9g} {fmax + g.palm_side_margin_m:.9g} {g.palm_half_height_m:.9g}" pos="{0.5 * finger_start:.9g} 0 0" material="arm_dark" {arm_geom}/>
                 <site name="{GRIPPER_SITE}" pos="{gp:.9g} 0 0" size="0.003" rgba="1 0 1 0.5" group="4"/>
                 {finger("left", 1.0)}
                 {finger("right", -1.0)}
