@@ -52,7 +52,7 @@ def calibrate_from_board_tags(station: Any, frame: Any) -> tuple[Any, dict]:
     from armlab.vision import calibrate_extrinsics, detect_tags
     from armlab.vision.calibration import project_grid
 
-    intrinsics = frame.intrinsics or station.camera.intrinsics
+    intrinsics = station.intrinsics.current()  # measured for this camera, else its own (as the operator's calibration)
     tags = detect_tags(frame.color_bgr, station.perception_config)
     calibration = calibrate_extrinsics(frame.color_bgr, intrinsics, station.perception_config, frame.depth_mm, tags=tags)
     return calibration, calibration_summary(calibration, tags, project_grid(calibration, station.perception_config))
