@@ -1,6 +1,7 @@
 """sort_by_tag (the UR3 write-up): every block whose top carries an ArUco id goes to the place its id
 names (workcell config: block_tags → places_m), stacked there when several blocks share an id
-(large ones first). A block whose id has no destination in the workcell config stays where it is, and
+(large ones first). A tag too small to read goes by its block's colour when exactly one configured id has
+that colour (perception sets the destination, armlab.vision.blocks). A block whose id has no destination in the workcell config stays where it is, and
 the job fails once the others are sorted, naming that block (UnknownTagDestination)."""
 
 from __future__ import annotations
@@ -35,7 +36,8 @@ def make_policy(level: int | None, params: dict, runner: TaskRunner):
         for block in sorted(tagged, key=lambda b: (-b.get("stack_level", 1), b["size"] != "large")):
             column = columns[block["destination"]]
             yaw = column.top["yaw_rad"] if column.top is not None else 0.0
-            moves.append(Move(block, column.surface_m(), f"id {block['aruco_id']} → place {block['destination']}", yaw_rad=yaw,
+            tag = f"id {block['aruco_id']}" if block.get("aruco_id") is not None else f"unread tag, {block.get('color')}"
+            moves.append(Move(block, column.surface_m(), f"{tag} → place {block['destination']}", yaw_rad=yaw,
                               on_placed=lambda edge, c=column, b=block: c.add(b, edge)))
         for block in unknown:
             runner.note_once(f"block with {_describe(block)}: no destination for that id in the workcell config")

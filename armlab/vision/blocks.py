@@ -584,7 +584,10 @@ def _tag_ids_on(block: Block, color_bgr: np.ndarray, roi, detector, scale: float
 def _with_tag(block: Block, color_bgr: np.ndarray, roi, detector, cfg: PerceptionConfig) -> Block:
     """The block with its top tag's id, colour and destination (config), if a tag is found on it: read
     from the ROI at 2x; if that finds none, at TAG_RETRY_SCALES, where an id counts when it is one of the
-    configured block tags or read at two scales (a tiny tag misreads now and then, never the same way)."""
+    configured block tags or read at two scales (a tiny tag misreads now and then, never the same way).
+    A tag read at no scale (a small block's tag seen askew from far, under 2 px per bit) leaves aruco_id None;
+    when exactly one configured block tag has the block's colour (the id <-> colour table of block_tags),
+    the block gets that tag's destination."""
     ids = _tag_ids_on(block, color_bgr, roi, detector, 2.0)[:1]
     if not ids:
         reads = [tag_id for scale in TAG_RETRY_SCALES for tag_id in _tag_ids_on(block, color_bgr, roi, detector, scale)]
@@ -592,7 +595,8 @@ def _with_tag(block: Block, color_bgr: np.ndarray, roi, detector, cfg: Perceptio
         ids = sorted((tag_id for tag_id, n in counts.items() if tag_id in cfg.tags.block_tags or n >= 2),
                      key=lambda tag_id: (-counts[tag_id], tag_id not in cfg.tags.block_tags))[:1]
     if not ids:
-        return block
+        by_colour = [entry for entry in cfg.tags.block_tags.values() if entry.color == block.color]
+        return replace(block, destination=by_colour[0].destination) if len(by_colour) == 1 else block
     entry = cfg.tags.block_tags.get(ids[0])
     return replace(block, aruco_id=ids[0], color=entry.color if entry else block.color,
                    destination=entry.destination if entry else None)
