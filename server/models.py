@@ -102,14 +102,20 @@ class PixelRequest(Request):
 
 
 class ClickedPoint(Request):
-    pixel: list[float] = Field(min_length=2, max_length=2, description="(u, v) in the colour image")
-    world_m: list[float] = Field(min_length=2, max_length=3, description="its known world point: (x, y) on the board or (x, y, z)")
+    pixel: list[Pixel] = Field(min_length=2, max_length=2, description="(u, v) in the colour image")
+    world_m: list[Coordinate] = Field(min_length=2, max_length=3, description="its known world point: (x, y) on the board or (x, y, z)")
 
 
 class PointsCalibrationRequest(Request):
     """Calibration without tags: >= 4 clicked pixels whose world points are known (board grid corners or typed)."""
 
     points: list[ClickedPoint] = Field(min_length=1, max_length=200)
+
+    @model_validator(mode="after")
+    def _one_world_dimension(self) -> "PointsCalibrationRequest":
+        if len({len(point.world_m) for point in self.points}) > 1:
+            raise ValueError("points: world_m must be (x, y) for every point or (x, y, z) for every point, not a mix")
+        return self
 
 
 class TargetRequest(Request):
