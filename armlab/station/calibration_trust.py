@@ -134,12 +134,20 @@ class CalibrationTrust:
                 with self._lock:
                     self._restored_rejected = True
                 self.events.add("warn", f"restored calibration not trusted: {warning}")
-            elif drift_px is not None and drift_px <= threshold_px:
-                self.set_calibration(calibration, {**(info or {}), "restored": True})
+            elif drift_px is not None and drift_px <= threshold_px and self._trust_restored(calibration, {**(info or {}), "restored": True}):
                 self.events.add("info", f"restored calibration trusted: the board tags are {drift_px:.2f} px from where it puts them")
             return
         if warning is not None and self.self_recalibrate:
             self._self_recalibrate_if_idle(perception.tags)
+
+    def _trust_restored(self, calibration: Any, info: dict) -> bool:
+        """Install the restored `calibration` if it is still the candidate (checked and installed under one
+        lock: a calibration the operator installed meanwhile is kept). False when superseded."""
+        with self._lock:
+            if calibration is not self._restored or self._restored_rejected:
+                return False
+            self.set_calibration(calibration, info)  # the lock is re-entrant; set_calibration clears _restored
+        return True
 
     # Self-recalibration --------------------------------------------------------------------------
 
