@@ -9,7 +9,7 @@ from __future__ import annotations
 
 from collections.abc import Callable
 
-from armlab.tasks.runner import Move, Plan, TaskRunner, cubes, near, overhead_look_pose
+from armlab.tasks.runner import Move, Plan, TaskRunner, cubes, near, seeing_look_pose
 
 # The innermost slots 100 mm from x = 0: at 90 mm a large block was partly hidden by the arm at the look
 # pose once the arm sagged 0.03 rad (then neither detected nor counted done).
@@ -64,5 +64,5 @@ def policy(objects: list[dict], given_up: set, standing_at: Callable[[tuple[floa
 
 def make_policy(level: int | None, params: dict, runner: TaskRunner):
     """The policy, with the runner looking from the overhead pose and slots checked in the depth image."""
-    runner.look_pose_rad = overhead_look_pose(runner.station.model)
+    runner.look_pose_rad = seeing_look_pose(runner.station)
     return lambda objects, given_up: policy(objects, given_up, runner.height_at)

@@ -16,7 +16,7 @@ import math
 from armlab.motion.gripper_box import GripperBox
 from armlab.tasks.columns import Column
 from armlab.tasks.judge import GRIPPER_BOX_M, TAG_RADIUS_M
-from armlab.tasks.runner import Move, Plan, TaskRunner, cubes, overhead_look_pose
+from armlab.tasks.runner import Move, Plan, TaskRunner, cubes, seeing_look_pose
 
 MIN_COLUMN = 3
 BOX_MARGIN_M = 0.010  # planned gripper paths keep this far inside the judge's box (tracking error)
@@ -50,7 +50,7 @@ def pile_sizes(block: dict) -> list[str]:
 def make_policy(level: int | None, params: dict, runner: TaskRunner):
     runner.max_transfer_z_m = GRIPPER_CEILING_M
     runner.gripper_box = planning_box()
-    runner.look_pose_rad = overhead_look_pose(runner.station.model)
+    runner.look_pose_rad = seeing_look_pose(runner.station)
     tags = sorted(runner.tag_centres(), key=lambda xy: (math.hypot(*xy), xy[0]))
     large = Column("large column", column_base(tags[0], runner.gripper_box))
     small = Column("small column", column_base(tags[1], runner.gripper_box))

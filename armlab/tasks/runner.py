@@ -125,6 +125,17 @@ def overhead_look_pose(model) -> np.ndarray:
     return q
 
 
+def seeing_look_pose(station: Station) -> np.ndarray:
+    """The look pose of a job that must see every block (pick_sort, pick_stack): the station's workcell's
+    look_pose_rad when it defines one (chosen for that workcell's camera), else overhead_look_pose, which
+    is the RX200's (its IK point is out of other arms' reach at pitch 90 deg, e.g. the UR3's)."""
+    from armlab.scene import as_workcell
+
+    if as_workcell(getattr(station.config, "workcell", None)).look_pose_rad is not None:
+        return look_pose(station)
+    return overhead_look_pose(station.model)
+
+
 def pick_end_joints(steps: list) -> np.ndarray:
     """The joints a plan's last trajectory ends at."""
     from armlab.motion import TrajectoryStep
