@@ -37,6 +37,8 @@ class AutoJobInfo(Wire):
     scored: bool = Field(description="the simulation scores it: the judge (§7), else the job's own scorer")
     scene: bool = Field(description="POST /api/sim/scene can generate its starting scene")
     time_limit_s: float | None = Field(None, description="the event's time limit, simulated seconds")
+    available: bool = Field(True, description="the station's workcell can run it (its gripper type and geometry)")
+    unavailable_reason: str | None = Field(None, description="why not, when not available: what the workcell lacks")
 
 
 class AutoJobsResponse(Wire):

@@ -75,6 +75,12 @@ def check_request(event: str, level: int | None, workcell: str | None = None) ->
             load_workcell(workcell).check_arm_fits()
         except ConfigError as error:
             raise EvalError(str(error)) from None
+    from armlab.tasks.registry import JobUnsupported, check_supported
+
+    try:
+        check_supported(event, workcell)
+    except JobUnsupported as error:
+        raise EvalError(str(error)) from None
     reason = episode_unsupported(event, level, workcell)
     if reason:
         raise EvalError(f"job '{event}' cannot be evaluated headless yet: {reason}")

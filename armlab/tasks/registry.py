@@ -10,6 +10,37 @@ from armlab.station.core import NotCalibrated, Station
 from armlab.station.jobs import Job, JobContext
 from armlab.tasks import clear_table, line_up, pick_sort, pick_stack, sort_by_tag, sort_stack, stack_here, stack_high, to_the_sky
 from armlab.tasks.runner import Plan, TaskRunner
+from armlab.workcell import Workcell
+
+
+class JobUnsupported(ValueError):
+    """A job the station's workcell cannot run (its gripper type or geometry): refused before anything moves."""
+
+
+def _tags_in_gripper_box(workcell: Workcell) -> str | None:
+    """pick_stack's columns stand on the two board tags nearest the base, with the gripper kept inside
+    the judge's fixed box (§7, the RX200 board's): both tags must lie inside it."""
+    from armlab.tasks.judge import GRIPPER_BOX_M as box
+
+    tags = sorted(workcell.board_tags.centres_m.values(), key=lambda xy: (math.hypot(*xy), xy[0]))[:2]
+    outside = [xy for xy in tags if not (abs(xy[0]) <= box["x_abs_max"] and box["y_min"] <= xy[1] <= box["y_max"])]
+    if not outside:
+        return None
+    return (f"board tags inside the judge's gripper box (|x| <= {box['x_abs_max'] * 1000:.0f} mm, y {box['y_min'] * 1000:.0f}.."
+            f"{box['y_max'] * 1000:.0f} mm) to stack on; tag(s) at {', '.join(f'({x * 1000:.0f}, {y * 1000:.0f}) mm' for x, y in outside)} are not")
+
+
+LINE_REACH_M = (0.14, 0.35)  # line_up's slot radius band (armlab.tasks.line_up.choose_layout)
+
+
+def _reaches_line_band(workcell: Workcell) -> str | None:
+    """line_up lays its lines out within 0.14-0.35 m of the base axis (the RX200's top-down reach): the
+    workcell's top-down reach (scene.reach_m) must cover that band."""
+    low, high = workcell.scene.reach_m
+    if low <= LINE_REACH_M[0] and high >= LINE_REACH_M[1]:
+        return None
+    return (f"a top-down reach covering {LINE_REACH_M[0] * 1000:.0f}-{LINE_REACH_M[1] * 1000:.0f} mm from the base "
+            f"(its line layouts, laid out for the RX200); this workcell's reach is {low * 1000:.0f}-{high * 1000:.0f} mm")
 
 
 @dataclass(frozen=True)
@@ -21,6 +52,12 @@ class JobSpec:
     make_policy: Callable[[int | None, dict, TaskRunner], Callable[[list[dict], set], Plan]]
     summary: str
     param_types: tuple[tuple[str, type], ...] = ()
+    # What the job needs of the workcell (config/workcells/<name>.yaml): the end effectors it works with
+    # (gripper.type), why it needs them, and a check of the workcell's geometry (None = any; else a
+    # function returning what is missing, or None when the workcell has it).
+    gripper_types: tuple[str, ...] = ("fingers", "suction")
+    gripper_why: str = ""
+    workcell_check: Callable[[Workcell], str | None] | None = None
 
 
 JOBS: dict[str, JobSpec] = {
@@ -29,13 +66,15 @@ JOBS: dict[str, JobSpec] = {
         JobSpec("pick_sort", (1, 2, 3), pick_sort.make_policy,
                 "every block to y < 0: small at x < 0, large at x > 0"),
         JobSpec("pick_stack", (1, 2, 3), pick_stack.make_policy,
-                "every block into columns of three or more on the calibration tags"),
+                "every block into columns of three or more on the calibration tags",
+                workcell_check=_tags_in_gripper_box),
         JobSpec("line_up", (1, 2, 3), line_up.make_policy,
-                "per size, the six blocks in a straight rainbow line"),
+                "per size, the six blocks in a straight rainbow line", workcell_check=_reaches_line_band),
         JobSpec("stack_high", (1, 2), stack_high.make_policy,
                 "per size, one column of the six blocks in rainbow order, red at the bottom"),
         JobSpec("to_the_sky", (1,), to_the_sky.make_policy,
-                "one tower of large blocks, as tall as the arm can build (fed by the feeder)"),
+                "one tower of large blocks, as tall as the arm can build (fed by the feeder)",
+                gripper_types=("fingers",), gripper_why="side grasps for the tower's upper blocks"),
         JobSpec("sort_stack", (1, 2, 3), sort_stack.make_policy,
                 "every block to its side of y < 0, stacked in rainbow order per side"),
         JobSpec("sort_by_tag", (1, 2, 3), sort_by_tag.make_policy,
@@ -81,11 +120,36 @@ def checked_request(job: str, level, params) -> tuple[JobSpec, int | None, dict]
     return spec, level, params
 
 
+def unsupported_reason(job: str, workcell: Workcell | str | None = None) -> str | None:
+    """What the workcell (a Workcell, a name, None = the default) lacks for the job, or None when the job
+    can run there. Unknown jobs are checked_request's (None here)."""
+    from armlab.scene import as_workcell
+
+    spec = JOBS.get(job)
+    if spec is None:
+        return None
+    cell = as_workcell(workcell)
+    if cell.gripper.type not in spec.gripper_types:
+        why = f" ({spec.gripper_why})" if spec.gripper_why else ""
+        return f"a gripper of type {' or '.join(spec.gripper_types)}{why}; this workcell's is {cell.gripper.type}"
+    return spec.workcell_check(cell) if spec.workcell_check is not None else None
+
+
+def check_supported(job: str, workcell: Workcell | str | None = None) -> None:
+    """JobUnsupported (a ValueError) naming the job, the workcell and what it lacks, unless the job runs there."""
+    from armlab.scene import as_workcell
+
+    reason = unsupported_reason(job, workcell)
+    if reason:
+        raise JobUnsupported(f"job '{job}' is not available on workcell '{as_workcell(workcell).name}': it needs {reason}")
+
+
 def start_auto(station: Station, job: str, level: int | None = None, params: dict | None = None, source: str | None = None) -> Job:
     """Start an autonomous job in the auto_sort state (CommandRefused unless idle; ValueError for a bad
     request; NotCalibrated without a camera calibration). Nothing moves before the checks pass."""
     station.allowed_or_raise("auto")
     spec, level, params = checked_request(job, level, params)
+    check_supported(job, getattr(station.config, "workcell", None))
     if station.calibration is None:
         raise NotCalibrated(f"job '{job}'")
     runners: dict[str, TaskRunner] = {}

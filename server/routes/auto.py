@@ -11,7 +11,7 @@ from pydantic import ValidationError
 
 from armlab.tasks import JOBS, JobSpec, start_auto
 from armlab.tasks.judge import EVENT_LIMITS_S
-from armlab.tasks.registry import checked_request
+from armlab.tasks.registry import check_supported, checked_request, unsupported_reason
 from server.auto_runs import SCORE_WAIT_S, AutoRun, is_judged, is_scored, watch_run
 from server.deps import ControlAuth, StationDep
 from server.errors import ApiError
@@ -31,8 +31,9 @@ def _has_scene(name: str, levels: tuple[int, ...]) -> bool:
     return True
 
 
-def _job_info(spec: JobSpec) -> dict:
+def _job_info(spec: JobSpec, workcell: str | None = None) -> dict:
     judged = is_judged(spec.name)
+    missing = unsupported_reason(spec.name, workcell)
     return {
         "name": spec.name,
         "levels": list(spec.levels),
@@ -42,6 +43,8 @@ def _job_info(spec: JobSpec) -> dict:
         "scored": is_scored(spec.name),
         "scene": _has_scene(spec.name, spec.levels),
         "time_limit_s": EVENT_LIMITS_S.get(spec.name) if judged else None,
+        "available": missing is None,
+        "unavailable_reason": None if missing is None else f"needs {missing}",
     }
 
 
@@ -60,19 +63,22 @@ def _last_run(request: Request) -> AutoRun | None:
 
 
 @router.get("/jobs", response_model=AutoJobsResponse)
-def read_auto_jobs() -> dict:
-    """The autonomous jobs: levels, summary, parameter names and types, whether the judge scores them."""
-    data = [_job_info(spec) for spec in JOBS.values()]
+def read_auto_jobs(station: StationDep) -> dict:
+    """The autonomous jobs: levels, summary, parameter names and types, whether the judge scores them, and
+    whether the station's workcell can run each (else what it lacks)."""
+    data = [_job_info(spec, station.config.workcell) for spec in JOBS.values()]
     return {"data": data, "count": len(data)}
 
 
 @router.post("", response_model=AutoResponse, status_code=202)
 def post_auto(body: AutoRequest, request: Request, station: StationDep, controller: ControlAuth, wait: bool = False) -> JSONResponse:
     """Start an autonomous job in the auto_sort state: 202 {job} at once, or (?wait=true) 200 {job, score}
-    once it has ended. 422 for an unknown job, level or parameter; 409 unless idle or without a calibration."""
+    once it has ended. 422 for an unknown job, level or parameter, or a job the station's workcell cannot
+    run (naming what it lacks); 409 unless idle or without a calibration."""
     params = _widened(body.job, body.params)
     station.allowed_or_raise("auto")
     _, level, _ = checked_request(body.job, body.level, params)
+    check_supported(body.job, station.config.workcell)
     sim_start_s = station.sim.sim_time_s if station.sim is not None else None
     job = start_auto(station, body.job, level, params, source=controller)
     run = None

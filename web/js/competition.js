@@ -37,6 +37,15 @@ export function paramValue(type, input) {
   }
 }
 
+/** A job's <option>: one the station's workcell cannot run is disabled, its reason shown beside it. */
+export function jobOption(job) {
+  if (job.available !== false) return new Option(job.name, job.name);
+  const option = new Option(`${job.name} (not on this workcell)`, job.name);
+  option.disabled = true;
+  option.title = job.unavailable_reason || "not available on this workcell";
+  return option;
+}
+
 export class CompetitionPanel {
   /** api: Api; live: LiveView (the plan is drawn as one of its overlays); log: EventLog; serverNowS(): server clock. */
   constructor({ api, live, log, serverNowS }) {
@@ -72,13 +81,15 @@ export class CompetitionPanel {
     }
     const select = $("comp-job");
     const previous = select.value;
-    select.replaceChildren(...this.jobs.map((job) => new Option(job.name, job.name)));
-    if (this.jobs.some((job) => job.name === previous)) select.value = previous;
+    select.replaceChildren(...this.jobs.map((job) => jobOption(job)));
+    const available = this.jobs.filter((job) => job.available !== false);
+    select.value = (available.find((job) => job.name === previous) || available[0] || { name: "" }).name;
     this.showJob();
   }
 
+  /** The chosen job, when the station's workcell can run it (the others are listed disabled). */
   selected() {
-    return this.jobs.find((job) => job.name === $("comp-job").value) || null;
+    return this.jobs.find((job) => job.name === $("comp-job").value && job.available !== false) || null;
   }
 
   /** Levels, summary, parameter inputs and scene row of the chosen job. */

@@ -40,6 +40,8 @@ export const CLIENT_MESSAGE_TYPES = Object.freeze(["ack", "view", "command"]);
  * @property {boolean} scored the simulation scores it: the judge (§7), else the job's own scorer
  * @property {boolean} scene POST /api/sim/scene can generate its starting scene
  * @property {(number|null)} [time_limit_s] the event's time limit, simulated seconds
+ * @property {boolean} [available] the station's workcell can run it (its gripper type and geometry)
+ * @property {(string|null)} [unavailable_reason] why not, when not available: what the workcell lacks
  */
 
 /**
