@@ -102,6 +102,7 @@ def test_job_list_names_levels_summaries_and_parameters(http):
         assert isinstance(job["summary"], str) and job["summary"]
         assert all(set(p) == {"name", "type"} for p in job["params"])
         assert job["time_limit_s"] is None or job["judged"]
+        assert job["available"] is True and job["unavailable_reason"] is None  # the RX200 (fingers) runs every job
 
 
 def test_a_job_before_calibration_is_409_not_calibrated_and_nothing_moves(http):
