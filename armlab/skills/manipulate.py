@@ -62,6 +62,7 @@ def run_steps(station: Station, ctx: JobContext, steps: Sequence, replan: Callab
 TRANSFER_CLEARANCE_M = 0.05  # the held block's bottom (or the fingers) this far above the tallest obstacle
 TALL_OVER_TARGET_M = 0.16  # obstacles this much above the target (taller than a pile of four) are checked on the way down too
 MAX_PLACE_TILT_RAD = np.radians(5.0)  # by default a block is released at most this far from top-down
+SHORT_APPROACH_FRACTIONS = (0.75, 0.5)  # of approach_height_m: last-resort straight descents (a tall column far out)
 
 
 def _finger_seed(station: Station, q_start, point_m, pitch_rad: float, yaw_rad: float, finger_axis_rad: float):
@@ -138,8 +139,10 @@ def _transfer_plan(station: Station, q_start, point_m, yaw_rad: float | None, bo
     if finger_axis_rad is not None and yaw_rad is not None and not suction:
         seed = _finger_seed(station, q_start, point_m, config.top_down_pitch_rad, yaw_rad, finger_axis_rad)
     # Carrying a block, approach from higher by its edge (so the block itself clears its neighbours)
-    # where that is reachable at the pitch wanted; else from the usual approach height.
-    approaches = list(dict.fromkeys((config.approach_height_m + carried, config.approach_height_m)))
+    # where that is reachable at the pitch wanted; else from the usual approach height; else (a column's
+    # top near the edge of reach, where the point is reachable top-down but not the one above it) from lower.
+    approaches = list(dict.fromkeys((config.approach_height_m + carried, config.approach_height_m,
+                                     *(config.approach_height_m * f for f in SHORT_APPROACH_FRACTIONS))))
     for index, approach_m in enumerate(approaches):
         near_m = point_m + np.array([0.0, 0.0, min(approach_m, max(0.0, max_transfer_z_m - point_m[2]))])
         try:

@@ -99,11 +99,13 @@ def is_stale(station: Station, block: dict) -> bool:
     return station.moved_over_since(block["position_m"], float(block.get("seen_time_s", 0.0)))
 
 
-def surface_height_m(station: Station, xy_m, radius_m: float = 0.008, max_height_m: float = 0.6) -> float:
+def surface_height_m(station: Station, xy_m, radius_m: float = 0.008, max_height_m: float = 0.6,
+                     unseen: float | None = 0.0) -> float | None:
     """The height of whatever stands at world (x, y), measured in the newest depth image: the highest
     z whose point projects to a pixel whose depth lands back within radius_m of (x, y) at that height
-    (a ray cast down the column onto the depth surface). 0.0 for the bare board; NotCalibrated without
-    a calibration; ValueError without depth."""
+    (a ray cast down the column onto the depth surface). 0.0 for the bare board; `unseen` when no
+    height at (x, y), not even the board's, is seen (e.g. a column whose top is outside the image and
+    whose body hides its base); NotCalibrated without a calibration; ValueError without depth."""
     from armlab.vision.geometry import backproject, project_points, transform_points
 
     calibration = station.calibration
@@ -122,7 +124,7 @@ def surface_height_m(station: Station, xy_m, radius_m: float = 0.008, max_height
     depth_m[inside] = depth[rows[inside], cols[inside]] / 1000.0
     valid = inside & (depth_m > 0)
     if not valid.any():
-        return 0.0
+        return unseen
     world = transform_points(calibration.T_world_camera, backproject(pixels[valid], depth_m[valid], calibration.K, calibration.dist))
     hits = (np.hypot(world[:, 0] - float(xy_m[0]), world[:, 1] - float(xy_m[1])) <= radius_m) & (np.abs(world[:, 2] - heights[valid]) <= 0.006)
-    return float(max(0.0, world[hits, 2].max())) if hits.any() else 0.0
+    return float(max(0.0, world[hits, 2].max())) if hits.any() else unseen

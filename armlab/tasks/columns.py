@@ -25,13 +25,19 @@ class Column:
     base_xy_m: tuple[float, float]
     placed: list[dict] = field(default_factory=list)  # blocks put here, bottom-up (wire dicts + "edge_m")
     top: dict | None = None  # the detection of its top block at the newest look
-    height_m: float = 0.0  # measured height of the column's top face
+    height_m: float = 0.0  # measured height of the column's top face (remembered when unmeasured)
+    unmeasured: bool = False  # the newest look could not measure the height (see observe)
 
-    def observe(self, objects: list[dict], measure_height: Callable[[tuple[float, float]], float]) -> None:
-        """Update from a look: the top detection near the base and the measured height."""
+    def observe(self, objects: list[dict], measure_height: Callable[[tuple[float, float]], float | None]) -> None:
+        """Update from a look: the top detection near the base and the measured height. A height of None
+        (the camera sees neither a top nor the board there: a column whose top is outside the image hides
+        its own base, e.g. six blocks at (-150, -120) mm on the RX200) keeps what the job put there, and
+        the column stands as high as those blocks."""
         tops = [o for o in objects if near(o["position_m"], self.base_xy_m, COLUMN_RADIUS_M)]
         self.top = max(tops, key=lambda o: o["position_m"][2]) if tops else None
-        self.height_m = measure_height(self.base_xy_m)
+        measured = measure_height(self.base_xy_m)
+        self.unmeasured = measured is None
+        self.height_m = sum(block["edge_m"] for block in self.placed) if measured is None else measured
         kept, stacked_m = [], 0.0
         for block in self.placed:  # keep what the measured height still holds
             if stacked_m + block["edge_m"] > self.height_m + HEIGHT_TOLERANCE_M:
@@ -60,9 +66,25 @@ class Column:
             x, y = self.top["position_m"][:2]
         return (float(x), float(y), float(self.height_m if self.height_m > 0.005 else 0.0))
 
+    def stand_in(self) -> dict | None:
+        """An obstacle for a column that stands but that the newest look could neither measure nor detect
+        (an object no policy picks, as TaskRunner.unseen_columns makes), else None."""
+        if not self.unmeasured or self.top is not None or self.height_m <= 0.005:
+            return None
+        return {"position_m": [float(self.base_xy_m[0]), float(self.base_xy_m[1]), float(self.height_m)], "is_cube": False,
+                "color": None, "size": None, "stack_level": 0, "unseen": True, "yaw_rad": 0.0}
+
     def holds(self, block: dict) -> bool:
         """True if `block` (a detection) is this column's top."""
         return self.top is not None and block is self.top
 
     def add(self, block: dict, edge_m: float) -> None:
         self.placed.append({**block, "edge_m": edge_m})
+
+
+def unseen_as_none(runner) -> Callable[[tuple[float, float]], float | None]:
+    """The runner's height measurement, None where the camera sees nothing at (x, y), not even the board
+    (for Column.observe)."""
+    from armlab import skills
+
+    return lambda xy_m: skills.surface_height_m(runner.station, xy_m, unseen=None)

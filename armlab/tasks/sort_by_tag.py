@@ -6,8 +6,8 @@ the job fails once the others are sorted, naming that block (UnknownTagDestinati
 
 from __future__ import annotations
 
-from armlab.tasks.columns import Column
-from armlab.tasks.runner import Move, Plan, TaskRunner, cubes
+from armlab.tasks.columns import Column, unseen_as_none
+from armlab.tasks.runner import Move, Plan, TaskRunner, cubes, seeing_look_pose
 
 
 class UnknownTagDestination(ValueError):
@@ -25,10 +25,13 @@ def make_policy(level: int | None, params: dict, runner: TaskRunner):
     workcell = as_workcell(getattr(runner.station.config, "workcell", None))  # the station's
     columns = {int(dest): Column(f"place {dest}", tuple(map(float, xy))) for dest, xy in workcell.places_m.items()}
     runner.reserved_m.extend(column.base_xy_m for column in columns.values())
+    runner.look_pose_rad = seeing_look_pose(runner.station)  # the RX200's sleep pose hides blocks near (0, 130) mm
 
     def policy(objects: list[dict], given_up: set) -> Plan:
         for column in columns.values():
-            column.observe(objects, runner.height_at)
+            column.observe(objects, unseen_as_none(runner))
+            if column.stand_in() is not None:  # an obstacle for the moves planned from this look
+                objects.append(column.stand_in())
         tops = {id(c.top) for c in columns.values() if c.top is not None}
         tagged = [b for b in cubes(objects) if b.get("destination") in columns and id(b) not in tops]
         unknown = [b for b in cubes(objects) if b.get("aruco_id") is not None and b.get("destination") not in columns]

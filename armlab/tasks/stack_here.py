@@ -3,8 +3,8 @@ first. Parameters: x_m, y_m (default: the workcell's sort_by_tag place nearest t
 
 from __future__ import annotations
 
-from armlab.tasks.columns import Column
-from armlab.tasks.runner import Move, Plan, TaskRunner, cubes
+from armlab.tasks.columns import Column, unseen_as_none
+from armlab.tasks.runner import Move, Plan, TaskRunner, cubes, seeing_look_pose
 
 
 def make_policy(level: int | None, params: dict, runner: TaskRunner):
@@ -14,12 +14,15 @@ def make_policy(level: int | None, params: dict, runner: TaskRunner):
     default = min(workcell.places_m.values(), key=lambda xy: xy[0] ** 2 + xy[1] ** 2)
     column = Column("stack", (float(params.get("x_m", default[0])), float(params.get("y_m", default[1]))))
     runner.reserved_m.append(column.base_xy_m)
+    runner.look_pose_rad = seeing_look_pose(runner.station)  # the RX200's sleep pose hides blocks near (0, 130) mm
 
     def wanted(block: dict) -> bool:
         return params.get("color") in (None, block.get("color")) and params.get("size") in (None, block.get("size"))
 
     def policy(objects: list[dict], given_up: set) -> Plan:
-        column.observe(objects, runner.height_at)
+        column.observe(objects, unseen_as_none(runner))
+        if column.stand_in() is not None:  # an obstacle for the moves planned from this look
+            objects.append(column.stand_in())
         loose = [b for b in cubes(objects) if wanted(b) and not column.holds(b)]
         larges_left = any(b["size"] == "large" for b in loose)
         moves = []
