@@ -2,8 +2,8 @@
 corners offered by the page (the workcell grid from the server's hello), clicks each where it is on the
 live video, and fits; the station's calibration is then checked against the simulation's ground truth
 (the true camera pose and intrinsics: camera position error, click-to-world error of grid points not
-clicked). Too few points, collinear points and a point off the board are refused on the page with the
-reason, and the old calibration is kept. Also the self-recalibration toggle (PUT /api/calibration/settings)."""
+clicked). Below 4 points Fit is disabled ("click at least 4 points"); collinear points and a point off
+the board are refused on the page with the reason, and the old calibration is kept. Also the self-recalibration toggle (PUT /api/calibration/settings)."""
 
 from __future__ import annotations
 
@@ -79,6 +79,18 @@ def fit_refused(page, server, words: str) -> str:
     return message
 
 
+def fit_blocked(page, server, clicked: int) -> None:
+    """Below 4 points Fit is disabled and says to click at least 4 points; a click on it sends nothing."""
+    page.wait_for_function("document.getElementById('btn-clickcal-fit').textContent.includes('at least 4')")
+    fit = page.query_selector("#btn-clickcal-fit")
+    assert fit.is_disabled() and "click at least 4 points" in fit.text_content(), fit.text_content()
+    assert page.eval_on_selector_all("#clickcal-points tr", "rows => rows.length") == clicked
+    before = server.get("/api/calibration")
+    fit.click(force=True)  # a disabled button ignores it: no request, no raw 422 shown
+    assert page.is_hidden("#clickcal-error") and page.is_disabled("#btn-clickcal-fit")
+    assert server.get("/api/calibration") == before
+
+
 def test_click_calibration_from_the_page_matches_ground_truth(browser, fresh):
     page = open_page(browser, f"{fresh.base_url}/?token={fresh.token}")
     wait_frames(page, 2)
@@ -87,9 +99,11 @@ def test_click_calibration_from_the_page_matches_ground_truth(browser, fresh):
     page.click("#click-mode button[data-mode='points']")
     page.wait_for_function("document.getElementById('clickcal').open && document.getElementById('clickcal-x').options.length > 10")
 
+    fit_blocked(page, fresh, 0)
     click_points(page, camera, NINE[:3])
-    fit_refused(page, fresh, "at least 4 points")
-    click_points(page, camera, ROW)
+    fit_blocked(page, fresh, 3)
+    page.click("#btn-clickcal-clear")
+    click_points(page, camera, ROW)  # four points: Fit is enabled again (page.click waits for that)
     fit_refused(page, fresh, "collinear")
     page.fill("#clickcal-typed", "900, 100")  # typed, but off the 1000 mm board
     page.mouse.click(*canvas_point(page, 640, 360))

@@ -48,8 +48,10 @@ export function offBoardReason(workcell, worldM) {
 const $ = (id) => document.getElementById(id);
 
 export class ClickCalibration {
-  /** api: Api; live: LiveView (its canvas is clicked, its overlays draw the points); log: EventLog. */
-  constructor({ api, live, log }) {
+  /** api: Api; live: LiveView (its canvas is clicked, its overlays draw the points); log: EventLog;
+   * afterChange(): re-applies the allowed commands (Fit is disabled below MIN_POINTS points). */
+  constructor({ api, live, log, afterChange = () => {} }) {
+    this.afterChange = afterChange; // called when Fit may be enabled again (enough points)
     this.api = api;
     this.live = live;
     this.log = log;
@@ -228,7 +230,18 @@ export class ClickCalibration {
       }),
     );
     const fit = $("btn-clickcal-fit");
-    fit.textContent = `Fit ${this.points.length} point${this.points.length === 1 ? "" : "s"}`;
+    const tooFew = this.points.length < MIN_POINTS;
+    const wasBlocked = Boolean(fit.dataset.blocked);
+    fit.textContent = tooFew ? `Fit: click at least ${MIN_POINTS} points` : `Fit ${this.points.length} points`;
+    if (tooFew) {
+      fit.dataset.blocked = `click at least ${MIN_POINTS} points`; // applyAllowed keeps it disabled
+      fit.title = fit.dataset.blocked;
+      fit.disabled = true;
+    } else {
+      delete fit.dataset.blocked;
+      fit.title = "";
+      if (wasBlocked) this.afterChange(); // the station's allowed commands decide again
+    }
     $("clickcal-hint").textContent = this.active
       ? `click the chosen point on the video (${this.points.length} so far, at least ${MIN_POINTS}, spread out)`
       : "choose Click-calibrate above the video to click points";

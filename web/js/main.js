@@ -82,7 +82,7 @@ class App {
       },
     });
     this.programPath = new ProgramPathOverlay(this.live);
-    this.clickcal = new ClickCalibration({ api: this.api, live: this.live, log: this.log });
+    this.clickcal = new ClickCalibration({ api: this.api, live: this.live, log: this.log, afterChange: () => this.refreshAllowed() });
     this.stream = new Stream({
       token: this.api.token,
       handlers: {

@@ -10,12 +10,13 @@ const SWATCH = {
   purple: "#9b6bff",
 };
 
-/** Enable exactly the [data-command] buttons whose command the station allows now (and that we may send). */
+/** Enable exactly the [data-command] buttons whose command the station allows now (and that we may send),
+ * except those the page blocks itself (data-blocked: why, e.g. too few click-calibration points). */
 export function applyAllowed(root, allowed, canControl) {
   const set = new Set(allowed || []);
   root.querySelectorAll("[data-command]").forEach((el) => {
     const name = el.dataset.command;
-    el.disabled = !canControl || !set.has(name);
+    el.disabled = !canControl || !set.has(name) || Boolean(el.dataset.blocked);
   });
 }
 
