@@ -74,6 +74,9 @@ def test_the_competition_panel_does_not_offer_them(ur3_server, browser):
         sky = next(o for o in options if o["value"] == "to_the_sky")
         assert sky["disabled"] and "fingers" in sky["title"], sky
         assert page.eval_on_selector("#comp-job", "s => s.value") in AVAILABLE
+        reasons = page.eval_on_selector_all("#comp-unavailable li", "ls => ls.map(l => [l.dataset.job, l.innerText])")
+        assert {job for job, _ in reasons} == UNAVAILABLE and page.is_visible("#comp-unavailable"), reasons
+        assert "fingers" in dict(reasons)["to_the_sky"], reasons
         assert page.errors == []
     finally:
         page.close()

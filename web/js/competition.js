@@ -84,7 +84,27 @@ export class CompetitionPanel {
     select.replaceChildren(...this.jobs.map((job) => jobOption(job)));
     const available = this.jobs.filter((job) => job.available !== false);
     select.value = (available.find((job) => job.name === previous) || available[0] || { name: "" }).name;
+    this.showUnavailable();
     this.showJob();
+  }
+
+  /** Under the summary: the jobs this station's workcell cannot run, each with what it lacks. */
+  showUnavailable() {
+    let list = $("comp-unavailable");
+    if (!list) {
+      list = document.createElement("ul");
+      list.id = "comp-unavailable";
+      list.className = "comp-unavailable";
+      $("comp-summary").after(list);
+    }
+    const missing = this.jobs.filter((job) => job.available === false);
+    list.replaceChildren(...missing.map((job) => {
+      const item = document.createElement("li");
+      item.dataset.job = job.name;
+      item.textContent = `${job.name}: not on this workcell, ${job.unavailable_reason || "not available"}`;
+      return item;
+    }));
+    list.hidden = missing.length === 0;
   }
 
   /** The chosen job, when the station's workcell can run it (the others are listed disabled). */
