@@ -169,7 +169,10 @@ def _transfer_plan(station: Station, q_start, point_m, yaw_rad: float | None, bo
 
     start_m = model.fk(q_start)[:3, 3]
     tallest = max([box.top_z_m for box in boxes] + [0.0])
-    z_first = min(max(near_m[2], tallest + carried + TRANSFER_CLEARANCE_M), max_transfer_z_m)
+    # After a short approach the arm goes back up at least to the usual approach height (a joint move, at
+    # whatever pitch reaches it), not just the few cm of the short one: there the way to park is clear.
+    usual_near_z = point_m[2] + min(config.approach_height_m, max(0.0, max_transfer_z_m - point_m[2]))
+    z_first = min(max(near_m[2], usual_near_z, tallest + carried + TRANSFER_CLEARANCE_M), max_transfer_z_m)
     # From over the tallest obstacle upward; when none of those works (over a tall column the transfer
     # is too high to reach a block near the base), lower ones, which must then pass beside it.
     heights = [*np.arange(z_first, max_transfer_z_m + 1e-9, 0.04), *np.arange(near_m[2], z_first - 0.02, 0.04)]
