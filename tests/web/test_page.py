@@ -45,14 +45,18 @@ def test_page_loads_streams_frames_and_mirrors_status(page, server):
     for shown, q in zip(rows, ui_joints_rad):
         assert math.isclose(float(shown.rstrip("°")), math.degrees(q), abs_tol=0.06)
 
-    # Exactly the allowed commands are enabled.
+    # Exactly the allowed commands are enabled, but for a button the page blocks itself with its reason: only
+    # click calibration's Fit, until 4 points are clicked.
     allowed = set(page.evaluate("window.armlab.status.allowed_commands"))
     buttons = page.eval_on_selector_all(
-        "button[data-command]", "bs => bs.map(b => [b.dataset.command, b.disabled])"
+        "button[data-command]", "bs => bs.map(b => [b.id, b.dataset.command, b.disabled, b.dataset.blocked || ''])"
     )
     assert buttons, "no command buttons on the page"
-    for command, disabled in buttons:
-        assert disabled == (command not in allowed), f"button for '{command}' disabled={disabled}, allowed={allowed}"
+    blocked = {button_id: reason for button_id, _, _, reason in buttons if reason}
+    assert blocked == {"btn-clickcal-fit": "click at least 4 points"}, blocked
+    for button_id, command, disabled, reason in buttons:
+        expected = bool(reason) or command not in allowed
+        assert disabled == expected, f"button '{button_id}' for '{command}' disabled={disabled}, allowed={allowed}"
     assert not page.is_disabled("#btn-estop")
 
     # The joint plot has collected samples at telemetry rate.
