@@ -20,29 +20,12 @@ from dataclasses import replace
 
 os.environ.setdefault("MUJOCO_GL", "egl")
 
-import mujoco  # noqa: E402
 import numpy as np  # noqa: E402
 
 from armlab.devices.sim import SimWorkcell, SimWorkcellConfig  # noqa: E402
 from armlab.devices.sim.checkerboard import calibration_poses, pose_in_camera_frame  # noqa: E402
 from armlab.vision import calibrate_extrinsics, load_perception_config  # noqa: E402
 from armlab.vision.intrinsics_capture import IntrinsicsCapture, IntrinsicsRejected, load_intrinsics_config, solve_intrinsics  # noqa: E402
-
-
-def true_intrinsics(model) -> dict:
-    """fx, fy, cx, cy (OpenCV pixel centres) of MuJoCo's drawing frustum of the overhead camera."""
-    data = mujoco.MjData(model)
-    mujoco.mj_forward(model, data)
-    scene = mujoco.MjvScene(model, maxgeom=2000)
-    camera = mujoco.MjvCamera()
-    camera.type = mujoco.mjtCamera.mjCAMERA_FIXED
-    camera.fixedcamid = model.camera("overhead").id
-    mujoco.mjv_updateScene(model, data, mujoco.MjvOption(), None, camera, mujoco.mjtCatBit.mjCAT_ALL, scene)
-    gl = scene.camera[0]
-    width, height = model.cam_resolution[camera.fixedcamid]
-    left, right = gl.frustum_center - gl.frustum_width, gl.frustum_center + gl.frustum_width
-    return {"fx": width * gl.frustum_near / (right - left), "fy": height * gl.frustum_near / (gl.frustum_top - gl.frustum_bottom),
-            "cx": -left / (right - left) * width - 0.5, "cy": gl.frustum_top / (gl.frustum_top - gl.frustum_bottom) * height - 0.5}
 
 
 def main() -> None:
@@ -59,7 +42,7 @@ def main() -> None:
         cell = SimWorkcell(SimWorkcellConfig(seed=100 + rig))
         cell.start()
         try:
-            truth = true_intrinsics(cell.model)
+            truth = cell.camera_intrinsics()
             T_world_camera = np.asarray(cell.truth()["camera"]["T_world_camera"])
             capture = IntrinsicsCapture(config, (1280, 720))
             for position_m, rotvec in calibration_poses(most + 4, seed=rig):

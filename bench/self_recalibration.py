@@ -16,7 +16,6 @@ import tempfile
 import time
 from pathlib import Path
 
-import cv2
 import numpy as np
 
 os.environ.setdefault("MUJOCO_GL", "egl")
@@ -24,20 +23,6 @@ sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "tests" / "server")
 import live  # noqa: E402
 
 from armlab import skills  # noqa: E402
-
-
-def bump(cell, translation_m, rotation_rad) -> None:
-    T = np.eye(4)
-    T[:3, :3] = cv2.Rodrigues(np.asarray(rotation_rad, dtype=float))[0]
-    T[:3, 3] = translation_m
-    cell.bump_camera(T)
-
-
-def pose_error(calibration, cell) -> tuple[float, float]:
-    truth = np.asarray(cell.truth()["camera"]["T_world_camera"])
-    position_m = float(np.linalg.norm(calibration.camera_position_m - truth[:3, 3]))
-    cos = (np.trace(calibration.T_world_camera[:3, :3].T @ truth[:3, :3]) - 1.0) / 2.0
-    return position_m, float(np.degrees(np.arccos(np.clip(cos, -1.0, 1.0))))
 
 
 def sim_seconds_until(cell, predicate, timeout_s: float = 60.0) -> float:
@@ -54,16 +39,16 @@ def trial(seed: int, folder: Path) -> dict:
         try:
             job = skills.calibrate(station)
             assert job.wait(30) and job.state == "succeeded", job.message
-            before = pose_error(station.calibration, cell)
+            before = cell.camera_pose_error(station.calibration.T_world_camera)
             old = station.calibration
-            bump(cell, (0.005, 0.0, 0.0), np.radians([1.0, 0.0, 0.0]))
+            cell.knock_camera((0.005, 0.0, 0.0), np.radians([1.0, 0.0, 0.0]))
             to_warning_s = sim_seconds_until(cell, lambda: station.status()["camera_warning"])
             to_recalibrated_s = sim_seconds_until(
                 cell, lambda: station.calibration is not old and station.status()["camera_warning"] is None)
-            after = pose_error(station.calibration, cell)
+            after = cell.camera_pose_error(station.calibration.T_world_camera)
         finally:
             station.close()
-        bump(cell, (0.005, 0.0, 0.0), (0.0, 0.0, 0.0))  # knocked while the station is off
+        cell.knock_camera((0.005, 0.0, 0.0), (0.0, 0.0, 0.0))  # knocked while the station is off
         station = live.make_station(cell, db, restore_calibration=True)
         try:
             to_rejected_s = sim_seconds_until(cell, lambda: station.status()["calibration_state"] == "rejected")

@@ -57,15 +57,9 @@ def read_truth(station: StationDep) -> dict:
 def post_camera_bump(body: CameraBumpRequest, station: StationDep, controller: ControlAuth) -> dict:
     """Knock the simulated camera mount (translation, then rotation vector, in the camera's frame): a
     calibrated station then warns 'camera moved: recalibrate' in its status until recalibrated."""
-    import cv2
-    import numpy as np
-
     cell = _cell(station)
     station.allowed_or_raise("set_scene", controller)
-    T_old_new = np.eye(4)
-    T_old_new[:3, :3] = cv2.Rodrigues(np.asarray(body.rotation_rad, dtype=float))[0]
-    T_old_new[:3, 3] = body.translation_m
-    cell.bump_camera(T_old_new)
+    cell.knock_camera(body.translation_m, body.rotation_rad)
     station.events.add("warn", f"simulated camera mount bumped by {controller}")
     return {"translation_m": body.translation_m, "rotation_rad": body.rotation_rad}
 

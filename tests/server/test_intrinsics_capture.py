@@ -6,7 +6,6 @@ intrinsics survive a restart on the same SQLite file."""
 
 from __future__ import annotations
 
-import mujoco
 import numpy as np
 import pytest
 
@@ -25,24 +24,6 @@ def cell():
     started.close()
 
 
-def true_intrinsics(cell) -> dict:
-    """fx, fy, cx, cy (OpenCV: pixel centres at integers) of the frustum MuJoCo draws the overhead camera with."""
-    model = cell.model
-    data = mujoco.MjData(model)
-    mujoco.mj_forward(model, data)
-    scene = mujoco.MjvScene(model, maxgeom=2000)
-    camera = mujoco.MjvCamera()
-    camera.type = mujoco.mjtCamera.mjCAMERA_FIXED
-    camera.fixedcamid = model.camera("overhead").id
-    mujoco.mjv_updateScene(model, data, mujoco.MjvOption(), None, camera, mujoco.mjtCatBit.mjCAT_ALL, scene)
-    gl = scene.camera[0]
-    width, height = model.cam_resolution[camera.fixedcamid]
-    left, right = gl.frustum_center - gl.frustum_width, gl.frustum_center + gl.frustum_width
-    return {"fx": width * gl.frustum_near / (right - left), "cx": -left / (right - left) * width - 0.5,
-            "fy": height * gl.frustum_near / (gl.frustum_top - gl.frustum_bottom),
-            "cy": gl.frustum_top / (gl.frustum_top - gl.frustum_bottom) * height - 0.5}
-
-
 def place(client, position_m, rotation_rad=(0.0, 0.0, 0.0)):
     response = client.post("/api/sim/checkerboard", json={"position_m": list(position_m), "rotation_rad": list(rotation_rad)}, headers=AUTH)
     assert response.status_code == 200, response.text
@@ -55,7 +36,7 @@ def capture(client):
 def test_capture_solve_accept_matches_truth_refusals_keep_old_and_survive_restart(cell, tmp_path):
     import httpx
 
-    truth = true_intrinsics(cell)
+    truth = cell.camera_intrinsics()
     db_path = tmp_path / "station.sqlite3"
     with live.station_server(cell, db_path, TOKEN) as url, httpx.Client(base_url=url, timeout=30) as client:
         factory = client.get("/api/intrinsics").json()

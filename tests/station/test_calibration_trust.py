@@ -8,7 +8,6 @@ pose as closely as a calibration by the operator does. The camera-moved check ru
 
 from __future__ import annotations
 
-import cv2
 import numpy as np
 import pytest
 
@@ -41,21 +40,6 @@ def make_station(cell, db_path, **config) -> Station:
 def calibrate(station) -> None:
     job = skills.calibrate(station)
     assert job.wait(30) and job.state == "succeeded", job.message
-
-
-def bump(cell, translation_m, rotation_rad) -> None:
-    T = np.eye(4)
-    T[:3, :3] = cv2.Rodrigues(np.asarray(rotation_rad, dtype=float))[0]
-    T[:3, 3] = translation_m
-    cell.bump_camera(T)
-
-
-def pose_error(calibration, cell) -> tuple[float, float]:
-    """Camera position (m) and rotation (deg) error against the simulation's true camera pose."""
-    truth = np.asarray(cell.truth()["camera"]["T_world_camera"])
-    position_m = float(np.linalg.norm(calibration.camera_position_m - truth[:3, 3]))
-    cos = (np.trace(calibration.T_world_camera[:3, :3].T @ truth[:3, :3]) - 1.0) / 2.0
-    return position_m, float(np.degrees(np.arccos(np.clip(cos, -1.0, 1.0))))
 
 
 def messages(station) -> list[str]:
@@ -103,7 +87,7 @@ def test_a_restored_calibration_is_checked_before_it_is_trusted(cell, tmp_path):
     finally:
         station.close()
 
-    bump(cell, (0.005, 0.0, 0.0), (0.0, 0.0, 0.0))  # knocked while the station was off
+    cell.knock_camera((0.005, 0.0, 0.0), (0.0, 0.0, 0.0))  # knocked while the station was off
     station = make_station(cell, db, restore_calibration=True)
     try:
         assert station.calibration is None  # not used before the board tags confirm it
@@ -118,7 +102,7 @@ def test_a_restored_calibration_is_checked_before_it_is_trusted(cell, tmp_path):
         calibrate(station)  # the operator recalibrates: trusted again, the warning gone
         live.wait_for(lambda: warning_of(station) is None, timeout_s=10)
         assert station.status()["calibration_state"] == "trusted"
-        assert pose_error(station.calibration, cell)[0] < POSITION_TOLERANCE_M
+        assert cell.camera_pose_error(station.calibration.T_world_camera)[0] < POSITION_TOLERANCE_M
     finally:
         station.close()
 
@@ -129,7 +113,7 @@ def test_self_recalibration_off_keeps_the_warning_on_clears_it_at_the_moved_came
         assert station.status()["self_recalibrate"] is False  # config default: off
         calibrate(station)
         old = station.calibration
-        bump(cell, *BUMP_5MM_1DEG)
+        cell.knock_camera(*BUMP_5MM_1DEG)
         assert live.wait_for(lambda: warning_of(station), timeout_s=30).startswith("camera moved: recalibrate")
         wait_sim(cell, 4 * CHECK_PERIOD_S)  # four more checks: off, nothing recalibrates
         assert warning_of(station) and station.calibration is old and station.current_job().name == "calibrate"
@@ -138,9 +122,9 @@ def test_self_recalibration_off_keeps_the_warning_on_clears_it_at_the_moved_came
         until(lambda: warning_of(station) is None and station.calibration is not old, station)
         job = station.current_job()
         assert job.name == "self-recalibrate" and job.state == "succeeded", job.message
-        position_m, rotation_deg = pose_error(station.calibration, cell)
+        position_m, rotation_deg = cell.camera_pose_error(station.calibration.T_world_camera)
         assert position_m < POSITION_TOLERANCE_M and rotation_deg < ROTATION_TOLERANCE_DEG, (position_m, rotation_deg)
-        assert pose_error(old, cell)[1] > 0.8  # the bump (1 degree) really turned the camera away from the old calibration
+        assert cell.camera_pose_error(old.T_world_camera)[1] > 0.8  # the bump (1 degree) really turned the camera away from the old calibration
         assert any("recalibrated itself from the board tags" in m for m in messages(station))
         assert station.store.latest_calibration()["info"]["method"] == "self"  # saved: the next start restores it
         wait_sim(cell, 3 * CHECK_PERIOD_S)
@@ -161,7 +145,7 @@ def test_self_recalibration_waits_for_the_board_tags_and_for_the_arm_to_stop(cel
         station.set_scene(cover)
         calibrate(station)  # three board tags are enough to calibrate
         first = station.calibration
-        bump(cell, *BUMP_5MM_1DEG)
+        cell.knock_camera(*BUMP_5MM_1DEG)
         live.wait_for(lambda: warning_of(station), timeout_s=30)
         wait_sim(cell, 4 * CHECK_PERIOD_S)  # one tag hidden: 3 of 4 in view, fewer than asked: the warning stays
         assert warning_of(station) and station.calibration is first
@@ -176,7 +160,7 @@ def test_self_recalibration_waits_for_the_board_tags_and_for_the_arm_to_stop(cel
         home = np.asarray(station.model.home_rad, dtype=float)
         station.move_joints(home + np.array([0.6, 0.0, 0.0, 0.0, 0.0]), moving_time_s=1.0, wait=True)
         station.move_joints(home, moving_time_s=6.0)
-        bump(cell, *BUMP_5MM_1DEG)
+        cell.knock_camera(*BUMP_5MM_1DEG)
         moving_with_warning = 0
         while station.arm.is_moving():
             status = station.status()
@@ -187,7 +171,7 @@ def test_self_recalibration_waits_for_the_board_tags_and_for_the_arm_to_stop(cel
         until(lambda: warning_of(station) is None and station.calibration is not second, station)
         job = station.current_job()
         assert job.name == "self-recalibrate" and job.state == "succeeded", job.message
-        assert pose_error(station.calibration, cell)[0] < POSITION_TOLERANCE_M
+        assert cell.camera_pose_error(station.calibration.T_world_camera)[0] < POSITION_TOLERANCE_M
     finally:
         station.close()
 
@@ -216,7 +200,7 @@ def test_synchronous_mode_checks_a_restored_calibration_with_one_look(tmp_path):
         station = start(restore_calibration=True)
         assert station.calibration_state == "trusted" and station.calibration is not None
         station.close()
-        bump(fast, (0.005, 0.0, 0.0), (0.0, 0.0, 0.0))
+        fast.knock_camera((0.005, 0.0, 0.0), (0.0, 0.0, 0.0))
         station = start(restore_calibration=True)
         assert station.calibration_state == "rejected" and station.calibration is None
         station.close()

@@ -59,6 +59,34 @@ class SimTruth:
         with self.lock:
             return self._feeder.status() if self._feeder is not None else None
 
+    def camera_pose_error(self, T_world_camera) -> tuple[float, float]:
+        """Position (m) and rotation (deg) error of a camera pose (e.g. a calibration's) against the true camera."""
+        with self.lock:
+            truth = self._T_world_camera.copy()
+        T = np.asarray(T_world_camera, dtype=float)
+        position_m = float(np.linalg.norm(T[:3, 3] - truth[:3, 3]))
+        cos = (np.trace(T[:3, :3].T @ truth[:3, :3]) - 1.0) / 2.0
+        return position_m, float(np.degrees(np.arccos(np.clip(cos, -1.0, 1.0))))
+
+    def camera_intrinsics(self, camera_name: str = "overhead") -> dict:
+        """fx, fy, cx, cy (OpenCV: pixel centres at integers) of the frustum MuJoCo draws the camera with."""
+        import mujoco
+
+        with self.lock:
+            model = self._model
+            data = mujoco.MjData(model)
+            mujoco.mj_forward(model, data)
+            scene = mujoco.MjvScene(model, maxgeom=2000)
+            camera = mujoco.MjvCamera()
+            camera.type = mujoco.mjtCamera.mjCAMERA_FIXED
+            camera.fixedcamid = model.camera(camera_name).id
+            mujoco.mjv_updateScene(model, data, mujoco.MjvOption(), None, camera, mujoco.mjtCatBit.mjCAT_ALL, scene)
+            width, height = model.cam_resolution[camera.fixedcamid]
+        gl = scene.camera[0]
+        left, right = gl.frustum_center - gl.frustum_width, gl.frustum_center + gl.frustum_width
+        return {"fx": width * gl.frustum_near / (right - left), "fy": height * gl.frustum_near / (gl.frustum_top - gl.frustum_bottom),
+                "cx": -left / (right - left) * width - 0.5, "cy": gl.frustum_top / (gl.frustum_top - gl.frustum_bottom) * height - 0.5}
+
     def truth(self) -> dict:
         """Ground truth: camera (K, size, true T_world_camera), objects (pose; feeder blocks only once
         fed, as feed_0, feed_1, ...), the feeder's state (None without one), gripper contacts, arm."""

@@ -28,6 +28,7 @@ from armlab.devices.sim.config import (
     load_camera_config,
     load_sim_config,
     nominal_T_world_camera,
+    rotation_from_rotvec,
 )
 from armlab.devices.sim.feeder import FeederRuntime, parked_objects
 from armlab.devices.sim.gripper import SimGripper
@@ -427,6 +428,13 @@ class SimWorkcell(SimTruth):
             self._model.cam_quat[camera_id] = quat_wxyz_from_matrix(R_world_mj)
             self._data.cam_xpos[camera_id] = self._T_world_camera[:3, 3]  # the next physics step would recompute these
             self._data.cam_xmat[camera_id] = R_world_mj.ravel()
+
+    def knock_camera(self, translation_m, rotation_rad) -> None:
+        """bump_camera by a translation (m) and then a rotation vector (rad), both in the camera's frame."""
+        T_old_new = np.eye(4)
+        T_old_new[:3, :3] = rotation_from_rotvec(np.asarray(rotation_rad, dtype=float))
+        T_old_new[:3, 3] = np.asarray(translation_m, dtype=float)
+        self.bump_camera(T_old_new)
 
     def place_checkerboard(self, position_m=None, R_world_board=None) -> None:
         """Put the intrinsics checkerboard (checkerboard.py: board frame, z out of the printed face) at a world
