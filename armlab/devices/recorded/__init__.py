@@ -2,6 +2,6 @@
 
 from armlab.devices.recorded.camera_recorded import RecordedCamera
 from armlab.devices.recorded.configuration_recorded import RecordedCameraConfig
-from armlab.devices.recorded.folder import RecordingError
+from armlab.devices.recorded.errors import RecordingError
 
 __all__ = ["RecordedCamera", "RecordedCameraConfig", "RecordingError"]

@@ -15,14 +15,14 @@ from pathlib import Path
 import cv2
 import numpy as np
 
+from armlab.devices.recorded.errors import RecordingError
+
+__all__ = ["FramePair", "PngHeader", "RecordingError", "checked_pairs", "find_pairs", "png_header", "read_pair"]
+
 log = logging.getLogger(__name__)
 
 PNG_SIGNATURE = b"\x89PNG\r\n\x1a\n"
 _COLOUR_TYPES = {0: 1, 2: 3, 3: 1, 4: 2, 6: 4}  # PNG colour type -> channels (3: palette, one index per pixel)
-
-
-class RecordingError(ValueError):
-    """A recording (folder, bag or intrinsics) cannot be played; the message names the file and the fault."""
 
 
 @dataclass(frozen=True)

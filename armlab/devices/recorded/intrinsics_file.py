@@ -19,10 +19,11 @@ import numpy as np
 
 from armlab.config import read_config_file
 from armlab.devices.camera import Intrinsics
+from armlab.devices.recorded.errors import RecordingError
 from armlab.errors import ConfigError
 
 
-class IntrinsicsFileError(ValueError):
+class IntrinsicsFileError(RecordingError):
     """An intrinsics file is missing, unreadable or holds no usable intrinsics (the message names it)."""
 
 
