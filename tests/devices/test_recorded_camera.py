@@ -259,3 +259,30 @@ def test_bad_bags_are_refused_naming_the_bag(tmp_path):
         _camera(no_depth).connect()
     with pytest.raises(RecordingError, match=r"frame: 'x' holds a pair of a folder"):
         _camera(write_bag(tmp_path / "bag", count=1), frame="x").connect()
+
+
+def test_every_intrinsics_layout_reads_the_same_camera(tmp_path):
+    import yaml
+
+    from armlab.cli.vision_cmd import load_intrinsics
+    from armlab.devices.recorded.intrinsics_file import read_intrinsics_file
+
+    flat = [v for row in K_TEST for v in row]
+    files = {
+        "armlab.json": json.dumps({"K": K_TEST, "dist": DIST_TEST, "image_size": [64, 48]}),
+        "ros_calibration.yaml": yaml.safe_dump({"image_width": 64, "image_height": 48, "camera_name": "c", "distortion_model": "plumb_bob",
+                                                "camera_matrix": {"rows": 3, "cols": 3, "data": flat},
+                                                "distortion_coefficients": {"rows": 1, "cols": 5, "data": DIST_TEST}}),
+        "camera_info.yaml": yaml.safe_dump({"width": 64, "height": 48, "k": flat, "d": DIST_TEST}),
+        "kept_camera_info.json": json.dumps({"K_from_camera_info": K_TEST, "D_from_camera_info_plumb_bob": DIST_TEST}),
+    }
+    expected = (64, 48, 100.0, 101.0, 31.5, 23.5, tuple(DIST_TEST))
+    for name, text in files.items():
+        (tmp_path / name).write_text(text)
+        intrinsics, origin = read_intrinsics_file(tmp_path / name, (64, 48))
+        assert (intrinsics.width, intrinsics.height, intrinsics.fx, intrinsics.fy, intrinsics.cx, intrinsics.cy, intrinsics.dist) == expected, name
+        assert origin.startswith(name)
+    cli = load_intrinsics(str(tmp_path / "armlab.json"))  # `armlab calibrate-extrinsics --intrinsics` reads the same file
+    assert (cli.width, cli.height, cli.fx, cli.fy, cli.cx, cli.cy, cli.dist) == expected
+    with pytest.raises(RecordingError, match=r"kept_camera_info\.json: the file gives no image size"):
+        read_intrinsics_file(tmp_path / "kept_camera_info.json")
