@@ -14,6 +14,9 @@ def register(subparsers: argparse._SubParsersAction) -> None:
     tags.add_argument("image")
     tags.add_argument("--family", "--dict", dest="dict", default=None,
                       help="tag36h11 | tagStandard41h12 (AprilTag library) | DICT_... (OpenCV ArUco); default: the workcell's board tags")
+    tags.add_argument("--corners", choices=("opencv", "apriltag"), default="opencv",
+                      help="corner convention: opencv (TL, TR, BR, BL, pixel centres at integers; the station's) or "
+                           "apriltag (the AprilTag library's: counter-clockwise from bottom-left, pixel centres at +0.5)")
     tags.set_defaults(func=run_tags)
 
     intr = subparsers.add_parser("calibrate-intrinsics", help="camera intrinsics from checkerboard images")
@@ -97,7 +100,8 @@ def run_tags(args: argparse.Namespace) -> int:
         tags = detect_tags(_read_color(args.image), load_perception_config(), dictionary=args.dict)
     except ValueError as error:
         return _fail(str(error))
-    print(json.dumps([{"id": t.id, "corners_px": t.corners_px.round(3).tolist(), "hamming": t.hamming,
+    corners = (lambda t: t.corners_apriltag_px()) if args.corners == "apriltag" else (lambda t: t.corners_px)
+    print(json.dumps([{"id": t.id, "corners_px": corners(t).round(3).tolist(), "hamming": t.hamming,
                        "decision_margin": None if t.decision_margin is None else round(t.decision_margin, 2)} for t in tags]))
     return 0
 
