@@ -86,20 +86,7 @@ class AprilTagDetector:
         pointer.contents.decode_sharpening = float(s.decode_sharpening)  # the wrapper truncates it to an int
 
     def __del__(self) -> None:
-        """Free the library's detector before its families: pupil-apriltags' own __del__ frees the
-        families first, and the detector's teardown then reads them (an intermittent segfault,
-        pupil-labs/apriltags#46, duckietown/lib-dt-apriltags#33)."""
-        detector = getattr(self, "_detector", None)
-        if detector is None or getattr(detector, "tag_detector_ptr", None) is None:
-            return
-        libc = detector.libc
-        libc.apriltag_detector_destroy.restype = None
-        libc.apriltag_detector_destroy(detector.tag_detector_ptr)
-        detector.tag_detector_ptr = None  # its own __del__ then does nothing
-        for family, pointer in detector.tag_families.items():
-            destroy = getattr(libc, f"{family}_destroy")
-            destroy.restype = None
-            destroy(pointer)
+        free_library_detector(getattr(self, "_detector", None))
 
     def detect(self, grey: np.ndarray) -> list[tuple[int, np.ndarray, int | None, float | None]]:
         """(id, corners (4, 1, 2) float32 in OpenCV order, hamming, decision margin) per instance."""
@@ -111,6 +98,23 @@ class AprilTagDetector:
             corners = (np.asarray(det.corners, dtype=np.float32)[_APRILTAG_TO_OPENCV] - 0.5).reshape(4, 1, 2)
             found.append((int(det.tag_id), corners, int(det.hamming), float(det.decision_margin)))
         return found
+
+
+def free_library_detector(detector) -> None:
+    """Free a pupil_apriltags.Detector's C detector before its families: pupil-apriltags' own __del__
+    frees the families first, and the detector's teardown then reads them (an intermittent segfault,
+    pupil-labs/apriltags#46, duckietown/lib-dt-apriltags#33). Its own __del__ then does nothing."""
+    if detector is None or getattr(detector, "tag_detector_ptr", None) is None:
+        return
+    libc = detector.libc
+    libc.apriltag_detector_destroy.restype = None
+    libc.apriltag_detector_destroy(detector.tag_detector_ptr)
+    detector.tag_detector_ptr = None
+    for family, pointer in detector.tag_families.items():
+        destroy = getattr(libc, f"{family}_destroy")
+        destroy.restype = None
+        destroy(pointer)
+    detector.tag_families = {}
 
 
 def make_detector(name: str, settings: TagDetectionConfig | None = None):

@@ -22,7 +22,7 @@ from test_tag_families import _place, _square
 from armlab.devices.sim.tag_bitmaps import tag_bitmap
 from armlab.vision import detect_tags, load_perception_config
 from armlab.vision.config import TagDetectionConfig
-from armlab.vision.tags import make_detector
+from armlab.vision.tags import free_library_detector, make_detector
 
 PHOTO_TAGS = 47
 MIN_FOUND = 44  # what the AprilTag library finds with its defaults at full resolution (quad_decimate 1)
@@ -101,8 +101,9 @@ def test_tags_command_gives_corners_in_the_librarys_convention(capsys):
     photo = PHOTOS[0]
     assert main(["tags", str(photo), "--family", "tag36h11", "--corners", "apriltag"]) == 0
     ours = [np.array(t["corners_px"]) for t in json.loads(capsys.readouterr().out)]
-    library = Detector(families="tag36h11", nthreads=1, quad_decimate=1.0).detect(
-        cv2.cvtColor(cv2.imread(str(photo)), cv2.COLOR_BGR2GRAY))  # the grey the command makes
+    detector = Detector(families="tag36h11", nthreads=1, quad_decimate=1.0)
+    library = detector.detect(cv2.cvtColor(cv2.imread(str(photo)), cv2.COLOR_BGR2GRAY))  # the grey the command makes
+    free_library_detector(detector)  # its own teardown can segfault
     assert len(library) >= 9
     for det in library:  # the same corners as the library's, in its order and pixel convention
         assert min(np.abs(c - det.corners).max() for c in ours) < 0.01
