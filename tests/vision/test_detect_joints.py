@@ -1,14 +1,14 @@
 """The arm is never a block, offline too (issue 17 item 4): `armlab detect --joints q1,... [--arm NAME]`
 applies the live station's robot self-filter. On a real ROB 550 frame the RX200 stands in view near the
 bottom centre in its sleep pose: without --joints a 'block' is reported on it, with the sleep joints
-none is, and every other detection is unchanged. Bad --joints / --arm -> exit 2 naming the option."""
+none is, and every other detection is unchanged. Bad --joints / --arm -> exit 2 naming the option
+(on a synthetic board frame: checked without the data folder)."""
 
 from __future__ import annotations
 
 import json
 
 import cv2
-import numpy as np
 import pytest
 from rob550_dev import DEV, f21_intrinsics, needs_dev_frames, rob550_config
 
@@ -40,6 +40,17 @@ def frame_files(tmp_path_factory):
     return [str(color), "--depth", str(depth), "--calibration", str(cal_path)]
 
 
+@pytest.fixture(scope="module")
+def board_files(tmp_path_factory, board_frame, intrinsics, cfg):
+    """A synthetic board frame (exact geometry, no arm), its depth and calibration: for the bad-input checks."""
+    tmp = tmp_path_factory.mktemp("detect_joints_board")
+    color, depth = board_frame
+    cv2.imwrite(str(tmp / "color.png"), color)
+    cv2.imwrite(str(tmp / "depth.png"), depth)
+    calibrate_extrinsics(color, intrinsics, cfg, depth_mm=depth).save(tmp / "calibration.json")
+    return [str(tmp / "color.png"), "--depth", str(tmp / "depth.png"), "--calibration", str(tmp / "calibration.json")]
+
+
 def _detect(capsys, frame_files, *extra: str) -> list[dict]:
     assert main(["detect", *frame_files, "--all", *extra]) == 0, capsys.readouterr().err
     return json.loads(capsys.readouterr().out)
@@ -60,7 +71,6 @@ def test_the_arm_in_a_real_frame_is_a_block_without_joints_and_none_with_them(ca
     assert sorted(map(key, _detect(capsys, frame_files, "--joints", SLEEP_RAD, "--arm", "rx200"))) == sorted(map(key, with_joints))
 
 
-@needs_dev_frames
 @pytest.mark.parametrize("args, says", [
     (["--joints", "0,-1.8,1.55"], "--joints: arm rx200 has 5 joints"),
     (["--joints", "0,nan,1.55,0.8,0"], "--joints: 'nan' is not a finite number"),
@@ -72,7 +82,8 @@ def test_the_arm_in_a_real_frame_is_a_block_without_joints_and_none_with_them(ca
     (["--joints", SLEEP_RAD, "--arm", "no_such_arm"], "--arm no_such_arm"),
     (["--joints", SLEEP_RAD, "--arm", "ur3"], "--joints: arm ur3 has 6 joints"),
 ])
-def test_bad_joints_or_arm_is_a_clear_error(capsys, frame_files, args, says):
-    assert main(["detect", *frame_files, *args]) == 2
+def test_bad_joints_or_arm_is_a_clear_error(capsys, board_files, args, says):
+    assert main(["detect", *board_files, *args]) == 2
     out = capsys.readouterr()
     assert out.out == "" and says in out.err and out.err.startswith("error: "), out.err
+
