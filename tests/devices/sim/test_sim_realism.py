@@ -195,10 +195,10 @@ def test_real_frame_colour_cast_light_and_clutter(real_cell):
 
 
 def test_realism_is_chosen_by_caller_then_environment_then_config(monkeypatch):
-    sim = load_sim_config()
-    assert sim.realism == "real"  # the shipped default
+    sim = load_sim_config().model_copy(update={"realism": "real"})
     monkeypatch.delenv(REALISM_ENV, raising=False)
     assert resolve_realism(None, sim) == "real"
+    assert resolve_realism(None, sim.model_copy(update={"realism": "ideal"})) == "ideal"
     monkeypatch.setenv(REALISM_ENV, "ideal")
     assert resolve_realism(None, sim) == "ideal"
     assert resolve_realism("real", sim) == "real"
