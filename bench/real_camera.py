@@ -1,9 +1,9 @@
 """Measure a real L515's imperfections on real RGB-D frames (default: ../shared/data/rob550_dev), the
 magnitudes the simulated camera's `realism: real` copies (config/cameras/sim_l515.yaml `realism:`).
 
-Per frame: the board plane fitted to the depth against the plane the tags' pose gives (PnP on the
-labelled tag centres with the station's camera_info K and distortion): offset at the board centre along
-the tags' normal (+ = depth behind the tags' plane) and tilt; depth noise (residual std in 16x16-pixel
+Per frame: the board plane fitted to the depth against the plane the tags' pose gives (the station's PnP
+on the detected tags' corners with the camera_info K and distortion): its height above the tags' plane at
+the tags' centre (negative: behind), its tilt and the direction it rises in (board frame, deg from +y); depth noise (residual std in 16x16-pixel
 patches after a local plane fit) against range; the hole (0) fraction on the board, at cube edges and on
 dark pixels; flying pixels (between top and board) at cube edges; the board grey's colour (white balance)
 and brightness (exposure) and its spread over the board (uneven light).
@@ -112,11 +112,14 @@ def measure(data: Path, name: str, K: np.ndarray, dist: np.ndarray) -> dict | No
     if tag_normal[2] > 0:
         tag_normal = -tag_normal
     tag_normal = -tag_normal  # the same orientation as the fitted normal (+z camera, away from it)
-    centre_cam = t + R @ np.array([0.0, 150.0, 0.0])  # the board centre (between the tags)
+    tags_centre = np.mean(list(TAG_CENTRES_MM.values()), axis=0)
+    centre_cam = t + R @ np.array([tags_centre[0], tags_centre[1], 0.0])
     ray = centre_cam / np.linalg.norm(centre_cam)
     depth_plane_point = ray * (d / float(normal @ ray))  # where the centre's ray meets the depth plane
-    offset_mm = float(tag_normal @ (depth_plane_point - centre_cam))
+    offset_mm = -float(tag_normal @ (depth_plane_point - centre_cam))  # + toward the camera
     tilt_deg = math.degrees(math.acos(min(1.0, abs(float(normal @ tag_normal)))))
+    up_world = R.T @ -normal  # the depth plane's normal toward the camera, in the board frame
+    rise_deg = math.degrees(math.atan2(-up_world[0], -up_world[1]))  # the plane rises along this direction
     # Noise: residual std in small board patches after a local plane fit, against the patch's range.
     noise = []
     h, w = depth.shape
@@ -158,6 +161,7 @@ def measure(data: Path, name: str, K: np.ndarray, dist: np.ndarray) -> dict | No
         "no_depth_columns": int(len(empty_columns)),
         "offset_mm": round(offset_mm, 2),
         "tilt_deg": round(tilt_deg, 2),
+        "rise_deg": round(rise_deg, 0),
         "board_range_mm": round(float(np.median(depth[board])), 1),
         "noise_std_mm_median": round(float(np.median(noise[:, 1])), 2) if len(noise) else None,
         "noise_by_range": noise,
@@ -180,7 +184,7 @@ def main() -> int:
     dist = np.array(calibration["D_from_camera_info_plumb_bob"], dtype=np.float64)
     names = sorted(p.name[len("image_"):-len(".labels.json")] for p in args.data.glob("image_*.labels.json"))
     rows = []
-    print(f"{'frame':<14} {'reproj':>6} {'nocol':>5} {'offset':>7} {'tilt':>5} {'range':>6} {'noise':>5} {'holes':>6} {'edgeH':>6} {'edgeF':>6} "
+    print(f"{'frame':<14} {'reproj':>6} {'nocol':>5} {'offset':>7} {'tilt':>5} {'rises':>6} {'range':>6} {'noise':>5} {'holes':>6} {'edgeH':>6} {'edgeF':>6} "
           f"{'darkH':>6} {'board BGR':>18} {'light':>5}")
     for name in names:
         row = measure(args.data, name, K, dist)
@@ -188,7 +192,7 @@ def main() -> int:
             print(f"{name:<14} (fewer than 4 labelled tags)")
             continue
         rows.append(row)
-        print(f"{name:<14} {row['reprojection_px']:>6.2f} {row['no_depth_columns']:>5} {row['offset_mm']:>6.1f}m {row['tilt_deg']:>5.2f} {row['board_range_mm']:>6.0f} "
+        print(f"{name:<14} {row['reprojection_px']:>6.2f} {row['no_depth_columns']:>5} {row['offset_mm']:>6.1f}m {row['tilt_deg']:>5.2f} {row['rise_deg']:>6.0f} {row['board_range_mm']:>6.0f} "
               f"{row['noise_std_mm_median']:>5.2f} {row['holes_board']:>6.3f} {row['holes_edge_band']:>6.3f} "
               f"{row['flying_edge_band']:>6.3f} {row['holes_dark']:>6.3f} {str(row['board_bgr']):>18} {row['light_spread']}")
     noise = np.concatenate([r["noise_by_range"] for r in rows])

@@ -122,10 +122,10 @@ class SimCamera(SimDevice, Camera):
         with self._condition:
             self._condition.notify_all()  # a reader waiting for a frame sees the camera closed
 
-    def set_board(self, T_world_camera: np.ndarray, board_centre_m) -> None:
-        """Tell the realistic depth where the board is seen (its offset and tilt pivot there); no-op if ideal."""
+    def set_board(self, T_world_camera: np.ndarray, pivot_m) -> None:
+        """Tell the realistic depth where the board is seen (its offset and tilt pivot at pivot_m); no-op if ideal."""
         if self._noise.real is not None:
-            self._noise.real.set_board(T_world_camera, board_centre_m)
+            self._noise.real.set_board(T_world_camera, pivot_m)
 
     def publish(self, images: RawImages) -> Frame:
         """Add noise, stamp and store a render as the newest frame (called by the workcell)."""

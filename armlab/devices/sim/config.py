@@ -224,8 +224,9 @@ class CameraRealismConfig(StrictModel):
     """The real L515's imperfections (`realism: real`), magnitudes measured on real frames by
     bench/real_camera.py (which frames and figures: the camera file's comments)."""
 
-    # The depth's board plane against the true board: offset along the board's normal at the board centre
-    # (+ = the depth reads behind the board), tilt about an axis in the image (axis_deg: 0 = image x).
+    # The depth's board plane against the true board, as calibration reports it: its height above the board
+    # at the board tags' centre (negative: behind, away from the camera) and its tilt, rising along the
+    # board's +y turned by depth_tilt_axis_deg (0: the tilt's axis is the board's x axis).
     depth_offset_m: Annotated[float, Field(ge=-0.05, le=0.05)]
     depth_tilt_deg: Annotated[float, Field(ge=-10.0, le=10.0)]
     depth_tilt_axis_deg: float = 0.0

@@ -41,22 +41,23 @@ class RealCamera:
         left, right = realism.no_depth_columns
         self._no_depth = (slice(0, left), slice(width - right, width) if right else slice(0, 0))
 
-    def set_board(self, T_world_camera: np.ndarray, board_centre_m) -> None:
+    def set_board(self, T_world_camera: np.ndarray, pivot_m) -> None:
         """Place the depth's board plane against the true board as this camera sees it (call again when the
-        camera moves): every point moves along its ray so that the board's points move off the board by
-        offset + tan(tilt) * (distance from the board centre along the tilt's direction), measured along
-        the board's normal. The board the depth shows is then exactly that offset and tilt away."""
+        camera moves): every point moves along its ray so that the board's points rise off the board by
+        offset + tan(tilt) * (distance from the pivot, the board tags' centre, along the tilt's direction),
+        measured along the board's normal (+ toward the camera). The board the depth shows is then exactly
+        that offset and tilt away, as calibration measures them (armlab.vision.board_plane)."""
         cfg = self.config
         R, t = T_world_camera[:3, :3], T_world_camera[:3, 3]
-        centre_mm = 1000.0 * (R.T @ (np.array([board_centre_m[0], board_centre_m[1], 0.0]) - t))
+        centre_mm = 1000.0 * (R.T @ (np.array([pivot_m[0], pivot_m[1], 0.0]) - t))
         normal = R.T @ np.array([0.0, 0.0, 1.0])  # the board's normal in the camera frame
         axis = math.radians(cfg.depth_tilt_axis_deg)  # the tilt's axis in the board; it slopes across it
         slope_dir = R.T @ np.array([-math.sin(axis), math.cos(axis), 0.0])
-        # A step dz along a pixel's ray moves its point by dz * |n . r| along the board's normal.
+        # A step dz along a pixel's ray moves its point by dz * |n . r| along the board's normal, away from the camera.
         per_normal = 1.0 / np.abs(normal[0] * self._ray_x + normal[1] * self._ray_y + normal[2])
         along = slope_dir[0] * self._ray_x + slope_dir[1] * self._ray_y + slope_dir[2]  # (slope_dir . P) / Z
-        self._depth_gain = (self._slope * along * per_normal).astype(np.float32)
-        shift_mm = 1000.0 * cfg.depth_offset_m - self._slope * float(slope_dir @ centre_mm)
+        self._depth_gain = (-self._slope * along * per_normal).astype(np.float32)
+        shift_mm = -(1000.0 * cfg.depth_offset_m - self._slope * float(slope_dir @ centre_mm))
         self._depth_shift = (shift_mm * per_normal).astype(np.float32)
 
     def with_depth(self, offset_m: float | None, tilt_deg: float | None) -> None:

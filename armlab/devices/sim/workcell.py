@@ -92,7 +92,7 @@ class SimWorkcell(SimTruth):
             real.with_depth(self.config.depth_offset_m, self.config.depth_tilt_deg)
         noise = NoiseModel(self._camera_config, noise_rng, self.config.color_noise, self.config.depth_noise, real)
         self.camera = SimCamera(self, self._camera_config, noise, self.config.camera_fps)
-        self.camera.set_board(self._T_world_camera, self._board_centre_m())
+        self.camera.set_board(self._T_world_camera, self._depth_pivot_m())
         self._render_thread: RenderThread | None = None
         self._physics_thread: threading.Thread | None = None
         self._stop_event = threading.Event()
@@ -438,10 +438,11 @@ class SimWorkcell(SimTruth):
             self._model.cam_quat[camera_id] = quat_wxyz_from_matrix(R_world_mj)
             self._data.cam_xpos[camera_id] = self._T_world_camera[:3, 3]  # the next physics step would recompute these
             self._data.cam_xmat[camera_id] = R_world_mj.ravel()
-            self.camera.set_board(self._T_world_camera, self._board_centre_m())  # the depth's tilt pivots there
+            self.camera.set_board(self._T_world_camera, self._depth_pivot_m())  # the depth's tilt pivots there
 
-    def _board_centre_m(self) -> np.ndarray:
-        return np.mean(np.asarray(self._workcell.board.corners_m, dtype=float), axis=0)
+    def _depth_pivot_m(self) -> np.ndarray:
+        """Where the realistic depth's offset is measured and its tilt pivots: the board tags' centre."""
+        return np.mean(np.asarray(list(self._workcell.board_tags.centres_m.values()), dtype=float), axis=0)
 
     def knock_camera(self, translation_m, rotation_rad) -> None:
         """bump_camera by a translation (m) and then a rotation vector (rad), both in the camera's frame."""

@@ -15,7 +15,7 @@ from armlab.scene import Scene, SceneObject
 
 CAMERA = load_camera_config()
 REAL = CAMERA.realism
-BOARD_CENTRE_M = (0.0, 0.15)  # the rx200_armlab board's centre (config/workcells/rx200_armlab.yaml)
+TAGS_CENTRE_M = (0.0, 0.125)  # the rx200_armlab board tags' centre (config/workcells/rx200_armlab.yaml)
 
 
 def board_points(cell, depth_mm):
@@ -46,18 +46,18 @@ def fit_plane(points):
 
 
 def plane_offset_and_tilt(cell, depth_mm):
-    """The depth's board plane against the true board: offset (mm, + = behind) along the true normal at
-    the board centre, and the angle between the planes (deg)."""
+    """The depth's board plane against the true board: its height (mm, negative: behind) along the true
+    normal at the board tags' centre, and the angle between the planes (deg)."""
     points, keep, T = board_points(cell, depth_mm)
     selected = points[keep & (depth_mm > 0)]
     normal, centre = fit_plane(selected[::5])
     residual = (selected - centre) @ normal
     normal, centre = fit_plane(selected[np.abs(residual) < 3.0][::3])
     true_normal = T[:3, :3].T @ np.array([0.0, 0.0, 1.0])  # world +z (toward the camera) in the camera frame
-    board_centre = T[:3, :3].T @ (np.array([*BOARD_CENTRE_M, 0.0]) - T[:3, 3]) * 1000.0
+    board_centre = T[:3, :3].T @ (np.array([*TAGS_CENTRE_M, 0.0]) - T[:3, 3]) * 1000.0
     ray = board_centre / np.linalg.norm(board_centre)
     on_depth_plane = ray * float(normal @ centre) / float(normal @ ray)
-    offset_mm = -float(true_normal @ (on_depth_plane - board_centre))
+    offset_mm = float(true_normal @ (on_depth_plane - board_centre))
     tilt_deg = math.degrees(math.acos(min(1.0, abs(float(normal @ true_normal)))))
     return offset_mm, tilt_deg
 
@@ -88,7 +88,7 @@ def real_cell():
         yield cell
 
 
-@pytest.mark.parametrize("offset_m,tilt_deg", [(0.011, 1.4), (-0.007, 0.8)])
+@pytest.mark.parametrize("offset_m,tilt_deg", [(-0.011, 1.4), (0.007, 0.8)])
 def test_board_plane_offset_and_tilt_as_configured(offset_m, tilt_deg):
     with SimWorkcell(SimWorkcellConfig(seed=1, realism="real", depth_offset_m=offset_m, depth_tilt_deg=tilt_deg)) as cell:
         offset_mm, measured_tilt_deg = plane_offset_and_tilt(cell, cell.render().depth_mm)
@@ -219,10 +219,13 @@ def test_realism_flag_reaches_the_workcell():
     # run_one hands the value on to the episode's SimWorkcellConfig: a bad one fails there, naming it.
     crashed = run_one("pick_sort", 3, 0, realism="sometimes")
     assert crashed["crashed"] and "realism" in crashed["failures"][-1]
-    with SimWorkcell(SimWorkcellConfig(realism="real")) as cell:
-        assert cell.realism == "real" and cell.camera._noise.real is not None
-    with SimWorkcell(SimWorkcellConfig()) as cell:  # the suite's $ARMLAB_REALISM (tests/conftest.py)
-        assert cell.realism == "ideal" and cell.camera._noise.real is None
+    for requested, expected in (("real", "real"), (None, "ideal")):  # None: the suite's $ARMLAB_REALISM (tests/conftest.py)
+        cell = SimWorkcell(SimWorkcellConfig(realism=requested))  # not started: no renderer needed
+        try:
+            assert cell.realism == expected and (cell.camera._noise.real is not None) == (expected == "real")
+            assert any((cell.model.geom(i).name or "").startswith("clutter:") for i in range(cell.model.ngeom)) == (expected == "real")
+        finally:
+            cell.close()
 
 
 def test_bad_realism_config_is_refused_naming_the_field():
