@@ -16,6 +16,9 @@ def register(subparsers: argparse._SubParsersAction) -> None:
     parser.add_argument("--event", default=None, help="starting scene: pick_sort, pick_stack, line_up, stack_high, to_the_sky")
     parser.add_argument("--level", type=int, default=None, help="starting scene level (1-3)")
     parser.add_argument("--scene-seed", type=int, default=None, help="starting scene seed")
+    parser.add_argument("--realism", choices=("real", "ideal"), default=None,
+                        help="simulation: real (the camera's imperfections, shadows, clutter) or ideal (exact); "
+                             "default from the config, else config/sim.yaml `realism`")
     parser.add_argument("--workcell", default=None,
                         help="workcell (config/workcells/<name>.yaml: arm, gripper, board, camera); default from the config, rx200_armlab")
     parser.add_argument("--backend", choices=("sim", "real"), default=None,
@@ -49,7 +52,8 @@ def build_station_config(args: argparse.Namespace):
         config = validate_config({**read_config_file(path), "workcell": workcell}, StationConfig, f"{path} with --workcell {workcell}")
     sim_updates = {
         key: value
-        for key, value in (("seed", args.seed), ("event", args.event), ("level", args.level), ("scene_seed", args.scene_seed))
+        for key, value in (("seed", args.seed), ("event", args.event), ("level", args.level), ("scene_seed", args.scene_seed),
+                           ("realism", getattr(args, "realism", None)))
         if value is not None
     }
     if sim_updates:

@@ -38,7 +38,7 @@ def make_sim_station(config: StationConfig | None = None, db_path: str | Path | 
 
     config = config or StationConfig()
     cell = SimWorkcell(SimWorkcellConfig(realtime=True, seed=config.sim.seed, camera_fps=config.sim.camera_fps,
-                                         workcell=config.workcell))
+                                         workcell=config.workcell, realism=config.sim.realism))
     cell.start()
     try:
         if config.sim.event:
