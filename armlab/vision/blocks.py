@@ -20,6 +20,7 @@ import numpy as np
 
 from armlab.vision.calibration import Calibration
 from armlab.vision.clipped_face import fit_clipped_square, on_image_border
+from armlab.vision.colors import BoardGrey, ColorModel, ColorReading
 from armlab.vision.config import PerceptionConfig
 from armlab.vision.geometry import PlaneCamera, height_coefficients, height_map_m
 from armlab.vision.tags import check_color_image, detect_tags, make_detector
@@ -53,6 +54,7 @@ class Block:
     stack_sizes: tuple[str, ...] = field(default=())
     seen_time_s: float | None = None  # capture time (time.time()) of the frame it was seen in
     seen_arm_joints_rad: tuple[float, ...] | None = None  # the measured arm joints at that frame
+    color_lab: tuple[float, float, float] | None = None  # the top face's board-normalised CIELAB (armlab.vision.colors)
 
     def to_dict(self) -> dict:
         return {
@@ -71,6 +73,7 @@ class Block:
             "side_m": float(self.side_m),
             "seen_time_s": self.seen_time_s,
             "seen_arm_joints_rad": None if self.seen_arm_joints_rad is None else list(self.seen_arm_joints_rad),
+            "color_lab": None if self.color_lab is None else [float(x) for x in self.color_lab],
         }
 
 
@@ -350,6 +353,7 @@ def detect_blocks(
     tag_detector: cv2.aruco.ArucoDetector | None = None,
     geometry: BlockGeometry | None = None,
     ignore_mask: np.ndarray | None = None,
+    color_model: ColorModel | None = None,
 ) -> list[Block]:
     """Blocks (top of each stack) and flagged non-cubes on the board, sorted by y then x.
 
@@ -357,6 +361,8 @@ def detect_blocks(
     geometry: BlockGeometry(cal), if the caller keeps one per calibration (saves its computation per frame).
     ignore_mask: (H, W) bool pixels that are not the scene (the robot self-filter's mask): no face is
     built from them, and a block partly hidden under them, or partly inside them, is flagged occluded.
+    color_model: names each face's colour from its pixels and the board's grey around it (default: the
+    config's, armlab.vision.colors); the hue classes only find candidate pixels.
     """
     check_color_image(color_bgr)
     if color_bgr.ndim != 3:
@@ -392,6 +398,10 @@ def detect_blocks(
         colourless[ignored_small] = False
         z_cover = z_small.copy()
         z_cover[ignored_small] = np.inf
+    board_small = np.abs(z_small) < bc.min_height_m  # board-height pixels: the colour model's grey reference
+    if ignore_mask is not None:
+        board_small &= ~ignore_mask[::step, ::step]
+    colour_of = _face_colour(color_model or ColorModel.from_config(cfg), BoardGrey(small_bgr, board_small, scale=step))
     coloured = (classes > 0).astype(np.uint8)
     # A tag on a block's top is white and black: bridge its white (next to colour, never the dark arm)
     # so the thin coloured ring around it stays one candidate at this resolution.
@@ -435,7 +445,7 @@ def detect_blocks(
             ):
                 continue  # a lower member of a stack: the block on top sits inside its footprint
             region = region or _Region(color_bgr, depth_mm, geo, cfg, roi, table, ignore_mask)
-            for block, looks_tagged in _blocks_from_region(color_bgr, geo, cfg, region, top_m, names[ci - 1], ci, z_cover, step):
+            for block, looks_tagged in _blocks_from_region(color_bgr, geo, cfg, region, top_m, names[ci - 1], ci, z_cover, step, colour_of):
                 if block.aruco_id is None and looks_tagged:
                     detector = detector or make_detector(cfg.tags.block_tag_dictionary)
                     block = _with_tag(block, color_bgr, roi, detector, cfg)
@@ -465,9 +475,16 @@ class _Region:
             self.z[ignored] = np.nan
 
 
-def _blocks_from_region(color_bgr, geo: BlockGeometry, cfg, region: _Region, top_m, name, ci, z_small, step) -> list[tuple[Block, bool]]:
+def _face_colour(model: ColorModel, grey: BoardGrey):
+    """colour_of(face_bgr, centre_px) -> ColorReading: the model's reading against the board's grey near the face."""
+    return lambda face_bgr, centre_px: model.classify(face_bgr, grey.near(centre_px))
+
+
+def _blocks_from_region(color_bgr, geo: BlockGeometry, cfg, region: _Region, top_m, name, ci, z_small, step,
+                        colour_of=None) -> list[tuple[Block, bool]]:
     """The top face at about top_m in the ROI (pixels of this colour or colourless, e.g. a tag), as
-    blocks, each with whether its face looks tagged (_face_looks_tagged)."""
+    blocks, each with whether its face looks tagged (_face_looks_tagged). colour_of (_face_colour):
+    names the face's colour from its coloured pixels (a tag's black and white left out)."""
     roi, hsv, classes, z = region.roi, region.hsv, region.classes, region.z
     tol = cfg.blocks.top_face_tolerance_m
     mine = classes == ci
@@ -487,6 +504,12 @@ def _blocks_from_region(color_bgr, geo: BlockGeometry, cfg, region: _Region, top
     if np.count_nonzero(classes[ys, xs] == ci) / len(ys) < 0.15:
         return []  # the face is mostly another object's colourless top
     face = _face_from_pixels(ys, xs, roi, contour, face_m, geo.camera)
+    reading: ColorReading | None = None
+    if colour_of is not None:
+        coloured = ~region.colourless[ys, xs]
+        pick = coloured if np.count_nonzero(coloured) >= 10 else slice(None)
+        reading = colour_of(color_bgr[ys[pick] + roi[1], xs[pick] + roi[0]], face.center_px)
+        name = reading.name
     small = cfg.blocks.small_size_m
     if face.pixel_count * face.pixel_area_m2 < 0.3 * small * small:
         return []  # a sliver: the edge of a lower stack member or noise
@@ -504,6 +527,8 @@ def _blocks_from_region(color_bgr, geo: BlockGeometry, cfg, region: _Region, top
         blocks = [_make_block(face, name, geo.camera, cfg, z_small, step, z, classified)]
     else:
         blocks = [_make_block(part, name, geo.camera, cfg, z_small, step, z) for part in _split_touching(face, cfg)]
+    if reading is not None:
+        blocks = [replace(block, color_lab=reading.measured_lab) for block in blocks]
     return [(block, _face_looks_tagged(color_bgr, block, roi, hsv)) for block in blocks]
 
 

@@ -1,0 +1,316 @@
+"""Block colours that survive real light: a face's colour normalised by the board's own grey, in CIELAB,
+matched to class references measured on real frames (and on the simulation's renders), with `unknown`
+for a face far from every class.
+
+Why: hue centres measured in the simulation call real yellow orange and real purple blue or red. The
+board is a neutral grey under the same light as the blocks, so dividing a face's linear RGB by the
+board's (von Kries white balance + exposure) leaves the face's reflectance relative to the board; that
+is turned into CIELAB (sRGB primaries, D65) as if the board had `board_reflectance`. Distances are
+CIE94-like with lightness and chroma down-weighted (k_L, k_C): shading and exposure errors change a
+face's lightness and chroma far more than its hue. A face farther than `max_distance` from every class
+reference, or achromatic (chroma below `min_chroma`) where the nearest reference is chromatic, is
+reported as `unknown` with its measured colour, never forced into a class (black, pink, light-blue
+cubes exist on real boards). Station colour calibration adds operator samples as references
+(ColorModel.with_samples); the defaults come from config/vision.yaml (color_model).
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+
+import numpy as np
+
+UNKNOWN = "unknown"
+
+# sRGB (linear) -> CIE XYZ, D65; the white point is the matrix's row sums.
+_RGB_TO_XYZ = np.array([[0.4124, 0.3576, 0.1805], [0.2126, 0.7152, 0.0722], [0.0193, 0.1192, 0.9505]])
+_WHITE_XYZ = _RGB_TO_XYZ.sum(axis=1)
+BOARD_MAX_SATURATION = 128  # HSV saturation (0..255) above which a pixel is not the board even under a strong colour cast
+BOARD_LUMINANCE_BAND = 0.2  # board pixels within this fraction of the median brightness (drops grid lines, tags' white, shadows)
+BOARD_CHROMATICITY_BAND = 0.03  # ... and within this of the median chromaticity (r, b of r + g + b; drops wood, paper, cables)
+MIN_BOARD_PIXELS = 20
+CLIPPED = 250  # an 8-bit channel at or above this may be clipped: the face is compared with references as the camera would clip them
+
+
+def srgb_to_linear(values: np.ndarray) -> np.ndarray:
+    """8-bit sRGB values (any shape) -> linear light 0..1 (IEC 61966-2-1)."""
+    c = np.asarray(values, dtype=float) / 255.0
+    return np.where(c <= 0.04045, c / 12.92, ((c + 0.055) / 1.055) ** 2.4)
+
+
+def _lab_f(t: np.ndarray) -> np.ndarray:
+    d = 6.0 / 29.0
+    return np.where(t > d**3, np.cbrt(t), t / (3 * d * d) + 4.0 / 29.0)
+
+
+def lab_from_relative_rgb(relative_rgb: np.ndarray, board_reflectance: float) -> np.ndarray:
+    """CIELAB (D65) of linear RGB relative to the board (1 = the board's own), the board taken as a
+    neutral grey of board_reflectance. Lightness may exceed 100 for faces brighter than white."""
+    xyz = _RGB_TO_XYZ @ (np.asarray(relative_rgb, dtype=float) * board_reflectance)
+    fx, fy, fz = _lab_f(np.maximum(xyz, 0.0) / _WHITE_XYZ)
+    return np.array([116.0 * fy - 16.0, 500.0 * (fx - fy), 200.0 * (fy - fz)])
+
+
+def normalised_rgb(face_bgr: np.ndarray, board_bgr: np.ndarray) -> np.ndarray:
+    """The face's linear RGB relative to the board's (per channel; 1 = as bright as the board): the
+    median of the face's pixels (N, 3) BGR uint8, divided channel by channel by the board's."""
+    face = np.asarray(face_bgr).reshape(-1, 3)
+    if face.shape[0] == 0:
+        raise ValueError("normalised_rgb: the face has no pixels")
+    board = np.asarray(board_bgr, dtype=float).reshape(3)
+    if not np.all(np.isfinite(board)) or np.any(board <= 0):
+        raise ValueError(f"normalised_rgb: board grey must be 3 positive values (BGR), got {board.tolist()}")
+    face_rgb = np.median(face, axis=0)[::-1]
+    return srgb_to_linear(face_rgb) / np.maximum(srgb_to_linear(board[::-1]), 1e-4)
+
+
+def board_reference_bgr(color_bgr: np.ndarray, board_mask: np.ndarray) -> np.ndarray:
+    """The board's grey (3,) BGR in this light: per-channel median of the masked pixels that are not
+    strongly coloured (HSV saturation <= BOARD_MAX_SATURATION) and, twice from the medians, within
+    BOARD_LUMINANCE_BAND of the median brightness and BOARD_CHROMATICITY_BAND of the median
+    chromaticity: the dominant grey (grid lines, tags' white, shadows, wood and paper dropped; a colour
+    cast of the light is kept, it is what the reference measures).
+    color_bgr: (H, W, 3) uint8; board_mask: (H, W) bool, e.g. board-height pixels around a block.
+    ValueError when fewer than MIN_BOARD_PIXELS such pixels remain."""
+    if color_bgr.ndim != 3 or board_mask.shape != color_bgr.shape[:2]:
+        raise ValueError(f"board_reference_bgr: mask {board_mask.shape} does not match image {color_bgr.shape}")
+    pixels = color_bgr[board_mask.astype(bool)]
+    if len(pixels) < MIN_BOARD_PIXELS:
+        raise ValueError(f"board_reference_bgr: only {len(pixels)} board pixels (needs {MIN_BOARD_PIXELS})")
+    hi = pixels.max(axis=1).astype(np.int32)
+    lo = pixels.min(axis=1).astype(np.int32)
+    grey = pixels[(hi - lo) * 255 <= BOARD_MAX_SATURATION * np.maximum(hi, 1)]
+    if len(grey) < MIN_BOARD_PIXELS:
+        raise ValueError(f"board_reference_bgr: only {len(grey)} grey board pixels (needs {MIN_BOARD_PIXELS})")
+    values = grey.astype(np.float32)
+    brightness = values.mean(axis=1)
+    chromaticity = values[:, [0, 2]] / np.maximum(3.0 * brightness[:, None], 1.0)
+    keep = np.ones(len(grey), bool)
+    for _ in range(2):
+        median = float(np.median(brightness[keep]))
+        centre = np.median(chromaticity[keep], axis=0)
+        keep = (np.abs(brightness - median) <= BOARD_LUMINANCE_BAND * max(median, 1.0)) & np.all(
+            np.abs(chromaticity - centre) <= BOARD_CHROMATICITY_BAND, axis=1)
+        if np.count_nonzero(keep) < MIN_BOARD_PIXELS:
+            raise ValueError("board_reference_bgr: the board pixels have no dominant grey")
+    reference = np.median(grey[keep], axis=0).astype(float)
+    if np.any(reference <= 0):
+        raise ValueError("board_reference_bgr: the board reads black (no light?)")
+    return reference
+
+
+def lab_distance(lab: np.ndarray, reference: np.ndarray, k_lightness: float, k_chroma: float) -> float:
+    """CIE94-like colour difference with lightness and chroma down-weighted by k_lightness, k_chroma
+    (hue keeps weight 1): lab and reference are (3,) CIELAB."""
+    l1, a1, b1 = (float(x) for x in lab)
+    l2, a2, b2 = (float(x) for x in reference)
+    c1, c2 = math.hypot(a1, b1), math.hypot(a2, b2)
+    dc = c1 - c2
+    dh2 = max((a1 - a2) ** 2 + (b1 - b2) ** 2 - dc * dc, 0.0)
+    cm = math.sqrt(c1 * c2)
+    return math.sqrt(((l1 - l2) / k_lightness) ** 2 + (dc / (k_chroma * (1 + 0.045 * cm))) ** 2 + dh2 / (1 + 0.015 * cm) ** 2)
+
+
+def chroma(lab) -> float:
+    return math.hypot(float(lab[1]), float(lab[2]))
+
+
+@dataclass(frozen=True)
+class ColorReading:
+    """A face's colour: name (a class, or UNKNOWN), its measured CIELAB (board-normalised), the distance
+    to the nearest reference (of `name`; for UNKNOWN: of `nearest`) and the nearest class."""
+
+    name: str
+    measured_lab: tuple[float, float, float]
+    distance: float
+    nearest: str
+
+    def to_dict(self) -> dict:
+        return {"name": self.name, "measured_lab": [round(float(x), 2) for x in self.measured_lab],
+                "distance": round(float(self.distance), 3), "nearest": self.nearest}
+
+
+@dataclass(frozen=True)
+class ColorSample:
+    """An operator's (or a labelled frame's) sample: a face of colour `name` measured as `lab` (board-normalised)."""
+
+    name: str
+    lab: tuple[float, float, float]
+    u: float | None = None
+    v: float | None = None
+    time_s: float | None = None
+
+    def to_dict(self) -> dict:
+        return {"name": self.name, "lab": [round(float(x), 3) for x in self.lab], "u": self.u, "v": self.v, "time_s": self.time_s}
+
+    @classmethod
+    def from_dict(cls, data: dict) -> "ColorSample":
+        lab = tuple(float(x) for x in data["lab"])
+        if len(lab) != 3 or not all(math.isfinite(x) for x in lab):
+            raise ValueError(f"colour sample lab must be 3 finite numbers, got {data['lab']!r}")
+        return cls(str(data["name"]), lab, data.get("u"), data.get("v"), data.get("time_s"))
+
+
+@dataclass(frozen=True)
+class ColorModel:
+    """Nearest-reference colour classes in board-normalised CIELAB (see the module doc). Immutable:
+    with_samples returns a new model, so a perception thread can keep using the old one meanwhile.
+
+    references: class -> default reference colours (CIELAB); samples: the station's own, each a
+    reference of its name; names: every colour name a sample may carry (the classes + config extras)."""
+
+    references: dict[str, tuple[tuple[float, float, float], ...]]
+    board_reflectance: float = 0.5
+    k_lightness: float = 2.0
+    k_chroma: float = 2.0
+    max_distance: float = 15.0
+    min_chroma: float = 10.0
+    names: tuple[str, ...] = ()
+    samples: tuple[ColorSample, ...] = field(default=())
+
+    @classmethod
+    def from_config(cls, cfg) -> "ColorModel":
+        """The defaults of a PerceptionConfig (its color_model section) or of a ColorModelConfig."""
+        section = getattr(cfg, "color_model", cfg)
+        return _model_from_section(section)
+
+    @property
+    def classes(self) -> tuple[str, ...]:
+        return tuple(self.references)
+
+    def with_samples(self, samples) -> "ColorModel":
+        """This model with the station's samples (replacing any it had); ValueError naming a sample's
+        colour name the model does not know."""
+        samples = tuple(samples)
+        for i, sample in enumerate(samples):
+            if sample.name not in self.names:
+                raise ValueError(f"samples[{i}].color: unknown colour '{sample.name}' (known: {', '.join(self.names)})")
+        return ColorModel(self.references, self.board_reflectance, self.k_lightness, self.k_chroma, self.max_distance,
+                          self.min_chroma, self.names, samples)
+
+    def measure(self, face_bgr: np.ndarray, board_bgr: np.ndarray) -> np.ndarray:
+        """The face's board-normalised CIELAB (3,)."""
+        return lab_from_relative_rgb(normalised_rgb(face_bgr, board_bgr), self.board_reflectance)
+
+    def classify(self, face_bgr: np.ndarray, board_bgr: np.ndarray) -> ColorReading:
+        """The colour of a block face: face_bgr (N, 3) uint8 BGR pixels of the top face, board_bgr the
+        board's grey near it (board_reference_bgr). A face with a channel at the camera's ceiling
+        (overexposed) is compared with each reference as the camera would have clipped it."""
+        face = np.asarray(face_bgr).reshape(-1, 3)
+        lab = self.measure(face, board_bgr)
+        if face.shape[0] and np.median(face, axis=0).max() >= CLIPPED:
+            return self.classify_lab(lab, seen=lambda ref: self._as_clipped(ref, board_bgr))
+        return self.classify_lab(lab)
+
+    def _as_clipped(self, ref, board_bgr) -> np.ndarray:
+        """A reference colour as this camera shows it under this board grey, clipped at 255, measured back."""
+        board_lin = srgb_to_linear(np.asarray(board_bgr, dtype=float)[::-1])
+        face_lin = np.clip(relative_rgb_from_lab(ref, self.board_reflectance) * board_lin, 0.0, srgb_to_linear(CLIPPED))
+        return lab_from_relative_rgb(face_lin / np.maximum(board_lin, 1e-4), self.board_reflectance)
+
+    def classify_lab(self, lab, seen=None) -> ColorReading:
+        """The class of a board-normalised CIELAB colour (nearest reference; UNKNOWN when too far, or
+        achromatic against a chromatic reference). seen(ref) -> the reference as the camera shows it."""
+        lab = np.asarray(lab, dtype=float)
+        achromatic = chroma(lab) < self.min_chroma
+        best_name, best_d, nearest, nearest_d = UNKNOWN, math.inf, UNKNOWN, math.inf
+        for name, ref in self._all_references():
+            if seen is not None:
+                ref = seen(ref)
+            d = lab_distance(lab, ref, self.k_lightness, self.k_chroma)
+            if d < nearest_d:
+                nearest, nearest_d = name, d
+            if achromatic and chroma(ref) >= self.min_chroma:
+                continue  # a grey, black or white face is never a chromatic class
+            if d < best_d:
+                best_name, best_d = name, d
+        measured = tuple(round(float(x), 2) for x in lab)
+        if best_d <= self.max_distance:
+            return ColorReading(best_name, measured, best_d, best_name)
+        return ColorReading(UNKNOWN, measured, nearest_d, nearest)
+
+    def _all_references(self):
+        for name, refs in self.references.items():
+            for ref in refs:
+                yield name, ref
+        for sample in self.samples:
+            yield sample.name, sample.lab
+
+
+def _model_from_section(section) -> ColorModel:
+    references = {name: tuple(tuple(float(x) for x in ref) for ref in refs) for name, refs in section.references.items()}
+    names = tuple(dict.fromkeys([*references, *section.extra_names]))
+    return ColorModel(references, section.board_reflectance, section.k_lightness, section.k_chroma, section.max_distance,
+                      section.min_chroma, names)
+
+
+def board_mask_near(shape: tuple[int, int], center_px, radius_px: int, exclude_px: int) -> np.ndarray:
+    """(H, W) bool: a square window of radius_px around center_px without its middle (exclude_px): where
+    to look for board pixels around a clicked face when no depth says which are the board."""
+    h, w = shape
+    u, v = int(round(float(center_px[0]))), int(round(float(center_px[1])))
+    mask = np.zeros((h, w), bool)
+    mask[max(0, v - radius_px) : v + radius_px + 1, max(0, u - radius_px) : u + radius_px + 1] = True
+    mask[max(0, v - exclude_px) : v + exclude_px + 1, max(0, u - exclude_px) : u + exclude_px + 1] = False
+    return mask
+
+
+def face_patch(color_bgr: np.ndarray, center_px, radius_px: int) -> np.ndarray:
+    """(N, 3) pixels of a square patch of radius_px around center_px (clipped to the image)."""
+    h, w = color_bgr.shape[:2]
+    u, v = int(round(float(center_px[0]))), int(round(float(center_px[1])))
+    patch = color_bgr[max(0, v - radius_px) : min(h, v + radius_px + 1), max(0, u - radius_px) : min(w, u + radius_px + 1)]
+    return patch.reshape(-1, 3)
+
+
+class BoardGrey:
+    """The board's grey for the faces of one frame: measured from board pixels (board_mask) in a window
+    around each face, else over the whole board. Windows are cached per frame by nothing: cheap enough
+    at the resolution given (detect_blocks passes its quarter-resolution image)."""
+
+    def __init__(self, color_bgr: np.ndarray, board_mask: np.ndarray, scale: float = 1.0, window_px: int = 24) -> None:
+        self.color_bgr, self.board_mask, self.scale, self.window_px = color_bgr, board_mask, scale, window_px
+        self._global: np.ndarray | None = None
+
+    def overall(self) -> np.ndarray:
+        if self._global is None:
+            self._global = board_reference_bgr(self.color_bgr, self.board_mask)
+        return self._global
+
+    def near(self, center_px) -> np.ndarray:
+        """The board's grey around a full-resolution pixel (falls back to the whole board's)."""
+        u, v = int(round(float(center_px[0]) / self.scale)), int(round(float(center_px[1]) / self.scale))
+        r = self.window_px
+        h, w = self.board_mask.shape
+        y0, y1, x0, x1 = max(0, v - r), min(h, v + r + 1), max(0, u - r), min(w, u + r + 1)
+        try:
+            return board_reference_bgr(self.color_bgr[y0:y1, x0:x1], self.board_mask[y0:y1, x0:x1])
+        except ValueError:
+            return self.overall()
+
+
+def relative_rgb_from_lab(lab, board_reflectance: float) -> np.ndarray:
+    """lab_from_relative_rgb's inverse: linear RGB relative to the board of a board-normalised CIELAB."""
+    l, a, b = (float(x) for x in lab)
+    fy = (l + 16.0) / 116.0
+    fx, fz = fy + a / 500.0, fy - b / 200.0
+    d = 6.0 / 29.0
+
+    def inv(t):
+        return t**3 if t > d else 3 * d * d * (t - 4.0 / 29.0)
+
+    xyz = np.array([inv(fx), inv(fy), inv(fz)]) * _WHITE_XYZ
+    return np.linalg.solve(_RGB_TO_XYZ, xyz) / board_reflectance
+
+
+def colour_bgr_of_lab(lab, board_reflectance: float = 0.5) -> tuple[int, int, int]:
+    """An 8-bit BGR colour showing a board-normalised CIELAB under a board of mid-grey 128 (for drawing)."""
+    rgb = np.clip(relative_rgb_from_lab(lab, board_reflectance) * float(srgb_to_linear(128.0)), 0.0, 1.0)
+    srgb = np.where(rgb <= 0.0031308, 12.92 * rgb, 1.055 * rgb ** (1 / 2.4) - 0.055)
+    r, g, bb = (int(round(255 * x)) for x in srgb)
+    return bb, g, r
+
+
+__all__ = ["UNKNOWN", "BoardGrey", "ColorModel", "ColorReading", "ColorSample", "board_mask_near", "board_reference_bgr",
+           "face_patch", "lab_distance", "lab_from_relative_rgb", "normalised_rgb", "srgb_to_linear"]
