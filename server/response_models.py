@@ -84,6 +84,8 @@ class Detection(Wire):
     occluded: bool
     aruco_id: int | None = None
     destination: Any = None
+    color_lab: list[float] | None = Field(None, description="the top face's colour, board-normalised CIELAB (L, a, b): "
+                                          "what an 'unknown' colour measured")
 
 
 class DetectionsResponse(Wire):

@@ -168,6 +168,7 @@ class ColorModel:
     min_chroma: float = 10.0
     names: tuple[str, ...] = ()
     samples: tuple[ColorSample, ...] = field(default=())
+    shadowed: frozenset = field(default=frozenset())  # (class, index) of default references a sample of another name overrides
 
     @classmethod
     def from_config(cls, cfg) -> "ColorModel":
@@ -181,13 +182,19 @@ class ColorModel:
 
     def with_samples(self, samples) -> "ColorModel":
         """This model with the station's samples (replacing any it had); ValueError naming a sample's
-        colour name the model does not know."""
+        colour name the model does not know. The station's word wins over the defaults: a default
+        reference closer than max_distance / 2 to a sample of another name is no longer used (a cube
+        this station's operator calls pink is not red here, whatever another station's red looked like)."""
         samples = tuple(samples)
         for i, sample in enumerate(samples):
             if sample.name not in self.names:
                 raise ValueError(f"samples[{i}].color: unknown colour '{sample.name}' (known: {', '.join(self.names)})")
+        shadowed = frozenset(
+            (name, index) for name, refs in self.references.items() for index, ref in enumerate(refs)
+            if any(s.name != name and lab_distance(s.lab, ref, self.k_lightness, self.k_chroma) < 0.5 * self.max_distance
+                   for s in samples))
         return ColorModel(self.references, self.board_reflectance, self.k_lightness, self.k_chroma, self.max_distance,
-                          self.min_chroma, self.names, samples)
+                          self.min_chroma, self.names, samples, shadowed)
 
     def measure(self, face_bgr: np.ndarray, board_bgr: np.ndarray) -> np.ndarray:
         """The face's board-normalised CIELAB (3,)."""
@@ -232,8 +239,9 @@ class ColorModel:
 
     def _all_references(self):
         for name, refs in self.references.items():
-            for ref in refs:
-                yield name, ref
+            for index, ref in enumerate(refs):
+                if (name, index) not in self.shadowed:
+                    yield name, ref
         for sample in self.samples:
             yield sample.name, sample.lab
 
@@ -262,6 +270,29 @@ def face_patch(color_bgr: np.ndarray, center_px, radius_px: int) -> np.ndarray:
     u, v = int(round(float(center_px[0]))), int(round(float(center_px[1])))
     patch = color_bgr[max(0, v - radius_px) : min(h, v + radius_px + 1), max(0, u - radius_px) : min(w, u + radius_px + 1)]
     return patch.reshape(-1, 3)
+
+
+CLICK_FACE_SIDE_PX = 34.0  # a large cube's top at ~1 m under a ~900 px focal length (1280 px wide L515 frame)
+PATCH_FRACTION = 0.18  # the face patch's half-width, as a fraction of the face's side (its middle third)
+RING_FACES = (0.6, 1.8)  # the board ring around a face: from 0.6 to 1.8 face sides from its centre
+
+
+def measure_at(model: "ColorModel", color_bgr: np.ndarray, center_px, side_px: float | None = None,
+               board_mask: np.ndarray | None = None) -> np.ndarray:
+    """Board-normalised CIELAB of the face centred at center_px: the median of its middle patch over the
+    board's grey in the ring around it (RING_FACES; within board_mask if given: e.g. board-height pixels).
+    side_px: the face's side in pixels (default: a large cube's, scaled with the image width).
+    ValueError when the centre is outside the image or the ring holds no board."""
+    h, w = color_bgr.shape[:2]
+    u, v = float(center_px[0]), float(center_px[1])
+    if not (0 <= u < w and 0 <= v < h):
+        raise ValueError(f"pixel ({u:g}, {v:g}) is outside the {w}x{h} image")
+    side = float(side_px) if side_px is not None else CLICK_FACE_SIDE_PX * w / 1280.0
+    patch = face_patch(color_bgr, (u, v), max(2, int(round(PATCH_FRACTION * side))))
+    ring = board_mask_near((h, w), (u, v), int(RING_FACES[1] * side), int(RING_FACES[0] * side))
+    if board_mask is not None:
+        ring &= board_mask
+    return model.measure(patch, board_reference_bgr(color_bgr, ring))
 
 
 class BoardGrey:
@@ -313,4 +344,5 @@ def colour_bgr_of_lab(lab, board_reflectance: float = 0.5) -> tuple[int, int, in
 
 
 __all__ = ["UNKNOWN", "BoardGrey", "ColorModel", "ColorReading", "ColorSample", "board_mask_near", "board_reference_bgr",
-           "face_patch", "lab_distance", "lab_from_relative_rgb", "normalised_rgb", "srgb_to_linear"]
+           "face_patch", "lab_distance", "lab_from_relative_rgb", "measure_at", "normalised_rgb", "relative_rgb_from_lab",
+           "srgb_to_linear"]

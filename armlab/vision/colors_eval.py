@@ -15,11 +15,9 @@ from pathlib import Path
 import cv2
 import numpy as np
 
-from armlab.vision.colors import ColorModel, board_mask_near, board_reference_bgr, face_patch
+from armlab.vision.colors import CLICK_FACE_SIDE_PX, ColorModel, measure_at
 
 LABEL_NAMES = {"purple": "violet"}  # the labels' colour names -> the station's class names
-FACE_RADIUS_FRACTION = 0.18  # centre patch half-width as a fraction of the face's side in pixels (the middle third)
-BOARD_RING_FACES = (0.6, 1.8)  # the board ring around a face: from 0.6 to 1.8 face sides from its centre
 
 
 @dataclass(frozen=True)
@@ -51,18 +49,13 @@ def read_labelled_faces(data_dir: str | Path) -> list[LabelledFace]:
 
 
 def face_side_px(face: LabelledFace, image_width: int) -> float:
-    """About how wide the face looks: the cube's edge at ~1 m under a ~900 px focal length (a 1280 px
-    wide L515 frame), scaled with the image width."""
-    edge_m = 0.038 if face.size == "large" else 0.025
-    return edge_m * 900.0 * image_width / 1280.0
+    """About how wide the face looks (CLICK_FACE_SIDE_PX for a large cube, scaled by size and image width)."""
+    return CLICK_FACE_SIDE_PX * (1.0 if face.size == "large" else 0.025 / 0.038) * image_width / 1280.0
 
 
 def measure_face(model: ColorModel, color_bgr: np.ndarray, face: LabelledFace) -> np.ndarray:
     """Board-normalised CIELAB of the labelled face's centre patch (board grey from the ring around it)."""
-    side = face_side_px(face, color_bgr.shape[1])
-    patch = face_patch(color_bgr, (face.u, face.v), max(2, int(round(FACE_RADIUS_FRACTION * side))))
-    ring = board_mask_near(color_bgr.shape[:2], (face.u, face.v), int(BOARD_RING_FACES[1] * side), int(BOARD_RING_FACES[0] * side))
-    return model.measure(patch, board_reference_bgr(color_bgr, ring))
+    return measure_at(model, color_bgr, (face.u, face.v), face_side_px(face, color_bgr.shape[1]))
 
 
 @dataclass

@@ -151,6 +151,60 @@ export const CLIENT_MESSAGE_TYPES = Object.freeze(["ack", "view", "command"]);
  */
 
 /**
+ * A labelled frame: every listed face (u, v, colour) of the newest frame; replaces the station's samples.
+ * @typedef {Object} ColorFitRequest
+ * @property {Array<ColorSampleRequest>} samples
+ */
+
+/**
+ * @typedef {Object} ColorFitResponse
+ * @property {number} samples
+ * @property {number} read_otherwise_before faces the model read as another colour before the fit
+ */
+
+/**
+ * @typedef {Object} ColorReadingInfo
+ * @property {string} name the class the model gave ('unknown': far from every class)
+ * @property {Array<number>} measured_lab
+ * @property {number} distance to the nearest reference of that class (of `nearest` for unknown)
+ * @property {string} nearest
+ */
+
+/**
+ * @typedef {Object} ColorSampleInfo
+ * @property {string} name
+ * @property {Array<number>} lab board-normalised CIELAB (L, a, b) measured at the click
+ * @property {(number|null)} [u]
+ * @property {(number|null)} [v]
+ * @property {(number|null)} [time_s]
+ */
+
+/**
+ * A block's colour, named by the operator: the face at pixel (u, v) of the newest frame.
+ * @typedef {Object} ColorSampleRequest
+ * @property {number} u pixel column in the colour image
+ * @property {number} v pixel row in the colour image
+ * @property {string} color a colour the station knows: a class (red ... violet) or an extra name (pink, light_blue, ...)
+ */
+
+/**
+ * @typedef {Object} ColorSampleResponse
+ * @property {ColorSampleInfo} sample
+ * @property {ColorReadingInfo} reading_before what the colour model read there before this sample
+ * @property {number} samples samples in use now
+ */
+
+/**
+ * The colour model in use: the config's defaults plus this station's samples.
+ * @typedef {Object} ColorsInfo
+ * @property {Array<string>} classes
+ * @property {Array<string>} names every colour name a sample may carry
+ * @property {number} max_distance a face farther than this from every reference reads 'unknown'
+ * @property {Array<ColorSampleInfo>} samples
+ * @property {Object<string, *>} references the defaults: CIELAB references per class
+ */
+
+/**
  * @typedef {Object} CommandMessage
  * @property {"command"} type
  * @property {("estop"|"reset"|"cancel"|"take_control"|"release_control")} name
@@ -185,6 +239,7 @@ export const CLIENT_MESSAGE_TYPES = Object.freeze(["ack", "view", "command"]);
  * @property {boolean} occluded
  * @property {(number|null)} [aruco_id]
  * @property {*} [destination]
+ * @property {(Array<number>|null)} [color_lab] the top face's colour, board-normalised CIELAB (L, a, b): what an 'unknown' colour measured
  */
 
 /**
