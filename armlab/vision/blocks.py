@@ -398,7 +398,7 @@ def detect_blocks(
         colourless[ignored_small] = False
         z_cover = z_small.copy()
         z_cover[ignored_small] = np.inf
-    board_small = np.abs(z_small) < bc.min_height_m  # board-height pixels: the colour model's grey reference
+    board_small = (z_small < bc.min_height_m) & (z_small > -0.03)  # at the board (or its depth offset): the colour model's grey
     if ignore_mask is not None:
         board_small &= ~ignore_mask[::step, ::step]
     colour_of = _face_colour(color_model or ColorModel.from_config(cfg), BoardGrey(small_bgr, board_small, scale=step))

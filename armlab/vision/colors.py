@@ -297,8 +297,9 @@ def measure_at(model: "ColorModel", color_bgr: np.ndarray, center_px, side_px: f
 
 class BoardGrey:
     """The board's grey for the faces of one frame: measured from board pixels (board_mask) in a window
-    around each face, else over the whole board. Windows are cached per frame by nothing: cheap enough
-    at the resolution given (detect_blocks passes its quarter-resolution image)."""
+    around each face, else over the whole board, else over the whole image (the board is its largest
+    grey), else a mid grey (no normalisation: a frame with no grey at all). Cheap at the resolution
+    given (detect_blocks passes its quarter-resolution image)."""
 
     def __init__(self, color_bgr: np.ndarray, board_mask: np.ndarray, scale: float = 1.0, window_px: int = 24) -> None:
         self.color_bgr, self.board_mask, self.scale, self.window_px = color_bgr, board_mask, scale, window_px
@@ -306,7 +307,14 @@ class BoardGrey:
 
     def overall(self) -> np.ndarray:
         if self._global is None:
-            self._global = board_reference_bgr(self.color_bgr, self.board_mask)
+            for mask in (self.board_mask, np.ones(self.board_mask.shape, bool)):
+                try:
+                    self._global = board_reference_bgr(self.color_bgr, mask)
+                    break
+                except ValueError:
+                    continue
+            else:
+                self._global = np.array([128.0, 128.0, 128.0])
         return self._global
 
     def near(self, center_px) -> np.ndarray:

@@ -142,3 +142,17 @@ def test_board_reference_is_the_dominant_grey():
 def test_lab_of_the_board_itself_is_neutral(model):
     lab = lab_from_relative_rgb(np.ones(3), model.board_reflectance)
     assert abs(lab[1]) < 0.5 and abs(lab[2]) < 0.5
+
+
+def test_board_grey_falls_back_to_the_whole_board_then_the_image():
+    """No board pixels near a face (or none at all, e.g. a depth plane offset): the grey still comes from
+    the board, never from the face itself."""
+    from armlab.vision.colors import BoardGrey
+
+    image = np.empty((80, 120, 3), np.uint8)
+    image[:] = (118, 130, 126)
+    image[30:50, 50:70] = (10, 190, 235)  # a yellow face
+    only_far = np.zeros((80, 120), bool)
+    only_far[:, :10] = True
+    assert np.allclose(BoardGrey(image, only_far, window_px=8).near((60, 40)), (118, 130, 126))
+    assert np.allclose(BoardGrey(image, np.zeros((80, 120), bool)).near((60, 40)), (118, 130, 126))
