@@ -31,6 +31,7 @@ BOARD_LUMINANCE_BAND = 0.2  # board pixels within this fraction of the median br
 BOARD_CHROMATICITY_BAND = 0.03  # ... and within this of the median chromaticity (r, b of r + g + b; drops wood, paper, cables)
 MIN_BOARD_PIXELS = 20
 CLIPPED = 250  # an 8-bit channel at or above this may be clipped: the face is compared with references as the camera would clip them
+MAX_FACE_GAIN = 2.0  # a clipped face's exposure against its board grey, fitted on >= 2 unclipped channels, within this factor
 
 
 def srgb_to_linear(values: np.ndarray) -> np.ndarray:
@@ -203,18 +204,34 @@ class ColorModel:
     def classify(self, face_bgr: np.ndarray, board_bgr: np.ndarray) -> ColorReading:
         """The colour of a block face: face_bgr (N, 3) uint8 BGR pixels of the top face, board_bgr the
         board's grey near it (board_reference_bgr). A face with a channel at the camera's ceiling
-        (overexposed) is compared with each reference as the camera would have clipped it."""
+        (overexposed: its true colour is unknown in that channel) is compared with each reference as the
+        camera would show it, clipped the same way: its hue and chroma at the exposure that best fits the
+        face's unclipped channels (a top face may be lit more than the board near it: a highlight, the
+        board's ring in the cube's shadow), its lightness at the board's exposure (so a dim yellow is not
+        a bright orange)."""
         face = np.asarray(face_bgr).reshape(-1, 3)
         lab = self.measure(face, board_bgr)
-        if face.shape[0] and np.median(face, axis=0).max() >= CLIPPED:
-            return self.classify_lab(lab, seen=lambda ref: self._as_clipped(ref, board_bgr))
+        if face.shape[0]:
+            face_rgb = np.median(face, axis=0)[::-1]
+            if face_rgb.max() >= CLIPPED:
+                return self.classify_lab(lab, seen=lambda ref: self._as_clipped(ref, board_bgr, face_rgb))
         return self.classify_lab(lab)
 
-    def _as_clipped(self, ref, board_bgr) -> np.ndarray:
-        """A reference colour as this camera shows it under this board grey, clipped at 255, measured back."""
+    def _as_clipped(self, ref, board_bgr, face_rgb: np.ndarray) -> np.ndarray:
+        """A reference colour as this camera shows it on a face whose channels at or above CLIPPED are
+        clipped (CIELAB against the board): hue and chroma of the reference scaled to the face's unclipped
+        channels (least squares in linear light, within MAX_FACE_GAIN) and clipped; lightness of the
+        reference at the board's exposure, clipped."""
         board_lin = srgb_to_linear(np.asarray(board_bgr, dtype=float)[::-1])
-        face_lin = np.clip(relative_rgb_from_lab(ref, self.board_reflectance) * board_lin, 0.0, srgb_to_linear(CLIPPED))
-        return lab_from_relative_rgb(face_lin / np.maximum(board_lin, 1e-4), self.board_reflectance)
+        ceiling = float(srgb_to_linear(CLIPPED))
+        ref_lin = relative_rgb_from_lab(ref, self.board_reflectance) * board_lin
+        at_board = lab_from_relative_rgb(np.minimum(ref_lin, ceiling) / np.maximum(board_lin, 1e-4), self.board_reflectance)
+        free = face_rgb < CLIPPED
+        if np.count_nonzero(free) >= 2 and float(ref_lin[free] @ ref_lin[free]) > 1e-12:
+            gain = float(srgb_to_linear(face_rgb[free]) @ ref_lin[free]) / float(ref_lin[free] @ ref_lin[free])
+            ref_lin = ref_lin * min(max(gain, 1.0 / MAX_FACE_GAIN), MAX_FACE_GAIN)
+        seen = lab_from_relative_rgb(np.minimum(ref_lin, ceiling) / np.maximum(board_lin, 1e-4), self.board_reflectance)
+        return np.array([at_board[0], seen[1], seen[2]])  # hue and chroma at the face's exposure, lightness at the board's
 
     def classify_lab(self, lab, seen=None) -> ColorReading:
         """The class of a board-normalised CIELAB colour (nearest reference; UNKNOWN when too far, or
@@ -277,9 +294,9 @@ PATCH_FRACTION = 0.18  # the face patch's half-width, as a fraction of the face'
 RING_FACES = (0.6, 1.8)  # the board ring around a face: from 0.6 to 1.8 face sides from its centre
 
 
-def measure_at(model: "ColorModel", color_bgr: np.ndarray, center_px, side_px: float | None = None,
-               board_mask: np.ndarray | None = None) -> np.ndarray:
-    """Board-normalised CIELAB of the face centred at center_px: the median of its middle patch over the
+def face_and_board_at(color_bgr: np.ndarray, center_px, side_px: float | None = None,
+                      board_mask: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray]:
+    """(face pixels (N, 3), board grey (3,)) of the face centred at center_px: its middle patch, and the
     board's grey in the ring around it (RING_FACES; within board_mask if given: e.g. board-height pixels).
     side_px: the face's side in pixels (default: a large cube's, scaled with the image width).
     ValueError when the centre is outside the image or the ring holds no board."""
@@ -292,7 +309,19 @@ def measure_at(model: "ColorModel", color_bgr: np.ndarray, center_px, side_px: f
     ring = board_mask_near((h, w), (u, v), int(RING_FACES[1] * side), int(RING_FACES[0] * side))
     if board_mask is not None:
         ring &= board_mask
-    return model.measure(patch, board_reference_bgr(color_bgr, ring))
+    return patch, board_reference_bgr(color_bgr, ring)
+
+
+def measure_at(model: "ColorModel", color_bgr: np.ndarray, center_px, side_px: float | None = None,
+               board_mask: np.ndarray | None = None) -> np.ndarray:
+    """Board-normalised CIELAB of the face centred at center_px (face_and_board_at)."""
+    return model.measure(*face_and_board_at(color_bgr, center_px, side_px, board_mask))
+
+
+def classify_at(model: "ColorModel", color_bgr: np.ndarray, center_px, side_px: float | None = None,
+                board_mask: np.ndarray | None = None) -> ColorReading:
+    """The model's reading of the face centred at center_px (face_and_board_at), as detection reads a face."""
+    return model.classify(*face_and_board_at(color_bgr, center_px, side_px, board_mask))
 
 
 class BoardGrey:
@@ -352,5 +381,5 @@ def colour_bgr_of_lab(lab, board_reflectance: float = 0.5) -> tuple[int, int, in
 
 
 __all__ = ["UNKNOWN", "BoardGrey", "ColorModel", "ColorReading", "ColorSample", "board_mask_near", "board_reference_bgr",
-           "face_patch", "lab_distance", "lab_from_relative_rgb", "measure_at", "normalised_rgb", "relative_rgb_from_lab",
+           "face_patch", "classify_at", "face_and_board_at", "lab_distance", "lab_from_relative_rgb", "measure_at", "normalised_rgb", "relative_rgb_from_lab",
            "srgb_to_linear"]

@@ -15,7 +15,7 @@ from pathlib import Path
 import cv2
 import numpy as np
 
-from armlab.vision.colors import CLICK_FACE_SIDE_PX, ColorModel, measure_at
+from armlab.vision.colors import CLICK_FACE_SIDE_PX, ColorModel, ColorReading, classify_at, measure_at
 
 LABEL_NAMES = {"purple": "violet"}  # the labels' colour names -> the station's class names
 
@@ -58,6 +58,11 @@ def measure_face(model: ColorModel, color_bgr: np.ndarray, face: LabelledFace) -
     return measure_at(model, color_bgr, (face.u, face.v), face_side_px(face, color_bgr.shape[1]))
 
 
+def classify_face(model: ColorModel, color_bgr: np.ndarray, face: LabelledFace) -> ColorReading:
+    """The model's reading of the labelled face's centre patch, as detection reads a face (clipping included)."""
+    return classify_at(model, color_bgr, (face.u, face.v), face_side_px(face, color_bgr.shape[1]))
+
+
 @dataclass
 class ColorScore:
     """Per-frame and total colour figures at the labelled centres."""
@@ -98,7 +103,7 @@ def score_colors(model: ColorModel, data_dir: str | Path, include_uncertain: boo
         image = images.get(face.frame)
         if image is None:
             image = images[face.frame] = cv2.imread(str(Path(data_dir) / f"image_{face.frame}.png"), cv2.IMREAD_COLOR)
-        reading = model.classify_lab(measure_face(model, image, face))
+        reading = classify_face(model, image, face)
         confusion[(face.color, reading.name)] += 1
         readings.append((face, reading))
         if face.color not in model.classes:

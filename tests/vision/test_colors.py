@@ -156,3 +156,21 @@ def test_board_grey_falls_back_to_the_whole_board_then_the_image():
     only_far[:, :10] = True
     assert np.allclose(BoardGrey(image, only_far, window_px=8).near((60, 40)), (118, 130, 126))
     assert np.allclose(BoardGrey(image, np.zeros((80, 120), bool)).near((60, 40)), (118, 130, 126))
+
+
+@pytest.mark.parametrize("face_gain", [1.0, 1.25])
+def test_a_face_brighter_than_its_board_with_a_clipped_channel_keeps_its_class(model, face_gain):
+    """A top face lit more than the board near it (a highlight, the ring in the cube's shadow) until a
+    channel clips at 255: read from its unclipped channels, not pushed toward the next hue (an orange whose
+    red clips looks yellower). Each class's references, under a bright board grey."""
+    from armlab.vision.colors import relative_rgb_from_lab, srgb_to_linear
+
+    board = np.array([150.0, 160.0, 170.0])
+    for name in model.classes:
+        for ref in model.references[name]:
+            lin = relative_rgb_from_lab(ref, model.board_reflectance) * srgb_to_linear(board[::-1]) * face_gain
+            lin = np.clip(lin, 0.0, 1.0)
+            srgb = np.where(lin <= 0.0031308, 12.92 * lin, 1.055 * lin ** (1 / 2.4) - 0.055)
+            face = np.tile(np.round(255 * srgb[::-1]).astype(np.uint8), (20, 1))
+            reading = model.classify(face, board)
+            assert reading.name == name, f"{name} {ref} x{face_gain} (face BGR {face[0].tolist()}): {reading}"
