@@ -20,7 +20,7 @@ from typing import Any
 
 import numpy as np
 
-from armlab.vision.colors import ColorModel, ColorSample, chroma, measure_at
+from armlab.vision.colors import ColorModel, ColorSample, board_region_mask, chroma, measure_at
 
 MAX_SAMPLES = 200
 
@@ -29,8 +29,9 @@ class StationColors:
     """Owned by the Station (station.colors). Thread-safe; `model` is an immutable ColorModel that the
     perception thread reads each frame."""
 
-    def __init__(self, store: Any, events: Any, get_config) -> None:
+    def __init__(self, store: Any, events: Any, get_config, get_calibration=lambda: None) -> None:
         self._store, self._events, self._get_config = store, events, get_config
+        self._get_calibration = get_calibration  # with one, board grey is looked for on the board's rectangle only
         self._lock = threading.Lock()
         self._write_lock = threading.Lock()  # one change at a time (read samples, store, swap)
         self._defaults: ColorModel | None = None
@@ -90,13 +91,19 @@ class StationColors:
             raise ValueError(f"{field}v: {v:g} is outside the image (0..{h - 1})")
         defaults = self.defaults
         try:
-            lab = measure_at(defaults, color_bgr, (u, v))
+            lab = measure_at(defaults, color_bgr, (u, v), board_mask=self._board_mask(color_bgr.shape[:2]))
         except ValueError as error:
             raise ValueError(f"{field}u, v: no board grey around ({u:g}, {v:g}) to measure against ({error})") from error
         if name in defaults.classes and chroma(lab) < defaults.min_chroma:
             raise ValueError(f"{field}u, v: the face at ({u:g}, {v:g}) reads grey (Lab {[round(float(x), 1) for x in lab]}), "
                              f"not {name}: click on the block's top")
         return ColorSample(name, tuple(round(float(x), 3) for x in lab), float(u), float(v), time.time())
+
+    def _board_mask(self, shape_hw) -> np.ndarray | None:
+        cal, board = self._get_calibration(), self._get_config().board
+        if cal is None or (cal.height, cal.width) != tuple(shape_hw):
+            return None
+        return board_region_mask(shape_hw, cal.T_world_camera, cal.K, cal.dist, board.x_range_m, board.y_range_m)
 
     def add_sample(self, color_bgr: np.ndarray, u: float, v: float, name: str) -> dict:
         """Measure and add one sample, store and use it at once; returns {"sample", "samples", "reading_before"}."""

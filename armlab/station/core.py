@@ -135,7 +135,7 @@ class Station(Latch, MotionGate, ManualCommands, TeachCommands, JobControls, Per
         self._pipeline: Any = None  # synchronous mode's perception pipeline
         self.events = EventLog()
         self.intrinsics = CameraIntrinsics(camera, self.store, self.events)  # in use: measured here, else the camera's own
-        self.colors = StationColors(self.store, self.events, lambda: self.perception_config)  # colour model: defaults + samples
+        self.colors = StationColors(self.store, self.events, lambda: self.perception_config, lambda: self.calibration)  # defaults + samples
         self.frames: NewestSlot[Frame] = NewestSlot()
         self.perception: NewestSlot[Perception] = NewestSlot()
         self.telemetry: NewestSlot[dict] = NewestSlot()

@@ -20,7 +20,7 @@ import numpy as np
 
 from armlab.vision.calibration import Calibration
 from armlab.vision.clipped_face import fit_clipped_square, on_image_border
-from armlab.vision.colors import BoardGrey, ColorModel, ColorReading
+from armlab.vision.colors import BoardGrey, ColorModel, ColorReading, board_region_mask
 from armlab.vision.config import PerceptionConfig
 from armlab.vision.geometry import PlaneCamera, height_coefficients, height_map_m
 from armlab.vision.tags import check_color_image, detect_tags, make_detector
@@ -399,6 +399,7 @@ def detect_blocks(
         z_cover = z_small.copy()
         z_cover[ignored_small] = np.inf
     board_small = (z_small < bc.min_height_m) & (z_small > -0.03)  # at the board (or its depth offset): the colour model's grey
+    board_small &= board_region_mask(z_small.shape, cal.T_world_camera, cal.K, cal.dist, cfg.board.x_range_m, cfg.board.y_range_m, step)
     if ignore_mask is not None:
         board_small &= ~ignore_mask[::step, ::step]
     colour_of = _face_colour(color_model or ColorModel.from_config(cfg), BoardGrey(small_bgr, board_small, scale=step))

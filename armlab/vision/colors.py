@@ -19,6 +19,7 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass, field
 
+import cv2
 import numpy as np
 
 UNKNOWN = "unknown"
@@ -287,6 +288,21 @@ def face_patch(color_bgr: np.ndarray, center_px, radius_px: int) -> np.ndarray:
     u, v = int(round(float(center_px[0]))), int(round(float(center_px[1])))
     patch = color_bgr[max(0, v - radius_px) : min(h, v + radius_px + 1), max(0, u - radius_px) : min(w, u + radius_px + 1)]
     return patch.reshape(-1, 3)
+
+
+def board_region_mask(shape_hw: tuple[int, int], T_world_camera: np.ndarray, K: np.ndarray, dist, x_range_m, y_range_m,
+                      scale: float = 1.0) -> np.ndarray:
+    """(H, W) bool: the pixels inside the board's rectangle (z = 0) as the calibration sees it, in an
+    image `scale` times smaller than the camera's: board grey is looked for there only (the table
+    beside the board, wood or cloth, is at the board's height too)."""
+    from armlab.vision.geometry import project_points
+
+    (x0, x1), (y0, y1) = x_range_m, y_range_m
+    corners = np.array([[x0, y0, 0.0], [x1, y0, 0.0], [x1, y1, 0.0], [x0, y1, 0.0]])
+    pixels = project_points(np.asarray(T_world_camera, float), np.asarray(K, float), np.asarray(dist, float), corners) / scale
+    mask = np.zeros(shape_hw, np.uint8)
+    cv2.fillConvexPoly(mask, np.round(pixels).astype(np.int32), 1)
+    return mask.view(bool)
 
 
 CLICK_FACE_SIDE_PX = 34.0  # a large cube's top at ~1 m under a ~900 px focal length (1280 px wide L515 frame)

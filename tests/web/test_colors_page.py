@@ -38,6 +38,15 @@ def test_name_a_blocks_colour_from_the_page(browser, server):
         assert "reads grey" in refused and "unchanged" in refused, refused
         assert len(server.get("/api/colors")["samples"]) == 1
 
+        swatches = page.evaluate("""async () => {
+            const { labToCss } = await import('/js/colors.js');
+            return [labToCss([50, 0, 0]), labToCss([39.4, 52.5, 21.7]), labToCss(null)];
+        }""")
+        grey, red, none = swatches
+        assert len(set(grey[4:-1].split(","))) == 1 and none == ""  # the board's grey is grey; no Lab, no swatch
+        r, g, b = (int(x) for x in red[4:-1].split(","))
+        assert r > 2 * g and r > 2 * b  # the red reference shows red (unknown faces are drawn as measured)
+
         page.click("#btn-colors-reset")
         page.wait_for_function("document.querySelectorAll('#colors-samples li').length === 0", timeout=30_000)
         assert server.get("/api/colors")["samples"] == []
