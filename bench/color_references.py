@@ -26,7 +26,7 @@ REPO = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(REPO))
 
 from armlab.vision import load_perception_config  # noqa: E402
-from armlab.vision.colors import ColorModel, board_mask_near, board_reference_bgr, face_patch  # noqa: E402
+from armlab.vision.colors import ColorModel, board_region_mask, measure_at  # noqa: E402
 from armlab.vision.colors_eval import measure_face, read_labelled_faces, score_colors  # noqa: E402
 
 DEFAULT_DATA = REPO.parent / "shared" / "data" / "rob550_dev"
@@ -49,7 +49,7 @@ def real_samples(model: ColorModel, data: Path) -> dict[str, dict[str, list]]:
     return out
 
 
-def sim_samples(model: ColorModel, scenes: int) -> dict[str, list]:
+def sim_samples(model: ColorModel, cfg, scenes: int) -> dict[str, list]:
     """class -> [CIELAB] of resting cube tops in seeded line_up scenes (every colour, both sizes)."""
     from armlab.devices.sim import SimWorkcell, SimWorkcellConfig
     from armlab.scene import generate_scene
@@ -72,10 +72,9 @@ def sim_samples(model: ColorModel, scenes: int) -> dict[str, list]:
             if top.type != "block" or not top.resting:
                 continue
             u, v = project_points(T, K, np.zeros(5), top.top_center_m.reshape(1, 3))[0]
-            side = (0.038 if top.size == "large" else 0.025) * K[0, 0]
-            patch = face_patch(frame.color_bgr, (u, v), max(2, int(0.18 * side)))
-            ring = board_mask_near(frame.color_bgr.shape[:2], (u, v), int(1.8 * side), int(0.6 * side))
-            out[top.color].append(model.measure(patch, board_reference_bgr(frame.color_bgr, ring)))
+            side = (0.038 if top.size == "large" else 0.025) * K[0, 0] / (T[2, 3] - top.top_center_m[2])
+            board = board_region_mask(frame.color_bgr.shape[:2], T, K, np.zeros(5), cfg.board.x_range_m, cfg.board.y_range_m)
+            out[top.color].append(measure_at(model, frame.color_bgr, (u, v), side, board))
     return out
 
 
@@ -87,7 +86,7 @@ def main() -> None:
     cfg = load_perception_config()
     shipped = ColorModel.from_config(cfg)
     real = real_samples(shipped, args.data)
-    sim = sim_samples(shipped, args.sim_scenes)
+    sim = sim_samples(shipped, cfg, args.sim_scenes)
     refs: dict[str, dict[str, np.ndarray]] = {station: {c: np.median(v, axis=0) for c, v in per.items()} for station, per in real.items()}
     refs["sim"] = {c: np.median(v, axis=0) for c, v in sim.items()}
     print("color_model.references (median L, a, b; board-normalised):")
