@@ -22,6 +22,8 @@ from dataclasses import dataclass, field
 import cv2
 import numpy as np
 
+from armlab.vision.geometry import project_points
+
 UNKNOWN = "unknown"
 
 # sRGB (linear) -> CIE XYZ, D65; the white point is the matrix's row sums.
@@ -52,6 +54,20 @@ def lab_from_relative_rgb(relative_rgb: np.ndarray, board_reflectance: float) ->
     xyz = _RGB_TO_XYZ @ (np.asarray(relative_rgb, dtype=float) * board_reflectance)
     fx, fy, fz = _lab_f(np.maximum(xyz, 0.0) / _WHITE_XYZ)
     return np.array([116.0 * fy - 16.0, 500.0 * (fx - fy), 200.0 * (fy - fz)])
+
+
+def relative_rgb_from_lab(lab, board_reflectance: float) -> np.ndarray:
+    """lab_from_relative_rgb's inverse: linear RGB relative to the board of a board-normalised CIELAB."""
+    l, a, b = (float(x) for x in lab)
+    fy = (l + 16.0) / 116.0
+    fx, fz = fy + a / 500.0, fy - b / 200.0
+    d = 6.0 / 29.0
+
+    def inv(t):
+        return t**3 if t > d else 3 * d * d * (t - 4.0 / 29.0)
+
+    xyz = np.array([inv(fx), inv(fy), inv(fz)]) * _WHITE_XYZ
+    return np.linalg.solve(_RGB_TO_XYZ, xyz) / board_reflectance
 
 
 def normalised_rgb(face_bgr: np.ndarray, board_bgr: np.ndarray) -> np.ndarray:
@@ -295,8 +311,6 @@ def board_region_mask(shape_hw: tuple[int, int], T_world_camera: np.ndarray, K: 
     """(H, W) bool: the pixels inside the board's rectangle (z = 0) as the calibration sees it, in an
     image `scale` times smaller than the camera's: board grey is looked for there only (the table
     beside the board, wood or cloth, is at the board's height too)."""
-    from armlab.vision.geometry import project_points
-
     (x0, x1), (y0, y1) = x_range_m, y_range_m
     corners = np.array([[x0, y0, 0.0], [x1, y0, 0.0], [x1, y1, 0.0], [x0, y1, 0.0]])
     pixels = project_points(np.asarray(T_world_camera, float), np.asarray(K, float), np.asarray(dist, float), corners) / scale
@@ -374,28 +388,6 @@ class BoardGrey:
             return self.overall()
 
 
-def relative_rgb_from_lab(lab, board_reflectance: float) -> np.ndarray:
-    """lab_from_relative_rgb's inverse: linear RGB relative to the board of a board-normalised CIELAB."""
-    l, a, b = (float(x) for x in lab)
-    fy = (l + 16.0) / 116.0
-    fx, fz = fy + a / 500.0, fy - b / 200.0
-    d = 6.0 / 29.0
-
-    def inv(t):
-        return t**3 if t > d else 3 * d * d * (t - 4.0 / 29.0)
-
-    xyz = np.array([inv(fx), inv(fy), inv(fz)]) * _WHITE_XYZ
-    return np.linalg.solve(_RGB_TO_XYZ, xyz) / board_reflectance
-
-
-def colour_bgr_of_lab(lab, board_reflectance: float = 0.5) -> tuple[int, int, int]:
-    """An 8-bit BGR colour showing a board-normalised CIELAB under a board of mid-grey 128 (for drawing)."""
-    rgb = np.clip(relative_rgb_from_lab(lab, board_reflectance) * float(srgb_to_linear(128.0)), 0.0, 1.0)
-    srgb = np.where(rgb <= 0.0031308, 12.92 * rgb, 1.055 * rgb ** (1 / 2.4) - 0.055)
-    r, g, bb = (int(round(255 * x)) for x in srgb)
-    return bb, g, r
-
-
 __all__ = ["UNKNOWN", "BoardGrey", "ColorModel", "ColorReading", "ColorSample", "board_mask_near", "board_reference_bgr",
-           "face_patch", "classify_at", "face_and_board_at", "lab_distance", "lab_from_relative_rgb", "measure_at", "normalised_rgb", "relative_rgb_from_lab",
-           "srgb_to_linear"]
+           "board_region_mask", "classify_at", "face_and_board_at", "face_patch", "lab_distance", "lab_from_relative_rgb",
+           "measure_at", "normalised_rgb", "relative_rgb_from_lab", "srgb_to_linear"]
