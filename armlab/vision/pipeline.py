@@ -103,7 +103,7 @@ class PerceptionPipeline:
         if cal is not None and depth_mm is not None:
             self._use_calibration(cal)
             if self._block_geometry is None:
-                self._block_geometry = BlockGeometry(cal)
+                self._block_geometry = BlockGeometry(cal, self.cfg)
             if arm_joints_rad is not None and self.cfg.self_filter.enabled:
                 robot_mask = self.self_filter.mask(depth_mm, cal, np.asarray(arm_joints_rad, dtype=float), held_block_edge_m)
             blocks = detect_blocks(
