@@ -124,6 +124,9 @@ export const CLIENT_MESSAGE_TYPES = Object.freeze(["ack", "view", "command"]);
  * @property {(number|null)} [width]
  * @property {(number|null)} [height]
  * @property {(number|null)} [depth_check_error_m]
+ * @property {(number|null)} [depth_offset_m] the depth camera's board plane above (+) or behind (-) the tags' plane
+ * @property {(number|null)} [depth_tilt_deg] angle between the depth camera's board plane and the tags' plane
+ * @property {(string|null)} [depth_model] the two in words, e.g. 'depth 8.3 mm behind the tags' plane, tilted 1.52 deg'
  * @property {(Array<Array<number>>|null)} [grid_points_px]
  * @property {(Array<TagInfo>|null)} [tags]
  * @property {(number|null)} [time]
@@ -142,6 +145,9 @@ export const CLIENT_MESSAGE_TYPES = Object.freeze(["ack", "view", "command"]);
  * @property {(number|null)} [width]
  * @property {(number|null)} [height]
  * @property {(number|null)} [depth_check_error_m]
+ * @property {(number|null)} [depth_offset_m] the depth camera's board plane above (+) or behind (-) the tags' plane
+ * @property {(number|null)} [depth_tilt_deg] angle between the depth camera's board plane and the tags' plane
+ * @property {(string|null)} [depth_model] the two in words, e.g. 'depth 8.3 mm behind the tags' plane, tilted 1.52 deg'
  * @property {(Array<Array<number>>|null)} [grid_points_px]
  * @property {(Array<TagInfo>|null)} [tags]
  * @property {(number|null)} [time]
