@@ -54,7 +54,7 @@ class Status(Wire):
     joint_names: list[str]
     joint_limits_rad: list[list[float]] = Field(description="[lower, upper] per joint")
     gripper: GripperStatus
-    gripper_pose: GripperPose
+    gripper_pose: GripperPose | None = Field(description="the gripper's pose (FK of the joints); None on a station with no arm")
     moving: bool
     torque_enabled: bool = Field(True, description="motor torque on (the arm holds); off = limp, it falls unless held")
     calibrated: bool

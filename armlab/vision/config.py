@@ -25,10 +25,11 @@ __all__ = ["BlockTagEntry", "PerceptionConfig", "TagDetectionConfig", "is_aprilt
 
 class TagDetectionConfig(StrictModel):
     """Tag decoder thresholds (vision.yaml tag_detection). AprilTag library: detections with more
-    corrected bits than max_hamming or a decision margin below min_decision_margin are dropped;
-    quad_decimate 1 keeps ~20 px tags readable. ArUco: aruco_error_correction_rate (OpenCV's)."""
+    corrected bits than max_hamming or a decision margin below min_decision_margin are dropped
+    (max_hamming 2 is the library's own default); quad_decimate 1 keeps ~20 px tags readable.
+    ArUco: aruco_error_correction_rate (OpenCV's)."""
 
-    max_hamming: int = Field(1, ge=0, le=3)
+    max_hamming: int = Field(2, ge=0, le=3)
     min_decision_margin: float = Field(25.0, ge=0.0)
     quad_decimate: float = Field(1.0, ge=1.0, le=4.0)
     quad_sigma: float = Field(0.0, ge=0.0, le=2.0)

@@ -9,6 +9,7 @@ import { applyMovingTimeLimits, emptyDetectionsReason, readMovingTimeS } from ".
 import { IntrinsicsPanel } from "./intrinsics.js";
 import { CartesianJog } from "./jog.js";
 import { LiveView } from "./liveview.js";
+import { applyNoArm } from "./noarm.js";
 import { EventLog } from "./log.js";
 import {
   JointSliders,
@@ -202,6 +203,7 @@ class App {
   /** Sliders, readouts, plot and teach table from the arm the server runs (its joint names and limits). */
   setArm(arm) {
     renderArm(arm);
+    applyNoArm(document, arm);
     this.sliders.build(arm.joint_names, arm.joint_limits_rad);
     this.plot.setJoints(arm.joint_names, arm.joint_limits_rad);
     this.teach.setJointNames(arm.joint_names);

@@ -153,7 +153,7 @@ export function renderArm(arm) {
   document.body.dataset.gripperType = arm.gripper_type;
   $("btn-open").textContent = suction ? "Vacuum off" : "Open";
   $("btn-close").textContent = suction ? "Vacuum on" : "Close";
-  $("arm-name").textContent = `${arm.name} · ${arm.joint_names.length} joints · ${suction ? "suction cup" : "fingers"}`;
+  $("arm-name").textContent = arm.has_arm === false ? "none" : `${arm.name} · ${arm.joint_names.length} joints · ${suction ? "suction cup" : "fingers"}`;
 }
 
 /** Detections table; rows carry data-index so hovering on the canvas can highlight one. */

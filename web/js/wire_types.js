@@ -4,9 +4,10 @@
 
 export const STATES = Object.freeze(["idle", "calibrate", "teach", "repeat", "click_grab", "click_drop", "auto_sort", "estop", "fault"]);
 export const COMMANDS = Object.freeze(["estop", "reset", "home", "sleep", "move_joints", "move_to", "jog", "torque", "gripper", "calibrate", "grab", "drop", "teach_start", "teach_record", "teach_stop", "teach_undo", "repeat", "auto", "cancel", "set_scene", "pause", "resume", "step", "set_speed"]);
+export const ARM_COMMANDS = Object.freeze(["home", "sleep", "move_joints", "move_to", "jog", "torque", "gripper", "grab", "drop", "teach_start", "teach_record", "teach_stop", "teach_undo", "repeat", "auto", "pause", "resume", "step", "set_speed"]);
 export const VIEWS = Object.freeze(["color", "depth", "topdown"]);
 export const LAYERS = Object.freeze(["tags", "detections", "grid"]);
-export const ERROR_CODES = Object.freeze(["wrong_state", "unreachable", "unsafe", "invalid", "not_found", "not_calibrated", "unauthorized", "forbidden", "not_controller", "needs_confirmation", "device", "internal"]);
+export const ERROR_CODES = Object.freeze(["wrong_state", "unreachable", "unsafe", "invalid", "not_found", "not_calibrated", "unauthorized", "forbidden", "not_controller", "needs_confirmation", "no_arm", "device", "internal"]);
 export const SERVER_MESSAGE_TYPES = Object.freeze(["frame", "telemetry", "event", "calibration", "hello"]);
 export const CLIENT_MESSAGE_TYPES = Object.freeze(["ack", "view", "command"]);
 
@@ -26,8 +27,10 @@ export const CLIENT_MESSAGE_TYPES = Object.freeze(["ack", "view", "command"]);
  * @property {Array<Array<number>>} joint_limits_rad [lower, upper] per joint, joint_names order
  * @property {Array<number>} velocity_limits_rad_s
  * @property {Array<number>} home_rad
- * @property {("fingers"|"suction")} gripper_type
+ * @property {("fingers"|"suction"|"none")} gripper_type
  * @property {boolean} full_pose Cartesian moves keep the tool's whole orientation (six joints or more), else pitch and yaw
+ * @property {boolean} [has_arm] False: a station with no arm (armlab serve --arm none), perception only; no joints
+ * @property {(string|null)} [reason] why the arm's panels are off (a station with no arm)
  */
 
 /**
@@ -507,7 +510,7 @@ export const CLIENT_MESSAGE_TYPES = Object.freeze(["ack", "view", "command"]);
  * @property {Array<string>} joint_names
  * @property {Array<Array<number>>} joint_limits_rad [lower, upper] per joint
  * @property {GripperStatus} gripper
- * @property {GripperPose} gripper_pose
+ * @property {(GripperPose|null)} gripper_pose the gripper's pose (FK of the joints); None on a station with no arm
  * @property {boolean} moving
  * @property {boolean} [torque_enabled] motor torque on (the arm holds); off = limp, it falls unless held
  * @property {boolean} calibrated
@@ -614,7 +617,7 @@ export const CLIENT_MESSAGE_TYPES = Object.freeze(["ack", "view", "command"]);
  * @property {Array<string>} joint_names
  * @property {Array<Array<number>>} joint_limits_rad [lower, upper] per joint
  * @property {GripperStatus} gripper
- * @property {GripperPose} gripper_pose
+ * @property {(GripperPose|null)} gripper_pose the gripper's pose (FK of the joints); None on a station with no arm
  * @property {boolean} moving
  * @property {boolean} [torque_enabled] motor torque on (the arm holds); off = limp, it falls unless held
  * @property {boolean} calibrated
