@@ -84,6 +84,8 @@ class Detection(Wire):
     occluded: bool
     aruco_id: int | None = None
     destination: Any = None
+    color_lab: list[float] | None = Field(None, description="the top face's colour, board-normalised CIELAB (L, a, b): "
+                                          "what an 'unknown' colour measured")
 
 
 class DetectionsResponse(Wire):
@@ -113,6 +115,9 @@ class CalibrationInfo(Wire):
     width: int | None = None
     height: int | None = None
     depth_check_error_m: float | None = None
+    depth_offset_m: float | None = Field(None, description="the depth camera's board plane above (+) or behind (-) the tags' plane")
+    depth_tilt_deg: float | None = Field(None, description="angle between the depth camera's board plane and the tags' plane")
+    depth_model: str | None = Field(None, description="the two in words, e.g. 'depth 8.3 mm behind the tags' plane, tilted 1.52 deg'")
     grid_points_px: list[list[float]] | None = None
     tags: list[TagInfo] | None = None
     time: float | None = None

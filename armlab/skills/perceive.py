@@ -125,6 +125,6 @@ def surface_height_m(station: Station, xy_m, radius_m: float = 0.008, max_height
     valid = inside & (depth_m > 0)
     if not valid.any():
         return unseen
-    world = transform_points(calibration.T_world_camera, backproject(pixels[valid], depth_m[valid], calibration.K, calibration.dist))
+    world = transform_points(calibration.T_world_depth, backproject(pixels[valid], depth_m[valid], calibration.K, calibration.dist))
     hits = (np.hypot(world[:, 0] - float(xy_m[0]), world[:, 1] - float(xy_m[1])) <= radius_m) & (np.abs(world[:, 2] - heights[valid]) <= 0.006)
     return float(max(0.0, world[hits, 2].max())) if hits.any() else unseen

@@ -33,6 +33,7 @@ from armlab.devices.gripper import Gripper
 from armlab.errors import NoArmError, ShuttingDown
 from armlab.station.calibration_trust import CalibrationTrust
 from armlab.station.checks import checked_joints
+from armlab.station.colors import StationColors
 from armlab.station.config import StationConfig
 from armlab.station.intrinsics import CameraIntrinsics
 from armlab.station.jobs import Job, JobContext, start_job_thread
@@ -137,6 +138,7 @@ class Station(Latch, MotionGate, ManualCommands, TeachCommands, JobControls, Per
         self._pipeline: Any = None  # synchronous mode's perception pipeline
         self.events = EventLog()
         self.intrinsics = CameraIntrinsics(camera, self.store, self.events)  # in use: measured here, else the camera's own
+        self.colors = StationColors(self.store, self.events, lambda: self.perception_config, lambda: self.calibration)  # defaults + samples
         self.frames: NewestSlot[Frame] = NewestSlot()
         self.perception: NewestSlot[Perception] = NewestSlot()
         self.telemetry: NewestSlot[dict] = NewestSlot()
@@ -160,6 +162,7 @@ class Station(Latch, MotionGate, ManualCommands, TeachCommands, JobControls, Per
 
             self.perception_config = load_perception_config(workcell=self.config.workcell)  # the station's board and tags
         self.intrinsics.restore()
+        self.colors.restore()
         if self.config.restore_calibration:
             self._restore_calibration()
         self._closing.clear()
@@ -170,6 +173,7 @@ class Station(Latch, MotionGate, ManualCommands, TeachCommands, JobControls, Per
                 PerceptionLoop(
                     self.frames, self.perception, lambda: self._calibration, self.perception_config, self.config.perception_rate_hz, self.model,
                     get_check_calibration=self._calibration_to_check, on_check=self._on_calibration_check,
+                    get_color_model=lambda: self.colors.model,
                 ),
                 TelemetryPublisher(self.telemetry_snapshot, self.telemetry, self.config.telemetry_rate_hz),
                 DeviceWatch(self.device_problems, self._on_device_problems, 1.0 / self.config.device_check_rate_hz),

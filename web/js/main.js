@@ -2,6 +2,7 @@
 
 import { Api, adoptToken, dropToken } from "./api.js";
 import { ClickCalibration } from "./clickcal.js";
+import { ColorCalibration } from "./colors.js";
 import { CompetitionPanel } from "./competition.js";
 import { ControlLease } from "./control.js";
 import { applyMovingTimeLimits, emptyDetectionsReason, readMovingTimeS } from "./inputs.js";
@@ -84,6 +85,7 @@ class App {
     });
     this.programPath = new ProgramPathOverlay(this.live);
     this.clickcal = new ClickCalibration({ api: this.api, live: this.live, log: this.log, afterChange: () => this.refreshAllowed() });
+    this.colors = new ColorCalibration({ root: $("colors-panel"), api: this.api, live: this.live, log: this.log });
     this.stream = new Stream({
       token: this.api.token,
       handlers: {
@@ -351,6 +353,7 @@ class App {
   setMode(mode) {
     this.live.setMode(mode);
     this.clickcal.setActive(mode === "points");
+    this.colors.setActive(mode === "color");
     document.querySelectorAll("#click-mode button").forEach((b) => b.classList.toggle("on", b.dataset.mode === mode));
     $("live").dataset.mode = mode;
   }

@@ -127,6 +127,9 @@ export const CLIENT_MESSAGE_TYPES = Object.freeze(["ack", "view", "command"]);
  * @property {(number|null)} [width]
  * @property {(number|null)} [height]
  * @property {(number|null)} [depth_check_error_m]
+ * @property {(number|null)} [depth_offset_m] the depth camera's board plane above (+) or behind (-) the tags' plane
+ * @property {(number|null)} [depth_tilt_deg] angle between the depth camera's board plane and the tags' plane
+ * @property {(string|null)} [depth_model] the two in words, e.g. 'depth 8.3 mm behind the tags' plane, tilted 1.52 deg'
  * @property {(Array<Array<number>>|null)} [grid_points_px]
  * @property {(Array<TagInfo>|null)} [tags]
  * @property {(number|null)} [time]
@@ -145,12 +148,69 @@ export const CLIENT_MESSAGE_TYPES = Object.freeze(["ack", "view", "command"]);
  * @property {(number|null)} [width]
  * @property {(number|null)} [height]
  * @property {(number|null)} [depth_check_error_m]
+ * @property {(number|null)} [depth_offset_m] the depth camera's board plane above (+) or behind (-) the tags' plane
+ * @property {(number|null)} [depth_tilt_deg] angle between the depth camera's board plane and the tags' plane
+ * @property {(string|null)} [depth_model] the two in words, e.g. 'depth 8.3 mm behind the tags' plane, tilted 1.52 deg'
  * @property {(Array<Array<number>>|null)} [grid_points_px]
  * @property {(Array<TagInfo>|null)} [tags]
  * @property {(number|null)} [time]
  * @property {(string|null)} [method] 'points' for a calibration from clicked points (tags otherwise)
  * @property {(Object<string, *>|null)} [points] clicked-point fit: homography, reprojection and per-point errors (px)
  * @property {"calibration"} [type]
+ */
+
+/**
+ * A labelled frame: every listed face (u, v, colour) of the newest frame; replaces the station's samples.
+ * @typedef {Object} ColorFitRequest
+ * @property {Array<ColorSampleRequest>} samples
+ */
+
+/**
+ * @typedef {Object} ColorFitResponse
+ * @property {number} samples
+ * @property {number} read_otherwise_before faces the model read as another colour before the fit
+ */
+
+/**
+ * @typedef {Object} ColorReadingInfo
+ * @property {string} name the class the model gave ('unknown': far from every class)
+ * @property {Array<number>} measured_lab
+ * @property {number} distance to the nearest reference of that class (of `nearest` for unknown)
+ * @property {string} nearest
+ */
+
+/**
+ * @typedef {Object} ColorSampleInfo
+ * @property {string} name
+ * @property {Array<number>} lab board-normalised CIELAB (L, a, b) measured at the click
+ * @property {(number|null)} [u]
+ * @property {(number|null)} [v]
+ * @property {(number|null)} [time_s]
+ */
+
+/**
+ * A block's colour, named by the operator: the face at pixel (u, v) of the newest frame.
+ * @typedef {Object} ColorSampleRequest
+ * @property {number} u pixel column in the colour image
+ * @property {number} v pixel row in the colour image
+ * @property {string} color a colour the station knows: a class (red ... violet) or an extra name (pink, light_blue, ...)
+ */
+
+/**
+ * @typedef {Object} ColorSampleResponse
+ * @property {ColorSampleInfo} sample
+ * @property {ColorReadingInfo} reading_before what the colour model read there before this sample
+ * @property {number} samples samples in use now
+ */
+
+/**
+ * The colour model in use: the config's defaults plus this station's samples.
+ * @typedef {Object} ColorsInfo
+ * @property {Array<string>} classes
+ * @property {Array<string>} names every colour name a sample may carry
+ * @property {number} max_distance a face farther than this from every reference reads 'unknown'
+ * @property {Array<ColorSampleInfo>} samples
+ * @property {Object<string, *>} references the defaults: CIELAB references per class
  */
 
 /**
@@ -188,6 +248,7 @@ export const CLIENT_MESSAGE_TYPES = Object.freeze(["ack", "view", "command"]);
  * @property {boolean} occluded
  * @property {(number|null)} [aruco_id]
  * @property {*} [destination]
+ * @property {(Array<number>|null)} [color_lab] the top face's colour, board-normalised CIELAB (L, a, b): what an 'unknown' colour measured
  */
 
 /**
