@@ -65,10 +65,23 @@ def test_the_arm_in_a_real_frame_is_a_block_without_joints_and_none_with_them(ca
     assert not [b for b in with_joints if _on_the_arm(b)], with_joints
     # Nothing else changes: the filter takes the arm, not the cubes next to it (--all stamps the joints).
     assert all(b.pop("seen_arm_joints_rad") == pytest.approx([0.0, -1.8, 1.55, 0.8, 0.0]) for b in with_joints)
-    key = lambda b: json.dumps({k: v for k, v in b.items() if k != "seen_arm_joints_rad"}, sort_keys=True)  # noqa: E731
-    assert sorted(map(key, with_joints)) == sorted(key(b) for b in without if b not in on_arm)
+    # The same blocks, each where it was: the board plane is refitted without the arm's pixels, so
+    # positions may move by a fraction of a millimetre, classes not at all.
+    _assert_same_blocks(with_joints, [b for b in without if b not in on_arm])
     # The workcell's arm by name gives the same.
-    assert sorted(map(key, _detect(capsys, frame_files, "--joints", SLEEP_RAD, "--arm", "rx200"))) == sorted(map(key, with_joints))
+    _assert_same_blocks(_detect(capsys, frame_files, "--joints", SLEEP_RAD, "--arm", "rx200"), with_joints)
+
+
+def _assert_same_blocks(found: list[dict], expected: list[dict], tolerance_m: float = 0.001) -> None:
+    """Pairs every expected block with one found of the same class within tolerance_m; none left over."""
+    classes = lambda b: (b["color"], b["size"], b["is_cube"], b["stack_level"])  # noqa: E731
+    left = list(found)
+    for block in expected:
+        match = next((f for f in left if classes(f) == classes(block)
+                      and max(abs(a - c) for a, c in zip(f["position_m"], block["position_m"])) <= tolerance_m), None)
+        assert match is not None, f"{block} not found among {left}"
+        left.remove(match)
+    assert not left, f"extra blocks: {left}"
 
 
 @pytest.mark.parametrize("args, says", [
