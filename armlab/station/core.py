@@ -395,7 +395,7 @@ class Station(Latch, MotionGate, ManualCommands, TeachCommands, JobControls, Per
             "joint_names": list(self.model.joint_names),
             "joint_limits_rad": [[float(lo), float(hi)] for lo, hi in zip(self.model.lower_rad, self.model.upper_rad)],
             "gripper": gripper_dict,
-            "gripper_pose": gripper_pose_from_matrix(self.model.fk(q)),
+            "gripper_pose": gripper_pose_from_matrix(self.model.fk(q), np.asarray(self.model.T_world_base)[:3, 3]),
             "moving": moving_measured,
             "torque_enabled": self._torque_enabled,
             "calibrated": calibrated,
