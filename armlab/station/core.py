@@ -114,6 +114,9 @@ class Station(Latch, MotionGate, ManualCommands, TeachCommands, JobControls, Per
         self.backend = backend
         self.synchronous = synchronous
         self._lock = threading.RLock()
+        self._send_lock = threading.Lock()  # one sender of device commands at a time, taken before _lock (motion.py _sending)
+        self._outbox: list | None = None  # device commands queued under the lock, sent after it (motion.py _sending)
+        self._halts = 0  # how many times the devices were halted (latch.py _halt_devices)
         self._halt = threading.Event()  # the latch: set by e-stop and device loss (before any lock), cleared by reset
         self._closing = threading.Event()
         self._state = State.IDLE
