@@ -25,7 +25,7 @@ import threading
 import time
 from collections import Counter
 from dataclasses import dataclass, field
-from typing import Annotated
+from typing import Annotated, Union
 
 from pydantic import Field, TypeAdapter, ValidationError
 from starlette.websockets import WebSocket, WebSocketDisconnect
@@ -36,12 +36,14 @@ from armlab.station.lease import checked_controller
 from armlab.station.perception import _Worker
 from armlab.workcell import DEFAULT_WORKCELL, load_workcell
 from server.models import AckMessage, CommandMessage, HeartbeatMessage, ViewMessage
+from server.stream_models import CLIENT_MESSAGES, message_type
 from server.views import ViewKey, compose_view, encode_jpeg
 
 log = logging.getLogger(__name__)
 
 # What a client may send: validated strictly (server/models.py), dispatched on "type".
-CLIENT_MESSAGE = TypeAdapter(Annotated[AckMessage | ViewMessage | CommandMessage | HeartbeatMessage, Field(discriminator="type")])
+CLIENT_MESSAGE = TypeAdapter(Annotated[Union[CLIENT_MESSAGES], Field(discriminator="type")])  # noqa: UP007 - a tuple
+_CLIENT_TYPES = [message_type(model) for model in CLIENT_MESSAGES]
 _SESSION_NUMBERS = itertools.count(1)
 MAX_QUEUED_CALLS = 32  # a session's station calls waiting behind a slow one; more are refused with an error event
 
@@ -50,7 +52,7 @@ def _message_error(text: str, error: ValidationError) -> str:
     """One line for the client: what was wrong with its message."""
     first = error.errors()[0]
     where = ".".join(str(part) for part in first.get("loc", ()))
-    return f"bad message {text[:80]!r}: {where + ': ' if where else ''}{first.get('msg')} (expected type ack, view, command or heartbeat)"
+    return f"bad message {text[:80]!r}: {where + ': ' if where else ''}{first.get('msg')} (expected type {', '.join(_CLIENT_TYPES[:-1])} or {_CLIENT_TYPES[-1]})"
 
 
 @dataclass(frozen=True)
@@ -368,4 +370,4 @@ class StreamHub:
             await self._reply_error(client, str(error))
 
     async def _reply_error(self, client: ClientSession, message: str) -> None:
-        await client.websocket.send_text(json.dumps({"type": "event", "level": "error", "message": message, "time_s": time.time()}))
+        await client.websocket.send_text(json.dumps({"type": "event", "level": "error", "kind": "general", "message": message, "time_s": time.time()}))
