@@ -87,11 +87,11 @@ def load_intrinsics(path: str | None):
 
     source = resolve_config_path(path or "sim_l515", "cameras")
     data = read_config_file(source)
+    if "intrinsics" not in data:  # an intrinsics file (K, dist, image_size; ROS camera_info): the recorded camera reads the same
+        from armlab.devices.recorded.intrinsics_file import read_intrinsics_file
+
+        return read_intrinsics_file(source)[0]
     try:
-        if "K" in data:
-            K = data["K"]
-            width, height = data.get("image_size") or (data["width"], data["height"])
-            return Intrinsics(int(width), int(height), float(K[0][0]), float(K[1][1]), float(K[0][2]), float(K[1][2]), tuple(float(x) for x in data.get("dist", [0.0] * 5)))
         k = data["intrinsics"]
         return Intrinsics(int(data["width"]), int(data["height"]), float(k["fx"]), float(k["fy"]), float(k["cx"]), float(k["cy"]), tuple(float(x) for x in k.get("dist", [0.0] * 5)))
     except (KeyError, TypeError, ValueError, IndexError) as error:
