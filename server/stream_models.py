@@ -2,7 +2,7 @@
 
 from __future__ import annotations
 
-from typing import Literal
+from typing import Literal, get_args
 
 from pydantic import Field
 
@@ -27,8 +27,11 @@ class TelemetryMessage(Status):
 
 
 class EventMessage(Wire):
+    """An operator event. The page acts on `kind` (armlab.station.slots.EventLog.KINDS), never on the text."""
+
     type: Literal["event"] = "event"
     level: Literal["info", "warn", "error"]
+    kind: Literal["general", "scene"] = Field(description="what happened, for a client to act on; 'general': for people only")
     message: str
     time_s: float
 
@@ -125,3 +128,14 @@ class HeartbeatMessage(Request):
     """The controlling page is still there: keeps its hold-to-run jog going for another jog_hold_s."""
 
     type: Literal["heartbeat"]
+
+
+# Every websocket message each side sends, one model per `type` (the generator and stream.py read these).
+SERVER_MESSAGES = (FrameHeader, TelemetryMessage, EventMessage, CalibrationMessage, HelloMessage)
+CLIENT_MESSAGES = (AckMessage, ViewMessage, CommandMessage, HeartbeatMessage)
+
+
+def message_type(model: type[Wire]) -> str:
+    """The `type` a websocket message model carries (its field's one Literal value)."""
+    (value,) = get_args(model.model_fields["type"].annotation)
+    return value

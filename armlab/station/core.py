@@ -118,6 +118,9 @@ class Station(Latch, MotionGate, ManualCommands, TeachCommands, JobControls, Per
         self.backend = backend
         self.synchronous = synchronous
         self._lock = threading.RLock()
+        self._send_lock = threading.Lock()  # one sender of device commands at a time, taken before _lock (motion.py _sending)
+        self._outbox: list | None = None  # device commands queued under the lock, sent after it (motion.py _sending)
+        self._halts = 0  # how many times the devices were halted (latch.py _halt_devices)
         self._halt = threading.Event()  # the latch: set by e-stop and device loss (before any lock), cleared by reset
         self._closing = threading.Event()
         self._state = State.IDLE
@@ -410,7 +413,7 @@ class Station(Latch, MotionGate, ManualCommands, TeachCommands, JobControls, Per
             "joint_names": list(self.model.joint_names) if self.has_arm else [],
             "joint_limits_rad": [[float(lo), float(hi)] for lo, hi in zip(self.model.lower_rad, self.model.upper_rad)] if self.has_arm else [],
             "gripper": gripper_dict,
-            "gripper_pose": gripper_pose_from_matrix(self.model.fk(q)) if self.has_arm else None,
+            "gripper_pose": gripper_pose_from_matrix(self.model.fk(q), np.asarray(self.model.T_world_base)[:3, 3]) if self.has_arm else None,
             "moving": moving_measured,
             "torque_enabled": self._torque_enabled,
             "calibrated": calibrated,

@@ -1,6 +1,6 @@
 """Manual commands of the gate: joint and pose moves, hold-to-run jog, torque, gripper (teach: teach.py).
 
-A mixin of core.Station (it uses the station's lock, transition table, lease and `_command_arm`). Every
+A mixin of core.Station (it uses the station's lock, transition table, lease, `_sending` and `_command_arm`). Every
 command is refused before planning (state, latch, lease), planned and checked outside the lock, then
 re-checked and sent under it; nothing slow (IK, planning, SQLite) runs while the lock is held.
 """
@@ -38,7 +38,7 @@ class ManualCommands:
         self.allowed_or_raise(command, source)  # refuse before planning
         trajectory = self.plan_move(q_goal_rad, moving_time_s)  # planning and checks: outside the lock
         swept_box = self._swept_box(trajectory)
-        with self._lock:
+        with self._sending():
             self._transition(command, source=source)  # state unchanged: idle/teach stay
             self._jog = None
             self._command_arm(trajectory, swept_box)
@@ -98,7 +98,7 @@ class ManualCommands:
         )
         self.check_motion(trajectory)
         swept_box = self._swept_box(trajectory)
-        with self._lock:
+        with self._sending():
             self._transition("jog", source=source)
             self._command_arm(trajectory, swept_box)
             self._jog = {"trajectory": trajectory, "start_s": self.clock_s(), "velocity": velocity, "source": source}
@@ -142,7 +142,7 @@ class ManualCommands:
         trajectory = plan_gripper_step(self.model, q_start, axis, amount, speeds, fingers, config.board_clearance_m, config.sample_rate_hz)
         self.check_motion(trajectory)
         swept_box = self._swept_box(trajectory)
-        with self._lock:
+        with self._sending():
             self._transition("jog", source=source)
             self._jog = None
             self._command_arm(trajectory, swept_box)
@@ -167,7 +167,7 @@ class ManualCommands:
     def set_torque(self, enabled: bool, source: str | None = None, confirm: bool = False) -> None:
         """Torque on, or off (limp: the arm falls under gravity unless held), which outside teach needs
         confirm=True (NeedsConfirmation otherwise: nothing changes)."""
-        with self._lock:
+        with self._sending():  # the torque call (a ROS service on the real arm) is made after the lock is released
             state = self._check("torque", source)
             if not enabled and state is not State.TEACH and not confirm:
                 raise NeedsConfirmation(
@@ -178,7 +178,8 @@ class ManualCommands:
             self._jog = None
             if self._halt.is_set():
                 raise CommandRefused("torque", self._effective_state().value, allowed_commands(self._effective_state()))
-            self.arm.set_torque(bool(enabled))
+            self._send_later(lambda: self.arm.set_torque(bool(enabled)))
+        with self._lock:
             self._torque_enabled = bool(enabled)
         self.events.add("warn" if not enabled else "info", f"torque {'on' if enabled else 'off'}")
 
@@ -186,9 +187,9 @@ class ManualCommands:
         """'grasp' or 'release'."""
         if action not in ("grasp", "release"):
             raise ValueError(f"gripper action must be 'grasp' or 'release', not {action!r}")
-        with self._lock:
+        with self._sending():
             self._transition("gripper", source=source)
-            getattr(self.gripper, action)(wait=False)
+            self._send_later(lambda: getattr(self.gripper, action)(wait=False))
         if wait:
             self.wait_gripper()
 

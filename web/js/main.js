@@ -187,7 +187,7 @@ class App {
         break;
       case "event":
         this.log.add(msg.level || "info", msg.message || "", msg.time_s);
-        if (String(msg.message || "").startsWith("scene set")) this.refreshScene();
+        if (msg.kind === "scene") this.refreshScene();
         break;
       case "calibration":
         this.showCalibration(msg);

@@ -9,7 +9,8 @@ export const VIEWS = Object.freeze(["color", "depth", "topdown"]);
 export const LAYERS = Object.freeze(["tags", "detections", "grid"]);
 export const ERROR_CODES = Object.freeze(["wrong_state", "unreachable", "unsafe", "invalid", "not_found", "not_calibrated", "unauthorized", "forbidden", "not_controller", "needs_confirmation", "no_arm", "device", "internal"]);
 export const SERVER_MESSAGE_TYPES = Object.freeze(["frame", "telemetry", "event", "calibration", "hello"]);
-export const CLIENT_MESSAGE_TYPES = Object.freeze(["ack", "view", "command"]);
+export const CLIENT_MESSAGE_TYPES = Object.freeze(["ack", "view", "command", "heartbeat"]);
+export const EVENT_KINDS = Object.freeze(["general", "scene"]);
 
 /**
  * @typedef {Object} AckMessage
@@ -279,9 +280,11 @@ export const CLIENT_MESSAGE_TYPES = Object.freeze(["ack", "view", "command"]);
  */
 
 /**
+ * An operator event. The page acts on `kind` (armlab.station.slots.EventLog.KINDS), never on the text.
  * @typedef {Object} EventMessage
  * @property {"event"} [type]
  * @property {("info"|"warn"|"error")} level
+ * @property {("general"|"scene")} kind what happened, for a client to act on; 'general': for people only
  * @property {string} message
  * @property {number} time_s
  */

@@ -95,6 +95,7 @@ class SimWorkcell(SimTruth):
         self.camera.set_board(self._T_world_camera, self._depth_pivot_m())
         self._render_thread: RenderThread | None = None
         self._physics_thread: threading.Thread | None = None
+        self.physics_fault: str | None = None  # why the real-time physics thread died (devices then raise DeviceLost)
         self._stop_event = threading.Event()
         self._started = False
         self._closed = False
@@ -338,6 +339,16 @@ class SimWorkcell(SimTruth):
             time.sleep(0.002)
 
     def _physics_loop(self) -> None:
+        """The real-time physics thread. If it dies, physics would freeze while reads and renders still succeed:
+        instead the reason is kept in physics_fault and every device raises DeviceLost naming it (the station's
+        device watch then faults and halts), and it is logged."""
+        try:
+            self._run_physics()
+        except Exception as error:  # noqa: BLE001 - whatever ended it, it must not end silently
+            self.physics_fault = f"{type(error).__name__}: {error}"
+            logger.exception("simulation physics thread died: the simulated devices now report lost")
+
+    def _run_physics(self) -> None:
         wall0 = time.monotonic()
         sim0 = self.sim_time_s
         timestep = self._model.opt.timestep
