@@ -18,6 +18,7 @@ class Latch:
 
     def _halt_devices(self, gripper: bool = True) -> list[str]:
         """Stop the arm (and gripper); never raises (a lost device is reported). No lock needed."""
+        self._commanded = None  # the arm holds where it is: no commanded motion to continue
         failures = []
         for device in (self.arm, self.gripper) if gripper else (self.arm,):
             try:

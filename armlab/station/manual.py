@@ -34,14 +34,41 @@ class ManualCommands:
         self.check_motion(trajectory)
         return trajectory
 
+    def plan_move_from(self, handover, q_goal_rad, moving_time_s: float | None = None) -> JointTrajectory:
+        """A joint move to q_goal that takes over a running motion at `handover` (armlab.motion.handover): the
+        synchronised trapezoid when the handover is at rest, else a jerk-limited blend (ruckig) from its
+        position, velocity and acceleration within the arm's limits, ending at rest on the goal (moving_time_s:
+        its least duration). ValueError when none can be planned. Not checked (the splice is)."""
+        from armlab.motion import plan_joint_move
+        from armlab.motion.blend import arm_limits, plan_run
+
+        q_goal = self.checked_joints(q_goal_rad)
+        moving_time = checked_moving_time(moving_time_s, self.config.max_moving_time_s)
+        if handover.at_rest:
+            return plan_joint_move(handover.position_rad, q_goal, self.model, moving_time_s=moving_time)
+        run = plan_run(
+            np.vstack([handover.position_rad, q_goal]), arm_limits(self.model),
+            start_velocity=handover.velocity_rad_s, start_accel=handover.accel_rad_s2,
+            minimum_s=[None, moving_time] if moving_time else None, rate_hz=self.motion_config.sample_rate_hz,
+        )
+        return run.trajectory
+
     def _manual_move(self, command: str, q_goal_rad, moving_time_s: float | None, wait: bool, source: str | None) -> None:
+        """A manual joint move, planned and checked outside the lock; it takes over a motion in progress
+        continuously (plan_move_from), else starts from the measured joints at rest."""
         self.allowed_or_raise(command, source)  # refuse before planning
-        trajectory = self.plan_move(q_goal_rad, moving_time_s)  # planning and checks: outside the lock
-        swept_box = self._swept_box(trajectory)
-        with self._lock:
+        self.checked_joints(q_goal_rad)
+
+        def plan(handover) -> JointTrajectory:
+            if handover is None:
+                return self.plan_move(q_goal_rad, moving_time_s)
+            return self.plan_move_from(handover, q_goal_rad, moving_time_s)
+
+        def under_lock() -> None:
             self._transition(command, source=source)  # state unchanged: idle/teach stay
             self._jog = None
-            self._command_arm(trajectory, swept_box)
+
+        trajectory, _ = self._send_replacing(plan, under_lock, command)
         if wait:
             self.wait_motion(trajectory.duration_s + 5.0)
 
@@ -78,26 +105,26 @@ class ManualCommands:
     def jog(self, velocity_rad_s, source: str | None = None, speed_percent: float = 100.0) -> JointTrajectory:
         """Hold-to-run: move at these joint velocities (rad/s, scaled by speed_percent) for motion jog_hold_s,
         then stop by itself. Sending it again (or heartbeat()) within jog_hold_s keeps it going; zeros ramp down to rest."""
-        from armlab.motion.jog import checked_jog_velocity, plan_jog, reference_velocity
+        from armlab.motion.jog import checked_jog_velocity, plan_jog
 
-        velocity = checked_jog_velocity(velocity_rad_s, self.model.velocity_limit_rad_s, self.model.joint_names)
+        config = self.motion_config
+        allowed = np.minimum(np.asarray(self.model.velocity_limit_rad_s, dtype=float), config.jog_max_speed_rad_s)
+        velocity = checked_jog_velocity(velocity_rad_s, allowed, self.model.joint_names)
         velocity = velocity * checked_speed_percent(speed_percent) / 100.0
         self.allowed_or_raise("jog", source)
+
+        def plan(handover) -> JointTrajectory:
+            # It brakes jog_hold_s after this command: a plan taking over later holds the speed that much less.
+            if handover is None:
+                q0, v0, hold_s = self.joints_rad(), np.zeros_like(velocity), config.jog_hold_s
+            else:
+                q0, v0 = handover.position_rad, handover.segment_velocity_rad_s
+                hold_s = max(config.jog_hold_s - handover.lead_s, 1.0 / config.sample_rate_hz)
+            return plan_jog(q0, v0, velocity, hold_s, self.model.lower_rad, self.model.upper_rad,
+                            self.model.accel_limit_rad_s2, config.sample_rate_hz)
+
+        trajectory, _ = self._send_replacing(plan, lambda: self._transition("jog", source=source), "jog")
         with self._lock:
-            jog = dict(self._jog) if self._jog is not None else None
-        q0, v0 = self.joints_rad(), np.zeros_like(velocity)
-        if jog is not None and self.arm.is_moving():
-            _, v0 = reference_velocity(jog["trajectory"], self.clock_s() - jog["start_s"])
-        config = self.motion_config
-        trajectory = plan_jog(
-            q0, v0, velocity, config.jog_hold_s, self.model.lower_rad, self.model.upper_rad, self.model.accel_limit_rad_s2,
-            config.sample_rate_hz,
-        )
-        self.check_motion(trajectory)
-        swept_box = self._swept_box(trajectory)
-        with self._lock:
-            self._transition("jog", source=source)
-            self._command_arm(trajectory, swept_box)
             self._jog = {"trajectory": trajectory, "start_s": self.clock_s(), "velocity": velocity, "source": source}
         return trajectory
 
@@ -176,6 +203,7 @@ class ManualCommands:
             if self._halt.is_set():
                 raise CommandRefused("torque", self._effective_state().value, allowed_commands(self._effective_state()))
             self.arm.set_torque(bool(enabled))
+            self._commanded = None
             self._torque_enabled = bool(enabled)
         self.events.add("warn" if not enabled else "info", f"torque {'on' if enabled else 'off'}")
 

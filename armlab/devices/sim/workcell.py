@@ -284,6 +284,7 @@ class SimWorkcell(SimTruth):
             self._next_control_s = data.time + self._sim.physics.control_period_s
             if self.arm.is_connected:
                 self.arm.control(data.time)
+                self._record_joints()
             self.gripper.control(data.time)
             if self._feeder is not None:
                 self._feeder.tick(self._model, data)
