@@ -32,10 +32,10 @@ class MotionConfig(StrictModel):
     workspace_max_m: tuple[float, float, float] = (0.55, 0.60, 0.70)
     max_step_rad: float = Field(0.1, gt=0.0, le=1.0)
     start_tolerance_rad: float = Field(0.05, gt=0.0, le=0.5)
-    jog_hold_s: float = Field(0.1, gt=0.0, le=2.0)  # a jog runs this long after its last heartbeat, then brakes
+    jog_hold_s: float = Field(0.2, gt=0.0, le=2.0)  # a jog runs this long after its last heartbeat, then brakes
     # The fastest hold-to-run joint jog (rad/s, capped by each joint's own limit): the deadman's stopping distance
-    # is v * jog_hold_s + v^2 / (2 a), 0.2 rad at 1 rad/s and 5 rad/s^2 (2.3 rad at pi rad/s with a 0.3 s hold).
-    jog_max_speed_rad_s: float = Field(1.0, gt=0.0, le=10.0)
+    # is v * jog_hold_s + v^2 / (2 a), 0.22 rad at 0.8 rad/s and 5 rad/s^2 (1.93 rad at pi rad/s with a 0.3 s hold).
+    jog_max_speed_rad_s: float = Field(0.8, gt=0.0, le=10.0)
     # A motion that replaces a running one takes over this long after it is planned (the running trajectory goes
     # on meanwhile), so planning and checking never make the command jump (armlab.motion.handover).
     handover_lead_s: float = Field(0.05, ge=0.02, le=0.5)

@@ -78,7 +78,7 @@ def test_moves_and_jogs_take_over_one_another_continuously(fast):
     cell.start_joint_recording()
     station.move_joints([1.2, 0.2, 0.1, 0.9, 1.0])
     cell.step(0.3)
-    station.jog([-1.0, 0.0, 0.0, 0.0, 0.5], source="pad")  # a jog takes over the move
+    station.jog([-0.8, 0.0, 0.0, 0.0, 0.5], source="pad")  # a jog takes over the move
     for _ in range(4):
         cell.step(0.05)
         assert station.heartbeat(source="pad")
