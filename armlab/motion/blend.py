@@ -91,7 +91,8 @@ def _calculate(otg, inp, trajectory):
     try:
         return otg.calculate(inp, trajectory)
     except Exception as error:  # noqa: BLE001 - the library raises ValueError, RuntimeError or its own types
-        raise ValueError(f"the trajectory library (ruckig) found no trajectory: {type(error).__name__}: {error}") from None
+        first_line = (str(error).strip().splitlines() or [""])[0]
+        raise ValueError(f"the trajectory library (ruckig) found no trajectory: {type(error).__name__}: {first_line}") from None
 
 
 def _rest_to_rest_time(delta: np.ndarray, limits: Limits) -> float:
