@@ -49,6 +49,12 @@ class MotionConfig(StrictModel):
     finger_back_m: float = Field(0.07, ge=0.0, le=0.3)  # the fingers reach this far back from the gripper point
     finger_thickness_m: float = Field(0.008, ge=0.0, le=0.05)
     finger_half_height_m: float = Field(0.012, ge=0.0, le=0.1)
+    # The arm against itself (every trajectory the station sends): the gripper point, the finger tips and a held
+    # block, each with self_clearance_m around it, stay out of the base (a cylinder of base_radius_m around the
+    # first joint's axis up to the second joint; the RX200's base plate is 100 mm square) and 2x that from the
+    # upper arm. The fingers' box (above) stays above the board itself.
+    base_radius_m: float = Field(0.06, ge=0.0, le=0.5)
+    self_clearance_m: float = Field(0.03, ge=0.0, le=0.2)
     # A suction cup lands on the block's top face and presses this far into its seal (the tool point below the face).
     suction_press_m: float = Field(0.002, ge=0.0, le=0.01)
 

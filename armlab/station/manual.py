@@ -13,7 +13,6 @@ import numpy as np
 
 from armlab.devices.arm import JointTrajectory
 from armlab.errors import ArmMoving, CommandRefused, NeedsConfirmation, NotController
-from armlab.station.arm_info import station_gripper_type
 from armlab.station.checks import checked_moving_time, checked_position
 from armlab.station.states import State, allowed_commands
 
@@ -137,7 +136,7 @@ class ManualCommands:
         Refused before anything moves: ArmMoving while the arm still moves, StepRefused/Unreachable (the
         reason) when the step cannot keep the gripper's orientation and line. A step that follows this
         station's previous step starts from that step's commanded end (the servos' sag does not add up)."""
-        from armlab.motion.gripper_step import FingerBox, StepSpeeds, plan_gripper_step
+        from armlab.motion.gripper_step import StepSpeeds, plan_gripper_step
 
         scale = checked_speed_percent(speed_percent) / 100.0
         self.allowed_or_raise("jog", source)
@@ -154,15 +153,7 @@ class ManualCommands:
             config.step_speed_m_s * scale, config.step_accel_m_s2 * scale,
             config.step_rotation_speed_rad_s * scale, config.step_rotation_accel_rad_s2 * scale,
         )
-        gripper = getattr(self.model.config, "gripper", None)
-        cup = getattr(self.model.config, "suction_cup", None)
-        if station_gripper_type(self) == "suction" and cup is not None:  # the cup's body, back from its lip
-            fingers = FingerBox(cup.body_length_m, 0.0, cup.body_radius_m, cup.body_radius_m)
-        else:
-            fingers = FingerBox(
-                config.finger_back_m, config.pad_reach_m,
-                (gripper.finger_offset_max_m if gripper is not None else 0.0) + config.finger_thickness_m, config.finger_half_height_m,
-            )
+        fingers = self.finger_box()
         trajectory = plan_gripper_step(self.model, q_start, axis, amount, speeds, fingers, config.board_clearance_m, config.sample_rate_hz)
         self.check_motion(trajectory)
         swept_box = self._swept_box(trajectory)

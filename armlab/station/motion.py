@@ -80,6 +80,44 @@ class MotionGate:
         # The table itself (no clearance): planners keep their own board_clearance_m; the straight joint-space
         # move from the sleep pose home passes the gripper point within 1 mm of the board.
         check_trajectory(self.model, trajectory, workspace_m=config.workspace_m, max_step_rad=config.max_step_rad)
+        self.check_body(trajectory)
+
+    def check_body(self, trajectory: JointTrajectory) -> None:
+        """UnsafeTrajectory (with the reason and when) if the fingers (a box around them, or the suction cup's
+        body) go into the board, or the gripper end of the arm (gripper point, finger tips, the held block) into
+        the arm's own base or upper arm, at any sample (armlab.motion.clearance). No lock needed (pure)."""
+        from armlab.motion.clearance import lowest_corner_m, self_collision
+        from armlab.motion.safety import UnsafeTrajectory
+
+        config, positions, times = self.motion_config, trajectory.positions_rad, trajectory.times_s
+        sample, lowest_m, gripper_z_m = lowest_corner_m(self.model, positions, self.finger_box().corners_m())
+        if lowest_m < 0.0:
+            raise UnsafeTrajectory(
+                f"the fingers would go {-lowest_m * 1000:.1f} mm into the board (gripper point at z = {gripper_z_m * 1000:.1f} mm) "
+                f"at t = {times[sample]:.3f} s"
+            )
+        held = self.held_block
+        held_edge_m = float(held["edge_m"]) if held and held.get("edge_m") else None
+        hit = self_collision(self.model, positions, base_radius_m=config.base_radius_m, reach_m=config.self_clearance_m,
+                             held_edge_m=held_edge_m)
+        if hit is not None:
+            raise UnsafeTrajectory(f"{hit[1]} at t = {times[hit[0]]:.3f} s: the arm would hit itself")
+
+    def finger_box(self):
+        """The box the gripper occupies beyond the wrist (armlab.motion.gripper_step.FingerBox): the open fingers
+        from config, or the suction cup's body."""
+        from armlab.motion.gripper_step import FingerBox
+        from armlab.station.arm_info import station_gripper_type
+
+        config = self.motion_config
+        gripper = getattr(self.model.config, "gripper", None)
+        cup = getattr(self.model.config, "suction_cup", None)
+        if station_gripper_type(self) == "suction" and cup is not None:  # the cup's body, back from its lip
+            return FingerBox(cup.body_length_m, 0.0, cup.body_radius_m, cup.body_radius_m)
+        return FingerBox(
+            config.finger_back_m, config.pad_reach_m,
+            (gripper.finger_offset_max_m if gripper is not None else 0.0) + config.finger_thickness_m, config.finger_half_height_m,
+        )
 
     def _command_arm(self, trajectory: JointTrajectory, swept_box: np.ndarray, handover: Handover | None = None) -> JointTrajectory:
         """Send a checked trajectory and remember it and where the gripper sweeps; returns what was sent.
