@@ -1,8 +1,8 @@
 """A new motion that replaces a running one without a jump: where it takes over and how the two join.
 
 The arm tracks a trajectory "from now". A replacement is planned from the state the running trajectory
-will be in lead_s later (the handover), and commanded as the running trajectory's next lead_s followed by
-the new plan: position, velocity and acceleration of the command stay continuous, and the time spent
+will be in at its first sample lead_s or more later (the handover), and commanded as the running trajectory
+until then followed by the new plan: position, velocity and acceleration of the command stay continuous, and the time spent
 planning and checking is covered by the lead (the splice is trimmed to the moment it is sent). The state
 is taken from the commanded reference, not from the servos' noisy readings; the gate still checks that the
 first sample is where the arm is measured. Pure: no devices.
@@ -10,7 +10,6 @@ first sample is where the arm is measured. Pure: no devices.
 
 from __future__ import annotations
 
-import math
 from dataclasses import dataclass
 
 import numpy as np
@@ -22,10 +21,12 @@ REST_SPEED_RAD_S = 1e-6  # a reference slower than this (every joint) is at rest
 
 @dataclass(frozen=True)
 class Handover:
-    """Where a replacement takes over. planned_at_s: the clock time the splice's t = 0 stands for;
-    prefix: the running trajectory from then until the handover (uniform samples); position_rad,
+    """Where a replacement takes over. planned_at_s: the clock time the splice's t = 0 stands for (the running
+    trajectory's sample at or before the moment it was planned); prefix: the running trajectory from then until
+    the handover (its own samples); position_rad,
     velocity_rad_s, accel_rad_s2: the commanded state at the end of the prefix (shape (dof,) each).
-    source_id: which command it was taken from (the gate's count), so a stale handover is noticed."""
+    source_id: which command it was taken from (the gate's count), so a stale handover is noticed; period_s: the
+    running trajectory's sample period before the handover."""
 
     planned_at_s: float
     prefix: JointTrajectory
@@ -33,17 +34,23 @@ class Handover:
     velocity_rad_s: np.ndarray
     accel_rad_s2: np.ndarray
     source_id: int = 0
+    period_s: float = 0.01
 
     @property
     def lead_s(self) -> float:
+        """From planned_at_s to the handover."""
         return self.prefix.duration_s
+
+    @property
+    def takes_over_s(self) -> float:
+        """The clock time at which the new plan takes over."""
+        return self.planned_at_s + self.prefix.duration_s
 
     @property
     def segment_velocity_rad_s(self) -> np.ndarray:
         """The velocity of the prefix's last sample segment: where a plan whose velocity steps once per sample
         (a jog) continues from."""
-        period = float(self.prefix.times_s[1] - self.prefix.times_s[0])
-        return self.velocity_rad_s - 0.5 * self.accel_rad_s2 * period
+        return self.velocity_rad_s - 0.5 * self.accel_rad_s2 * self.period_s
 
     @property
     def at_rest(self) -> bool:
@@ -66,26 +73,36 @@ def reference_velocity(trajectory: JointTrajectory, t_s: float) -> np.ndarray:
 
 def take_over(running: JointTrajectory, running_start_s: float, now_s: float, lead_s: float, rate_hz: float,
               source_id: int = 0) -> Handover | None:
-    """The handover lead_s (at least two sample periods) after now_s from a trajectory started at
-    running_start_s (clock seconds), or None when it has already ended (the arm holds its last sample).
+    """The handover at the running trajectory's first sample at least lead_s after now_s (its start was
+    running_start_s, clock seconds), or None when it has already ended (the arm holds its last sample).
 
-    The state at the handover is read from the uniform samples before it: velocity from the last
-    difference advanced half a period by the acceleration (so the new plan's first difference continues the
-    old ones), acceleration from the last second difference."""
+    The prefix keeps the running trajectory's own samples, so the command is exactly the one already running
+    until the handover. The state there is read from the samples before it: velocity from the last difference
+    advanced half a sample by the acceleration (so the new plan's first difference continues the old ones),
+    acceleration from the last second difference. rate_hz: the fallback sample rate of a two-sample trajectory."""
+    times, positions = running.times_s, running.positions_rad
     t_now = now_s - running_start_s
     if t_now >= running.duration_s:
         return None
-    period = 1.0 / rate_hz
-    count = max(2, math.ceil(lead_s * rate_hz - 1e-9))
-    times = np.arange(count + 1) * period
-    positions = sample_positions(running, t_now + times)
-    v_last = (positions[-1] - positions[-2]) / period
-    v_before = (positions[-2] - positions[-3]) / period
-    accel = (v_last - v_before) / period
+    index = int(np.searchsorted(times, t_now + lead_s - 1e-9))
+    at_end = index >= len(times) - 1 or len(times) < 3
+    index = min(max(index, 2), len(times) - 1)
+    # The prefix starts at the running trajectory's sample at or before now (its t = 0 is in the past: the gate
+    # trims it to the moment it is sent), so its sample spacing stays the running trajectory's own.
+    before = min(int(np.searchsorted(times, t_now, side="right")) - 1, index - 1)
+    prefix = JointTrajectory(times[before : index + 1] - times[before], positions[before : index + 1].copy())
+    planned_at_s = running_start_s + float(times[before])
+    if at_end:  # the running trajectory ends inside the lead: at rest on its last sample
+        zeros = np.zeros(positions.shape[1])
+        period = float(times[-1] - times[-2]) if len(times) > 1 else 1.0 / rate_hz
+        return Handover(planned_at_s, prefix, positions[-1].copy(), zeros, zeros.copy(), source_id, period)
+    period = float(times[index] - times[index - 1])
+    period_before = float(times[index - 1] - times[index - 2])
+    v_last = (positions[index] - positions[index - 1]) / period
+    v_before = (positions[index - 1] - positions[index - 2]) / period_before
+    accel = (v_last - v_before) / (0.5 * (period + period_before))
     velocity = v_last + 0.5 * accel * period
-    if t_now + times[-1] >= running.duration_s:  # the running trajectory ends inside the lead: at rest there
-        velocity, accel = np.zeros_like(velocity), np.zeros_like(accel)
-    return Handover(now_s, JointTrajectory(times, positions), positions[-1].copy(), velocity, accel, source_id)
+    return Handover(planned_at_s, prefix, positions[index].copy(), velocity, accel, source_id, period)
 
 
 def splice(handover: Handover, new: JointTrajectory) -> JointTrajectory:

@@ -230,7 +230,7 @@ class _Runner:
                 if self.control.paused or self.control.steps_pending:
                     action = self._wait_paused()
                     self.phase = self.phase_before
-                here = self.station.joints_rad()
+                here = self.station.start_position()
                 targets = remaining[:1] if action == "step" else remaining
                 self.run_speed = self._speed()
                 pending, started = checked_run(self.station, np.vstack([here, [points[i] for i in targets]]),
@@ -310,7 +310,7 @@ class _Runner:
     def run(self) -> dict:
         station, waypoints = self.station, self.program.waypoints
         first = np.asarray(waypoints[0].joints_rad)
-        points, ease, labels = plan_ease_in(station, station.joints_rad(), first, self.control.speed_percent, self.settings)
+        points, ease, labels = plan_ease_in(station, station.start_position(), first, self.control.speed_percent, self.settings)
         ease_cap = 100.0 * self.settings.ease_in_speed_fraction
         self.move(points, ease, labels, ease_cap)
         self.wait(lambda: not station.arm.is_moving(), 5.0)
@@ -335,9 +335,10 @@ class _Runner:
             self.cycle += 1
         self.trace.start_cycle(self.cycle + 1)
         self.phase = "home"
-        home = plan_transfer(station, station.joints_rad(), station.model.home_rad, self.control.speed_percent, self.settings,
+        here = station.start_position()
+        home = plan_transfer(station, here, station.model.home_rad, self.control.speed_percent, self.settings,
                              labels=(len(waypoints) - 1, HOME_LABEL))
-        self.move([station.joints_rad(), np.asarray(station.model.home_rad)], home, [len(waypoints) - 1, HOME_LABEL], ease_cap)
+        self.move([here, np.asarray(station.model.home_rad)], home, [len(waypoints) - 1, HOME_LABEL], ease_cap)
         self.wait(lambda: not station.arm.is_moving(), 5.0)
         self.report()
         return {

@@ -28,7 +28,7 @@ class ManualCommands:
 
         q_goal = self.checked_joints(q_goal_rad)
         trajectory = plan_joint_move(
-            self.joints_rad(), q_goal, self.model, moving_time_s=checked_moving_time(moving_time_s, self.config.max_moving_time_s)
+            self.start_position(), q_goal, self.model, moving_time_s=checked_moving_time(moving_time_s, self.config.max_moving_time_s)
         )
         self.check_motion(trajectory)
         return trajectory
@@ -104,6 +104,7 @@ class ManualCommands:
     def jog(self, velocity_rad_s, source: str | None = None, speed_percent: float = 100.0) -> JointTrajectory:
         """Hold-to-run: move at these joint velocities (rad/s, scaled by speed_percent) for motion jog_hold_s,
         then stop by itself. Sending it again (or heartbeat()) within jog_hold_s keeps it going; zeros ramp down to rest."""
+        from armlab.motion.blend import arm_limits
         from armlab.motion.jog import checked_jog_velocity, plan_jog
 
         config = self.motion_config
@@ -115,12 +116,12 @@ class ManualCommands:
         def plan(handover) -> JointTrajectory:
             # It brakes jog_hold_s after this command: a plan taking over later holds the speed that much less.
             if handover is None:
-                q0, v0, hold_s = self.joints_rad(), np.zeros_like(velocity), config.jog_hold_s
+                q0, v0, hold_s = self.start_position(), np.zeros_like(velocity), config.jog_hold_s
             else:
                 q0, v0 = handover.position_rad, handover.segment_velocity_rad_s
-                hold_s = max(config.jog_hold_s - handover.lead_s, 1.0 / config.sample_rate_hz)
+                hold_s = max(config.jog_hold_s - (handover.takes_over_s - self.clock_s()), 1.0 / config.sample_rate_hz)
             return plan_jog(q0, v0, velocity, hold_s, self.model.lower_rad, self.model.upper_rad,
-                            self.model.accel_limit_rad_s2, config.sample_rate_hz)
+                            arm_limits(self.model).accel_rad_s2, config.sample_rate_hz)  # 2 % inside, as the blends
 
         trajectory, _ = self._send_replacing(plan, lambda: self._transition("jog", source=source), "jog")
         with self._lock:

@@ -91,7 +91,7 @@ class MotionGate:
 
         config, positions, times = self.motion_config, trajectory.positions_rad, trajectory.times_s
         sample, lowest_m, gripper_z_m = lowest_corner_m(self.model, positions, self.finger_box().corners_m())
-        if lowest_m < 0.0:
+        if lowest_m < -1e-6:
             raise UnsafeTrajectory(
                 f"the fingers would go {-lowest_m * 1000:.1f} mm into the board (gripper point at z = {gripper_z_m * 1000:.1f} mm) "
                 f"at t = {times[sample]:.3f} s"
@@ -133,13 +133,15 @@ class MotionGate:
             raise CommandRefused("move", state.value, allowed_commands(state))
         now = self.clock_s()
         running = self._commanded
+        planned, planned_t0 = trajectory, now  # remembered untrimmed: a later handover keeps its sample grid
         if handover is not None:
             if running is None or running[2] != handover.source_id:
                 raise HandoverLate("another motion was commanded since the handover was planned")
             elapsed = now - handover.planned_at_s
             if elapsed > handover.lead_s - 1e-9:
-                raise HandoverLate(f"planning took {elapsed:.3f} s, longer than the {handover.lead_s:.3f} s lead")
+                raise HandoverLate(f"the handover {handover.lead_s - elapsed:.3f} s ago has passed (planning was slower than the lead)")
             trajectory = trimmed(trajectory, elapsed)
+            planned_t0 = handover.planned_at_s
         elif running is not None and now - running[1] < running[0].duration_s:
             velocity = reference_velocity(running[0], now - running[1])
             # Slower than one sample's worth of acceleration from rest, a plan from rest continues it as well.
@@ -152,10 +154,24 @@ class MotionGate:
         check_start(trajectory, self.joints_rad(), self.motion_config.start_tolerance_rad, self.model.joint_names)
         self.arm.command_trajectory(trajectory)
         self._command_count += 1
-        self._commanded = (trajectory, now, self._command_count)
+        self._commanded = (planned, planned_t0, self._command_count)
         self._motions.append((time.time() + trajectory.duration_s, swept_box))
         del self._motions[:-MOTION_MEMORY]
         return trajectory
+
+    def start_position(self) -> np.ndarray:
+        """Where a motion from rest starts: the position the servos were last commanded to hold (the end of the
+        last trajectory sent) while the arm is measured within half the start tolerance of it, so the command
+        does not step by the servos' residual error; else (halted, limp, pushed away) the measured joints."""
+        measured = self.joints_rad()
+        with self._lock:
+            running = self._commanded
+        if running is None or self.clock_s() - running[1] < running[0].duration_s:
+            return measured
+        held = running[0].positions_rad[-1]
+        if float(np.max(np.abs(held - measured))) > 0.5 * self.motion_config.start_tolerance_rad:
+            return measured
+        return held.copy()
 
     def motion_handover(self, lead_s: float | None = None) -> Handover | None:
         """Where a motion replacing the commanded one takes over (lead_s, default handover_lead_s, from now),
@@ -202,6 +218,8 @@ class MotionGate:
         from armlab.motion.blend import arm_limits, plan_stop
 
         handover = self.motion_handover()
+        if handover is None and not self.arm.is_moving():
+            return
         if handover is not None and not handover.at_rest:
             limits = arm_limits(self.model)
             rate = self.motion_config.sample_rate_hz

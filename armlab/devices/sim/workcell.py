@@ -232,6 +232,10 @@ class SimWorkcell(SimTruth):
         """The servos' position references: where the arm is commanded to be now."""
         return self._data.ctrl[self._pos_act].copy()
 
+    def arm_reference_velocity(self) -> np.ndarray:
+        """The servos' velocity feed-forward: the commanded trajectory's slope now."""
+        return self._data.ctrl[self._vel_act].copy()
+
     def arm_velocities(self) -> np.ndarray:
         return self._data.qvel[self._arm_qvel].copy()
 
