@@ -132,3 +132,32 @@ def test_a_jobs_trajectory_that_does_not_continue_the_motion_is_refused(fast):
     assert handle.wait(30) and handle.state == "succeeded", handle.message
     assert refused and "does not continue it" in refused[0], refused
     assert abs(station.joints_rad()[0] - (-1.0)) < 0.01  # the first trajectory ran to its end
+
+
+def test_a_replacement_the_trajectory_library_cannot_plan_is_refused_and_the_motion_goes_on(fast):
+    """Issue 18 item 2: a ruckig failure while re-planning (the real 'ValueError: -101 is not a valid Result' of the
+    CI run here: limits far below the motion in progress) is a ValueError naming the library; the running
+    trajectory is not touched."""
+    from armlab.motion.blend import Limits, plan_run
+
+    station, cell = fast
+    _at_rest(station, [-1.0, 0.0, 0.0, 0.0, 0.0])
+    outcome = {}
+
+    def job(ctx):
+        station.move_in_job(ctx, [-1.0, 0.0, 0.0, 0.0, 0.0])  # at rest, then a move the job replaces
+        q = station.joints_rad()
+        s = np.linspace(0.0, 1.0, 201)
+        station.start_trajectory(ctx, JointTrajectory(s * 2.0, q + s[:, None] * np.array([0.6, 0, 0, 0, 0])))
+        station.wait_in_job(ctx, lambda: station.clock_s() > outcome.setdefault("t0", station.clock_s()) + 0.5, 5.0)
+        tiny = Limits(np.full(5, 1e-2), np.full(5, 1e-5), np.full(5, 1e-5))
+        try:
+            station.replace_trajectory(ctx, lambda h: plan_run(np.vstack([h.position_rad, q]), tiny, start_velocity=h.velocity_rad_s).trajectory)
+        except ValueError as error:
+            outcome["refused"] = str(error)
+        station.wait_in_job(ctx, lambda: not station.arm.is_moving(), 10.0)
+
+    handle = station.start_job("grab", "replan", job)
+    assert handle.wait(30) and handle.state == "succeeded", handle.message
+    assert "trajectory library (ruckig) found no trajectory: ValueError: -101" in outcome.get("refused", ""), outcome
+    assert abs(station.joints_rad()[0] - (-0.4)) < 0.01  # the running trajectory went on to its end
