@@ -119,7 +119,8 @@ class MotionGate:
             (gripper.finger_offset_max_m if gripper is not None else 0.0) + config.finger_thickness_m, config.finger_half_height_m,
         )
 
-    def _command_arm(self, trajectory: JointTrajectory, swept_box: np.ndarray, handover: Handover | None = None) -> JointTrajectory:
+    def _command_arm(self, trajectory: JointTrajectory, swept_box: np.ndarray, handover: Handover | None = None,
+                     planned_after: int | None = None) -> JointTrajectory:
         """Send a checked trajectory and remember it and where the gripper sweeps; returns what was sent.
         Caller holds the lock and has checked the state; checked here: the latch, the start (no jump from the
         measured joints) and, while a commanded motion runs, that this one continues it: a splice from
@@ -134,6 +135,8 @@ class MotionGate:
         now = self.clock_s()
         running = self._commanded
         planned, planned_t0 = trajectory, now  # remembered untrimmed: a later handover keeps its sample grid
+        if handover is None and planned_after is not None and planned_after != self._command_count:
+            raise HandoverLate("another motion was commanded while this one was planned from rest")
         if handover is not None:
             if running is None or running[2] != handover.source_id:
                 raise HandoverLate("another motion was commanded since the handover was planned")
@@ -196,6 +199,8 @@ class MotionGate:
 
         lead = self.motion_config.handover_lead_s
         for _ in range(3):
+            with self._lock:
+                seen = self._command_count
             handover = self.motion_handover(lead)
             new = plan(handover)
             trajectory = splice(handover, new) if handover is not None else new
@@ -205,7 +210,7 @@ class MotionGate:
                 with self._lock:
                     if under_lock is not None:
                         under_lock()
-                    self._command_arm(trajectory, swept_box, handover)
+                    self._command_arm(trajectory, swept_box, handover, planned_after=seen)
                 return trajectory, handover
             except HandoverLate:
                 lead *= 2.0

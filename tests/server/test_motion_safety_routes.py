@@ -28,11 +28,11 @@ def _sim_wait(cell, duration_s: float) -> None:
 
 def test_a_joint_move_sent_while_the_waist_turns_continues_its_motion(url, cell):
     with httpx.Client(base_url=url, headers=HEADERS, timeout=30) as http:
-        assert http.post("/api/arm/joints", json={"q_rad": [-2.0, 0, 0, 0, 0]}, params={"wait": "true"}).status_code in (200, 202)
+        assert http.post("/api/arm/joints", json={"q_rad": [-2.6, 0, 0, 0, 0]}, params={"wait": "true"}).status_code in (200, 202)
         live.wait_for(lambda: not cell.arm.is_moving(), 10, 0.01)
         cell.start_joint_recording()
-        assert http.post("/api/arm/joints", json={"q_rad": [2.0, 0, 0, 0, 0]}).status_code in (200, 202)
-        live.wait_for(lambda: cell.arm.read_joint_state().velocity_rad_s[0] > 2.5, 10, 0.002)  # turning at ~3 rad/s
+        assert http.post("/api/arm/joints", json={"q_rad": [2.6, 0, 0, 0, 0]}).status_code in (200, 202)
+        live.wait_for(lambda: cell.arm.read_joint_state().velocity_rad_s[0] > 2.5, 10, 0.002)  # turning at ~3 rad/s (for 1 s)
         reply = http.post("/api/arm/joints", json={"q_rad": [-1.0, 0, 0, 0, 0]})  # reverse
         assert reply.status_code in (200, 202), reply.text
         live.wait_for(lambda: not cell.arm.is_moving(), 20, 0.01)
