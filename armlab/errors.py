@@ -67,11 +67,17 @@ class ShuttingDown(ConnectionError):
 
 
 class ArmMoving(CommandRefused):
-    """A jog step sent while the arm still moves (HTTP 409): the next step starts when this one has ended."""
+    """A command that cannot take over the motion in progress (HTTP 409): a jog step sent while the arm still
+    moves (the next step starts when this one has ended), or a motion that would not continue the running one
+    (`reason` says why)."""
 
-    def __init__(self, command: str, state: str, allowed: list[str] | tuple[str, ...]) -> None:
+    def __init__(self, command: str, state: str, allowed: list[str] | tuple[str, ...], reason: str | None = None) -> None:
         super().__init__(command, state, allowed)
-        self.args = (f"command '{command}' refused: the arm is still moving; send the next step once it has stopped (?wait=true waits)",)
+        self.reason = reason
+        if reason is None:
+            self.args = (f"command '{command}' refused: the arm is still moving; send the next step once it has stopped (?wait=true waits)",)
+        else:
+            self.args = (f"command '{command}' refused while the arm moves: {reason}",)
 
 
 class NoArmError(CommandRefused):

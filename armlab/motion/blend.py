@@ -79,10 +79,20 @@ def _ruckig_segment(q0, v0, a0, q1, v1, limits: Limits, minimum_s: float | None,
     if minimum_s:
         inp.minimum_duration = float(minimum_s)
     trajectory = Trajectory(dof)
-    result = otg.calculate(inp, trajectory)
+    result = _calculate(otg, inp, trajectory)
     if result not in (Result.Working, Result.Finished):
         raise ValueError(f"no jerk-limited trajectory between these states ({result.name})")
     return trajectory
+
+
+def _calculate(otg, inp, trajectory):
+    """ruckig's calculate, its own errors (an invalid input, a result code its Python enum does not know such as
+    -101, a duration past its numerical range) as a ValueError that says where they come from."""
+    try:
+        return otg.calculate(inp, trajectory)
+    except Exception as error:  # noqa: BLE001 - the library raises ValueError, RuntimeError or its own types
+        first_line = (str(error).strip().splitlines() or [""])[0]
+        raise ValueError(f"the trajectory library (ruckig) found no trajectory: {type(error).__name__}: {first_line}") from None
 
 
 def _rest_to_rest_time(delta: np.ndarray, limits: Limits) -> float:
@@ -205,7 +215,7 @@ def plan_stop(position_rad, velocity_rad_s, accel_rad_s2, limits: Limits, rate_h
     inp.max_acceleration = list(limits.accel_rad_s2)
     inp.max_jerk = list(limits.jerk_rad_s3)
     trajectory = Trajectory(dof)
-    if otg.calculate(inp, trajectory) not in (Result.Working, Result.Finished):
+    if _calculate(otg, inp, trajectory) not in (Result.Working, Result.Finished):
         raise ValueError("no stopping trajectory")
     duration = max(float(trajectory.duration), 1.0 / rate_hz)
     count = max(1, math.ceil(duration * rate_hz - 1e-9))

@@ -75,3 +75,55 @@ def first_collision(
             sample = int(np.argwhere(hit)[0][0])
             return f"the arm passes within {link_radius_m * 1000:.0f} mm of {box.name} (top {box.top_z_m * 1000:.0f} mm) at sample {sample}"
     return None
+
+
+def lowest_corner_m(model, positions_rad: np.ndarray, corners_m: np.ndarray) -> tuple[int, float, float]:
+    """(sample, world z of the lowest of `corners_m` (K, 3) in the gripper frame, the gripper point's z at that
+    sample) over joint vectors (N, dof): how low the fingers (a box around them) come."""
+    T = np.asarray(model.fk(np.asarray(positions_rad, float)), float).reshape(-1, 4, 4)
+    lowest = np.einsum("nj,kj->nk", T[:, 2, :3], np.asarray(corners_m, float)) + T[:, 2, 3][:, None]
+    sample = int(np.argmin(lowest.min(axis=1)))
+    return sample, float(lowest[sample].min()), float(T[sample, 2, 3])
+
+
+def self_collision(
+    model,
+    positions_rad: np.ndarray,
+    *,
+    base_radius_m: float,
+    reach_m: float = 0.03,
+    finger_length_m: float = 0.03,
+    held_edge_m: float | None = None,
+) -> tuple[int, str] | None:
+    """The first sample at which the gripper end of the arm (the gripper point, the finger tips, a held block's
+    bottom: arm_points_m's last points, each reaching reach_m around it) meets the arm's own base (a cylinder
+    of base_radius_m around the first joint's axis, up to the second joint's origin) or its first long link
+    (the segment from the second joint's origin to the third's), as (sample, what); None when it never does."""
+    positions = np.atleast_2d(np.asarray(positions_rad, float))
+    points = arm_points_m(model, positions, finger_length_m, held_edge_m)  # (N, P, 3)
+    dof = int(model.dof)
+    origins = points[:, : dof + 1]
+    distal = [points[:, dof], points[:, -1 if held_edge_m is None else -2]]
+    distal_names = ["the gripper point", "the finger tips"]
+    if held_edge_m is not None:
+        distal.append(points[:, -1])
+        distal_names.append("the held block")
+    axis_xy, base_top = origins[:, 0, :2], origins[:, 1, 2]
+    a, b = origins[:, 1], origins[:, 2]
+    d = np.stack(distal, axis=1)  # (N, K, 3)
+    radial = np.linalg.norm(d[:, :, :2] - axis_xy[:, None, :], axis=2)
+    in_base = (radial < base_radius_m + reach_m) & (d[:, :, 2] < base_top[:, None] + reach_m)
+    ab = (b - a)[:, None, :]
+    along = np.clip(np.sum((d - a[:, None, :]) * ab, axis=2) / np.maximum(np.sum(ab * ab, axis=2), 1e-12), 0.0, 1.0)
+    gap = np.linalg.norm(d - (a[:, None, :] + along[..., None] * ab), axis=2)
+    near_link = gap < 2.0 * reach_m
+    hits = np.argwhere(in_base | near_link)
+    if hits.size:
+        sample, k = (int(v) for v in hits[0])
+        name, point = distal_names[k], d[sample, k]
+        if in_base[sample, k]:
+            return sample, (f"{name} would reach the arm's own base ({radial[sample, k] * 1000:.0f} mm from its axis at "
+                            f"z = {point[2] * 1000:.0f} mm; the base is {base_radius_m * 1000:.0f} mm wide up to "
+                            f"{base_top[sample] * 1000:.0f} mm)")
+        return sample, f"{name} would come within {gap[sample, k] * 1000:.0f} mm of the arm's upper arm"
+    return None

@@ -32,7 +32,13 @@ class MotionConfig(StrictModel):
     workspace_max_m: tuple[float, float, float] = (0.55, 0.60, 0.70)
     max_step_rad: float = Field(0.1, gt=0.0, le=1.0)
     start_tolerance_rad: float = Field(0.05, gt=0.0, le=0.5)
-    jog_hold_s: float = Field(0.3, gt=0.0, le=2.0)  # a jog runs this long after its last heartbeat, then stops
+    jog_hold_s: float = Field(0.2, gt=0.0, le=2.0)  # a jog runs this long after its last heartbeat, then brakes
+    # The fastest hold-to-run joint jog (rad/s, capped by each joint's own limit): the deadman's stopping distance
+    # is v * jog_hold_s + v^2 / (2 a), 0.22 rad at 0.8 rad/s and 5 rad/s^2 (1.93 rad at pi rad/s with a 0.3 s hold).
+    jog_max_speed_rad_s: float = Field(0.8, gt=0.0, le=10.0)
+    # A motion that replaces a running one takes over this long after it is planned (the running trajectory goes
+    # on meanwhile), so planning and checking never make the command jump (armlab.motion.handover).
+    handover_lead_s: float = Field(0.05, ge=0.02, le=0.5)
     # Jog steps of the gripper (POST /api/arm/step) at 100 % speed; the operator's override scales the speeds.
     step_speed_m_s: float = Field(0.05, gt=0.0, le=0.5)
     step_accel_m_s2: float = Field(0.2, gt=0.0, le=5.0)
@@ -43,6 +49,12 @@ class MotionConfig(StrictModel):
     finger_back_m: float = Field(0.07, ge=0.0, le=0.3)  # the fingers reach this far back from the gripper point
     finger_thickness_m: float = Field(0.008, ge=0.0, le=0.05)
     finger_half_height_m: float = Field(0.012, ge=0.0, le=0.1)
+    # The arm against itself (every trajectory the station sends): the gripper point, the finger tips and a held
+    # block, each with self_clearance_m around it, stay out of the base (a cylinder of base_radius_m around the
+    # first joint's axis up to the second joint; the RX200's base plate is 100 mm square) and 2x that from the
+    # upper arm. The fingers' box (above) stays above the board itself.
+    base_radius_m: float = Field(0.06, ge=0.0, le=0.5)
+    self_clearance_m: float = Field(0.03, ge=0.0, le=0.2)
     # A suction cup lands on the block's top face and presses this far into its seal (the tool point below the face).
     suction_press_m: float = Field(0.002, ge=0.0, le=0.01)
 

@@ -28,7 +28,7 @@ def checked_jog_velocity(velocity_rad_s, velocity_limit_rad_s, names) -> np.ndar
         raise ValueError("velocity_rad_s must be finite numbers")
     for index, name in enumerate(names):
         if abs(velocity[index]) > limit[index] + 1e-9:
-            raise ValueError(f"joint '{name}' jog velocity {velocity[index]:.3f} rad/s is above its limit {limit[index]:.3f} rad/s")
+            raise ValueError(f"joint '{name}' jog velocity {velocity[index]:.3f} rad/s is above its jog limit {limit[index]:.3f} rad/s")
     return velocity
 
 

@@ -177,7 +177,8 @@ def plan_pick(
             raise ValueError(f"block_height_m must be > 0, got {height}")
         depth_m = config.held_below_top_m(height, gripper_type)
     grasp_m = top_m - np.array([0.0, 0.0, depth_m])
-    grasp_m[2] = max(grasp_m[2], config.board_clearance_m)
+    pads_m = config.pad_reach_m if gripper_type == "fingers" else 0.0  # never grasp lower: the pads stay on the board
+    grasp_m[2] = max(grasp_m[2], config.board_clearance_m, pads_m)
     steps = _approach_steps(arm, q_now_rad, grasp_m, yaw, config, "grasp", ("move above block", "descend to grasp", "lift"),
                             gripper_type)
     return [GripperStep("open before pick" if gripper_type == "fingers" else "vacuum off before pick", "release"), *steps]

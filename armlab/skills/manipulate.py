@@ -227,7 +227,8 @@ def plan_pick(station: Station, top_center_m, yaw_rad: float | None, edge_m: flo
     top = np.asarray(top_center_m, float)
     gripper_type = station_gripper_type(station)
     grasp_m = top - np.array([0.0, 0.0, config.held_below_top_m(edge_m, gripper_type)])
-    grasp_m[2] = max(grasp_m[2], config.board_clearance_m)
+    pads_m = config.pad_reach_m if gripper_type == "fingers" else 0.0  # never grasp lower: the pads stay on the board
+    grasp_m[2] = max(grasp_m[2], config.board_clearance_m, pads_m)
     q_start = station.joints_rad() if q_start is None else q_start
     steps = _transfer_plan(station, q_start, grasp_m, yaw_rad, boxes, None, "grasp", ("move above block", "descend to grasp", "lift"),
                            max_transfer_z_m, finger_axis_rad, gripper_box=gripper_box)

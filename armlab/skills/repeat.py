@@ -17,9 +17,11 @@ import threading
 
 import numpy as np
 
-from armlab.motion.blend import Run, plan_run, plan_stop, reference_state
+from armlab.errors import CommandRefused
+from armlab.motion.blend import Limits, Run, plan_run, plan_stop
 from armlab.skills.repeat_plan import (
-    HOME_LABEL, CyclePlan, RepeatSettings, Step, plan_cycle, plan_ease_in, plan_transfer, station_limits, tick_s,
+    HOME_LABEL, CyclePlan, RepeatSettings, Step, checked_run, plan_cycle, plan_ease_in, plan_transfer, station_limits,
+    tick_s,
 )
 from armlab.station.core import Station
 from armlab.station.job_control import RunControl, checked_speed_percent
@@ -71,10 +73,11 @@ class _Runner:
     """The repeat job's loop (one instance per job, used only on the job's thread)."""
 
     def __init__(self, station: Station, ctx: JobContext, program, cycles: int | None, control: RunControl,
-                 settings: RepeatSettings, trace: CycleTrace) -> None:
+                 settings: RepeatSettings, trace: CycleTrace, plans: dict[float, CyclePlan] | None = None) -> None:
         self.station, self.ctx, self.program, self.cycles = station, ctx, program, cycles
         self.control, self.settings, self.trace = control, settings, trace
-        self.plans: dict[float, CyclePlan] = {}
+        self.plans: dict[float, CyclePlan] = {} if plans is None else plans
+        self.speed_cap, self.run_speed = 100.0, control.speed_percent
         self.plan = self._plan(control.speed_percent)
         self.anchor_s = 0.0
         self.cycle = 0
@@ -156,62 +159,120 @@ class _Runner:
             version = self.control.version
             self.wait(lambda: self.control.version != version, WAIT_LIMIT_S)
 
-    def _brake(self, trajectory, start: float) -> None:
-        position, velocity, accel = reference_state(trajectory, self.clock() - start)
-        limits = station_limits(self.station, self.settings).scaled(self.control.speed_percent / 100.0)
-        stop = plan_stop(position, velocity, accel, limits, self.settings.rate_hz)
-        begin = self.command(stop)
-        self.wait(lambda: self.clock() >= begin + stop.duration_s - self.eps and not self.station.arm.is_moving(), stop.duration_s + 5.0)
+    def _brake(self) -> None:
+        """Pause: brake the motion in progress to rest on a jerk-limited stop within the limits of the speed it
+        runs at (or the arm's own, when that stop fails the motion check); if neither passes, the run goes on
+        to its end and the pause holds there."""
+        for speed in (max(self.run_speed, self.control.speed_percent), 100.0):
+            limits = self._limits(speed)
+
+            def stop(handover):
+                if handover is None:
+                    raise ValueError("the run has ended")
+                return plan_stop(handover.position_rad, handover.velocity_rad_s, handover.accel_rad_s2, limits, self.settings.rate_hz)
+
+            try:
+                trajectory, t0, _ = self.station.replace_trajectory(self.ctx, stop)
+            except (ValueError, CommandRefused):
+                continue
+            self.current = (trajectory, t0)
+            break
+        self.wait(lambda: not self.station.arm.is_moving(), 30.0)
 
     def _limits(self, speed_percent: float):
         return station_limits(self.station, self.settings).scaled(speed_percent / 100.0)
 
-    def move(self, points: list, run: Run, labels: list[int]) -> None:
-        """Execute a run through points (the first is where the arm is), reacting to the RunControl."""
+    def _speed(self) -> float:
+        """The speed the next motion runs at: the override, capped during the ease-in and the way home."""
+        return min(self.control.speed_percent, self.speed_cap)
+
+    def _replan(self, points: list, targets: list[int]):
+        """A speed change: the rest of the run from the motion in progress (the handover: position, velocity,
+        acceleration) at the new speed, sent through the gate. Velocity is limited at the new speed; acceleration
+        and jerk at the faster of the old and new, so slowing down brakes as hard as the run it replaces would
+        (time-scaled limits at 10 % allow 1 % of the acceleration and carried the arm past its joint limits).
+        Returns (run, its start on the clock) or None when it cannot be planned or fails the motion check: the
+        running plan goes on, the new speed applies from the next stop (the event log says why)."""
+        speed = self._speed()
+        fast = self._limits(max(speed, self.run_speed))
+        slow = self._limits(speed)
+        limits = Limits(slow.velocity_rad_s, fast.accel_rad_s2, fast.jerk_rad_s3)
+        planned: dict = {}
+
+        def plan(handover):
+            if handover is None:
+                raise ValueError("the run has ended")
+            run = plan_run(np.vstack([handover.position_rad, [points[i] for i in targets]]), limits,
+                           start_velocity=handover.velocity_rad_s, start_accel=handover.accel_rad_s2,
+                           tick_s=tick_s(self.station), rate_hz=self.settings.rate_hz)
+            planned["run"] = run
+            return run.trajectory
+
+        try:
+            trajectory, t0, run_start = self.station.replace_trajectory(self.ctx, plan)
+        except (ValueError, CommandRefused) as error:
+            self.station.events.add("warn", f"repeat: speed {speed:g} % applies from the next stop ({error})")
+            return None
+        self.current = (trajectory, t0)
+        self.run_speed = speed
+        return planned["run"], run_start
+
+    def move(self, points: list, run: Run, labels: list[int], speed_cap: float = 100.0) -> None:
+        """Execute a run through points (the first is where the arm is), reacting to the RunControl.
+        speed_cap: the fastest speed (%) of this move's runs (the ease-in and the way home)."""
+        self.speed_cap = speed_cap
+        self.run_speed = self._speed()
         remaining = list(range(1, len(points)))
-        pending = run
+        pending, started = run, None
         while True:
-            if self.control.paused or self.control.steps_pending:
-                action = self._wait_paused()
-                self.phase = self.phase_before
-                here = self.station.joints_rad()
+            if self.control.paused or self.control.steps_pending or pending is None:  # None: braked, resumed since
+                action = "resume"
+                if self.control.paused or self.control.steps_pending:
+                    action = self._wait_paused()
+                    self.phase = self.phase_before
+                here = self.station.start_position()
                 targets = remaining[:1] if action == "step" else remaining
-                sub = plan_run(np.vstack([here, [points[i] for i in targets]]), self._limits(self.control.speed_percent),
-                               stop_everywhere=action == "step", tick_s=tick_s(self.station), rate_hz=self.settings.rate_hz)
-                pending = sub
+                self.run_speed = self._speed()
+                pending, started = checked_run(self.station, np.vstack([here, [points[i] for i in targets]]),
+                                               [-1, *(labels[i] for i in targets)], self._limits(self.run_speed), None,
+                                               self.settings, allow_blend=action != "step"), None
                 if action == "step":
-                    self._run_to_end(sub, targets, labels)
+                    self._run_to_end(pending, targets, labels)
                     remaining = remaining[1:]
                     if not remaining:
                         return
                     continue
-            outcome = self._run_to_end(pending, remaining, labels)
+            outcome = self._run_to_end(pending, remaining, labels, started)
             if outcome is None:
                 return
-            trajectory, start, passed = outcome
-            remaining = remaining[passed:]
+            start, passed = outcome
             if self.control.paused:
-                self._brake(trajectory, start)
+                remaining = remaining[passed:]
+                self._brake()
+                pending, started = None, None
                 continue
-            # a speed change: continue from the motion in progress at the new speed
-            position, velocity, accel = reference_state(trajectory, self.clock() - start)
-            speed = self.control.speed_percent
-            self.speed_seen = speed
-            pending = plan_run(np.vstack([position, [points[i] for i in remaining]]), self._limits(speed),
-                               start_velocity=velocity, start_accel=accel, tick_s=tick_s(self.station), rate_hz=self.settings.rate_hz)
+            self.speed_seen = self.control.speed_percent
+            replanned = self._replan(points, remaining[passed:])
+            if replanned is None:  # refused: the running plan goes on to its end
+                started = start
+                continue
+            remaining = remaining[passed:]
+            pending, started = replanned
 
-    def _run_to_end(self, run: Run, remaining: list[int], labels: list[int]):
-        """Command `run` and wait for its end (None) or a control change ((trajectory, start, waypoints passed))."""
+    def _run_to_end(self, run: Run, remaining: list[int], labels: list[int], started: float | None = None):
+        """Command `run` (unless it was sent already and started at `started`) and wait for its end (None) or a
+        control change ((its start, waypoints passed))."""
         version = self.control.version
-        start = self.command(run.trajectory)
+        start = self.command(run.trajectory) if started is None else started
         self.report()
-        done = self.wait(lambda: self.clock() >= start + run.duration_s - self.eps or self.control.version != version, run.duration_s + 5.0)
+        done = self.wait(lambda: self.clock() >= start + run.duration_s - self.eps or self.control.version != version,
+                         max(0.0, start + run.duration_s - self.clock()) + 5.0)
         elapsed = self.clock() - start
         finished = elapsed >= run.duration_s - self.eps or not done
         passed = len(remaining) if finished else sum(1 for t in run.arrival_s[1:] if t <= elapsed + self.eps)
         if passed and 0 <= labels[remaining[passed - 1]] < len(self.program.waypoints):
             self.waypoint = labels[remaining[passed - 1]]
-        return None if finished else (run.trajectory, start, passed)
+        return None if finished else (start, passed)
 
     # Steps --------------------------------------------------------------------------------------------
 
@@ -249,8 +310,9 @@ class _Runner:
     def run(self) -> dict:
         station, waypoints = self.station, self.program.waypoints
         first = np.asarray(waypoints[0].joints_rad)
-        points, ease, labels = plan_ease_in(station, station.joints_rad(), first, self.control.speed_percent, self.settings)
-        self.move(points, ease, labels)
+        points, ease, labels = plan_ease_in(station, station.start_position(), first, self.control.speed_percent, self.settings)
+        ease_cap = 100.0 * self.settings.ease_in_speed_fraction
+        self.move(points, ease, labels, ease_cap)
         self.wait(lambda: not station.arm.is_moving(), 5.0)
         if station.gripper.read_state().command != waypoints[0].gripper:
             station.run_gripper(self.ctx, waypoints[0].gripper)
@@ -273,9 +335,10 @@ class _Runner:
             self.cycle += 1
         self.trace.start_cycle(self.cycle + 1)
         self.phase = "home"
-        home = plan_transfer(station, station.joints_rad(), station.model.home_rad, self.control.speed_percent, self.settings,
+        here = station.start_position()
+        home = plan_transfer(station, here, station.model.home_rad, self.control.speed_percent, self.settings,
                              labels=(len(waypoints) - 1, HOME_LABEL))
-        self.move([station.joints_rad(), np.asarray(station.model.home_rad)], home, [len(waypoints) - 1, HOME_LABEL])
+        self.move([here, np.asarray(station.model.home_rad)], home, [len(waypoints) - 1, HOME_LABEL], ease_cap)
         self.wait(lambda: not station.arm.is_moving(), 5.0)
         self.report()
         return {
@@ -305,11 +368,16 @@ def repeat(station: Station, program_id: int, cycles: int | None = 1, speed_perc
     control = RunControl(speed_percent)
     control.trace = CycleTrace(station.model.joint_names)
 
+    plans = {speed_percent: plan}  # cycle plans by speed, shared with the speed check of set_job_speed
+
+    def check_speed(speed: float) -> None:  # a speed the cycle cannot be planned at is refused, the job runs on
+        if speed not in plans:
+            plans[speed] = plan_cycle(station, program, speed, settings)
+
+    control.validate_speed = check_speed
+
     def run(ctx: JobContext) -> dict:
-        runner = _Runner(station, ctx, program, cycles, control, settings, control.trace)
-        runner.plans[speed_percent] = plan
-        runner.plan = plan
-        return runner.run()
+        return _Runner(station, ctx, program, cycles, control, settings, control.trace, plans).run()
 
     times = f"× {cycles}" if cycles is not None else "until stopped"
     return station.start_job("repeat", "repeat", run, detail=f"program '{program.name}' {times} at {speed_percent:g} %",

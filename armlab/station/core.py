@@ -138,6 +138,8 @@ class Station(Latch, MotionGate, ManualCommands, TeachCommands, JobControls, Per
         self._last_joints: np.ndarray | None = None
         self._torque_enabled = True  # connect() leaves the arm holding; set_torque() changes it
         self._motions: list[tuple[float, np.ndarray]] = []  # (end time_s, xy box [xmin, ymin, xmax, ymax])
+        self._commanded: tuple | None = None  # the last trajectory sent: (trajectory, clock_s at its t = 0, count)
+        self._command_count = 0
         self._pipeline: Any = None  # synchronous mode's perception pipeline
         self.events = EventLog()
         self.intrinsics = CameraIntrinsics(camera, self.store, self.events)  # in use: measured here, else the camera's own
@@ -473,9 +475,19 @@ class Station(Latch, MotionGate, ManualCommands, TeachCommands, JobControls, Per
             self._transition(command, source=source, detail=detail or name)
             self._job = job
             self._jog = None
-            start_job_thread(job, function, self._on_job_end, cleanup=cleanup)
+            start_job_thread(job, self._after_rest(function), self._on_job_end, cleanup=cleanup)
         self.events.add("info", f"job '{name}' started" + (f": {detail}" if detail else ""))
         return job
+
+    def _after_rest(self, function: Callable[[JobContext], Any]) -> Callable[[JobContext], Any]:
+        """The job's function, run once a motion still in progress (a manual move, a jog running out) has been
+        braked to rest: every job plans from the arm at rest."""
+
+        def run(ctx: JobContext) -> Any:
+            self.brake_to_rest(ctx)
+            return function(ctx)
+
+        return run
 
     def _on_job_end(self, job: Job, error: BaseException | None) -> None:
         if isinstance(error, DEVICE_ERRORS) and self._job is job:

@@ -35,6 +35,7 @@ class RunControl:
         self._steps = 0
         self.version = 0
         self.trace = None  # the job's record of commanded and measured joints (repeat: skills.repeat.CycleTrace)
+        self.validate_speed = None  # the job's check of a new speed (raises with the reason), run before it applies
 
     def _bump(self) -> None:
         self.version += 1
@@ -57,7 +58,13 @@ class RunControl:
             self._bump()
 
     def set_speed(self, speed_percent: float) -> None:
+        """Change the speed; ValueError (the job's reason, e.g. a waypoint the cycle fails at that speed) leaves it."""
         value = checked_speed_percent(speed_percent)
+        if self.validate_speed is not None:
+            try:
+                self.validate_speed(value)
+            except ValueError as error:
+                raise ValueError(f"speed {value:g} % refused, the job goes on at {self.speed_percent:g} %: {error}") from None
         with self._lock:
             self._speed_percent = value
             self._bump()

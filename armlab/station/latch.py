@@ -24,6 +24,7 @@ class Latch:
         """Stop the arm (and gripper); never raises (a lost device is reported). No lock needed. Counted, so a
         command checked before this halt and sent after it is halted again (motion.py _sending)."""
         self._halts += 1
+        self._commanded = None  # the arm holds where it is: no commanded motion to continue
         failures = []
         for device in (self.arm, self.gripper) if gripper else (self.arm,):
             try:

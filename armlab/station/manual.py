@@ -13,7 +13,6 @@ import numpy as np
 
 from armlab.devices.arm import JointTrajectory
 from armlab.errors import ArmMoving, CommandRefused, NeedsConfirmation, NotController
-from armlab.station.arm_info import station_gripper_type
 from armlab.station.checks import checked_moving_time, checked_position
 from armlab.station.states import State, allowed_commands
 
@@ -29,19 +28,46 @@ class ManualCommands:
 
         q_goal = self.checked_joints(q_goal_rad)
         trajectory = plan_joint_move(
-            self.joints_rad(), q_goal, self.model, moving_time_s=checked_moving_time(moving_time_s, self.config.max_moving_time_s)
+            self.start_position(), q_goal, self.model, moving_time_s=checked_moving_time(moving_time_s, self.config.max_moving_time_s)
         )
         self.check_motion(trajectory)
         return trajectory
 
+    def plan_move_from(self, handover, q_goal_rad, moving_time_s: float | None = None) -> JointTrajectory:
+        """A joint move to q_goal that takes over a running motion at `handover` (armlab.motion.handover): the
+        synchronised trapezoid when the handover is at rest, else a jerk-limited blend (ruckig) from its
+        position, velocity and acceleration within the arm's limits, ending at rest on the goal (moving_time_s:
+        its least duration). ValueError when none can be planned. Not checked (the splice is)."""
+        from armlab.motion import plan_joint_move
+        from armlab.motion.blend import arm_limits, plan_run
+
+        q_goal = self.checked_joints(q_goal_rad)
+        moving_time = checked_moving_time(moving_time_s, self.config.max_moving_time_s)
+        if handover.at_rest:
+            return plan_joint_move(handover.position_rad, q_goal, self.model, moving_time_s=moving_time)
+        run = plan_run(
+            np.vstack([handover.position_rad, q_goal]), arm_limits(self.model),
+            start_velocity=handover.velocity_rad_s, start_accel=handover.accel_rad_s2,
+            minimum_s=[None, moving_time] if moving_time else None, rate_hz=self.motion_config.sample_rate_hz,
+        )
+        return run.trajectory
+
     def _manual_move(self, command: str, q_goal_rad, moving_time_s: float | None, wait: bool, source: str | None) -> None:
+        """A manual joint move, planned and checked outside the lock; it takes over a motion in progress
+        continuously (plan_move_from), else starts from the measured joints at rest."""
         self.allowed_or_raise(command, source)  # refuse before planning
-        trajectory = self.plan_move(q_goal_rad, moving_time_s)  # planning and checks: outside the lock
-        swept_box = self._swept_box(trajectory)
-        with self._sending():
+        self.checked_joints(q_goal_rad)
+
+        def plan(handover) -> JointTrajectory:
+            if handover is None:
+                return self.plan_move(q_goal_rad, moving_time_s)
+            return self.plan_move_from(handover, q_goal_rad, moving_time_s)
+
+        def under_lock() -> None:
             self._transition(command, source=source)  # state unchanged: idle/teach stay
             self._jog = None
-            self._command_arm(trajectory, swept_box)
+
+        trajectory, _ = self._send_replacing(plan, under_lock, command)
         if wait:
             self.wait_motion(trajectory.duration_s + 5.0)
 
@@ -80,27 +106,28 @@ class ManualCommands:
     def jog(self, velocity_rad_s, source: str | None = None, speed_percent: float = 100.0) -> JointTrajectory:
         """Hold-to-run: move at these joint velocities (rad/s, scaled by speed_percent) for motion jog_hold_s,
         then stop by itself. Sending it again (or heartbeat()) within jog_hold_s keeps it going; zeros ramp down to rest."""
-        from armlab.motion.jog import checked_jog_velocity, plan_jog, reference_velocity
+        from armlab.motion.blend import arm_limits
+        from armlab.motion.jog import checked_jog_velocity, plan_jog
 
         self.require_arm("jog")
-        velocity = checked_jog_velocity(velocity_rad_s, self.model.velocity_limit_rad_s, self.model.joint_names)
+        config = self.motion_config
+        allowed = np.minimum(np.asarray(self.model.velocity_limit_rad_s, dtype=float), config.jog_max_speed_rad_s)
+        velocity = checked_jog_velocity(velocity_rad_s, allowed, self.model.joint_names)
         velocity = velocity * checked_speed_percent(speed_percent) / 100.0
         self.allowed_or_raise("jog", source)
+
+        def plan(handover) -> JointTrajectory:
+            # It brakes jog_hold_s after this command: a plan taking over later holds the speed that much less.
+            if handover is None:
+                q0, v0, hold_s = self.start_position(), np.zeros_like(velocity), config.jog_hold_s
+            else:
+                q0, v0 = handover.position_rad, handover.segment_velocity_rad_s
+                hold_s = max(config.jog_hold_s - (handover.takes_over_s - self.clock_s()), 1.0 / config.sample_rate_hz)
+            return plan_jog(q0, v0, velocity, hold_s, self.model.lower_rad, self.model.upper_rad,
+                            arm_limits(self.model).accel_rad_s2, config.sample_rate_hz)  # 2 % inside, as the blends
+
+        trajectory, _ = self._send_replacing(plan, lambda: self._transition("jog", source=source), "jog")
         with self._lock:
-            jog = dict(self._jog) if self._jog is not None else None
-        q0, v0 = self.joints_rad(), np.zeros_like(velocity)
-        if jog is not None and self.arm.is_moving():
-            _, v0 = reference_velocity(jog["trajectory"], self.clock_s() - jog["start_s"])
-        config = self.motion_config
-        trajectory = plan_jog(
-            q0, v0, velocity, config.jog_hold_s, self.model.lower_rad, self.model.upper_rad, self.model.accel_limit_rad_s2,
-            config.sample_rate_hz,
-        )
-        self.check_motion(trajectory)
-        swept_box = self._swept_box(trajectory)
-        with self._sending():
-            self._transition("jog", source=source)
-            self._command_arm(trajectory, swept_box)
             self._jog = {"trajectory": trajectory, "start_s": self.clock_s(), "velocity": velocity, "source": source}
         return trajectory
 
@@ -113,7 +140,7 @@ class ManualCommands:
         Refused before anything moves: ArmMoving while the arm still moves, StepRefused/Unreachable (the
         reason) when the step cannot keep the gripper's orientation and line. A step that follows this
         station's previous step starts from that step's commanded end (the servos' sag does not add up)."""
-        from armlab.motion.gripper_step import FingerBox, StepSpeeds, plan_gripper_step
+        from armlab.motion.gripper_step import StepSpeeds, plan_gripper_step
 
         scale = checked_speed_percent(speed_percent) / 100.0
         self.allowed_or_raise("jog", source)
@@ -130,15 +157,7 @@ class ManualCommands:
             config.step_speed_m_s * scale, config.step_accel_m_s2 * scale,
             config.step_rotation_speed_rad_s * scale, config.step_rotation_accel_rad_s2 * scale,
         )
-        gripper = getattr(self.model.config, "gripper", None)
-        cup = getattr(self.model.config, "suction_cup", None)
-        if station_gripper_type(self) == "suction" and cup is not None:  # the cup's body, back from its lip
-            fingers = FingerBox(cup.body_length_m, 0.0, cup.body_radius_m, cup.body_radius_m)
-        else:
-            fingers = FingerBox(
-                config.finger_back_m, config.pad_reach_m,
-                (gripper.finger_offset_max_m if gripper is not None else 0.0) + config.finger_thickness_m, config.finger_half_height_m,
-            )
+        fingers = self.finger_box()
         trajectory = plan_gripper_step(self.model, q_start, axis, amount, speeds, fingers, config.board_clearance_m, config.sample_rate_hz)
         self.check_motion(trajectory)
         swept_box = self._swept_box(trajectory)
@@ -180,6 +199,7 @@ class ManualCommands:
                 raise CommandRefused("torque", self._effective_state().value, allowed_commands(self._effective_state()))
             self._send_later(lambda: self.arm.set_torque(bool(enabled)))
         with self._lock:
+            self._commanded = None
             self._torque_enabled = bool(enabled)
         self.events.add("warn" if not enabled else "info", f"torque {'on' if enabled else 'off'}")
 

@@ -17,12 +17,17 @@ from contextlib import contextmanager
 import numpy as np
 
 from armlab.devices.arm import JointTrajectory
-from armlab.errors import CommandRefused
+from armlab.errors import ArmMoving, CommandRefused
+from armlab.motion.handover import Handover
 from armlab.station.jobs import JobCancelled, JobContext
 from armlab.station.states import JOB_STATES, allowed_commands
 
 WAIT_CHUNK_S = 0.05  # waits on the devices check cancel/e-stop this often (simulated time in fast mode)
 MOTION_MEMORY = 256  # how many recent arm motions the gate remembers for stale-perception checks
+
+
+class HandoverLate(RuntimeError):
+    """A planned handover can no longer be used (its moment passed, or another motion was commanded): plan again."""
 
 
 class MotionGate:
@@ -78,6 +83,7 @@ class MotionGate:
         # The table itself (no clearance): planners keep their own board_clearance_m; the straight joint-space
         # move from the sleep pose home passes the gripper point within 1 mm of the board.
         check_trajectory(self.model, trajectory, workspace_m=config.workspace_m, max_step_rad=config.max_step_rad)
+        self.check_body(trajectory)
 
     @contextmanager
     def _sending(self) -> Iterator[None]:
@@ -107,18 +113,165 @@ class MotionGate:
             raise RuntimeError("device commands are sent from inside Station._sending(), never under the bare lock")
         self._outbox.append(send)
 
-    def _command_arm(self, trajectory: JointTrajectory, swept_box: np.ndarray) -> None:
-        """Queue a checked trajectory for the arm and remember where the gripper sweeps. Caller is inside
-        `_sending()` (holds the lock) and has checked the state; the latch and the start (no jump from the
-        measured joints) are checked here; the trajectory reaches the arm once the lock is released."""
+    def check_body(self, trajectory: JointTrajectory) -> None:
+        """UnsafeTrajectory (with the reason and when) if the fingers (a box around them, or the suction cup's
+        body) go into the board, or the gripper end of the arm (gripper point, finger tips, the held block) into
+        the arm's own base or upper arm, at any sample (armlab.motion.clearance). No lock needed (pure)."""
+        from armlab.motion.clearance import lowest_corner_m, self_collision
+        from armlab.motion.safety import UnsafeTrajectory
+
+        config, positions, times = self.motion_config, trajectory.positions_rad, trajectory.times_s
+        sample, lowest_m, gripper_z_m = lowest_corner_m(self.model, positions, self.finger_box().corners_m())
+        if lowest_m < -1e-6:
+            raise UnsafeTrajectory(
+                f"the fingers would go {-lowest_m * 1000:.1f} mm into the board (gripper point at z = {gripper_z_m * 1000:.1f} mm) "
+                f"at t = {times[sample]:.3f} s"
+            )
+        held = self.held_block
+        held_edge_m = float(held["edge_m"]) if held and held.get("edge_m") else None
+        hit = self_collision(self.model, positions, base_radius_m=config.base_radius_m, reach_m=config.self_clearance_m,
+                             held_edge_m=held_edge_m)
+        if hit is not None:
+            raise UnsafeTrajectory(f"{hit[1]} at t = {times[hit[0]]:.3f} s: the arm would hit itself")
+
+    def finger_box(self):
+        """The box the gripper occupies beyond the wrist (armlab.motion.gripper_step.FingerBox): the open fingers
+        from config, or the suction cup's body."""
+        from armlab.motion.gripper_step import FingerBox
+        from armlab.station.arm_info import station_gripper_type
+
+        config = self.motion_config
+        gripper = getattr(self.model.config, "gripper", None)
+        cup = getattr(self.model.config, "suction_cup", None)
+        if station_gripper_type(self) == "suction" and cup is not None:  # the cup's body, back from its lip
+            return FingerBox(cup.body_length_m, 0.0, cup.body_radius_m, cup.body_radius_m)
+        return FingerBox(
+            config.finger_back_m, config.pad_reach_m,
+            (gripper.finger_offset_max_m if gripper is not None else 0.0) + config.finger_thickness_m, config.finger_half_height_m,
+        )
+
+    def _command_arm(self, trajectory: JointTrajectory, swept_box: np.ndarray, handover: Handover | None = None,
+                     planned_after: int | None = None) -> JointTrajectory:
+        """Send a checked trajectory and remember it and where the gripper sweeps; returns what was sent.
+        Caller is inside `_sending()` (holds the lock; the trajectory reaches the arm once the lock is released)
+        and has checked the state; checked here: the latch, the start (no jump from the
+        measured joints) and, while a commanded motion runs, that this one continues it: a splice from
+        `handover` (taken from that very motion; trimmed to now: HandoverLate when now is past the handover)
+        or a trajectory starting at the running reference and its velocity (ArmMoving otherwise)."""
+        from armlab.motion.handover import continuity_problem, reference_velocity, trimmed
         from armlab.motion.safety import check_start
 
+        state = self._effective_state()
         if self._halt.is_set():
-            raise CommandRefused("move", self._effective_state().value, allowed_commands(self._effective_state()))
+            raise CommandRefused("move", state.value, allowed_commands(state))
+        now = self.clock_s()
+        running = self._commanded
+        planned, planned_t0 = trajectory, now  # remembered untrimmed: a later handover keeps its sample grid
+        if handover is None and planned_after is not None and planned_after != self._command_count:
+            raise HandoverLate("another motion was commanded while this one was planned from rest")
+        if handover is not None:
+            if running is None or running[2] != handover.source_id:
+                raise HandoverLate("another motion was commanded since the handover was planned")
+            elapsed = now - handover.planned_at_s
+            if elapsed > handover.lead_s - 1e-9:
+                raise HandoverLate(f"the handover {handover.lead_s - elapsed:.3f} s ago has passed (planning was slower than the lead)")
+            trajectory = trimmed(trajectory, elapsed)
+            planned_t0 = handover.planned_at_s
+        elif running is not None and now - running[1] < running[0].duration_s:
+            velocity = reference_velocity(running[0], now - running[1])
+            # Slower than one sample's worth of acceleration from rest, a plan from rest continues it as well.
+            slow_rad_s = np.asarray(self.model.accel_limit_rad_s2, float) / self.motion_config.sample_rate_hz
+            if np.any(np.abs(velocity) > slow_rad_s):
+                position = running[0].sample(now - running[1])
+                problem = continuity_problem(trajectory, position, velocity, self.model.accel_limit_rad_s2, self.model.joint_names)
+                if problem is not None:
+                    raise ArmMoving("move", state.value, allowed_commands(state), f"the new motion does not continue it: {problem}")
         check_start(trajectory, self.joints_rad(), self.motion_config.start_tolerance_rad, self.model.joint_names)
         self._send_later(lambda: self.arm.command_trajectory(trajectory))
+        self._command_count += 1
+        self._commanded = (planned, planned_t0, self._command_count)
         self._motions.append((time.time() + trajectory.duration_s, swept_box))
         del self._motions[:-MOTION_MEMORY]
+        return trajectory
+
+    def start_position(self) -> np.ndarray:
+        """Where a motion from rest starts: the position the servos were last commanded to hold (the end of the
+        last trajectory sent) while the arm is measured within half the start tolerance of it, so the command
+        does not step by the servos' residual error; else (halted, limp, pushed away) the measured joints."""
+        measured = self.joints_rad()
+        with self._lock:
+            running = self._commanded
+        if running is None or self.clock_s() - running[1] < running[0].duration_s:
+            return measured
+        held = running[0].positions_rad[-1]
+        if float(np.max(np.abs(held - measured))) > 0.5 * self.motion_config.start_tolerance_rad:
+            return measured
+        return held.copy()
+
+    def motion_handover(self, lead_s: float | None = None) -> Handover | None:
+        """Where a motion replacing the commanded one takes over (lead_s, default handover_lead_s, from now),
+        or None when no commanded motion is running (plan from the measured joints, at rest)."""
+        from armlab.motion.handover import take_over
+
+        with self._lock:
+            running = self._commanded
+        if running is None:
+            return None
+        config = self.motion_config
+        lead = config.handover_lead_s if lead_s is None else lead_s
+        return take_over(running[0], running[1], self.clock_s(), lead, config.sample_rate_hz, running[2])
+
+    def _send_replacing(self, plan: Callable, under_lock: Callable[[], None] | None = None, command: str = "move") -> tuple[JointTrajectory, Handover | None]:
+        """Plan (plan(handover) -> the new trajectory, from the handover's state, or from the measured joints
+        when it is None), check and send a motion that replaces whatever runs, continuously. under_lock() runs
+        with the lock held just before sending (state transitions, the job's ownership). A handover missed
+        because planning was slow is retried with a longer lead (twice), then ArmMoving. Returns (the
+        trajectory as planned, spliced; the handover or None)."""
+        from armlab.motion.handover import splice
+
+        lead = self.motion_config.handover_lead_s
+        for _ in range(3):
+            with self._lock:
+                seen = self._command_count
+            handover = self.motion_handover(lead)
+            new = plan(handover)
+            trajectory = splice(handover, new) if handover is not None else new
+            self.check_motion(trajectory)
+            swept_box = self._swept_box(trajectory)
+            try:
+                with self._sending():
+                    if under_lock is not None:
+                        under_lock()
+                    self._command_arm(trajectory, swept_box, handover, planned_after=seen)
+                return trajectory, handover
+            except HandoverLate:
+                lead *= 2.0
+        state = self.state
+        raise ArmMoving(command, state.value, allowed_commands(state), "planning could not keep up with the motion in progress")
+
+    def brake_to_rest(self, ctx: JobContext | None = None) -> None:
+        """Bring a motion in progress to rest on a jerk-limited stop at the arm's limits (no-op at rest), and
+        wait until the arm stands still. Inside a job only while the job owns the arm."""
+        from armlab.motion.blend import arm_limits, plan_stop
+
+        handover = self.motion_handover()
+        if handover is None and not self.arm.is_moving():
+            return
+        if handover is not None and not handover.at_rest:
+            limits = arm_limits(self.model)
+            rate = self.motion_config.sample_rate_hz
+
+            def stop(handover: Handover | None) -> JointTrajectory:
+                if handover is None:
+                    raise HandoverLate("the motion ended meanwhile")
+                return plan_stop(handover.position_rad, handover.velocity_rad_s, handover.accel_rad_s2, limits, rate)
+
+            owns = (lambda: self._owns_arm(ctx)) if ctx is not None else None
+            try:
+                self._send_replacing(stop, owns, "stop")
+            except (HandoverLate, ValueError):  # the motion ended meanwhile, or the stop fails its check: it runs out
+                pass
+        self._wait_until(lambda: not self.arm.is_moving(), 30.0, ctx)
 
     def _swept_box(self, trajectory: JointTrajectory) -> np.ndarray:
         """[xmin, ymin, xmax, ymax] of the gripper point along a trajectory (sampled; no lock needed)."""
@@ -149,12 +302,23 @@ class MotionGate:
 
     def start_trajectory(self, ctx: JobContext, trajectory: JointTrajectory) -> None:
         """Inside a job: check the trajectory (check_motion) and command it (only while this job owns the
-        arm), without waiting; it replaces a motion in progress (it must start where the arm is)."""
+        arm), without waiting; while a motion runs it must continue it (replace_trajectory plans one that does)."""
         self.check_motion(trajectory)
         swept_box = self._swept_box(trajectory)
         with self._sending():
             self._owns_arm(ctx)
             self._command_arm(trajectory, swept_box)
+
+    def replace_trajectory(self, ctx: JobContext, plan: Callable) -> tuple[JointTrajectory, float, float]:
+        """Inside a job: replace the motion in progress by plan(handover) (see _send_replacing), continuously.
+        Returns (the command as spliced, the clock time of its t = 0, the clock time the new plan starts).
+        ValueError / UnsafeTrajectory when the plan cannot be made or fails the check: nothing changes, the
+        motion in progress goes on."""
+        trajectory, handover = self._send_replacing(plan, lambda: self._owns_arm(ctx))
+        if handover is None:
+            start = self._commanded[1]
+            return trajectory, start, start
+        return trajectory, handover.planned_at_s, handover.planned_at_s + handover.lead_s
 
     def wait_in_job(self, ctx: JobContext, predicate: Callable[[], bool], timeout_s: float) -> bool:
         """Inside a job: block until predicate() holds (False after timeout_s of motion-clock time); raises

@@ -93,3 +93,13 @@ def test_a_stop_brakes_within_the_limits_to_rest():
     assert np.abs(accel).max() <= np.max(ARM.accel_limit_rad_s2) * 1.05
     assert np.abs(velocity[-1]).max() < 0.02
     assert stop.duration_s < 1.5
+
+
+def test_a_trajectory_library_failure_is_a_clear_value_error():
+    """Issue 18 item 2: ruckig's own errors (RuckigError here; 'ValueError: -101 is not a valid Result' in CI) are
+    a ValueError that names the library, which the repeat job turns into a refused speed change."""
+    from armlab.motion.blend import Limits, plan_run
+
+    tiny = Limits(np.ones(2), np.full(2, 1e-3), np.full(2, 1e-3))
+    with pytest.raises(ValueError, match=r"trajectory library \(ruckig\) found no trajectory"):
+        plan_run(np.array([[0.0, 0.0], [1.0, 1.0]]), tiny, start_velocity=[1e3, 0.0])

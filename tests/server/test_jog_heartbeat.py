@@ -34,8 +34,8 @@ def test_websocket_heartbeats_hold_a_jog_and_their_loss_stops_it(url, cell, how)
             assert json.loads(ws.recv(timeout=5))["controller"] == "pad"
             q0 = cell.arm.read_joint_state().position_rad[0]
             assert http.post("/api/arm/jog", json={"velocity_rad_s": VELOCITY}, headers=PAGE).status_code == 200
-            for _ in range(12):  # 1.2 s of sim time with a heartbeat every 0.1 s: far longer than one hold
-                _sim_wait(cell, 0.1)
+            for _ in range(40):  # 1.2 s of sim time with a heartbeat every 0.03 s (the hold is 0.2 s): far longer than one hold
+                _sim_wait(cell, 0.03)
                 ws.send(json.dumps({"type": "heartbeat"}))
             live.wait_for(lambda: cell.arm.read_joint_state().position_rad[0] - q0 > 0.8 * 0.4 * 1.2, 5, 0.01)
             assert cell.arm.is_moving(), "the jog ended although heartbeats arrived"

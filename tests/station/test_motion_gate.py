@@ -49,8 +49,8 @@ def test_a_manual_move_out_of_the_box_is_refused_and_nothing_moves(cell, idle):
         station.move_joints(FACING_X)
     assert still_for(cell, station, 0.3)
     with pytest.raises(UnsafeTrajectory, match="workspace box"):
-        station.move_joints([-0.6, 0, 0, 0, 0], moving_time_s=0.8, wait=True)  # gripper point at x = 0.23 m
-        station.jog([-3.0, 0, 0, 0, 0])  # its plan (ramp up, 0.3 s, ramp down: ~0.45 rad) sweeps past x = 0.3 m
+        station.move_joints([-0.8, 0, 0, 0, 0], moving_time_s=0.8, wait=True)  # gripper point at x = 0.293 m
+        station.jog([-0.8, 0, 0, 0, 0])  # its plan (ramp up, 0.2 s, ramp down: ~0.16 rad) sweeps past x = 0.3 m
     assert still_for(cell, station, 0.3)
 
 

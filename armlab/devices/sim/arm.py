@@ -22,10 +22,11 @@ LIMIT_TOLERANCE_RAD = 1e-6
 
 
 def sample_trajectory(trajectory: JointTrajectory, t_s: float) -> tuple[np.ndarray, np.ndarray]:
-    """(position, velocity) of a piecewise-linear trajectory at t_s (clamped; zero velocity past the end)."""
+    """(position, velocity) of a piecewise-linear trajectory at t_s (clamped; zero velocity outside it). At its
+    start the velocity is the first segment's: a trajectory that takes over a moving arm starts moving."""
     times = trajectory.times_s
     positions = trajectory.positions_rad
-    if t_s <= times[0]:
+    if t_s < times[0]:
         return positions[0].copy(), np.zeros(positions.shape[1])
     if t_s >= times[-1]:
         return positions[-1].copy(), np.zeros(positions.shape[1])

@@ -35,6 +35,34 @@ class SimTruth:
             self._path = None
             return path
 
+    def start_joint_recording(self, max_ticks: int = 200_000) -> None:
+        """Record the arm at every control tick from now on (simulated time, fast mode too): the servos'
+        position and velocity references and the measured positions and velocities, to measure motion on the sim's clock.
+        At most max_ticks are kept (then recording stops adding)."""
+        if not (isinstance(max_ticks, int) and 0 < max_ticks <= 10_000_000):
+            raise ValueError(f"max_ticks must be an integer in 1..10000000, got {max_ticks!r}")
+        with self.lock:
+            self._joint_trace = {"rows": [], "max": max_ticks}
+
+    def stop_joint_recording(self) -> dict[str, np.ndarray]:
+        """Stop recording; {"time_s": (N,), "reference_rad", "reference_velocity_rad_s", "position_rad",
+        "velocity_rad_s": (N, dof)}."""
+        with self.lock:
+            trace, self._joint_trace = getattr(self, "_joint_trace", None), None
+        rows = np.asarray(trace["rows"] if trace else np.empty((0, 1)), dtype=float)
+        dof = (rows.shape[1] - 1) // 4 if rows.size else 0
+        column = [1 + k * dof for k in range(5)]
+        return {"time_s": rows[:, 0] if rows.size else np.empty(0), "reference_rad": rows[:, column[0] : column[1]],
+                "reference_velocity_rad_s": rows[:, column[1] : column[2]], "position_rad": rows[:, column[2] : column[3]],
+                "velocity_rad_s": rows[:, column[3] : column[4]]}
+
+    def _record_joints(self) -> None:
+        """At a control tick (under the lock): one row of the joint recording, if one runs."""
+        trace = getattr(self, "_joint_trace", None)
+        if trace is not None and len(trace["rows"]) < trace["max"]:
+            trace["rows"].append((float(self._data.time), *self.arm_reference(), *self.arm_reference_velocity(),
+                                  *self.arm_positions(), *self.arm_velocities()))
+
     def gripper_path(self) -> np.ndarray:
         """(N, 4) samples (sim_time_s, x, y, z) of the gripper point, oldest first; (0, 4) if not recording.
         Each sample is gripper_point_m() as it read at that simulated time."""

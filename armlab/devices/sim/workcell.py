@@ -242,6 +242,10 @@ class SimWorkcell(SimTruth):
         """The servos' position references: where the arm is commanded to be now."""
         return self._data.ctrl[self._pos_act].copy()
 
+    def arm_reference_velocity(self) -> np.ndarray:
+        """The servos' velocity feed-forward: the commanded trajectory's slope now."""
+        return self._data.ctrl[self._vel_act].copy()
+
     def arm_velocities(self) -> np.ndarray:
         return self._data.qvel[self._arm_qvel].copy()
 
@@ -294,6 +298,7 @@ class SimWorkcell(SimTruth):
             self._next_control_s = data.time + self._sim.physics.control_period_s
             if self.arm.is_connected:
                 self.arm.control(data.time)
+                self._record_joints()
             self.gripper.control(data.time)
             if self._feeder is not None:
                 self._feeder.tick(self._model, data)

@@ -1,0 +1,68 @@
+"""Issue 18 item 6: targets into the arm itself or the board are refused with the reason, before anything moves:
+every trajectory the gate sends keeps the fingers' box above the board and the gripper end of the arm (gripper
+point, finger tips, a held block) out of the arm's base and upper arm; program waypoints likewise. POST
+/api/arm/pose calls move_to (an UnsafeTrajectory is its 422). Fast synchronous sim."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from armlab import skills
+from armlab.kinematics import load_arm
+from armlab.motion.safety import UnsafeTrajectory
+from armlab.skills.programs import import_program
+from armlab.store import Waypoint
+
+ARM = load_arm("rx200")
+
+
+@pytest.fixture(scope="module")
+def fast(tmp_path_factory):
+    from armlab.devices.sim import SimWorkcell, SimWorkcellConfig
+    from armlab.station import Station, StationConfig
+
+    cell = SimWorkcell(SimWorkcellConfig(realtime=False, seed=0))
+    cell.start()
+    db = tmp_path_factory.mktemp("body") / "station.sqlite3"
+    station = Station(cell.arm, cell.gripper, cell.camera, model=ARM, config=StationConfig(database_path=str(db)),
+                      sim=cell, backend="sim", synchronous=True)
+    station.start()
+    station.home(wait=True)
+    yield station, cell
+    station.close()
+    cell.close()
+
+
+@pytest.mark.parametrize("position_m, reason", [
+    ([0.0, 0.0, 0.0], "into the board|own base"),  # onto the arm's own base (was accepted: 200)
+    ([0.25, 0.0, 0.0], r"fingers would go 9\.\d mm into the board"),  # was accepted; the gripper stalled at 8.5 mm
+    ([0.0, 0.05, 0.12], "gripper point would reach the arm's own base"),  # above the board, inside the base
+])
+def test_a_target_into_the_board_or_the_arm_itself_is_refused_with_the_reason(fast, position_m, reason):
+    station, cell = fast
+    before = station.joints_rad()
+    with pytest.raises(UnsafeTrajectory, match=reason):
+        station.move_to(position_m)
+    cell.step(0.3)
+    assert not station.arm.is_moving() and np.max(np.abs(station.joints_rad() - before)) < 5e-3
+
+
+def test_targets_clear_of_the_board_and_the_arm_are_still_reached(fast):
+    station, cell = fast
+    station.move_to([0.1, 0.15, 0.012], wait=True)  # the fingers' pads 3 mm above the board
+    assert np.linalg.norm(cell.gripper_point_m() - [0.1, 0.15, 0.012]) < 0.005
+    station.sleep(wait=True)
+    station.home(wait=True)
+
+
+def test_a_waypoint_into_the_arm_itself_is_refused_in_programs(fast):
+    station, _ = fast
+    at_base = tuple(float(v) for v in ARM.ik(np.array([0.0, 0.05, 0.12])))
+    program = station.store.save_program("into the base", [Waypoint((0.0, 0.0, 0.0, 0.0, 0.0), "release"), Waypoint(at_base, "release")])
+    with pytest.raises(UnsafeTrajectory, match="waypoint 2: the gripper point would reach the arm's own base"):
+        skills.repeat(station, program.id)
+    csv = "t_s,q1,q2,q3,q4,q5,gripper\n0,0,0,0,0,0,release\n2," + ",".join(f"{v:.6f}" for v in at_base) + ",release\n"
+    with pytest.raises(UnsafeTrajectory, match="waypoint 2"):
+        import_program(station, "csv", csv, "imported into the base")
+    assert "imported into the base" not in [p.name for p in station.store.list_programs()]
