@@ -11,7 +11,7 @@ import json
 import sys
 from pathlib import Path
 
-from armlab.station.states import COMMANDS, State
+from armlab.station.states import ARM_COMMANDS, COMMANDS, State
 from server.models import ERROR_CODES, WIRE_MODELS
 from server.program_models import PROGRAM_WIRE_MODELS
 from server.views import LAYERS, VIEWS
@@ -76,6 +76,7 @@ def render() -> str:
         "",
         f"export const STATES = Object.freeze({json.dumps([state.value for state in State])});",
         f"export const COMMANDS = Object.freeze({json.dumps(list(COMMANDS))});",
+        f"export const ARM_COMMANDS = Object.freeze({json.dumps([c for c in COMMANDS if c in ARM_COMMANDS])});",
         f"export const VIEWS = Object.freeze({json.dumps(list(VIEWS))});",
         f"export const LAYERS = Object.freeze({json.dumps(list(LAYERS))});",
         f"export const ERROR_CODES = Object.freeze({json.dumps(list(ERROR_CODES))});",

@@ -82,8 +82,10 @@ class ArmInfo(Wire):
     joint_limits_rad: list[list[float]] = Field(description="[lower, upper] per joint, joint_names order")
     velocity_limits_rad_s: list[float]
     home_rad: list[float]
-    gripper_type: Literal["fingers", "suction"]
+    gripper_type: Literal["fingers", "suction", "none"]
     full_pose: bool = Field(description="Cartesian moves keep the tool's whole orientation (six joints or more), else pitch and yaw")
+    has_arm: bool = Field(True, description="False: a station with no arm (armlab serve --arm none), perception only; no joints")
+    reason: str | None = Field(None, description="why the arm's panels are off (a station with no arm)")
 
 
 class LimitsInfo(Wire):

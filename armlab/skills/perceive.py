@@ -41,8 +41,8 @@ def pixel_to_world(station: Station, u: float, v: float) -> dict:
     depth = frame.depth_mm if frame is not None else None
     remembered = perception.surface_depth_mm if perception is not None else None
     robot = robot_volume_of(station, frame) if depth is not None else None
-    if depth is not None and robot is None:  # the arm's pose is unknown: its depth cannot be told from the board's
-        depth = None
+    if depth is not None and robot is None and getattr(station, "has_arm", True):
+        depth = None  # the arm's pose is unknown: its depth cannot be told from the board's (no arm: all depth is the scene's)
     point, on = pixel_to_world_off_robot(calibration, u, v, depth, robot, remembered)
     return {"position_m": [float(x) for x in point], "on": on}
 

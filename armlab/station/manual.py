@@ -49,9 +49,11 @@ class ManualCommands:
         self._manual_move("move_joints", q_rad, moving_time_s, wait, source)
 
     def home(self, moving_time_s: float | None = None, wait: bool = False, source: str | None = None) -> None:
+        self.require_arm("home")
         self._manual_move("home", self.model.home_rad, moving_time_s, wait, source)
 
     def sleep(self, moving_time_s: float | None = None, wait: bool = False, source: str | None = None) -> None:
+        self.require_arm("sleep")
         self._manual_move("sleep", self.model.sleep_rad, moving_time_s, wait, source)
 
     def solve_pose(self, position_m, pitch_rad: float | None = None, yaw_rad: float | None = None) -> np.ndarray:
@@ -80,6 +82,7 @@ class ManualCommands:
         then stop by itself. Sending it again (or heartbeat()) within jog_hold_s keeps it going; zeros ramp down to rest."""
         from armlab.motion.jog import checked_jog_velocity, plan_jog, reference_velocity
 
+        self.require_arm("jog")
         velocity = checked_jog_velocity(velocity_rad_s, self.model.velocity_limit_rad_s, self.model.joint_names)
         velocity = velocity * checked_speed_percent(speed_percent) / 100.0
         self.allowed_or_raise("jog", source)

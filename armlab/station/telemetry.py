@@ -54,6 +54,9 @@ def block_to_dict(index: int, block) -> dict:
         "aruco_id": getattr(block, "aruco_id", None),
         "destination": getattr(block, "destination", None),
     }
+    color_lab = getattr(block, "color_lab", None)
+    if color_lab is not None:
+        data["color_lab"] = _floats(color_lab)
     seen_time_s = getattr(block, "seen_time_s", None)
     if seen_time_s is not None:
         data["seen_time_s"] = float(seen_time_s)

@@ -22,6 +22,7 @@ import numpy as np
 from armlab.vision.board_plane import BoardPlane, BoardPlaneError, BoardPlaneFitter
 from armlab.vision.calibration import Calibration
 from armlab.vision.clipped_face import fit_clipped_square, on_image_border
+from armlab.vision.colors import BoardGrey, ColorModel, board_region_mask
 from armlab.vision.config import PerceptionConfig
 from armlab.vision.geometry import PlaneCamera, height_coefficients, height_map_m
 from armlab.vision.tags import check_color_image, detect_tags, make_detector
@@ -60,6 +61,7 @@ class Block:
     stack_sizes: tuple[str, ...] = field(default=())
     seen_time_s: float | None = None  # capture time (time.time()) of the frame it was seen in
     seen_arm_joints_rad: tuple[float, ...] | None = None  # the measured arm joints at that frame
+    color_lab: tuple[float, float, float] | None = None  # the top face's board-normalised CIELAB (armlab.vision.colors)
 
     def to_dict(self) -> dict:
         return {
@@ -78,6 +80,7 @@ class Block:
             "side_m": float(self.side_m),
             "seen_time_s": self.seen_time_s,
             "seen_arm_joints_rad": None if self.seen_arm_joints_rad is None else list(self.seen_arm_joints_rad),
+            "color_lab": None if self.color_lab is None else [float(x) for x in self.color_lab],
         }
 
 
@@ -452,6 +455,7 @@ def detect_blocks(
     tag_detector: cv2.aruco.ArucoDetector | None = None,
     geometry: BlockGeometry | None = None,
     ignore_mask: np.ndarray | None = None,
+    color_model: ColorModel | None = None,
 ) -> list[Block]:
     """Blocks (top of each stack) and flagged non-cubes on the board, sorted by y then x.
 
@@ -459,6 +463,8 @@ def detect_blocks(
     geometry: BlockGeometry(cal), if the caller keeps one per calibration (saves its computation per frame).
     ignore_mask: (H, W) bool pixels that are not the scene (the robot self-filter's mask): no face is
     built from them, and a block partly hidden under them, or partly inside them, is flagged occluded.
+    color_model: names each face's colour from its pixels and the board's grey around it (default: the
+    config's, armlab.vision.colors); the hue classes only find candidate pixels.
     """
     check_color_image(color_bgr)
     if color_bgr.ndim != 3:
@@ -476,7 +482,9 @@ def detect_blocks(
     geo, step = geometry, STEP
     depth_small = depth_mm[::step, ::step].astype(np.float32)
     depth_small /= 1000.0
-    geo = frame_geometry(geo, depth_small, cfg, None if ignore_mask is None else ignore_mask[::step, ::step])
+    # The robot is not left out of the board-plane fit: it stands far above the fit's window anyway, and
+    # so the heights of everything else do not depend on whether the arm's joints are known.
+    geo = frame_geometry(geo, depth_small, cfg)
     z_small = height_map_m(depth_small, geo.small_K, geo.height_row, coefficients=geo.small_coefficients)
     raised = (z_small > bc.min_height_m) & (z_small < bc.max_height_m)
     lut, names = hue_lut(cfg)
@@ -500,6 +508,11 @@ def detect_blocks(
         colourless[ignored_small] = False
         z_cover = z_small.copy()
         z_cover[ignored_small] = np.inf
+    board_small = (z_small < bc.min_height_m) & (z_small > -0.03)  # at the board (or its depth offset): the colour model's grey
+    board_small &= board_region_mask(z_small.shape, cal.T_world_camera, cal.K, cal.dist, cfg.board.x_range_m, cfg.board.y_range_m, step)
+    if ignore_mask is not None:
+        board_small &= ~ignore_mask[::step, ::step]
+    colour_of = _face_colour(color_model or ColorModel.from_config(cfg), BoardGrey(small_bgr, board_small, scale=step))
     coloured = (classes > 0).astype(np.uint8)
     # A tag on a block's top is white and black: bridge its white (next to colour, never the dark arm)
     # so the thin coloured ring around it stays one candidate at this resolution.
@@ -550,7 +563,7 @@ def detect_blocks(
             region = region or _Region(color_bgr, depth_mm, geo, cfg, roi, table, ignore_mask)
             region.board_value = board_value
             region.coloured_small = coloured
-            for block, looks_tagged in _blocks_from_region(color_bgr, geo, cfg, region, top_m, names, ci, z_cover, step):
+            for block, looks_tagged in _blocks_from_region(color_bgr, geo, cfg, region, top_m, names, ci, z_cover, step, colour_of):
                 made.append(block)
                 if any(np.linalg.norm(block.position_m[:2] - b.position_m[:2]) < 0.015 and block.height_m <= b.height_m + 0.01
                        for b in blocks):
@@ -589,12 +602,19 @@ class _Region:
             self.z[ignored] = np.nan
 
 
-def _blocks_from_region(color_bgr, geo: BlockGeometry, cfg, region: _Region, top_m, names, ci, z_small, step) -> list[tuple[Block, bool]]:
+def _face_colour(model: ColorModel, grey: BoardGrey):
+    """colour_of(face_bgr, centre_px) -> ColorReading: the model's reading against the board's grey near the face."""
+    return lambda face_bgr, centre_px: model.classify(face_bgr, grey.near(centre_px))
+
+
+def _blocks_from_region(color_bgr, geo: BlockGeometry, cfg, region: _Region, top_m, names, ci, z_small, step,
+                        colour_of=None) -> list[tuple[Block, bool]]:
     """The top face at about top_m in the ROI that holds this colour's top pixels, as blocks, each with
     whether its face looks tagged (_face_looks_tagged). The face is every block-coloured (or
     colourless, e.g. a tag) pixel at that height connected to them: a cube whose top reads as two hues
     (real yellow next to orange, a shaded edge) stays one face, touching cubes form one face that is
-    then split by their footprints; each face or part takes its pixels' majority colour."""
+    then split by their footprints; each face or part is named by colour_of (_face_colour: the colour
+    model on its block-coloured pixels, a tag's black and white left out), else by its pixels' majority hue class."""
     roi, hsv, classes, z = region.roi, region.hsv, region.classes, region.z
     tol = cfg.blocks.top_face_tolerance_m
     mine = classes == ci
@@ -635,21 +655,28 @@ def _blocks_from_region(color_bgr, geo: BlockGeometry, cfg, region: _Region, top
         return (_dark_and_colourless(hsv[ys, xs], face_classes, region.board_value)
                 or _part_of_larger_surface(face, z_small, step, tol, region.coloured_small))
 
-    def name_of(f: _Face) -> str:
-        return names[face_colour(f.classes, ci) - 1]
+    def block_of(f: _Face, classified: _Classified | None = None, out_of_view: bool = False) -> Block:
+        if colour_of is None or f.pixels_px is None:
+            return _make_block(f, names[face_colour(f.classes, ci) - 1], geo.camera, cfg, z_small, step, z, classified, out_of_view)
+        px = f.pixels_px.astype(np.intp)
+        if f.classes is not None and np.count_nonzero(f.classes) >= 10:
+            px = px[f.classes > 0]
+        reading = colour_of(color_bgr[px[:, 1], px[:, 0]], f.center_px)
+        block = _make_block(f, reading.name, geo.camera, cfg, z_small, step, z, classified, out_of_view)
+        return replace(block, color_lab=reading.measured_lab)
 
     if _runs_off_image(ys, xs, roi, geo.calibration):
         # A tall stack's top partly out of view: the square from the edges that show, else flagged.
         # No tag lookup: a tag on a cut face is likely cut too.
         clipped = _classify_clipped(face, ys, xs, roi, geo, cfg)
         if clipped is None or not clipped.is_cube or part_of_more():
-            return [(_not_cube(_make_block(face, name_of(face), geo.camera, cfg, z_small, step, z, clipped, out_of_view=True)), False)]
-        return [(_make_block(face, name_of(face), geo.camera, cfg, z_small, step, z, clipped), False)]
+            return [(_not_cube(block_of(face, clipped, out_of_view=True)), False)]
+        return [(block_of(face, clipped), False)]
     classified = _classify_face(face, cfg)
     if classified.is_cube:
-        blocks = [_make_block(face, name_of(face), geo.camera, cfg, z_small, step, z, classified)]
+        blocks = [block_of(face, classified)]
     else:
-        blocks = [_make_block(part, name_of(part), geo.camera, cfg, z_small, step, z) for part in _split_touching(face, cfg)]
+        blocks = [block_of(part) for part in _split_touching(face, cfg)]
     if any(b.is_cube for b in blocks) and part_of_more():
         blocks = [_not_cube(b) for b in blocks]
     return [(block, _face_looks_tagged(color_bgr, block, roi, hsv, region.board_value)) for block in blocks]
