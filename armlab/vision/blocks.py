@@ -321,7 +321,7 @@ class BlockGeometry:
         self.fitter = None
         if cfg is not None and cfg.board_plane.enabled:
             self.fitter = BoardPlaneFitter(K, cal.dist, cal.T_world_depth, cal.width, cal.height,
-                                           cfg.board.x_range_m, cfg.board.y_range_m, step=STEP)
+                                           cfg.board.x_range_m, cfg.board.y_range_m, step=2 * STEP)
         self._set_heights(cal.T_world_depth[2])
         self.plane: BoardPlane | None = None  # the frame's board plane, when with_heights made this
 
@@ -354,7 +354,9 @@ def frame_geometry(geo: BlockGeometry, depth_m_small: np.ndarray, cfg: Perceptio
         return geo
     bp = cfg.board_plane
     try:
-        plane = geo.fitter.fit(depth_m_small, bp.window_m, bp.inlier_m, exclude_small, bp.min_inlier_fraction)
+        # Every 2nd quarter-resolution pixel (~14 000): the plane's 3 numbers are fixed many times over.
+        plane = geo.fitter.fit(depth_m_small[::2, ::2], bp.window_m, bp.inlier_m,
+                               None if exclude_small is None else exclude_small[::2, ::2], bp.min_inlier_fraction)
     except BoardPlaneError:
         return geo
     return geo.with_heights(plane)
@@ -389,8 +391,13 @@ def _seeded_blob(mask: np.ndarray, seed: np.ndarray | None) -> np.ndarray | None
     return (labels == 1 + int(np.argmax(hits[1:]))).view(np.uint8)
 
 
+MAX_GROWTH = 1.7
+EDGE_GROW_PX = 3  # a real depth image rounds a top's edges over ~3 px (L515, ROB 550 frames): the face regains them from colour
+
+
 def _top_face_in_roi(
-    z: np.ndarray, band: np.ndarray, keep: np.ndarray, tol_m: float, seed: np.ndarray | None = None
+    z: np.ndarray, band: np.ndarray, keep: np.ndarray, tol_m: float, seed: np.ndarray | None = None,
+    grow: np.ndarray | None = None,
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray, float] | None:
     """ROI pixels (rows, columns), contour (ROI coordinates) and median height of the flat face in the
     band of heights z within tol_m of the guess (band), among the pixels to keep.
@@ -405,6 +412,12 @@ def _top_face_in_roi(
     blob &= (np.abs(z - face_m) < 0.5 * tol_m).view(np.uint8)
     if not blob.any():
         return None
+    if grow is not None:  # the edge pixels depth smoothing pulled below the band, where colour says top
+        grown = blob | (cv2.dilate(blob, np.ones((2 * EDGE_GROW_PX + 1, 2 * EDGE_GROW_PX + 1), np.uint8)) & grow.view(np.uint8))
+        # A ring of EDGE_GROW_PX around a face: at most (29/23)^2 ~ 1.6x a small cube's top at 1 m. More is a
+        # sliver (a lower stack member's side) growing into a face, not an edge regained.
+        if np.count_nonzero(grown) <= MAX_GROWTH * np.count_nonzero(blob):
+            blob = grown
     contours, _ = cv2.findContours(blob, cv2.RETR_EXTERNAL, cv2.CHAIN_APPROX_SIMPLE)
     contour = max(contours, key=cv2.contourArea)
     # Holes inside the outline (a highlight, a knot in the wood, a depth dropout) are the face too.
@@ -469,7 +482,9 @@ def detect_blocks(
     geo, step = geometry, STEP
     depth_small = depth_mm[::step, ::step].astype(np.float32)
     depth_small /= 1000.0
-    geo = frame_geometry(geo, depth_small, cfg, None if ignore_mask is None else ignore_mask[::step, ::step])
+    # The robot is not left out of the board-plane fit: it stands far above the fit's window anyway, and
+    # so the heights of everything else do not depend on whether the arm's joints are known.
+    geo = frame_geometry(geo, depth_small, cfg)
     z_small = height_map_m(depth_small, geo.small_K, geo.height_row, coefficients=geo.small_coefficients)
     raised = (z_small > bc.min_height_m) & (z_small < bc.max_height_m)
     lut, names = hue_lut(cfg)
@@ -534,17 +549,26 @@ def detect_blocks(
             pts = np.stack([xs[layer], ys[layer]], axis=1)
             tops[int(ci)] = (top_m, pts.mean(axis=0), np.concatenate([pts.min(axis=0) - 1, pts.max(axis=0) + 1]))
         region = None  # the ROI's colour and heights, shared by the colours of this component
-        for ci, (top_m, _, box) in tops.items():
+        made: list[Block] = []  # this component's blocks: a face holds every colour on it
+        for ci, (top_m, centroid, box) in tops.items():
             if any(
                 other_top > top_m + 0.01 and box[0] <= centre[0] <= box[2] and box[1] <= centre[1] <= box[3]
                 for cj, (other_top, centre, _) in tops.items() if cj != ci
             ):
                 continue  # a lower member of a stack: the block on top sits inside its footprint
+            u, v = float(centroid[0] + x) * step, float(centroid[1] + y) * step
+            if any(abs(b.height_m - top_m) < bc.top_face_tolerance_m
+                   and cv2.pointPolygonTest(b.contour_px.astype(np.float32).reshape(-1, 1, 2), (u, v), False) >= 0 for b in made):
+                continue  # this colour's top is part of a face already measured (a second hue on it)
             region = region or _Region(color_bgr, depth_mm, geo, cfg, roi, table, ignore_mask)
             region.board_value = board_value
             region.coloured_small = coloured
             for block, looks_tagged in _blocks_from_region(color_bgr, geo, cfg, region, top_m, names, ci, z_cover, step, colour_of):
-                if block.aruco_id is None and looks_tagged:
+                made.append(block)
+                if any(np.linalg.norm(block.position_m[:2] - b.position_m[:2]) < 0.015 and block.height_m <= b.height_m + 0.01
+                       for b in blocks):
+                    continue  # found already (from another colour on it)
+                if block.aruco_id is None and looks_tagged and block.is_cube:  # not on the arm or a distractor
                     detector = detector or make_detector(cfg.tags.block_tag_dictionary)
                     block = _with_tag(block, color_bgr, roi, detector, cfg)
                 twins = [b for b in blocks if np.linalg.norm(block.position_m[:2] - b.position_m[:2]) < 0.015]
@@ -552,6 +576,9 @@ def detect_blocks(
                     blocks.append(block)
                 elif all(block.height_m > b.height_m + 0.01 for b in twins):  # keep a stack's top only
                     blocks = [b for b in blocks if not any(b is twin for twin in twins)] + [block]
+    # Off the board (the workcell's rectangle) is not the scene: walls, the table, boxes at the image's edge.
+    (bx0, bx1), (by0, by1) = cfg.board.x_range_m, cfg.board.y_range_m
+    blocks = [b for b in blocks if bx0 <= b.position_m[0] <= bx1 and by0 <= b.position_m[1] <= by1]
     return sorted(blocks, key=lambda b: (round(float(b.position_m[1]), 3), float(b.position_m[0])))
 
 
@@ -598,16 +625,18 @@ def _blocks_from_region(color_bgr, geo: BlockGeometry, cfg, region: _Region, top
     # colour is compared with its own brightest top pixels (a blue top is darker than a yellow one).
     value = hsv[..., 2]
     keep = region.colourless.copy()
-    for cj in np.unique(classes[band]):
-        if cj == 0:
-            continue
+    for cj in np.flatnonzero(np.bincount(classes[band], minlength=1)[1:]) + 1:
         colour = classes == cj
         top = colour & band
         if np.count_nonzero(top) >= 10:
             keep |= colour & (value >= 0.7 * quantile(value[top], 0.95))
         else:
             keep |= colour
-    found = _top_face_in_roi(z, band, keep, tol, seed)
+    with np.errstate(invalid="ignore"):
+        # Bright block colour no lower than half a small cube under the top (and not above it: the
+        # block on top of a lower stack member): the top's rounded edge.
+        grow = keep & (classes > 0) & (z > top_m - 0.5 * cfg.blocks.small_size_m) & (z < top_m + tol)
+    found = _top_face_in_roi(z, band, keep, tol, seed, grow)
     if found is None:
         return []
     ys, xs, contour, face_m = found
@@ -621,7 +650,10 @@ def _blocks_from_region(color_bgr, geo: BlockGeometry, cfg, region: _Region, top
         return []  # a sliver: the edge of a lower stack member or noise
     if _covered(contour, face_m, z):
         return []  # a lower member of a stack: something sits on its centre
-    part_of_more = _part_of_larger_surface(face, z_small, step, tol, region.coloured_small) or _dark_and_colourless(hsv[ys, xs], face_classes, region.board_value)
+
+    def part_of_more() -> bool:  # only asked about faces that would otherwise be cubes
+        return (_dark_and_colourless(hsv[ys, xs], face_classes, region.board_value)
+                or _part_of_larger_surface(face, z_small, step, tol, region.coloured_small))
 
     def block_of(f: _Face, classified: _Classified | None = None, out_of_view: bool = False) -> Block:
         if colour_of is None or f.pixels_px is None:
@@ -637,7 +669,7 @@ def _blocks_from_region(color_bgr, geo: BlockGeometry, cfg, region: _Region, top
         # A tall stack's top partly out of view: the square from the edges that show, else flagged.
         # No tag lookup: a tag on a cut face is likely cut too.
         clipped = _classify_clipped(face, ys, xs, roi, geo, cfg)
-        if clipped is None or not clipped.is_cube or part_of_more:
+        if clipped is None or not clipped.is_cube or part_of_more():
             return [(_not_cube(block_of(face, clipped, out_of_view=True)), False)]
         return [(block_of(face, clipped), False)]
     classified = _classify_face(face, cfg)
@@ -645,9 +677,9 @@ def _blocks_from_region(color_bgr, geo: BlockGeometry, cfg, region: _Region, top
         blocks = [block_of(face, classified)]
     else:
         blocks = [block_of(part) for part in _split_touching(face, cfg)]
-    if part_of_more:
+    if any(b.is_cube for b in blocks) and part_of_more():
         blocks = [_not_cube(b) for b in blocks]
-    return [(block, _face_looks_tagged(color_bgr, block, roi, hsv)) for block in blocks]
+    return [(block, _face_looks_tagged(color_bgr, block, roi, hsv, region.board_value)) for block in blocks]
 
 
 MIN_CHROMA = 0.15  # of the board's value: real cube tops 0.22-1.7, the dark arm's tinted parts 0.06-0.09 (ROB 550 frames)
@@ -739,9 +771,12 @@ def _covered(contour: np.ndarray, top_m: float, z: np.ndarray) -> bool:
     return above > 0.15 * max(1, np.count_nonzero(inside))
 
 
-def _face_looks_tagged(color_bgr: np.ndarray, block: Block, roi=None, roi_hsv: np.ndarray | None = None) -> bool:
+def _face_looks_tagged(color_bgr: np.ndarray, block: Block, roi=None, roi_hsv: np.ndarray | None = None,
+                       board_value: float | None = None) -> bool:
     """A top face whose middle is mostly colourless (white, grey or black: hue is noise on dark
-    pixels, so they count too) may carry a tag. roi_hsv: the HSV image of the ROI, if at hand."""
+    pixels, so they count too) may carry a tag. roi_hsv: the HSV image of the ROI, if at hand.
+    board_value: the board's median value in this frame; given, colourless = chroma (S x V) below
+    MIN_CHROMA of it (a dark real violet top is dim but coloured), else S or V below 60."""
     u, v = block.center_px.astype(int).tolist()
     xa, ya, xb, yb = max(0, u - 4), max(0, v - 4), u + 5, v + 5
     if roi_hsv is not None and roi[0] <= xa and roi[1] <= ya and xb <= roi[2] and yb <= roi[3]:
@@ -751,6 +786,9 @@ def _face_looks_tagged(color_bgr: np.ndarray, block: Block, roi=None, roi_hsv: n
         if patch.size == 0:
             return False
         hsv = cv2.cvtColor(patch, cv2.COLOR_BGR2HSV)
+    if board_value is not None:
+        chroma = hsv[..., 1].astype(np.float32) * hsv[..., 2] / 255.0
+        return bool(np.mean(chroma < MIN_CHROMA * board_value) > 0.5)
     return bool(np.mean((hsv[..., 1] < 60) | (hsv[..., 2] < 60)) > 0.5)
 
 

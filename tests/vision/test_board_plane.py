@@ -133,3 +133,17 @@ def test_the_arm_and_the_walls_are_not_cubes_on_empty_boards(rob550):
         color, depth = _frame(name)
         cal = calibrate_extrinsics(color, intr, cfg, depth_mm=depth)
         assert [b for b in detect_blocks(color, depth, cal, cfg) if b.is_cube] == [], name
+
+
+def test_heights_follow_the_frames_own_board_after_the_depth_drifts(rob550, blocks_frame):
+    """Depth read 8 mm farther after calibration (drift, a knock): the frame's fitted plane follows it."""
+    from armlab.vision import detect_blocks
+
+    cfg, _ = rob550
+    color, depth, cal = blocks_frame
+    drifted = np.where(depth > 0, depth + 8, 0).astype(np.uint16)
+    cubes = [b for b in detect_blocks(color, drifted, cal, cfg) if b.is_cube]
+    before = {tuple(np.round(b.center_px / 10).astype(int)): b.height_m for b in detect_blocks(color, depth, cal, cfg) if b.is_cube}
+    assert len(cubes) == 12
+    changes = [abs(b.height_m - before[key]) for b in cubes if (key := tuple(np.round(b.center_px / 10).astype(int))) in before]
+    assert len(changes) >= 10 and max(changes) < 0.0015, changes
