@@ -274,6 +274,16 @@ class Station(Latch, MotionGate, ManualCommands, TeachCommands, JobControls, Per
         with self._lock:
             return self._lease.holder
 
+    def require_control(self, command: str, source: str | None) -> None:
+        """The lease check of a command outside the state table (program edits): NotController naming the
+        holder, ShuttingDown while closing; a free lease goes to `source`, as a motion command takes it."""
+        with self._lock:
+            if self._closing.is_set():
+                raise ShuttingDown(f"command '{command}' refused: the station is shutting down")
+            taken = self._lease.require(source, command)
+        if taken:
+            self.events.add("info", f"control taken by '{source}' (the lease was free)")
+
     def take_control(self, source: str) -> str | None:
         """Take the control lease over (explicitly); the event log tells everyone, the previous holder too.
         Returns the previous holder."""
