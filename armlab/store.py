@@ -32,6 +32,8 @@ from armlab.store_schema import NewerSchema, migrate
 
 log = logging.getLogger(__name__)
 
+MAX_PROGRAM_NAME_CHARS = 100  # a program's name (the API's limit too)
+
 DEFAULT_DB_PATH = Path(__file__).resolve().parents[1] / "var" / "armlab.sqlite3"
 MAX_DWELL_S = 3600.0  # the longest dwell or moving time of one waypoint
 
@@ -429,10 +431,13 @@ class Store:
 
 
 def _checked_program(name: str, waypoints: Sequence[Waypoint]) -> tuple[str, str]:
-    """(stripped name, waypoints JSON) of a program to write; ValueError for an empty name or no waypoints."""
+    """(stripped name, waypoints JSON) of a program to write; ValueError for an empty or too long name or
+    no waypoints."""
     name = str(name).strip()
     if not name:
         raise ValueError("a program needs a name")
+    if len(name) > MAX_PROGRAM_NAME_CHARS:
+        raise ValueError(f"a program name has at most {MAX_PROGRAM_NAME_CHARS} characters, this one {len(name)}")
     if not waypoints:
         raise ValueError("a program needs at least one waypoint: record one before saving")
     return name, json.dumps([waypoint.to_dict() for waypoint in waypoints])
