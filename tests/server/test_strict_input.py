@@ -176,3 +176,29 @@ def test_malformed_program_files_are_422_and_store_nothing(http, file_format, co
     error = response.json()["error"]
     assert error["code"] == "invalid" and fragment in error["message"], error["message"][:300]
     assert http.get("/api/programs").json() == before
+
+
+def _block(index: int, position_m: list[float]) -> dict:
+    return {"id": f"b{index}", "type": "block", "color": "red", "size": "large", "position_m": position_m}
+
+
+@pytest.mark.parametrize(
+    ("objects", "fragment"),
+    [
+        ([_block(0, [0.10, 0.20, 0.019]), _block(1, [0.12, 0.20, 0.019])], "b0 and b1 overlap"),
+        ([_block(0, [0.10, 0.20, -1.0])], "b0 is below the board"),
+        ([_block(0, [0.10, 0.20, 0.010])], "b0 is below the board"),  # 9 mm into the board
+        ([_block(i, [0.10, 0.20, 0.019]) for i in range(100)], "overlap"),  # exhausted MuJoCo's arena: a fault
+    ],
+    ids=["two-overlapping", "one-metre-below", "half-sunk", "hundred-in-one-place"],
+)
+def test_scenes_that_cannot_stand_are_422_and_change_nothing(http, objects, fragment):
+    """Issue 18 item 8: a block at z = -1 m was flung to z = 98.8 m, 100 overlapping blocks faulted the station."""
+    scene = [_block(0, [-0.10, 0.20, 0.019]), _block(1, [0.10, 0.20, 0.019 + 0.038])]  # a block on a block only touches
+    assert http.post("/api/sim/scene", json={"objects": scene}, headers=AUTH).status_code == 200
+    response = http.post("/api/sim/scene", json={"objects": objects}, headers=AUTH)
+    assert response.status_code == 422, response.text[:300]
+    error = response.json()["error"]
+    assert error["code"] == "invalid" and fragment in error["message"], error["message"][:300]
+    assert http.get("/api/sim/scene").json()["objects"] == 2
+    assert http.get("/api/status").json()["state"] == "idle"
