@@ -95,6 +95,13 @@ def post_teach_stop(body: TeachStopRequest, station: StationDep, controller: Con
     return program_out(station, station.teach_stop(body.name, source=controller))
 
 
+@router.post("/teach/exit", response_model=Status)
+def post_teach_exit(station: StationDep, controller: ControlAuth) -> dict:
+    """Leave teach without saving: the draft stays on disk (teach/start resumes it); nothing moves."""
+    station.teach_exit(source=controller)
+    return station.status()
+
+
 @router.get("/programs", response_model=ProgramsResponse)
 def read_programs(station: StationDep) -> dict:
     """Saved programs; a damaged row is left out and named in `skipped`, never hiding the others."""
