@@ -48,11 +48,11 @@ def build_station_config(args: argparse.Namespace):
 
 def open_checked_store(db_path, backups: int) -> str | None:
     """Check the database file (and make its rolling backup); None if sound, else the one-line reason."""
-    from armlab.store import DamagedDatabase, Store
+    from armlab.store import DamagedDatabase, Store, UnusableDatabase
 
     try:
         Store(db_path, backups=backups)
-    except DamagedDatabase as error:
+    except (DamagedDatabase, UnusableDatabase) as error:
         return str(error)
     return None
 
