@@ -422,6 +422,24 @@ class Store:
             ),
         )
 
+    def record_job_start(self, job: dict) -> None:
+        """A job's row as it starts (state running), unless its outcome is already in: a station killed
+        mid-job leaves this row, which mark_interrupted_jobs turns into 'interrupted' at the next start."""
+        self._run(
+            "INSERT OR IGNORE INTO job_results (id, name, state, message, started_s, finished_s, result_json) "
+            "VALUES (?, ?, ?, ?, ?, NULL, 'null')",
+            (job["id"], job["name"], job["state"], job.get("message") or "", job["started_s"]),
+        )
+
+    def mark_interrupted_jobs(self) -> int:
+        """At start-up: jobs still 'running' were cut off by a kill, crash or power loss; they become
+        'interrupted'. Returns how many."""
+        rows = self._run(
+            "UPDATE job_results SET state = 'interrupted', message = ? WHERE state = 'running' RETURNING id",
+            ("the station stopped while this job ran (killed, crashed or lost power)",),
+        )
+        return len(rows)
+
     def job_results(self, limit: int = 50) -> list[dict]:
         """The newest job outcomes; damaged rows are logged and skipped."""
         rows = self._run(

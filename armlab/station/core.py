@@ -157,6 +157,9 @@ class Station(Latch, MotionGate, ManualCommands, TeachCommands, JobControls, Per
 
             self.perception_config = load_perception_config(workcell=self.config.workcell)  # the station's board and tags
         self.intrinsics.restore()
+        interrupted = self.store.mark_interrupted_jobs()
+        if interrupted:
+            self.events.add("warn", f"{interrupted} job(s) were cut off when the station last stopped: marked interrupted")
         if self.config.restore_calibration:
             self._restore_calibration()
         self._closing.clear()
@@ -466,6 +469,10 @@ class Station(Latch, MotionGate, ManualCommands, TeachCommands, JobControls, Per
             self._job = job
             self._jog = None
             start_job_thread(job, function, self._on_job_end, cleanup=cleanup)
+        try:  # on disk while it runs: a station killed mid-job shows it 'interrupted' after the restart
+            self.store.record_job_start(job.to_dict())
+        except Exception as store_error:  # noqa: BLE001 - the job matters more than its record
+            log.warning("could not record the start of job %s: %s", job.id, store_error)
         self.events.add("info", f"job '{name}' started" + (f": {detail}" if detail else ""))
         return job
 
