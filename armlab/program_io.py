@@ -90,12 +90,12 @@ def parse_json(text: str, dof: int) -> tuple[str | None, list[Waypoint]]:
             raise ProgramFileError(f"{where}: needs 'joints_rad' and 'gripper'")
         joints = item["joints_rad"]
         if not isinstance(joints, list) or not all(_is_number(v) for v in joints):
-            raise ProgramFileError(f"{where}: 'joints_rad' must be a list of finite numbers")
+            raise ProgramFileError(f"{where}: 'joints_rad' must be a list of numbers (finite)")
         if len(joints) != dof:
             raise ProgramFileError(f"{where}: {len(joints)} joint values, the arm has {dof}")
         for key in ("dwell_s", "moving_time_s"):
             if item.get(key) is not None and not _is_number(item[key]):
-                raise ProgramFileError(f"{where}: '{key}' must be a finite number")
+                raise ProgramFileError(f"{where}: '{key}' must be a number (finite)")
         unknown = set(item) - {"joints_rad", "gripper", "dwell_s", "moving_time_s"}
         if unknown:
             raise ProgramFileError(f"{where}: unknown field(s) {', '.join(sorted(unknown))}")
