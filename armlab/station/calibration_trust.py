@@ -154,7 +154,8 @@ class CalibrationTrust:
                 return  # a frame from before the restore (a camera's buffered frame) proves nothing
         if judging_restored:
             threshold_px = self.perception_config.calibration.drift_threshold_px
-            if warning is not None and drift_px is not None:  # moved (too few tags: not used, still checking)
+            # Moved: rejected. Too few tags: not used, checked again later (synchronous mode looks only once: rejected).
+            if warning is not None and (drift_px is not None or self.synchronous):
                 with self._lock:
                     self._restored_rejected = True
                 self.events.add("warn", f"restored calibration not trusted: {warning}")
