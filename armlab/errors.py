@@ -78,3 +78,13 @@ class ArmMoving(CommandRefused):
     def __init__(self, command: str, state: str, allowed: list[str] | tuple[str, ...]) -> None:
         super().__init__(command, state, allowed)
         self.args = (f"command '{command}' refused: the arm is still moving; send the next step once it has stopped (?wait=true waits)",)
+
+
+class NoArmError(CommandRefused):
+    """A command that needs the arm, on a station that has none (`armlab serve --arm none`: perception only;
+    HTTP 409 `no_arm`). Nothing is planned and nothing moves."""
+
+    def __init__(self, command: str, state: str = "idle", allowed: list[str] | tuple[str, ...] = ()) -> None:
+        super().__init__(command, state, allowed)
+        self.args = (f"'{command}' refused: this station has no arm (perception only: calibrate, detections, click → world); "
+                     "start it with an arm to move",)

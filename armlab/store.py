@@ -1,4 +1,4 @@
-"""SQLite persistence for the station: taught programs, calibrations, camera intrinsics and job results.
+"""SQLite persistence for the station: taught programs, calibrations, camera intrinsics, colour calibrations and job results.
 
 One real file (default var/armlab.sqlite3). Each call opens its own short-lived connection, so the
 store is safe to use from the station's job threads and the server's threads alike.
@@ -402,6 +402,28 @@ class Store:
                 return {**value, "created_s": float(created_s)}
             except _ROW_ERRORS as error:
                 self._skip(f"intrinsics {row_id}", error)
+        return None
+
+    # Colour calibration ---------------------------------------------------------------------------
+
+    def save_color_calibration(self, data: dict) -> int:
+        """Save the station's colour calibration (its JSON dict: {"samples": [...]}); returns the row id."""
+        rows = self._run("INSERT INTO color_calibrations (created_s, data_json) VALUES (?, ?) RETURNING id",
+                         (time.time(), json.dumps(data)))
+        return int(rows[0][0])
+
+    def latest_color_calibration(self) -> dict | None:
+        """The newest colour calibration that reads back ({"created_s", **data}; damaged rows are logged
+        and skipped), else None."""
+        rows = self._run("SELECT id, created_s, data_json FROM color_calibrations ORDER BY id DESC LIMIT 20", raw_text=True)
+        for row_id, created_s, data in rows:
+            try:
+                value = json.loads(data.decode("utf-8"))
+                if not isinstance(value, dict):
+                    raise ValueError("not a JSON object")
+                return {**value, "created_s": float(created_s)}
+            except _ROW_ERRORS as error:
+                self._skip(f"colour calibration {row_id}", error)
         return None
 
     # Job results ----------------------------------------------------------------------------------

@@ -56,6 +56,16 @@ MIGRATIONS: tuple[str, ...] = (
     );
     CREATE INDEX IF NOT EXISTS intrinsics_by_camera ON intrinsics (camera, id);
     """,
+    # 4: the station's colour calibration (operator samples: colour name + board-normalised CIELAB,
+    # armlab/station/colors.py); the newest row is the one in use, a reset stores one with no samples
+    # (issue 17 item 2).
+    """
+    CREATE TABLE IF NOT EXISTS color_calibrations (
+        id INTEGER PRIMARY KEY AUTOINCREMENT,
+        created_s REAL NOT NULL,
+        data_json TEXT NOT NULL
+    );
+    """,
 )
 
 SCHEMA_VERSION = len(MIGRATIONS)

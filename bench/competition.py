@@ -104,12 +104,13 @@ def seconds(value, digits: int = 1) -> str:
     return "-" if value is None else f"{value:.{digits}f} s"
 
 
-def run_cell(cell: Cell, seeds: list[int], workers: int, ray_address: str | None) -> None:
+def run_cell(cell: Cell, seeds: list[int], workers: int, ray_address: str | None, realism: str | None = None) -> None:
     reason = episode_unsupported(cell.job, cell.level, cell.workcell)
     if reason:
         cell.skipped = f"not run: {reason}"
         return
-    for run in evaluate(cell.job, cell.level, seeds, workers=workers, ray_address=ray_address, workcell=cell.workcell):
+    for run in evaluate(cell.job, cell.level, seeds, workers=workers, ray_address=ray_address, workcell=cell.workcell,
+                        realism=realism):
         cell.runs.append(run)
         print(".", end="", flush=True)
 
@@ -237,6 +238,8 @@ def main() -> int:
     parser.add_argument("--ray", metavar="ADDRESS", help="run on a Ray cluster instead of local processes")
     parser.add_argument("--jobs", help="comma-separated job names (default: every job in armlab.tasks.JOBS)")
     parser.add_argument("--levels", help="comma-separated levels run for jobs that have them (default: all)")
+    parser.add_argument("--realism", choices=("real", "ideal"), default=None,
+                        help="real or ideal simulation (default: config/sim.yaml `realism`)")
     parser.add_argument("--workcells", default=DEFAULT_WORKCELL,
                         help=f"comma-separated workcells (config/workcells; default {DEFAULT_WORKCELL}): each job runs on each")
     args = parser.parse_args()
@@ -263,7 +266,7 @@ def main() -> int:
     where = f"Ray cluster {args.ray}" if args.ray else f"{args.workers} worker process(es)"
     print(f"seeds ({len(seeds)}): {', '.join(map(str, seeds))}")
     print(f"jobs in armlab.tasks.JOBS: {', '.join(f'{n} L{min(s.levels)}-{max(s.levels)}' if s.levels else n for n, s in JOBS.items())}")
-    print(f"workcells: {', '.join(workcells)}")
+    print(f"workcells: {', '.join(workcells)}; realism: {args.realism or 'config/sim.yaml'}")
     print(f"running on {where}; one dot per run", flush=True)
 
     cells: dict[tuple[str, str, int | None], Cell] = {}
@@ -276,7 +279,7 @@ def main() -> int:
                     continue  # none of its levels asked for
                 cell = cells[(workcell, name, level)] = Cell(name, level, workcell=workcell)
                 print(f"{cell.name}: ", end="", flush=True)
-                run_cell(cell, seeds, args.workers, args.ray)
+                run_cell(cell, seeds, args.workers, args.ray, args.realism)
                 print(f" {cell.skipped or 'done'}", flush=True)
     elapsed_s = time.monotonic() - started
 

@@ -3,6 +3,10 @@ perturbed per scene (the sim's "bumped rig"), against ground truth; then the per
 whole perception pass on one core and the JPEG encode time.
 
     MUJOCO_GL=egl .venv/bin/python bench/perception.py [--scenes 110] [--first-seed 0] [--board-scenes 5]
+        [--realism real|ideal] [--depth-offset-m M] [--depth-tilt-deg D]
+
+--realism real: the camera with a real L515's imperfections (config/cameras/sim_l515.yaml `realism:`);
+--depth-offset-m / --depth-tilt-deg replace its depth plane offset and tilt (0 0: as if calibrated away).
 
 Each scene is calibrated from a frame with the arm parked (as the station does), then perceived with
 the robot self-filter on (the frame's arm joints, as the station passes them).
@@ -78,12 +82,14 @@ def arm_over_block(cell: SimWorkcell, scene: Scene, rng: np.random.Generator) ->
     cell.step(3.0)
 
 
-def make_cell(seed: int, attempts: int = 30) -> SimWorkcell:
+def make_cell(seed: int, attempts: int = 30, realism: str | None = None, depth_offset_m: float | None = None,
+              depth_tilt_deg: float | None = None) -> SimWorkcell:
     """A workcell whose rig is bumped by `seed`. Retries for a while if config/ is momentarily invalid
     (the tree is shared with people editing it); a persistent error is raised."""
     for attempt in range(attempts):
         try:
-            return SimWorkcell(SimWorkcellConfig(realtime=False, seed=seed, camera_pose_error=True))
+            return SimWorkcell(SimWorkcellConfig(realtime=False, seed=seed, camera_pose_error=True, realism=realism,
+                                                 depth_offset_m=depth_offset_m, depth_tilt_deg=depth_tilt_deg))
         except ConfigError:
             if attempt == attempts - 1:
                 raise
@@ -109,7 +115,7 @@ def run(args) -> int:
             before = len(scene.objects)
             scene = add_touching_twin(scene)
             touching_scenes += len(scene.objects) > before
-        cell = make_cell(seed)
+        cell = make_cell(seed, realism=args.realism, depth_offset_m=args.depth_offset_m, depth_tilt_deg=args.depth_tilt_deg)
         cell.start()
         try:
             cell.set_scene(scene)
@@ -223,7 +229,7 @@ def click_calibration_accuracy(args) -> None:
     cfg = load_perception_config()
     views = []
     for seed in range(args.first_seed, args.first_seed + args.board_scenes):
-        cell = make_cell(seed)
+        cell = make_cell(seed, realism=args.realism, depth_offset_m=args.depth_offset_m, depth_tilt_deg=args.depth_tilt_deg)
         cell.start()
         try:
             cell.step(0.3)
@@ -327,7 +333,12 @@ def main(argv=None) -> int:
     parser.add_argument("--repeats", type=int, default=20)
     parser.add_argument("--verbose", action="store_true")
     parser.add_argument("--board-scenes", type=int, default=5, help="rigs per board in the 36h11 vs 41h12 comparison (0: skip)")
+    parser.add_argument("--realism", choices=("real", "ideal"), default=None, help="simulated camera (default: config/sim.yaml)")
+    parser.add_argument("--depth-offset-m", type=float, default=None, help="realism real: the depth plane's offset (m)")
+    parser.add_argument("--depth-tilt-deg", type=float, default=None, help="realism real: the depth plane's tilt (deg)")
     args = parser.parse_args(argv)
+    print(f"realism: {args.realism or 'config/sim.yaml'}" + (f", depth offset {args.depth_offset_m} m" if args.depth_offset_m is not None else "")
+          + (f", tilt {args.depth_tilt_deg} deg" if args.depth_tilt_deg is not None else ""), flush=True)
     status = run(args) if args.scenes > 0 else 0
     if args.board_scenes > 0:
         compare_boards(args)

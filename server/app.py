@@ -20,7 +20,7 @@ import armlab
 from server.auth import resolve_token
 from server.errors import install_error_handlers
 from server.guard import HostOriginGuard
-from server.routes import arm, auto, calibration, calibration_settings, detections, intrinsics, jobs, programs, repeat, sim, station, stream
+from server.routes import arm, auto, calibration, calibration_settings, colors, detections, intrinsics, jobs, programs, repeat, sim, station, stream
 from server.stream import StreamHub
 from server.waiting import Waiter
 
@@ -102,7 +102,7 @@ def create_app(
         """Liveness check."""
         return {"status": "ok", "version": armlab.__version__}
 
-    for module in (station, arm, calibration, calibration_settings, intrinsics, detections, jobs, auto, programs, repeat, sim, stream):
+    for module in (station, arm, calibration, calibration_settings, colors, intrinsics, detections, jobs, auto, programs, repeat, sim, stream):
         app.include_router(module.router)
     if web_dir is not None and Path(web_dir, "index.html").exists():
         app.mount("/", StaticFiles(directory=str(web_dir), html=True), name="web")

@@ -9,7 +9,7 @@ from fastapi.exceptions import RequestValidationError
 from fastapi.responses import JSONResponse
 from starlette.exceptions import HTTPException as StarletteHTTPException
 
-from armlab.errors import CalibrationUntrusted, CommandRefused, DeviceNotConnectedError, NeedsConfirmation, NotController
+from armlab.errors import CalibrationUntrusted, CommandRefused, DeviceNotConnectedError, NeedsConfirmation, NoArmError, NotController
 from armlab.station.core import NotCalibrated
 from armlab.store import NotFound
 
@@ -51,6 +51,8 @@ def _classify(error: Exception) -> tuple[int, str]:
         from armlab.kinematics import Unreachable
     except ImportError:  # kinematics not installed: nothing can raise it
         Unreachable = ()  # type: ignore[assignment]  # noqa: N806
+    if isinstance(error, NoArmError):
+        return 409, "no_arm"
     if isinstance(error, CommandRefused):
         return 409, "wrong_state"
     if isinstance(error, NotController):
@@ -81,7 +83,8 @@ _DOCUMENTED_ERRORS = {
     "403": "refused: a Host this station does not serve, or a foreign Origin",
     "404": "no such item (or a damaged one, left out)",
     "409": "not allowed in the current state (allowed commands listed), not calibrated or the calibration not trusted "
-    "(the reason), another client controls the station (named), or needs confirm: true",
+    "(the reason), another client controls the station (named), needs confirm: true, or needs an arm the station "
+    "does not have (no_arm)",
     "422": "invalid input, or an unreachable or unsafe target; nothing moved",
     "503": "a device is not connected, timed out or is still lost, or the station is shutting down",
 }

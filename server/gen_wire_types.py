@@ -11,9 +11,11 @@ import json
 import sys
 from pathlib import Path
 
-from armlab.station.states import COMMANDS, State
+from armlab.station.slots import EventLog
+from armlab.station.states import ARM_COMMANDS, COMMANDS, State
 from server.models import ERROR_CODES, WIRE_MODELS
 from server.program_models import PROGRAM_WIRE_MODELS
+from server.stream_models import CLIENT_MESSAGES, SERVER_MESSAGES, message_type
 from server.views import LAYERS, VIEWS
 
 OUTPUT = Path(__file__).resolve().parents[1] / "web" / "js" / "wire_types.js"
@@ -76,11 +78,13 @@ def render() -> str:
         "",
         f"export const STATES = Object.freeze({json.dumps([state.value for state in State])});",
         f"export const COMMANDS = Object.freeze({json.dumps(list(COMMANDS))});",
+        f"export const ARM_COMMANDS = Object.freeze({json.dumps([c for c in COMMANDS if c in ARM_COMMANDS])});",
         f"export const VIEWS = Object.freeze({json.dumps(list(VIEWS))});",
         f"export const LAYERS = Object.freeze({json.dumps(list(LAYERS))});",
         f"export const ERROR_CODES = Object.freeze({json.dumps(list(ERROR_CODES))});",
-        'export const SERVER_MESSAGE_TYPES = Object.freeze(["frame", "telemetry", "event", "calibration", "hello"]);',
-        'export const CLIENT_MESSAGE_TYPES = Object.freeze(["ack", "view", "command"]);',
+        f"export const SERVER_MESSAGE_TYPES = Object.freeze({json.dumps([message_type(m) for m in SERVER_MESSAGES])});",
+        f"export const CLIENT_MESSAGE_TYPES = Object.freeze({json.dumps([message_type(m) for m in CLIENT_MESSAGES])});",
+        f"export const EVENT_KINDS = Object.freeze({json.dumps(list(EventLog.KINDS))});",
         "",
     ]
     for name in sorted(definitions):

@@ -38,6 +38,7 @@ from server.auto_models import (
     ScoreRule,
     TaskProgress,
 )
+from server.colors_models import COLOR_WIRE_MODELS
 from server.response_models import (
     CalibrationInfo,
     Detection,
@@ -178,6 +179,7 @@ WIRE_MODELS: tuple[type[BaseModel], ...] = (
 
 WIRE_MODELS = (
     *WIRE_MODELS,
+    *COLOR_WIRE_MODELS,
     AutoRequest,
     AutoParam,
     AutoJobInfo,

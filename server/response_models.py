@@ -54,7 +54,7 @@ class Status(Wire):
     joint_names: list[str]
     joint_limits_rad: list[list[float]] = Field(description="[lower, upper] per joint")
     gripper: GripperStatus
-    gripper_pose: GripperPose
+    gripper_pose: GripperPose | None = Field(description="the gripper's pose (FK of the joints); None on a station with no arm")
     moving: bool
     torque_enabled: bool = Field(True, description="motor torque on (the arm holds); off = limp, it falls unless held")
     calibrated: bool
@@ -84,6 +84,8 @@ class Detection(Wire):
     occluded: bool
     aruco_id: int | None = None
     destination: Any = None
+    color_lab: list[float] | None = Field(None, description="the top face's colour, board-normalised CIELAB (L, a, b): "
+                                          "what an 'unknown' colour measured")
 
 
 class DetectionsResponse(Wire):
@@ -113,6 +115,9 @@ class CalibrationInfo(Wire):
     width: int | None = None
     height: int | None = None
     depth_check_error_m: float | None = None
+    depth_offset_m: float | None = Field(None, description="the depth camera's board plane above (+) or behind (-) the tags' plane")
+    depth_tilt_deg: float | None = Field(None, description="angle between the depth camera's board plane and the tags' plane")
+    depth_model: str | None = Field(None, description="the two in words, e.g. 'depth 8.3 mm behind the tags' plane, tilted 1.52 deg'")
     grid_points_px: list[list[float]] | None = None
     tags: list[TagInfo] | None = None
     time: float | None = None

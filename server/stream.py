@@ -9,7 +9,9 @@ a slow or stalled client holds at most one frame in flight and never slows anyon
 A session with the control token is a controller named by `?controller=` (else a name of its own): it
 may take the control lease, its heartbeats keep its hold-to-run jog going, and when its last session
 closes the lease it holds is released. Calls into the station run off the event loop (e-stop on the
-app's safety pool).
+app's safety pool). A session's e-stop is never queued behind its other messages: acks, view changes and
+e-stops are handled as they arrive, the station calls of other commands and heartbeats in order on the
+session's own task.
 """
 
 from __future__ import annotations
@@ -23,7 +25,7 @@ import threading
 import time
 from collections import Counter
 from dataclasses import dataclass, field
-from typing import Annotated
+from typing import Annotated, Union
 
 from pydantic import Field, TypeAdapter, ValidationError
 from starlette.websockets import WebSocket, WebSocketDisconnect
@@ -34,20 +36,23 @@ from armlab.station.lease import checked_controller
 from armlab.station.perception import _Worker
 from armlab.workcell import DEFAULT_WORKCELL, load_workcell
 from server.models import AckMessage, CommandMessage, HeartbeatMessage, ViewMessage
+from server.stream_models import CLIENT_MESSAGES, message_type
 from server.views import ViewKey, compose_view, encode_jpeg
 
 log = logging.getLogger(__name__)
 
 # What a client may send: validated strictly (server/models.py), dispatched on "type".
-CLIENT_MESSAGE = TypeAdapter(Annotated[AckMessage | ViewMessage | CommandMessage | HeartbeatMessage, Field(discriminator="type")])
+CLIENT_MESSAGE = TypeAdapter(Annotated[Union[CLIENT_MESSAGES], Field(discriminator="type")])  # noqa: UP007 - a tuple
+_CLIENT_TYPES = [message_type(model) for model in CLIENT_MESSAGES]
 _SESSION_NUMBERS = itertools.count(1)
+MAX_QUEUED_CALLS = 32  # a session's station calls waiting behind a slow one; more are refused with an error event
 
 
 def _message_error(text: str, error: ValidationError) -> str:
     """One line for the client: what was wrong with its message."""
     first = error.errors()[0]
     where = ".".join(str(part) for part in first.get("loc", ()))
-    return f"bad message {text[:80]!r}: {where + ': ' if where else ''}{first.get('msg')} (expected type ack, view, command or heartbeat)"
+    return f"bad message {text[:80]!r}: {where + ': ' if where else ''}{first.get('msg')} (expected type {', '.join(_CLIENT_TYPES[:-1])} or {_CLIENT_TYPES[-1]})"
 
 
 @dataclass(frozen=True)
@@ -138,6 +143,7 @@ class ClientSession:
     calibration_version: int = 0
     event_seq: int = 0
     frames_sent: int = 0
+    calls: asyncio.Queue = field(default_factory=lambda: asyncio.Queue(MAX_QUEUED_CALLS))  # commands, heartbeats
 
 
 class StreamHub:
@@ -147,6 +153,7 @@ class StreamHub:
         self.station = station
         self.safety_pool = safety_pool  # None: the loop's default executor
         self._workcell: dict | None = None
+        self._arm: dict | None = None  # arm_info(station), read once off the loop (it loads the workcell file)
         self.loop: asyncio.AbstractEventLoop | None = None
         self.clients: set[ClientSession] = set()
         self.frames: dict[ViewKey, EncodedFrame] = {}
@@ -232,16 +239,19 @@ class StreamHub:
                                event_seq=self.station.events.last_seq)
         if self._workcell is None:  # read once, off the event loop (a config file)
             self._workcell = await self._off_loop(self._workcell_info)
+        if self._arm is None:  # likewise: the gripper type comes from the workcell file
+            self._arm = await self._off_loop(arm_info, self.station)
         hello = {"type": "hello", "server_time_s": time.time(), "can_control": can_control,
                  "controller": client.controller if can_control else None, "backend": self.station.backend,
-                 "workcell": self._workcell, "arm": arm_info(self.station), "limits": {"max_moving_time_s": float(self.station.config.max_moving_time_s)}}
+                 "workcell": self._workcell, "arm": self._arm, "limits": {"max_moving_time_s": float(self.station.config.max_moving_time_s)}}
         await websocket.send_text(json.dumps(hello))
         calibration = await self._off_loop(lambda: self.station.calibration_info)
         await websocket.send_text(json.dumps({"type": "calibration", **calibration}))
         client.calibration_version = self.calibration_version
         self.clients.add(client)
         self.encoder.watch(client.key)
-        tasks = {asyncio.create_task(self._send_loop(client)), asyncio.create_task(self._receive_loop(client))}
+        tasks = {asyncio.create_task(self._send_loop(client)), asyncio.create_task(self._receive_loop(client)),
+                 asyncio.create_task(self._call_loop(client))}
         try:
             # Whichever ends first (client gone, send failed) ends the session.
             done, _ = await asyncio.wait(tasks, return_when=asyncio.FIRST_COMPLETED)
@@ -300,7 +310,19 @@ class StreamHub:
                     client.wake.set()
             elif isinstance(parsed, ViewMessage):
                 await self._change_view(client, parsed.view, parsed.layers)
-            elif isinstance(parsed, HeartbeatMessage):
+            elif isinstance(parsed, CommandMessage) and parsed.name == "estop":
+                await self._command(client, "estop")  # at once: never behind a slow command of this session
+            else:
+                try:
+                    client.calls.put_nowait(parsed)
+                except asyncio.QueueFull:
+                    await self._reply_error(client, f"too many messages waiting ({MAX_QUEUED_CALLS}): {text[:80]!r} dropped")
+
+    async def _call_loop(self, client: ClientSession) -> None:
+        """The session's commands (but e-stop) and heartbeats, one at a time in the order they came."""
+        while True:
+            parsed = await client.calls.get()
+            if isinstance(parsed, HeartbeatMessage):
                 if client.can_control:
                     try:
                         await self._off_loop(self.station.heartbeat, client.controller)
@@ -348,4 +370,4 @@ class StreamHub:
             await self._reply_error(client, str(error))
 
     async def _reply_error(self, client: ClientSession, message: str) -> None:
-        await client.websocket.send_text(json.dumps({"type": "event", "level": "error", "message": message, "time_s": time.time()}))
+        await client.websocket.send_text(json.dumps({"type": "event", "level": "error", "kind": "general", "message": message, "time_s": time.time()}))

@@ -2,7 +2,7 @@
 
 from __future__ import annotations
 
-from typing import Literal
+from typing import Literal, get_args
 
 from pydantic import Field
 
@@ -27,8 +27,11 @@ class TelemetryMessage(Status):
 
 
 class EventMessage(Wire):
+    """An operator event. The page acts on `kind` (armlab.station.slots.EventLog.KINDS), never on the text."""
+
     type: Literal["event"] = "event"
     level: Literal["info", "warn", "error"]
+    kind: Literal["general", "scene"] = Field(description="what happened, for a client to act on; 'general': for people only")
     message: str
     time_s: float
 
@@ -82,8 +85,10 @@ class ArmInfo(Wire):
     joint_limits_rad: list[list[float]] = Field(description="[lower, upper] per joint, joint_names order")
     velocity_limits_rad_s: list[float]
     home_rad: list[float]
-    gripper_type: Literal["fingers", "suction"]
+    gripper_type: Literal["fingers", "suction", "none"]
     full_pose: bool = Field(description="Cartesian moves keep the tool's whole orientation (six joints or more), else pitch and yaw")
+    has_arm: bool = Field(True, description="False: a station with no arm (armlab serve --arm none), perception only; no joints")
+    reason: str | None = Field(None, description="why the arm's panels are off (a station with no arm)")
 
 
 class LimitsInfo(Wire):
@@ -123,3 +128,14 @@ class HeartbeatMessage(Request):
     """The controlling page is still there: keeps its hold-to-run jog going for another jog_hold_s."""
 
     type: Literal["heartbeat"]
+
+
+# Every websocket message each side sends, one model per `type` (the generator and stream.py read these).
+SERVER_MESSAGES = (FrameHeader, TelemetryMessage, EventMessage, CalibrationMessage, HelloMessage)
+CLIENT_MESSAGES = (AckMessage, ViewMessage, CommandMessage, HeartbeatMessage)
+
+
+def message_type(model: type[Wire]) -> str:
+    """The `type` a websocket message model carries (its field's one Literal value)."""
+    (value,) = get_args(model.model_fields["type"].annotation)
+    return value

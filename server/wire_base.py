@@ -26,6 +26,7 @@ ERROR_CODES = (
     "forbidden",
     "not_controller",
     "needs_confirmation",
+    "no_arm",
     "device",
     "internal",
 )

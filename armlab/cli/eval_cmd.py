@@ -27,6 +27,9 @@ def register(subparsers: argparse._SubParsersAction) -> None:
     where.add_argument("--workers", default="1", help="processes running seeds in parallel (default 1: this process)")
     where.add_argument("--ray", metavar="ADDRESS", help="run the seeds as tasks on a Ray cluster: auto or host:port "
                                                       "(needs the cluster extra: pip install 'armlab[cluster]')")
+    parser.add_argument("--realism", choices=("real", "ideal"), default=None,
+                        help="real: the simulated camera (and later the arm) with a real one's imperfections; ideal: "
+                             "exact. Default: config/sim.yaml `realism` (real)")
     parser.add_argument("--truth-out", type=Path, metavar="DIR",
                         help="write each run's final ground truth (+ gripper_path_m) to DIR/<seed>.json")
     parser.add_argument("--json", action="store_true", help='print {"runs": [...], "summary": {...}} only')
@@ -52,7 +55,7 @@ def run_eval(args: argparse.Namespace) -> int:
         seeds = parse_seeds(args.seeds)
         workers = _int_option("--workers", args.workers)
         runs_iter = evaluate(args.event, level, seeds, workers=workers, ray_address=args.ray,
-                             keep_truth=args.truth_out is not None, workcell=args.workcell)
+                             keep_truth=args.truth_out is not None, workcell=args.workcell, realism=args.realism)
         if args.truth_out is not None:
             if args.truth_out.exists() and not args.truth_out.is_dir():
                 raise EvalError(f"--truth-out {args.truth_out} exists and is not a directory")
@@ -63,7 +66,8 @@ def run_eval(args: argparse.Namespace) -> int:
     if not args.json:
         backend = f"Ray cluster {args.ray}" if args.ray else f"{workers} worker process(es)" if workers > 1 else "this process"
         print(f"{args.event}" + (f" L{level}" if level is not None else "") +
-              (f" on workcell {args.workcell}" if args.workcell else "") + f": {len(seeds)} seed(s) {_seed_text(seeds)} on {backend}", flush=True)
+              (f" on workcell {args.workcell}" if args.workcell else "") +
+              (f" ({args.realism} simulation)" if args.realism else "") + f": {len(seeds)} seed(s) {_seed_text(seeds)} on {backend}", flush=True)
     started = time.monotonic()
     runs = []
     try:

@@ -16,12 +16,26 @@ def register(subparsers: argparse._SubParsersAction) -> None:
     parser.add_argument("--event", default=None, help="starting scene: pick_sort, pick_stack, line_up, stack_high, to_the_sky")
     parser.add_argument("--level", type=int, default=None, help="starting scene level (1-3)")
     parser.add_argument("--scene-seed", type=int, default=None, help="starting scene seed")
+    parser.add_argument("--realism", choices=("real", "ideal"), default=None,
+                        help="simulation: real (the camera's imperfections, shadows, clutter) or ideal (exact); "
+                             "default from the config, else config/sim.yaml `realism`")
     parser.add_argument("--workcell", default=None,
                         help="workcell (config/workcells/<name>.yaml: arm, gripper, board, camera); default from the config, rx200_armlab")
-    parser.add_argument("--backend", choices=("sim", "real"), default="sim", help="sim (default) or real devices")
-    parser.add_argument("--arm", default="interbotix_arm", help="real backend: arm config (config/devices/)")
-    parser.add_argument("--gripper", default="interbotix_gripper", help="real backend: gripper config (config/devices/)")
-    parser.add_argument("--camera", default="realsense_l515", help="real backend: camera config (config/cameras/)")
+    parser.add_argument("--backend", choices=("sim", "real"), default=None,
+                        help="sim or real devices (default: sim, or real when --arm none or --camera is given)")
+    parser.add_argument("--arm", default=None,
+                        help="real backend: arm config (config/devices/; default interbotix_arm); 'none': no arm, perception only")
+    parser.add_argument("--gripper", default=None, help="real backend: gripper config (config/devices/; default interbotix_gripper)")
+    parser.add_argument("--camera", default=None,
+                        help="real backend: camera config (config/cameras/: realsense_l515 (default), webcam, recorded)")
+    parser.add_argument("--source", default=None,
+                        help="the camera's source: recorded: a folder of image_*.png + depth_*.png or a ROS bag; webcam: a device index or video file")
+    parser.add_argument("--intrinsics", default=None,
+                        help="recorded camera: intrinsics file (K, dist, image_size); default the folder's intrinsics.json or the bag's camera_info")
+    parser.add_argument("--board", default=None,
+                        help="real backend: the board's tags: a config/boards/ name (rob550: tagStandard41h12) or 'auto' (the known "
+                             "board whose tags the first frame shows; the default with a recorded camera); default the workcell's")
+    parser.add_argument("--frame", default=None, help="recorded camera (folder): hold the pair image_<FRAME>.png + depth_<FRAME>.png")
     parser.add_argument("--log-level", default="warning", choices=("debug", "info", "warning", "error"))
     parser.set_defaults(func=run_serve)
 
@@ -38,12 +52,40 @@ def build_station_config(args: argparse.Namespace):
         config = validate_config({**read_config_file(path), "workcell": workcell}, StationConfig, f"{path} with --workcell {workcell}")
     sim_updates = {
         key: value
-        for key, value in (("seed", args.seed), ("event", args.event), ("level", args.level), ("scene_seed", args.scene_seed))
+        for key, value in (("seed", args.seed), ("event", args.event), ("level", args.level), ("scene_seed", args.scene_seed),
+                           ("realism", getattr(args, "realism", None)))
         if value is not None
     }
     if sim_updates:
         config = config.model_validate({**config.model_dump(), "sim": {**config.sim.model_dump(), **sim_updates}})
     return config
+
+
+def device_choice(args: argparse.Namespace) -> tuple[str, str, str, object, str | None]:
+    """(backend, arm, gripper, camera config, board) from the command line: --arm none or --camera means real devices;
+    --source, --intrinsics and --frame override the camera config's fields. ConfigError naming the option."""
+    from armlab.config import read_config_file, resolve_config_path
+    from armlab.errors import ConfigError
+
+    arm = args.arm or "interbotix_arm"
+    backend = args.backend or ("real" if args.arm == "none" or args.camera is not None else "sim")
+    if backend == "sim":
+        given = [f"--{name}" for name in ("arm", "gripper", "camera", "source", "intrinsics", "frame", "board")
+                 if getattr(args, name, None) is not None]
+        if given:
+            raise ConfigError(f"{', '.join(given)}: devices are chosen for the real backend; the simulation has its own (drop --backend sim)")
+        return backend, arm, "", None, None
+    gripper = args.gripper or ("none" if arm == "none" else "interbotix_gripper")
+    path = resolve_config_path(args.camera or "realsense_l515", "cameras")
+    camera = read_config_file(path)
+    overrides = {name: getattr(args, name) for name in ("source", "intrinsics", "frame") if getattr(args, name, None) is not None}
+    for name in overrides:
+        if (name != "source" and camera.get("type") != "recorded") or (name == "source" and camera.get("type") not in ("recorded", "opencv")):
+            raise ConfigError(f"--{name}: the {path.stem} camera ({path}, type {camera.get('type')}) has no {name}")
+    if "source" in overrides and camera.get("type") == "opencv" and overrides["source"].isdigit():
+        overrides["source"] = int(overrides["source"])
+    board = getattr(args, "board", None) or ("auto" if camera.get("type") == "recorded" else None)
+    return backend, arm, gripper, {**camera, **overrides}, board
 
 
 def open_checked_store(db_path, backups: int) -> str | None:
@@ -72,6 +114,7 @@ def run_serve(args: argparse.Namespace) -> int:
 
     try:
         config = build_station_config(args)  # the workcell decides the arm: unknown or contradicting names stop here
+        backend, arm, gripper, camera, board = device_choice(args)
     except ConfigError as error:
         print(f"armlab serve: {error}", file=sys.stderr, flush=True)
         return 2
@@ -80,9 +123,20 @@ def run_serve(args: argparse.Namespace) -> int:
         print(f"armlab serve: {problem}", file=sys.stderr, flush=True)
         return 2
     token, generated = resolve_token(args.token)
-    if args.backend == "real":
+    made = None
+    if backend == "real":
+        try:  # built before the server starts: a device or recording that cannot be used stops start-up in one line
+            made = make_device_station(config, arm, gripper, camera, db_path=args.db, board=board)
+        except (ValueError, ConnectionError, OSError, ImportError) as error:
+            print(f"armlab serve: {error}", file=sys.stderr, flush=True)
+            return 2
+        for note in made.notes:
+            print(note, flush=True)
+        if not made.station.has_arm:
+            print("no arm: perception only (calibrate, detections, click → world); motion commands are refused", flush=True)
+
         def factory():
-            return make_device_station(config, args.arm, args.gripper, args.camera, db_path=args.db)
+            return made
     else:
         def factory():
             return make_sim_station(config, db_path=args.db)
@@ -94,7 +148,11 @@ def run_serve(args: argparse.Namespace) -> int:
     print(f"ArmLab control station ({origin} control token). Open:\n    {url}\n", flush=True)
     if args.host not in ("127.0.0.1", "localhost", "::1"):
         print(f"warning: listening on {args.host}: anyone who can reach it can watch; the token guards control", flush=True)
-    run(app, args.host, args.port, args.log_level, log_config())
+    try:
+        run(app, args.host, args.port, args.log_level, log_config())
+    finally:
+        if made is not None and made.station.is_running:  # the server never started (e.g. the port is taken)
+            made.close()
     return 0
 
 

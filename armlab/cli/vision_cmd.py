@@ -14,6 +14,9 @@ def register(subparsers: argparse._SubParsersAction) -> None:
     tags.add_argument("image")
     tags.add_argument("--family", "--dict", dest="dict", default=None,
                       help="tag36h11 | tagStandard41h12 (AprilTag library) | DICT_... (OpenCV ArUco); default: the workcell's board tags")
+    tags.add_argument("--corners", choices=("opencv", "apriltag"), default="opencv",
+                      help="corner convention: opencv (TL, TR, BR, BL, pixel centres at integers; the station's) or "
+                           "apriltag (the AprilTag library's: counter-clockwise from bottom-left, pixel centres at +0.5)")
     tags.set_defaults(func=run_tags)
 
     intr = subparsers.add_parser("calibrate-intrinsics", help="camera intrinsics from checkerboard images")
@@ -43,6 +46,11 @@ def register(subparsers: argparse._SubParsersAction) -> None:
     det.add_argument("--depth", required=True, help="16-bit PNG depth in mm, aligned to colour")
     det.add_argument("--calibration", required=True, help="calibration JSON from calibrate-extrinsics")
     det.add_argument("--all", action="store_true", help="include non-cubes (distractors) and every field")
+    det.add_argument("--joints", default=None, metavar="Q1,Q2,...",
+                     help="the arm's joints (rad, comma-separated) when the frame was taken: the robot self-filter "
+                          "the live station uses then keeps the arm (and a block it holds) from being reported")
+    det.add_argument("--arm", default=None,
+                     help="the arm of --joints: config/arms/<name>.yaml or a path (default: the workcell's arm at its base pose)")
     det.set_defaults(func=run_detect)
 
 
@@ -79,11 +87,11 @@ def load_intrinsics(path: str | None):
 
     source = resolve_config_path(path or "sim_l515", "cameras")
     data = read_config_file(source)
+    if "intrinsics" not in data:  # an intrinsics file (K, dist, image_size; ROS camera_info): the recorded camera reads the same
+        from armlab.devices.recorded.intrinsics_file import read_intrinsics_file
+
+        return read_intrinsics_file(source)[0]
     try:
-        if "K" in data:
-            K = data["K"]
-            width, height = data.get("image_size") or (data["width"], data["height"])
-            return Intrinsics(int(width), int(height), float(K[0][0]), float(K[1][1]), float(K[0][2]), float(K[1][2]), tuple(float(x) for x in data.get("dist", [0.0] * 5)))
         k = data["intrinsics"]
         return Intrinsics(int(data["width"]), int(data["height"]), float(k["fx"]), float(k["fy"]), float(k["cx"]), float(k["cy"]), tuple(float(x) for x in k.get("dist", [0.0] * 5)))
     except (KeyError, TypeError, ValueError, IndexError) as error:
@@ -97,7 +105,8 @@ def run_tags(args: argparse.Namespace) -> int:
         tags = detect_tags(_read_color(args.image), load_perception_config(), dictionary=args.dict)
     except ValueError as error:
         return _fail(str(error))
-    print(json.dumps([{"id": t.id, "corners_px": t.corners_px.round(3).tolist(), "hamming": t.hamming,
+    corners = (lambda t: t.corners_apriltag_px()) if args.corners == "apriltag" else (lambda t: t.corners_px)
+    print(json.dumps([{"id": t.id, "corners_px": corners(t).round(3).tolist(), "hamming": t.hamming,
                        "decision_margin": None if t.decision_margin is None else round(t.decision_margin, 2)} for t in tags]))
     return 0
 
@@ -147,12 +156,57 @@ def run_calibrate_points(args: argparse.Namespace) -> int:
     return 0
 
 
+def parse_joints(text: str, model):
+    """--joints 'q1,q2,...' (radians) for the arm `model`: ValueError naming the option when a value is
+    not a finite number, the count is not the arm's, or a joint is outside its limits."""
+    import numpy as np
+
+    from armlab.station.checks import checked_joints
+
+    values = []
+    for item in text.split(","):
+        try:
+            value = float(item)
+        except ValueError:
+            raise ValueError(f"--joints: {item.strip()!r} is not a number (expected radians, comma-separated)") from None
+        if not np.isfinite(value):
+            raise ValueError(f"--joints: {item.strip()!r} is not a finite number")
+        values.append(value)
+    if len(values) != model.dof:
+        raise ValueError(f"--joints: arm {model.name} has {model.dof} joints ({', '.join(model.joint_names)}), got {len(values)} values")
+    try:
+        return checked_joints(model, values)
+    except ValueError as error:
+        raise ValueError(f"--joints: {error}") from None
+
+
+def detect_arm_model(name: str | None, workcell: str):
+    """The arm for --joints: the workcell's arm at its base pose, or config/arms/<name>.yaml (or a path)
+    at its own; ValueError naming --arm when it cannot be loaded."""
+    from armlab.kinematics import load_arm
+    from armlab.workcell import load_workcell, load_workcell_arm
+
+    cell = load_workcell(workcell)
+    try:
+        return load_workcell_arm(cell) if name is None or name == cell.arm else load_arm(name)
+    except (ValueError, OSError) as error:
+        raise ValueError(f"--arm {name}: {error}") from None
+
+
 def run_detect(args: argparse.Namespace) -> int:
-    from armlab.vision import Calibration, detect_blocks, load_perception_config
+    from armlab.vision import Calibration, load_perception_config
+    from armlab.vision.pipeline import PerceptionPipeline
 
     try:
+        if args.arm is not None and args.joints is None:
+            raise ValueError("--arm names the arm whose --joints are given: give --joints too")
+        cfg = load_perception_config()
+        model = detect_arm_model(args.arm, cfg.workcell) if args.joints is not None else None
+        joints = parse_joints(args.joints, model) if model is not None else None
         cal = Calibration.load(args.calibration)
-        blocks = detect_blocks(_read_color(args.color), _read_depth(args.depth), cal, load_perception_config())
+        color, depth = _read_color(args.color), _read_depth(args.depth)
+        # The live station's pass: with joints, the self-filter's robot mask is kept out of block detection.
+        blocks = PerceptionPipeline(cfg, model).process(color, depth, cal, layers=None, arm_joints_rad=joints).blocks
     except ValueError as error:
         return _fail(str(error))
     keys = ("color", "size", "position_m", "yaw_rad", "stack_level")

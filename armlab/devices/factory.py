@@ -22,12 +22,15 @@ BACKENDS: dict[str, dict[str, tuple[str, str, str]]] = {
     "camera": {
         "opencv": ("armlab.devices.opencv", "OpenCVCameraConfig", "OpenCVCamera"),
         "realsense": ("armlab.devices.realsense", "RealSenseCameraConfig", "RealSenseCamera"),
+        "recorded": ("armlab.devices.recorded", "RecordedCameraConfig", "RecordedCamera"),
     },
     "arm": {
         "interbotix": ("armlab.devices.interbotix", "InterbotixArmConfig", "InterbotixArm"),
+        "none": ("armlab.devices.none", "NoArmConfig", "NoArm"),
     },
     "gripper": {
         "interbotix": ("armlab.devices.interbotix", "InterbotixGripperConfig", "InterbotixGripper"),
+        "none": ("armlab.devices.none", "NoGripperConfig", "NoGripper"),
     },
 }
 CONFIG_SUBDIRS = {"camera": "cameras", "arm": "devices", "gripper": "devices"}

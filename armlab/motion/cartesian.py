@@ -69,9 +69,10 @@ def gripper_position_m(arm, q_rad) -> np.ndarray:
 
 
 def gripper_pitch_rad(arm, q_rad) -> float:
-    """Pitch of the approach axis (gripper x axis) below the horizontal at q; π/2 = pointing straight down."""
-    approach = np.asarray(arm.fk(np.asarray(q_rad, float)), float)[:3, 0]
-    return float(math.asin(max(-1.0, min(1.0, -approach[2]))))
+    """The pitch `arm.ik` means for the pose at q (ArmModel.pitch_of: below the horizontal in the vertical plane
+    through the base axis, π/2 = straight down; beyond ±π/2 when pointing back toward the base axis, which
+    an asin of the approach axis folds onto a different, often unreachable, orientation)."""
+    return float(arm.pitch_of(np.asarray(q_rad, float)))
 
 
 def vertical_profile_duration(distance_m: float, speed_m_s: float, accel_m_s2: float) -> float:

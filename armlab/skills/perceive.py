@@ -41,8 +41,8 @@ def pixel_to_world(station: Station, u: float, v: float) -> dict:
     depth = frame.depth_mm if frame is not None else None
     remembered = perception.surface_depth_mm if perception is not None else None
     robot = robot_volume_of(station, frame) if depth is not None else None
-    if depth is not None and robot is None:  # the arm's pose is unknown: its depth cannot be told from the board's
-        depth = None
+    if depth is not None and robot is None and getattr(station, "has_arm", True):
+        depth = None  # the arm's pose is unknown: its depth cannot be told from the board's (no arm: all depth is the scene's)
     point, on = pixel_to_world_off_robot(calibration, u, v, depth, robot, remembered)
     return {"position_m": [float(x) for x in point], "on": on}
 
@@ -125,6 +125,6 @@ def surface_height_m(station: Station, xy_m, radius_m: float = 0.008, max_height
     valid = inside & (depth_m > 0)
     if not valid.any():
         return unseen
-    world = transform_points(calibration.T_world_camera, backproject(pixels[valid], depth_m[valid], calibration.K, calibration.dist))
+    world = transform_points(calibration.T_world_depth, backproject(pixels[valid], depth_m[valid], calibration.K, calibration.dist))
     hits = (np.hypot(world[:, 0] - float(xy_m[0]), world[:, 1] - float(xy_m[1])) <= radius_m) & (np.abs(world[:, 2] - heights[valid]) <= 0.006)
     return float(max(0.0, world[hits, 2].max())) if hits.any() else unseen

@@ -18,6 +18,7 @@ from armlab.store import MAX_PROGRAM_NAME_CHARS, Program, Waypoint
 def update_program(station: Station, program_id: int, name: str | None = None, waypoints: Sequence[Waypoint] | None = None) -> Program:
     """Rename and/or replace the waypoints (checked); NotFound, ValueError, UnsafeTrajectory."""
     if waypoints is not None:
+        station.require_arm("editing a program's waypoints")
         check_waypoints(station, list(waypoints))
     return station.store.update_program(program_id, name=name, waypoints=waypoints)
 
@@ -44,6 +45,7 @@ def move_times_s(station: Station, waypoints: Sequence[Waypoint]) -> list[float]
 
 def export_program(station: Station, program_id: int, file_format: str) -> tuple[str, str]:
     """(file text, suggested file name) of a program as JSON or CSV."""
+    station.require_arm("exporting a program (its joints and move times are the arm's)")
     program = station.store.get_program(program_id)
     stem = "".join(c if c.isalnum() or c in "-_" else "_" for c in program.name)[:60] or f"program-{program.id}"
     if file_format == "json":
@@ -55,6 +57,7 @@ def export_program(station: Station, program_id: int, file_format: str) -> tuple
 
 def import_program(station: Station, file_format: str, content: str, name: str | None = None) -> Program:
     """Parse (ProgramFileError naming the line), check every waypoint, then save as a new program."""
+    station.require_arm("importing a program (its waypoints are checked against the arm)")
     dof = int(station.model.dof)
     if file_format == "json":
         file_name, waypoints = program_io.parse_json(content, dof)

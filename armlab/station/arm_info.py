@@ -6,10 +6,14 @@ from __future__ import annotations
 
 from armlab.motion.pose_path import holds_full_pose
 
+NO_ARM_REASON = "this station has no arm (perception only: calibrate, detections, click → world)"
+
 
 def station_gripper_type(station) -> str:
     """'fingers' or 'suction': the station's own `gripper_type` when it has one, else its workcell's
     (config/workcells/<workcell>.yaml gripper.type), else 'fingers' (a station without a workcell)."""
+    if getattr(station, "model", True) is None:
+        return "none"
     explicit = getattr(station, "gripper_type", None)
     if isinstance(explicit, str):
         return explicit
@@ -26,6 +30,9 @@ def arm_info(station) -> dict:
     names, [lower, upper] limits (rad), velocity limits (rad/s), home (rad), gripper type, and whether
     Cartesian moves keep the tool's whole orientation (six joints or more) or its pitch and yaw."""
     model = station.model
+    if model is None:  # a station with no arm (armlab serve --arm none)
+        return {"name": "none", "vendor": None, "joint_names": [], "joint_limits_rad": [], "velocity_limits_rad_s": [], "home_rad": [],
+                "gripper_type": "none", "full_pose": False, "has_arm": False, "reason": NO_ARM_REASON}
     return {
         "name": model.name,
         "vendor": getattr(model.config, "vendor", None),

@@ -43,6 +43,10 @@ def calibration_summary(calibration: Any, tags: Sequence, grid_px: np.ndarray) -
         "width": int(calibration.width),
         "height": int(calibration.height),
         "depth_check_error_m": None if depth_error is None else float(depth_error),
+        # The depth camera against the tags' plane (vision.board_plane), applied to every depth -> world.
+        "depth_offset_m": getattr(calibration, "depth_offset_m", None),
+        "depth_tilt_deg": getattr(calibration, "depth_tilt_deg", None),
+        "depth_model": None if getattr(calibration, "depth_correction", None) is None else calibration.depth_correction.describe(),
         "grid_points_px": np.asarray(grid_px, dtype=float).round(2).tolist(),
         "tags": [tag_to_dict(tag) for tag in tags],
         "time": time.time(),

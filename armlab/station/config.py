@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 from pathlib import Path
+from typing import Literal
 
 from pydantic import Field, field_validator, model_validator
 
@@ -17,6 +18,7 @@ class SimStartConfig(StrictModel):
     level: int = Field(1, ge=1, le=3)
     scene_seed: int = 0
     camera_fps: float = Field(30.0, gt=0.0, le=120.0)
+    realism: Literal["real", "ideal"] | None = None  # None: config/sim.yaml `realism` (`armlab serve --realism`)
 
 
 class StationConfig(StrictModel):

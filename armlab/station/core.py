@@ -30,9 +30,10 @@ import numpy as np
 from armlab.devices.arm import Arm
 from armlab.devices.camera import Camera, Frame
 from armlab.devices.gripper import Gripper
-from armlab.errors import ShuttingDown
+from armlab.errors import NoArmError, ShuttingDown
 from armlab.station.calibration_trust import CalibrationTrust
 from armlab.station.checks import checked_joints
+from armlab.station.colors import StationColors
 from armlab.station.config import StationConfig
 from armlab.station.intrinsics import CameraIntrinsics
 from armlab.station.jobs import Job, JobContext, start_job_thread
@@ -43,7 +44,7 @@ from armlab.station.motion import MOTION_MEMORY, WAIT_CHUNK_S, MotionGate
 from armlab.station.perceiving import Perceiving
 from armlab.station.perception import DEVICE_ERRORS, FrameSource, Perception, PerceptionLoop
 from armlab.station.slots import EventLog, NewestSlot
-from armlab.station.states import JOB_STATES, State, after_event, allowed_commands, next_state
+from armlab.station.states import ARM_COMMANDS, JOB_STATES, State, after_event, allowed_commands, next_state
 from armlab.station.job_control import JobControls
 from armlab.station.teach import TeachCommands
 from armlab.station.telemetry import TelemetryPublisher, gripper_pose_from_matrix
@@ -85,6 +86,8 @@ class Station(Latch, MotionGate, ManualCommands, TeachCommands, JobControls, Per
     synchronous: the sim runs in fast mode and nothing runs on threads (evaluations); frames are
     captured when a skill asks for one and physics advances only while the gate waits.
     `source` (every command): the controller's name for the lease (None: an in-process caller, not leased).
+    model None: a station with no arm (armlab.devices.none's NoArm and NoGripper as its devices): perception
+    only, every command that needs the arm refused (NoArmError) before anything is planned.
     """
 
     def __init__(
@@ -106,6 +109,7 @@ class Station(Latch, MotionGate, ManualCommands, TeachCommands, JobControls, Per
             raise ValueError("synchronous mode needs a fast-mode simulation (SimWorkcell with realtime=False)")
         self.arm, self.gripper, self.camera = arm, gripper, camera
         self.model = model
+        self.has_arm = model is not None
         self.config = config or StationConfig()
         self.store = store or Store(self.config.database_file())
         self.perception_config = perception_config
@@ -114,6 +118,9 @@ class Station(Latch, MotionGate, ManualCommands, TeachCommands, JobControls, Per
         self.backend = backend
         self.synchronous = synchronous
         self._lock = threading.RLock()
+        self._send_lock = threading.Lock()  # one sender of device commands at a time, taken before _lock (motion.py _sending)
+        self._outbox: list | None = None  # device commands queued under the lock, sent after it (motion.py _sending)
+        self._halts = 0  # how many times the devices were halted (latch.py _halt_devices)
         self._halt = threading.Event()  # the latch: set by e-stop and device loss (before any lock), cleared by reset
         self._closing = threading.Event()
         self._state = State.IDLE
@@ -134,6 +141,7 @@ class Station(Latch, MotionGate, ManualCommands, TeachCommands, JobControls, Per
         self._pipeline: Any = None  # synchronous mode's perception pipeline
         self.events = EventLog()
         self.intrinsics = CameraIntrinsics(camera, self.store, self.events)  # in use: measured here, else the camera's own
+        self.colors = StationColors(self.store, self.events, lambda: self.perception_config, lambda: self.calibration)  # defaults + samples
         self.frames: NewestSlot[Frame] = NewestSlot()
         self.perception: NewestSlot[Perception] = NewestSlot()
         self.telemetry: NewestSlot[dict] = NewestSlot()
@@ -157,6 +165,7 @@ class Station(Latch, MotionGate, ManualCommands, TeachCommands, JobControls, Per
 
             self.perception_config = load_perception_config(workcell=self.config.workcell)  # the station's board and tags
         self.intrinsics.restore()
+        self.colors.restore()
         interrupted = self.store.mark_interrupted_jobs()
         if interrupted:
             self.events.add("warn", f"{interrupted} job(s) were cut off when the station last stopped: marked interrupted")
@@ -170,6 +179,7 @@ class Station(Latch, MotionGate, ManualCommands, TeachCommands, JobControls, Per
                 PerceptionLoop(
                     self.frames, self.perception, lambda: self._calibration, self.perception_config, self.config.perception_rate_hz, self.model,
                     get_check_calibration=self._calibration_to_check, on_check=self._on_calibration_check,
+                    get_color_model=lambda: self.colors.model,
                 ),
                 TelemetryPublisher(self.telemetry_snapshot, self.telemetry, self.config.telemetry_rate_hz),
                 DeviceWatch(self.device_problems, self._on_device_problems, 1.0 / self.config.device_check_rate_hz),
@@ -229,7 +239,7 @@ class Station(Latch, MotionGate, ManualCommands, TeachCommands, JobControls, Per
 
     def allowed_commands(self) -> list[str]:
         with self._lock:
-            return allowed_commands(self._effective_state())
+            return allowed_commands(self._effective_state(), self.has_arm)
 
     def allowed_or_raise(self, command: str, source: str | None = None) -> None:
         """CommandRefused (naming the allowed commands) unless `command` is allowed right now;
@@ -248,6 +258,8 @@ class Station(Latch, MotionGate, ManualCommands, TeachCommands, JobControls, Per
         Returns the state it would lead to. Caller holds the lock."""
         if self._closing.is_set() and command not in _UNLATCHED:
             raise ShuttingDown(f"command '{command}' refused: the station is shutting down")
+        if not self.has_arm and command in ARM_COMMANDS:
+            raise NoArmError(command, self._effective_state().value, allowed_commands(self._effective_state(), False))
         new_state = next_state(self._effective_state(), command)
         if command not in _UNLATCHED and source is not None and self._lease.holder not in (None, source):
             self._lease.require(source, command)  # raises NotController naming the holder
@@ -369,6 +381,12 @@ class Station(Latch, MotionGate, ManualCommands, TeachCommands, JobControls, Per
         """The measured joint positions (rad)."""
         return np.asarray(self.arm.read_joint_state().position_rad, dtype=float)
 
+    def require_arm(self, what: str) -> None:
+        """NoArmError naming `what` on a station without an arm (for work that needs the arm's model, e.g. programs)."""
+        if not self.has_arm:
+            with self._lock:
+                raise NoArmError(what, self._effective_state().value, allowed_commands(self._effective_state(), False))
+
     def checked_joints(self, q_rad) -> np.ndarray:
         """A finite joint vector inside the limits (ValueError naming the joint otherwise)."""
         return checked_joints(self.model, q_rad)
@@ -387,7 +405,7 @@ class Station(Latch, MotionGate, ManualCommands, TeachCommands, JobControls, Per
             speed = np.abs(np.asarray(joint_state.velocity_rad_s, dtype=float))
             moving_measured = bool(self.arm.is_moving()) or bool(speed.size and speed.max() > self.config.moving_speed_rad_s)
         except DEVICE_ERRORS:
-            q = self._last_joints if self._last_joints is not None else np.asarray(self.model.home_rad, dtype=float)
+            q = self._last_joints if self._last_joints is not None else np.asarray(self.model.home_rad if self.has_arm else [], dtype=float)
         try:
             gripper = self.gripper.read_state()
             gripper_dict = {"width_m": float(gripper.width_m), "holding": bool(gripper.holding), "command": gripper.command}
@@ -405,10 +423,10 @@ class Station(Latch, MotionGate, ManualCommands, TeachCommands, JobControls, Per
             "state": state.value,
             "detail": detail,
             "joints_rad": [float(v) for v in q],
-            "joint_names": list(self.model.joint_names),
-            "joint_limits_rad": [[float(lo), float(hi)] for lo, hi in zip(self.model.lower_rad, self.model.upper_rad)],
+            "joint_names": list(self.model.joint_names) if self.has_arm else [],
+            "joint_limits_rad": [[float(lo), float(hi)] for lo, hi in zip(self.model.lower_rad, self.model.upper_rad)] if self.has_arm else [],
             "gripper": gripper_dict,
-            "gripper_pose": gripper_pose_from_matrix(self.model.fk(q)),
+            "gripper_pose": gripper_pose_from_matrix(self.model.fk(q), np.asarray(self.model.T_world_base)[:3, 3]) if self.has_arm else None,
             "moving": moving_measured,
             "torque_enabled": self._torque_enabled,
             "calibrated": calibrated,
@@ -420,7 +438,7 @@ class Station(Latch, MotionGate, ManualCommands, TeachCommands, JobControls, Per
             "controller_since_s": lease["since_s"],
             "devices_lost": lost,
             "job": job.to_dict() if job is not None else None,
-            "allowed_commands": allowed_commands(state),
+            "allowed_commands": allowed_commands(state, self.has_arm),
             "time_s": time.time(),
         }
 

@@ -38,7 +38,7 @@ def make_sim_station(config: StationConfig | None = None, db_path: str | Path | 
 
     config = config or StationConfig()
     cell = SimWorkcell(SimWorkcellConfig(realtime=True, seed=config.sim.seed, camera_fps=config.sim.camera_fps,
-                                         workcell=config.workcell))
+                                         workcell=config.workcell, realism=config.sim.realism))
     cell.start()
     try:
         if config.sim.event:
@@ -61,8 +61,9 @@ def make_sim_station(config: StationConfig | None = None, db_path: str | Path | 
 class DeviceStation:
     """A Station on real (or mixed) devices; close() stops the station, then closes the devices it opened."""
 
-    def __init__(self, station: Station) -> None:
+    def __init__(self, station: Station, notes: tuple[str, ...] = ()) -> None:
         self.station = station
+        self.notes = notes  # what start-up chose and why (the board tags found, the recording played), to print
 
     def close(self) -> dict:
         report = {"joined": [], "alive": []}
@@ -85,25 +86,52 @@ def make_device_station(
     config: StationConfig | None = None,
     arm: str = "interbotix_arm",
     gripper: str = "interbotix_gripper",
-    camera: str = "realsense_l515",
+    camera="realsense_l515",
     db_path: str | Path | None = None,
+    board: str | None = None,
 ) -> DeviceStation:
-    """A started Station on devices chosen by config files (config/devices/, config/cameras/).
+    """A started Station on devices chosen by config files (config/devices/, config/cameras/); `camera` may also
+    be a config mapping. arm "none" (config/devices/none.yaml): a station with no arm (and no gripper), perception
+    only: every motion command is refused with the reason.
 
-    Connect failures (no hardware, missing SDK) raise the device's clear error; whatever was opened is closed.
+    Connect failures (no hardware, missing SDK, a recording that cannot be played) raise the device's clear
+    error; whatever was opened is closed. board: the board's tags (armlab.station.board_choice): None the
+    workcell's, a config/boards/ name, or "auto" (the known board whose tags the first frame shows).
     """
     from armlab.devices.factory import make_devices
+    from armlab.devices.none import NoArm, NoGripper
     from armlab.workcell import load_workcell_arm
 
     config = config or StationConfig()
     devices = make_devices(arm, gripper, camera)
-    store = Store(db_path if db_path is not None else config.database_file())
-    station = Station(
-        devices.arm, devices.gripper, devices.camera, model=load_workcell_arm(config.workcell), config=config, store=store, backend="real"
-    )
+    has_arm = not isinstance(devices.arm, NoArm)
+    if not has_arm and not isinstance(devices.gripper, NoGripper):
+        from armlab.errors import ConfigError
+
+        raise ConfigError(f"gripper '{gripper}': a station with no arm has no gripper either (use gripper 'none')")
     try:
+        perception_config, board_note = _board(config.workcell, board, devices.camera)
+        store = Store(db_path if db_path is not None else config.database_file())
+        model = load_workcell_arm(config.workcell) if has_arm else None
+        station = Station(devices.arm, devices.gripper, devices.camera, model=model, config=config, store=store,
+                          perception_config=perception_config, backend="real")
         station.start()
     except BaseException:
         _close_devices(devices.arm, devices.gripper, devices.camera)
         raise
-    return DeviceStation(station)
+    notes = [getattr(devices.camera, "description", None), board_note]
+    for note in filter(None, notes):
+        station.events.add("info", note)
+    return DeviceStation(station, tuple(filter(None, notes)))
+
+
+def _board(workcell: str, board: str | None, camera):
+    """The perception config for `board` (None: the workcell's own) and a note; "auto" connects the camera to look."""
+    from armlab.station.board_choice import AUTO, board_perception_config
+
+    frame = None
+    if board == AUTO:
+        if not camera.is_connected:
+            camera.connect()
+        frame = camera.read().color_bgr
+    return board_perception_config(workcell, board, frame)

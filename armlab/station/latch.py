@@ -8,16 +8,22 @@ device is still gone.
 
 from __future__ import annotations
 
+import logging
+
 from armlab.errors import CommandRefused, DeviceLost
 from armlab.station.perception import DEVICE_ERRORS
 from armlab.station.states import State, allowed_commands
+
+log = logging.getLogger(__name__)
 
 
 class Latch:
     """E-stop, device loss, reset."""
 
     def _halt_devices(self, gripper: bool = True) -> list[str]:
-        """Stop the arm (and gripper); never raises (a lost device is reported). No lock needed."""
+        """Stop the arm (and gripper); never raises (a lost device is reported). No lock needed. Counted, so a
+        command checked before this halt and sent after it is halted again (motion.py _sending)."""
+        self._halts += 1
         failures = []
         for device in (self.arm, self.gripper) if gripper else (self.arm,):
             try:
@@ -85,6 +91,21 @@ class Latch:
             if self._transition("device_failed", event=True) is State.FAULT:
                 self._detail = f"{device} lost: {reason}; reset once it is back"
         self.events.add("error", f"{device} lost: {reason}: motion halted")
+
+    def component_failed(self, what: str, reason: str) -> None:
+        """A part of the station died (e.g. the teach recorder's thread): latch, cancel the job, hold the arm
+        still, enter fault with the reason, log it. Reset clears it (no device to wait for)."""
+        self._halt.set()
+        job = self._job
+        if job is not None:
+            job.cancel()
+        self._halt_devices()
+        with self._lock:
+            self._jog = None
+            if self._transition("device_failed", event=True) is State.FAULT:
+                self._detail = f"{what} failed: {reason}; reset to continue"
+        log.error("%s failed: %s: motion halted, station in fault", what, reason)
+        self.events.add("error", f"{what} failed: {reason}: motion halted")
 
     def reset(self, source: str | None = None) -> None:
         """Leave estop/fault for idle without moving the arm; DeviceLost while a device is still gone."""

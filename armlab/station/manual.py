@@ -1,6 +1,6 @@
 """Manual commands of the gate: joint and pose moves, hold-to-run jog, torque, gripper (teach: teach.py).
 
-A mixin of core.Station (it uses the station's lock, transition table, lease and `_command_arm`). Every
+A mixin of core.Station (it uses the station's lock, transition table, lease, `_sending` and `_command_arm`). Every
 command is refused before planning (state, latch, lease), planned and checked outside the lock, then
 re-checked and sent under it; nothing slow (IK, planning, SQLite) runs while the lock is held.
 """
@@ -38,7 +38,7 @@ class ManualCommands:
         self.allowed_or_raise(command, source)  # refuse before planning
         trajectory = self.plan_move(q_goal_rad, moving_time_s)  # planning and checks: outside the lock
         swept_box = self._swept_box(trajectory)
-        with self._lock:
+        with self._sending():
             self._transition(command, source=source)  # state unchanged: idle/teach stay
             self._jog = None
             self._command_arm(trajectory, swept_box)
@@ -49,9 +49,11 @@ class ManualCommands:
         self._manual_move("move_joints", q_rad, moving_time_s, wait, source)
 
     def home(self, moving_time_s: float | None = None, wait: bool = False, source: str | None = None) -> None:
+        self.require_arm("home")
         self._manual_move("home", self.model.home_rad, moving_time_s, wait, source)
 
     def sleep(self, moving_time_s: float | None = None, wait: bool = False, source: str | None = None) -> None:
+        self.require_arm("sleep")
         self._manual_move("sleep", self.model.sleep_rad, moving_time_s, wait, source)
 
     def solve_pose(self, position_m, pitch_rad: float | None = None, yaw_rad: float | None = None) -> np.ndarray:
@@ -80,6 +82,7 @@ class ManualCommands:
         then stop by itself. Sending it again (or heartbeat()) within jog_hold_s keeps it going; zeros ramp down to rest."""
         from armlab.motion.jog import checked_jog_velocity, plan_jog, reference_velocity
 
+        self.require_arm("jog")
         velocity = checked_jog_velocity(velocity_rad_s, self.model.velocity_limit_rad_s, self.model.joint_names)
         velocity = velocity * checked_speed_percent(speed_percent) / 100.0
         self.allowed_or_raise("jog", source)
@@ -95,7 +98,7 @@ class ManualCommands:
         )
         self.check_motion(trajectory)
         swept_box = self._swept_box(trajectory)
-        with self._lock:
+        with self._sending():
             self._transition("jog", source=source)
             self._command_arm(trajectory, swept_box)
             self._jog = {"trajectory": trajectory, "start_s": self.clock_s(), "velocity": velocity, "source": source}
@@ -139,7 +142,7 @@ class ManualCommands:
         trajectory = plan_gripper_step(self.model, q_start, axis, amount, speeds, fingers, config.board_clearance_m, config.sample_rate_hz)
         self.check_motion(trajectory)
         swept_box = self._swept_box(trajectory)
-        with self._lock:
+        with self._sending():
             self._transition("jog", source=source)
             self._jog = None
             self._command_arm(trajectory, swept_box)
@@ -164,7 +167,7 @@ class ManualCommands:
     def set_torque(self, enabled: bool, source: str | None = None, confirm: bool = False) -> None:
         """Torque on, or off (limp: the arm falls under gravity unless held), which outside teach needs
         confirm=True (NeedsConfirmation otherwise: nothing changes)."""
-        with self._lock:
+        with self._sending():  # the torque call (a ROS service on the real arm) is made after the lock is released
             state = self._check("torque", source)
             if not enabled and state is not State.TEACH and not confirm:
                 raise NeedsConfirmation(
@@ -175,7 +178,8 @@ class ManualCommands:
             self._jog = None
             if self._halt.is_set():
                 raise CommandRefused("torque", self._effective_state().value, allowed_commands(self._effective_state()))
-            self.arm.set_torque(bool(enabled))
+            self._send_later(lambda: self.arm.set_torque(bool(enabled)))
+        with self._lock:
             self._torque_enabled = bool(enabled)
         self.events.add("warn" if not enabled else "info", f"torque {'on' if enabled else 'off'}")
 
@@ -183,9 +187,9 @@ class ManualCommands:
         """'grasp' or 'release'."""
         if action not in ("grasp", "release"):
             raise ValueError(f"gripper action must be 'grasp' or 'release', not {action!r}")
-        with self._lock:
+        with self._sending():
             self._transition("gripper", source=source)
-            getattr(self.gripper, action)(wait=False)
+            self._send_later(lambda: getattr(self.gripper, action)(wait=False))
         if wait:
             self.wait_gripper()
 

@@ -2,14 +2,17 @@
 
 A mixin of core.Station. Every trajectory from any source (manual, jog, jobs) passes `check_motion`
 (limits, velocity and acceleration, the table, the workspace box, the per-step jump) outside the lock and
-`_command_arm` (latch, start at the measured joints) under it. Waits return at once when the latch is set
+`_command_arm` (latch, start at the measured joints) under it, inside `_sending()`, which sends to the
+device once the lock is released (on the real arm a ROS service call: status and telemetry never wait for
+it) and halts again if the latch went up meanwhile. Waits return at once when the latch is set
 and, in fast mode, never let the physics run more than one control period past it.
 """
 
 from __future__ import annotations
 
 import time
-from collections.abc import Callable
+from collections.abc import Callable, Iterator
+from contextlib import contextmanager
 
 import numpy as np
 
@@ -81,15 +84,44 @@ class MotionGate:
         # move from the sleep pose home passes the gripper point within 1 mm of the board.
         check_trajectory(self.model, trajectory, workspace_m=config.workspace_m, max_step_rad=config.max_step_rad)
 
+    @contextmanager
+    def _sending(self) -> Iterator[None]:
+        """`with self._sending():` instead of `with self._lock:` around checks that end in device commands: the
+        body runs under the lock and queues its commands (_send_later), which are sent after the lock is
+        released, in order, one sender at a time (so the device sees commands in the order they were checked).
+        The latch and a cancel still win: a command checked before a halt (e-stop, fault, cancel) and sent after
+        it is halted again here (e-stop sets the latch before it halts, so either its halt comes after this send
+        or this check sees it). Never enter it holding the lock. A body that raises sends nothing."""
+        with self._send_lock:
+            outbox: list[Callable[[], object]] = []
+            with self._lock:
+                halts = self._halts
+                self._outbox = outbox
+                try:
+                    yield
+                finally:
+                    self._outbox = None
+            for send in outbox:
+                send()
+            if outbox and (self._halt.is_set() or self._halts != halts):
+                self._halt_devices(gripper=self._halt.is_set())
+
+    def _send_later(self, send: Callable[[], object]) -> None:
+        """Queue a device command for when the lock is released (caller is inside `_sending()`)."""
+        if self._outbox is None:
+            raise RuntimeError("device commands are sent from inside Station._sending(), never under the bare lock")
+        self._outbox.append(send)
+
     def _command_arm(self, trajectory: JointTrajectory, swept_box: np.ndarray) -> None:
-        """Send a checked trajectory and remember where the gripper sweeps. Caller holds the lock and has
-        checked the state; the latch and the start (no jump from the measured joints) are checked here."""
+        """Queue a checked trajectory for the arm and remember where the gripper sweeps. Caller is inside
+        `_sending()` (holds the lock) and has checked the state; the latch and the start (no jump from the
+        measured joints) are checked here; the trajectory reaches the arm once the lock is released."""
         from armlab.motion.safety import check_start
 
         if self._halt.is_set():
             raise CommandRefused("move", self._effective_state().value, allowed_commands(self._effective_state()))
         check_start(trajectory, self.joints_rad(), self.motion_config.start_tolerance_rad, self.model.joint_names)
-        self.arm.command_trajectory(trajectory)
+        self._send_later(lambda: self.arm.command_trajectory(trajectory))
         self._motions.append((time.time() + trajectory.duration_s, swept_box))
         del self._motions[:-MOTION_MEMORY]
 
@@ -125,7 +157,7 @@ class MotionGate:
         arm), without waiting; it replaces a motion in progress (it must start where the arm is)."""
         self.check_motion(trajectory)
         swept_box = self._swept_box(trajectory)
-        with self._lock:
+        with self._sending():
             self._owns_arm(ctx)
             self._command_arm(trajectory, swept_box)
 
@@ -153,9 +185,9 @@ class MotionGate:
         """Inside a job: grasp or release (only while this job owns the arm) and wait for the fingers."""
         if action not in ("grasp", "release"):
             raise ValueError(f"gripper action must be 'grasp' or 'release', not {action!r}")
-        with self._lock:
+        with self._sending():
             self._owns_arm(ctx)
-            getattr(self.gripper, action)(wait=False)
+            self._send_later(lambda: getattr(self.gripper, action)(wait=False))
         self.wait_gripper(ctx if not ctx.in_cleanup else None)
 
     def move_in_job(self, ctx: JobContext, q_goal_rad, moving_time_s: float | None = None) -> None:

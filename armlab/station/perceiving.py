@@ -74,6 +74,7 @@ class Perceiving:
 
             if self._pipeline is None:
                 self._pipeline = PerceptionPipeline(self.perception_config, arm_model=self.model)
+            self._pipeline.color_model = self.colors.model
             frame = self.fresh_frame()
             previous, _ = self.perception.get()
             perception = analyse_frame(self._pipeline, frame, self.calibration, previous.surface_depth_mm if previous else None)

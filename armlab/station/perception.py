@@ -161,7 +161,8 @@ class PerceptionLoop(_Worker):
     turns on the robot self-filter for frames that carry the arm's joints.
     `get_check_calibration()` (default: get_calibration) is the calibration the camera-moved check
     compares the board tags with (a restored one is checked before it is used); after each check
-    `on_check(calibration, drift_px, warning, perception)` is called, if given.
+    `on_check(calibration, drift_px, warning, perception)` is called, if given. `get_color_model()`
+    (armlab.vision.colors ColorModel) names block colours, read each frame (None: the config's).
     """
 
     name = "station-perception"
@@ -176,10 +177,12 @@ class PerceptionLoop(_Worker):
         arm_model: Any = None,
         get_check_calibration: Callable[[], Any] | None = None,
         on_check: Callable[[Any, float | None, str | None, Perception], None] | None = None,
+        get_color_model: Callable[[], Any] | None = None,
     ) -> None:
         super().__init__()
         self.get_check_calibration = get_check_calibration or get_calibration
         self.on_check = on_check
+        self.get_color_model = get_color_model
         self.frames = frames
         self.out = out
         self.get_calibration = get_calibration
@@ -200,6 +203,8 @@ class PerceptionLoop(_Worker):
                 continue
             started = time.monotonic()
             calibration = self.get_calibration()
+            if self.get_color_model is not None:
+                pipeline.color_model = self.get_color_model()  # the station's colour calibration, at once
             perception = analyse_frame(pipeline, frame, calibration, surface)
             checked = self.get_check_calibration()
             warning = drift.update(frame.timestamp_s, list(perception.tags), checked, self.config)

@@ -63,9 +63,12 @@ class NewestSlot(Generic[ValueT]):
 
 
 class EventLog:
-    """The newest `capacity` operator events, each {"seq", "level", "message", "time_s"}."""
+    """The newest `capacity` operator events, each {"seq", "level", "kind", "message", "time_s"}. `kind` says what
+    happened for a client to act on (the page keys on it, never on the message's text): "general" (for people
+    only) or "scene" (the simulated scene was replaced)."""
 
     LEVELS = ("info", "warn", "error")
+    KINDS = ("general", "scene")
 
     def __init__(self, capacity: int = 200) -> None:
         self._lock = threading.Lock()
@@ -73,12 +76,14 @@ class EventLog:
         self._seq = 0
         self._listeners: list[Callable[[dict], None]] = []
 
-    def add(self, level: str, message: str) -> dict:
+    def add(self, level: str, message: str, kind: str = "general") -> dict:
         if level not in self.LEVELS:
             raise ValueError(f"event level must be one of {self.LEVELS}, not {level!r}")
+        if kind not in self.KINDS:
+            raise ValueError(f"event kind must be one of {self.KINDS}, not {kind!r}")
         with self._lock:
             self._seq += 1
-            event = {"seq": self._seq, "level": level, "message": message, "time_s": time.time()}
+            event = {"seq": self._seq, "level": level, "kind": kind, "message": message, "time_s": time.time()}
             self._events.append(event)
             listeners = list(self._listeners)
         for listener in listeners:

@@ -102,10 +102,17 @@ EVENTS = MappingProxyType(
 )
 
 
-def allowed_commands(state: State) -> list[str]:
-    """The commands `state` accepts, in the canonical COMMANDS order."""
+# The commands that need an arm: a station without one (perception only) refuses them whatever its state.
+ARM_COMMANDS = frozenset(
+    (*_MANUAL_MOVES, "grab", "drop", "teach_start", "teach_record", "teach_stop", "teach_undo", "repeat", "auto",
+     "pause", "resume", "step", "set_speed")
+)
+
+
+def allowed_commands(state: State, has_arm: bool = True) -> list[str]:
+    """The commands `state` accepts, in the canonical COMMANDS order (without ARM_COMMANDS when there is no arm)."""
     row = TRANSITIONS[State(state)]
-    return [name for name in COMMANDS if name in row]
+    return [name for name in COMMANDS if name in row and (has_arm or name not in ARM_COMMANDS)]
 
 
 def next_state(state: State, command: str) -> State:

@@ -10,6 +10,7 @@ the station lock; a `_teach_saving` flag keeps two teach writes from interleavin
 
 from __future__ import annotations
 
+import logging
 import threading
 import time
 
@@ -21,12 +22,15 @@ from armlab.store import Program, Waypoint
 
 RATE_LIMITS_HZ = (0.5, 20.0)
 
+log = logging.getLogger(__name__)
+
 
 class ContinuousRecorder(threading.Thread):
     """Trajectory mode: records the pose at `rate_hz` while the arm moves (a joint changed by min_change_rad
     or the gripper command changed since the last record), each record committed like teach_record, with
     moving_time_s = the time since the previous one so repeat follows the recorded pace. Ends on stop(),
-    on leaving teach (a refused record) or at shutdown."""
+    on leaving teach (a refused record) or at shutdown; any other failure (a locked or damaged database, a
+    device error) ends it as a station fault (state, detail, event, log) that halts the arm, never silently."""
 
     def __init__(self, station, rate_hz: float, min_change_rad: float, source: str | None) -> None:
         super().__init__(name="teach-recorder", daemon=True)
@@ -42,6 +46,14 @@ class ContinuousRecorder(threading.Thread):
             self.join(timeout_s)
 
     def run(self) -> None:
+        try:
+            self._record()
+        except Exception as error:  # noqa: BLE001 - recording must not just stop: the operator is told, the arm halts
+            self.error = f"{type(error).__name__}: {error}"
+            log.exception("teach recorder died after %d waypoints", self.recorded)
+            self.station.component_failed("teach recorder", f"{self.error} (after {self.recorded} waypoints)")
+
+    def _record(self) -> None:
         station = self.station
         last_q, last_gripper, last_t = station.joints_rad(), station.gripper.read_state().command, time.monotonic()
         next_t = last_t + self.period_s

@@ -12,6 +12,7 @@ from collections.abc import Callable
 
 import numpy as np
 
+from armlab.kinematics.rx200_geometry import approach_pitch_rad
 from armlab.station.perception import _Worker
 from armlab.station.slots import NewestSlot
 
@@ -20,16 +21,18 @@ def _floats(values) -> list[float]:
     return [float(value) for value in np.asarray(values, dtype=float).ravel()]
 
 
-def gripper_pose_from_matrix(T_world_gripper: np.ndarray) -> dict:
+def gripper_pose_from_matrix(T_world_gripper: np.ndarray, base_xyz_m=(0.0, 0.0, 0.0)) -> dict:
     """Position, pitch and yaw of the gripper point from its world pose (x axis = approach axis).
 
-    pitch_rad: the approach axis' angle below the horizontal (+π/2 = pointing straight down).
+    pitch_rad: the pitch the arm's `ik` takes (ArmModel.pitch_of): the approach axis below the horizontal
+    in the vertical plane through the base axis (at base_xyz_m) and the gripper point, 0 = pointing away
+    from the base axis, +π/2 = straight down, beyond ±π/2 = pointing back toward it; so a pose sent back
+    with this pitch is the same pose (an asin pitch folded those onto the pointing-away ones).
     yaw_rad: the heading of the fingers' closing axis (the pose's y axis) in the board plane,
     measured from world +x, so it is meaningful when pointing straight down too.
     """
     T = np.asarray(T_world_gripper, dtype=float)
-    approach = T[:3, 0]
-    pitch = math.asin(max(-1.0, min(1.0, -float(approach[2]))))
+    pitch = approach_pitch_rad(T, tuple(float(v) for v in base_xyz_m))
     closing = T[:3, 1]
     yaw = math.atan2(float(closing[1]), float(closing[0]))
     return {"position_m": _floats(T[:3, 3]), "pitch_rad": pitch, "yaw_rad": yaw}
@@ -54,6 +57,9 @@ def block_to_dict(index: int, block) -> dict:
         "aruco_id": getattr(block, "aruco_id", None),
         "destination": getattr(block, "destination", None),
     }
+    color_lab = getattr(block, "color_lab", None)
+    if color_lab is not None:
+        data["color_lab"] = _floats(color_lab)
     seen_time_s = getattr(block, "seen_time_s", None)
     if seen_time_s is not None:
         data["seen_time_s"] = float(seen_time_s)

@@ -41,11 +41,13 @@ def score_run(event: str, level: int | None, truth: dict, sim_time_s: float, gri
     return score_job(event, truth, sim_time_s=sim_time_s, workcell=workcell)
 
 
-def run_episode(event: str, level: int | None, seed: int, *, keep_truth: bool = False, workcell: str | None = None) -> dict:
+def run_episode(event: str, level: int | None, seed: int, *, keep_truth: bool = False, workcell: str | None = None,
+                realism: str | None = None) -> dict:
     """Run job `event` at `level` on the scene of `seed` on `workcell` (config/workcells/<name>.yaml: its
     arm, gripper, board and scene; None = the default, the RX200); return the judged result as a
     JSON-ready dict: {event, level, seed, workcell, points, max_points, sim_time_s, wall_time_s, breakdown,
-    failures, full, within_limit} (+ truth with gripper_path_m when keep_truth)."""
+    failures, full, within_limit} (+ truth with gripper_path_m when keep_truth). realism: real or ideal
+    simulation (None: config/sim.yaml's)."""
     from armlab import skills
     from armlab.devices.sim import SimWorkcell, SimWorkcellConfig
     from armlab.station.config import StationConfig
@@ -58,7 +60,7 @@ def run_episode(event: str, level: int | None, seed: int, *, keep_truth: bool = 
     wall_start = time.monotonic()
     config = StationConfig() if workcell is None else StationConfig(workcell=workcell)
     with tempfile.TemporaryDirectory(prefix="armlab-eval-") as tmp, SimWorkcell(
-        SimWorkcellConfig(realtime=False, seed=int(seed), workcell=config.workcell),
+        SimWorkcellConfig(realtime=False, seed=int(seed), workcell=config.workcell, realism=realism),
         scene=episode_scene(event, level, seed, config.workcell),
     ) as cell:
         station = Station(cell.arm, cell.gripper, cell.camera, model=load_workcell_arm(config.workcell), config=config,

@@ -103,14 +103,15 @@ def episode_unsupported(event: str, level: int | None, workcell: str | None = No
     return None
 
 
-def run_one(event: str, level: int | None, seed: int, keep_truth: bool = False, workcell: str | None = None) -> dict:
+def run_one(event: str, level: int | None, seed: int, keep_truth: bool = False, workcell: str | None = None,
+            realism: str | None = None) -> dict:
     """One episode, in whichever process runs it; an exception becomes a crashed run with no points."""
     os.environ.setdefault("MUJOCO_GL", "egl")
     from armlab.tasks.episode import run_episode
 
     started, cpu_started = time.monotonic(), time.process_time()
     try:
-        result = run_episode(event, level, seed, keep_truth=keep_truth, workcell=workcell)
+        result = run_episode(event, level, seed, keep_truth=keep_truth, workcell=workcell, realism=realism)
         # CPU seconds of this process (all its threads): a speed figure that other load on the machine
         # does not inflate, unlike wall time.
         result["cpu_time_s"] = round(time.process_time() - cpu_started, 3)
@@ -127,35 +128,37 @@ def run_one(event: str, level: int | None, seed: int, keep_truth: bool = False, 
 
 
 def evaluate(event: str, level: int | None, seeds: Sequence[int], *, workers: int = 1,
-             ray_address: str | None = None, keep_truth: bool = False, workcell: str | None = None) -> Iterator[dict]:
+             ray_address: str | None = None, keep_truth: bool = False, workcell: str | None = None,
+             realism: str | None = None) -> Iterator[dict]:
     """Run every seed and yield the results in seed order as they become available. workers = 1 runs in
     this process; more use a spawn-context process pool (MuJoCo's GL context and threads do not survive
     fork); ray_address ("auto" or host:port) runs each seed as a Ray task on that cluster instead.
-    workcell: config/workcells/<name>.yaml to run on (None = the default, the RX200)."""
+    workcell: config/workcells/<name>.yaml to run on (None = the default, the RX200); realism: real or
+    ideal simulation (None: the simulation config's)."""
     seeds = sorted(int(s) for s in seeds)
     if isinstance(workers, bool) or not isinstance(workers, int) or not 1 <= workers <= MAX_WORKERS:
         raise EvalError(f"workers must be an integer in 1..{MAX_WORKERS}, not {workers!r}")
     if ray_address is not None:
-        return _over_ray(event, level, seeds, ray_address, keep_truth, workcell)
+        return _over_ray(event, level, seeds, ray_address, keep_truth, workcell, realism)
     if workers == 1 or len(seeds) <= 1:
-        return (run_one(event, level, seed, keep_truth, workcell) for seed in seeds)
-    return _over_processes(event, level, seeds, min(workers, len(seeds)), keep_truth, workcell)
+        return (run_one(event, level, seed, keep_truth, workcell, realism) for seed in seeds)
+    return _over_processes(event, level, seeds, min(workers, len(seeds)), keep_truth, workcell, realism)
 
 
-def _over_processes(event, level, seeds, workers, keep_truth, workcell=None) -> Iterator[dict]:
+def _over_processes(event, level, seeds, workers, keep_truth, workcell=None, realism=None) -> Iterator[dict]:
     import multiprocessing
     from concurrent.futures import ProcessPoolExecutor
 
     executor = ProcessPoolExecutor(max_workers=workers, mp_context=multiprocessing.get_context("spawn"))
     try:
-        futures = [executor.submit(run_one, event, level, seed, keep_truth, workcell) for seed in seeds]
+        futures = [executor.submit(run_one, event, level, seed, keep_truth, workcell, realism) for seed in seeds]
         for future in futures:
             yield future.result()
     finally:
         executor.shutdown(wait=True, cancel_futures=True)
 
 
-def _over_ray(event, level, seeds, address, keep_truth, workcell=None) -> Iterator[dict]:
+def _over_ray(event, level, seeds, address, keep_truth, workcell=None, realism=None) -> Iterator[dict]:
     try:
         import ray
     except ImportError:
@@ -166,7 +169,7 @@ def _over_ray(event, level, seeds, address, keep_truth, workcell=None) -> Iterat
         ray.init(address=address, log_to_driver=False, logging_level="warning")
     try:
         task = ray.remote(num_cpus=1, max_retries=0)(run_one)
-        refs = [task.remote(event, level, seed, keep_truth, workcell) for seed in seeds]
+        refs = [task.remote(event, level, seed, keep_truth, workcell, realism) for seed in seeds]
         for ref in refs:
             yield ray.get(ref)
     finally:

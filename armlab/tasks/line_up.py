@@ -94,7 +94,7 @@ def make_policy(level: int | None, params: dict, runner: TaskRunner):
         layout, direction = chosen["layout"], chosen["direction"]
         segments = [(line[0], line[-1]) for line in layout.values()]
         across = direction + math.pi / 2
-        blocks = [b for b in cubes(objects) if b["size"] in sizes]
+        blocks = [b for b in cubes(objects) if b["size"] in sizes and b["color"] in COLORS]  # other colours: obstacles
 
         def slot_of(block):
             return layout[block["size"]][COLORS.index(block["color"])]

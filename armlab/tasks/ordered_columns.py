@@ -49,7 +49,8 @@ def make_ordered_policy(runner: TaskRunner, bases: dict[str, tuple[float, float]
             return any(math.dist(block["position_m"][:2], c.base_xy_m) < ON_COLUMN_RADIUS_M
                        and block["position_m"][2] > runner.edge_of(block) + 0.01 for c in columns.values())
 
-        blocks = [b for b in cubes(objects) if keep(b) and b["size"] in columns]
+        # A block of a colour outside the rainbow (perception's 'unknown', a taught 'pink') has no place in a column: an obstacle.
+        blocks = [b for b in cubes(objects) if keep(b) and b["size"] in columns and b["color"] in RANK]
         tops = {id(c.top) for c in columns.values() if c.top is not None}
         loose = [b for b in blocks if id(b) not in tops and (in_the_way is None or not on_a_column(b))]
         hidden = {size: sum(pile_sizes(b)[:-1].count(size) for b in loose) for size in columns}
@@ -67,7 +68,7 @@ def make_ordered_policy(runner: TaskRunner, bases: dict[str, tuple[float, float]
         # A column whose top outranks a loose block of its size gives the top back (put aside).
         for size, column in columns.items():
             top_color = column.top_color()
-            if column.top is None or top_color is None:
+            if column.top is None or top_color not in RANK:
                 continue
             lower = [b for b in loose if b["size"] == size and RANK[b["color"]] < RANK[top_color]]
             if lower:

@@ -10,6 +10,7 @@ face is then measured on a full-resolution region of interest.
 
 from __future__ import annotations
 
+import copy
 import math
 from collections import Counter
 from dataclasses import dataclass, field, replace
@@ -18,16 +19,23 @@ from functools import lru_cache
 import cv2
 import numpy as np
 
+from armlab.vision.board_plane import BoardPlane, BoardPlaneError, BoardPlaneFitter
 from armlab.vision.calibration import Calibration
 from armlab.vision.clipped_face import fit_clipped_square, on_image_border
+from armlab.vision.colors import BoardGrey, ColorModel, board_region_mask
 from armlab.vision.config import PerceptionConfig
 from armlab.vision.geometry import PlaneCamera, height_coefficients, height_map_m
 from armlab.vision.tags import check_color_image, detect_tags, make_detector
 
-MIN_FILL = 0.84  # top-face area / its minimum-area rectangle: squares ~0.95, discs 0.785
+# Shape of a top face, from ideal shapes with room for real edges: area / minimum-area rectangle
+# (square 1, disc 0.785, triangle 0.5; real cube tops, edges worn and trimmed by depth smoothing, 0.77-0.91
+# on the ROB 550 frames) and area / minimum enclosing circle (square 2/pi = 0.64, disc 1: a disc fills
+# its rectangle like a worn square but its circle far more).
+MIN_FILL = 0.70
+SPLIT_MIN_FILL = 0.84  # a part split off a wider face: quarter discs (a semicircle cut in two) fill 0.785
+MAX_CIRCLE_FILL = 0.82
 MAX_ASPECT = 1.3
 SIZE_TOLERANCE = 0.22  # measured side within this fraction of the class size
-HEIGHT_TOLERANCE_M = 0.003  # top height vs a sum of cube edges (cubes measure within ~1 mm)
 SPLIT_SIZE_TOLERANCE = 0.12  # each side of a part split from touching cubes, within this of the edge
 BORDER_MARGIN_PX = 2  # a face with pixels this close to the image's edge runs off the image
 MAX_EDGE_RESIDUAL = 0.025  # a cut face's outline this close to a square's edges on average (x edge): cubes ~0.013, discs ~0.036
@@ -53,6 +61,7 @@ class Block:
     stack_sizes: tuple[str, ...] = field(default=())
     seen_time_s: float | None = None  # capture time (time.time()) of the frame it was seen in
     seen_arm_joints_rad: tuple[float, ...] | None = None  # the measured arm joints at that frame
+    color_lab: tuple[float, float, float] | None = None  # the top face's board-normalised CIELAB (armlab.vision.colors)
 
     def to_dict(self) -> dict:
         return {
@@ -71,6 +80,7 @@ class Block:
             "side_m": float(self.side_m),
             "seen_time_s": self.seen_time_s,
             "seen_arm_joints_rad": None if self.seen_arm_joints_rad is None else list(self.seen_arm_joints_rad),
+            "color_lab": None if self.color_lab is None else [float(x) for x in self.color_lab],
         }
 
 
@@ -186,6 +196,8 @@ class _Face:
     pixel_count: int
     pixel_area_m2: float
     plane_H: np.ndarray | None = None  # PlaneCamera.homography(top_m)
+    pixels_px: np.ndarray | None = None  # (N, 2) full-resolution (u, v) of points_xy
+    classes: np.ndarray | None = None  # (N,) colour index + 1 of those pixels (0: colourless)
 
 
 def _measure_rect(points_xy: np.ndarray, pitch_m: float) -> tuple[np.ndarray, float, float, float, float]:
@@ -196,6 +208,13 @@ def _measure_rect(points_xy: np.ndarray, pitch_m: float) -> tuple[np.ndarray, fl
     yaw = (yaw + math.pi / 4) % (math.pi / 2) - math.pi / 4
     fill = points_xy.shape[0] * pitch_m * pitch_m / max(wa * wb, 1e-12)
     return np.array([cx, cy]), wa, wb, yaw, fill
+
+
+def circle_fill(points_xy: np.ndarray, pitch_m: float) -> float:
+    """A point set's area / its minimum enclosing circle's (square 0.64, disc 1)."""
+    _, radius = cv2.minEnclosingCircle(points_xy.astype(np.float32))
+    radius += 0.5 * pitch_m
+    return points_xy.shape[0] * pitch_m * pitch_m / max(math.pi * radius * radius, 1e-12)
 
 
 @dataclass(frozen=True)
@@ -220,12 +239,32 @@ def _classify_face(face: _Face, cfg: PerceptionConfig) -> _Classified:
     height_err = stacks[0][0]
     is_cube = (
         fill >= MIN_FILL
+        and circle_fill(face.points_xy, pitch) <= MAX_CIRCLE_FILL
         and max(wa, wb) / max(min(wa, wb), 1e-9) <= MAX_ASPECT
         and abs(side - edge) <= SIZE_TOLERANCE * edge
-        and height_err <= HEIGHT_TOLERANCE_M
+        and height_err <= cfg.blocks.stack_height_tolerance_m
     )
     centroid = face.points_xy.mean(axis=0)
     return _Classified(size, side, yaw, is_cube, centroid if is_cube else centre, stacks)
+
+
+def _part(face: _Face, sel: np.ndarray) -> _Face:
+    """The part `sel` (bool over the face's points) of a face, with its own pixel centre and outline."""
+    if face.pixels_px is None or not sel.any():
+        return _Face(face.points_xy[sel], face.top_m, face.contour_px, face.center_px, int(sel.sum()), face.pixel_area_m2, face.plane_H)
+    px = face.pixels_px[sel]
+    hull = cv2.convexHull(px.astype(np.float32)).reshape(-1, 2).astype(np.float64)
+    return _Face(face.points_xy[sel], face.top_m, hull, px.mean(axis=0), int(sel.sum()), face.pixel_area_m2, face.plane_H,
+                 px, None if face.classes is None else face.classes[sel])
+
+
+def face_colour(classes: np.ndarray | None, fallback: int) -> int:
+    """The colour index + 1 most of a face's coloured pixels have (fallback when none is coloured)."""
+    if classes is None:
+        return fallback
+    counts = np.bincount(classes, minlength=fallback + 1)
+    counts[0] = 0
+    return int(np.argmax(counts)) if counts.sum() else fallback
 
 
 def _split_touching(face: _Face, cfg: PerceptionConfig) -> list[_Face]:
@@ -249,13 +288,14 @@ def _split_touching(face: _Face, cfg: PerceptionConfig) -> list[_Face]:
         parts = []
         for k in range(n):
             sel = labels.ravel() == k
-            parts.append(_Face(face.points_xy[sel], face.top_m, face.contour_px, face.center_px, int(sel.sum()), face.pixel_area_m2, face.plane_H))
+            parts.append(_part(face, sel))
 
         def fits(part: _Face) -> bool:
             classified = _classify_face(part, cfg)
             edge = cfg.blocks.large_size_m if classified.size == "large" else cfg.blocks.small_size_m
             _, wa, wb, _, _ = _measure_rect(part.points_xy, pitch)
-            return classified.is_cube and max(abs(wa - edge), abs(wb - edge)) <= SPLIT_SIZE_TOLERANCE * edge
+            fill = _measure_rect(part.points_xy, pitch)[4]
+            return classified.is_cube and fill >= SPLIT_MIN_FILL and max(abs(wa - edge), abs(wb - edge)) <= SPLIT_SIZE_TOLERANCE * edge
 
         if all(fits(p) for p in parts):
             return parts
@@ -266,23 +306,58 @@ STEP = 4  # candidates at quarter resolution (a small cube's top is still ~6x6 p
 
 
 class BlockGeometry:
-    """What detect_blocks needs from a calibration, computed once: the plane mapper, the height
-    coefficients of the quarter-resolution height map and, per full-resolution column and row, the
-    terms of a pixel's world height. Depends only on the calibration, so a caller that sees the same
-    calibration every frame (PerceptionPipeline) builds it once; read-only afterwards."""
+    """What detect_blocks needs from a calibration, computed once: the plane mapper, the board-plane
+    fitter's per-pixel terms and, for heights above a plane (row = (n, D): height = n . X + D for depth
+    camera points X), the terms of the quarter-resolution height map and, per full-resolution column
+    and row, of a pixel's height. Built for the calibration's depth model (T_world_depth); with_heights
+    gives the same for the board plane fitted in a frame. Read-only once built."""
 
-    def __init__(self, cal: Calibration) -> None:
+    def __init__(self, cal: Calibration, cfg: PerceptionConfig | None = None) -> None:
         K = cal.K
         self.calibration = cal
         self.camera = PlaneCamera(cal.T_world_camera, K, cal.dist)
         self.small_shape = (-(-cal.height // STEP), -(-cal.width // STEP))  # of image[::STEP, ::STEP]
         self.small_K = K / np.array([[STEP], [STEP], [1]])
-        self.small_coefficients = height_coefficients(self.small_shape, self.small_K, cal.T_world_camera)
-        r3 = cal.T_world_camera[2, :3].astype(np.float32)
+        self.fitter = None
+        if cfg is not None and cfg.board_plane.enabled:
+            self.fitter = BoardPlaneFitter(K, cal.dist, cal.T_world_depth, cal.width, cal.height,
+                                           cfg.board.x_range_m, cfg.board.y_range_m, step=STEP)
+        self._set_heights(cal.T_world_depth[2])
+        self.plane: BoardPlane | None = None  # the frame's board plane, when with_heights made this
+
+    def _set_heights(self, row: np.ndarray) -> None:
+        K, cal = self.calibration.K, self.calibration
+        T = np.eye(4)
+        T[2] = row
+        self.small_coefficients = height_coefficients(self.small_shape, self.small_K, T)
+        r3 = np.asarray(row[:3], dtype=np.float32)
+        self.height_row = T
         self.height_u = r3[0] * ((np.arange(cal.width, dtype=np.float32) - K[0, 2]) / K[0, 0])
         self.height_v = r3[1] * ((np.arange(cal.height, dtype=np.float32) - K[1, 2]) / K[1, 1])
         self.height_1 = r3[2]
-        self.height_t = np.float32(cal.T_world_camera[2, 3])
+        self.height_t = np.float32(row[3])
+
+    def with_heights(self, plane: BoardPlane) -> "BlockGeometry":
+        """A copy measuring heights from `plane` (a board plane fitted in the depth camera's frame)."""
+        other = copy.copy(self)
+        other._set_heights(plane.height_row())
+        other.plane = plane
+        return other
+
+
+def frame_geometry(geo: BlockGeometry, depth_m_small: np.ndarray, cfg: PerceptionConfig,
+                   exclude_small: np.ndarray | None = None) -> BlockGeometry:
+    """geo measuring heights from the board plane fitted in this frame's depth (quarter resolution, in
+    metres), so heights follow the depth camera's own board; geo itself (the calibration's depth model)
+    when the fit is disabled or finds no dominant board plane (the board hidden, no depth)."""
+    if geo.fitter is None:
+        return geo
+    bp = cfg.board_plane
+    try:
+        plane = geo.fitter.fit(depth_m_small, bp.window_m, bp.inlier_m, exclude_small, bp.min_inlier_fraction)
+    except BoardPlaneError:
+        return geo
+    return geo.with_heights(plane)
 
 
 def _roi_heights(depth_mm: np.ndarray, geo: BlockGeometry, roi: tuple[int, int, int, int]) -> np.ndarray:
@@ -301,8 +376,21 @@ def _largest_blob(mask: np.ndarray) -> np.ndarray | None:
     return (labels == 1 + int(np.argmax(stats[1:, cv2.CC_STAT_AREA]))).view(np.uint8)
 
 
+def _seeded_blob(mask: np.ndarray, seed: np.ndarray | None) -> np.ndarray | None:
+    """The connected part of mask holding most seed pixels (the largest when no seed pixel is in it)."""
+    if seed is None:
+        return _largest_blob(mask)
+    n, labels = cv2.connectedComponents(mask.view(np.uint8), connectivity=4)
+    if n <= 1:
+        return None
+    hits = np.bincount(labels[seed & mask.view(bool)], minlength=n)
+    if hits[1:].max() == 0:
+        return _largest_blob(mask)
+    return (labels == 1 + int(np.argmax(hits[1:]))).view(np.uint8)
+
+
 def _top_face_in_roi(
-    z: np.ndarray, band: np.ndarray, keep: np.ndarray, tol_m: float
+    z: np.ndarray, band: np.ndarray, keep: np.ndarray, tol_m: float, seed: np.ndarray | None = None
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray, float] | None:
     """ROI pixels (rows, columns), contour (ROI coordinates) and median height of the flat face in the
     band of heights z within tol_m of the guess (band), among the pixels to keep.
@@ -310,17 +398,21 @@ def _top_face_in_roi(
     Two passes: the loose band finds the face, a tight band around its median keeps only the face
     (side-face pixels just below the top edge would bias the footprint toward the camera).
     """
-    blob = _largest_blob(band & keep)
+    blob = _seeded_blob(band & keep, seed)
     if blob is None:
         return None
     face_m = quantile(z[blob.view(bool)], 0.5)
     blob &= (np.abs(z - face_m) < 0.5 * tol_m).view(np.uint8)
-    ys, xs = np.nonzero(blob)
-    if len(ys) == 0:
+    if not blob.any():
         return None
     contours, _ = cv2.findContours(blob, cv2.RETR_EXTERNAL, cv2.CHAIN_APPROX_SIMPLE)
     contour = max(contours, key=cv2.contourArea)
-    return ys, xs, contour, quantile(z[ys, xs], 0.5)
+    # Holes inside the outline (a highlight, a knot in the wood, a depth dropout) are the face too.
+    filled = np.zeros_like(blob)
+    cv2.drawContours(filled, [contour], -1, 1, thickness=cv2.FILLED)
+    ys, xs = np.nonzero(filled)
+    zs = z[ys, xs]
+    return ys, xs, contour, quantile(zs[np.isfinite(zs)], 0.5) if np.isfinite(zs).any() else face_m
 
 
 def _face_from_pixels(ys: np.ndarray, xs: np.ndarray, roi, contour: np.ndarray, top_m: float, camera: PlaneCamera) -> _Face:
@@ -339,7 +431,7 @@ def _face_from_pixels(ys: np.ndarray, xs: np.ndarray, roi, contour: np.ndarray, 
     du, dv = world_xy[-2] - world_xy[-3], world_xy[-1] - world_xy[-3]
     pixel_area = float(abs(du[0] * dv[1] - du[1] * dv[0]))
     contour_px = contour.reshape(-1, 2) + np.array([x0, y0])
-    return _Face(world_xy[:-3], top_m, contour_px.astype(np.float64), np.array([u, v]), n, pixel_area, H)
+    return _Face(world_xy[:-3], top_m, contour_px.astype(np.float64), np.array([u, v]), n, pixel_area, H, pixels[:n])
 
 
 def detect_blocks(
@@ -350,6 +442,7 @@ def detect_blocks(
     tag_detector: cv2.aruco.ArucoDetector | None = None,
     geometry: BlockGeometry | None = None,
     ignore_mask: np.ndarray | None = None,
+    color_model: ColorModel | None = None,
 ) -> list[Block]:
     """Blocks (top of each stack) and flagged non-cubes on the board, sorted by y then x.
 
@@ -357,6 +450,8 @@ def detect_blocks(
     geometry: BlockGeometry(cal), if the caller keeps one per calibration (saves its computation per frame).
     ignore_mask: (H, W) bool pixels that are not the scene (the robot self-filter's mask): no face is
     built from them, and a block partly hidden under them, or partly inside them, is flagged occluded.
+    color_model: names each face's colour from its pixels and the board's grey around it (default: the
+    config's, armlab.vision.colors); the hue classes only find candidate pixels.
     """
     check_color_image(color_bgr)
     if color_bgr.ndim != 3:
@@ -370,11 +465,12 @@ def detect_blocks(
         raise ValueError(f"ignore_mask must be a bool (H, W) = ({h}, {w}) array, got {getattr(ignore_mask, 'shape', None)}")
     bc = cfg.blocks
     if geometry is None or geometry.calibration is not cal:
-        geometry = BlockGeometry(cal)
+        geometry = BlockGeometry(cal, cfg)
     geo, step = geometry, STEP
     depth_small = depth_mm[::step, ::step].astype(np.float32)
     depth_small /= 1000.0
-    z_small = height_map_m(depth_small, geo.small_K, cal.T_world_camera, coefficients=geo.small_coefficients)
+    geo = frame_geometry(geo, depth_small, cfg, None if ignore_mask is None else ignore_mask[::step, ::step])
+    z_small = height_map_m(depth_small, geo.small_K, geo.height_row, coefficients=geo.small_coefficients)
     raised = (z_small > bc.min_height_m) & (z_small < bc.max_height_m)
     lut, names = hue_lut(cfg)
     # Every step-th pixel: nearest-neighbour resizing by an integer factor picks exactly those, and
@@ -385,6 +481,11 @@ def detect_blocks(
     classes = _color_classes(hsv_small, cfg, table)
     colourless = classes == 0  # e.g. the white and black of a tag on a block's top
     classes[~raised] = 0
+    # The board's own brightness (median value of its pixels in this frame): the scale a block's
+    # colourfulness is judged on (lighting and exposure change both alike).
+    with np.errstate(invalid="ignore"):
+        board_px = np.abs(z_small[::2, ::2]) < cfg.board_plane.inlier_m
+    board_value = quantile(hsv_small[::2, ::2, 2][board_px], 0.5) if np.count_nonzero(board_px) >= 20 else 255.0
     z_cover = z_small  # what may hide part of a face: what stands above it, and the robot
     if ignore_mask is not None:  # the robot: neither colour nor a tag's white
         ignored_small = ignore_mask[::step, ::step]
@@ -392,6 +493,11 @@ def detect_blocks(
         colourless[ignored_small] = False
         z_cover = z_small.copy()
         z_cover[ignored_small] = np.inf
+    board_small = (z_small < bc.min_height_m) & (z_small > -0.03)  # at the board (or its depth offset): the colour model's grey
+    board_small &= board_region_mask(z_small.shape, cal.T_world_camera, cal.K, cal.dist, cfg.board.x_range_m, cfg.board.y_range_m, step)
+    if ignore_mask is not None:
+        board_small &= ~ignore_mask[::step, ::step]
+    colour_of = _face_colour(color_model or ColorModel.from_config(cfg), BoardGrey(small_bgr, board_small, scale=step))
     coloured = (classes > 0).astype(np.uint8)
     # A tag on a block's top is white and black: bridge its white (next to colour, never the dark arm)
     # so the thin coloured ring around it stays one candidate at this resolution.
@@ -435,7 +541,9 @@ def detect_blocks(
             ):
                 continue  # a lower member of a stack: the block on top sits inside its footprint
             region = region or _Region(color_bgr, depth_mm, geo, cfg, roi, table, ignore_mask)
-            for block, looks_tagged in _blocks_from_region(color_bgr, geo, cfg, region, top_m, names[ci - 1], ci, z_cover, step):
+            region.board_value = board_value
+            region.coloured_small = coloured
+            for block, looks_tagged in _blocks_from_region(color_bgr, geo, cfg, region, top_m, names, ci, z_cover, step, colour_of):
                 if block.aruco_id is None and looks_tagged:
                     detector = detector or make_detector(cfg.tags.block_tag_dictionary)
                     block = _with_tag(block, color_bgr, roi, detector, cfg)
@@ -454,6 +562,8 @@ class _Region:
                  ignore_mask: np.ndarray | None = None) -> None:
         x0, y0, x1, y1 = roi
         self.roi = roi
+        self.board_value = 255.0
+        self.coloured_small: np.ndarray | None = None  # the frame's block-coloured pixels at STEP
         self.hsv = cv2.cvtColor(color_bgr[y0:y1, x0:x1], cv2.COLOR_BGR2HSV)
         self.classes = _color_classes(self.hsv, cfg, table)
         self.colourless = self.classes == 0
@@ -465,46 +575,125 @@ class _Region:
             self.z[ignored] = np.nan
 
 
-def _blocks_from_region(color_bgr, geo: BlockGeometry, cfg, region: _Region, top_m, name, ci, z_small, step) -> list[tuple[Block, bool]]:
-    """The top face at about top_m in the ROI (pixels of this colour or colourless, e.g. a tag), as
-    blocks, each with whether its face looks tagged (_face_looks_tagged)."""
+def _face_colour(model: ColorModel, grey: BoardGrey):
+    """colour_of(face_bgr, centre_px) -> ColorReading: the model's reading against the board's grey near the face."""
+    return lambda face_bgr, centre_px: model.classify(face_bgr, grey.near(centre_px))
+
+
+def _blocks_from_region(color_bgr, geo: BlockGeometry, cfg, region: _Region, top_m, names, ci, z_small, step,
+                        colour_of=None) -> list[tuple[Block, bool]]:
+    """The top face at about top_m in the ROI that holds this colour's top pixels, as blocks, each with
+    whether its face looks tagged (_face_looks_tagged). The face is every block-coloured (or
+    colourless, e.g. a tag) pixel at that height connected to them: a cube whose top reads as two hues
+    (real yellow next to orange, a shaded edge) stays one face, touching cubes form one face that is
+    then split by their footprints; each face or part is named by colour_of (_face_colour: the colour
+    model on its block-coloured pixels, a tag's black and white left out), else by its pixels' majority hue class."""
     roi, hsv, classes, z = region.roi, region.hsv, region.classes, region.z
     tol = cfg.blocks.top_face_tolerance_m
     mine = classes == ci
     band = np.abs(z - top_m) < tol
-    near_top = mine & band
-    # Lit from above, a top face is brighter than the block's sides: dim pixels of this colour are side
-    # faces that the depth filter smeared up to the top's height at the edge facing the camera.
-    if np.count_nonzero(near_top) >= 10:
-        value = hsv[..., 2]
-        keep = (mine & (value >= 0.7 * quantile(value[near_top], 0.95))) | region.colourless
-    else:
-        keep = mine | region.colourless
-    found = _top_face_in_roi(z, band, keep, tol)
+    seed = mine & band
+    # Lit from above, a top face is brighter than the block's sides: dim pixels of a colour are side
+    # faces that the depth filter smeared up to the top's height at the edge facing the camera. Each
+    # colour is compared with its own brightest top pixels (a blue top is darker than a yellow one).
+    value = hsv[..., 2]
+    keep = region.colourless.copy()
+    for cj in np.unique(classes[band]):
+        if cj == 0:
+            continue
+        colour = classes == cj
+        top = colour & band
+        if np.count_nonzero(top) >= 10:
+            keep |= colour & (value >= 0.7 * quantile(value[top], 0.95))
+        else:
+            keep |= colour
+    found = _top_face_in_roi(z, band, keep, tol, seed)
     if found is None:
         return []
     ys, xs, contour, face_m = found
-    if np.count_nonzero(classes[ys, xs] == ci) / len(ys) < 0.15:
+    face_classes = classes[ys, xs]
+    if np.count_nonzero(face_classes) / len(ys) < 0.15:
         return []  # the face is mostly another object's colourless top
     face = _face_from_pixels(ys, xs, roi, contour, face_m, geo.camera)
+    face.classes = face_classes
     small = cfg.blocks.small_size_m
     if face.pixel_count * face.pixel_area_m2 < 0.3 * small * small:
         return []  # a sliver: the edge of a lower stack member or noise
     if _covered(contour, face_m, z):
         return []  # a lower member of a stack: something sits on its centre
+    part_of_more = _part_of_larger_surface(face, z_small, step, tol, region.coloured_small) or _dark_and_colourless(hsv[ys, xs], face_classes, region.board_value)
+
+    def block_of(f: _Face, classified: _Classified | None = None, out_of_view: bool = False) -> Block:
+        if colour_of is None or f.pixels_px is None:
+            return _make_block(f, names[face_colour(f.classes, ci) - 1], geo.camera, cfg, z_small, step, z, classified, out_of_view)
+        px = f.pixels_px.astype(np.intp)
+        if f.classes is not None and np.count_nonzero(f.classes) >= 10:
+            px = px[f.classes > 0]
+        reading = colour_of(color_bgr[px[:, 1], px[:, 0]], f.center_px)
+        block = _make_block(f, reading.name, geo.camera, cfg, z_small, step, z, classified, out_of_view)
+        return replace(block, color_lab=reading.measured_lab)
+
     if _runs_off_image(ys, xs, roi, geo.calibration):
         # A tall stack's top partly out of view: the square from the edges that show, else flagged.
         # No tag lookup: a tag on a cut face is likely cut too.
         clipped = _classify_clipped(face, ys, xs, roi, geo, cfg)
-        if clipped is None or not clipped.is_cube:
-            return [(_make_block(face, name, geo.camera, cfg, z_small, step, z, clipped, out_of_view=True), False)]
-        return [(_make_block(face, name, geo.camera, cfg, z_small, step, z, clipped), False)]
+        if clipped is None or not clipped.is_cube or part_of_more:
+            return [(_not_cube(block_of(face, clipped, out_of_view=True)), False)]
+        return [(block_of(face, clipped), False)]
     classified = _classify_face(face, cfg)
     if classified.is_cube:
-        blocks = [_make_block(face, name, geo.camera, cfg, z_small, step, z, classified)]
+        blocks = [block_of(face, classified)]
     else:
-        blocks = [_make_block(part, name, geo.camera, cfg, z_small, step, z) for part in _split_touching(face, cfg)]
+        blocks = [block_of(part) for part in _split_touching(face, cfg)]
+    if part_of_more:
+        blocks = [_not_cube(b) for b in blocks]
     return [(block, _face_looks_tagged(color_bgr, block, roi, hsv)) for block in blocks]
+
+
+MIN_CHROMA = 0.15  # of the board's value: real cube tops 0.22-1.7, the dark arm's tinted parts 0.06-0.09 (ROB 550 frames)
+
+
+def _dark_and_colourless(face_hsv: np.ndarray, face_classes: np.ndarray, board_value: float) -> bool:
+    """True when a face's block-coloured pixels are dark and grey (chroma = saturation x value), as the
+    black arm's faintly tinted parts are: their median chroma is below MIN_CHROMA of the board's value."""
+    coloured = face_classes > 0
+    if not coloured.any():
+        return False
+    hsv = face_hsv[coloured].astype(np.float32)
+    chroma = hsv[:, 1] * hsv[:, 2] / 255.0
+    return quantile(chroma, 0.5) < MIN_CHROMA * board_value
+
+
+def _not_cube(block: Block) -> Block:
+    return replace(block, is_cube=False) if block.is_cube else block
+
+
+LARGER_SURFACE_RATIO = 1.5  # colourless surface at a face's height, connected to it, this many times its area: not a cube's top
+
+
+def _part_of_larger_surface(face: _Face, z_small: np.ndarray, step: int, tol_m: float, coloured_small: np.ndarray | None) -> bool:
+    """True when the face is a coloured patch on a larger surface at the same height (the dark arm's
+    top with a coloured part, a hand, a box): the surface of heights within tol_m of the face that is
+    connected to it holds LARGER_SURFACE_RATIO times the face's area or more of pixels that are not
+    block-coloured (coloured_small: the frame's block-coloured pixels at `step`). A cube's top ends at
+    its edges, where the height drops; touching cubes at the same height are block-coloured."""
+    u, v = face.center_px / step
+    r = max(4, int(3 * math.sqrt(face.pixel_count) / step))
+    x0, y0 = max(0, int(u) - r), max(0, int(v) - r)
+    window = z_small[y0 : int(v) + r + 1, x0 : int(u) + r + 1]
+    if window.size == 0:
+        return False
+    with np.errstate(invalid="ignore"):
+        band = (np.abs(window - face.top_m) < tol_m).astype(np.uint8)
+    n, labels = cv2.connectedComponents(band, connectivity=8)
+    cu, cv_ = min(int(u) - x0, window.shape[1] - 1), min(int(v) - y0, window.shape[0] - 1)
+    label = labels[cv_, cu]
+    if label == 0:
+        return False
+    surface = labels == label
+    if coloured_small is not None:
+        surface &= ~coloured_small[y0 : y0 + window.shape[0], x0 : x0 + window.shape[1]].astype(bool)
+    return np.count_nonzero(surface) * step * step >= LARGER_SURFACE_RATIO * face.pixel_count
 
 
 def _runs_off_image(ys: np.ndarray, xs: np.ndarray, roi, cal: Calibration) -> bool:
@@ -535,7 +724,7 @@ def _classify_clipped(face: _Face, ys: np.ndarray, xs: np.ndarray, roi, geo: Blo
     is_cube = (
         abs(fit.side_m - edge) <= SIZE_TOLERANCE * edge
         and fit.edge_residual_m <= MAX_EDGE_RESIDUAL * edge
-        and stacks[0][0] <= HEIGHT_TOLERANCE_M
+        and stacks[0][0] <= cfg.blocks.stack_height_tolerance_m
     )
     return _Classified(size, fit.side_m, fit.yaw_rad, is_cube, fit.centre_xy, stacks)
 
@@ -614,7 +803,7 @@ def _make_block(face: _Face, color: str, camera: PlaneCamera, cfg, z_small, step
     if occluded and not is_cube:
         # Part of the face is hidden: judge by what can be seen (not larger than the cube, right height).
         edge = cfg.blocks.large_size_m if size == "large" else cfg.blocks.small_size_m
-        is_cube = side <= edge * (1 + SIZE_TOLERANCE) and c.stacks[0][0] <= HEIGHT_TOLERANCE_M
+        is_cube = side <= edge * (1 + SIZE_TOLERANCE) and c.stacks[0][0] <= cfg.blocks.stack_height_tolerance_m
     return Block(
         color=color,
         size=size,
@@ -648,4 +837,6 @@ def _is_occluded(face: _Face, centre_xy, yaw: float, size: str, camera: PlaneCam
     inside = np.zeros(window.shape, np.uint8)
     cv2.fillConvexPoly(inside, np.round(poly - [x0, y0]).astype(np.int32), 1)
     above = np.count_nonzero((window > face.top_m + 0.008) & (inside > 0))
-    return above > 0.05 * max(1, np.count_nonzero(inside))
+    # At least 3 samples: a small cube's square holds ~30, and one or two can be a depth dropout the
+    # robot mask claims at its edge.
+    return above > max(2, 0.05 * np.count_nonzero(inside))

@@ -12,6 +12,15 @@ import cv2
 import numpy as np
 
 from armlab.devices.camera import Intrinsics
+from armlab.vision.board_plane import (
+    BoardPlaneError,
+    BoardPlaneFitter,
+    DepthCorrection,
+    apply_correction,
+    correction_from_dict,
+    correction_to_dict,
+    depth_correction,
+)
 from armlab.vision.config import PerceptionConfig
 from armlab.vision.geometry import (
     backproject,
@@ -42,6 +51,24 @@ class Calibration:
     T_world_camera_depth: np.ndarray | None = None
     tag_ids: tuple[int, ...] = ()
     created_s: float = field(default_factory=time.time)
+    # How the depth camera's board plane sits against the tags' plane (board_plane.DepthCorrection):
+    # None = no correction measured (no depth, or an older calibration): depth maps through T_world_camera.
+    depth_correction: DepthCorrection | None = None
+
+    @property
+    def T_world_depth(self) -> np.ndarray:
+        """Depth-camera points (back-projected with K, dist) -> world: T_world_camera corrected by the
+        board plane the depth showed at calibration (so the board's depth lands at z = 0)."""
+        return apply_correction(self.T_world_camera, self.depth_correction)
+
+    @property
+    def depth_offset_m(self) -> float | None:
+        """The depth board plane's height above the tags' plane at the tags' centre (negative: behind)."""
+        return None if self.depth_correction is None else self.depth_correction.offset_m
+
+    @property
+    def depth_tilt_deg(self) -> float | None:
+        return None if self.depth_correction is None else self.depth_correction.tilt_deg
 
     @property
     def camera_position_m(self) -> np.ndarray:
@@ -69,6 +96,8 @@ class Calibration:
             "tag_ids": list(self.tag_ids),
             "camera_position_m": self.camera_position_m.tolist(),
             "created_s": self.created_s,
+            "depth_correction": correction_to_dict(self.depth_correction),
+            "depth_model": None if self.depth_correction is None else self.depth_correction.describe(),
         }
 
     @classmethod
@@ -91,6 +120,7 @@ class Calibration:
                 T_world_camera_depth=None if T_depth is None else _matrix(T_depth, (4, 4), "T_world_camera_depth"),
                 tag_ids=tuple(int(i) for i in data.get("tag_ids", ())),
                 created_s=float(data.get("created_s", time.time())),
+                depth_correction=_correction(data.get("depth_correction")),
             )
         except KeyError as error:
             raise CalibrationError(f"calibration data lacks the field {error.args[0]!r}") from error
@@ -116,6 +146,13 @@ class Calibration:
         if not isinstance(data, dict):
             raise CalibrationError(f"calibration {path} is not a JSON object")
         return cls.from_dict(data)
+
+
+def _correction(value) -> DepthCorrection | None:
+    try:
+        return correction_from_dict(value)
+    except (KeyError, TypeError, ValueError) as error:
+        raise CalibrationError(f"calibration data: depth_correction is malformed ({error})") from error
 
 
 def _matrix(value, shape: tuple[int, int], name: str) -> np.ndarray:
@@ -176,12 +213,14 @@ def depth_at(depth_mm: np.ndarray, u: float, v: float, radius: int = 2) -> float
 
 
 def depth_cross_check(
-    tags: list[Tag], depth_mm: np.ndarray, K: np.ndarray, dist: np.ndarray, cfg: PerceptionConfig, T_world_camera: np.ndarray
+    tags: list[Tag], depth_mm: np.ndarray, K: np.ndarray, dist: np.ndarray, cfg: PerceptionConfig, T_world_camera: np.ndarray,
+    T_world_depth: np.ndarray | None = None,
 ) -> tuple[np.ndarray, float]:
     """Independent pose from depth: back-project the board-tag centres and fit a rigid transform (SVD).
 
     Returns that T_world_camera and the RMS distance (m) between the tag centres mapped through the
-    PnP pose and their true world positions: large when PnP or the depth disagree with the board.
+    depth model (T_world_depth: the PnP pose with the board plane's correction; T_world_camera when
+    None) and their true world positions: large when PnP or the depth disagree with the board.
     """
     centres_px, centres_world = [], []
     for tag in tags:
@@ -198,7 +237,7 @@ def depth_cross_check(
     camera_pts = backproject(pixels, depths_m, K, dist)
     world_pts = np.array([w for _, w in centres_world])
     T_depth = rigid_transform_3d(camera_pts, world_pts)
-    residual = transform_points(T_world_camera, camera_pts) - world_pts
+    residual = transform_points(T_world_camera if T_world_depth is None else T_world_depth, camera_pts) - world_pts
     return T_depth, float(np.sqrt(np.mean(np.sum(residual**2, axis=1))))
 
 
@@ -232,9 +271,10 @@ def calibrate_extrinsics(
         raise CalibrationError(f"tag reprojection error {error_px:.2f} px exceeds {limit_px} px: a tag is misdetected or misplaced")
     if T_world_camera[2, 3] <= 0:
         raise CalibrationError("the solved camera is below the board: the tag layout does not match the config")
-    T_depth, depth_error = None, None
+    T_depth, depth_error, correction = None, None, None
     if depth_mm is not None:
-        T_depth, depth_error = depth_cross_check(tags, depth_mm, K, dist, cfg, T_world_camera)
+        correction = measure_depth_correction(depth_mm, K, dist, T_world_camera, cfg)
+        T_depth, depth_error = depth_cross_check(tags, depth_mm, K, dist, cfg, T_world_camera, apply_correction(T_world_camera, correction))
         limit_m = cfg.calibration.max_depth_check_error_m
         if depth_error > limit_m:
             raise CalibrationError(
@@ -250,7 +290,28 @@ def calibrate_extrinsics(
         depth_check_error_m=depth_error,
         T_world_camera_depth=T_depth,
         tag_ids=ids,
+        depth_correction=correction,
     )
+
+
+def measure_depth_correction(
+    depth_mm: np.ndarray, K: np.ndarray, dist: np.ndarray, T_world_camera: np.ndarray, cfg: PerceptionConfig
+) -> DepthCorrection | None:
+    """The depth camera's offset and tilt against the tags' plane (board_plane.depth_correction), from
+    the board plane fitted in this depth image (undistorted rays, every 4th pixel); None when the board
+    plane is disabled in the config. CalibrationError when no board plane shows in the depth."""
+    bp = cfg.board_plane
+    if not bp.enabled:
+        return None
+    h, w = depth_mm.shape
+    fitter = BoardPlaneFitter(K, dist, T_world_camera, w, h, cfg.board.x_range_m, cfg.board.y_range_m, step=4, undistort=True)
+    small = depth_mm[::4, ::4].astype(np.float64) / 1000.0
+    try:
+        plane = fitter.fit(small, bp.window_m, bp.inlier_m, min_fraction=bp.min_inlier_fraction)
+    except BoardPlaneError:
+        return None  # no board near the tags' plane in this depth: the cross-check says how far off it is
+    centre = np.mean(np.array(list(cfg.tags.board_tags.values()), dtype=np.float64), axis=0)
+    return depth_correction(plane, T_world_camera, centre)
 
 
 def project_grid(cal: Calibration, cfg: PerceptionConfig) -> np.ndarray:

@@ -5,6 +5,8 @@ Validated at load time so a typo fails at start-up, not mid-job."""
 
 from __future__ import annotations
 
+import math
+import re
 from pathlib import Path
 
 import cv2
@@ -15,16 +17,19 @@ from armlab.config import StrictModel, config_dir, read_config_file, validate_co
 from armlab.errors import ConfigError
 from armlab.workcell import DEFAULT_WORKCELL, BlockTagEntry, Workcell, is_apriltag_family, known_family, load_workcell
 
+COLOR_NAME = re.compile(r"[a-z][a-z0-9_]{0,31}")
+
 __all__ = ["BlockTagEntry", "PerceptionConfig", "TagDetectionConfig", "is_apriltag_family", "load_perception_config",
            "workcell_sections"]
 
 
 class TagDetectionConfig(StrictModel):
     """Tag decoder thresholds (vision.yaml tag_detection). AprilTag library: detections with more
-    corrected bits than max_hamming or a decision margin below min_decision_margin are dropped;
-    quad_decimate 1 keeps ~20 px tags readable. ArUco: aruco_error_correction_rate (OpenCV's)."""
+    corrected bits than max_hamming or a decision margin below min_decision_margin are dropped
+    (max_hamming 2 is the library's own default); quad_decimate 1 keeps ~20 px tags readable.
+    ArUco: aruco_error_correction_rate (OpenCV's)."""
 
-    max_hamming: int = Field(1, ge=0, le=3)
+    max_hamming: int = Field(2, ge=0, le=3)
     min_decision_margin: float = Field(25.0, ge=0.0)
     quad_decimate: float = Field(1.0, ge=1.0, le=4.0)
     quad_sigma: float = Field(0.0, ge=0.0, le=2.0)
@@ -109,6 +114,7 @@ class BlockConfig(StrictModel):
     min_height_m: float = Field(0.008, gt=0.0)
     max_height_m: float = Field(0.55, gt=0.0)
     top_face_tolerance_m: float = Field(0.006, gt=0.0)
+    stack_height_tolerance_m: float = Field(0.008, gt=0.0)
     min_saturation: int = Field(70, ge=0, le=255)
     min_value: int = Field(40, ge=0, le=255)
     colors: dict[str, float]
@@ -125,6 +131,49 @@ class BlockConfig(StrictModel):
             if not 0.0 <= hue < 180.0:
                 raise ValueError(f"colors.{name}: hue {hue} outside OpenCV's 0..180")
         return self
+
+
+class ColorModelConfig(StrictModel):
+    """Block colour classes in board-normalised CIELAB (armlab.vision.colors): references per class
+    (measured on real frames and on the simulation's renders: bench/color_references.py), the
+    distance beyond which a face is `unknown`, and the extra colour names an operator may teach the
+    station (colour calibration) besides the classes."""
+
+    board_reflectance: float = Field(0.5, gt=0.0, le=1.0)
+    k_lightness: float = Field(2.0, gt=0.0)
+    k_chroma: float = Field(2.0, gt=0.0)
+    max_distance: float = Field(15.0, gt=0.0)
+    min_chroma: float = Field(10.0, ge=0.0)
+    references: dict[str, tuple[tuple[float, float, float], ...]]
+    extra_names: tuple[str, ...] = ()
+
+    @model_validator(mode="after")
+    def _sane(self) -> "ColorModelConfig":
+        for name, refs in self.references.items():
+            if not refs:
+                raise ValueError(f"references.{name}: needs at least one reference colour [L, a, b]")
+            for i, ref in enumerate(refs):
+                if not all(math.isfinite(x) for x in ref) or not 0.0 <= ref[0] <= 200.0:
+                    raise ValueError(f"references.{name}[{i}]: {list(ref)} is not a CIELAB colour (finite, L in 0..200)")
+        for name in (*self.references, *self.extra_names):
+            if not COLOR_NAME.fullmatch(name) or name == "unknown":
+                raise ValueError(f"colour name '{name}': lower-case letters, digits and _ only, and not 'unknown'")
+        clash = set(self.references) & set(self.extra_names)
+        if clash:
+            raise ValueError(f"extra_names: {sorted(clash)} are classes already")
+        return self
+
+
+class BoardPlaneConfig(StrictModel):
+    """The board plane fitted in each depth image (armlab.vision.board_plane): board pixels whose height
+    above the tags' plane is within window_m (the depth camera's offset; real L515s: 7-12 mm, measured on
+    the ROB 550 frames), inliers within inlier_m (about 3x the depth noise on the board: 1.2-1.7 mm RMS
+    on those frames). enabled: false measures heights from the tags' plane (the calibration's correction)."""
+
+    enabled: bool = True
+    window_m: float = Field(0.03, gt=0.0, lt=0.2)
+    inlier_m: float = Field(0.004, gt=0.0, lt=0.05)
+    min_inlier_fraction: float = Field(0.5, gt=0.0, le=1.0)
 
 
 class ObjectConfig(StrictModel):
@@ -168,6 +217,8 @@ class PerceptionConfig(StrictModel):
     board: BoardConfig
     blocks: BlockConfig
     objects: ObjectConfig = ObjectConfig()
+    color_model: ColorModelConfig
+    board_plane: BoardPlaneConfig = BoardPlaneConfig()
     self_filter: SelfFilterConfig = SelfFilterConfig()
 
     @model_validator(mode="after")
@@ -175,6 +226,9 @@ class PerceptionConfig(StrictModel):
         for tag_id, entry in self.tags.block_tags.items():
             if entry.color not in self.blocks.colors:
                 raise ValueError(f"tags.block_tags.{tag_id}: colour '{entry.color}' is not in blocks.colors")
+        if set(self.color_model.references) != set(self.blocks.colors):
+            raise ValueError(f"color_model.references: classes {sorted(self.color_model.references)} must be the "
+                             f"block colours {sorted(self.blocks.colors)}")
         return self
 
     def board_tag_corners_m(self, tag_id: int) -> np.ndarray:

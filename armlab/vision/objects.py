@@ -112,7 +112,7 @@ def detect_objects_from_depth(
         sel = (labels == k) & (above > 0)
         if np.count_nonzero(sel) < oc.min_points:
             continue
-        world = transform_points(cal.T_world_camera, pts[sel].astype(np.float64))
+        world = transform_points(cal.T_world_depth, pts[sel].astype(np.float64))
         x, y, bw, bh = stats[k, :4]
         objects.append(
             DepthObject(

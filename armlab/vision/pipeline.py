@@ -54,6 +54,7 @@ class PerceptionPipeline:
         self._tag_centres_px = np.empty((0, 2))
         self._grid_px: dict[tuple[int, int], np.ndarray] = {}
         self._block_geometry: BlockGeometry | None = None
+        self.color_model = None  # an armlab.vision.colors ColorModel (the station's colour calibration); None: the config's
 
     def _use_calibration(self, cal: Calibration) -> None:
         if cal is not self._cal:
@@ -102,11 +103,12 @@ class PerceptionPipeline:
         if cal is not None and depth_mm is not None:
             self._use_calibration(cal)
             if self._block_geometry is None:
-                self._block_geometry = BlockGeometry(cal)
+                self._block_geometry = BlockGeometry(cal, self.cfg)
             if arm_joints_rad is not None and self.cfg.self_filter.enabled:
                 robot_mask = self.self_filter.mask(depth_mm, cal, np.asarray(arm_joints_rad, dtype=float), held_block_edge_m)
             blocks = detect_blocks(
-                color_bgr, depth_mm, cal, self.cfg, tag_detector=self._block_detector, geometry=self._block_geometry, ignore_mask=robot_mask
+                color_bgr, depth_mm, cal, self.cfg, tag_detector=self._block_detector, geometry=self._block_geometry, ignore_mask=robot_mask,
+                color_model=self.color_model,
             )
             if frame_time_s is not None or arm_joints_rad is not None:
                 seen_joints = joints if arm_joints_rad is not None else None

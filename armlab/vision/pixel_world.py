@@ -41,7 +41,7 @@ def pixel_to_world(
         if not math.isfinite(depth) or depth <= 0:
             raise ValueError(f"depth must be a positive number of mm, got {depth_mm}")
     camera_point = backproject(pixel, np.array([depth / 1000.0]), cal.K, cal.dist)
-    return transform_points(cal.T_world_camera, camera_point)[0]
+    return transform_points(cal.T_world_depth, camera_point)[0]  # the depth camera's board lands at z = 0
 
 
 def pixel_to_world_off_robot(
@@ -73,12 +73,13 @@ def pixel_to_world_off_robot(
         if not valid.any():
             continue
         pixels = np.column_stack([cols[valid], rows[valid]]).astype(np.float64)
-        points = transform_points(cal.T_world_camera, backproject(pixels, readings_m[valid], cal.K, cal.dist))
+        T_world_depth = cal.T_world_depth
+        points = transform_points(T_world_depth, backproject(pixels, readings_m[valid], cal.K, cal.dist))
         keep = ~robot.contains(points) if (robot is not None and source == "depth") else np.ones(len(points), bool)
         if keep.any():
             median_m = float(np.median(readings_m[valid][keep]))
             camera_point = backproject(np.array([[u, v]], dtype=np.float64), np.array([median_m]), cal.K, cal.dist)
-            return transform_points(cal.T_world_camera, camera_point)[0], source
+            return transform_points(T_world_depth, camera_point)[0], source
     return board, "board"
 
 

@@ -173,7 +173,7 @@ class _RayGrid:
             xn = ((us - cal.K[0, 2]) / cal.K[0, 0]).astype(np.float32)
             yn = ((vs - cal.K[1, 2]) / cal.K[1, 1]).astype(np.float32)
             self.x, self.y = np.broadcast_to(xn[None, :], (len(vs), len(us))), np.broadcast_to(yn[:, None], (len(vs), len(us)))
-        self.T_camera_world = invert_transform(cal.T_world_camera)
+        self.T_camera_world = invert_transform(cal.T_world_depth)  # depth points are tested: the depth model
 
 
 def robot_mask(depth_mm: np.ndarray, cal: Calibration, volume: RobotVolume, pixel_step: int = 2, rays: _RayGrid | None = None) -> np.ndarray:

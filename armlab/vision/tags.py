@@ -33,6 +33,11 @@ class Tag:
         return {"id": self.id, "corners_px": self.corners_px.tolist(), "center_px": self.center_px.tolist(),
                 "hamming": self.hamming, "decision_margin": self.decision_margin}
 
+    def corners_apriltag_px(self) -> np.ndarray:
+        """Corners (4, 2) in the AprilTag library's convention (counter-clockwise from the tag's
+        bottom-left, pixel centres at +0.5), to compare with the library's or apriltag_ros' output."""
+        return self.corners_px[_APRILTAG_TO_OPENCV] + 0.5  # the reordering is its own inverse
+
     def shifted(self, offset_px: np.ndarray) -> "Tag":
         """The same tag with its pixels moved by offset_px (a crop's origin)."""
         return Tag(self.id, self.corners_px + offset_px, self.center_px + offset_px, self.hamming, self.decision_margin)
@@ -65,8 +70,8 @@ class AprilTagDetector:
         self.family = family
         self.settings = settings or TagDetectionConfig()
         s = self.settings
-        # pupil-apriltags always decodes up to 2 corrected bits, whose lookup table costs ~1 s to build
-        # for tagStandard41h12; built here with the family at max_hamming bits instead (0-1: ~10x less).
+        # pupil-apriltags always builds its decode table for 2 corrected bits; built here for max_hamming
+        # bits instead (tagStandard41h12: 0.2 s at 2 bits, 6 ms at 1; tag36h11: 35 ms at 2, 4 ms at 1).
         self._detector = Detector(families="tag16h5", nthreads=1, quad_decimate=s.quad_decimate,
                                   quad_sigma=s.quad_sigma, refine_edges=1)
         libc, pointer = self._detector.libc, self._detector.tag_detector_ptr
@@ -81,20 +86,7 @@ class AprilTagDetector:
         pointer.contents.decode_sharpening = float(s.decode_sharpening)  # the wrapper truncates it to an int
 
     def __del__(self) -> None:
-        """Free the library's detector before its families: pupil-apriltags' own __del__ frees the
-        families first, and the detector's teardown then reads them (an intermittent segfault,
-        pupil-labs/apriltags#46, duckietown/lib-dt-apriltags#33)."""
-        detector = getattr(self, "_detector", None)
-        if detector is None or getattr(detector, "tag_detector_ptr", None) is None:
-            return
-        libc = detector.libc
-        libc.apriltag_detector_destroy.restype = None
-        libc.apriltag_detector_destroy(detector.tag_detector_ptr)
-        detector.tag_detector_ptr = None  # its own __del__ then does nothing
-        for family, pointer in detector.tag_families.items():
-            destroy = getattr(libc, f"{family}_destroy")
-            destroy.restype = None
-            destroy(pointer)
+        free_library_detector(getattr(self, "_detector", None))
 
     def detect(self, grey: np.ndarray) -> list[tuple[int, np.ndarray, int | None, float | None]]:
         """(id, corners (4, 1, 2) float32 in OpenCV order, hamming, decision margin) per instance."""
@@ -106,6 +98,23 @@ class AprilTagDetector:
             corners = (np.asarray(det.corners, dtype=np.float32)[_APRILTAG_TO_OPENCV] - 0.5).reshape(4, 1, 2)
             found.append((int(det.tag_id), corners, int(det.hamming), float(det.decision_margin)))
         return found
+
+
+def free_library_detector(detector) -> None:
+    """Free a pupil_apriltags.Detector's C detector before its families: pupil-apriltags' own __del__
+    frees the families first, and the detector's teardown then reads them (an intermittent segfault,
+    pupil-labs/apriltags#46, duckietown/lib-dt-apriltags#33). Its own __del__ then does nothing."""
+    if detector is None or getattr(detector, "tag_detector_ptr", None) is None:
+        return
+    libc = detector.libc
+    libc.apriltag_detector_destroy.restype = None
+    libc.apriltag_detector_destroy(detector.tag_detector_ptr)
+    detector.tag_detector_ptr = None
+    for family, pointer in detector.tag_families.items():
+        destroy = getattr(libc, f"{family}_destroy")
+        destroy.restype = None
+        destroy(pointer)
+    detector.tag_families = {}
 
 
 def make_detector(name: str, settings: TagDetectionConfig | None = None):

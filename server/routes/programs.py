@@ -36,6 +36,8 @@ router = APIRouter(prefix="/api", tags=["programs"])
 
 def waypoint_out(station, waypoint) -> dict:
     """A waypoint's wire dict with its gripper point (FK, world frame) for drawing the program's path."""
+    if station.model is None:  # no arm: no gripper point to draw
+        return {**waypoint.to_dict(), "gripper_position_m": None}
     position = station.model.fk(waypoint.joints_rad)[:3, 3]
     return {**waypoint.to_dict(), "gripper_position_m": [float(v) for v in position]}
 

@@ -37,7 +37,7 @@ def post_scene(body: SceneRequest, station: StationDep, controller: ControlAuth)
     else:
         scene = generate_scene(body.event, level=body.level or 1, seed=body.seed or 0, workcell=station.config.workcell)
     station.set_scene(scene, source=controller)  # checked under the station lock, changed outside it
-    station.events.add("info", f"scene set: {body.event or 'custom'} ({len(scene.objects)} objects)")
+    station.events.add("info", f"scene set: {body.event or 'custom'} ({len(scene.objects)} objects)", kind="scene")
     return {"objects": len(scene.objects), "event": body.event, "level": body.level, "seed": body.seed}
 
 

@@ -48,6 +48,18 @@ def _opencv_failing(tmp_path: Path) -> tuple[Camera, Callable[[], None]]:
     return camera, lambda: write_video(path, _frames(), fps=30.0)
 
 
+def _recorded_slow(request) -> Camera:
+    """A folder of two recorded RGB-D pairs (tests/devices/recorded_helpers.py) played at 2 frames/s. Its
+    connect refuses bad input with a RecordingError naming the file (test_recorded_camera.py), not a
+    ConnectionError: no failing case here."""
+    from recorded_helpers import write_pairs
+
+    from armlab.devices.recorded import RecordedCamera, RecordedCameraConfig
+
+    folder = write_pairs(request.getfixturevalue("tmp_path") / "recording")
+    return RecordedCamera(RecordedCameraConfig(source=str(folder), fps=SLOW_FPS))
+
+
 @pytest.fixture(scope="module")
 def slow_sim_workcell():
     """A real-time MuJoCo workcell whose camera renders 2 frames/s; its camera is left disconnected."""
@@ -67,6 +79,7 @@ def _sim_slow(request) -> Camera:
 CASES = [
     CameraCase("opencv-video-file", _opencv_slow, _opencv_failing),
     CameraCase("sim", _sim_slow, None),
+    CameraCase("recorded-folder", _recorded_slow, None),
 ]
 FAILING_CASES = [case for case in CASES if case.make_failing is not None]
 

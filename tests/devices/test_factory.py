@@ -42,7 +42,7 @@ def test_config_model_and_shipped_names_are_accepted():
 @pytest.mark.parametrize(
     "maker, config, message",
     [
-        (make_camera, {"type": "kinect", "source": 0}, r"unknown camera backend 'kinect' \(allowed: sim, opencv, realsense\)"),
+        (make_camera, {"type": "kinect", "source": 0}, r"unknown camera backend 'kinect' \(allowed: sim, opencv, realsense, recorded\)"),
         (make_camera, {"source": 0}, "type: missing"),
         (make_camera, {"type": "opencv", "source": 0, "fps": -5}, "fps"),
         (make_arm, {"type": "opencv"}, "unknown arm backend 'opencv'"),

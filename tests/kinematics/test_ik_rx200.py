@@ -4,7 +4,7 @@ import math
 
 import numpy as np
 import pytest
-from hypothesis import given, settings
+from hypothesis import assume, given, settings
 from hypothesis import strategies as st
 
 from armlab.kinematics import Unreachable
@@ -388,3 +388,56 @@ def test_pitch_search_is_the_steepest_by_brute_force(rx200):
         steepest_on_grid = np.min(np.abs(grid[grid_ok[i]] - math.pi / 2)) if grid_ok[i].any() else np.inf
         assert abs(found - math.pi / 2) <= steepest_on_grid + 1e-9
     assert ok.sum() > 100
+
+
+# ------------------------------------------------ the pitch a pose reports is the pitch ik takes (issue 20 item 6)
+
+# In the limits, every joint above the board, the gripper pointing up and back toward the base axis. Its
+# approach axis is 102.9 deg below the horizontal seen from the base (world pitch); an asin of the approach
+# axis reads -77.1 deg, which asks for the approach pointing up and AWAY from the base: no joint vector
+# within the limits reaches that (ik: "shoulder needs 120.3 deg"). Readers of a pose (the status' gripper_pose,
+# the vertical segment's held pitch) used that asin, so the arm's own pose came back refused.
+UP_AND_BACK_Q = [-1.361, -1.874, -1.511, 2.040, 0.212]
+
+
+def test_the_pose_of_an_arm_pointing_up_and_back_round_trips_through_its_reported_pitch(rx200):
+    from armlab.motion.cartesian import gripper_pitch_rad, plan_vertical_segment
+    from armlab.station.telemetry import gripper_pose_from_matrix
+
+    q = np.array(UP_AND_BACK_Q)
+    assert rx200.within_limits(q) and rx200.joint_frames(q)[:, 2, 3].min() >= 0.0
+    pose = rx200.fk(q)
+    expected_pitch = float(physical_pitch(rx200, pose[None])[0])  # the test's own reading: -102.9 deg
+    assert math.degrees(expected_pitch) == pytest.approx(-102.94, abs=0.01)
+    reported = gripper_pose_from_matrix(pose, rx200.T_world_base[:3, 3])
+    for pitch in (reported["pitch_rad"], gripper_pitch_rad(rx200, q)):
+        assert pitch == pytest.approx(expected_pitch, abs=1e-9)
+        solution = rx200.ik(reported["position_m"], pitch=pitch, q_seed=rx200.home_rad)
+        reached = rx200.fk(solution)
+        assert np.abs(reached[:3, 3] - pose[:3, 3]).max() < 1e-9
+        assert np.abs(reached[:3, 0] - pose[:3, 0]).max() < 1e-9
+    # a straight 20 mm rise from that pose keeps it (before: the asin pitch made ik change branch on the way)
+    rise = plan_vertical_segment(rx200, q, pose[2, 3] + 0.02)
+    ends = rx200.fk(rise.positions_rad[[0, -1]])
+    assert ends[1, 2, 3] == pytest.approx(pose[2, 3] + 0.02, abs=1e-6)
+    assert np.abs(ends[1, :3, 0] - pose[:3, 0]).max() < 1e-6
+
+
+@settings(max_examples=120, derandomize=True, deadline=None)
+@given(st.lists(st.floats(0.0, 1.0), min_size=5, max_size=5), st.sampled_from(["home", "own", "sleep"]))
+def test_fk_then_ik_at_the_reported_pitch_round_trips_over_in_limit_joints(rx200, fractions, seed_name):
+    """Any joint vector within the limits with every joint above the board: its gripper point at the pitch
+    its pose reports is solved, to the same position and approach axis (120 derandomised examples)."""
+    from armlab.station.telemetry import gripper_pose_from_matrix
+
+    lower, upper = rx200.lower_rad, rx200.upper_rad
+    q = lower + np.array(fractions) * (upper - lower)
+    assume(rx200.joint_frames(q)[:, 2, 3].min() >= 0.0)
+    pose = rx200.fk(q)
+    reported = gripper_pose_from_matrix(pose, rx200.T_world_base[:3, 3])
+    seed = {"home": rx200.home_rad, "own": q, "sleep": rx200.sleep_rad}[seed_name]
+    solution = rx200.ik(reported["position_m"], pitch=reported["pitch_rad"], q_seed=seed)
+    reached = rx200.fk(solution)
+    assert rx200.within_limits(solution)
+    assert np.abs(reached[:3, 3] - pose[:3, 3]).max() < 1e-9
+    assert np.abs(reached[:3, 0] - pose[:3, 0]).max() < 1e-9

@@ -32,6 +32,22 @@ def test_joint_outside_its_limits_is_named_with_the_time():
         check_trajectory(ARM, JointTrajectory(times, positions), check_rates=False)
 
 
+@pytest.mark.parametrize("joint", range(5))
+@pytest.mark.parametrize("side", ["lower", "upper"])
+def test_each_joint_beyond_either_limit_is_refused(joint, side):
+    """Both ends of every joint's range (before, only the elbow's upper limit was tested: a check ignoring
+    the lower limits passed). A sample 0.01 rad past the limit, the rest of the trajectory at rest inside."""
+    name = ("waist", "shoulder", "elbow", "wrist_angle", "wrist_rotate")[joint]
+    times = np.arange(5) * 0.01
+    limit = (ARM.lower_rad if side == "lower" else ARM.upper_rad)[joint]
+    positions = np.tile(Q_REACH_DOWN, (5, 1))
+    positions[2, joint] = limit + (-0.01 if side == "lower" else 0.01)
+    with pytest.raises(UnsafeTrajectory, match=rf"{name} = {positions[2, joint]:.4f} rad at t = 0\.020 s is outside its limits"):
+        check_trajectory(ARM, JointTrajectory(times, positions), check_rates=False, clearance_m=-1.0)
+    positions[2, joint] = limit  # on the limit itself: allowed
+    check_trajectory(ARM, JointTrajectory(times, positions), check_rates=False, clearance_m=-1.0)
+
+
 def test_too_fast_and_too_sharp_are_rejected_by_finite_differences():
     times = np.arange(4) * 0.01
     jump = np.zeros((4, 5))

@@ -1,6 +1,27 @@
-"""web/js/wire_types.js is generated from the pydantic models and must not go stale."""
+"""web/js/wire_types.js is generated from the pydantic models and must not go stale; each typedef carries exactly
+its model's fields (checked per typedef, not anywhere in the file), and the message-type lists are the models'."""
+
+import re
 
 from server import gen_wire_types
+from server.stream import CLIENT_MESSAGE
+from server.stream_models import CLIENT_MESSAGES, SERVER_MESSAGES
+
+
+def _typedefs(text: str) -> dict[str, list[str]]:
+    """{typedef name: its @property names in order} of a generated file."""
+    found = {}
+    for block in re.findall(r"/\*\*(.*?)\*/", text, flags=re.S):
+        name = re.search(r"@typedef \{Object\} (\w+)", block)
+        if name is not None:
+            found[name.group(1)] = re.findall(r"@property \{[^\n]*?\} \[?(\w+)\]?", block)
+    return found
+
+
+def _constant(text: str, name: str) -> list[str]:
+    match = re.search(rf"export const {name} = Object\.freeze\((\[.*?\])\);", text)
+    assert match is not None, f"{name} missing from the generated file"
+    return re.findall(r'"([^"]*)"', match.group(1))
 
 
 def test_generated_wire_types_are_current():
@@ -9,11 +30,25 @@ def test_generated_wire_types_are_current():
     assert gen_wire_types.main(["--check"]) == 0
 
 
-def test_every_model_has_a_typedef_with_its_fields():
+def test_every_model_has_a_typedef_with_exactly_its_fields():
     text = gen_wire_types.render()
     assert text.startswith("// generated, do not edit")
+    typedefs = _typedefs(text)
     for model in gen_wire_types.ALL_WIRE_MODELS:
-        assert f"@typedef {{Object}} {model.__name__}\n" in text
-        for field_name in model.model_fields:
-            assert f"{field_name}" in text
+        assert model.__name__ in typedefs, f"no typedef {model.__name__}"
+        expected = [field.alias or name for name, field in model.model_fields.items()]
+        assert sorted(typedefs[model.__name__]) == sorted(expected), model.__name__
     assert '@property {"frame"} [type]' in text or '@property {"frame"} type' in text
+
+
+def test_message_type_lists_are_every_message_each_side_sends():
+    text = gen_wire_types.render()
+    assert _constant(text, "CLIENT_MESSAGE_TYPES") == ["ack", "view", "command", "heartbeat"]
+    assert _constant(text, "SERVER_MESSAGE_TYPES") == ["frame", "telemetry", "event", "calibration", "hello"]
+    assert _constant(text, "EVENT_KINDS") == ["general", "scene"]
+    # what the server parses is exactly the client list: one model per type, each accepted
+    assert len(CLIENT_MESSAGES) == 4 and len(SERVER_MESSAGES) == 5
+    samples = {"ack": '{"type": "ack", "seq": 1}', "view": '{"type": "view", "view": "color", "layers": []}',
+               "command": '{"type": "command", "name": "estop"}', "heartbeat": '{"type": "heartbeat"}'}
+    for kind in _constant(text, "CLIENT_MESSAGE_TYPES"):
+        assert type(CLIENT_MESSAGE.validate_json(samples[kind])).__name__.lower().startswith(kind)

@@ -181,3 +181,33 @@ def test_a_view_only_session_and_a_tokenless_request_can_stop_the_arm(url, http_
     answer = httpx.post(http_url + "/api/estop", headers={"X-Armlab-Controller": "viewer-page"})
     assert answer.status_code == 200 and answer.json()["state"] == "estop"
     assert httpx.post(http_url + "/api/reset", headers=auth).json()["state"] == "idle"
+
+
+def test_a_websocket_estop_latches_while_a_slow_message_of_the_same_session_is_in_flight(cell, tmp_path):
+    """A websocket e-stop is never queued behind a slow message of the same session (issue 20 item 6). The slow
+    message: a take_control while the test holds the station's lock (as a long locked section or slow station call
+    would); the e-stop sent after it must set the latch while it is still in flight (measured by the latch and the
+    state, not by wall time). Its own station on the module's cell."""
+    from server.app import create_app
+    from armlab.station import State
+
+    made = []
+
+    def factory():
+        made.append(live.StationOnCell(cell, tmp_path / "station.sqlite3"))
+        return made[-1]
+
+    with live.serve(create_app(station_factory=factory, token=TOKEN)) as url:
+        station = made[0].station
+        with connect(url.replace("http://", "ws://") + f"/ws?token={TOKEN}&controller=slow", open_timeout=10) as ws:
+            assert json.loads(ws.recv(timeout=5))["type"] == "hello"
+            _next(ws, "calibration")  # the session is set up (reading the calibration takes the lock too)
+            assert not station._halt.is_set()
+            with station._lock:  # take_control now waits for the lock on its worker thread
+                ws.send(json.dumps({"type": "command", "name": "take_control"}))
+                ws.send(json.dumps({"type": "command", "name": "estop"}))
+                # before: the receive loop awaited take_control, so the e-stop waited for this lock
+                live.wait_for(station._halt.is_set, 10.0)
+                assert station.controller is None  # the slow message is indeed still in flight
+            live.wait_for(lambda: station.state is State.ESTOP, 10.0)
+            live.wait_for(lambda: station.controller == "slow", 10.0)  # and it still ran, in order, after

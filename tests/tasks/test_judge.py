@@ -214,6 +214,31 @@ def test_pick_stack_bottom_31_mm_from_a_tag_scores_nothing():
     assert "31 mm" in rules_of(off, "stacked")[0].detail
 
 
+def leaning_pile(x, y, lean_x_m, specs):
+    """Blocks each set lean_x_m along x from the one below (a column while |lean| <= 15 mm), bottom first."""
+    objects, bottom = [], 0.0
+    for i, (obj_id, color, size) in enumerate(specs):
+        objects.append(block(obj_id, color, size, x + i * lean_x_m, y, bottom + edge(size) / 2.0))
+        bottom += edge(size)
+    return objects
+
+
+def test_pick_stack_measures_a_leaning_column_at_its_bottom_block():
+    """The rule is the column's bottom within 30 mm of a tag centre; a leaning pile's top is elsewhere.
+    Tag 2 at (250, -25) mm; blocks 14 mm apart along x."""
+    three = [("a", "red", "large"), ("b", "green", "large"), ("c", "blue", "large")]
+    # bottom 10 mm from the tag, leaning away: top 38 mm from it -> on the tag
+    away = judge("pick_stack", 1, truth(leaning_pile(0.240, -0.025, -0.014, three)), sim_time_s=60.0,
+                 gripper_path_m=INSIDE_BOX_PATH_M)
+    assert [len(c) for c in columns(truth(leaning_pile(0.240, -0.025, -0.014, three))["objects"])] == [3]
+    assert (away.points, away.full) == (3 * 40 + 20, True)
+    # bottom 35 mm from the tag, leaning back over it: top 7 mm from it -> off the tag, "35 mm" said
+    back = judge("pick_stack", 1, truth(leaning_pile(0.215, -0.025, 0.014, three)), sim_time_s=60.0,
+                 gripper_path_m=INSIDE_BOX_PATH_M)
+    assert back.points == 0
+    assert all("35 mm" in rule.detail for rule in rules_of(back, "stacked"))
+
+
 def test_pick_stack_needs_three_in_the_column_and_scores_only_upright_ones():
     two = pile(-0.25, 0.275, [("a", "red", "large"), ("b", "green", "large")])
     score = judge("pick_stack", 1, truth(two, block("c", "blue", "large", 0.0, 0.1)), sim_time_s=60.0,

@@ -45,8 +45,12 @@ def raw_library(grey: np.ndarray, cfg) -> list[tuple[int, np.ndarray]]:
     """What the AprilTag library finds on its own, at the configured decoder thresholds."""
     from pupil_apriltags import Detector
 
+    from armlab.vision.tags import free_library_detector
+
     s = cfg.tag_detection
-    found = Detector(families="tag36h11", nthreads=1, quad_decimate=s.quad_decimate).detect(grey)
+    detector = Detector(families="tag36h11", nthreads=1, quad_decimate=s.quad_decimate)
+    found = detector.detect(grey)
+    free_library_detector(detector)  # its own teardown can segfault
     return [(int(d.tag_id), np.asarray(d.corners, dtype=float)) for d in found
             if d.hamming <= s.max_hamming and d.decision_margin >= s.min_decision_margin]
 

@@ -77,12 +77,10 @@ def test_topdown_pixels_map_to_the_board_and_back(page):
             const corners = [g.topdownPxToWorld(0, 0, 1000, 650, b), g.topdownPxToWorld(1000, 650, 1000, 650, b)];
             const p = g.worldToTopdownPx(0.123, -0.05, 1000, 650, b);
             const w = g.topdownPxToWorld(p.u, p.v, 1000, 650, b);
-            const fromHeader = g.boundsFromHeader({ world_bounds_m: [-0.2, 0.2, 0.0, 0.3] }, b);
-            const fallback = g.boundsFromHeader({ world_bounds_m: [0, NaN, 0, 1] }, b);
             return {
-                b, corners, p, w, fromHeader, fallback,
+                b, corners, p, w, headerBounds: typeof g.boundsFromHeader,
                 noWorkcell: [g.boardBoundsFromWorkcell(null), g.boardBoundsFromWorkcell({ board: { x_range_m: [1, 0], y_range_m: [0, 1] } })],
-                noBounds: [g.boundsFromHeader({}), g.topdownPxToWorld(1, 1, 10, 10, null), g.worldToTopdownPx(0, 0, 10, 10, null)],
+                noBounds: [g.topdownPxToWorld(1, 1, 10, 10, null), g.worldToTopdownPx(0, 0, 10, 10, null)],
                 edges: [g.blockEdgeM(workcell, "small"), g.blockEdgeM(workcell, "huge"), g.blockEdgeM(null, "large")],
             };
         }"""
@@ -92,9 +90,9 @@ def test_topdown_pixels_map_to_the_board_and_back(page):
     assert (x0, y0) == pytest.approx((-0.5, 0.475)) and (x1, y1) == pytest.approx((0.5, -0.175))
     assert result["p"]["u"] == pytest.approx(623) and result["p"]["v"] == pytest.approx(525)
     assert result["w"][:2] == pytest.approx([0.123, -0.05])
-    assert result["fromHeader"] == {"xMin": -0.2, "xMax": 0.2, "yMin": 0.0, "yMax": 0.3}
-    assert result["fallback"] == result["b"], "the workcell's board when the header has no bounds"
-    assert result["noWorkcell"] == [None, None] and result["noBounds"] == [None, None, None]
+    # the frame header carries no bounds (FrameHeader): the warp's bounds are the hello's board, nothing else
+    assert result["headerBounds"] == "undefined"
+    assert result["noWorkcell"] == [None, None] and result["noBounds"] == [None, None]
     assert result["edges"] == [0.025, None, None]
 
 

@@ -73,19 +73,6 @@ export function worldToTopdownPx(xM, yM, imageW, imageH, bounds) {
   return { u, v };
 }
 
-/** Read warp bounds from a frame header when the server sends them, else `fallback` (the board's). */
-export function boundsFromHeader(header, fallback = null) {
-  const b = header && (header.world_bounds_m || header.bounds_m);
-  if (Array.isArray(b) && b.length === 4 && b.every(Number.isFinite)) {
-    return { xMin: b[0], xMax: b[1], yMin: b[2], yMax: b[3] };
-  }
-  if (b && ["xMin", "xMax", "yMin", "yMax"].every((k) => Number.isFinite(b[k]))) return b;
-  if (b && ["x_min", "x_max", "y_min", "y_max"].every((k) => Number.isFinite(b[k]))) {
-    return { xMin: b.x_min, xMax: b.x_max, yMin: b.y_min, yMax: b.y_max };
-  }
-  return fallback;
-}
-
 /** Format metres as whole millimetres with a sign, e.g. "+123". */
 export function fmtMm(valueM) {
   if (!Number.isFinite(valueM)) return "—";

@@ -5,7 +5,6 @@ import { cameraModel, worldToCameraPx } from "./projection.js";
 import { drawTopdownDetections, drawTopdownGrid, drawTopdownTags } from "./topdown.js";
 import {
   boardBoundsFromWorkcell,
-  boundsFromHeader,
   elementToImagePx,
   fmtMm,
   frameToCameraPx,
@@ -65,9 +64,9 @@ export class LiveView {
     this.boardBounds = boardBoundsFromWorkcell(this.workcell);
   }
 
-  /** The top-down warp's bounds: the frame header's if it has them, else the workcell's board (null before the hello). */
+  /** The top-down warp's bounds: the workcell's board, which the server's warp fills (null before the hello). */
   topdownBounds() {
-    return boundsFromHeader(this.header, this.boardBounds);
+    return this.boardBounds;
   }
 
   setDetections(detections) {

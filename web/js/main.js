@@ -2,12 +2,14 @@
 
 import { Api, adoptToken, dropToken } from "./api.js";
 import { ClickCalibration } from "./clickcal.js";
+import { ColorCalibration } from "./colors.js";
 import { CompetitionPanel } from "./competition.js";
 import { ControlLease } from "./control.js";
 import { applyMovingTimeLimits, emptyDetectionsReason, readMovingTimeS } from "./inputs.js";
 import { IntrinsicsPanel } from "./intrinsics.js";
 import { CartesianJog } from "./jog.js";
 import { LiveView } from "./liveview.js";
+import { applyNoArm } from "./noarm.js";
 import { EventLog } from "./log.js";
 import {
   JointSliders,
@@ -83,6 +85,7 @@ class App {
     });
     this.programPath = new ProgramPathOverlay(this.live);
     this.clickcal = new ClickCalibration({ api: this.api, live: this.live, log: this.log, afterChange: () => this.refreshAllowed() });
+    this.colors = new ColorCalibration({ root: $("colors-panel"), api: this.api, live: this.live, log: this.log });
     this.stream = new Stream({
       token: this.api.token,
       handlers: {
@@ -184,7 +187,7 @@ class App {
         break;
       case "event":
         this.log.add(msg.level || "info", msg.message || "", msg.time_s);
-        if (String(msg.message || "").startsWith("scene set")) this.refreshScene();
+        if (msg.kind === "scene") this.refreshScene();
         break;
       case "calibration":
         this.showCalibration(msg);
@@ -200,6 +203,7 @@ class App {
   /** Sliders, readouts, plot and teach table from the arm the server runs (its joint names and limits). */
   setArm(arm) {
     renderArm(arm);
+    applyNoArm(document, arm);
     this.sliders.build(arm.joint_names, arm.joint_limits_rad);
     this.plot.setJoints(arm.joint_names, arm.joint_limits_rad);
     this.teach.setJointNames(arm.joint_names);
@@ -349,6 +353,7 @@ class App {
   setMode(mode) {
     this.live.setMode(mode);
     this.clickcal.setActive(mode === "points");
+    this.colors.setActive(mode === "color");
     document.querySelectorAll("#click-mode button").forEach((b) => b.classList.toggle("on", b.dataset.mode === mode));
     $("live").dataset.mode = mode;
   }

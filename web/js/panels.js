@@ -1,6 +1,7 @@
 // Rendering of the side panels from server data: status line, joint and gripper readouts, joint
 // sliders, detections table, calibration result, programs list, and command-button enabling.
 
+import { labToCss } from "./colors.js";
 import { fmtDeg, fmtMm } from "./geometry.js";
 
 const $ = (id) => document.getElementById(id);
@@ -152,7 +153,7 @@ export function renderArm(arm) {
   document.body.dataset.gripperType = arm.gripper_type;
   $("btn-open").textContent = suction ? "Vacuum off" : "Open";
   $("btn-close").textContent = suction ? "Vacuum on" : "Close";
-  $("arm-name").textContent = `${arm.name} · ${arm.joint_names.length} joints · ${suction ? "suction cup" : "fingers"}`;
+  $("arm-name").textContent = arm.has_arm === false ? "none" : `${arm.name} · ${arm.joint_names.length} joints · ${suction ? "suction cup" : "fingers"}`;
 }
 
 /** Detections table; rows carry data-index so hovering on the canvas can highlight one. */
@@ -174,7 +175,7 @@ export function renderDetections(detections, hoverIndex, onRowClick, why = "") {
     tr.dataset.index = String(i);
     if (i === hoverIndex) tr.className = "hover";
     const p = d.position_m || [];
-    const sw = `<span class="swatch" style="background:${SWATCH[d.color] || "#888"}"></span>`;
+    const sw = `<span class="swatch" style="background:${SWATCH[d.color] || labToCss(d.color_lab) || "#888"}"></span>`; // unknown: as measured
     const size = d.size || (d.is_cube === false ? "other" : "");
     const level = d.stack_level > 1 ? ` L${d.stack_level}` : "";
     const cells = [String(d.id ?? i), `${sw}${escapeHtml(d.color || "?")}`, escapeHtml(size + level),

@@ -4,11 +4,13 @@
 
 export const STATES = Object.freeze(["idle", "calibrate", "teach", "repeat", "click_grab", "click_drop", "auto_sort", "estop", "fault"]);
 export const COMMANDS = Object.freeze(["estop", "reset", "home", "sleep", "move_joints", "move_to", "jog", "torque", "gripper", "calibrate", "grab", "drop", "teach_start", "teach_record", "teach_stop", "teach_undo", "repeat", "auto", "cancel", "set_scene", "pause", "resume", "step", "set_speed"]);
+export const ARM_COMMANDS = Object.freeze(["home", "sleep", "move_joints", "move_to", "jog", "torque", "gripper", "grab", "drop", "teach_start", "teach_record", "teach_stop", "teach_undo", "repeat", "auto", "pause", "resume", "step", "set_speed"]);
 export const VIEWS = Object.freeze(["color", "depth", "topdown"]);
 export const LAYERS = Object.freeze(["tags", "detections", "grid"]);
-export const ERROR_CODES = Object.freeze(["wrong_state", "unreachable", "unsafe", "invalid", "not_found", "not_calibrated", "unauthorized", "forbidden", "not_controller", "needs_confirmation", "device", "internal"]);
+export const ERROR_CODES = Object.freeze(["wrong_state", "unreachable", "unsafe", "invalid", "not_found", "not_calibrated", "unauthorized", "forbidden", "not_controller", "needs_confirmation", "no_arm", "device", "internal"]);
 export const SERVER_MESSAGE_TYPES = Object.freeze(["frame", "telemetry", "event", "calibration", "hello"]);
-export const CLIENT_MESSAGE_TYPES = Object.freeze(["ack", "view", "command"]);
+export const CLIENT_MESSAGE_TYPES = Object.freeze(["ack", "view", "command", "heartbeat"]);
+export const EVENT_KINDS = Object.freeze(["general", "scene"]);
 
 /**
  * @typedef {Object} AckMessage
@@ -26,8 +28,10 @@ export const CLIENT_MESSAGE_TYPES = Object.freeze(["ack", "view", "command"]);
  * @property {Array<Array<number>>} joint_limits_rad [lower, upper] per joint, joint_names order
  * @property {Array<number>} velocity_limits_rad_s
  * @property {Array<number>} home_rad
- * @property {("fingers"|"suction")} gripper_type
+ * @property {("fingers"|"suction"|"none")} gripper_type
  * @property {boolean} full_pose Cartesian moves keep the tool's whole orientation (six joints or more), else pitch and yaw
+ * @property {boolean} [has_arm] False: a station with no arm (armlab serve --arm none), perception only; no joints
+ * @property {(string|null)} [reason] why the arm's panels are off (a station with no arm)
  */
 
 /**
@@ -124,6 +128,9 @@ export const CLIENT_MESSAGE_TYPES = Object.freeze(["ack", "view", "command"]);
  * @property {(number|null)} [width]
  * @property {(number|null)} [height]
  * @property {(number|null)} [depth_check_error_m]
+ * @property {(number|null)} [depth_offset_m] the depth camera's board plane above (+) or behind (-) the tags' plane
+ * @property {(number|null)} [depth_tilt_deg] angle between the depth camera's board plane and the tags' plane
+ * @property {(string|null)} [depth_model] the two in words, e.g. 'depth 8.3 mm behind the tags' plane, tilted 1.52 deg'
  * @property {(Array<Array<number>>|null)} [grid_points_px]
  * @property {(Array<TagInfo>|null)} [tags]
  * @property {(number|null)} [time]
@@ -142,12 +149,69 @@ export const CLIENT_MESSAGE_TYPES = Object.freeze(["ack", "view", "command"]);
  * @property {(number|null)} [width]
  * @property {(number|null)} [height]
  * @property {(number|null)} [depth_check_error_m]
+ * @property {(number|null)} [depth_offset_m] the depth camera's board plane above (+) or behind (-) the tags' plane
+ * @property {(number|null)} [depth_tilt_deg] angle between the depth camera's board plane and the tags' plane
+ * @property {(string|null)} [depth_model] the two in words, e.g. 'depth 8.3 mm behind the tags' plane, tilted 1.52 deg'
  * @property {(Array<Array<number>>|null)} [grid_points_px]
  * @property {(Array<TagInfo>|null)} [tags]
  * @property {(number|null)} [time]
  * @property {(string|null)} [method] 'points' for a calibration from clicked points (tags otherwise)
  * @property {(Object<string, *>|null)} [points] clicked-point fit: homography, reprojection and per-point errors (px)
  * @property {"calibration"} [type]
+ */
+
+/**
+ * A labelled frame: every listed face (u, v, colour) of the newest frame; replaces the station's samples.
+ * @typedef {Object} ColorFitRequest
+ * @property {Array<ColorSampleRequest>} samples
+ */
+
+/**
+ * @typedef {Object} ColorFitResponse
+ * @property {number} samples
+ * @property {number} read_otherwise_before faces the model read as another colour before the fit
+ */
+
+/**
+ * @typedef {Object} ColorReadingInfo
+ * @property {string} name the class the model gave ('unknown': far from every class)
+ * @property {Array<number>} measured_lab
+ * @property {number} distance to the nearest reference of that class (of `nearest` for unknown)
+ * @property {string} nearest
+ */
+
+/**
+ * @typedef {Object} ColorSampleInfo
+ * @property {string} name
+ * @property {Array<number>} lab board-normalised CIELAB (L, a, b) measured at the click
+ * @property {(number|null)} [u]
+ * @property {(number|null)} [v]
+ * @property {(number|null)} [time_s]
+ */
+
+/**
+ * A block's colour, named by the operator: the face at pixel (u, v) of the newest frame.
+ * @typedef {Object} ColorSampleRequest
+ * @property {number} u pixel column in the colour image
+ * @property {number} v pixel row in the colour image
+ * @property {string} color a colour the station knows: a class (red ... violet) or an extra name (pink, light_blue, ...)
+ */
+
+/**
+ * @typedef {Object} ColorSampleResponse
+ * @property {ColorSampleInfo} sample
+ * @property {ColorReadingInfo} reading_before what the colour model read there before this sample
+ * @property {number} samples samples in use now
+ */
+
+/**
+ * The colour model in use: the config's defaults plus this station's samples.
+ * @typedef {Object} ColorsInfo
+ * @property {Array<string>} classes
+ * @property {Array<string>} names every colour name a sample may carry
+ * @property {number} max_distance a face farther than this from every reference reads 'unknown'
+ * @property {Array<ColorSampleInfo>} samples
+ * @property {Object<string, *>} references the defaults: CIELAB references per class
  */
 
 /**
@@ -185,6 +249,7 @@ export const CLIENT_MESSAGE_TYPES = Object.freeze(["ack", "view", "command"]);
  * @property {boolean} occluded
  * @property {(number|null)} [aruco_id]
  * @property {*} [destination]
+ * @property {(Array<number>|null)} [color_lab] the top face's colour, board-normalised CIELAB (L, a, b): what an 'unknown' colour measured
  */
 
 /**
@@ -215,9 +280,11 @@ export const CLIENT_MESSAGE_TYPES = Object.freeze(["ack", "view", "command"]);
  */
 
 /**
+ * An operator event. The page acts on `kind` (armlab.station.slots.EventLog.KINDS), never on the text.
  * @typedef {Object} EventMessage
  * @property {"event"} [type]
  * @property {("info"|"warn"|"error")} level
+ * @property {("general"|"scene")} kind what happened, for a client to act on; 'general': for people only
  * @property {string} message
  * @property {number} time_s
  */
@@ -446,7 +513,7 @@ export const CLIENT_MESSAGE_TYPES = Object.freeze(["ack", "view", "command"]);
  * @property {Array<string>} joint_names
  * @property {Array<Array<number>>} joint_limits_rad [lower, upper] per joint
  * @property {GripperStatus} gripper
- * @property {GripperPose} gripper_pose
+ * @property {(GripperPose|null)} gripper_pose the gripper's pose (FK of the joints); None on a station with no arm
  * @property {boolean} moving
  * @property {boolean} [torque_enabled] motor torque on (the arm holds); off = limp, it falls unless held
  * @property {boolean} calibrated
@@ -553,7 +620,7 @@ export const CLIENT_MESSAGE_TYPES = Object.freeze(["ack", "view", "command"]);
  * @property {Array<string>} joint_names
  * @property {Array<Array<number>>} joint_limits_rad [lower, upper] per joint
  * @property {GripperStatus} gripper
- * @property {GripperPose} gripper_pose
+ * @property {(GripperPose|null)} gripper_pose the gripper's pose (FK of the joints); None on a station with no arm
  * @property {boolean} moving
  * @property {boolean} [torque_enabled] motor torque on (the arm holds); off = limp, it falls unless held
  * @property {boolean} calibrated

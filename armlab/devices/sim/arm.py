@@ -66,7 +66,7 @@ class SimArm(SimDevice, Arm):
             self._torque = True
 
     def close(self) -> None:
-        if self._connected:
+        if self._connected and self._cell.physics_fault is None:  # with the physics dead there is nothing to stop
             self.stop()
         super().close()
 

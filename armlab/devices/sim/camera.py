@@ -15,6 +15,7 @@ import numpy as np
 from armlab.devices.camera import Camera, Frame, Intrinsics
 from armlab.devices.sim.config import SimCameraConfig
 from armlab.devices.sim.device import SimDevice
+from armlab.devices.sim.realism import RealCamera
 from armlab.devices.sim.render import RawImages
 
 if TYPE_CHECKING:
@@ -26,11 +27,14 @@ NOISE_BANK_SIZE = 3
 class NoiseModel:
     """Turns a clean render into a camera frame: colour noise (Gaussian, per channel) and depth noise
     (Gaussian in mm, random dropouts, no reading outside the range). Per frame it adds a bank image
-    shifted by a random number of rows, so no noise is generated on the hot path."""
+    shifted by a random number of rows, so no noise is generated on the hot path. real: the real camera's
+    imperfections (armlab.devices.sim.realism) replace the flat depth noise; None: the ideal camera."""
 
-    def __init__(self, config: SimCameraConfig, rng: np.random.Generator, color_noise: bool, depth_noise: bool) -> None:
+    def __init__(self, config: SimCameraConfig, rng: np.random.Generator, color_noise: bool, depth_noise: bool,
+                 real: RealCamera | None = None) -> None:
         self._config = config
         self._rng = rng
+        self.real = real
         shape = (config.height, config.width)
         self._pixels = config.height * config.width
         self._color_bank: list[np.ndarray] = []
@@ -41,7 +45,7 @@ class NoiseModel:
                 np.clip(np.rint(rng.normal(0.0, config.color.noise_std, (*shape, 3))), -127, 127).astype(np.int16)
                 for _ in range(NOISE_BANK_SIZE)
             ]
-        if depth_noise:
+        if depth_noise and real is None:
             self._depth_bank = [
                 rng.normal(0.0, config.depth.noise_std_mm, shape).astype(np.float32) for _ in range(NOISE_BANK_SIZE)
             ]
@@ -62,6 +66,8 @@ class NoiseModel:
     def apply(self, images: RawImages) -> tuple[np.ndarray, np.ndarray]:
         """(color_bgr uint8, depth_mm uint16) from a render."""
         rgb = images.rgb
+        if self.real is not None:
+            rgb = self.real.color(rgb, images.sim_time_s)
         if self._color_bank:
             index, rows = self._shift()
             noisy = np.empty_like(rgb)
@@ -73,6 +79,8 @@ class NoiseModel:
         if self._depth_bank:
             index, rows = self._shift()
             self._add_rolled(depth_mm, self._depth_bank[index], rows, depth_mm, cv2.CV_32F)
+        if self.real is not None:
+            depth_mm = self.real.depth(depth_mm, images.rgb)
         depth_cfg = self._config.depth
         valid = cv2.inRange(depth_m, depth_cfg.min_range_m, depth_cfg.max_range_m)
         out = depth_mm.astype(np.uint16)
@@ -113,6 +121,11 @@ class SimCamera(SimDevice, Camera):
         super().close()
         with self._condition:
             self._condition.notify_all()  # a reader waiting for a frame sees the camera closed
+
+    def set_board(self, T_world_camera: np.ndarray, pivot_m) -> None:
+        """Tell the realistic depth where the board is seen (its offset and tilt pivot at pivot_m); no-op if ideal."""
+        if self._noise.real is not None:
+            self._noise.real.set_board(T_world_camera, pivot_m)
 
     def publish(self, images: RawImages) -> Frame:
         """Add noise, stamp and store a render as the newest frame (called by the workcell)."""

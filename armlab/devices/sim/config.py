@@ -15,6 +15,9 @@ from armlab.devices.camera import Intrinsics
 
 Positive = Annotated[float, Field(gt=0.0)]
 NonNegative = Annotated[float, Field(ge=0.0)]
+Fraction = Annotated[float, Field(ge=0.0, le=1.0)]
+Realism = Literal["real", "ideal"]
+REALISM_ENV = "ARMLAB_REALISM"  # overrides config/sim.yaml's realism where no caller chose one (the test suite: ideal)
 
 
 class SimWorkcellConfig(StrictModel):
@@ -30,6 +33,12 @@ class SimWorkcellConfig(StrictModel):
     camera: str | None = None  # None: the workcell's camera (config/cameras/<name>.yaml)
     sim: str = "sim"  # config/<sim>.yaml
     workcell: str = "rx200_armlab"  # config/workcells/<workcell>.yaml: arm, gripper, board, tags, camera, feeder
+    # real: the camera's imperfections of the real L515 (its file's `realism:`), a second light with shadows
+    # and clutter on the board (config/sim.yaml `realism_scene:`); ideal: the exact camera. None: $ARMLAB_REALISM,
+    # else config/sim.yaml `realism`.
+    realism: Realism | None = None
+    depth_offset_m: float | None = None  # realism real: replace the camera file's depth offset / tilt (tests)
+    depth_tilt_deg: float | None = None
 
 
 class PhysicsConfig(StrictModel):
@@ -123,6 +132,47 @@ class RenderConfig(StrictModel):
     multisamples: Annotated[int, Field(ge=0, le=16)] = 0
 
 
+class LightConfig(StrictModel):
+    """A MuJoCo spot light (positions and directions in the world frame, m)."""
+
+    position_m: list[float] = Field(min_length=3, max_length=3)
+    direction: list[float] = Field(min_length=3, max_length=3)
+    diffuse: Fraction
+    cutoff_deg: Annotated[float, Field(gt=0.0, le=90.0)] = 60.0
+    exponent: Annotated[float, Field(ge=0.0, le=128.0)] = 0.0  # spot falloff: cos(angle off axis) ** exponent
+    cast_shadow: bool = True
+
+
+class ClutterItem(StrictModel):
+    """A thing lying on the board that is not a block (visual only: no contacts, not in the scene or the
+    judge's truth). kind: cable (a polyline of capsules through points_m), pliers (two handles and a jaw
+    at position_m, yaw_deg) or hand (a palm and four fingers reaching in at position_m, yaw_deg)."""
+
+    kind: Literal["cable", "pliers", "hand"]
+    points_m: list[list[float]] | None = None
+    position_m: list[float] | None = None
+    yaw_deg: float = 0.0
+    radius_m: Positive = 0.003
+    rgba: list[Fraction] = Field(min_length=4, max_length=4)
+
+    @model_validator(mode="after")
+    def _has_geometry(self) -> ClutterItem:
+        if self.kind == "cable" and (self.points_m is None or len(self.points_m) < 2 or any(len(p) != 2 for p in self.points_m)):
+            raise ValueError("a cable needs points_m: at least two [x, y] points")
+        if self.kind != "cable" and (self.position_m is None or len(self.position_m) != 2):
+            raise ValueError(f"{self.kind} needs position_m: [x, y]")
+        return self
+
+
+class SceneRealismConfig(StrictModel):
+    """What `realism: real` adds to the workcell itself: a second light casting shadows (the real frames'
+    board brightness varies 9-32 % over the board), the shadow map size, and clutter on the board."""
+
+    second_light: LightConfig
+    shadow_size_px: Annotated[int, Field(ge=256, le=8192)] = 2048
+    clutter: list[ClutterItem] = []
+
+
 class SimConfig(StrictModel):
     """config/sim.yaml."""
 
@@ -134,7 +184,8 @@ class SimConfig(StrictModel):
     suction: SuctionSimConfig | None = None
     objects: ObjectsConfig
     camera_pose_error: PoseErrorConfig
-
+    realism: Realism = "ideal"  # the workcell's default; `--realism` and SimWorkcellConfig.realism override it
+    realism_scene: SceneRealismConfig | None = None
 
     def servos(self, arm: str) -> ArmServoConfig:
         """The servo settings of `arm`: `arm:` for the RX200, else `arms.<name>` (ValueError naming the field)."""
@@ -169,6 +220,44 @@ class ColorConfig(StrictModel):
     noise_std: NonNegative
 
 
+class CameraRealismConfig(StrictModel):
+    """The real L515's imperfections (`realism: real`), magnitudes measured on real frames by
+    bench/real_camera.py (which frames and figures: the camera file's comments)."""
+
+    # The depth's board plane against the true board, as calibration reports it: its height above the board
+    # at the board tags' centre (negative: behind, away from the camera) and its tilt, rising along the
+    # board's +y turned by depth_tilt_axis_deg (0: the tilt's axis is the board's x axis).
+    depth_offset_m: Annotated[float, Field(ge=-0.05, le=0.05)]
+    depth_tilt_deg: Annotated[float, Field(ge=-10.0, le=10.0)]
+    depth_tilt_axis_deg: float = 0.0
+    # Depth noise: std at 1 m growing as (range / 1 m) ** exponent (replaces depth.noise_std_mm).
+    noise_std_at_1m_mm: NonNegative
+    noise_range_exponent: Annotated[float, Field(ge=0.0, le=3.0)] = 1.0
+    # Depth edges: pixels within edge_band_px of a step > edge_step_mm read as holes (0) or flying pixels
+    # (a depth between the two sides) with these fractions.
+    edge_step_mm: Positive
+    edge_band_px: Annotated[int, Field(ge=1, le=10)]
+    edge_hole_fraction: Fraction
+    edge_flying_fraction: Fraction
+    # Dark faces (rendered grey level below dark_level): this fraction reads 0.
+    dark_level: Annotated[int, Field(ge=0, le=255)]
+    dark_hole_fraction: Fraction
+    # Columns at the image's left and right sides with no depth at all (the depth camera's narrower field).
+    no_depth_columns: list[Annotated[int, Field(ge=0, le=400)]] = Field(default_factory=lambda: [0, 0], min_length=2, max_length=2)
+    # Colour: white-balance gains (R, G, B) on the render, each drifting by up to +-white_balance_drift;
+    # exposure drifting by up to +-exposure_drift; slow sinusoids of simulated time with seeded phases.
+    white_balance_gains: list[Positive] = Field(min_length=3, max_length=3)
+    white_balance_drift: list[Fraction] = Field(min_length=3, max_length=3)
+    exposure_drift: Fraction
+    drift_period_s: Positive
+
+    @model_validator(mode="after")
+    def _fractions_fit(self) -> CameraRealismConfig:
+        if self.edge_hole_fraction + self.edge_flying_fraction > 1.0:
+            raise ValueError("realism: edge_hole_fraction + edge_flying_fraction must not exceed 1")
+        return self
+
+
 class SimCameraConfig(StrictModel):
     """config/cameras/<name>.yaml for a simulated camera."""
 
@@ -181,6 +270,7 @@ class SimCameraConfig(StrictModel):
     mount: MountConfig
     depth: DepthConfig
     color: ColorConfig
+    realism: CameraRealismConfig | None = None  # None: the camera has no `real` imperfections
 
     @model_validator(mode="after")
     def _principal_point_inside(self) -> SimCameraConfig:
@@ -193,6 +283,21 @@ class SimCameraConfig(StrictModel):
     def to_intrinsics(self) -> Intrinsics:
         k = self.intrinsics
         return Intrinsics(self.width, self.height, k.fx, k.fy, k.cx, k.cy, tuple(k.dist))
+
+
+def resolve_realism(requested: str | None, sim: SimConfig) -> str:
+    """The realism to run: the caller's choice, else $ARMLAB_REALISM, else config/sim.yaml's (ValueError naming
+    the variable for a bad value)."""
+    import os
+
+    if requested is not None:
+        return requested
+    value = os.environ.get(REALISM_ENV, "").strip()
+    if value:
+        if value not in ("real", "ideal"):
+            raise ValueError(f"${REALISM_ENV}: expected real or ideal, got {value!r}")
+        return value
+    return sim.realism
 
 
 def load_sim_config(name: str = "sim") -> SimConfig:

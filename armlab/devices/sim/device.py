@@ -7,7 +7,7 @@ a device with more to do on connect overrides _on_connect(); on close, close() c
 
 from __future__ import annotations
 
-from armlab.errors import DeviceAlreadyConnectedError, DeviceNotConnectedError
+from armlab.errors import DeviceAlreadyConnectedError, DeviceLost, DeviceNotConnectedError
 
 
 class SimDevice:
@@ -32,6 +32,10 @@ class SimDevice:
         self._connected = False
 
     def _require(self) -> None:
-        """DeviceNotConnectedError unless connected (every command calls this first)."""
+        """DeviceNotConnectedError unless connected, DeviceLost once the simulation's physics thread died (every
+        command and read calls this first)."""
         if not self._connected:
             raise DeviceNotConnectedError(f"{self} is not connected: call connect() (or SimWorkcell.start()) first")
+        fault = getattr(getattr(self, "_cell", None), "physics_fault", None)
+        if fault is not None:
+            raise DeviceLost(f"{self}: the simulation's physics stopped ({fault}); restart the station")

@@ -14,7 +14,8 @@ import numpy as np
 from armlab.config import read_config_file, resolve_config_path
 from armlab.devices.sim import textures
 from armlab.devices.sim.checkerboard import BODY_NAME as CHECKERBOARD, checkerboard_texture, checkerboard_xml, load_checkerboard_target
-from armlab.devices.sim.config import SimCameraConfig, SimConfig
+from armlab.devices.sim.clutter import realism_world_xml
+from armlab.devices.sim.config import SceneRealismConfig, SimCameraConfig, SimConfig
 from armlab.devices.sim.feeder import FEEDER_PROBE, parked_objects
 from armlab.devices.sim.mjcf_dh import DhArmGeometry
 from armlab.devices.sim.mjcf_numbers import fmt_numbers as _fmt, quat_wxyz_from_matrix
@@ -281,9 +282,10 @@ def _feeder_xml(scene: Scene, workcell: Workcell) -> str:
 
 def build_model_xml(
     arm: ArmGeometry | DhArmGeometry, sim: SimConfig, camera: SimCameraConfig, T_world_camera: np.ndarray, scene: Scene,
-    workcell: Workcell | None = None,
+    workcell: Workcell | None = None, realism: SceneRealismConfig | None = None,
 ) -> tuple[str, dict[str, bytes]]:
-    """The whole workcell as MJCF text plus the texture PNGs it references (MuJoCo in-memory assets)."""
+    """The whole workcell as MJCF text plus the texture PNGs it references (MuJoCo in-memory assets);
+    realism: the realistic workcell's second light (with its shadow map) and clutter, None for the ideal one."""
     import cv2
 
     workcell = workcell or load_workcell()
@@ -330,7 +332,7 @@ def build_model_xml(
   <statistic extent="1" center="0 0.15 0.2"/>
   <visual>
     <global offwidth="{camera.width}" offheight="{camera.height}"/>
-    <quality shadowsize="0" offsamples="{sim.render.multisamples}"/>
+    <quality shadowsize="{realism.shadow_size_px if realism is not None else 0}" offsamples="{sim.render.multisamples}"/>
     <map znear="0.05" zfar="20"/>
     <headlight ambient="0.35 0.35 0.35" diffuse="0.35 0.35 0.35" specular="0 0 0"/>
   </visual>
@@ -352,6 +354,7 @@ def build_model_xml(
           friction="{_fmt(sim.objects.board_friction)}" solref="{_fmt(sim.objects.solref)}" contype="1" conaffinity="1"/>
     <geom name="table" type="plane" size="1.5 1.5 0.05" pos="0 0.15 -0.003" material="table" contype="1" conaffinity="1"/>
     {''.join(tag_geoms)}
+    {realism_world_xml(realism)}
     {_feeder_xml(scene, workcell)}
     <camera name="{CAMERA_NAME}" mode="fixed" {camera_xml_attributes(T_world_camera, camera)}/>
     {arm_bodies}

@@ -60,8 +60,9 @@ def _gl_context_class(backend: str):
 class _GLRenderer:
     """Owns the GL and MuJoCo render contexts; used only from the render thread."""
 
-    def __init__(self, model: mujoco.MjModel, camera_name: str, width: int, height: int) -> None:
+    def __init__(self, model: mujoco.MjModel, camera_name: str, width: int, height: int, shadows: bool = False) -> None:
         self.width, self.height = width, height
+        self.shadows = shadows  # the realistic workcell's second light casts shadows (one more pass per frame)
         self.backend = os.environ.get("MUJOCO_GL", "egl")
         self._gl = _gl_context_class(self.backend)(width, height)
         self._gl.make_current()
@@ -84,7 +85,8 @@ class _GLRenderer:
         self._scene = mujoco.MjvScene(model, maxgeom=2000)
         for flag in (mujoco.mjtRndFlag.mjRND_SKYBOX, mujoco.mjtRndFlag.mjRND_REFLECTION,
                      mujoco.mjtRndFlag.mjRND_SHADOW, mujoco.mjtRndFlag.mjRND_HAZE, mujoco.mjtRndFlag.mjRND_FOG):
-            self._scene.flags[flag] = 0  # none of them is in the workcell; each costs a pass on a CPU
+            self._scene.flags[flag] = 0  # none of them is in the ideal workcell; each costs a pass on a CPU
+        self._scene.flags[mujoco.mjtRndFlag.mjRND_SHADOW] = int(self.shadows)
         self._option = mujoco.MjvOption()
         self._camera = mujoco.MjvCamera()
         self._camera.type = mujoco.mjtCamera.mjCAMERA_FIXED
@@ -134,7 +136,7 @@ class RenderThread:
     """
 
     def __init__(self, model: mujoco.MjModel, camera_name: str, width: int, height: int,
-                 snapshot: Callable[[_GLRenderer], tuple[float, np.ndarray | None, bool | None]]) -> None:
+                 snapshot: Callable[[_GLRenderer], tuple[float, np.ndarray | None, bool | None]], shadows: bool = False) -> None:
         self._snapshot = snapshot
         self._requests: queue.Queue = queue.Queue()
         self._stop = threading.Event()
@@ -142,7 +144,7 @@ class RenderThread:
         self._error: BaseException | None = None
         self._period_s: float | None = None
         self._publish: Callable[[RawImages], None] | None = None
-        self._args = (model, camera_name, width, height)
+        self._args = (model, camera_name, width, height, shadows)
         self._thread = threading.Thread(target=self._run, name="sim-render", daemon=True)
         self._thread.start()
         self._ready.wait(30.0)

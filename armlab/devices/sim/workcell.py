@@ -28,8 +28,10 @@ from armlab.devices.sim.config import (
     load_camera_config,
     load_sim_config,
     nominal_T_world_camera,
+    resolve_realism,
     rotation_from_rotvec,
 )
+from armlab.devices.sim.realism import RealCamera
 from armlab.devices.sim.feeder import FeederRuntime, parked_objects
 from armlab.devices.sim.gripper import SimGripper
 from armlab.devices.sim.arm_select import select_arm
@@ -63,7 +65,8 @@ class SimWorkcell(SimTruth):
             mount = self._workcell.camera.mount
             self._camera_config = self._camera_config.model_copy(
                 update={"mount": MountConfig(position_m=list(mount.position_m), tilt_deg=mount.tilt_deg)})
-        pose_rng, noise_rng = (np.random.default_rng(s) for s in np.random.SeedSequence(self.config.seed).spawn(2))
+        self.realism = resolve_realism(self.config.realism, self._sim)
+        pose_rng, noise_rng, real_rng = (np.random.default_rng(s) for s in np.random.SeedSequence(self.config.seed).spawn(3))
         T_nominal = nominal_T_world_camera(self._camera_config.mount)
         self._T_world_camera = (
             T_nominal @ draw_pose_error(pose_rng, self._sim.camera_pose_error) if self.config.camera_pose_error else T_nominal
@@ -83,10 +86,16 @@ class SimWorkcell(SimTruth):
             self.gripper = SimGripper(self, self._geometry.finger_offset_min_m, self._geometry.finger_offset_max_m,
                                       self._geometry.pad_thickness_m, self._sim.gripper.stop_speed_m_s,
                                       self._sim.gripper.stop_time_s)
-        noise = NoiseModel(self._camera_config, noise_rng, self.config.color_noise, self.config.depth_noise)
+        real = None
+        if self.realism == "real" and self._camera_config.realism is not None:
+            real = RealCamera(self._camera_config, self._camera_config.realism, real_rng, self.config.depth_noise)
+            real.with_depth(self.config.depth_offset_m, self.config.depth_tilt_deg)
+        noise = NoiseModel(self._camera_config, noise_rng, self.config.color_noise, self.config.depth_noise, real)
         self.camera = SimCamera(self, self._camera_config, noise, self.config.camera_fps)
+        self.camera.set_board(self._T_world_camera, self._depth_pivot_m())
         self._render_thread: RenderThread | None = None
         self._physics_thread: threading.Thread | None = None
+        self.physics_fault: str | None = None  # why the real-time physics thread died (devices then raise DeviceLost)
         self._stop_event = threading.Event()
         self._started = False
         self._closed = False
@@ -102,8 +111,9 @@ class SimWorkcell(SimTruth):
         if scene.workcell is not None and scene.workcell != self._workcell.name:
             raise ValueError(f"the scene was made for workcell '{scene.workcell}' (its board, reach and sizes); this "
                              f"simulation runs workcell '{self._workcell.name}': generate the scene for it")
+        realism_scene = self._sim.realism_scene if self.realism == "real" else None
         xml, assets = build_model_xml(self._geometry, self._sim, self._camera_config, self._T_world_camera, scene,
-                                      self._workcell)
+                                      self._workcell, realism_scene)
         model = mujoco.MjModel.from_xml_string(xml, assets)
         names = self._geometry.joint_names
         arm_root = model.body("base").id
@@ -329,6 +339,16 @@ class SimWorkcell(SimTruth):
             time.sleep(0.002)
 
     def _physics_loop(self) -> None:
+        """The real-time physics thread. If it dies, physics would freeze while reads and renders still succeed:
+        instead the reason is kept in physics_fault and every device raises DeviceLost naming it (the station's
+        device watch then faults and halts), and it is logged."""
+        try:
+            self._run_physics()
+        except Exception as error:  # noqa: BLE001 - whatever ended it, it must not end silently
+            self.physics_fault = f"{type(error).__name__}: {error}"
+            logger.exception("simulation physics thread died: the simulated devices now report lost")
+
+    def _run_physics(self) -> None:
         wall0 = time.monotonic()
         sim0 = self.sim_time_s
         timestep = self._model.opt.timestep
@@ -355,7 +375,8 @@ class SimWorkcell(SimTruth):
     def _renderer(self) -> RenderThread:
         if self._render_thread is None:
             cam = self._camera_config
-            self._render_thread = RenderThread(self._model, CAMERA_NAME, cam.width, cam.height, self._snapshot)
+            shadows = self.realism == "real" and self._sim.realism_scene is not None
+            self._render_thread = RenderThread(self._model, CAMERA_NAME, cam.width, cam.height, self._snapshot, shadows=shadows)
         return self._render_thread
 
     def render_raw(self) -> RawImages:
@@ -428,6 +449,11 @@ class SimWorkcell(SimTruth):
             self._model.cam_quat[camera_id] = quat_wxyz_from_matrix(R_world_mj)
             self._data.cam_xpos[camera_id] = self._T_world_camera[:3, 3]  # the next physics step would recompute these
             self._data.cam_xmat[camera_id] = R_world_mj.ravel()
+            self.camera.set_board(self._T_world_camera, self._depth_pivot_m())  # the depth's tilt pivots there
+
+    def _depth_pivot_m(self) -> np.ndarray:
+        """Where the realistic depth's offset is measured and its tilt pivots: the board tags' centre."""
+        return np.mean(np.asarray(list(self._workcell.board_tags.centres_m.values()), dtype=float), axis=0)
 
     def knock_camera(self, translation_m, rotation_rad) -> None:
         """bump_camera by a translation (m) and then a rotation vector (rad), both in the camera's frame."""

@@ -1,0 +1,244 @@
+"""The board plane as the depth camera sees it: a robust plane fit over the board's pixels (objects,
+the arm and everything off the board excluded), and the rigid correction that puts that plane at the
+tags' z = 0.
+
+Why: a real RGB-D camera's depth is not exactly registered with its colour camera. On the ROB 550
+frames (../shared/data/rob550_dev) the depth board sits 9-15 mm behind the plane the tags' pose gives
+(6-8 mm in front at another station) and is tilted ~1.5 deg; heights measured from the tags' plane
+are off by that much. Heights are therefore measured from the plane fitted to each frame's own depth
+(a camera knock or drift is followed), and calibration stores the correction it measured so every
+depth -> world conversion (click -> world, objects, the self-filter) lands the board at z = 0.
+
+The fit works on inverse depth: a plane n.X = D seen through pixel rays r = (x, y, 1) has
+1 / depth = (n . r) / D, affine in the normalised coordinates (x, y). RANSAC on three pixels, inliers
+within a height band, then least squares on the inliers (twice).
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+
+class BoardPlaneError(ValueError):
+    """No board plane could be fitted (too few board pixels with depth, or no dominant plane)."""
+
+
+@dataclass(frozen=True)
+class BoardPlane:
+    """The board's plane in the depth camera's frame: height(X) = normal . X + distance_m for camera
+    points X (m), 0 on the board and positive toward the camera. normal: unit (3,), pointing from the
+    board toward the camera; distance_m: the camera's distance from the plane. rms_m: the inliers' RMS
+    distance from it (the depth noise on the board); inlier_fraction: of the pixels tried."""
+
+    normal: np.ndarray
+    distance_m: float
+    rms_m: float
+    inliers: int
+    inlier_fraction: float
+
+    def height_row(self) -> np.ndarray:
+        """(4,) = (normal, distance): what row 2 of T_world_camera is to tag-plane heights."""
+        return np.array([*self.normal, self.distance_m])
+
+    def in_world(self, T_world_camera: np.ndarray) -> tuple[np.ndarray, float]:
+        """(unit normal, d) of the plane in world coordinates: normal . P + d = 0 on the plane."""
+        n_w = T_world_camera[:3, :3] @ self.normal
+        # A camera point X maps to P = R X + t; n.X + D = 0 <=> (R n).(P - t) + D = 0.
+        return n_w, float(self.distance_m - n_w @ T_world_camera[:3, 3])
+
+
+def fit_inverse_depth_plane(
+    x: np.ndarray, y: np.ndarray, depth_m: np.ndarray, inlier_m: float, iterations: int = 48, seed: int = 0,
+    min_fraction: float = 0.3,
+) -> BoardPlane:
+    """Robust plane through camera points depth * (x, y, 1) (1-D arrays of normalised coordinates and
+    depths in metres, board candidates only). BoardPlaneError when fewer than min_fraction of them lie
+    within inlier_m of the best plane."""
+    x = np.asarray(x, dtype=np.float64).ravel()
+    y = np.asarray(y, dtype=np.float64).ravel()
+    d = np.asarray(depth_m, dtype=np.float64).ravel()
+    n = d.size
+    if n < 50:
+        raise BoardPlaneError(f"only {n} board pixels have depth; a plane fit needs at least 50")
+    A = np.column_stack([x, y, np.ones(n)])
+    w = 1.0 / d
+    rng = np.random.default_rng(seed)
+
+    def heights(coef: np.ndarray) -> np.ndarray:
+        # n.X + D with n = -coef/|coef|, D = 1/|coef|: (1 - depth * coef.r) / |coef|.
+        norm = math.sqrt(float(coef @ coef))
+        return (1.0 - d * (A @ coef)) / norm
+
+    best, best_count = None, -1
+    for _ in range(iterations):
+        idx = rng.choice(n, 3, replace=False)
+        try:
+            coef = np.linalg.solve(A[idx], w[idx])
+        except np.linalg.LinAlgError:
+            continue
+        if not np.all(np.isfinite(coef)) or coef[2] <= 0:
+            continue  # the plane must face the camera
+        count = int(np.count_nonzero(np.abs(heights(coef)) < inlier_m))
+        if count > best_count:
+            best, best_count = coef, count
+    if best is None or best_count < min_fraction * n:
+        raise BoardPlaneError(f"no dominant board plane in the depth: the best holds {max(best_count, 0)} of {n} board pixels")
+    inliers = np.abs(heights(best)) < inlier_m
+    for _ in range(2):  # least squares on the inliers, in inverse depth weighted back to metres
+        weights = d[inliers]  # d(1/depth) = -d(depth)/depth^2; height ~ d(depth) -> weight by depth
+        coef, *_ = np.linalg.lstsq(A[inliers] * weights[:, None], w[inliers] * weights, rcond=None)
+        inliers = np.abs(heights(coef)) < inlier_m
+    h = heights(coef)[inliers]
+    norm = math.sqrt(float(coef @ coef))
+    return BoardPlane(normal=-coef / norm, distance_m=1.0 / norm, rms_m=float(np.sqrt(np.mean(h * h))),
+                      inliers=int(inliers.sum()), inlier_fraction=float(inliers.mean()))
+
+
+def board_pixel_mask(shape: tuple[int, int], K: np.ndarray, T_world_camera: np.ndarray, x_range_m, y_range_m,
+                     step: int = 1, margin_m: float = 0.02) -> np.ndarray:
+    """(H', W') bool of every step-th pixel whose ray meets the tags' plane z = 0 inside the board's
+    rectangle shrunk by margin_m (lens distortion ignored: a margin's worth at the corners)."""
+    h, w = shape
+    us = (np.arange(w) * step - K[0, 2]) / K[0, 0]
+    vs = (np.arange(h) * step - K[1, 2]) / K[1, 1]
+    R, t = T_world_camera[:3, :3], T_world_camera[:3, 3]
+    rx, ry, rz = (R[:, 0][:, None, None] * us[None, None, :] + R[:, 1][:, None, None] * vs[None, :, None] + R[:, 2][:, None, None])
+    with np.errstate(divide="ignore", invalid="ignore"):
+        s = -t[2] / rz
+        X, Y = t[0] + s * rx, t[1] + s * ry
+        return ((s > 0) & (X > x_range_m[0] + margin_m) & (X < x_range_m[1] - margin_m)
+                & (Y > y_range_m[0] + margin_m) & (Y < y_range_m[1] - margin_m))
+
+
+def fit_board_plane(
+    depth_m: np.ndarray, x: np.ndarray, y: np.ndarray, tag_heights_m: np.ndarray, on_board: np.ndarray,
+    window_m: float, inlier_m: float, sample_step: int = 2, exclude: np.ndarray | None = None, seed: int = 0,
+    min_fraction: float = 0.5,
+) -> BoardPlane:
+    """The board plane from one depth image (any resolution; all arrays the same shape): pixels on the
+    board (on_board), with a reading, whose height above the tags' plane (tag_heights_m) is within
+    window_m (what the depth camera's offset can be; cubes and the arm stand taller), and not excluded
+    (e.g. the robot's mask). RANSAC on every sample_step-th candidate, least squares on all inliers."""
+    with np.errstate(invalid="ignore"):
+        cand = on_board & (depth_m > 0) & (np.abs(tag_heights_m) < window_m)
+    if exclude is not None:
+        cand &= ~exclude
+    ys, xs = np.nonzero(cand)
+    if ys.size < 50:
+        raise BoardPlaneError(f"only {ys.size} board pixels have depth within {window_m * 1000:.0f} mm of the tags' plane")
+    sub = slice(None, None, max(1, int(sample_step)))
+    xx, yy, dd = x[ys, xs] if x.ndim == 2 else x[xs], y[ys, xs] if y.ndim == 2 else y[ys], depth_m[ys, xs]
+    rough = fit_inverse_depth_plane(xx[sub], yy[sub], dd[sub], inlier_m, iterations=16, seed=seed, min_fraction=min_fraction)
+    # Refit on every candidate, starting from the rough plane's inliers.
+    h = dd * (rough.normal[0] * xx + rough.normal[1] * yy + rough.normal[2]) + rough.distance_m
+    keep = np.abs(h) < inlier_m
+    A = np.column_stack([xx[keep], yy[keep], np.ones(int(keep.sum()))]) * dd[keep][:, None]
+    coef, *_ = np.linalg.lstsq(A, np.ones(int(keep.sum())), rcond=None)  # coef . X = 1 on the plane
+    norm = math.sqrt(float(coef @ coef))
+    normal, distance = -coef / norm, 1.0 / norm
+    h = dd * (normal[0] * xx + normal[1] * yy + normal[2]) + distance
+    inl = np.abs(h) < inlier_m
+    return BoardPlane(normal=normal, distance_m=distance, rms_m=float(np.sqrt(np.mean(h[inl] ** 2))),
+                      inliers=int(inl.sum()), inlier_fraction=float(inl.mean()))
+
+
+@dataclass(frozen=True)
+class DepthCorrection:
+    """How the depth camera's board plane sits against the tags' plane, and the rigid world -> world
+    correction (4x4) that moves the former onto the latter: rotation about the work area's centre by
+    the tilt, then a shift along z. offset_m: the depth plane's height above the tags' plane at that
+    centre (negative = behind it, away from the camera); tilt_deg: the angle between the planes."""
+
+    offset_m: float
+    tilt_deg: float
+    T_correction: np.ndarray
+
+    def describe(self) -> str:
+        where = "behind" if self.offset_m < 0 else "in front of"
+        return f"depth {abs(self.offset_m) * 1000:.1f} mm {where} the tags' plane, tilted {self.tilt_deg:.2f} deg"
+
+
+def depth_correction(plane: BoardPlane, T_world_camera: np.ndarray, centre_xy_m) -> DepthCorrection:
+    """The correction that puts the depth board plane (camera frame) on the world's z = 0 when depth
+    points are mapped by T_correction @ T_world_camera; centre_xy_m: where the offset is measured and
+    about which the tilt is undone (the board tags' centroid: the work area)."""
+    n_w, d = plane.in_world(T_world_camera)
+    if n_w[2] < 0:
+        n_w, d = -n_w, -d
+    cx, cy = float(centre_xy_m[0]), float(centre_xy_m[1])
+    z0 = -(d + n_w[0] * cx + n_w[1] * cy) / n_w[2]  # the depth plane's height at the centre
+    tilt = math.acos(min(1.0, float(n_w[2])))
+    # Rotation taking n_w to +z (Rodrigues about n_w x z).
+    axis = np.cross(n_w, [0.0, 0.0, 1.0])
+    s = np.linalg.norm(axis)
+    if s < 1e-12:
+        R = np.eye(3)
+    else:
+        k = axis / s
+        Kx = np.array([[0, -k[2], k[1]], [k[2], 0, -k[0]], [-k[1], k[0], 0]])
+        R = np.eye(3) + math.sin(tilt) * Kx + (1 - math.cos(tilt)) * Kx @ Kx
+    p0 = np.array([cx, cy, z0])
+    T = np.eye(4)
+    T[:3, :3] = R
+    T[:3, 3] = np.array([cx, cy, 0.0]) - R @ p0
+    return DepthCorrection(offset_m=float(z0), tilt_deg=math.degrees(tilt), T_correction=T)
+
+
+def correction_from_dict(data: dict | None) -> DepthCorrection | None:
+    if not data:
+        return None
+    T = np.asarray(data["T_correction"], dtype=np.float64)
+    if T.shape != (4, 4) or not np.all(np.isfinite(T)) or not np.allclose(T[:3, :3] @ T[:3, :3].T, np.eye(3), atol=1e-6):
+        raise ValueError("depth_correction.T_correction must be a finite rigid 4x4 transform")
+    return DepthCorrection(float(data["offset_m"]), float(data["tilt_deg"]), T)
+
+
+def correction_to_dict(c: DepthCorrection | None) -> dict | None:
+    return None if c is None else {"offset_m": c.offset_m, "tilt_deg": c.tilt_deg, "T_correction": c.T_correction.tolist()}
+
+
+def apply_correction(T_world_camera: np.ndarray, correction: DepthCorrection | None) -> np.ndarray:
+    """T_world_depth: depth-camera points -> world (T_world_camera when there is no correction)."""
+    return T_world_camera if correction is None else correction.T_correction @ T_world_camera
+
+
+__all__ = ["BoardPlane", "BoardPlaneError", "DepthCorrection", "apply_correction", "board_pixel_mask", "depth_correction",
+           "fit_board_plane", "fit_inverse_depth_plane"]
+
+
+class BoardPlaneFitter:
+    """fit_board_plane for one calibration and image size, with its per-pixel inputs computed once:
+    every step-th pixel's normalised coordinates (undistorted when `undistort`, else the pinhole's,
+    matching heights computed without distortion), the board mask and the tag-plane height terms."""
+
+    def __init__(self, K: np.ndarray, dist: np.ndarray, T_world_camera: np.ndarray, width: int, height: int,
+                 x_range_m, y_range_m, step: int = 4, undistort: bool = False) -> None:
+        self.key = (K.tobytes(), np.asarray(dist).tobytes(), T_world_camera.tobytes(), width, height, step, undistort)
+        self.step = step
+        h, w = -(-height // step), -(-width // step)
+        us = np.arange(w, dtype=np.float64) * step
+        vs = np.arange(h, dtype=np.float64) * step
+        if undistort and np.any(np.asarray(dist) != 0):
+            import cv2
+
+            grid = np.stack(np.meshgrid(us, vs), axis=-1).reshape(-1, 1, 2)
+            und = cv2.undistortPoints(grid, K, np.asarray(dist, dtype=np.float64)).reshape(h, w, 2)
+            self.x, self.y = und[..., 0], und[..., 1]
+        else:
+            self.x = np.broadcast_to(((us - K[0, 2]) / K[0, 0])[None, :], (h, w))
+            self.y = np.broadcast_to(((vs - K[1, 2]) / K[1, 1])[:, None], (h, w))
+        r3 = T_world_camera[2, :3]
+        self.tag_coefficients = r3[0] * self.x + r3[1] * self.y + r3[2]
+        self.tag_t = float(T_world_camera[2, 3])
+        self.on_board = board_pixel_mask((h, w), K, T_world_camera, x_range_m, y_range_m, step)
+
+    def fit(self, depth_m_small: np.ndarray, window_m: float, inlier_m: float, exclude_small: np.ndarray | None = None,
+            min_fraction: float = 0.5) -> BoardPlane:
+        """The board plane of a depth image already sampled at this fitter's step (metres, 0 = none)."""
+        with np.errstate(invalid="ignore"):
+            tag_heights = depth_m_small * self.tag_coefficients + self.tag_t
+        return fit_board_plane(depth_m_small, self.x, self.y, tag_heights, self.on_board, window_m, inlier_m,
+                               exclude=exclude_small, min_fraction=min_fraction)

@@ -1,0 +1,433 @@
+"""Block colours that survive real light: a face's colour normalised by the board's own grey, in CIELAB,
+matched to class references measured on real frames (and on the simulation's renders), with `unknown`
+for a face far from every class.
+
+Why: hue centres measured in the simulation call real yellow orange and real purple blue or red. The
+board is a neutral grey under the same light as the blocks, so dividing a face's linear RGB by the
+board's (von Kries white balance + exposure) leaves the face's reflectance relative to the board; that
+is turned into CIELAB (sRGB primaries, D65) as if the board had `board_reflectance`. Distances are
+CIE94-like with lightness and chroma down-weighted (k_L, k_C): shading and exposure errors change a
+face's lightness and chroma far more than its hue. A face farther than `max_distance` from every class
+reference, or achromatic (chroma below `min_chroma`) where the nearest reference is chromatic, is
+reported as `unknown` with its measured colour, never forced into a class (black, pink, light-blue
+cubes exist on real boards). Station colour calibration adds operator samples as references
+(ColorModel.with_samples); the defaults come from config/vision.yaml (color_model).
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+from functools import cached_property
+
+import cv2
+import numpy as np
+
+from armlab.vision.geometry import project_points
+
+UNKNOWN = "unknown"
+
+# sRGB (linear) -> CIE XYZ, D65; the white point is the matrix's row sums.
+_RGB_TO_XYZ = np.array([[0.4124, 0.3576, 0.1805], [0.2126, 0.7152, 0.0722], [0.0193, 0.1192, 0.9505]])
+_WHITE_XYZ = _RGB_TO_XYZ.sum(axis=1)
+BOARD_MAX_SATURATION = 128  # HSV saturation (0..255) above which a pixel is not the board even under a strong colour cast
+BOARD_LUMINANCE_BAND = 0.2  # board pixels within this fraction of the median brightness (drops grid lines, tags' white, shadows)
+BOARD_CHROMATICITY_BAND = 0.03  # ... and within this of the median chromaticity (r, b of r + g + b; drops wood, paper, cables)
+MIN_BOARD_PIXELS = 20
+CLIPPED = 250  # an 8-bit channel at or above this may be clipped: the face is compared with references as the camera would clip them
+MAX_FACE_GAIN = 2.0  # a clipped face's exposure against its board grey, fitted on >= 2 unclipped channels, within this factor
+
+
+def srgb_to_linear(values: np.ndarray) -> np.ndarray:
+    """8-bit sRGB values (any shape) -> linear light 0..1 (IEC 61966-2-1)."""
+    c = np.asarray(values, dtype=float) / 255.0
+    return np.where(c <= 0.04045, c / 12.92, ((c + 0.055) / 1.055) ** 2.4)
+
+
+def _lab_f(t: np.ndarray) -> np.ndarray:
+    d = 6.0 / 29.0
+    return np.where(t > d**3, np.cbrt(t), t / (3 * d * d) + 4.0 / 29.0)
+
+
+def lab_from_relative_rgb(relative_rgb: np.ndarray, board_reflectance: float) -> np.ndarray:
+    """CIELAB (D65) of linear RGB relative to the board (1 = the board's own), the board taken as a
+    neutral grey of board_reflectance; (..., 3) -> (..., 3). Lightness may exceed 100 for faces brighter than white."""
+    xyz = (np.asarray(relative_rgb, dtype=float) * board_reflectance) @ _RGB_TO_XYZ.T
+    f = _lab_f(np.maximum(xyz, 0.0) / _WHITE_XYZ)
+    fx, fy, fz = f[..., 0], f[..., 1], f[..., 2]
+    return np.stack([116.0 * fy - 16.0, 500.0 * (fx - fy), 200.0 * (fy - fz)], axis=-1)
+
+
+_XYZ_TO_RGB = np.linalg.inv(_RGB_TO_XYZ)
+
+
+def relative_rgb_from_lab(lab, board_reflectance: float) -> np.ndarray:
+    """lab_from_relative_rgb's inverse: linear RGB relative to the board of board-normalised CIELAB, (..., 3)."""
+    lab = np.asarray(lab, dtype=float)
+    fy = (lab[..., 0] + 16.0) / 116.0
+    f = np.stack([fy + lab[..., 1] / 500.0, fy, fy - lab[..., 2] / 200.0], axis=-1)
+    d = 6.0 / 29.0
+    xyz = np.where(f > d, f**3, 3 * d * d * (f - 4.0 / 29.0)) * _WHITE_XYZ
+    return xyz @ _XYZ_TO_RGB.T / board_reflectance
+
+
+MAX_FACE_SAMPLES = 512  # a face's median from at most this many of its pixels (evenly spread): as good, faster
+
+
+def face_median_rgb(face_bgr: np.ndarray) -> np.ndarray:
+    """The per-channel median (3,) RGB of a face's pixels (N, 3) BGR uint8; ValueError when there are none."""
+    face = np.asarray(face_bgr).reshape(-1, 3)
+    if face.shape[0] == 0:
+        raise ValueError("the face has no pixels")
+    if face.shape[0] > MAX_FACE_SAMPLES:
+        face = face[:: face.shape[0] // MAX_FACE_SAMPLES]
+    return np.median(face, axis=0)[::-1]
+
+
+def normalised_rgb(face_bgr: np.ndarray, board_bgr: np.ndarray, face_rgb: np.ndarray | None = None) -> np.ndarray:
+    """The face's linear RGB relative to the board's (per channel; 1 = as bright as the board): the
+    median of the face's pixels (N, 3) BGR uint8 (or face_rgb, that median if at hand), divided channel
+    by channel by the board's."""
+    board = np.asarray(board_bgr, dtype=float).reshape(3)
+    if not np.all(np.isfinite(board)) or np.any(board <= 0):
+        raise ValueError(f"normalised_rgb: board grey must be 3 positive values (BGR), got {board.tolist()}")
+    face_rgb = face_median_rgb(face_bgr) if face_rgb is None else face_rgb
+    return srgb_to_linear(face_rgb) / np.maximum(srgb_to_linear(board[::-1]), 1e-4)
+
+
+def _median(values: np.ndarray) -> float:
+    """The median of a non-empty 1-D array (upper middle for an even count), by partial sort: far
+    cheaper than np.median on the few hundred pixels of a board window."""
+    k = values.size // 2
+    return float(np.partition(values, k)[k])
+
+
+def board_reference_bgr(color_bgr: np.ndarray, board_mask: np.ndarray) -> np.ndarray:
+    """The board's grey (3,) BGR in this light: per-channel median of the masked pixels that are not
+    strongly coloured (HSV saturation <= BOARD_MAX_SATURATION) and, twice from the medians, within
+    BOARD_LUMINANCE_BAND of the median brightness and BOARD_CHROMATICITY_BAND of the median
+    chromaticity: the dominant grey (grid lines, tags' white, shadows, wood and paper dropped; a colour
+    cast of the light is kept, it is what the reference measures).
+    color_bgr: (H, W, 3) uint8; board_mask: (H, W) bool, e.g. board-height pixels around a block.
+    ValueError when fewer than MIN_BOARD_PIXELS such pixels remain."""
+    if color_bgr.ndim != 3 or board_mask.shape != color_bgr.shape[:2]:
+        raise ValueError(f"board_reference_bgr: mask {board_mask.shape} does not match image {color_bgr.shape}")
+    pixels = color_bgr[board_mask.astype(bool)]
+    if len(pixels) < MIN_BOARD_PIXELS:
+        raise ValueError(f"board_reference_bgr: only {len(pixels)} board pixels (needs {MIN_BOARD_PIXELS})")
+    hi = pixels.max(axis=1).astype(np.int32)
+    lo = pixels.min(axis=1).astype(np.int32)
+    grey = pixels[(hi - lo) * 255 <= BOARD_MAX_SATURATION * np.maximum(hi, 1)]
+    if len(grey) < MIN_BOARD_PIXELS:
+        raise ValueError(f"board_reference_bgr: only {len(grey)} grey board pixels (needs {MIN_BOARD_PIXELS})")
+    values = grey.astype(np.float32)
+    total = values.sum(axis=1)
+    blue, red = values[:, 0] / np.maximum(total, 1.0), values[:, 2] / np.maximum(total, 1.0)  # chromaticity
+    keep = np.ones(len(grey), bool)
+    for _ in range(2):
+        median = _median(total[keep])
+        keep = ((np.abs(total - median) <= BOARD_LUMINANCE_BAND * max(median, 3.0))
+                & (np.abs(blue - _median(blue[keep])) <= BOARD_CHROMATICITY_BAND)
+                & (np.abs(red - _median(red[keep])) <= BOARD_CHROMATICITY_BAND))
+        if np.count_nonzero(keep) < MIN_BOARD_PIXELS:
+            raise ValueError("board_reference_bgr: the board pixels have no dominant grey")
+    board = values[keep]
+    reference = np.array([_median(board[:, channel]) for channel in range(3)], dtype=float)
+    if np.any(reference <= 0):
+        raise ValueError("board_reference_bgr: the board reads black (no light?)")
+    return reference
+
+
+def lab_distance(lab: np.ndarray, reference: np.ndarray, k_lightness: float, k_chroma: float) -> float:
+    """CIE94-like colour difference with lightness and chroma down-weighted by k_lightness, k_chroma
+    (hue keeps weight 1): lab and reference are (3,) CIELAB."""
+    l1, a1, b1 = (float(x) for x in lab)
+    l2, a2, b2 = (float(x) for x in reference)
+    c1, c2 = math.hypot(a1, b1), math.hypot(a2, b2)
+    dc = c1 - c2
+    dh2 = max((a1 - a2) ** 2 + (b1 - b2) ** 2 - dc * dc, 0.0)
+    cm = math.sqrt(c1 * c2)
+    return math.sqrt(((l1 - l2) / k_lightness) ** 2 + (dc / (k_chroma * (1 + 0.045 * cm))) ** 2 + dh2 / (1 + 0.015 * cm) ** 2)
+
+
+def lab_distances(lab: np.ndarray, references: np.ndarray, k_lightness: float, k_chroma: float) -> np.ndarray:
+    """lab_distance of one CIELAB colour (3,) to each of references (M, 3), or of each lab (M, 3) to its reference."""
+    lab, references = np.asarray(lab, dtype=float), np.asarray(references, dtype=float)
+    c1, c2 = np.hypot(lab[..., 1], lab[..., 2]), np.hypot(references[..., 1], references[..., 2])
+    dc = c1 - c2
+    dh2 = np.maximum((lab[..., 1] - references[..., 1]) ** 2 + (lab[..., 2] - references[..., 2]) ** 2 - dc * dc, 0.0)
+    cm = np.sqrt(c1 * c2)
+    return np.sqrt(((lab[..., 0] - references[..., 0]) / k_lightness) ** 2 + (dc / (k_chroma * (1 + 0.045 * cm))) ** 2
+                   + dh2 / (1 + 0.015 * cm) ** 2)
+
+
+def chroma(lab) -> float:
+    return math.hypot(float(lab[1]), float(lab[2]))
+
+
+@dataclass(frozen=True)
+class ColorReading:
+    """A face's colour: name (a class, or UNKNOWN), its measured CIELAB (board-normalised), the distance
+    to the nearest reference (of `name`; for UNKNOWN: of `nearest`) and the nearest class."""
+
+    name: str
+    measured_lab: tuple[float, float, float]
+    distance: float
+    nearest: str
+
+    def to_dict(self) -> dict:
+        return {"name": self.name, "measured_lab": [round(float(x), 2) for x in self.measured_lab],
+                "distance": round(float(self.distance), 3), "nearest": self.nearest}
+
+
+@dataclass(frozen=True)
+class ColorSample:
+    """An operator's (or a labelled frame's) sample: a face of colour `name` measured as `lab` (board-normalised)."""
+
+    name: str
+    lab: tuple[float, float, float]
+    u: float | None = None
+    v: float | None = None
+    time_s: float | None = None
+
+    def to_dict(self) -> dict:
+        return {"name": self.name, "lab": [round(float(x), 3) for x in self.lab], "u": self.u, "v": self.v, "time_s": self.time_s}
+
+    @classmethod
+    def from_dict(cls, data: dict) -> "ColorSample":
+        lab = tuple(float(x) for x in data["lab"])
+        if len(lab) != 3 or not all(math.isfinite(x) for x in lab):
+            raise ValueError(f"colour sample lab must be 3 finite numbers, got {data['lab']!r}")
+        return cls(str(data["name"]), lab, data.get("u"), data.get("v"), data.get("time_s"))
+
+
+@dataclass(frozen=True)
+class ColorModel:
+    """Nearest-reference colour classes in board-normalised CIELAB (see the module doc). Immutable:
+    with_samples returns a new model, so a perception thread can keep using the old one meanwhile.
+
+    references: class -> default reference colours (CIELAB); samples: the station's own, each a
+    reference of its name; names: every colour name a sample may carry (the classes + config extras)."""
+
+    references: dict[str, tuple[tuple[float, float, float], ...]]
+    board_reflectance: float = 0.5
+    k_lightness: float = 2.0
+    k_chroma: float = 2.0
+    max_distance: float = 15.0
+    min_chroma: float = 10.0
+    names: tuple[str, ...] = ()
+    samples: tuple[ColorSample, ...] = field(default=())
+    shadowed: frozenset = field(default=frozenset())  # (class, index) of default references a sample of another name overrides
+
+    @classmethod
+    def from_config(cls, cfg) -> "ColorModel":
+        """The defaults of a PerceptionConfig (its color_model section) or of a ColorModelConfig."""
+        section = getattr(cfg, "color_model", cfg)
+        return _model_from_section(section)
+
+    @property
+    def classes(self) -> tuple[str, ...]:
+        return tuple(self.references)
+
+    def with_samples(self, samples) -> "ColorModel":
+        """This model with the station's samples (replacing any it had); ValueError naming a sample's
+        colour name the model does not know. The station's word wins over the defaults: a default
+        reference closer than max_distance / 2 to a sample of another name is no longer used (a cube
+        this station's operator calls pink is not red here, whatever another station's red looked like)."""
+        samples = tuple(samples)
+        for i, sample in enumerate(samples):
+            if sample.name not in self.names:
+                raise ValueError(f"samples[{i}].color: unknown colour '{sample.name}' (known: {', '.join(self.names)})")
+        shadowed = frozenset(
+            (name, index) for name, refs in self.references.items() for index, ref in enumerate(refs)
+            if any(s.name != name and lab_distance(s.lab, ref, self.k_lightness, self.k_chroma) < 0.5 * self.max_distance
+                   for s in samples))
+        return ColorModel(self.references, self.board_reflectance, self.k_lightness, self.k_chroma, self.max_distance,
+                          self.min_chroma, self.names, samples, shadowed)
+
+    def measure(self, face_bgr: np.ndarray, board_bgr: np.ndarray, face_rgb: np.ndarray | None = None) -> np.ndarray:
+        """The face's board-normalised CIELAB (3,) (face_rgb: face_median_rgb(face_bgr), if at hand)."""
+        return lab_from_relative_rgb(normalised_rgb(face_bgr, board_bgr, face_rgb), self.board_reflectance)
+
+    def classify(self, face_bgr: np.ndarray, board_bgr: np.ndarray) -> ColorReading:
+        """The colour of a block face: face_bgr (N, 3) uint8 BGR pixels of the top face, board_bgr the
+        board's grey near it (board_reference_bgr). A face with a channel at the camera's ceiling
+        (overexposed: its true colour is unknown in that channel) is compared with each reference as the
+        camera would show it, clipped the same way: its hue and chroma at the exposure that best fits the
+        face's unclipped channels (a top face may be lit more than the board near it: a highlight, the
+        board's ring in the cube's shadow), its lightness at the board's exposure (so a dim yellow is not
+        a bright orange)."""
+        face_rgb = face_median_rgb(face_bgr)
+        lab = self.measure(face_bgr, board_bgr, face_rgb)
+        if face_rgb.max() >= CLIPPED:
+            return self.classify_lab(lab, seen=self._as_clipped(board_bgr, face_rgb))
+        return self.classify_lab(lab)
+
+    def _as_clipped(self, board_bgr, face_rgb: np.ndarray) -> np.ndarray:
+        """The references (M, 3) as this camera shows them on a face whose channels at or above CLIPPED
+        are clipped (CIELAB against the board): hue and chroma of each reference scaled to the face's
+        unclipped channels (least squares in linear light, within MAX_FACE_GAIN) and clipped; lightness
+        of the reference at the board's exposure, clipped."""
+        board_lin = np.maximum(srgb_to_linear(np.asarray(board_bgr, dtype=float)[::-1]), 1e-4)
+        ceiling = float(srgb_to_linear(CLIPPED))
+        ref_lin = self._table[2] * board_lin  # (M, 3)
+        at_board = lab_from_relative_rgb(np.minimum(ref_lin, ceiling) / board_lin, self.board_reflectance)
+        free = face_rgb < CLIPPED
+        if np.count_nonzero(free) >= 2:
+            norm = np.einsum("ij,ij->i", ref_lin[:, free], ref_lin[:, free])
+            fit = ref_lin[:, free] @ srgb_to_linear(face_rgb[free])
+            gain = np.clip(np.where(norm > 1e-12, fit / np.maximum(norm, 1e-12), 1.0), 1.0 / MAX_FACE_GAIN, MAX_FACE_GAIN)
+            ref_lin = ref_lin * gain[:, None]
+        seen = lab_from_relative_rgb(np.minimum(ref_lin, ceiling) / board_lin, self.board_reflectance)
+        seen[:, 0] = at_board[:, 0]  # hue and chroma at the face's exposure, lightness at the board's
+        return seen
+
+    def classify_lab(self, lab, seen: np.ndarray | None = None) -> ColorReading:
+        """The class of a board-normalised CIELAB colour (nearest reference; UNKNOWN when too far, or
+        achromatic against a chromatic reference). seen: the references (M, 3) as the camera shows them."""
+        lab = np.asarray(lab, dtype=float)
+        names, refs, _ = self._table
+        refs = refs if seen is None else seen
+        d = lab_distances(lab, refs, self.k_lightness, self.k_chroma)
+        measured = tuple(round(float(x), 2) for x in lab)
+        if len(d) == 0:
+            return ColorReading(UNKNOWN, measured, math.inf, UNKNOWN)
+        nearest = int(np.argmin(d))
+        allowed = d.copy()
+        if chroma(lab) < self.min_chroma:  # a grey, black or white face is never a chromatic class
+            allowed[np.hypot(refs[:, 1], refs[:, 2]) >= self.min_chroma] = np.inf
+        best = int(np.argmin(allowed))
+        if allowed[best] <= self.max_distance:
+            return ColorReading(names[best], measured, float(allowed[best]), names[best])
+        return ColorReading(UNKNOWN, measured, float(d[nearest]), names[nearest])
+
+    @cached_property
+    def _table(self) -> tuple[list[str], np.ndarray, np.ndarray]:
+        """(names, CIELAB (M, 3), relative linear RGB (M, 3)) of the references in use: the defaults not
+        shadowed, then the samples. Computed once per model (models are immutable)."""
+        names, labs = [], []
+        for name, refs in self.references.items():
+            for index, ref in enumerate(refs):
+                if (name, index) not in self.shadowed:
+                    names.append(name)
+                    labs.append(ref)
+        for sample in self.samples:
+            names.append(sample.name)
+            labs.append(sample.lab)
+        lab_array = np.asarray(labs, dtype=float).reshape(-1, 3)
+        return names, lab_array, relative_rgb_from_lab(lab_array, self.board_reflectance)
+
+
+def _model_from_section(section) -> ColorModel:
+    references = {name: tuple(tuple(float(x) for x in ref) for ref in refs) for name, refs in section.references.items()}
+    names = tuple(dict.fromkeys([*references, *section.extra_names]))
+    return ColorModel(references, section.board_reflectance, section.k_lightness, section.k_chroma, section.max_distance,
+                      section.min_chroma, names)
+
+
+def board_mask_near(shape: tuple[int, int], center_px, radius_px: int, exclude_px: int) -> np.ndarray:
+    """(H, W) bool: a square window of radius_px around center_px without its middle (exclude_px): where
+    to look for board pixels around a clicked face when no depth says which are the board."""
+    h, w = shape
+    u, v = int(round(float(center_px[0]))), int(round(float(center_px[1])))
+    mask = np.zeros((h, w), bool)
+    mask[max(0, v - radius_px) : v + radius_px + 1, max(0, u - radius_px) : u + radius_px + 1] = True
+    mask[max(0, v - exclude_px) : v + exclude_px + 1, max(0, u - exclude_px) : u + exclude_px + 1] = False
+    return mask
+
+
+def face_patch(color_bgr: np.ndarray, center_px, radius_px: int) -> np.ndarray:
+    """(N, 3) pixels of a square patch of radius_px around center_px (clipped to the image)."""
+    h, w = color_bgr.shape[:2]
+    u, v = int(round(float(center_px[0]))), int(round(float(center_px[1])))
+    patch = color_bgr[max(0, v - radius_px) : min(h, v + radius_px + 1), max(0, u - radius_px) : min(w, u + radius_px + 1)]
+    return patch.reshape(-1, 3)
+
+
+def board_region_mask(shape_hw: tuple[int, int], T_world_camera: np.ndarray, K: np.ndarray, dist, x_range_m, y_range_m,
+                      scale: float = 1.0) -> np.ndarray:
+    """(H, W) bool: the pixels inside the board's rectangle (z = 0) as the calibration sees it, in an
+    image `scale` times smaller than the camera's: board grey is looked for there only (the table
+    beside the board, wood or cloth, is at the board's height too)."""
+    (x0, x1), (y0, y1) = x_range_m, y_range_m
+    corners = np.array([[x0, y0, 0.0], [x1, y0, 0.0], [x1, y1, 0.0], [x0, y1, 0.0]])
+    pixels = project_points(np.asarray(T_world_camera, float), np.asarray(K, float), np.asarray(dist, float), corners) / scale
+    mask = np.zeros(shape_hw, np.uint8)
+    cv2.fillConvexPoly(mask, np.round(pixels).astype(np.int32), 1)
+    return mask.view(bool)
+
+
+CLICK_FACE_SIDE_PX = 34.0  # a large cube's top at ~1 m under a ~900 px focal length (1280 px wide L515 frame)
+PATCH_FRACTION = 0.18  # the face patch's half-width, as a fraction of the face's side (its middle third)
+RING_FACES = (0.6, 1.8)  # the board ring around a face: from 0.6 to 1.8 face sides from its centre
+
+
+def face_and_board_at(color_bgr: np.ndarray, center_px, side_px: float | None = None,
+                      board_mask: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray]:
+    """(face pixels (N, 3), board grey (3,)) of the face centred at center_px: its middle patch, and the
+    board's grey in the ring around it (RING_FACES; within board_mask if given: e.g. board-height pixels).
+    side_px: the face's side in pixels (default: a large cube's, scaled with the image width).
+    ValueError when the centre is outside the image or the ring holds no board."""
+    h, w = color_bgr.shape[:2]
+    u, v = float(center_px[0]), float(center_px[1])
+    if not (0 <= u < w and 0 <= v < h):
+        raise ValueError(f"pixel ({u:g}, {v:g}) is outside the {w}x{h} image")
+    side = float(side_px) if side_px is not None else CLICK_FACE_SIDE_PX * w / 1280.0
+    patch = face_patch(color_bgr, (u, v), max(2, int(round(PATCH_FRACTION * side))))
+    ring = board_mask_near((h, w), (u, v), int(RING_FACES[1] * side), int(RING_FACES[0] * side))
+    if board_mask is not None:
+        ring &= board_mask
+    return patch, board_reference_bgr(color_bgr, ring)
+
+
+def measure_at(model: "ColorModel", color_bgr: np.ndarray, center_px, side_px: float | None = None,
+               board_mask: np.ndarray | None = None) -> np.ndarray:
+    """Board-normalised CIELAB of the face centred at center_px (face_and_board_at)."""
+    return model.measure(*face_and_board_at(color_bgr, center_px, side_px, board_mask))
+
+
+def classify_at(model: "ColorModel", color_bgr: np.ndarray, center_px, side_px: float | None = None,
+                board_mask: np.ndarray | None = None) -> ColorReading:
+    """The model's reading of the face centred at center_px (face_and_board_at), as detection reads a face."""
+    return model.classify(*face_and_board_at(color_bgr, center_px, side_px, board_mask))
+
+
+class BoardGrey:
+    """The board's grey for the faces of one frame: measured from board pixels (board_mask) in a window
+    around each face, else over the whole board, else over the whole image (the board is its largest
+    grey), else a mid grey (no normalisation: a frame with no grey at all). Cheap at the resolution
+    given (detect_blocks passes its quarter-resolution image)."""
+
+    def __init__(self, color_bgr: np.ndarray, board_mask: np.ndarray, scale: float = 1.0, window_px: int = 24) -> None:
+        self.color_bgr, self.board_mask, self.scale, self.window_px = color_bgr, board_mask, scale, window_px
+        self._global: np.ndarray | None = None
+
+    def overall(self) -> np.ndarray:
+        if self._global is None:
+            image = self.color_bgr[::4, ::4]  # thousands of pixels are plenty for a median
+            for mask in (self.board_mask[::4, ::4], np.ones(image.shape[:2], bool)):
+                try:
+                    self._global = board_reference_bgr(image, mask)
+                    break
+                except ValueError:
+                    continue
+            else:
+                self._global = np.array([128.0, 128.0, 128.0])
+        return self._global
+
+    def near(self, center_px) -> np.ndarray:
+        """The board's grey around a full-resolution pixel (falls back to the whole board's)."""
+        u, v = int(round(float(center_px[0]) / self.scale)), int(round(float(center_px[1]) / self.scale))
+        r = self.window_px
+        h, w = self.board_mask.shape
+        y0, y1, x0, x1 = max(0, v - r), min(h, v + r + 1), max(0, u - r), min(w, u + r + 1)
+        try:
+            # Every other pixel of the window: ~600 board pixels, a quarter of the work.
+            return board_reference_bgr(self.color_bgr[y0:y1:2, x0:x1:2], self.board_mask[y0:y1:2, x0:x1:2])
+        except ValueError:
+            return self.overall()
+
+
+__all__ = ["UNKNOWN", "BoardGrey", "ColorModel", "ColorReading", "ColorSample", "board_mask_near", "board_reference_bgr",
+           "board_region_mask", "classify_at", "face_and_board_at", "face_patch", "lab_distance", "lab_from_relative_rgb",
+           "measure_at", "normalised_rgb", "relative_rgb_from_lab", "srgb_to_linear"]
