@@ -54,6 +54,12 @@ class NotController(RuntimeError):
         )
 
 
+class CalibrationUntrusted(RuntimeError):
+    """A grab, drop or autonomous job refused because the camera-moved check no longer confirms the
+    calibration in use (HTTP 409 'not_calibrated'); the message gives the reason. Recalibrate, or let
+    the board tags confirm the camera again."""
+
+
 class NeedsConfirmation(RuntimeError):
     """A command that is dangerous in the current state and was sent without confirm: true (HTTP 409)."""
 

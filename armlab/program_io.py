@@ -16,7 +16,7 @@ import json
 import math
 from collections.abc import Sequence
 
-from armlab.store import Waypoint
+from armlab.store import MAX_PROGRAM_NAME_CHARS, Waypoint
 
 FORMAT_NAME = "armlab-program"
 FORMAT_VERSION = 1
@@ -66,6 +66,8 @@ def parse_json(text: str, dof: int) -> tuple[str | None, list[Waypoint]]:
         document = json.loads(text)
     except json.JSONDecodeError as error:
         raise ProgramFileError(f"line {error.lineno}: not valid JSON ({error.msg})") from None
+    except RecursionError:
+        raise ProgramFileError("the JSON is nested too deeply to be a program file") from None
     name = None
     if isinstance(document, dict):
         if document.get("format", FORMAT_NAME) != FORMAT_NAME:
@@ -73,6 +75,8 @@ def parse_json(text: str, dof: int) -> tuple[str | None, list[Waypoint]]:
         name = document.get("name")
         if name is not None and not isinstance(name, str):
             raise ProgramFileError("'name' must be a string")
+        if name is not None and len(name.strip()) > MAX_PROGRAM_NAME_CHARS:
+            raise ProgramFileError(f"'name' has {len(name.strip())} characters; at most {MAX_PROGRAM_NAME_CHARS}")
         items = document.get("waypoints")
     else:
         items = document
@@ -86,12 +90,12 @@ def parse_json(text: str, dof: int) -> tuple[str | None, list[Waypoint]]:
             raise ProgramFileError(f"{where}: needs 'joints_rad' and 'gripper'")
         joints = item["joints_rad"]
         if not isinstance(joints, list) or not all(_is_number(v) for v in joints):
-            raise ProgramFileError(f"{where}: 'joints_rad' must be a list of numbers")
+            raise ProgramFileError(f"{where}: 'joints_rad' must be a list of numbers (finite)")
         if len(joints) != dof:
             raise ProgramFileError(f"{where}: {len(joints)} joint values, the arm has {dof}")
         for key in ("dwell_s", "moving_time_s"):
             if item.get(key) is not None and not _is_number(item[key]):
-                raise ProgramFileError(f"{where}: '{key}' must be a number")
+                raise ProgramFileError(f"{where}: '{key}' must be a number (finite)")
         unknown = set(item) - {"joints_rad", "gripper", "dwell_s", "moving_time_s"}
         if unknown:
             raise ProgramFileError(f"{where}: unknown field(s) {', '.join(sorted(unknown))}")
@@ -104,7 +108,11 @@ def parse_json(text: str, dof: int) -> tuple[str | None, list[Waypoint]]:
 
 def parse_csv(text: str, dof: int) -> list[Waypoint]:
     """Waypoints from CSV of to_csv's form: header `t_s, q1..q<dof>, gripper`, one row per line."""
-    rows = list(csv.reader(io.StringIO(text)))
+    reader = csv.reader(io.StringIO(text))
+    try:
+        rows = list(reader)
+    except csv.Error as error:  # e.g. a field over csv's field_size_limit (131,072 characters), an unclosed quote
+        raise ProgramFileError(f"line {reader.line_num}: {error}") from None
     expected = ["t_s", *(f"q{i + 1}" for i in range(dof)), "gripper"]
     if not rows:
         raise ProgramFileError("line 1: the file is empty; expected the header " + ",".join(expected))
@@ -161,4 +169,10 @@ def _check_count(count: int) -> None:
 
 
 def _is_number(value) -> bool:
-    return isinstance(value, (int, float)) and not isinstance(value, bool) and math.isfinite(float(value))
+    """A finite JSON number (an integer too large for a float, such as 10**400, is not)."""
+    if not isinstance(value, (int, float)) or isinstance(value, bool):
+        return False
+    try:
+        return math.isfinite(float(value))
+    except OverflowError:
+        return False

@@ -6,7 +6,9 @@ store is safe to use from the station's job threads and the server's threads ali
 Damaged data: opening runs `PRAGMA quick_check` and refuses a damaged file with DamagedDatabase, a
 one-line message naming the file and the newest good backup. A 0-byte file that already exists is
 damaged: SQLite writes its header on the first statement, so a database is never empty once created
-(a first start killed before that leaves 0 bytes: delete the file). Only a missing file is new.
+(a first start killed before that leaves 0 bytes: delete the file). Only a missing file is new. A sound
+file that cannot be written (read-only), or no room for the start-up backup, is UnusableDatabase saying so
+(never "damaged"), and no partial backup is left.
 With backups=N, each good open first copies the file to <db>.bak1 with SQLite's backup API, shifting
 older copies to .bak2 .. .bakN. A single row that cannot be read (bad UTF-8, bad JSON, an invalid
 waypoint) is logged and skipped, never hiding the others. Each program (its waypoints are in its
@@ -32,6 +34,8 @@ from armlab.store_schema import NewerSchema, migrate
 
 log = logging.getLogger(__name__)
 
+MAX_PROGRAM_NAME_CHARS = 100  # a program's name (the API's limit too)
+
 DEFAULT_DB_PATH = Path(__file__).resolve().parents[1] / "var" / "armlab.sqlite3"
 MAX_DWELL_S = 3600.0  # the longest dwell or moving time of one waypoint
 
@@ -41,6 +45,11 @@ _ROW_ERRORS = (UnicodeDecodeError, json.JSONDecodeError, KeyError, TypeError, Va
 
 class DamagedDatabase(RuntimeError):
     """The database file fails its integrity check. The message is one line: the file, why, how to recover."""
+
+
+class UnusableDatabase(RuntimeError):
+    """The database file is sound but cannot be used here: it is read-only, or there is no room for the
+    start-up backup. The message is one line: the file, why, what to do."""
 
 
 class NotFound(LookupError):
@@ -151,6 +160,11 @@ class Store:
         except NewerSchema as error:
             raise DamagedDatabase(f"database '{self.path}' cannot be used: {error}") from error
         except sqlite3.DatabaseError as error:
+            if _error_code(error) in (sqlite3.SQLITE_READONLY, sqlite3.SQLITE_CANTOPEN, sqlite3.SQLITE_PERM):
+                raise UnusableDatabase(
+                    f"database '{self.path}' is read-only here ({error}): the station writes to it; make the file and "
+                    f"its folder '{self.path.parent}' writable for this user, or give a writable --db"
+                ) from None
             self._refuse(str(error))
 
     def _refuse(self, reason: str):
@@ -176,13 +190,21 @@ class Store:
     def _rolling_backup(self, keep: int) -> None:
         """Copy the (checked) file to .bak1 with the backup API; older copies shift up; keep `keep`."""
         temporary = self.path.with_name(f"{self.path.name}.bak-new")
-        source, target = self._connect(), sqlite3.connect(temporary)
         try:
-            source.backup(target)
-            target.execute("PRAGMA journal_mode=DELETE")  # a backup is one self-contained file (no -wal)
-        finally:
-            target.close()
-            source.close()
+            source, target = self._connect(), sqlite3.connect(temporary)
+            try:
+                source.backup(target)
+                target.execute("PRAGMA journal_mode=DELETE")  # a backup is one self-contained file (no -wal)
+            finally:
+                target.close()
+                source.close()
+        except (sqlite3.Error, OSError) as error:  # no room (disk full, a file size limit), or not writable
+            for partial in (temporary, Path(f"{temporary}-journal")):
+                partial.unlink(missing_ok=True)
+            raise UnusableDatabase(
+                f"database '{self.path}': the start-up backup '{temporary}' could not be written ({error}); the database "
+                f"is untouched: free some space in '{self.path.parent}', or set database_backups: 0 to start without one"
+            ) from None
         self.backup_path(keep).unlink(missing_ok=True)
         for index in range(keep - 1, 0, -1):
             if self.backup_path(index).exists():
@@ -422,6 +444,24 @@ class Store:
             ),
         )
 
+    def record_job_start(self, job: dict) -> None:
+        """A job's row as it starts (state running), unless its outcome is already in: a station killed
+        mid-job leaves this row, which mark_interrupted_jobs turns into 'interrupted' at the next start."""
+        self._run(
+            "INSERT OR IGNORE INTO job_results (id, name, state, message, started_s, finished_s, result_json) "
+            "VALUES (?, ?, ?, ?, ?, NULL, 'null')",
+            (job["id"], job["name"], job["state"], job.get("message") or "", job["started_s"]),
+        )
+
+    def mark_interrupted_jobs(self) -> int:
+        """At start-up: jobs still 'running' were cut off by a kill, crash or power loss; they become
+        'interrupted'. Returns how many."""
+        rows = self._run(
+            "UPDATE job_results SET state = 'interrupted', message = ? WHERE state = 'running' RETURNING id",
+            ("the station stopped while this job ran (killed, crashed or lost power)",),
+        )
+        return len(rows)
+
     def job_results(self, limit: int = 50) -> list[dict]:
         """The newest job outcomes; damaged rows are logged and skipped."""
         rows = self._run(
@@ -451,13 +491,22 @@ class Store:
 
 
 def _checked_program(name: str, waypoints: Sequence[Waypoint]) -> tuple[str, str]:
-    """(stripped name, waypoints JSON) of a program to write; ValueError for an empty name or no waypoints."""
+    """(stripped name, waypoints JSON) of a program to write; ValueError for an empty or too long name or
+    no waypoints."""
     name = str(name).strip()
     if not name:
         raise ValueError("a program needs a name")
+    if len(name) > MAX_PROGRAM_NAME_CHARS:
+        raise ValueError(f"a program name has at most {MAX_PROGRAM_NAME_CHARS} characters, this one {len(name)}")
     if not waypoints:
         raise ValueError("a program needs at least one waypoint: record one before saving")
     return name, json.dumps([waypoint.to_dict() for waypoint in waypoints])
+
+
+def _error_code(error: sqlite3.Error) -> int | None:
+    """The primary SQLite result code of an error (extended codes reduced), None if it has none."""
+    code = getattr(error, "sqlite_errorcode", None)
+    return None if code is None else code & 0xFF
 
 
 def _program_from_row(row: tuple) -> Program:

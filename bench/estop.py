@@ -10,14 +10,19 @@ POST /api/estop. Figures (ms, p50 / p95 / max):
            bound is one control period).
 Loads: idle (no load), a scene change (a 40-object scene rebuilt in a loop), a calibration job, a
 blocked SQLite write (teach_stop waiting on a database another connection holds locked), a running job
-(a repeat program), and, over HTTP only, every worker thread busy with `?wait=true` moves.
+(a repeat program), and, over HTTP only, every worker thread busy with `?wait=true` moves, and 42 hung
+`?wait=true` clients (half hang up after sending, half stay without reading; issue 18 item 4).
+Under the hung clients, also GET /api/status (10 calls a round, while the requests wait) and POST
+/api/reset (once a round, after an e-stop) latency, p50 / p99 / max (target: p99 <= 100 ms), timed once the
+silent clients' requests are accepted and waiting.
 
-    .venv/bin/python bench/estop.py [--trials 15]
+    .venv/bin/python bench/estop.py [--trials 15] [--rounds 30]
 """
 
 from __future__ import annotations
 
 import argparse
+import json
 import os
 import random
 import socket
@@ -75,7 +80,7 @@ class Rig:
             self.station.start()
             return self.station
 
-        app = create_app(station_factory=factory, token=TOKEN)
+        app = self.app = create_app(station_factory=factory, token=TOKEN)
         port = free_port()
         self.server = uvicorn.Server(uvicorn.Config(app, host="127.0.0.1", port=port, log_level="error", lifespan="on"))
         self.thread = threading.Thread(target=self.server.run, daemon=True)
@@ -204,6 +209,64 @@ def load_busy_threads(rig: Rig):
     return lambda: [thread.join(20) for thread in threads]
 
 
+HUNG_CLIENTS = 42
+
+
+def _send_waiting_move(url: str) -> socket.socket:
+    """A raw client that sends a `?wait=true` 6 s move and never reads the answer."""
+    host, port = url.removeprefix("http://").split(":")
+    body = json.dumps({"q_rad": FAR_Q, "moving_time_s": 6.0}).encode()
+    head = (f"POST /api/arm/joints?wait=true HTTP/1.1\r\nHost: {host}:{port}\r\nAuthorization: Bearer {TOKEN}\r\n"
+            f"Content-Type: application/json\r\nContent-Length: {len(body)}\r\n\r\n").encode()
+    client = socket.create_connection((host, int(port)), timeout=10)
+    client.sendall(head + body)
+    return client
+
+
+def load_hung_waits(rig: Rig):
+    """42 `?wait=true` clients: the first half hang up once the arm moves, the rest stay without reading."""
+    hung = [_send_waiting_move(rig.url) for _ in range(HUNG_CLIENTS // 2)]
+    wait_for(lambda: rig.cell.arm.is_moving())
+    for client in hung:
+        client.close()
+    silent = [_send_waiting_move(rig.url) for _ in range(HUNG_CLIENTS - len(hung))]
+    # Accepted and waiting (the moves were planned: that burst of 21 commands is not the load measured here).
+    wait_for(lambda: rig.app.state.waiter.pending_count >= len(silent), 30)
+    return lambda: [client.close() for client in silent]
+
+
+def status_latency_without_load(rig: Rig, calls: int) -> list[float]:
+    """GET /api/status ms with the arm moving and no waiting clients: the machine's own baseline."""
+    rig.idle()
+    rig.http.post("/api/arm/joints", json={"q_rad": FAR_Q, "moving_time_s": 6.0}, headers=AUTH)
+    times = []
+    for _ in range(calls):
+        start = time.perf_counter()
+        assert rig.http.get("/api/status").status_code == 200
+        times.append((time.perf_counter() - start) * 1000)
+    return times
+
+
+def hung_wait_latency(rig: Rig, rounds: int, statuses_per_round: int = 10) -> tuple[list[float], list[float]]:
+    """(status ms, reset ms) under 42 hung `?wait=true` clients: each round starts the load, calls status
+    statuses_per_round times while the moves run and the requests wait, then e-stops (which ends the
+    waits, as it halts the arm) and times the reset."""
+    statuses, resets = [], []
+    for _ in range(rounds):
+        rig.idle()
+        stop = load_hung_waits(rig)
+        for _ in range(statuses_per_round):
+            start = time.perf_counter()
+            assert rig.http.get("/api/status").status_code == 200
+            statuses.append((time.perf_counter() - start) * 1000)
+        rig.http.post("/api/estop", headers=AUTH)
+        start = time.perf_counter()
+        assert rig.http.post("/api/reset", headers=AUTH).json()["state"] == "idle"
+        resets.append((time.perf_counter() - start) * 1000)
+        stop()
+    return statuses, resets
+
+
 def _ignore(function, *args) -> None:
     try:
         function(*args)
@@ -220,6 +283,11 @@ LOADS = {
 }
 
 
+def percentile(values: list[float], fraction: float) -> float:
+    ordered = sorted(values)
+    return ordered[min(len(ordered) - 1, int(round(fraction * (len(ordered) - 1))))]
+
+
 def summary(values: list[float]) -> str:
     ordered = sorted(values)
     p95 = ordered[min(len(ordered) - 1, int(round(0.95 * (len(ordered) - 1))))]
@@ -229,6 +297,8 @@ def summary(values: list[float]) -> str:
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--trials", type=int, default=15)
+    parser.add_argument("--loads", default="", help="comma-separated load names to run (default: all)")
+    parser.add_argument("--rounds", type=int, default=30, help="rounds of 42 hung clients: 10 status calls and one reset each")
     args = parser.parse_args()
     rng = random.Random(0)
     with tempfile.TemporaryDirectory() as tmp:
@@ -238,12 +308,15 @@ def main() -> None:
             print(f"e-stop latency, {args.trials} trials per row; sim control period {control_period_ms:.1f} ms; "
                   f"{os.cpu_count()} CPUs. Figures in ms: p50 p95 max")
             print(f"{'load':26s} {'via':5s} {'answer':>23s} {'halt':>23s} {'halt (sim time)':>23s}")
-            rows = [(name, via) for name in LOADS for via in ("call", "HTTP")] + [("busy worker threads", "HTTP")]
+            special = {"busy worker threads": load_busy_threads, "hung ?wait=true clients": load_hung_waits}
+            rows = [(name, via) for name in LOADS for via in ("call", "HTTP")] + [(name, "HTTP") for name in special]
+            chosen = {name.strip() for name in args.loads.split(",") if name.strip()}
+            rows = [(name, via) for name, via in rows if not chosen or name in chosen]
             for name, via in rows:
                 answers, halts, sims = [], [], []
                 for _ in range(args.trials):
                     rig.idle()
-                    stop = (load_busy_threads if name == "busy worker threads" else LOADS[name])(rig)
+                    stop = (special.get(name) or LOADS[name])(rig)
                     time.sleep(rng.uniform(0.02, 0.3))  # a random moment of the load
                     answer, halt, sim = rig.press(over_http=via == "HTTP")
                     stop()
@@ -252,6 +325,12 @@ def main() -> None:
                     sims.append(sim)
                 print(f"{name:26s} {via:5s} {summary(answers)} {summary(halts)} {summary(sims)}", flush=True)
                 assert max(sims) <= control_period_ms + 1e-6, f"{name}: a halt took more than one control period of sim time"
+            baseline = status_latency_without_load(rig, 10 * args.rounds)
+            statuses, resets = hung_wait_latency(rig, args.rounds)
+            for what, values in (("GET /api/status, no waiting clients (baseline)", baseline), ("GET /api/status", statuses), ("POST /api/reset", resets)):
+                under = "" if "baseline" in what else f" under {HUNG_CLIENTS} hung ?wait=true clients"
+                print(f"{what}{under}, {len(values)} calls (ms): p50 {statistics.median(values):.2f} "
+                      f"p99 {percentile(values, 0.99):.2f} max {max(values):.2f}", flush=True)
             rig.idle()
         finally:
             rig.close()

@@ -22,6 +22,7 @@ from server.errors import install_error_handlers
 from server.guard import HostOriginGuard
 from server.routes import arm, auto, calibration, calibration_settings, colors, detections, intrinsics, jobs, programs, repeat, sim, station, stream
 from server.stream import StreamHub
+from server.waiting import Waiter
 
 log = logging.getLogger(__name__)
 
@@ -68,10 +69,13 @@ def create_app(
         app.state.safety_pool = ThreadPoolExecutor(SAFETY_THREADS, thread_name_prefix="armlab-safety")
         app.state.hub = StreamHub(station_obj, station_obj.config.jpeg_quality, app.state.safety_pool)
         app.state.hub.start()
+        app.state.waiter = Waiter(station_obj)  # `?wait=true` requests wait here, not on worker threads
+        app.state.waiter.start()
         try:
             yield
         finally:
             station_obj.begin_shutdown()  # halt and end the job first: waiting requests return at once
+            app.state.waiter.stop()
             app.state.hub.stop()
             app.state.station = None
             report = close() or {}

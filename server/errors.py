@@ -9,7 +9,7 @@ from fastapi.exceptions import RequestValidationError
 from fastapi.responses import JSONResponse
 from starlette.exceptions import HTTPException as StarletteHTTPException
 
-from armlab.errors import CommandRefused, DeviceNotConnectedError, NeedsConfirmation, NoArmError, NotController
+from armlab.errors import CalibrationUntrusted, CommandRefused, DeviceNotConnectedError, NeedsConfirmation, NoArmError, NotController
 from armlab.station.core import NotCalibrated
 from armlab.store import NotFound
 
@@ -59,7 +59,7 @@ def _classify(error: Exception) -> tuple[int, str]:
         return 409, "not_controller"
     if isinstance(error, NeedsConfirmation):
         return 409, "needs_confirmation"
-    if isinstance(error, NotCalibrated):
+    if isinstance(error, (NotCalibrated, CalibrationUntrusted)):
         return 409, "not_calibrated"
     if isinstance(error, NotFound):
         return 404, "not_found"
@@ -82,8 +82,9 @@ _DOCUMENTED_ERRORS = {
     "401": "the control token is missing or wrong",
     "403": "refused: a Host this station does not serve, or a foreign Origin",
     "404": "no such item (or a damaged one, left out)",
-    "409": "not allowed in the current state (allowed commands listed), not calibrated, another client controls the "
-    "station (named), needs confirm: true, or needs an arm the station does not have (no_arm)",
+    "409": "not allowed in the current state (allowed commands listed), not calibrated or the calibration not trusted "
+    "(the reason), another client controls the station (named), needs confirm: true, or needs an arm the station "
+    "does not have (no_arm)",
     "422": "invalid input, or an unreachable or unsafe target; nothing moved",
     "503": "a device is not connected, timed out or is still lost, or the station is shutting down",
 }
@@ -147,6 +148,6 @@ def install_error_handlers(app: FastAPI) -> None:
     # Registered per base class so they are handled inside the app (a bare Exception handler runs in
     # Starlette's outermost middleware, which logs and re-raises).
     for error_class in (
-        CommandRefused, NotController, NeedsConfirmation, NotCalibrated, NotFound, ValueError, ConnectionError, TimeoutError, Exception
+        CommandRefused, NotController, NeedsConfirmation, NotCalibrated, CalibrationUntrusted, NotFound, ValueError, ConnectionError, TimeoutError, Exception
     ):
         app.add_exception_handler(error_class, _library)

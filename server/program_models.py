@@ -7,6 +7,7 @@ from typing import Annotated, Literal
 
 from pydantic import Field, model_validator
 
+from armlab.store import MAX_PROGRAM_NAME_CHARS
 from server.models import Angle, MovingTime, Request, Wire
 
 DWELL_LIMIT_S = 3600.0
@@ -16,7 +17,7 @@ CYCLES_LIMIT = 100_000
 
 Speed = Annotated[float, Field(ge=10.0, le=100.0, description="speed override, % of full speed (10-100)")]
 Dwell = Annotated[float, Field(ge=0.0, le=DWELL_LIMIT_S, description="seconds to hold still at the waypoint")]
-ProgramName = Annotated[str, Field(min_length=1, max_length=100)]
+ProgramName = Annotated[str, Field(min_length=1, max_length=MAX_PROGRAM_NAME_CHARS)]
 
 
 # Requests -----------------------------------------------------------------------------------------

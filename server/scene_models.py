@@ -6,7 +6,7 @@ from typing import Annotated, Literal
 
 from pydantic import Field, model_validator
 
-from armlab.scene import COLORS, OBJECT_TYPES, SIZES
+from armlab.scene import COLORS, MAX_SCENE_OBJECTS, OBJECT_TYPES, SIZES
 from armlab.scene import JOBS as SCENE_JOBS
 from server.wire_base import Angle, Position, Request
 
@@ -41,7 +41,7 @@ class SceneRequest(Request):
     event: Literal[tuple(SCENE_JOBS)] | None = Field(None, description="a competition event or another job with a scene generator")  # type: ignore[valid-type]
     level: int | None = Field(None, ge=1, le=3)
     seed: int | None = Field(None, ge=0, le=2**32 - 1)
-    objects: list[SceneObjectRequest] | None = Field(None, max_length=100)
+    objects: list[SceneObjectRequest] | None = Field(None, max_length=MAX_SCENE_OBJECTS)
 
     @model_validator(mode="after")
     def _one_kind(self) -> "SceneRequest":

@@ -302,3 +302,21 @@ def test_object_sizes_come_from_the_workcell_config(tmp_path, monkeypatch):
     assert arch.dimensions_m == pytest.approx((0.060 * 0.5, 0.025 * 0.5, 0.030 * 0.5))
     scene = generate_scene("pick_sort", 1, seed=0)
     assert all(o.position_m[2] == pytest.approx(0.020) for o in scene.objects)
+
+
+def test_every_generated_scene_can_stand():
+    """check_can_stand (what POST /api/sim/scene asks of explicit objects) passes every generated scene:
+    stacks touch, nothing is under the board (issue 18 item 8)."""
+    from armlab.scene import JOBS, check_can_stand
+
+    checked = 0
+    for event in JOBS:
+        for level in (1, 2, 3):
+            for seed in range(3):
+                try:
+                    scene = generate_scene(event, level, seed)
+                except ValueError:  # a job without that level or without a scene generator
+                    continue
+                check_can_stand(scene)
+                checked += 1
+    assert checked >= 30

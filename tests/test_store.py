@@ -241,3 +241,64 @@ def test_sigkill_while_saving_loses_nothing_acknowledged_and_leaves_no_partial_p
     calibrations = [json.loads(row[0]) for row in connection.execute("SELECT data_json FROM calibrations")]
     connection.close()
     assert len(calibrations) >= acknowledged and all(len(c["pad"]) == 20000 for c in calibrations)
+
+
+# A read-only file and a full disk (issue 18 item 8): real OS limits on a child process --------------
+
+REPO = Path(__file__).resolve().parents[1]
+OPEN_STORE = (
+    "import sys; sys.path.insert(0, sys.argv[1]); from armlab.store import Store\n"
+    "try:\n    Store(sys.argv[2], backups=2)\nexcept Exception as error:\n"
+    "    print(type(error).__name__ + ': ' + str(error)); sys.exit(3)\n"
+)
+
+
+def _open_in_child(db: Path, unprivileged: bool = False, max_file_bytes: int | None = None) -> subprocess.CompletedProcess:
+    """Store(db, backups=2) in a child process: unprivileged (uid 65534 when we are root, whom file modes do
+    not stop) and/or with RLIMIT_FSIZE (files cannot grow past max_file_bytes: no room for a backup)."""
+    import resource
+
+    def limits() -> None:
+        if max_file_bytes is not None:
+            signal.signal(signal.SIGXFSZ, signal.SIG_IGN)  # a write past the limit fails (EFBIG) instead of killing
+            resource.setrlimit(resource.RLIMIT_FSIZE, (max_file_bytes, max_file_bytes))
+
+    command = [sys.executable, "-c", OPEN_STORE, str(REPO), str(db)]
+    if unprivileged and os.geteuid() == 0:
+        command = ["setpriv", "--reuid=65534", "--regid=65534", "--clear-groups", *command]
+    return subprocess.run(command, capture_output=True, text=True, timeout=60, preexec_fn=limits)
+
+
+@pytest.fixture()
+def open_dir():
+    """A temporary folder anyone may enter (pytest's tmp_path is private to its user)."""
+    import shutil
+    import tempfile
+
+    folder = Path(tempfile.mkdtemp(prefix="armlab-store-"))
+    folder.chmod(0o755)
+    yield folder
+    shutil.rmtree(folder, ignore_errors=True)
+
+
+def test_a_read_only_database_is_reported_as_read_only_not_damaged(open_dir):
+    path = open_dir / "station.sqlite3"
+    _filled(path, programs=2)
+    path.chmod(0o444)
+    result = _open_in_child(path, unprivileged=True)
+    assert result.returncode == 3, result.stdout + result.stderr
+    message = result.stdout.strip()
+    assert "read-only" in message and str(path) in message and "damaged" not in message, message
+    assert "\n" not in message and "Traceback" not in result.stderr
+
+
+def test_no_room_for_the_start_up_backup_says_so_and_leaves_no_partial_copy(open_dir):
+    path = open_dir / "station.sqlite3"
+    _filled(path, programs=40)  # ~0.5 MB
+    size = path.stat().st_size
+    result = _open_in_child(path, max_file_bytes=size // 2)
+    assert result.returncode == 3, result.stdout + result.stderr
+    message = result.stdout.strip()
+    assert "backup" in message and str(path) in message and "Traceback" not in result.stderr, result.stdout + result.stderr
+    assert not Path(f"{path}.bak-new").exists(), "a partial backup was left behind"
+    assert len(Store(path).list_programs()) == 40  # the database itself is untouched

@@ -90,11 +90,11 @@ def device_choice(args: argparse.Namespace) -> tuple[str, str, str, object, str 
 
 def open_checked_store(db_path, backups: int) -> str | None:
     """Check the database file (and make its rolling backup); None if sound, else the one-line reason."""
-    from armlab.store import DamagedDatabase, Store
+    from armlab.store import DamagedDatabase, Store, UnusableDatabase
 
     try:
         Store(db_path, backups=backups)
-    except DamagedDatabase as error:
+    except (DamagedDatabase, UnusableDatabase) as error:
         return str(error)
     return None
 

@@ -82,6 +82,7 @@ def calibrate_points(station: Station, pixels_px: Sequence, world_m: Sequence, s
 def grab(station: Station, position_m=None, pixel=None, source: str | None = None) -> Job:
     """Pick the detected block under the click (its centre, top and yaw), else at the clicked world point."""
     station.allowed_or_raise("grab")
+    station.require_trusted_calibration("grab")
     point, on = target_point(station, position_m, pixel)
     block = block_near(station, point) if station.calibration is not None else None
     if block is not None:
@@ -109,6 +110,7 @@ def grab(station: Station, position_m=None, pixel=None, source: str | None = Non
 def drop(station: Station, position_m=None, pixel=None, source: str | None = None) -> Job:
     """Place the held block at the clicked spot, on whatever is there (board or the top of a stack)."""
     station.allowed_or_raise("drop")
+    station.require_trusted_calibration("drop")
     point, on = target_point(station, position_m, pixel)
     surface = point.copy()
     yaw = None

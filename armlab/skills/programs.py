@@ -12,7 +12,7 @@ from collections.abc import Sequence
 from armlab import program_io
 from armlab.skills.repeat_plan import RepeatSettings, check_waypoints, plan_transfer, same_pose
 from armlab.station.core import Station
-from armlab.store import Program, Waypoint
+from armlab.store import MAX_PROGRAM_NAME_CHARS, Program, Waypoint
 
 
 def update_program(station: Station, program_id: int, name: str | None = None, waypoints: Sequence[Waypoint] | None = None) -> Program:
@@ -25,7 +25,8 @@ def update_program(station: Station, program_id: int, name: str | None = None, w
 
 def duplicate_program(station: Station, program_id: int, name: str | None = None) -> Program:
     program = station.store.get_program(program_id)
-    return station.store.save_program(name or f"{program.name} (copy)", program.waypoints)
+    suffix = " (copy)"
+    return station.store.save_program(name or program.name[: MAX_PROGRAM_NAME_CHARS - len(suffix)] + suffix, program.waypoints)
 
 
 def move_times_s(station: Station, waypoints: Sequence[Waypoint]) -> list[float]:

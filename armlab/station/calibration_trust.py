@@ -1,7 +1,9 @@
 """Is the calibration still right? What the station does with the perception thread's camera-moved
 check (armlab.vision.drift): a calibration restored at start is held back until the board tags confirm
 it (status calibration_state 'checking' -> 'trusted', or 'rejected' with the camera-moved warning),
-and, when the operator enabled it, a calibration the camera has moved away from is redone from the
+the calibration in use is 'untrusted' while the check does not confirm it (the camera moved, or too few
+board tags are where it puts them): grabs, drops and autonomous jobs are then refused with the reason
+until the check confirms it again or the operator recalibrates (issue 18 item 3); and, when the operator enabled it, a calibration the camera has moved away from is redone from the
 board tags while the station is idle (never while a job runs, the arm moves or the latch is set; never
 with too few board tags in view: the warning then stays).
 
@@ -18,13 +20,14 @@ from typing import Any
 
 import numpy as np
 
+from armlab.errors import CalibrationUntrusted
 from armlab.station.jobs import JobContext
 from armlab.station.states import State
 from armlab.station.telemetry import tag_to_dict
 
 log = logging.getLogger(__name__)
 
-CHECKING, TRUSTED, REJECTED = "checking", "trusted", "rejected"
+CHECKING, TRUSTED, UNTRUSTED, REJECTED = "checking", "trusted", "untrusted", "rejected"
 SELF_RECALIBRATE_JOB = "self-recalibrate"
 
 
@@ -72,6 +75,7 @@ class CalibrationTrust:
     _self_recalibrate: bool | None = None  # the operator's setting (None: the config's)
     _self_recal_tried_s = -math.inf
     _self_recal_waiting: str | None = None  # why self-recalibration waits (logged once per reason)
+    _doubt: tuple[Any, str] | None = None  # (calibration, the check's warning) from the last check of the one in use
 
     # Restore -----------------------------------------------------------------------------------
 
@@ -109,14 +113,34 @@ class CalibrationTrust:
 
     @property
     def calibration_state(self) -> str | None:
-        """'trusted' (in use), 'checking' (restored, being checked), 'rejected' (restored, the camera
-        moved since: not used) or None (no calibration)."""
+        """'trusted' (in use), 'untrusted' (in use, but the camera-moved check does not confirm it: see
+        calibration_doubt), 'checking' (restored, being checked), 'rejected' (restored, the camera moved
+        since: not used) or None (no calibration)."""
         with self._lock:
             if self._calibration is not None:
-                return TRUSTED
+                return UNTRUSTED if self._doubt_locked() is not None else TRUSTED
             if self._restored is not None:
                 return REJECTED if self._restored_rejected else CHECKING
             return None
+
+    @property
+    def calibration_doubt(self) -> str | None:
+        """Why the calibration in use is not trusted (the camera-moved check's warning), else None."""
+        with self._lock:
+            return self._doubt_locked()
+
+    def _doubt_locked(self) -> str | None:
+        doubt = self._doubt
+        return doubt[1] if doubt is not None and self._calibration is not None and doubt[0] is self._calibration else None
+
+    def require_trusted_calibration(self, what: str) -> None:
+        """CalibrationUntrusted (the reason) while the calibration in use is not trusted; no calibration is
+        the caller's matter (NotCalibrated where one is needed)."""
+        reason = self.calibration_doubt
+        if reason is not None:
+            raise CalibrationUntrusted(
+                f"{what} refused: the calibration is not trusted ({reason}); recalibrate, or wait until the board tags confirm it"
+            )
 
     def _calibration_to_check(self) -> Any:
         """The calibration the camera-moved check compares with: the one in use, else the restored one."""
@@ -134,15 +158,30 @@ class CalibrationTrust:
                 return  # a frame from before the restore (a camera's buffered frame) proves nothing
         if judging_restored:
             threshold_px = self.perception_config.calibration.drift_threshold_px
-            if warning is not None:
+            # Moved: rejected. Too few tags: not used, checked again later (synchronous mode looks only once: rejected).
+            if warning is not None and (drift_px is not None or self.synchronous):
                 with self._lock:
                     self._restored_rejected = True
                 self.events.add("warn", f"restored calibration not trusted: {warning}")
             elif drift_px is not None and drift_px <= threshold_px and self._trust_restored(calibration, {**(info or {}), "restored": True}):
                 self.events.add("info", f"restored calibration trusted: the board tags are {drift_px:.2f} px from where it puts them")
             return
+        self._note_doubt(calibration, warning)
         if warning is not None and self.self_recalibrate:
             self._self_recalibrate_if_idle(perception.tags)
+
+    def _note_doubt(self, calibration: Any, warning: str | None) -> None:
+        """Record the check's verdict on the calibration in use; the event log says when trust changes."""
+        with self._lock:
+            if calibration is None or calibration is not self._calibration:
+                return
+            before = self._doubt_locked()
+            self._doubt = (calibration, warning) if warning is not None else None
+        if warning is not None and before is None:
+            self.events.add("warn", f"calibration not trusted: {warning}; grabs, drops and jobs are refused until "
+                                    "the board tags confirm it or it is redone")
+        elif warning is None and before is not None:
+            self.events.add("info", "calibration trusted again: the board tags confirm the camera")
 
     def _trust_restored(self, calibration: Any, info: dict) -> bool:
         """Install the restored `calibration` if it is still the candidate (checked and installed under one

@@ -168,6 +168,9 @@ class Station(Latch, MotionGate, ManualCommands, TeachCommands, JobControls, Per
             self.perception_config = load_perception_config(workcell=self.config.workcell)  # the station's board and tags
         self.intrinsics.restore()
         self.colors.restore()
+        interrupted = self.store.mark_interrupted_jobs()
+        if interrupted:
+            self.events.add("warn", f"{interrupted} job(s) were cut off when the station last stopped: marked interrupted")
         if self.config.restore_calibration:
             self._restore_calibration()
         self._closing.clear()
@@ -287,6 +290,16 @@ class Station(Latch, MotionGate, ManualCommands, TeachCommands, JobControls, Per
         """Who holds the control lease (None: free)."""
         with self._lock:
             return self._lease.holder
+
+    def require_control(self, command: str, source: str | None) -> None:
+        """The lease check of a command outside the state table (program edits): NotController naming the
+        holder, ShuttingDown while closing; a free lease goes to `source`, as a motion command takes it."""
+        with self._lock:
+            if self._closing.is_set():
+                raise ShuttingDown(f"command '{command}' refused: the station is shutting down")
+            taken = self._lease.require(source, command)
+        if taken:
+            self.events.add("info", f"control taken by '{source}' (the lease was free)")
 
     def take_control(self, source: str) -> str | None:
         """Take the control lease over (explicitly); the event log tells everyone, the previous holder too.
@@ -476,6 +489,10 @@ class Station(Latch, MotionGate, ManualCommands, TeachCommands, JobControls, Per
             self._job = job
             self._jog = None
             start_job_thread(job, self._after_rest(function), self._on_job_end, cleanup=cleanup)
+        try:  # on disk while it runs: a station killed mid-job shows it 'interrupted' after the restart
+            self.store.record_job_start(job.to_dict())
+        except Exception as store_error:  # noqa: BLE001 - the job matters more than its record
+            log.warning("could not record the start of job %s: %s", job.id, store_error)
         self.events.add("info", f"job '{name}' started" + (f": {detail}" if detail else ""))
         return job
 

@@ -33,6 +33,11 @@ class Latch:
                 failures.append(f"{device}: {error}")
         return failures
 
+    @property
+    def latched(self) -> bool:
+        """True while the e-stop (or a device loss) latch is set; lock-free."""
+        return self._halt.is_set()
+
     def estop(self, source: str | None = None) -> None:
         """Halt now and latch, from any state and from anyone (no lease needed): latch first, cancel the
         job, stop arm and gripper, then record the state; a command that was being sent when the latch

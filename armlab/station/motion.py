@@ -62,6 +62,11 @@ class MotionGate:
 
     def wait_gripper(self, ctx: JobContext | None = None) -> None:
         """Wait until the fingers stop moving (≤ gripper_settle_timeout_s of motion-clock time)."""
+        self._wait_until(self.fingers_still_check(), self.config.gripper_settle_timeout_s, ctx)
+
+    def fingers_still_check(self) -> Callable[[], bool]:
+        """A fresh predicate, true once the fingers' width stayed within 0.2 mm for 0.15 s (motion clock)
+        since it was first called: what a gripper wait waits for (also the server's ?wait=true)."""
         still = {"width": None, "since": self.clock_s()}
 
         def fingers_still() -> bool:
@@ -71,7 +76,7 @@ class MotionGate:
                 return False
             return now - still["since"] > 0.15
 
-        self._wait_until(fingers_still, self.config.gripper_settle_timeout_s, ctx)
+        return fingers_still
 
 
     def check_motion(self, trajectory: JointTrajectory) -> None:

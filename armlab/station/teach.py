@@ -210,3 +210,16 @@ class TeachCommands:
                 self._transition("teach_stop", source=source, detail="")
         self.events.add("info", f"program '{program.name}' saved ({len(program.waypoints)} waypoints)")
         return program
+
+    def teach_exit(self, source: str | None = None) -> None:
+        """Leave teach for idle without saving (CommandRefused outside teach): the draft stays on disk and
+        the next teach_start resumes it (unless discard_draft). Nothing moves. Without it an empty draft,
+        which teach_stop cannot save, could only be left by e-stop and reset."""
+        self.allowed_or_raise("teach_stop", source)
+        self.teach_continuous_stop()
+        with self._lock:
+            if self._teach_saving:
+                raise CommandRefused("teach_stop", "teach (busy saving)", [])
+            self._transition("teach_stop", source=source, detail="")
+        count = len(self.teach_draft())
+        self.events.add("info", f"left teach without saving ({count} waypoints kept in the draft)")

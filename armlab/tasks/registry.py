@@ -152,6 +152,7 @@ def start_auto(station: Station, job: str, level: int | None = None, params: dic
     check_supported(job, getattr(station.config, "workcell", None))
     if station.calibration is None:
         raise NotCalibrated(f"job '{job}'")
+    station.require_trusted_calibration(f"job '{job}'")
     runners: dict[str, TaskRunner] = {}
 
     def run(ctx: JobContext) -> dict:

@@ -1,12 +1,15 @@
-"""Manual arm and gripper commands. `?wait=true` blocks until the motion ends."""
+"""Manual arm and gripper commands. `?wait=true` answers once the motion ends; the wait holds no worker
+thread (server/waiting.py) and ends when the client hangs up."""
 
 from __future__ import annotations
 
-from fastapi import APIRouter
+from fastapi import APIRouter, Request
+from starlette.concurrency import run_in_threadpool
 
 from armlab.station.arm_info import arm_info
 from server.deps import ControlAuth, StationDep
 from server.models import ArmInfo, GripperRequest, JogRequest, JointsRequest, PoseNameRequest, PoseRequest, Status, StepRequest, TorqueRequest
+from server.waiting import until_arm_still, until_fingers_still
 
 router = APIRouter(prefix="/api", tags=["arm"])
 
@@ -17,32 +20,39 @@ def get_arm(station: StationDep) -> dict:
     return arm_info(station)
 
 
+async def _answer(request: Request, station, wait: bool) -> dict:
+    """The status, once the arm has stopped when the client asked to wait."""
+    if wait:
+        await until_arm_still(request, station, station.config.max_moving_time_s + 5.0)
+    return await run_in_threadpool(station.status)
+
+
 @router.post("/arm/home", response_model=Status)
-def post_home(station: StationDep, controller: ControlAuth, body: PoseNameRequest | None = None, wait: bool = False) -> dict:
+async def post_home(request: Request, station: StationDep, controller: ControlAuth, body: PoseNameRequest | None = None, wait: bool = False) -> dict:
     """All joints to zero (body optional: {moving_time_s})."""
-    station.home(body.moving_time_s if body else None, wait=wait, source=controller)
-    return station.status()
+    await run_in_threadpool(station.home, body.moving_time_s if body else None, wait=False, source=controller)
+    return await _answer(request, station, wait)
 
 
 @router.post("/arm/sleep", response_model=Status)
-def post_sleep(station: StationDep, controller: ControlAuth, body: PoseNameRequest | None = None, wait: bool = False) -> dict:
+async def post_sleep(request: Request, station: StationDep, controller: ControlAuth, body: PoseNameRequest | None = None, wait: bool = False) -> dict:
     """The folded rest pose (body optional: {moving_time_s})."""
-    station.sleep(body.moving_time_s if body else None, wait=wait, source=controller)
-    return station.status()
+    await run_in_threadpool(station.sleep, body.moving_time_s if body else None, wait=False, source=controller)
+    return await _answer(request, station, wait)
 
 
 @router.post("/arm/joints", response_model=Status)
-def post_joints(body: JointsRequest, station: StationDep, controller: ControlAuth, wait: bool = False) -> dict:
+async def post_joints(request: Request, body: JointsRequest, station: StationDep, controller: ControlAuth, wait: bool = False) -> dict:
     """Joint move (radians); out-of-limit or malformed → 422 and nothing moves."""
-    station.move_joints(body.q_rad, body.moving_time_s, wait=wait, source=controller)
-    return station.status()
+    await run_in_threadpool(station.move_joints, body.q_rad, body.moving_time_s, wait=False, source=controller)
+    return await _answer(request, station, wait)
 
 
 @router.post("/arm/pose", response_model=Status)
-def post_pose(body: PoseRequest, station: StationDep, controller: ControlAuth, wait: bool = False) -> dict:
+async def post_pose(request: Request, body: PoseRequest, station: StationDep, controller: ControlAuth, wait: bool = False) -> dict:
     """Move the gripper point to a world position; unreachable → 422 'unreachable' and nothing moves."""
-    station.move_to(body.position_m, body.pitch_rad, body.yaw_rad, body.moving_time_s, wait=wait, source=controller)
-    return station.status()
+    await run_in_threadpool(station.move_to, body.position_m, body.pitch_rad, body.yaw_rad, body.moving_time_s, wait=False, source=controller)
+    return await _answer(request, station, wait)
 
 
 @router.post("/arm/torque", response_model=Status)
@@ -61,15 +71,18 @@ def post_jog(body: JogRequest, station: StationDep, controller: ControlAuth) -> 
 
 
 @router.post("/arm/step", response_model=Status)
-def post_step(body: StepRequest, station: StationDep, controller: ControlAuth, wait: bool = False) -> dict:
+async def post_step(request: Request, body: StepRequest, station: StationDep, controller: ControlAuth, wait: bool = False) -> dict:
     """Jog step of the gripper: along world x/y/z keeping its pitch and yaw, or a pitch/roll rotation; a step
     that cannot keep them → 422 with the reason, a step while the arm moves → 409; nothing moves then."""
     amount = body.distance_m if body.axis in ("x", "y", "z") else body.angle_rad
-    station.step_gripper(body.axis, amount, body.speed_percent, wait=wait, source=controller)
-    return station.status()
+    await run_in_threadpool(station.step_gripper, body.axis, amount, body.speed_percent, wait=False, source=controller)
+    return await _answer(request, station, wait)
 
 
 @router.post("/gripper", response_model=Status)
-def post_gripper(body: GripperRequest, station: StationDep, controller: ControlAuth, wait: bool = True) -> dict:
-    station.gripper_command(body.action, wait=wait, source=controller)
-    return station.status()
+async def post_gripper(request: Request, body: GripperRequest, station: StationDep, controller: ControlAuth, wait: bool = True) -> dict:
+    """Grasp or release; waits (default) until the fingers are still."""
+    await run_in_threadpool(station.gripper_command, body.action, wait=False, source=controller)
+    if wait:
+        await until_fingers_still(request, station)
+    return await run_in_threadpool(station.status)

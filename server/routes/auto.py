@@ -7,6 +7,7 @@ from __future__ import annotations
 
 from fastapi import APIRouter, Request
 from fastapi.responses import JSONResponse
+from starlette.concurrency import run_in_threadpool
 from pydantic import ValidationError
 
 from armlab.tasks import JOBS, JobSpec, start_auto
@@ -16,6 +17,7 @@ from server.auto_runs import SCORE_WAIT_S, AutoRun, is_judged, is_scored, watch_
 from server.deps import ControlAuth, StationDep
 from server.errors import ApiError
 from server.models import AutoJobsResponse, AutoRequest, AutoResponse, AutoScoreResponse, SceneRequest
+from server.waiting import until_job_ended
 
 router = APIRouter(prefix="/api/auto", tags=["auto"])
 
@@ -70,25 +72,33 @@ def read_auto_jobs(station: StationDep) -> dict:
     return {"data": data, "count": len(data)}
 
 
-@router.post("", response_model=AutoResponse, status_code=202)
-def post_auto(body: AutoRequest, request: Request, station: StationDep, controller: ControlAuth, wait: bool = False) -> JSONResponse:
+@router.post(
+    "", response_model=AutoResponse, status_code=202,
+    responses={200: {"model": AutoResponse, "description": "?wait=true: the job once it has ended, with its score"}},
+)
+async def post_auto(body: AutoRequest, request: Request, station: StationDep, controller: ControlAuth, wait: bool = False) -> JSONResponse:
     """Start an autonomous job in the auto_sort state: 202 {job} at once, or (?wait=true) 200 {job, score}
-    once it has ended. 422 for an unknown job, level or parameter, or a job the station's workcell cannot
-    run (naming what it lacks); 409 unless idle or without a calibration."""
-    params = _widened(body.job, body.params)
-    station.allowed_or_raise("auto")
-    _, level, _ = checked_request(body.job, body.level, params)
-    check_supported(body.job, station.config.workcell)
-    sim_start_s = station.sim.sim_time_s if station.sim is not None else None
-    job = start_auto(station, body.job, level, params, source=controller)
-    run = None
-    if station.sim is not None:
-        run = request.app.state.auto_run = watch_run(job, body.job, level, params, station.sim, sim_start_s,
-                                                     workcell=station.config.workcell)
+    once it has ended (the wait holds no worker thread). 422 for an unknown job, level or parameter, or a
+    job the station's workcell cannot run (naming what it lacks); 409 unless idle or without a calibration."""
+
+    def start():
+        params = _widened(body.job, body.params)
+        station.allowed_or_raise("auto")
+        _, level, _ = checked_request(body.job, body.level, params)
+        check_supported(body.job, station.config.workcell)
+        sim_start_s = station.sim.sim_time_s if station.sim is not None else None
+        job = start_auto(station, body.job, level, params, source=controller)
+        run = None
+        if station.sim is not None:
+            run = request.app.state.auto_run = watch_run(job, body.job, level, params, station.sim, sim_start_s,
+                                                         workcell=station.config.workcell)
+        return job, run
+
+    job, run = await run_in_threadpool(start)
     if not wait:
         return JSONResponse({"job": job.to_dict(), "score": None}, status_code=202)
-    job.wait(AUTO_WAIT_TIMEOUT_S)
-    score = run.to_dict(wait_s=SCORE_WAIT_S) if run is not None else None
+    await until_job_ended(request, job, AUTO_WAIT_TIMEOUT_S)
+    score = await run_in_threadpool(run.to_dict, SCORE_WAIT_S) if run is not None else None
     return JSONResponse({"job": job.to_dict(), "score": score}, status_code=200)
 
 

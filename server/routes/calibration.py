@@ -2,31 +2,35 @@
 
 from __future__ import annotations
 
-from fastapi import APIRouter
+from fastapi import APIRouter, Request
 from fastapi.responses import JSONResponse
+from starlette.concurrency import run_in_threadpool
 
 from armlab import skills
 
 from server.deps import ControlAuth, StationDep
 from server.models import CalibrationInfo, JobResponse, PixelRequest, PixelToWorldResponse, PointsCalibrationRequest
-from server.routes.jobs import job_response
+from server.routes.jobs import WAITED_JOB, job_response
 
 router = APIRouter(prefix="/api", tags=["calibration"])
 
 
-@router.post("/calibrate", response_model=JobResponse, status_code=202)
-def post_calibrate(station: StationDep, controller: ControlAuth, wait: bool = False) -> JSONResponse:
+@router.post("/calibrate", response_model=JobResponse, status_code=202, responses=WAITED_JOB)
+async def post_calibrate(request: Request, station: StationDep, controller: ControlAuth, wait: bool = False) -> JSONResponse:
     """Find the board tags, solve the camera pose (cross-checked with depth), save and use it."""
-    return job_response(skills.calibrate(station, source=controller), wait)
+    return await job_response(request, await run_in_threadpool(skills.calibrate, station, source=controller), wait)
 
 
-@router.post("/calibrate/points", response_model=JobResponse, status_code=202)
-def post_calibrate_points(body: PointsCalibrationRequest, station: StationDep, controller: ControlAuth, wait: bool = False) -> JSONResponse:
+@router.post("/calibrate/points", response_model=JobResponse, status_code=202, responses=WAITED_JOB)
+async def post_calibrate_points(
+    request: Request, body: PointsCalibrationRequest, station: StationDep, controller: ControlAuth, wait: bool = False
+) -> JSONResponse:
     """Calibrate from >= 4 clicked pixels with known world points (no tags needed): homography + PnP,
     reprojection error per point; too few, collinear or inconsistent points fail the job saying why."""
     pixels = [p.pixel for p in body.points]
     world = [p.world_m for p in body.points]
-    return job_response(skills.calibrate_points(station, pixels, world, source=controller), wait)
+    job = await run_in_threadpool(skills.calibrate_points, station, pixels, world, source=controller)
+    return await job_response(request, job, wait)
 
 
 @router.get("/calibration", response_model=CalibrationInfo)

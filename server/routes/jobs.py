@@ -1,24 +1,31 @@
-"""Jobs: click-grab and click-drop (202 + job, or the final job with ?wait=true), current job, cancel."""
+"""Jobs: click-grab and click-drop (202 + job, or 200 + the ended job with ?wait=true: the wait holds no
+worker thread, server/waiting.py), current job, cancel."""
 
 from __future__ import annotations
 
-from fastapi import APIRouter
+from fastapi import APIRouter, Request
 from fastapi.responses import JSONResponse
+from starlette.concurrency import run_in_threadpool
 
 from armlab import skills
 from armlab.station.jobs import Job
 from server.deps import ControlAuth, StationDep
 from server.models import JobResponse, TargetRequest
+from server.waiting import until_job_ended
 
 router = APIRouter(prefix="/api", tags=["jobs"])
 
 JOB_WAIT_TIMEOUT_S = 300.0
 
 
-def job_response(job: Job, wait: bool) -> JSONResponse:
+# What a job-starting route documents: 202 at once, or 200 with ?wait=true once the job has ended.
+WAITED_JOB = {200: {"model": JobResponse, "description": "?wait=true: the job once it has ended (or as it stands after the wait's timeout)"}}
+
+
+async def job_response(request: Request, job: Job, wait: bool) -> JSONResponse:
     """202 {job} at once, or (wait) 200 {job} once it has ended."""
     if wait:
-        job.wait(JOB_WAIT_TIMEOUT_S)
+        await until_job_ended(request, job, JOB_WAIT_TIMEOUT_S)
         return JSONResponse({"job": job.to_dict()}, status_code=200)
     return JSONResponse({"job": job.to_dict()}, status_code=202)
 
@@ -29,16 +36,18 @@ def _target(body: TargetRequest) -> dict:
     return {"pixel": (body.u, body.v)}
 
 
-@router.post("/grab", response_model=JobResponse, status_code=202)
-def post_grab(body: TargetRequest, station: StationDep, controller: ControlAuth, wait: bool = False) -> JSONResponse:
+@router.post("/grab", response_model=JobResponse, status_code=202, responses=WAITED_JOB)
+async def post_grab(request: Request, body: TargetRequest, station: StationDep, controller: ControlAuth, wait: bool = False) -> JSONResponse:
     """Grab the detected block under the target (centre, top, yaw), else at the target point."""
-    return job_response(skills.grab(station, **_target(body), source=controller), wait)
+    job = await run_in_threadpool(lambda: skills.grab(station, **_target(body), source=controller))
+    return await job_response(request, job, wait)
 
 
-@router.post("/drop", response_model=JobResponse, status_code=202)
-def post_drop(body: TargetRequest, station: StationDep, controller: ControlAuth, wait: bool = False) -> JSONResponse:
+@router.post("/drop", response_model=JobResponse, status_code=202, responses=WAITED_JOB)
+async def post_drop(request: Request, body: TargetRequest, station: StationDep, controller: ControlAuth, wait: bool = False) -> JSONResponse:
     """Place the held block at the target, on the board or on top of the block/stack there."""
-    return job_response(skills.drop(station, **_target(body), source=controller), wait)
+    job = await run_in_threadpool(lambda: skills.drop(station, **_target(body), source=controller))
+    return await job_response(request, job, wait)
 
 
 @router.get("/jobs/current", response_model=JobResponse)

@@ -1,4 +1,5 @@
 """Teach mode and taught programs (the station's SQLite file): record, undo, save, edit, duplicate, export, import.
+Edits (rename, replace, delete, duplicate, import) need the control lease like motion; reading does not.
 
 A recorded waypoint is in the database's teach draft before /api/teach/record answers; a station killed
 while teaching resumes the draft on the next /api/teach/start (GET /api/teach/draft shows it).
@@ -96,6 +97,13 @@ def post_teach_stop(body: TeachStopRequest, station: StationDep, controller: Con
     return program_out(station, station.teach_stop(body.name, source=controller))
 
 
+@router.post("/teach/exit", response_model=Status)
+def post_teach_exit(station: StationDep, controller: ControlAuth) -> dict:
+    """Leave teach without saving: the draft stays on disk (teach/start resumes it); nothing moves."""
+    station.teach_exit(source=controller)
+    return station.status()
+
+
 @router.get("/programs", response_model=ProgramsResponse)
 def read_programs(station: StationDep) -> dict:
     """Saved programs; a damaged row is left out and named in `skipped`, never hiding the others."""
@@ -111,6 +119,7 @@ def read_program(program_id: ProgramId, station: StationDep) -> dict:
 @router.patch("/programs/{program_id}", response_model=ProgramInfo)
 def update_program(program_id: ProgramId, body: ProgramUpdateRequest, station: StationDep, controller: ControlAuth) -> dict:
     """Rename and/or replace the whole waypoint list (every waypoint checked first; nothing changes if one fails)."""
+    station.require_control("edit_program", controller)
     waypoints = None
     if body.waypoints is not None:
         waypoints = [Waypoint(tuple(w.joints_rad), w.gripper, w.dwell_s, w.moving_time_s) for w in body.waypoints]
@@ -120,11 +129,14 @@ def update_program(program_id: ProgramId, body: ProgramUpdateRequest, station: S
 @router.post("/programs/{program_id}/duplicate", response_model=ProgramInfo, status_code=201)
 def post_duplicate(program_id: ProgramId, station: StationDep, controller: ControlAuth, body: DuplicateRequest | None = None) -> dict:
     """Copy a program under a new name (default '<name> (copy)')."""
+    station.require_control("duplicate_program", controller)
     return program_out(station, program_edits.duplicate_program(station, program_id, body.name if body else None))
 
 
 @router.delete("/programs/{program_id}")
 def delete_program(program_id: ProgramId, station: StationDep, controller: ControlAuth) -> dict:
+    """Delete a program (the lease holder's command, like every edit)."""
+    station.require_control("delete_program", controller)
     station.store.delete_program(program_id)
     return {"deleted": program_id}
 
@@ -145,4 +157,5 @@ def export_program(program_id: ProgramId, station: StationDep, format: Literal["
 def post_import(body: ImportRequest, station: StationDep, controller: ControlAuth) -> dict:
     """Store a program from an exported file's text; a malformed file is refused (422 naming the line and
     the reason) and nothing stored changes."""
+    station.require_control("import_program", controller)
     return program_out(station, program_edits.import_program(station, body.format, body.content, body.name))

@@ -6,28 +6,30 @@ import csv
 import io
 from typing import Literal
 
-from fastapi import APIRouter, Response
+from fastapi import APIRouter, Request, Response
 from fastapi.responses import JSONResponse
+from starlette.concurrency import run_in_threadpool
 
 from armlab import skills
 from server.deps import ControlAuth, StationDep
 from server.errors import ApiError
 from server.models import JobResponse, ProgramId
 from server.program_models import RepeatRequest, SpeedRequest, TraceResponse
-from server.routes.jobs import job_response
+from server.routes.jobs import WAITED_JOB, job_response
 
 router = APIRouter(prefix="/api", tags=["repeat"])
 
 
-@router.post("/programs/{program_id}/repeat", response_model=JobResponse, status_code=202)
-def post_repeat(
-    program_id: ProgramId, station: StationDep, controller: ControlAuth, body: RepeatRequest | None = None, wait: bool = False
+@router.post("/programs/{program_id}/repeat", response_model=JobResponse, status_code=202, responses=WAITED_JOB)
+async def post_repeat(
+    request: Request, program_id: ProgramId, station: StationDep, controller: ControlAuth, body: RepeatRequest | None = None,
+    wait: bool = False,
 ) -> JSONResponse:
     """Repeat a program `cycles` times (None: until cancelled) at `speed_percent`, as a job: every waypoint
     and segment checked first, eased in from the current pose, paced by absolute deadlines, home at the end."""
     body = body or RepeatRequest()
-    job = skills.repeat(station, program_id, body.cycles, body.speed_percent, source=controller)
-    return job_response(job, wait)
+    job = await run_in_threadpool(skills.repeat, station, program_id, body.cycles, body.speed_percent, source=controller)
+    return await job_response(request, job, wait)
 
 
 def _job(job) -> dict:

@@ -24,14 +24,16 @@ def _cell(station: Station):
 
 @router.post("/scene")
 def post_scene(body: SceneRequest, station: StationDep, controller: ControlAuth) -> dict:
-    """Replace the objects: a generated event scene (event, level, seed) or explicit objects."""
-    from armlab.scene import Scene, generate_scene
+    """Replace the objects: a generated event scene (event, level, seed) or explicit objects (at most 100,
+    none below the board, none overlapping another: 422 naming them, and the scene stays)."""
+    from armlab.scene import Scene, check_can_stand, generate_scene
 
     _cell(station)
     station.allowed_or_raise("set_scene", controller)
     if body.objects is not None:
         scene = Scene.from_dict({"objects": [item.model_dump(exclude_none=True) for item in body.objects]},
                                 workcell=station.config.workcell)
+        check_can_stand(scene)
     else:
         scene = generate_scene(body.event, level=body.level or 1, seed=body.seed or 0, workcell=station.config.workcell)
     station.set_scene(scene, source=controller)  # checked under the station lock, changed outside it

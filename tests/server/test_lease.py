@@ -148,3 +148,35 @@ def test_decisions_lowercase_bearer_and_open_pixel_to_world(http, cell):
     assert response.status_code in (200, 409)
     assert response.status_code != 401
     assert np.allclose(_joints(http), q, atol=2e-3)
+
+
+def test_program_edits_need_the_lease_reading_does_not(http):
+    """Issue 18 item 7: a client without the lease cannot rename, replace, delete, duplicate or import the
+    holder's programs (409 naming the holder, nothing stored changes); reading and exporting stay open."""
+    taught = {"name": "alice's", "format": "json", "content": json.dumps(
+        {"name": "alice's", "joint_names": ["waist", "shoulder", "elbow", "wrist_angle", "wrist_rotate"],
+         "waypoints": [{"joints_rad": [0.0, 0.0, 0.0, 0.0, 0.0], "gripper": "release"},
+                       {"joints_rad": GOAL_A, "gripper": "grasp"}]})}
+    response = http.post("/api/programs/import", json=taught, headers=ALICE)
+    assert response.status_code == 201, response.text
+    program = response.json()
+    assert http.get("/api/status").json()["controller"] == "alice"
+    pid = program["id"]
+    before = http.get("/api/programs").json()
+    refused = [
+        http.patch(f"/api/programs/{pid}", json={"name": "bob's now"}, headers=BOB),
+        http.patch(f"/api/programs/{pid}", json={"waypoints": [{"joints_rad": GOAL_B, "gripper": "release"}]}, headers=BOB),
+        http.delete(f"/api/programs/{pid}", headers=BOB),
+        http.post(f"/api/programs/{pid}/duplicate", json={"name": "copied by bob"}, headers=BOB),
+        http.post("/api/programs/import", json={**taught, "name": "bob's import"}, headers=BOB),
+    ]
+    for response in refused:
+        assert "'alice'" in _error(response, 409, "not_controller"), response.request.url
+    assert http.get("/api/programs").json() == before, "a refused edit changed the stored programs"
+    # Reading needs neither the lease nor the token.
+    assert httpx.get(http.base_url.join(f"/api/programs/{pid}")).json()["name"] == "alice's"
+    assert httpx.get(http.base_url.join(f"/api/programs/{pid}/export")).status_code == 200
+    # The holder edits as before.
+    assert http.patch(f"/api/programs/{pid}", json={"name": "renamed"}, headers=ALICE).json()["name"] == "renamed"
+    assert http.post(f"/api/programs/{pid}/duplicate", headers=ALICE).status_code == 201
+    assert http.delete(f"/api/programs/{pid}", headers=ALICE).json() == {"deleted": pid}

@@ -142,6 +142,26 @@ def test_teach_start_resumes_an_unsaved_draft_unless_discarded(http):
     assert http.get("/api/teach/draft").json()["count"] == 0
 
 
+def test_teach_can_be_left_without_saving_and_without_an_estop(http):
+    """Issue 18 item 8: with an empty draft, teach/stop has nothing to save (422) and teach was left only by
+    e-stop and reset. POST /api/teach/exit leaves teach for idle without saving; the draft stays on disk
+    (the next teach/start resumes it), nothing moves."""
+    assert http.post("/api/teach/start", json={"discard_draft": True}, headers=AUTH).status_code == 200
+    _error(http.post("/api/teach/stop", json={"name": "empty"}, headers=AUTH), 422, "invalid")
+    response = http.post("/api/teach/exit", headers=AUTH)
+    assert response.status_code == 200, response.text
+    assert response.json()["state"] == "idle" and not response.json()["moving"]
+    assert http.post("/api/teach/start", headers=AUTH).status_code == 200
+    _move(http, POSE_C)
+    assert http.post("/api/teach/record", headers=AUTH).json()["count"] == 1
+    stored = _stored(http)
+    assert http.post("/api/teach/exit", headers=AUTH).json()["state"] == "idle"
+    assert _stored(http) == stored and http.get("/api/teach/draft").json()["count"] == 1  # kept, not saved
+    assert "1 waypoints (draft resumed)" in http.post("/api/teach/start", headers=AUTH).json()["detail"]
+    assert http.post("/api/teach/exit", headers=AUTH).json()["state"] == "idle"
+    _error(http.post("/api/teach/exit", headers=AUTH), 409, "wrong_state")  # not teaching
+
+
 def test_edit_rename_reorder_insert_a_gripper_step_and_duplicate(http):
     program = _teach(http, "edit me", [POSE_A, POSE_B])
     pid = program["id"]

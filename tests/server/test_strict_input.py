@@ -148,3 +148,57 @@ def test_a_malformed_websocket_message_gets_an_error_and_the_session_stays_open(
         ws.send(json.dumps({"type": "view", "view": "color", "layers": ["grid"]}))  # still served after the error
         assert _next_text(ws, "telemetry")["state"] == "idle"
     assert http.get("/api/status").json()["state"] == "idle"  # the list-named 'estop' did not stop anything
+
+
+_HEADER = "t_s,q1,q2,q3,q4,q5,gripper\n"
+_JOINT_NAMES = ["waist", "shoulder", "elbow", "wrist_angle", "wrist_rotate"]
+
+
+@pytest.mark.parametrize(
+    ("file_format", "content", "fragment"),
+    [
+        ("csv", _HEADER + "0," + "1" * 140_000 + ",0,0,0,0,release\n", "line 2"),  # a field over csv's 131,072 limit
+        ("csv", _HEADER + '0,"' + "x" * 140_000 + "\n", "line 2"),  # an unclosed quote swallowing the rest
+        ("json", "[" * 100_000 + "]" * 100_000, "nested"),
+        ("json", json.dumps({"waypoints": [{"joints_rad": [0, 0, 0, 0, 0], "gripper": "release"}]}).replace("[0, 0", "[1" + "0" * 400 + ", 0", 1),
+         "joints_rad"),
+        ("csv", _HEADER + "0,1" + "0" * 400 + ",0,0,0,0,release\n", "q1"),
+        ("json", json.dumps({"name": "n" * 500_000, "joint_names": _JOINT_NAMES,
+                             "waypoints": [{"joints_rad": [0, 0, 0, 0, 0], "gripper": "release"}]}), "name"),
+    ],
+    ids=["csv-field-over-limit", "csv-unclosed-quote", "json-nested-100k", "json-joint-10e400", "csv-joint-10e400", "json-name-500k"],
+)
+def test_malformed_program_files_are_422_and_store_nothing(http, file_format, content, fragment):
+    """Issue 18 item 8: each of these was a 500 (or, for the name, stored 500,000 characters)."""
+    before = http.get("/api/programs").json()
+    response = http.post("/api/programs/import", json={"format": file_format, "content": content}, headers=AUTH)
+    assert response.status_code == 422, response.text[:300]
+    error = response.json()["error"]
+    assert error["code"] == "invalid" and fragment in error["message"], error["message"][:300]
+    assert http.get("/api/programs").json() == before
+
+
+def _block(index: int, position_m: list[float]) -> dict:
+    return {"id": f"b{index}", "type": "block", "color": "red", "size": "large", "position_m": position_m}
+
+
+@pytest.mark.parametrize(
+    ("objects", "fragment"),
+    [
+        ([_block(0, [0.10, 0.20, 0.019]), _block(1, [0.12, 0.20, 0.019])], "b0 and b1 overlap"),
+        ([_block(0, [0.10, 0.20, -1.0])], "b0 is below the board"),
+        ([_block(0, [0.10, 0.20, 0.010])], "b0 is below the board"),  # 9 mm into the board
+        ([_block(i, [0.10, 0.20, 0.019]) for i in range(100)], "overlap"),  # exhausted MuJoCo's arena: a fault
+    ],
+    ids=["two-overlapping", "one-metre-below", "half-sunk", "hundred-in-one-place"],
+)
+def test_scenes_that_cannot_stand_are_422_and_change_nothing(http, objects, fragment):
+    """Issue 18 item 8: a block at z = -1 m was flung to z = 98.8 m, 100 overlapping blocks faulted the station."""
+    scene = [_block(0, [-0.10, 0.20, 0.019]), _block(1, [0.10, 0.20, 0.019 + 0.038])]  # a block on a block only touches
+    assert http.post("/api/sim/scene", json={"objects": scene}, headers=AUTH).status_code == 200
+    response = http.post("/api/sim/scene", json={"objects": objects}, headers=AUTH)
+    assert response.status_code == 422, response.text[:300]
+    error = response.json()["error"]
+    assert error["code"] == "invalid" and fragment in error["message"], error["message"][:300]
+    assert http.get("/api/sim/scene").json()["objects"] == 2
+    assert http.get("/api/status").json()["state"] == "idle"

@@ -144,3 +144,30 @@ def test_sigkill_while_recording_and_saving_loses_nothing_acknowledged(tmp_path,
             process.wait(15)
         except subprocess.TimeoutExpired:
             process.kill()
+
+
+def test_a_job_killed_by_sigkill_reads_interrupted_in_the_history_after_restart(tmp_path):
+    """Issue 18 item 8: a job's row is written when it starts, so a SIGKILL mid-job leaves it; the next start
+    marks it 'interrupted' (it was missing from /api/jobs/history)."""
+    db_path = tmp_path / "station.sqlite3"
+    process, base = _start(db_path)
+    try:
+        with httpx.Client(base_url=base, timeout=30, headers=AUTH) as http:
+            content = ("t_s,q1,q2,q3,q4,q5,gripper\n0,0,0,0,0,0,release\n2,0.6,0.1,0.2,0.3,0,release\n"
+                       "4,-0.6,0.1,0.2,0.3,0,release\n")
+            program = http.post("/api/programs/import", json={"format": "csv", "content": content, "name": "loop"})
+            assert program.status_code == 201, program.text
+            started = http.post(f"/api/programs/{program.json()['id']}/repeat", json={"cycles": None})
+            assert started.status_code == 202, started.text
+            job_id = started.json()["job"]["id"]
+            live.wait_for(lambda: http.get("/api/status").json()["moving"], 30)
+    finally:
+        _kill(process)
+    process, base = _start(db_path)
+    try:
+        history = httpx.get(base + "/api/jobs/history", timeout=30).json()["data"]
+        killed = [job for job in history if job["id"] == job_id]
+        assert killed and killed[0]["state"] == "interrupted", history
+        assert killed[0]["name"] == "repeat" and "stopped" in killed[0]["message"], killed
+    finally:
+        _kill(process)

@@ -206,3 +206,34 @@ def test_synchronous_mode_checks_a_restored_calibration_with_one_look(tmp_path):
         station.close()
     finally:
         fast.close()
+
+
+def test_a_large_knock_makes_the_calibration_untrusted_and_refuses_grabs_drops_and_jobs(cell, tmp_path):
+    """Issue 18 item 3: a knock of 50 mm and 0.1 rad moves every board tag out of where the check looks. Too
+    few tags confirmed is itself a reason to stop trusting: calibration_state 'untrusted' with the reason,
+    click-grabs, drops and autonomous jobs refused (409, the reason) and nothing moves, until the operator
+    recalibrates."""
+    from armlab.errors import CalibrationUntrusted
+    from armlab.tasks import start_auto
+
+    station = make_station(cell, tmp_path / "station.sqlite3")
+    try:
+        calibrate(station)
+        cell.knock_camera((0.05, 0.0, 0.0), (0.1, 0.0, 0.0))
+        status = until(lambda: (s := station.status())["calibration_state"] == "untrusted" and s, station)
+        assert status["camera_warning"].startswith("camera not confirmed"), status["camera_warning"]
+        q_before = np.asarray(station.arm.read_joint_state().position_rad)
+        for refused in (lambda: skills.grab(station, pixel=(640, 360)), lambda: skills.grab(station, position_m=(0.0, 0.2, 0.02)),
+                        lambda: skills.drop(station, position_m=(0.1, 0.2, 0.0)), lambda: start_auto(station, "pick_sort", 1)):
+            with pytest.raises(CalibrationUntrusted, match="camera not confirmed"):
+                refused()
+        assert station.status()["state"] == "idle" and not station.arm.is_moving()
+        assert np.allclose(station.arm.read_joint_state().position_rad, q_before, atol=5e-3)
+        assert any("calibration not trusted" in m for m in messages(station))
+        calibrate(station)  # the operator recalibrates at the knocked camera: trusted again
+        assert station.status()["calibration_state"] == "trusted"
+        assert cell.camera_pose_error(station.calibration.T_world_camera)[0] < POSITION_TOLERANCE_M
+        wait_sim(cell, 3 * CHECK_PERIOD_S)
+        assert station.status()["calibration_state"] == "trusted" and warning_of(station) is None
+    finally:
+        station.close()

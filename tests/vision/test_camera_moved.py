@@ -12,7 +12,7 @@ import pytest
 from armlab.devices.sim import SimWorkcell, SimWorkcellConfig
 from armlab.scene import generate_scene
 from armlab.vision import PerceptionPipeline, calibrate_extrinsics, load_perception_config
-from armlab.vision.drift import CAMERA_MOVED, DriftMonitor
+from armlab.vision.drift import CAMERA_MOVED, CAMERA_UNCONFIRMED, DriftMonitor
 
 # Arm poses swept over the board (waist left to right, reaching over the tag rows); the arm moves
 # smoothly from each to the next over MOVE_S, never resting, so every check sees it in motion.
@@ -93,3 +93,46 @@ def test_a_bumped_mount_warns_and_a_new_calibration_clears_it(station_like, bump
     frame = cell.render()
     new_cal = calibrate_extrinsics(frame.color_bgr, frame.intrinsics, cfg, depth_mm=frame.depth_mm)
     assert not any(_checks(cell, cfg, pipeline, monitor, new_cal, 9.0))
+
+
+def _overhead_calibration():
+    """A camera 1 m above the board looking straight down (K of DESIGN.md §3), no distortion."""
+    from armlab.vision import Calibration
+
+    T = np.eye(4)
+    T[:3, :3] = np.diag([1.0, -1.0, -1.0])  # camera z down, x along world x
+    T[:3, 3] = (0.0, 0.15, 1.0)
+    K = np.array([[904.0, 0.0, 640.0], [0.0, 904.0, 360.0], [0.0, 0.0, 1.0]])
+    return Calibration(T_world_camera=T, K=K, dist=np.zeros(5), width=1280, height=720, reprojection_error_px=0.3)
+
+
+def _tags_at(cal, cfg, ids, offset_px=(0.0, 0.0)):
+    """Board tags `ids` where `cal` puts them (+ offset_px), as the detector reports them."""
+    from armlab.vision.geometry import project_points
+    from armlab.vision.tags import Tag
+
+    world = np.array([[*cfg.tags.board_tags[i], 0.0] for i in ids])
+    centres = project_points(cal.T_world_camera, cal.K, cal.dist, world) + np.asarray(offset_px)
+    return [Tag(id=i, corners_px=np.repeat(c[None], 4, axis=0), center_px=c) for i, c in zip(ids, centres)]
+
+
+def test_too_few_board_tags_confirmed_is_a_warning_until_they_confirm_again():
+    """Issue 18 item 3: after a large knock no board tag is where the check looks; that must not pass as
+    'nothing to say'. Fewer than two board tags confirmed on drift_confirm_checks checks in a row warns (the
+    calibration is not trusted); a check that confirms the camera again clears that warning."""
+    cfg = load_perception_config()
+    cal, monitor = _overhead_calibration(), DriftMonitor(cfg.calibration)
+    period_s, ids = cfg.calibration.drift_check_period_s, sorted(cfg.tags.board_tags)
+    assert monitor.update(0.0, _tags_at(cal, cfg, ids), cal, cfg) is None
+    verdicts = [monitor.update(period_s * k, _tags_at(cal, cfg, ids[:1]), cal, cfg) for k in range(1, 4)]
+    assert verdicts[0] is None  # one check alone is not enough (an arm over the tags for a moment)
+    assert verdicts[-1] is not None and verdicts[-1].startswith(CAMERA_UNCONFIRMED), verdicts
+    assert "1 of the 4 board tags" in verdicts[-1]
+    assert monitor.update(period_s * 4, [], cal, cfg).startswith(CAMERA_UNCONFIRMED)
+    assert monitor.update(period_s * 5, _tags_at(cal, cfg, ids[:2]), cal, cfg) is None  # confirmed again
+    # A camera that moved stays 'moved' when the tags later vanish, and is not cleared by them.
+    for k in range(6, 8):
+        moved = monitor.update(period_s * k, _tags_at(cal, cfg, ids, offset_px=(9.0, 0.0)), cal, cfg)
+    assert moved.startswith(CAMERA_MOVED)
+    for k in range(8, 11):
+        assert monitor.update(period_s * k, [], cal, cfg).startswith(CAMERA_MOVED)

@@ -141,6 +141,7 @@ export class Api {
   deleteProgram(id) { return this.request("DELETE", `/api/programs/${encodeURIComponent(id)}`); }
   setJobSpeed(speedPercent) { return this.request("PATCH", "/api/jobs/current", { speed_percent: speedPercent }); }
   teachStop(name) { return this.post("/api/teach/stop", { name }); }
+  teachExit() { return this.post("/api/teach/exit"); }
   repeat(programId, cycles, speedPercent = 100) {
     return this.post(`/api/programs/${encodeURIComponent(programId)}/repeat`, { cycles, speed_percent: speedPercent });
   }

@@ -96,6 +96,7 @@ export class ClickCalibration {
       checking: "restored, checking against the board tags…",
       rejected: "restored calibration not trusted (camera moved): recalibrate",
       trusted: "trusted",
+      untrusted: "not trusted (the board tags do not confirm it): grabs and jobs refused; recalibrate",
     }[s.calibration_state] || "";
     state.textContent = text;
     state.dataset.state = s.calibration_state || "none";

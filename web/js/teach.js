@@ -52,6 +52,7 @@ export class TeachPanel {
     on("btn-teach-record", () => this.record());
     on("btn-teach-undo", () => this.run("undo waypoint", () => this.api.teachUndo()).then(() => this.refreshDraft()));
     on("btn-teach-stop", () => this.save());
+    on("btn-teach-exit", () => this.run("leave teach (the draft is kept)", () => this.api.teachExit()).then(() => this.showRecording(false)));
     on("btn-teach-continuous", () => this.toggleContinuous());
     on("btn-programs-refresh", () => this.refresh());
     on("btn-program-rename", () => this.rename());
