@@ -102,7 +102,7 @@ def test_on_image_border():
 def test_a_cut_disc_is_not_a_square(diameter, cut_m):
     """A cylinder's top cut by the border: its round outline lies far from any square's edges
     (blocks.py calls a cut face a cube only below MAX_EDGE_RESIDUAL of the edge)."""
-    from armlab.vision.blocks import MAX_EDGE_RESIDUAL
+    from armlab.vision.face_shape import MAX_EDGE_RESIDUAL
 
     centre = np.array([0.086, -0.15])
     n = int(0.12 / PITCH_M)

@@ -1,0 +1,200 @@
+"""A block's top face as measured (Face) and what its metric footprint says: size class, side, yaw,
+square or not (ClassifiedFace), touching cubes split by k-means, faces the image's edge cuts, and lower
+stack members covered by the block on top. Pure functions of the face's points and the config."""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from typing import TYPE_CHECKING
+
+import cv2
+import numpy as np
+
+from armlab.vision.calibration import Calibration
+from armlab.vision.clipped_face import fit_clipped_square, on_image_border
+from armlab.vision.config import PerceptionConfig
+from armlab.vision.stacks import stack_candidates
+
+if TYPE_CHECKING:  # the type only: blocks.py builds on this module
+    from armlab.vision.blocks import BlockGeometry
+
+# Shape of a top face, from ideal shapes with room for real edges: area / minimum-area rectangle
+# (square 1, disc 0.785, triangle 0.5; real cube tops, edges worn and trimmed by depth smoothing, 0.77-0.91
+# on the ROB 550 frames) and area / minimum enclosing circle (square 2/pi = 0.64, disc 1: a disc fills
+# its rectangle like a worn square but its circle far more).
+MIN_FILL = 0.70
+SPLIT_MIN_FILL = 0.84  # a part split off a wider face: quarter discs (a semicircle cut in two) fill 0.785
+MAX_CIRCLE_FILL = 0.82
+MAX_ASPECT = 1.3
+SIZE_TOLERANCE = 0.22  # measured side within this fraction of the class size
+SPLIT_SIZE_TOLERANCE = 0.12  # each side of a part split from touching cubes, within this of the edge
+BORDER_MARGIN_PX = 2  # a face with pixels this close to the image's edge runs off the image
+MAX_EDGE_RESIDUAL = 0.025  # a cut face's outline this close to a square's edges on average (x edge): cubes ~0.013, discs ~0.036
+
+
+def quantile(values: np.ndarray, q: float) -> float:
+    """The q-quantile (0..1) of a non-empty array by partial sort: far cheaper than np.percentile on small arrays."""
+    flat = np.asarray(values).ravel()
+    k = int(round(q * (flat.size - 1)))
+    return float(np.partition(flat, k)[k])
+
+
+@dataclass
+class Face:
+    """A measured flat top face before classification."""
+
+    points_xy: np.ndarray  # (N, 2) world
+    top_m: float
+    contour_px: np.ndarray
+    center_px: np.ndarray
+    pixel_count: int
+    pixel_area_m2: float
+    plane_H: np.ndarray | None = None  # PlaneCamera.homography(top_m)
+    pixels_px: np.ndarray | None = None  # (N, 2) full-resolution (u, v) of points_xy
+    classes: np.ndarray | None = None  # (N,) colour index + 1 of those pixels (0: colourless)
+
+
+def measure_rect(points_xy: np.ndarray, pitch_m: float) -> tuple[np.ndarray, float, float, float, float]:
+    """(centre xy, side_a, side_b, yaw mod pi/2 in [-pi/4, pi/4), fill) of a point set's minimum rectangle."""
+    (cx, cy), (wa, wb), angle_deg = cv2.minAreaRect(points_xy.astype(np.float32))
+    wa, wb = wa + pitch_m, wb + pitch_m  # pixel centres sit half a pixel inside the edges
+    yaw = math.radians(angle_deg)
+    yaw = (yaw + math.pi / 4) % (math.pi / 2) - math.pi / 4
+    fill = points_xy.shape[0] * pitch_m * pitch_m / max(wa * wb, 1e-12)
+    return np.array([cx, cy]), wa, wb, yaw, fill
+
+
+def circle_fill(points_xy: np.ndarray, pitch_m: float) -> float:
+    """A point set's area / its minimum enclosing circle's (square 0.64, disc 1)."""
+    _, radius = cv2.minEnclosingCircle(points_xy.astype(np.float32))
+    radius += 0.5 * pitch_m
+    return points_xy.shape[0] * pitch_m * pitch_m / max(math.pi * radius * radius, 1e-12)
+
+
+@dataclass(frozen=True)
+class ClassifiedFace:
+    size: str
+    side_m: float
+    yaw: float
+    is_cube: bool
+    centre_xy: np.ndarray
+    stacks: list[tuple[float, tuple[str, ...]]]  # stack_candidates(top, size), best first
+
+
+def classify_face(face: Face, cfg: PerceptionConfig) -> ClassifiedFace:
+    """Size, side, yaw, cube or not, centre and candidate stacks from the face's metric footprint and height."""
+    pitch = math.sqrt(face.pixel_area_m2)
+    centre, wa, wb, yaw, fill = measure_rect(face.points_xy, pitch)
+    side = math.sqrt(wa * wb)
+    large, small = cfg.blocks.large_size_m, cfg.blocks.small_size_m
+    size = "large" if abs(side - large) < abs(side - small) else "small"
+    edge = large if size == "large" else small
+    stacks = stack_candidates(face.top_m, size, cfg)
+    height_err = stacks[0][0]
+    is_cube = (
+        fill >= MIN_FILL
+        and circle_fill(face.points_xy, pitch) <= MAX_CIRCLE_FILL
+        and max(wa, wb) / max(min(wa, wb), 1e-9) <= MAX_ASPECT
+        and abs(side - edge) <= SIZE_TOLERANCE * edge
+        and height_err <= cfg.blocks.stack_height_tolerance_m
+    )
+    centroid = face.points_xy.mean(axis=0)
+    return ClassifiedFace(size, side, yaw, is_cube, centroid if is_cube else centre, stacks)
+
+
+def face_part(face: Face, sel: np.ndarray) -> Face:
+    """The part `sel` (bool over the face's points) of a face, with its own pixel centre and outline."""
+    if face.pixels_px is None or not sel.any():
+        return Face(face.points_xy[sel], face.top_m, face.contour_px, face.center_px, int(sel.sum()), face.pixel_area_m2, face.plane_H)
+    px = face.pixels_px[sel]
+    hull = cv2.convexHull(px.astype(np.float32)).reshape(-1, 2).astype(np.float64)
+    return Face(face.points_xy[sel], face.top_m, hull, px.mean(axis=0), int(sel.sum()), face.pixel_area_m2, face.plane_H,
+                 px, None if face.classes is None else face.classes[sel])
+
+
+def face_colour(classes: np.ndarray | None, fallback: int) -> int:
+    """The colour index + 1 most of a face's coloured pixels have (fallback when none is coloured)."""
+    if classes is None:
+        return fallback
+    counts = np.bincount(classes, minlength=fallback + 1)
+    counts[0] = 0
+    return int(np.argmax(counts)) if counts.sum() else fallback
+
+
+def split_touching(face: Face, cfg: PerceptionConfig) -> list[Face]:
+    """Split a face holding several touching same-colour cubes by k-means on its points; [face] if no split fits."""
+    area = face.pixel_count * face.pixel_area_m2
+    candidates = []
+    for edge in (cfg.blocks.large_size_m, cfg.blocks.small_size_m):
+        n = int(round(area / (edge * edge)))
+        if 2 <= n <= 6:
+            candidates.append(n)
+    pts = face.points_xy.astype(np.float32)
+    centred = pts - pts.mean(axis=0)
+    axis = np.linalg.svd(centred, full_matrices=False)[2][0]  # the row of cubes lies along this axis
+    along = centred @ axis
+    pitch = math.sqrt(face.pixel_area_m2)
+    for n in candidates:
+        # Deterministic start: n equal slices along the main axis, then k-means refines the split.
+        labels = np.minimum((np.argsort(np.argsort(along)) * n) // len(along), n - 1).astype(np.int32).reshape(-1, 1)
+        criteria = (cv2.TERM_CRITERIA_EPS + cv2.TERM_CRITERIA_MAX_ITER, 50, 1e-5)
+        _, labels, _ = cv2.kmeans(pts, n, labels, criteria, 1, cv2.KMEANS_USE_INITIAL_LABELS)
+        parts = []
+        for k in range(n):
+            sel = labels.ravel() == k
+            parts.append(face_part(face, sel))
+
+        def fits(part: Face) -> bool:
+            classified = classify_face(part, cfg)
+            edge = cfg.blocks.large_size_m if classified.size == "large" else cfg.blocks.small_size_m
+            _, wa, wb, _, _ = measure_rect(part.points_xy, pitch)
+            fill = measure_rect(part.points_xy, pitch)[4]
+            return classified.is_cube and fill >= SPLIT_MIN_FILL and max(abs(wa - edge), abs(wb - edge)) <= SPLIT_SIZE_TOLERANCE * edge
+
+        if all(fits(p) for p in parts):
+            return parts
+    return [face]
+
+
+def runs_off_image(ys: np.ndarray, xs: np.ndarray, roi, cal: Calibration) -> bool:
+    """True when a face (ROI rows ys, columns xs) reaches within BORDER_MARGIN_PX of the image's edge."""
+    x0, y0 = roi[0], roi[1]
+    m = BORDER_MARGIN_PX
+    return bool(
+        xs.min() + x0 <= m or ys.min() + y0 <= m or xs.max() + x0 >= cal.width - 1 - m or ys.max() + y0 >= cal.height - 1 - m
+    )
+
+
+def classify_clipped(face: Face, ys: np.ndarray, xs: np.ndarray, roi, geo: BlockGeometry, cfg: PerceptionConfig) -> ClassifiedFace | None:
+    """Size, side, yaw, cube or not, centre and stacks of a face the image's edge cuts, from the edges
+    of its outline that show (clipped_face.fit_clipped_square); None when they do not fix the square."""
+    mask = np.zeros((roi[3] - roi[1], roi[2] - roi[0]), np.uint8)
+    mask[ys, xs] = 1
+    contours, _ = cv2.findContours(mask, cv2.RETR_EXTERNAL, cv2.CHAIN_APPROX_NONE)
+    outline_px = max(contours, key=cv2.contourArea).reshape(-1, 2) + np.array(roi[:2])
+    shown = ~on_image_border(outline_px, geo.calibration.width, geo.calibration.height, BORDER_MARGIN_PX)
+    outline_xy = geo.camera.to_plane(outline_px.astype(np.float64), face.top_m, face.plane_H)
+    large, small = cfg.blocks.large_size_m, cfg.blocks.small_size_m
+    fit = fit_clipped_square(outline_xy, shown, math.sqrt(face.pixel_area_m2), (large, small), SIZE_TOLERANCE)
+    if fit is None:
+        return None
+    size = "large" if abs(fit.side_m - large) < abs(fit.side_m - small) else "small"
+    edge = large if size == "large" else small
+    stacks = stack_candidates(face.top_m, size, cfg)
+    is_cube = (
+        abs(fit.side_m - edge) <= SIZE_TOLERANCE * edge
+        and fit.edge_residual_m <= MAX_EDGE_RESIDUAL * edge
+        and stacks[0][0] <= cfg.blocks.stack_height_tolerance_m
+    )
+    return ClassifiedFace(size, fit.side_m, fit.yaw_rad, is_cube, fit.centre_xy, stacks)
+
+
+def covered_by_stack(contour: np.ndarray, top_m: float, z: np.ndarray) -> bool:
+    """True for a lower member of a stack: within the face's convex hull (contour in the coordinates
+    of the ROI's heights z), a sizeable part stands well above the face (the block on top)."""
+    inside = np.zeros(z.shape, np.uint8)
+    cv2.fillConvexPoly(inside, cv2.convexHull(contour), 1)
+    inside = inside.view(bool)
+    above = np.count_nonzero((z > top_m + 0.01) & inside)
+    return above > 0.15 * max(1, np.count_nonzero(inside))
