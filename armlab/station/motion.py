@@ -192,7 +192,13 @@ class MotionGate:
                 if problem is not None:
                     raise ArmMoving("move", state.value, allowed_commands(state), f"the new motion does not continue it: {problem}")
         check_start(trajectory, self.joints_rad(), self.motion_config.start_tolerance_rad, self.model.joint_names)
-        self._send_later(lambda: self.arm.command_trajectory(trajectory))
+        if handover is None:
+            self._send_later(lambda: self.arm.command_trajectory(trajectory))
+        else:  # trimmed again when it is sent (after the lock): the arm takes over where the splice is then
+            def send_spliced() -> None:
+                late_s = min(self.clock_s() - handover.planned_at_s, handover.lead_s - 1e-6)
+                self.arm.command_trajectory(trimmed(planned, late_s) if late_s > elapsed else trajectory)
+            self._send_later(send_spliced)
         self._command_count += 1
         self._commanded = (planned, planned_t0, self._command_count)
         self._motions.append((time.time() + trajectory.duration_s, swept_box))
