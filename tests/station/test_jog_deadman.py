@@ -16,21 +16,6 @@ ACCEL = float(ARM.accel_limit_rad_s2[0])
 OPERATOR_STOP_RAD = 0.25  # ~14 deg of waist, 0.1 m at the arm's reach: what a released jog may still travel
 
 
-@pytest.fixture(scope="module")
-def fast(tmp_path_factory):
-    from armlab.devices.sim import SimWorkcell, SimWorkcellConfig
-    from armlab.station import Station, StationConfig
-
-    cell = SimWorkcell(SimWorkcellConfig(realtime=False, seed=0))
-    cell.start()
-    db = tmp_path_factory.mktemp("deadman") / "station.sqlite3"
-    station = Station(cell.arm, cell.gripper, cell.camera, model=ARM, config=StationConfig(database_path=str(db)),
-                      sim=cell, backend="sim", synchronous=True)
-    station.start()
-    yield station, cell
-    station.close()
-    cell.close()
-
 
 @pytest.mark.parametrize("speed_percent", [25, 50, 100])
 def test_a_released_jog_brakes_within_the_timeout_and_stops_at_the_acceleration_limit(fast, speed_percent):

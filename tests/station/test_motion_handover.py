@@ -6,7 +6,6 @@ not continue the motion). Measured on the simulation's clock at every control ti
 from __future__ import annotations
 
 import numpy as np
-import pytest
 
 from armlab import skills
 from armlab.devices.arm import JointTrajectory
@@ -23,21 +22,6 @@ ACCEL = np.asarray(ARM.accel_limit_rad_s2, dtype=float)
 MEASURED_MAX = 1.5
 STEP_MAX_RAD = 1e-3  # smooth motion changes by ~1e-4 rad from one 4 ms tick to the next
 
-
-@pytest.fixture(scope="module")
-def fast(tmp_path_factory):
-    from armlab.devices.sim import SimWorkcell, SimWorkcellConfig
-    from armlab.station import Station, StationConfig
-
-    cell = SimWorkcell(SimWorkcellConfig(realtime=False, seed=0))
-    cell.start()
-    db = tmp_path_factory.mktemp("handover") / "station.sqlite3"
-    station = Station(cell.arm, cell.gripper, cell.camera, model=ARM, config=StationConfig(database_path=str(db)),
-                      sim=cell, backend="sim", synchronous=True)
-    station.start()
-    yield station, cell
-    station.close()
-    cell.close()
 
 
 def _at_rest(station, q) -> None:

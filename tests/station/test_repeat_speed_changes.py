@@ -26,21 +26,6 @@ NEAR_LIMITS = [  # drawn with shoulder and elbow within 0.15 rad of their limits
 ]
 
 
-@pytest.fixture(scope="module")
-def fast(tmp_path_factory):
-    from armlab.devices.sim import SimWorkcell, SimWorkcellConfig
-    from armlab.station import Station, StationConfig
-
-    cell = SimWorkcell(SimWorkcellConfig(realtime=False, seed=0))
-    cell.start()
-    db = tmp_path_factory.mktemp("speed") / "station.sqlite3"
-    station = Station(cell.arm, cell.gripper, cell.camera, model=ARM, config=StationConfig(database_path=str(db)),
-                      sim=cell, backend="sim", synchronous=True)
-    station.start()
-    yield station, cell
-    station.close()
-    cell.close()
-
 
 @pytest.mark.parametrize("index", range(len(NEAR_LIMITS)))
 def test_random_speed_changes_near_the_limits_never_fail_the_job(fast, index):
