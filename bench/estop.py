@@ -231,7 +231,11 @@ def load_hung_waits(rig: Rig):
         client.close()
     silent = [_send_waiting_move(rig.url) for _ in range(HUNG_CLIENTS - len(hung))]
     # Accepted and waiting (the moves were planned: that burst of 21 commands is not the load measured here).
-    wait_for(lambda: rig.app.state.waiter.pending_count >= len(silent), 30)
+    # A move sent while the arm moves now takes the motion over or is refused (409) when planning cannot keep up
+    # with it, so not every one of them waits: the row's header says how many did.
+    wait_for(lambda: rig.app.state.waiter.pending_count >= 1, 30)
+    time.sleep(1.0)  # bench, not a test: let the accepted ones settle into waiting
+    print(f"  ({rig.app.state.waiter.pending_count} of {len(silent)} silent clients waiting)", flush=True)
     return lambda: [client.close() for client in silent]
 
 
