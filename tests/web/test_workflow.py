@@ -111,16 +111,22 @@ def hover_the_top_down_view(page) -> None:
     # 32 px down at the event only) moves the point under the pointer, and the readout must follow it.
     page.evaluate(RECORD_MOVES)
     for fx, fy, expected in ((0.5, 0.5, (0.0, 0.15)), (0.25, 0.25, (-0.25, 0.3125))):
-        x, y = topdown_point(page, fx, fy)
-        page.evaluate("delete document.getElementById('hover-world').dataset.positionM; window.__moves = []")
-        page.mouse.move(x, y)
-        page.wait_for_function("document.getElementById('hover-world').dataset.positionM !== undefined")
-        x_m, y_m, _ = page.evaluate("JSON.parse(document.getElementById('hover-world').dataset.positionM)")
-        moves = page.evaluate("window.__moves")
-        under_pointer = [board_point_under(move) for move in moves]
-        assert any(math.dist((x_m, y_m), point) < 0.005 for point in under_pointer), (x_m, y_m, under_pointer, moves)
-        if all(move["rect"] == page.evaluate(CANVAS_STATE)["rect"] for move in moves):  # the usual case: a still layout
-            assert abs(x_m - expected[0]) < 0.005 and abs(y_m - expected[1]) < 0.005, (x_m, y_m, expected, moves)
+        for _attempt in range(5):  # the aim is taken from the layout as it is now; a layout that moves later is re-aimed
+            aimed = page.evaluate(CANVAS_STATE)
+            x, y = topdown_point(page, fx, fy, aimed)
+            page.mouse.move(1, 1)  # off the canvas first, so the move below always reaches it as a mousemove
+            page.evaluate("delete document.getElementById('hover-world').dataset.positionM; window.__moves = []")
+            page.mouse.move(x, y)
+            page.wait_for_function("document.getElementById('hover-world').dataset.positionM !== undefined")
+            x_m, y_m, _ = page.evaluate("JSON.parse(document.getElementById('hover-world').dataset.positionM)")
+            moves = page.evaluate("window.__moves")
+            under_pointer = [board_point_under(move) for move in moves]
+            assert any(math.dist((x_m, y_m), point) < 0.005 for point in under_pointer), (x_m, y_m, under_pointer, moves)
+            if moves and all(move["rect"] == aimed["rect"] for move in moves):  # the layout aimed at is the one hovered
+                assert abs(x_m - expected[0]) < 0.005 and abs(y_m - expected[1]) < 0.005, (x_m, y_m, expected, moves)
+                break
+        else:
+            raise AssertionError(f"the canvas box moved between aiming and hovering five times running: {aimed} {moves}")
     # Hovering a block's world position in the warp highlights its row in the detections list.
     page.wait_for_function("window.armlab.detections.length > 0", timeout=20_000)
     det = page.evaluate("window.armlab.detections[0]")
@@ -148,9 +154,10 @@ CANVAS_STATE = ("(() => { const c = document.getElementById('live'); const r = c
                 " return {w: c.width, h: c.height, view: c.dataset.view, rect: [r.x, r.y, r.width, r.height]}; })()")
 
 
-def topdown_point(page, fx: float, fy: float) -> tuple[float, float]:
-    """The page point at fractions (fx, fy) of the top-down image, as drawn now (object-fit: contain)."""
-    state = page.evaluate(CANVAS_STATE)
+def topdown_point(page, fx: float, fy: float, state: dict | None = None) -> tuple[float, float]:
+    """The page point at fractions (fx, fy) of the top-down image, as drawn in `state` (CANVAS_STATE; now if None)
+    with object-fit: contain."""
+    state = state or page.evaluate(CANVAS_STATE)
     x0, y0, width, height = state["rect"]
     scale = min(width / state["w"], height / state["h"])
     return (x0 + (width - state["w"] * scale) / 2 + state["w"] * scale * fx,
