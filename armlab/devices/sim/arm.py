@@ -74,8 +74,8 @@ class SimArm(SimDevice, Arm):
     def read_joint_state(self) -> JointState:
         self._require()
         with self._cell.lock:
-            position, velocity = self._cell.arm_positions(), self._cell.arm_velocities()
-        return JointState(position_rad=position, velocity_rad_s=velocity, timestamp_s=time.time())
+            position, velocity, age_s = self._cell.arm_reading()
+        return JointState(position_rad=position, velocity_rad_s=velocity, timestamp_s=time.time() - age_s)
 
     def validate_positions(self, positions_rad: np.ndarray) -> None:
         """ValueError unless positions_rad is (N, dof), finite and inside the joint limits."""
@@ -155,7 +155,7 @@ class SimArm(SimDevice, Arm):
             return
         self._halt_requested.clear()
         self._trajectory = None
-        self._hold_rad = self._cell.arm_positions()
+        self._hold_rad = self._cell.arm_reading()[0]  # as the driver holds: where the arm last read
         self._cell.apply_arm_reference(self._hold_rad, np.zeros_like(self._hold_rad))
         self._last_halt_s = (self._halt_requested_s, self._cell.sim_time_s)
 
@@ -163,7 +163,7 @@ class SimArm(SimDevice, Arm):
         self._require()
         with self._cell.lock:
             self._trajectory = None
-            self._hold_rad = self._cell.arm_positions()
+            self._hold_rad = self._cell.arm_reading()[0]
             self._cell.apply_arm_reference(self._hold_rad, np.zeros_like(self._hold_rad))
             self._cell.set_arm_torque(bool(enabled))
             self._torque = bool(enabled)

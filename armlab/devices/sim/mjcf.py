@@ -13,6 +13,7 @@ import numpy as np
 
 from armlab.config import read_config_file, resolve_config_path
 from armlab.devices.sim import textures
+from armlab.devices.sim.arm_realism import GEAR_ARMATURE, GEAR_SUFFIX, RealArm
 from armlab.devices.sim.checkerboard import BODY_NAME as CHECKERBOARD, checkerboard_texture, checkerboard_xml, load_checkerboard_target
 from armlab.devices.sim.clutter import realism_world_xml
 from armlab.devices.sim.config import SceneRealismConfig, SimCameraConfig, SimConfig
@@ -51,6 +52,7 @@ class ArmGeometry:
     grasp_effort_n: float
     T_world_base: np.ndarray
     sleep_rad: np.ndarray
+    real: RealArm | None = None  # the real arm (armlab.devices.sim.arm_realism; origins and base already the rig's)
 
     @classmethod
     def load(cls, name: str = "rx200") -> ArmGeometry:
@@ -73,6 +75,10 @@ class ArmGeometry:
     def mjcf(self, sim: SimConfig) -> tuple[str, str]:
         """(worldbody xml of the arm with its fingers, actuator xml)."""
         return _arm_xml(self, sim), _finger_arm_actuators(self, sim)
+
+    def tendon_xml(self) -> str:
+        """The real arm's gear springs (`<tendon>` content), empty for the ideal arm."""
+        return _gear_tendons(self)
 
 
 @dataclass(frozen=True)
@@ -113,10 +119,20 @@ def _arm_xml(arm: ArmGeometry, sim: SimConfig) -> str:
     names = arm.joint_names
     m = servo.link_masses_kg
 
+    real = arm.real
+    gravcomp = 1 if real is None else 0  # the ideal servos compensate gravity; the real firmware does not
+
     def joint(i: int, axis: str) -> str:
+        if real is None:
+            return (
+                f'<joint name="{names[i]}" axis="{axis}" range="{lo[i]:.9g} {hi[i]:.9g}" armature="{servo.armature[i]}" '
+                f'damping="{servo.damping[i]}" actuatorfrcrange="{-servo.force_limit_nm[i]} {servo.force_limit_nm[i]}"/>'
+            )
+        # The motor (its reading; the link stands at reading + the rig's zero offset: ref), then the gear behind it.
         return (
             f'<joint name="{names[i]}" axis="{axis}" range="{lo[i]:.9g} {hi[i]:.9g}" armature="{servo.armature[i]}" '
-            f'damping="{servo.damping[i]}" actuatorfrcrange="{-servo.force_limit_nm[i]} {servo.force_limit_nm[i]}"/>'
+            f'damping="{servo.damping[i]}" ref="{-real.rig.joint_offset_rad[i]:.9g}"/>'
+            f'<joint name="{names[i]}{GEAR_SUFFIX}" axis="{axis}" armature="{GEAR_ARMATURE}" frictionloss="{real.gear_friction_nm:.9g}"/>'
         )
 
     # Gripper geometry in the gripper link's frame (origin at the wrist_rotate joint, x = approach axis).
@@ -132,7 +148,7 @@ def _arm_xml(arm: ArmGeometry, sim: SimConfig) -> str:
 
     def finger(side: str, sign: float) -> str:
         return f"""
-                <body name="{side}_finger" pos="0 {sign * fmax:.9g} 0" gravcomp="1">
+                <body name="{side}_finger" pos="0 {sign * fmax:.9g} 0" gravcomp="{gravcomp}">
                   <inertial pos="{finger_start + 0.5 * finger_len:.9g} {sign * 0.004:.9g} 0" mass="{g.finger_mass_kg}" diaginertia="4e-6 4e-6 1e-6"/>
                   <joint name="{side}_finger" type="slide" axis="0 {sign:g} 0" range="{fmin} {fmax}" ref="{fmax}"
                          armature="{g.armature_kg}" damping="{g.damping_n_s_m}"/>
@@ -144,25 +160,25 @@ def _arm_xml(arm: ArmGeometry, sim: SimConfig) -> str:
                 </body>"""
 
     return f"""
-    <body name="base" quat="{_fmt(base_quat)}">
+    <body name="base" pos="{_fmt(arm.T_world_base[:3, 3])}" quat="{_fmt(base_quat)}">
       <geom name="base_link" type="box" size="0.05 0.05 0.03" pos="-0.01 0 0.03" material="arm_dark" {arm_geom}/>
-      <body name="waist_link" pos="{_fmt(o['waist'])}" gravcomp="1">
+      <body name="waist_link" pos="{_fmt(o['waist'])}" gravcomp="{gravcomp}">
         <inertial pos="0 0 0.02" mass="{m[0]}" diaginertia="3e-4 3e-4 3e-4"/>
         {joint(0, "0 0 1")}
         <geom name="waist_geom" type="cylinder" size="0.04 0.015" pos="0 0 0.017" material="arm_dark" {arm_geom}/>
-        <body name="shoulder_link" pos="{_fmt(o['shoulder'])}" gravcomp="1">
+        <body name="shoulder_link" pos="{_fmt(o['shoulder'])}" gravcomp="{gravcomp}">
           <inertial pos="0.025 0 0.1" mass="{m[1]}" diaginertia="1e-3 1e-3 1e-4"/>
           {joint(1, "0 1 0")}
           <geom name="upper_arm" type="capsule" size="0.018" fromto="0 0 0 {_fmt(o['elbow'])}" material="arm" {arm_geom}/>
-          <body name="forearm_link" pos="{_fmt(o['elbow'])}" gravcomp="1">
+          <body name="forearm_link" pos="{_fmt(o['elbow'])}" gravcomp="{gravcomp}">
             <inertial pos="0.1 0 0" mass="{m[2]}" diaginertia="1e-4 6e-4 6e-4"/>
             {joint(2, "0 1 0")}
             <geom name="forearm" type="capsule" size="0.016" fromto="0.02 0 0 {_fmt(o['wrist_angle'])}" material="arm" {arm_geom}/>
-            <body name="wrist_link" pos="{_fmt(o['wrist_angle'])}" gravcomp="1">
+            <body name="wrist_link" pos="{_fmt(o['wrist_angle'])}" gravcomp="{gravcomp}">
               <inertial pos="0.03 0 0" mass="{m[3]}" diaginertia="5e-5 5e-5 5e-5"/>
               {joint(3, "0 1 0")}
               <geom name="wrist" type="capsule" size="0.016" fromto="0.01 0 0 {o['wrist_rotate'][0] - 0.01:.9g} 0 0" material="arm_dark" {arm_geom}/>
-              <body name="gripper_link" pos="{_fmt(o['wrist_rotate'])}" gravcomp="1">
+              <body name="gripper_link" pos="{_fmt(o['wrist_rotate'])}" gravcomp="{gravcomp}">
                 <inertial pos="0.03 0 0" mass="{m[4]}" diaginertia="1e-4 1e-4 1e-4"/>
                 {joint(4, "1 0 0")}
                 <geom name="palm" type="box" size="{0.5 * finger_start:.9g} {fmax + g.palm_side_margin_m:.9g} {g.palm_half_height_m:.9g}" pos="{0.5 * finger_start:.9g} 0 0" material="arm_dark" {arm_geom}/>
@@ -177,15 +193,41 @@ def _arm_xml(arm: ArmGeometry, sim: SimConfig) -> str:
     </body>"""
 
 
+def _gear_tendons(arm: ArmGeometry) -> str:
+    """The real arm's gears: per joint a spring on its passive gear joint, slack within +-backlash/2 (a
+    tendon's dead band), of the joint's gear stiffness beyond; nothing for the ideal arm."""
+    real = arm.real
+    if real is None:
+        return ""
+    half = 0.5 * real.backlash_rad
+    tendons = "".join(
+        f'<fixed name="{name}{GEAR_SUFFIX}" stiffness="{real.gear_stiffness_nm_rad[i]:.9g}" '
+        f'damping="{real.gear_damping_nm_s_rad[i]:.9g}" springlength="{-half:.9g} {half:.9g}">'
+        f'<joint joint="{name}{GEAR_SUFFIX}" coef="1"/></fixed>'
+        for i, name in enumerate(arm.joint_names))
+    return tendons
+
+
 def _finger_arm_actuators(arm: ArmGeometry, sim: SimConfig) -> str:
-    """Position + velocity servo per joint, a position servo per finger capped at the grasp effort."""
+    """Position + velocity servo per joint, a position servo per finger capped at the grasp effort. The real
+    arm's: the firmware's P gain with its PWM (torque) saturating at the stall torque, and the motor's back-EMF
+    damping (the velocity actuator, fed no velocity: the firmware's feed-forward gains are 0)."""
     actuators = []
+    real = arm.real
     for i, name in enumerate(arm.joint_names):
+        if real is None:
+            actuators.append(
+                f'<position name="{name}_pos" joint="{name}" kp="{sim.arm.kp[i]}" '
+                f'ctrlrange="{arm.lower_rad[i]:.9g} {arm.upper_rad[i]:.9g}"/>'
+            )
+            actuators.append(f'<velocity name="{name}_vel" joint="{name}" kv="{sim.arm.kv[i]}" ctrlrange="-10 10"/>')
+            continue
+        stall = real.stall_torque_nm[i]
         actuators.append(
-            f'<position name="{name}_pos" joint="{name}" kp="{sim.arm.kp[i]}" '
-            f'ctrlrange="{arm.lower_rad[i]:.9g} {arm.upper_rad[i]:.9g}"/>'
+            f'<position name="{name}_pos" joint="{name}" kp="{real.kp_nm_rad[i]:.9g}" '
+            f'ctrlrange="{arm.lower_rad[i]:.9g} {arm.upper_rad[i]:.9g}" forcerange="{-stall:.9g} {stall:.9g}"/>'
         )
-        actuators.append(f'<velocity name="{name}_vel" joint="{name}" kv="{sim.arm.kv[i]}" ctrlrange="-10 10"/>')
+        actuators.append(f'<velocity name="{name}_vel" joint="{name}" kv="{real.kv_nm_s_rad[i]:.9g}" ctrlrange="-10 10"/>')
     for side in ("left", "right"):
         actuators.append(
             f'<position name="{side}_finger" joint="{side}_finger" kp="{sim.gripper.kp_n_m}" '
@@ -323,6 +365,7 @@ def build_model_xml(
         object_assets.append(asset)
         object_bodies.append(body)
     arm_bodies, actuators = arm.mjcf(sim)  # the RX200 with fingers (above) or a DH arm with a cup (mjcf_dh)
+    tendons = arm.tendon_xml() if isinstance(arm, ArmGeometry) else ""
     p = sim.physics
     xml = f"""<mujoco model="armlab_workcell">
   <compiler angle="radian" autolimits="true"/>
@@ -361,6 +404,7 @@ def build_model_xml(
     {''.join(object_bodies)}
     {checker_body}
   </worldbody>
+  {f"<tendon>{tendons}</tendon>" if tendons else ""}
   <actuator>
     {actuators}
   </actuator>

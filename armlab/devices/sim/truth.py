@@ -146,6 +146,8 @@ class SimTruth:
                 "quat_wxyz": data.xquat[self._gripper_body].tolist(),
             }
             arm = {"joint_names": list(self._geometry.joint_names), "position_rad": self.arm_positions().tolist()}
+            if self.rig is not None:  # the real arm: the links' true angles and the rig drawn for this seed
+                arm.update(link_rad=self.link_positions().tolist(), rig=self.rig)
             sim_time = float(data.time)
             feeder = self._feeder.status() if self._feeder is not None else None
         K = self.camera.intrinsics.K

@@ -8,6 +8,7 @@ clock (servo references updated every control period) and a render thread at the
 
 from __future__ import annotations
 
+import dataclasses
 import logging
 import math
 import threading
@@ -19,6 +20,7 @@ import numpy as np
 
 from armlab.devices.camera import Frame
 from armlab.devices.sim.arm import SimArm
+from armlab.devices.sim.arm_realism import GEAR_SUFFIX, JointStatePublisher, RealArm, draw_rig, rig_base, rig_origins
 from armlab.devices.sim.camera import NoiseModel, SimCamera
 from armlab.devices.sim.checkerboard import BODY_NAME as CHECKERBOARD, PARKED_POSITION_M, checked_pose
 from armlab.devices.sim.config import (
@@ -66,7 +68,8 @@ class SimWorkcell(SimTruth):
             self._camera_config = self._camera_config.model_copy(
                 update={"mount": MountConfig(position_m=list(mount.position_m), tilt_deg=mount.tilt_deg)})
         self.realism = resolve_realism(self.config.realism, self._sim)
-        pose_rng, noise_rng, real_rng = (np.random.default_rng(s) for s in np.random.SeedSequence(self.config.seed).spawn(3))
+        pose_rng, noise_rng, real_rng, rig_rng = (np.random.default_rng(s) for s in np.random.SeedSequence(self.config.seed).spawn(4))
+        self._publisher = self._make_real_arm(rig_rng)  # None: the ideal arm (readings are the truth)
         T_nominal = nominal_T_world_camera(self._camera_config.mount)
         self._T_world_camera = (
             T_nominal @ draw_pose_error(pose_rng, self._sim.camera_pose_error) if self.config.camera_pose_error else T_nominal
@@ -78,8 +81,11 @@ class SimWorkcell(SimTruth):
         self._path: PathRecorder | None = None
         self._build(self._scene, previous=None)
         physics = self._sim.physics
+        # The real arm's trajectory is done at its end time, as the Interbotix driver's (the servos' steady error
+        # would never settle within the tolerance); the ideal one's once it has settled.
+        settle_tolerance_rad = math.inf if self._publisher is not None else physics.settle_tolerance_rad
         self.arm = SimArm(self, self._geometry.joint_names, self._geometry.lower_rad, self._geometry.upper_rad,
-                          physics.settle_tolerance_rad, physics.settle_timeout_s)
+                          settle_tolerance_rad, physics.settle_timeout_s)
         if self._suction:
             self.gripper = SuctionGripper(self, self._sim.suction, self._workcell.arm)
         else:
@@ -101,6 +107,30 @@ class SimWorkcell(SimTruth):
         self._closed = False
 
     # ------------------------------------------------------------------ model
+    def _make_real_arm(self, rng: np.random.Generator) -> JointStatePublisher | None:
+        """With `realism: real` and the arm's servos configured for it: the rig drawn from the seed, the
+        geometry built as that rig with the real servos, and the driver's joint-state publisher."""
+        if self.realism != "real" or self._suction:
+            return None  # the DH arms (the UR3) stay ideal: see config/sim.yaml arms
+        config = self._sim.servos(self._workcell.arm).realism
+        if config is None:
+            return None
+        self._commanded_velocity = np.zeros(len(self._geometry.joint_names))
+        geometry = self._geometry
+        bounds = config.rig if self.config.arm_rig_error else config.rig.model_copy(
+            update={"joint_offset_deg": 0.0, "link_length_m": 0.0, "base_position_m": 0.0, "base_yaw_deg": 0.0})
+        rig = draw_rig(rng, bounds, len(geometry.joint_names), geometry.origins_m)
+        self._geometry = dataclasses.replace(geometry, origins_m=rig_origins(geometry.origins_m, rig),
+                                             T_world_base=rig_base(geometry.T_world_base, rig),
+                                             real=RealArm.from_config(config, rig))
+        return JointStatePublisher(config)
+
+    @property
+    def rig(self) -> dict | None:
+        """The real arm's drawn rig (joint zero offsets, link length changes, base shift and yaw), None when ideal."""
+        real = getattr(self._geometry, "real", None)
+        return None if real is None else real.rig.to_dict()
+
     def _build(self, scene: Scene, previous: dict | None) -> None:
         """(Re)build model and data for a scene; `previous` carries the arm/gripper state across."""
         self._install(self._compile(scene), scene, previous)
@@ -116,6 +146,7 @@ class SimWorkcell(SimTruth):
                                       self._workcell, realism_scene)
         model = mujoco.MjModel.from_xml_string(xml, assets)
         names = self._geometry.joint_names
+        real = self._publisher is not None
         arm_root = model.body("base").id
         pos_act = np.array([model.actuator(f"{n}_pos").id for n in names])
         vel_act = np.array([model.actuator(f"{n}_vel").id for n in names])
@@ -128,6 +159,8 @@ class SimWorkcell(SimTruth):
             "data": mujoco.MjData(model),
             "_arm_qpos": np.array([model.jnt_qposadr[model.joint(n).id] for n in names]),
             "_arm_qvel": np.array([model.jnt_dofadr[model.joint(n).id] for n in names]),
+            "_gear_qpos": np.array([model.jnt_qposadr[model.joint(n + GEAR_SUFFIX).id] for n in names] if real else [], dtype=int),
+            "_gear_qvel": np.array([model.jnt_dofadr[model.joint(n + GEAR_SUFFIX).id] for n in names] if real else [], dtype=int),
             "_finger_qpos": np.array([model.jnt_qposadr[model.joint(f"{s}_finger").id] for s in sides], dtype=int),
             "_finger_qvel": np.array([model.jnt_dofadr[model.joint(f"{s}_finger").id] for s in sides], dtype=int),
             "_pos_act": pos_act,
@@ -167,6 +200,8 @@ class SimWorkcell(SimTruth):
             data.time = previous["time"]
             data.qpos[self._arm_qpos] = previous["arm_qpos"]
             data.qvel[self._arm_qvel] = previous["arm_qvel"]
+            data.qpos[self._gear_qpos] = previous["gear_qpos"]
+            data.qvel[self._gear_qvel] = previous["gear_qvel"]
             data.qpos[self._finger_qpos] = previous["finger_qpos"]
             data.qvel[self._finger_qvel] = previous["finger_qvel"]
             data.ctrl[self._pos_act] = previous["pos_ctrl"]
@@ -175,6 +210,8 @@ class SimWorkcell(SimTruth):
             if not previous["torque"]:
                 self._apply_torque(model, False)
         mujoco.mj_forward(model, data)
+        if self._publisher is not None and previous is None:
+            self._publisher.publish(float(data.time), data.qpos[self._arm_qpos], data.qvel[self._arm_qvel])
         self._feeder = None
         if scene.feeder is not None:
             arm_geoms = np.flatnonzero(model.body_rootid[model.geom_bodyid] == arm_root).tolist()
@@ -200,6 +237,8 @@ class SimWorkcell(SimTruth):
                 "time": data.time,
                 "arm_qpos": data.qpos[self._arm_qpos].copy(),
                 "arm_qvel": data.qvel[self._arm_qvel].copy(),
+                "gear_qpos": data.qpos[self._gear_qpos].copy(),
+                "gear_qvel": data.qvel[self._gear_qvel].copy(),
                 "finger_qpos": data.qpos[self._finger_qpos].copy(),
                 "finger_qvel": data.qvel[self._finger_qvel].copy(),
                 "pos_ctrl": data.ctrl[self._pos_act].copy(),
@@ -243,8 +282,27 @@ class SimWorkcell(SimTruth):
         return self._data.ctrl[self._pos_act].copy()
 
     def arm_reference_velocity(self) -> np.ndarray:
-        """The servos' velocity feed-forward: the commanded trajectory's slope now."""
+        """The servos' velocity feed-forward: the commanded trajectory's slope now (the real arm's firmware is
+        given it but uses none)."""
+        if self._publisher is not None:
+            return self._commanded_velocity.copy()
         return self._data.ctrl[self._vel_act].copy()
+
+    def arm_reading(self) -> tuple[np.ndarray, np.ndarray, float]:
+        """What the driver reports: (position, velocity, age in simulated s). Ideal: the joints now, exactly;
+        real: the last published joint state (encoder counts, at the driver's rate)."""
+        if self._publisher is None:
+            return self.arm_positions(), self.arm_velocities(), 0.0
+        position, velocity, at_s = self._publisher.sample
+        return position.copy(), velocity.copy(), float(self._data.time) - at_s
+
+    def link_positions(self) -> np.ndarray:
+        """The links' true angles against the nominal arm: the motors plus (real arm) the rig's zero offsets and
+        the gears' play and deflection. Ideal: the joints."""
+        real = getattr(self._geometry, "real", None)
+        if real is None:
+            return self.arm_positions()
+        return self.arm_positions() + real.rig.joint_offset_rad + self._data.qpos[self._gear_qpos]
 
     def arm_velocities(self) -> np.ndarray:
         return self._data.qvel[self._arm_qvel].copy()
@@ -259,6 +317,9 @@ class SimWorkcell(SimTruth):
 
     def apply_arm_reference(self, position_rad: np.ndarray, velocity_rad_s: np.ndarray) -> None:
         self._data.ctrl[self._pos_act] = position_rad
+        if self._publisher is not None:  # the real firmware: no velocity feed-forward (its velocity actuator is the motor's damping)
+            self._commanded_velocity = np.clip(np.asarray(velocity_rad_s, dtype=float), -10.0, 10.0)
+            return
         self._data.ctrl[self._vel_act] = np.clip(velocity_rad_s, -10.0, 10.0)
 
     def apply_finger_reference(self, offset_m: float) -> None:
@@ -303,6 +364,8 @@ class SimWorkcell(SimTruth):
             if self._feeder is not None:
                 self._feeder.tick(self._model, data)
         mujoco.mj_step(self._model, data)
+        if self._publisher is not None and self._publisher.due(data.time):
+            self._publisher.publish(float(data.time), data.qpos[self._arm_qpos], data.qvel[self._arm_qvel])
         if self._path is not None and self._path.due(data.time):
             self._path.record(float(data.time), data.site_xpos[self._gripper_site])
 
