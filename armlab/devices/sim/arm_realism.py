@@ -9,8 +9,12 @@ for an XM430-W350 at P 800). That part is fixed by the firmware's gain and the l
 readings (the encoder sits on the motor's output). The rest of the measured sag (23 mm at 300 mm reach, gripper
 level) is what the encoder cannot see: the gear play (backlash) taken up by gravity and the compliance of the
 gears, horns and links, modelled as one passive joint per arm joint behind the motor (zero torque within +-backlash/2,
-a spring of gear_stiffness beyond it). The gear stiffness is the one number chosen to make up that rest; the
-readings therefore miss about half of the droop, as they do on the real arm."""
+a spring of gear_stiffness beyond it). The gear stiffness is the one number chosen to make up that rest: about 70 %
+of the droop shows in the readings, 30 % does not (tests/devices/sim/test_sim_real_arm.py).
+
+Backlash: a link whose joint gravity does not load (the waist, wrist_rotate) is dragged by its bearing friction
+(link_friction_nm) against the trailing flank of the play, so it stands 0.25 deg apart after approaching from either
+side while its encoder reads the same; the same friction leaves the motor a count or two short of its goal."""
 
 from __future__ import annotations
 
@@ -47,7 +51,7 @@ class ArmRealismConfig(StrictModel):
     no_load_speed_rad_s: list[Positive]  # back-EMF: the motor's damping is stall / no-load speed
     gear_stiffness_nm_rad: list[Positive]  # compliance behind the encoder (gears, horns, links)
     gear_damping_nm_s_rad: list[NonNegative]
-    gear_friction_nm: NonNegative  # holds a link where it is inside the play when nothing loads it
+    link_friction_nm: NonNegative  # the links' bearings against the frame: a moving link drags on its gear's trailing flank
     backlash_deg: NonNegative
     encoder_counts_per_turn: Annotated[int, Field(ge=16)]
     velocity_unit_rad_s: Positive  # Present Velocity's unit (0.229 rev/min)
@@ -108,7 +112,7 @@ class RealArm:
     stall_torque_nm: np.ndarray
     gear_stiffness_nm_rad: np.ndarray
     gear_damping_nm_s_rad: np.ndarray
-    gear_friction_nm: float
+    link_friction_nm: float
     backlash_rad: float
     rig: RigDraw
 
@@ -116,7 +120,7 @@ class RealArm:
     def from_config(cls, config: ArmRealismConfig, rig: RigDraw) -> RealArm:
         return cls(config.kp_nm_rad(), config.kv_nm_s_rad(), np.asarray(config.stall_torque_nm, float),
                    np.asarray(config.gear_stiffness_nm_rad, float), np.asarray(config.gear_damping_nm_s_rad, float),
-                   config.gear_friction_nm, math.radians(config.backlash_deg), rig)
+                   config.link_friction_nm, math.radians(config.backlash_deg), rig)
 
 
 def rig_origins(origins_m: dict[str, tuple], rig: RigDraw) -> dict[str, tuple]:

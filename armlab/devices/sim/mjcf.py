@@ -132,7 +132,7 @@ def _arm_xml(arm: ArmGeometry, sim: SimConfig) -> str:
         return (
             f'<joint name="{names[i]}" axis="{axis}" range="{lo[i]:.9g} {hi[i]:.9g}" armature="{servo.armature[i]}" '
             f'damping="{servo.damping[i]}" ref="{-real.rig.joint_offset_rad[i]:.9g}"/>'
-            f'<joint name="{names[i]}{GEAR_SUFFIX}" axis="{axis}" armature="{GEAR_ARMATURE}" frictionloss="{real.gear_friction_nm:.9g}"/>'
+            f'<joint name="{names[i]}{GEAR_SUFFIX}" axis="{axis}" armature="{GEAR_ARMATURE}"/>'
         )
 
     # Gripper geometry in the gripper link's frame (origin at the wrist_rotate joint, x = approach axis).
@@ -195,17 +195,19 @@ def _arm_xml(arm: ArmGeometry, sim: SimConfig) -> str:
 
 def _gear_tendons(arm: ArmGeometry) -> str:
     """The real arm's gears: per joint a spring on its passive gear joint, slack within +-backlash/2 (a
-    tendon's dead band), of the joint's gear stiffness beyond; nothing for the ideal arm."""
+    tendon's dead band), of the joint's gear stiffness beyond; and the link's bearing friction against the frame
+    (a tendon on motor + gear: the link's angle). Nothing for the ideal arm."""
     real = arm.real
     if real is None:
         return ""
     half = 0.5 * real.backlash_rad
-    tendons = "".join(
+    return "".join(
         f'<fixed name="{name}{GEAR_SUFFIX}" stiffness="{real.gear_stiffness_nm_rad[i]:.9g}" '
         f'damping="{real.gear_damping_nm_s_rad[i]:.9g}" springlength="{-half:.9g} {half:.9g}">'
         f'<joint joint="{name}{GEAR_SUFFIX}" coef="1"/></fixed>'
+        f'<fixed name="{name}_link" frictionloss="{real.link_friction_nm:.9g}">'
+        f'<joint joint="{name}" coef="1"/><joint joint="{name}{GEAR_SUFFIX}" coef="1"/></fixed>'
         for i, name in enumerate(arm.joint_names))
-    return tendons
 
 
 def _finger_arm_actuators(arm: ArmGeometry, sim: SimConfig) -> str:
