@@ -146,6 +146,16 @@ def rig_base(T_world_base: np.ndarray, rig: RigDraw) -> np.ndarray:
     return out
 
 
+def real_geometry(geometry, config: ArmRealismConfig, rng: np.random.Generator, rig_error: bool = True):
+    """An ArmGeometry (armlab.devices.sim.mjcf) made the real arm: a rig drawn from `rng` (nominal when not
+    rig_error: the servos and gears stay real), its origins and base pose, the real servos."""
+    bounds = config.rig if rig_error else config.rig.model_copy(
+        update={"joint_offset_deg": 0.0, "link_length_m": 0.0, "base_position_m": 0.0, "base_yaw_deg": 0.0})
+    rig = draw_rig(rng, bounds, len(geometry.joint_names), geometry.origins_m)
+    return dataclasses.replace(geometry, origins_m=rig_origins(geometry.origins_m, rig),
+                               T_world_base=rig_base(geometry.T_world_base, rig), real=RealArm.from_config(config, rig))
+
+
 class JointStatePublisher:
     """The driver's joint states: sampled every 1/rate_hz of simulated time, positions as whole encoder counts
     and velocities as whole Present Velocity units; read_joint_state returns the last sample."""

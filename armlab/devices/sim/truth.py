@@ -14,6 +14,20 @@ from armlab.devices.sim.suction import lip_touching
 class SimTruth:
     """Ground truth of a SimWorkcell (the methods read its _model/_data and scene index under self.lock)."""
 
+    @property
+    def rig(self) -> dict | None:
+        """The real arm's drawn rig (joint zero offsets, link length changes, base shift and yaw), None when ideal."""
+        real = getattr(self._geometry, "real", None)
+        return None if real is None else real.rig.to_dict()
+
+    def link_positions(self) -> np.ndarray:
+        """The links' true angles against the nominal arm (call under the lock): the motors plus (real arm) the
+        rig's zero offsets and the gears' play and deflection. Ideal: the joints."""
+        real = getattr(self._geometry, "real", None)
+        if real is None:
+            return self.arm_positions()
+        return self.arm_positions() + real.rig.joint_offset_rad + self._data.qpos[self._gear_qpos]
+
     def gripper_point_m(self) -> np.ndarray:
         """True world position of the gripper point (for tests and scorers)."""
         with self.lock:

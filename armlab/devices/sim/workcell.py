@@ -8,7 +8,6 @@ clock (servo references updated every control period) and a render thread at the
 
 from __future__ import annotations
 
-import dataclasses
 import logging
 import math
 import threading
@@ -20,7 +19,7 @@ import numpy as np
 
 from armlab.devices.camera import Frame
 from armlab.devices.sim.arm import SimArm
-from armlab.devices.sim.arm_realism import GEAR_SUFFIX, JointStatePublisher, RealArm, draw_rig, rig_base, rig_origins
+from armlab.devices.sim.arm_realism import GEAR_SUFFIX, JointStatePublisher, real_geometry
 from armlab.devices.sim.camera import NoiseModel, SimCamera
 from armlab.devices.sim.checkerboard import BODY_NAME as CHECKERBOARD, PARKED_POSITION_M, checked_pose
 from armlab.devices.sim.config import (
@@ -69,7 +68,12 @@ class SimWorkcell(SimTruth):
                 update={"mount": MountConfig(position_m=list(mount.position_m), tilt_deg=mount.tilt_deg)})
         self.realism = resolve_realism(self.config.realism, self._sim)
         pose_rng, noise_rng, real_rng, rig_rng = (np.random.default_rng(s) for s in np.random.SeedSequence(self.config.seed).spawn(4))
-        self._publisher = self._make_real_arm(rig_rng)  # None: the ideal arm (readings are the truth)
+        self._publisher = None  # the real arm's joint-state publisher; None: the ideal arm (readings are the truth)
+        config = None if self.realism != "real" or self._suction else self._sim.servos(self._workcell.arm).realism
+        if config is not None:  # the DH arms (the UR3) stay ideal: see config/sim.yaml arms
+            self._geometry = real_geometry(self._geometry, config, rig_rng, self.config.arm_rig_error)
+            self._publisher = JointStatePublisher(config)
+            self._commanded_velocity = np.zeros(len(self._geometry.joint_names))
         T_nominal = nominal_T_world_camera(self._camera_config.mount)
         self._T_world_camera = (
             T_nominal @ draw_pose_error(pose_rng, self._sim.camera_pose_error) if self.config.camera_pose_error else T_nominal
@@ -107,30 +111,6 @@ class SimWorkcell(SimTruth):
         self._closed = False
 
     # ------------------------------------------------------------------ model
-    def _make_real_arm(self, rng: np.random.Generator) -> JointStatePublisher | None:
-        """With `realism: real` and the arm's servos configured for it: the rig drawn from the seed, the
-        geometry built as that rig with the real servos, and the driver's joint-state publisher."""
-        if self.realism != "real" or self._suction:
-            return None  # the DH arms (the UR3) stay ideal: see config/sim.yaml arms
-        config = self._sim.servos(self._workcell.arm).realism
-        if config is None:
-            return None
-        self._commanded_velocity = np.zeros(len(self._geometry.joint_names))
-        geometry = self._geometry
-        bounds = config.rig if self.config.arm_rig_error else config.rig.model_copy(
-            update={"joint_offset_deg": 0.0, "link_length_m": 0.0, "base_position_m": 0.0, "base_yaw_deg": 0.0})
-        rig = draw_rig(rng, bounds, len(geometry.joint_names), geometry.origins_m)
-        self._geometry = dataclasses.replace(geometry, origins_m=rig_origins(geometry.origins_m, rig),
-                                             T_world_base=rig_base(geometry.T_world_base, rig),
-                                             real=RealArm.from_config(config, rig))
-        return JointStatePublisher(config)
-
-    @property
-    def rig(self) -> dict | None:
-        """The real arm's drawn rig (joint zero offsets, link length changes, base shift and yaw), None when ideal."""
-        real = getattr(self._geometry, "real", None)
-        return None if real is None else real.rig.to_dict()
-
     def _build(self, scene: Scene, previous: dict | None) -> None:
         """(Re)build model and data for a scene; `previous` carries the arm/gripper state across."""
         self._install(self._compile(scene), scene, previous)
@@ -295,14 +275,6 @@ class SimWorkcell(SimTruth):
             return self.arm_positions(), self.arm_velocities(), 0.0
         position, velocity, at_s = self._publisher.sample
         return position.copy(), velocity.copy(), float(self._data.time) - at_s
-
-    def link_positions(self) -> np.ndarray:
-        """The links' true angles against the nominal arm: the motors plus (real arm) the rig's zero offsets and
-        the gears' play and deflection. Ideal: the joints."""
-        real = getattr(self._geometry, "real", None)
-        if real is None:
-            return self.arm_positions()
-        return self.arm_positions() + real.rig.joint_offset_rad + self._data.qpos[self._gear_qpos]
 
     def arm_velocities(self) -> np.ndarray:
         return self._data.qvel[self._arm_qvel].copy()
