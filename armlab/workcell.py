@@ -1,7 +1,8 @@
 """The workcell (config/workcells/<name>.yaml): the arm (config/arms/<arm>.yaml) and its gripper type,
 the arm's base pose on the board, the camera and its mount, board and grid, board tags, block and
 distractor sizes, block-top ArUco ids, the spots the jobs use (sort_by_tag places, the to_the_sky
-feeder, the clear_table bin) and the approach heights (overrides of config/motion.yaml). One fact, one place: vision, scenes, the simulation, skills and the browser read it
+feeder, the clear_table bin) and the approach heights (overrides of config/motion.yaml). One fact, one place:
+vision, scenes, the simulation, skills and the browser read it
 from here (DESIGN §3). Validated at load; errors name the file and the field."""
 
 from __future__ import annotations

@@ -15,7 +15,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
-from typing import Literal, Union
+from typing import Literal
 
 import numpy as np
 
@@ -48,7 +48,7 @@ class GripperStep:
     action: Literal["grasp", "release"]
 
 
-Step = Union[TrajectoryStep, GripperStep]
+Step = TrajectoryStep | GripperStep
 
 
 def _unreachable_type():

@@ -143,7 +143,9 @@ class _Runner:
         total = self.cycles or 0
         fraction = (self.cycle + min(1.0, max(0.0, (now - self.anchor_s - self.cycle * plan.cycle_s) / plan.cycle_s))) / total if total else 0.0
         cycles_text = f"{self.cycles}" if self.cycles is not None else "∞"
-        self.ctx.progress(min(fraction, 1.0), f"cycle {min(self.cycle + 1, self.cycles or self.cycle + 1)}/{cycles_text}, waypoint {self.waypoint + 1}/{len(self.program.waypoints)}")
+        cycle = min(self.cycle + 1, self.cycles or self.cycle + 1)
+        self.ctx.progress(min(fraction, 1.0),
+                          f"cycle {cycle}/{cycles_text}, waypoint {self.waypoint + 1}/{len(self.program.waypoints)}")
 
     # Moves with pause, step and speed changes -------------------------------------------------------
 

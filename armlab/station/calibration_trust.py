@@ -3,7 +3,8 @@ check (armlab.vision.drift): a calibration restored at start is held back until 
 it (status calibration_state 'checking' -> 'trusted', or 'rejected' with the camera-moved warning),
 the calibration in use is 'untrusted' while the check does not confirm it (the camera moved, or too few
 board tags are where it puts them): grabs, drops and autonomous jobs are then refused with the reason
-until the check confirms it again or the operator recalibrates (issue 18 item 3); and, when the operator enabled it, a calibration the camera has moved away from is redone from the
+until the check confirms it again or the operator recalibrates (issue 18 item 3); and, when the operator
+enabled it, a calibration the camera has moved away from is redone from the
 board tags while the station is idle (never while a job runs, the arm moves or the latch is set; never
 with too few board tags in view: the warning then stays).
 

@@ -80,7 +80,8 @@ _UNLATCHED = ("estop",)  # the only command the latch and the lease never refuse
 
 
 class Station(Latch, MotionGate, ManualCommands, TeachCommands, JobControls, Perceiving, CalibrationTrust):
-    """The control station's gate (its parts: latch.py, motion.py, manual.py, teach.py, job_control.py, perceiving.py). Backends are injected; `sim` is the SimWorkcell when simulated (else None).
+    """The control station's gate (its parts: latch.py, motion.py, manual.py, teach.py, job_control.py, perceiving.py).
+    Backends are injected; `sim` is the SimWorkcell when simulated (else None).
 
     model: the armlab.kinematics ArmModel of the arm; perception_config: armlab.vision's config.
     synchronous: the sim runs in fast mode and nothing runs on threads (evaluations); frames are

@@ -31,7 +31,7 @@ Readings chosen where §7 leaves a choice (one line each):
 from __future__ import annotations
 
 import math
-from collections.abc import Mapping, Sequence
+from collections.abc import Mapping
 from dataclasses import dataclass
 
 import numpy as np

@@ -108,7 +108,7 @@ class PlanWorld:
         for b, pile in tops:
             top = b["z"] + EDGES_M[b["size"]]
             hidden = False
-            for other, other_pile in tops:
+            for other, _other_pile in tops:
                 if other is b:
                     continue
                 height = other["z"] + EDGES_M[other["size"]]

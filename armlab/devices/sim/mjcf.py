@@ -165,7 +165,8 @@ def _arm_xml(arm: ArmGeometry, sim: SimConfig) -> str:
               <body name="gripper_link" pos="{_fmt(o['wrist_rotate'])}" gravcomp="1">
                 <inertial pos="0.03 0 0" mass="{m[4]}" diaginertia="1e-4 1e-4 1e-4"/>
                 {joint(4, "1 0 0")}
-                <geom name="palm" type="box" size="{0.5 * finger_start:.9g} {fmax + g.palm_side_margin_m:.9g} {g.palm_half_height_m:.9g}" pos="{0.5 * finger_start:.9g} 0 0" material="arm_dark" {arm_geom}/>
+                <geom name="palm" type="box" size="{0.5 * finger_start:.9g} {fmax + g.palm_side_margin_m:.9g} {g.palm_half_height_m:.9g}"
+                      pos="{0.5 * finger_start:.9g} 0 0" material="arm_dark" {arm_geom}/>
                 <site name="{GRIPPER_SITE}" pos="{gp:.9g} 0 0" size="0.003" rgba="1 0 1 0.5" group="4"/>
                 {finger("left", 1.0)}
                 {finger("right", -1.0)}
@@ -350,7 +351,8 @@ def build_model_xml(
   </asset>
   <worldbody>
     <light name="sun" directional="true" pos="0.2 0.3 2" dir="-0.1 -0.15 -1" castshadow="false" diffuse="0.55 0.55 0.55" specular="0 0 0"/>
-    <geom name="board" type="plane" size="{0.5 * board.size_m[0]:.9g} {0.5 * board.size_m[1]:.9g} 0.05" pos="{_fmt(np.mean(board.corners_m, axis=0))} 0" material="board"
+    <geom name="board" type="plane" size="{0.5 * board.size_m[0]:.9g} {0.5 * board.size_m[1]:.9g} 0.05"
+          pos="{_fmt(np.mean(board.corners_m, axis=0))} 0" material="board"
           friction="{_fmt(sim.objects.board_friction)}" solref="{_fmt(sim.objects.solref)}" contype="1" conaffinity="1"/>
     <geom name="table" type="plane" size="1.5 1.5 0.05" pos="0 0.15 -0.003" material="table" contype="1" conaffinity="1"/>
     {''.join(tag_geoms)}

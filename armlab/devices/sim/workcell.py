@@ -51,7 +51,8 @@ PAD_GEOMS = ("left_pad", "right_pad")
 
 
 class SimWorkcell(SimTruth):
-    """The simulated workcell (the RX200 with fingers, or a DH arm with a suction cup, per the workcell config). See the module docstring for the clock semantics."""
+    """The simulated workcell (the RX200 with fingers, or a DH arm with a suction cup, per the workcell config).
+    See the module docstring for the clock semantics."""
 
     def __init__(self, config: SimWorkcellConfig | None = None, scene: Scene | None = None) -> None:
         self.config = config or SimWorkcellConfig()
