@@ -20,7 +20,21 @@ import armlab
 from server.auth import resolve_token
 from server.errors import install_error_handlers
 from server.guard import HostOriginGuard
-from server.routes import arm, auto, calibration, calibration_settings, colors, detections, intrinsics, jobs, programs, repeat, sim, station, stream
+from server.routes import (
+    arm,
+    auto,
+    calibration,
+    calibration_settings,
+    colors,
+    detections,
+    intrinsics,
+    jobs,
+    programs,
+    repeat,
+    sim,
+    station,
+    stream,
+)
 from server.stream import StreamHub
 from server.waiting import Waiter
 

@@ -42,7 +42,7 @@ class AutoRun:
     scored: threading.Event = field(default_factory=threading.Event)
 
 
-    def start(self) -> "AutoRun":
+    def start(self) -> AutoRun:
         threading.Thread(target=self._watch, name=f"auto-score-{self.job.id}", daemon=True).start()
         return self
 

@@ -9,7 +9,14 @@ from fastapi.exceptions import RequestValidationError
 from fastapi.responses import JSONResponse
 from starlette.exceptions import HTTPException as StarletteHTTPException
 
-from armlab.errors import CalibrationUntrusted, CommandRefused, DeviceNotConnectedError, NeedsConfirmation, NoArmError, NotController
+from armlab.errors import (
+    CalibrationUntrusted,
+    CommandRefused,
+    DeviceNotConnectedError,
+    NeedsConfirmation,
+    NoArmError,
+    NotController,
+)
 from armlab.station.core import NotCalibrated
 from armlab.store import NotFound
 

@@ -8,6 +8,7 @@ from pydantic import Field
 
 from server.wire_base import Vector3, Wire
 
+
 class ErrorBody(Wire):
     code: str
     message: str

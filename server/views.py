@@ -21,7 +21,7 @@ class ViewKey:
     layers: tuple[str, ...] = ()
 
     @classmethod
-    def make(cls, view: str = "color", layers=()) -> "ViewKey":
+    def make(cls, view: str = "color", layers=()) -> ViewKey:
         if view not in VIEWS:
             raise ValueError(f"view must be one of {', '.join(VIEWS)}, not {view!r}")
         unknown = [layer for layer in layers if layer not in LAYERS]
@@ -30,7 +30,7 @@ class ViewKey:
         return cls(view, tuple(sorted(set(layers))))
 
     @classmethod
-    def parse(cls, view: str | None, layers: str | None) -> "ViewKey":
+    def parse(cls, view: str | None, layers: str | None) -> ViewKey:
         """From query strings: view=color, layers=tags,detections,grid."""
         names = [name.strip() for name in (layers or "").split(",") if name.strip()]
         return cls.make(view or "color", names)

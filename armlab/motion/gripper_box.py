@@ -23,7 +23,7 @@ class GripperBox:
     min_m: tuple[float, float, float]
     max_m: tuple[float, float, float]
 
-    def shrunk(self, margin_m: float) -> "GripperBox":
+    def shrunk(self, margin_m: float) -> GripperBox:
         """The box with every face moved margin_m inward (room for tracking error)."""
         return GripperBox(tuple(v + margin_m for v in self.min_m), tuple(v - margin_m for v in self.max_m))
 

@@ -24,7 +24,13 @@ from armlab.kinematics.errors import Unreachable
 from armlab.motion.cartesian import DiscontinuousPath, plan_path
 from armlab.motion.pose_path import holds_full_pose
 from armlab.motion.pose_step import plan_pose_step
-from armlab.motion.trajectory import DEFAULT_RATE_HZ, START_TOLERANCE_RAD, check_joint_positions, minimum_time, plan_joint_move
+from armlab.motion.trajectory import (
+    DEFAULT_RATE_HZ,
+    START_TOLERANCE_RAD,
+    check_joint_positions,
+    minimum_time,
+    plan_joint_move,
+)
 
 AXES = ("x", "y", "z", "pitch", "roll")
 LINEAR_AXES = ("x", "y", "z")

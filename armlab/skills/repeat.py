@@ -20,7 +20,15 @@ import numpy as np
 from armlab.errors import CommandRefused
 from armlab.motion.blend import Limits, Run, plan_run, plan_stop
 from armlab.skills.repeat_plan import (
-    HOME_LABEL, CyclePlan, RepeatSettings, Step, checked_run, plan_cycle, plan_ease_in, plan_transfer, station_limits,
+    HOME_LABEL,
+    CyclePlan,
+    RepeatSettings,
+    Step,
+    checked_run,
+    plan_cycle,
+    plan_ease_in,
+    plan_transfer,
+    station_limits,
     tick_s,
 )
 from armlab.station.core import Station

@@ -36,6 +36,7 @@ from armlab.station.checks import checked_joints
 from armlab.station.colors import StationColors
 from armlab.station.config import StationConfig
 from armlab.station.intrinsics import CameraIntrinsics
+from armlab.station.job_control import JobControls
 from armlab.station.jobs import Job, JobContext, start_job_thread
 from armlab.station.latch import Latch
 from armlab.station.lease import ControlLease
@@ -45,7 +46,6 @@ from armlab.station.perceiving import Perceiving
 from armlab.station.perception import DEVICE_ERRORS, FrameSource, Perception, PerceptionLoop
 from armlab.station.slots import EventLog, NewestSlot
 from armlab.station.states import ARM_COMMANDS, JOB_STATES, State, after_event, allowed_commands, next_state
-from armlab.station.job_control import JobControls
 from armlab.station.teach import TeachCommands
 from armlab.station.telemetry import TelemetryPublisher, gripper_pose_from_matrix
 from armlab.station.watch import DeviceWatch

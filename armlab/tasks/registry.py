@@ -8,7 +8,17 @@ from dataclasses import dataclass
 
 from armlab.station.core import NotCalibrated, Station
 from armlab.station.jobs import Job, JobContext
-from armlab.tasks import clear_table, line_up, pick_sort, pick_stack, sort_by_tag, sort_stack, stack_here, stack_high, to_the_sky
+from armlab.tasks import (
+    clear_table,
+    line_up,
+    pick_sort,
+    pick_stack,
+    sort_by_tag,
+    sort_stack,
+    stack_here,
+    stack_high,
+    to_the_sky,
+)
 from armlab.tasks.runner import Plan, TaskRunner
 from armlab.workcell import Workcell
 

@@ -115,7 +115,7 @@ class BlockGeometry:
         self.height_1 = r3[2]
         self.height_t = np.float32(row[3])
 
-    def with_heights(self, plane: BoardPlane) -> "BlockGeometry":
+    def with_heights(self, plane: BoardPlane) -> BlockGeometry:
         """A copy measuring heights from `plane` (a board plane fitted in the depth camera's frame)."""
         other = copy.copy(self)
         other._set_heights(plane.height_row())

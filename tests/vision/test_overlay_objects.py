@@ -4,10 +4,18 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
-from synth import L515
 
-from armlab.vision import Block, OverlayLayers, calibrate_extrinsics, detect_objects_from_depth, detect_tags, draw_overlay, project_grid
+from armlab.vision import (
+    Block,
+    OverlayLayers,
+    calibrate_extrinsics,
+    detect_objects_from_depth,
+    detect_tags,
+    draw_overlay,
+    project_grid,
+)
 from armlab.vision.objects import fit_plane_ransac
+from synth import L515
 
 
 @pytest.fixture(scope="module")

@@ -13,12 +13,14 @@ import numpy as np
 
 from armlab.config import read_config_file, resolve_config_path
 from armlab.devices.sim import textures
-from armlab.devices.sim.checkerboard import BODY_NAME as CHECKERBOARD, checkerboard_texture, checkerboard_xml, load_checkerboard_target
+from armlab.devices.sim.checkerboard import BODY_NAME as CHECKERBOARD
+from armlab.devices.sim.checkerboard import checkerboard_texture, checkerboard_xml, load_checkerboard_target
 from armlab.devices.sim.clutter import realism_world_xml
 from armlab.devices.sim.config import SceneRealismConfig, SimCameraConfig, SimConfig
 from armlab.devices.sim.feeder import FEEDER_PROBE, parked_objects
 from armlab.devices.sim.mjcf_dh import DhArmGeometry
-from armlab.devices.sim.mjcf_numbers import fmt_numbers as _fmt, quat_wxyz_from_matrix
+from armlab.devices.sim.mjcf_numbers import fmt_numbers as _fmt
+from armlab.devices.sim.mjcf_numbers import quat_wxyz_from_matrix
 from armlab.scene import Scene, SceneObject
 from armlab.workcell import Workcell, load_workcell
 
