@@ -15,8 +15,9 @@ from dataclasses import dataclass, field
 from typing import Any
 
 from armlab.station.jobs import Job, jsonable
+from armlab.tasks.episode import _after_first_motion, score_run
 from armlab.tasks.judge import EVENT_LIMITS_S
-from armlab.tasks.scorers import SCORED_JOBS
+from armlab.tasks.scorers import SCORED_JOBS, score_job
 
 log = logging.getLogger(__name__)
 
@@ -67,9 +68,6 @@ class AutoRun:
     def _judge(self) -> tuple[dict | None, str]:
         if not is_scored(self.name):
             return None, f"'{self.name}' has no judge or scorer"
-        from armlab.tasks.episode import _after_first_motion, score_run
-        from armlab.tasks.scorers import score_job
-
         truth = self.cell.truth()
         sim_time_s = self.sim_end_s - self.sim_start_s
         if self.name in EVENT_LIMITS_S:

@@ -8,6 +8,7 @@ import cv2
 import numpy as np
 
 from armlab.devices.camera import Frame
+from armlab.vision import OverlayLayers, draw_overlay, top_down_view
 
 VIEWS = ("color", "depth", "topdown")
 LAYERS = ("tags", "detections", "grid")
@@ -79,15 +80,11 @@ def compose_view(frame: Frame, key: ViewKey, perception=None, calibration=None, 
     if key.view == "depth" and frame.depth_mm is not None:
         image = depth_to_bgr(frame.depth_mm)
     elif key.view == "topdown" and calibration is not None:
-        from armlab.vision import top_down_view
-
         return top_down_view(frame.color_bgr, calibration)
     else:
         image = frame.color_bgr
     if not key.layers:
         return image
-    from armlab.vision import OverlayLayers, draw_overlay
-
     layers = OverlayLayers(**{name: name in key.layers for name in LAYERS})
     tags = list(perception.tags) if perception is not None else []
     blocks = list(perception.blocks) if perception is not None else []

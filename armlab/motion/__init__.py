@@ -5,8 +5,8 @@ Kinematics come from an arm model (armlab.kinematics.load_arm); imports of it ar
 time so `import armlab.motion` stays light.
 """
 
-from armlab.motion.cartesian import DiscontinuousPath, plan_vertical_segment
-from armlab.motion.config import MotionConfig, load_motion_config
+from armlab.motion.cartesian import plan_vertical_segment
+from armlab.motion.errors import DiscontinuousPath
 from armlab.motion.pick_place import (
     GripperStep,
     Step,
@@ -17,6 +17,7 @@ from armlab.motion.pick_place import (
 )
 from armlab.motion.safety import UnsafeTrajectory, check_trajectory
 from armlab.motion.trajectory import MoveTiming, plan_joint_move, plan_joint_move_timed
+from armlab.motion_config import MotionConfig, load_motion_config
 
 __all__ = [
     "DiscontinuousPath",

@@ -20,10 +20,11 @@ from typing import Literal
 import numpy as np
 
 from armlab.devices.arm import JointTrajectory
+from armlab.kinematics import Unreachable
 from armlab.motion.cartesian import plan_vertical_segment
-from armlab.motion.config import MotionConfig
 from armlab.motion.safety import check_trajectory
 from armlab.motion.trajectory import plan_joint_move
+from armlab.motion_config import MotionConfig
 
 PITCH_STEP_RAD = math.radians(5.0)
 
@@ -52,8 +53,6 @@ Step = TrajectoryStep | GripperStep
 
 
 def _unreachable_type():
-    from armlab.kinematics import Unreachable
-
     return Unreachable
 
 

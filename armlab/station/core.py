@@ -50,6 +50,8 @@ from armlab.station.teach import TeachCommands
 from armlab.station.telemetry import TelemetryPublisher, gripper_pose_from_matrix
 from armlab.station.watch import DeviceWatch
 from armlab.store import Store
+from armlab.vision import load_perception_config
+from armlab.workcell import load_workcell_motion_config
 
 log = logging.getLogger(__name__)
 
@@ -164,8 +166,6 @@ class Station(Latch, MotionGate, ManualCommands, TeachCommands, JobControls, Per
             if not device.is_connected:
                 device.connect()
         if self.perception_config is None:
-            from armlab.vision import load_perception_config
-
             self.perception_config = load_perception_config(workcell=self.config.workcell)  # the station's board and tags
         self.intrinsics.restore()
         self.colors.restore()
@@ -349,8 +349,6 @@ class Station(Latch, MotionGate, ManualCommands, TeachCommands, JobControls, Per
         """armlab.motion's MotionConfig (config/motion.yaml with the workcell's `motion:` overrides, unless one
         was injected)."""
         if self._motion_config is None:
-            from armlab.workcell import load_workcell_motion_config
-
             self._motion_config = load_workcell_motion_config(self.config.workcell)
         return self._motion_config
 

@@ -7,6 +7,7 @@ from typing import Annotated, Literal
 from fastapi import APIRouter
 from pydantic import Field
 
+from armlab.scene import Scene, check_can_stand, generate_scene
 from armlab.station.core import Station
 from armlab.station.jobs import jsonable
 from server.deps import ControlAuth, StationDep
@@ -26,8 +27,6 @@ def _cell(station: Station):
 def post_scene(body: SceneRequest, station: StationDep, controller: ControlAuth) -> dict:
     """Replace the objects: a generated event scene (event, level, seed) or explicit objects (at most 100,
     none below the board, none overlapping another: 422 naming them, and the scene stays)."""
-    from armlab.scene import Scene, check_can_stand, generate_scene
-
     _cell(station)
     station.allowed_or_raise("set_scene", controller)
     if body.objects is not None:

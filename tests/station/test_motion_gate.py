@@ -10,9 +10,9 @@ import numpy as np
 import pytest
 
 from armlab.devices.arm import JointTrajectory
-from armlab.motion.config import MotionConfig
 from armlab.motion.safety import UnsafeTrajectory
 from armlab.motion.trajectory import plan_joint_move
+from armlab.motion_config import MotionConfig
 from armlab.station import State
 from station_helpers import back_to_idle, still_for
 

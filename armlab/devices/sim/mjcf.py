@@ -77,33 +77,6 @@ class ArmGeometry:
         return _arm_xml(self, sim), _finger_arm_actuators(self, sim)
 
 
-@dataclass(frozen=True)
-class FingerGripperOutline:
-    """The finger gripper's parts around the finger plane, relative to the gripper point (x = approach axis),
-    as _arm_xml builds them: for planners that keep the palm and open fingers clear of things."""
-
-    palm_half_height_m: float  # palm extent either side of the finger plane
-    palm_front_behind_m: float  # the palm's front face, this far behind the gripper point
-    palm_back_behind_m: float  # the palm's back face (the wrist_rotate joint), this far behind it
-    finger_half_height_m: float  # finger link extent either side of the finger plane
-    finger_tip_beyond_m: float  # the finger tips, this far beyond the gripper point
-    open_outer_m: float  # the palm's and the open fingers' outer faces from the finger plane's centre
-
-
-def finger_gripper_outline(arm: ArmGeometry, sim: SimConfig) -> FingerGripperOutline:
-    """The outline of `arm`'s simulated finger gripper (config/arms/<arm>.yaml gripper, config/sim.yaml gripper)."""
-    g = sim.gripper
-    gripper_point_m = arm.origins_m["gripper_point"][0]
-    return FingerGripperOutline(
-        palm_half_height_m=g.palm_half_height_m,
-        palm_front_behind_m=gripper_point_m - g.palm_depth_m,
-        palm_back_behind_m=gripper_point_m,
-        finger_half_height_m=0.5 * g.pad_width_m + g.finger_link_margin_m,
-        finger_tip_beyond_m=g.tip_beyond_gripper_point_m,
-        open_outer_m=arm.finger_offset_max_m + g.palm_side_margin_m,
-    )
-
-
 def _arm_xml(arm: ArmGeometry, sim: SimConfig) -> str:
     """The arm's kinematic tree. Joint axes: waist z; shoulder, elbow, wrist_angle +y (positive pitches the
     arm forward and down); wrist_rotate +x. Fingers slide along the gripper's +-y axis."""

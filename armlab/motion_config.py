@@ -1,4 +1,6 @@
-"""MotionConfig: pick/place heights, vertical-segment speeds and safety clearance (config/motion.yaml)."""
+"""MotionConfig: pick/place heights, vertical-segment speeds and safety clearance (config/motion.yaml).
+
+A config-level module (it needs only armlab.config), below the workcell, whose `motion:` overrides it validates."""
 
 from __future__ import annotations
 
