@@ -68,6 +68,7 @@ class AutoRun:
     def _judge(self) -> tuple[dict | None, str]:
         if not is_scored(self.name):
             return None, f"'{self.name}' has no judge or scorer"
+
         truth = self.cell.truth()
         sim_time_s = self.sim_end_s - self.sim_start_s
         if self.name in EVENT_LIMITS_S:

@@ -85,6 +85,7 @@ def compose_view(frame: Frame, key: ViewKey, perception=None, calibration=None, 
         image = frame.color_bgr
     if not key.layers:
         return image
+
     layers = OverlayLayers(**{name: name in key.layers for name in LAYERS})
     tags = list(perception.tags) if perception is not None else []
     blocks = list(perception.blocks) if perception is not None else []

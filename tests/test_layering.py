@@ -28,8 +28,6 @@ LAZY_IMPORTS = {
     "armlab/station/factory.py": (("armlab.devices.sim",), "MuJoCo only when a simulated station is built"),
     "armlab/tasks/episode.py": (("armlab.devices.sim",), "MuJoCo only when an episode runs"),
     "server/routes/sim.py": (("armlab.devices.sim",), "MuJoCo only on the simulation's own route"),
-    "armlab/devices/recorded/camera_recorded.py": (("armlab.devices.recorded.players",), "rosbags, for bag files only"),
-    "armlab/devices/recorded/players.py": (("armlab.devices.recorded.bag",), "rosbags, for bag files only"),
 }
 
 

@@ -63,6 +63,7 @@ class InterbotixArmFacade:
         """
         if roll != 0.0:
             raise ValueError("the RX200 cannot set roll independently: use roll=0")
+
         try:
             status = self._client.move_to(
                 base_to_world(x, y, z), pitch_rad=float(pitch), yaw_rad=None, moving_time_s=moving_time or self.moving_time, wait=blocking

@@ -1,8 +1,7 @@
 """Motion planning: time-parameterised joint trajectories, vertical Cartesian segments, pick/place
 plans and the safety check every plan passes before it reaches the arm. Pure functions, no devices.
 
-Kinematics come from an arm model (armlab.kinematics.load_arm); imports of it are deferred to call
-time so `import armlab.motion` stays light.
+Kinematics come from an arm model (armlab.kinematics.load_arm).
 """
 
 from armlab.motion.cartesian import plan_vertical_segment

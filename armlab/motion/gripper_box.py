@@ -68,6 +68,7 @@ def joint_moves_inside(model, q_start_rad, q_goal_rad, box: GripperBox | None,
         return [direct]
     if not (box.contains(gripper_path_m(model, q_start[None])[0]) and box.contains(gripper_path_m(model, q_goal[None])[0])):
         raise ValueError(f"a move that starts or ends outside the gripper box: {problem}")
+
     p_start, p_goal = gripper_path_m(model, np.vstack([q_start, q_goal]))
     for parts in range(2, MAX_PARTS + 1):
         via, seed = [], q_start

@@ -21,6 +21,7 @@ def station_gripper_type(station) -> str:
     workcell_name = getattr(getattr(station, "config", None), "workcell", None)
     if not workcell_name:
         return "fingers"
+
     return load_workcell(workcell_name).gripper.type
 
 

@@ -63,6 +63,7 @@ class StationConfig(StrictModel):
         """arm := the workcell's arm; an `arm:` that contradicts the workcell is an error naming both."""
         if not isinstance(data, dict):
             return data
+
         name = data.get("workcell", DEFAULT_WORKCELL)
         if not isinstance(name, str):
             return data  # the field check reports the wrong type

@@ -39,7 +39,11 @@ class SimStation:
 
 def make_sim_station(config: StationConfig | None = None, db_path: str | Path | None = None) -> SimStation:
     """Start a real-time SimWorkcell (seed and starting scene from config.sim) and a started Station on it."""
-    from armlab.devices.sim import SimWorkcell, SimWorkcellConfig
+    from armlab.devices.sim import (  # MuJoCo only when simulating (tests/test_layering.py)
+        SimWorkcell,
+        SimWorkcellConfig,
+    )
+
     config = config or StationConfig()
     cell = SimWorkcell(SimWorkcellConfig(realtime=True, seed=config.sim.seed, camera_fps=config.sim.camera_fps,
                                          workcell=config.workcell, realism=config.sim.realism))

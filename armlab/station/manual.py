@@ -88,6 +88,7 @@ class ManualCommands:
         for name, angle in (("pitch_rad", pitch_rad), ("yaw_rad", yaw_rad)):
             if angle is not None and not math.isfinite(float(angle)):
                 raise ValueError(f"{name} must be finite")
+
         if holds_full_pose(self.model):  # six joints or more: a full pose (ik_pose), the tool's heading kept without a yaw
             return solve_pose_move(self.model, position, pitch_rad, yaw_rad, self.joints_rad())
         return self.model.ik(position, pitch=pitch_rad, yaw=yaw_rad, q_seed=self.joints_rad())

@@ -52,7 +52,11 @@ def run_episode(event: str, level: int | None, seed: int, *, keep_truth: bool = 
     JSON-ready dict: {event, level, seed, workcell, points, max_points, sim_time_s, wall_time_s, breakdown,
     failures, full, within_limit} (+ truth with gripper_path_m when keep_truth). realism: real or ideal
     simulation (None: config/sim.yaml's)."""
-    from armlab.devices.sim import SimWorkcell, SimWorkcellConfig
+    from armlab.devices.sim import (  # MuJoCo only when simulating (tests/test_layering.py)
+        SimWorkcell,
+        SimWorkcellConfig,
+    )
+
     checked_request(event, level, None)
     wall_start = time.monotonic()
     config = StationConfig() if workcell is None else StationConfig(workcell=workcell)

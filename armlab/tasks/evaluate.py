@@ -77,6 +77,7 @@ def check_request(event: str, level: int | None, workcell: str | None = None) ->
             load_workcell(workcell).check_arm_fits()
         except ConfigError as error:
             raise EvalError(str(error)) from None
+
     try:
         check_supported(event, workcell)
     except JobUnsupported as error:

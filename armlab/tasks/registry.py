@@ -123,6 +123,7 @@ def checked_request(job: str, level, params) -> tuple[JobSpec, int | None, dict]
             raise ValueError(f"parameter {name!r} of job '{job}' must be {wanted.__name__}, got {type(value).__name__}")
         if wanted is float and not (math.isfinite(value) and abs(value) <= 1.0):
             raise ValueError(f"parameter {name!r} of job '{job}' must be a finite position within 1 m, got {value!r}")
+
     if params.get("color") not in (None, *COLORS) or params.get("size") not in (None, *SIZES):
         raise ValueError(f"color must be one of {', '.join(COLORS)} and size one of {', '.join(SIZES)}")
     return spec, level, params

@@ -82,7 +82,7 @@ def post_checkerboard(body: CheckerboardRequest, station: StationDep, controller
     import cv2
     import numpy as np
 
-    from armlab.devices.sim.checkerboard import pose_in_camera_frame
+    from armlab.devices.sim.checkerboard import pose_in_camera_frame  # MuJoCo only on the simulation's route
 
     cell = _cell(station)
     station.allowed_or_raise("set_scene", controller)
