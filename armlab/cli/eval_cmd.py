@@ -47,7 +47,12 @@ def _int_option(name: str, text: str | None) -> int | None:
 
 def run_eval(args: argparse.Namespace) -> int:
     from armlab.tasks.evaluate import (
-        EvalError, check_request, evaluate, parse_seeds, public_run, summarize,
+        EvalError,
+        check_request,
+        evaluate,
+        parse_seeds,
+        public_run,
+        summarize,
     )
 
     try:

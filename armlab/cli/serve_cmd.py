@@ -105,13 +105,12 @@ def run_serve(args: argparse.Namespace) -> int:
     import sys
 
     os.environ.setdefault("MUJOCO_GL", "egl")
+    from armlab.errors import ConfigError
     from armlab.station.factory import make_device_station, make_sim_station
     from server.app import create_app
     from server.auth import open_url, resolve_token
     from server.logging_config import log_config
     from server.serving import run
-
-    from armlab.errors import ConfigError
 
     try:
         config = build_station_config(args)  # the workcell decides the arm: unknown or contradicting names stop here

@@ -18,7 +18,13 @@ import numpy as np
 
 from armlab.devices.arm import JointTrajectory
 from armlab.errors import ArmMoving, CommandRefused
-from armlab.motion.handover import Handover
+from armlab.motion import check_trajectory
+from armlab.motion.blend import arm_limits, plan_stop
+from armlab.motion.clearance import lowest_corner_m, self_collision
+from armlab.motion.gripper_step import FingerBox
+from armlab.motion.handover import Handover, continuity_problem, reference_velocity, splice, take_over, trimmed
+from armlab.motion.safety import UnsafeTrajectory, check_start
+from armlab.station.arm_info import station_gripper_type
 from armlab.station.jobs import JobCancelled, JobContext
 from armlab.station.states import JOB_STATES, allowed_commands
 
@@ -82,8 +88,6 @@ class MotionGate:
     def check_motion(self, trajectory: JointTrajectory) -> None:
         """The full safety check of a trajectory (UnsafeTrajectory says why): joint, velocity and
         acceleration limits, the table, the workspace box, the per-step jump. No lock needed (pure)."""
-        from armlab.motion import check_trajectory
-
         config = self.motion_config
         # The table itself (no clearance): planners keep their own board_clearance_m; the straight joint-space
         # move from the sleep pose home passes the gripper point within 1 mm of the board.
@@ -122,9 +126,6 @@ class MotionGate:
         """UnsafeTrajectory (with the reason and when) if the fingers (a box around them, or the suction cup's
         body) go into the board, or the gripper end of the arm (gripper point, finger tips, the held block) into
         the arm's own base or upper arm, at any sample (armlab.motion.clearance). No lock needed (pure)."""
-        from armlab.motion.clearance import lowest_corner_m, self_collision
-        from armlab.motion.safety import UnsafeTrajectory
-
         config, positions, times = self.motion_config, trajectory.positions_rad, trajectory.times_s
         sample, lowest_m, gripper_z_m = lowest_corner_m(self.model, positions, self.finger_box().corners_m())
         if lowest_m < -1e-6:
@@ -142,9 +143,6 @@ class MotionGate:
     def finger_box(self):
         """The box the gripper occupies beyond the wrist (armlab.motion.gripper_step.FingerBox): the open fingers
         from config, or the suction cup's body."""
-        from armlab.motion.gripper_step import FingerBox
-        from armlab.station.arm_info import station_gripper_type
-
         config = self.motion_config
         gripper = getattr(self.model.config, "gripper", None)
         cup = getattr(self.model.config, "suction_cup", None)
@@ -163,9 +161,6 @@ class MotionGate:
         measured joints) and, while a commanded motion runs, that this one continues it: a splice from
         `handover` (taken from that very motion; trimmed to now: HandoverLate when now is past the handover)
         or a trajectory starting at the running reference and its velocity (ArmMoving otherwise)."""
-        from armlab.motion.handover import continuity_problem, reference_velocity, trimmed
-        from armlab.motion.safety import check_start
-
         state = self._effective_state()
         if self._halt.is_set():
             raise CommandRefused("move", state.value, allowed_commands(state))
@@ -222,8 +217,6 @@ class MotionGate:
     def motion_handover(self, lead_s: float | None = None) -> Handover | None:
         """Where a motion replacing the commanded one takes over (lead_s, default handover_lead_s, from now),
         or None when no commanded motion is running (plan from the measured joints, at rest)."""
-        from armlab.motion.handover import take_over
-
         with self._lock:
             running = self._commanded
         if running is None:
@@ -238,8 +231,6 @@ class MotionGate:
         with the lock held just before sending (state transitions, the job's ownership). A handover missed
         because planning was slow is retried with a longer lead (twice), then ArmMoving. Returns (the
         trajectory as planned, spliced; the handover or None)."""
-        from armlab.motion.handover import splice
-
         lead = self.motion_config.handover_lead_s
         for _ in range(3):
             with self._lock:
@@ -263,8 +254,6 @@ class MotionGate:
     def brake_to_rest(self, ctx: JobContext | None = None) -> None:
         """Bring a motion in progress to rest on a jerk-limited stop at the arm's limits (no-op at rest), and
         wait until the arm stands still. Inside a job only while the job owns the arm."""
-        from armlab.motion.blend import arm_limits, plan_stop
-
         handover = self.motion_handover()
         if handover is None and not self.arm.is_moving():
             return

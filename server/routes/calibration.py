@@ -7,7 +7,6 @@ from fastapi.responses import JSONResponse
 from starlette.concurrency import run_in_threadpool
 
 from armlab import skills
-
 from server.deps import ControlAuth, StationDep
 from server.models import CalibrationInfo, JobResponse, PixelRequest, PixelToWorldResponse, PointsCalibrationRequest
 from server.routes.jobs import WAITED_JOB, job_response

@@ -272,7 +272,8 @@ def test_jobs_cancel_and_wrong_state(http):
 
 
 def test_sim_scene_validation(http):
-    _error(http.post("/api/sim/scene", json={"objects": [{"id": "x", "type": "blob", "color": "red", "position_m": [0, 0.2, 0]}]}, headers=AUTH), 422, "invalid")
+    blob = {"id": "x", "type": "blob", "color": "red", "position_m": [0, 0.2, 0]}
+    _error(http.post("/api/sim/scene", json={"objects": [blob]}, headers=AUTH), 422, "invalid")
     assert http.post("/api/sim/scene", json={"event": "pick_sort", "level": 1, "seed": 2}, headers=AUTH).json()["objects"] == 3
     assert len(http.get("/api/sim/truth").json()["objects"]) == 3
     _error(http.post("/api/sim/scene", json={"event": "pick_sort"}), 401, "unauthorized")

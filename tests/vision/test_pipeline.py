@@ -4,9 +4,9 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
-from synth import L515
 
 from armlab.vision import OverlayLayers, PerceptionPipeline, calibrate_extrinsics, detect_blocks, detect_tags
+from synth import L515
 
 
 def test_pipeline_matches_the_standalone_functions(event_frame, cfg):

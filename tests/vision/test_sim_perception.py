@@ -7,7 +7,6 @@ import math
 
 import numpy as np
 import pytest
-from synth import render_sim
 
 from armlab.scene import Scene, SceneObject, quat_from_yaw
 from armlab.vision import (
@@ -21,6 +20,7 @@ from armlab.vision import (
 )
 from armlab.vision.evaluate import click_grid_errors, expected_tops, score_blocks
 from armlab.vision.geometry import project_points
+from synth import render_sim
 
 
 def _obj(oid, otype, color, size, x, y, yaw=0.0, z_base=0.0, aruco_id=None):

@@ -12,6 +12,7 @@ from pydantic import Field, model_validator
 
 from armlab.config import StrictModel, load_config, resolve_config_path
 from armlab.devices.camera import Intrinsics
+from armlab.devices.finger_gripper import FingerGripperConfig
 from armlab.devices.sim.arm_realism import ArmRealismConfig
 
 Positive = Annotated[float, Field(gt=0.0)]
@@ -103,25 +104,6 @@ class SuctionSimConfig(StrictModel):
     settle_time_s: Positive  # grasp(wait=True) waits this long for the seal to form (release: to vent)
 
 
-class GripperSimConfig(StrictModel):
-    kp_n_m: Positive
-    damping_n_s_m: NonNegative
-    armature_kg: NonNegative
-    finger_mass_kg: Positive
-    pad_width_m: Positive
-    pad_length_m: Positive
-    tip_beyond_gripper_point_m: float
-    palm_depth_m: Positive
-    palm_half_height_m: Positive
-    palm_side_margin_m: NonNegative
-    finger_link_margin_m: NonNegative
-    pad_friction: list[NonNegative] = Field(min_length=3, max_length=3)
-    pad_solref: list[float] = Field(min_length=2, max_length=2)
-    pad_solimp: list[float] = Field(min_length=3, max_length=5)
-    stop_speed_m_s: Positive
-    stop_time_s: Positive
-
-
 class ObjectsConfig(StrictModel):
     density_kg_m3: Positive
     friction: list[NonNegative] = Field(min_length=3, max_length=3)
@@ -186,7 +168,7 @@ class SimConfig(StrictModel):
     physics: PhysicsConfig
     arm: ArmServoConfig  # the RX200's servos
     arms: dict[str, ArmServoConfig] = {}  # other arms' servos, by arm name (config/arms/<name>.yaml)
-    gripper: GripperSimConfig
+    gripper: FingerGripperConfig  # the finger gripper's dimensions (armlab.devices.finger_gripper)
     suction: SuctionSimConfig | None = None
     objects: ObjectsConfig
     camera_pose_error: PoseErrorConfig

@@ -14,12 +14,14 @@ import numpy as np
 from armlab.config import read_config_file, resolve_config_path
 from armlab.devices.sim import textures
 from armlab.devices.sim.arm_realism import GEAR_ARMATURE, GEAR_SUFFIX, RealArm
-from armlab.devices.sim.checkerboard import BODY_NAME as CHECKERBOARD, checkerboard_texture, checkerboard_xml, load_checkerboard_target
+from armlab.devices.sim.checkerboard import BODY_NAME as CHECKERBOARD
+from armlab.devices.sim.checkerboard import checkerboard_texture, checkerboard_xml, load_checkerboard_target
 from armlab.devices.sim.clutter import realism_world_xml
 from armlab.devices.sim.config import SceneRealismConfig, SimCameraConfig, SimConfig
 from armlab.devices.sim.feeder import FEEDER_PROBE, parked_objects
 from armlab.devices.sim.mjcf_dh import DhArmGeometry
-from armlab.devices.sim.mjcf_numbers import fmt_numbers as _fmt, quat_wxyz_from_matrix
+from armlab.devices.sim.mjcf_numbers import fmt_numbers as _fmt
+from armlab.devices.sim.mjcf_numbers import quat_wxyz_from_matrix
 from armlab.scene import Scene, SceneObject
 from armlab.workcell import Workcell, load_workcell
 
@@ -79,33 +81,6 @@ class ArmGeometry:
     def tendon_xml(self) -> str:
         """The real arm's gear springs (`<tendon>` content), empty for the ideal arm."""
         return _gear_tendons(self)
-
-
-@dataclass(frozen=True)
-class FingerGripperOutline:
-    """The finger gripper's parts around the finger plane, relative to the gripper point (x = approach axis),
-    as _arm_xml builds them: for planners that keep the palm and open fingers clear of things."""
-
-    palm_half_height_m: float  # palm extent either side of the finger plane
-    palm_front_behind_m: float  # the palm's front face, this far behind the gripper point
-    palm_back_behind_m: float  # the palm's back face (the wrist_rotate joint), this far behind it
-    finger_half_height_m: float  # finger link extent either side of the finger plane
-    finger_tip_beyond_m: float  # the finger tips, this far beyond the gripper point
-    open_outer_m: float  # the palm's and the open fingers' outer faces from the finger plane's centre
-
-
-def finger_gripper_outline(arm: ArmGeometry, sim: SimConfig) -> FingerGripperOutline:
-    """The outline of `arm`'s simulated finger gripper (config/arms/<arm>.yaml gripper, config/sim.yaml gripper)."""
-    g = sim.gripper
-    gripper_point_m = arm.origins_m["gripper_point"][0]
-    return FingerGripperOutline(
-        palm_half_height_m=g.palm_half_height_m,
-        palm_front_behind_m=gripper_point_m - g.palm_depth_m,
-        palm_back_behind_m=gripper_point_m,
-        finger_half_height_m=0.5 * g.pad_width_m + g.finger_link_margin_m,
-        finger_tip_beyond_m=g.tip_beyond_gripper_point_m,
-        open_outer_m=arm.finger_offset_max_m + g.palm_side_margin_m,
-    )
 
 
 def _arm_xml(arm: ArmGeometry, sim: SimConfig) -> str:
@@ -181,7 +156,8 @@ def _arm_xml(arm: ArmGeometry, sim: SimConfig) -> str:
               <body name="gripper_link" pos="{_fmt(o['wrist_rotate'])}" gravcomp="{gravcomp}">
                 <inertial pos="0.03 0 0" mass="{m[4]}" diaginertia="1e-4 1e-4 1e-4"/>
                 {joint(4, "1 0 0")}
-                <geom name="palm" type="box" size="{0.5 * finger_start:.9g} {fmax + g.palm_side_margin_m:.9g} {g.palm_half_height_m:.9g}" pos="{0.5 * finger_start:.9g} 0 0" material="arm_dark" {arm_geom}/>
+                <geom name="palm" type="box" size="{0.5 * finger_start:.9g} {fmax + g.palm_side_margin_m:.9g} {g.palm_half_height_m:.9g}"
+                      pos="{0.5 * finger_start:.9g} 0 0" material="arm_dark" {arm_geom}/>
                 <site name="{GRIPPER_SITE}" pos="{gp:.9g} 0 0" size="0.003" rgba="1 0 1 0.5" group="4"/>
                 {finger("left", 1.0)}
                 {finger("right", -1.0)}
@@ -395,7 +371,8 @@ def build_model_xml(
   </asset>
   <worldbody>
     <light name="sun" directional="true" pos="0.2 0.3 2" dir="-0.1 -0.15 -1" castshadow="false" diffuse="0.55 0.55 0.55" specular="0 0 0"/>
-    <geom name="board" type="plane" size="{0.5 * board.size_m[0]:.9g} {0.5 * board.size_m[1]:.9g} 0.05" pos="{_fmt(np.mean(board.corners_m, axis=0))} 0" material="board"
+    <geom name="board" type="plane" size="{0.5 * board.size_m[0]:.9g} {0.5 * board.size_m[1]:.9g} 0.05"
+          pos="{_fmt(np.mean(board.corners_m, axis=0))} 0" material="board"
           friction="{_fmt(sim.objects.board_friction)}" solref="{_fmt(sim.objects.solref)}" contype="1" conaffinity="1"/>
     <geom name="table" type="plane" size="1.5 1.5 0.05" pos="0 0.15 -0.003" material="table" contype="1" conaffinity="1"/>
     {''.join(tag_geoms)}

@@ -20,8 +20,10 @@ import numpy as np
 from armlab.devices.camera import Frame
 from armlab.devices.sim.arm import SimArm
 from armlab.devices.sim.arm_realism import GEAR_SUFFIX, JointStatePublisher, real_geometry
+from armlab.devices.sim.arm_select import select_arm
 from armlab.devices.sim.camera import NoiseModel, SimCamera
-from armlab.devices.sim.checkerboard import BODY_NAME as CHECKERBOARD, PARKED_POSITION_M, checked_pose
+from armlab.devices.sim.checkerboard import BODY_NAME as CHECKERBOARD
+from armlab.devices.sim.checkerboard import PARKED_POSITION_M, checked_pose
 from armlab.devices.sim.config import (
     MountConfig,
     SimWorkcellConfig,
@@ -32,15 +34,14 @@ from armlab.devices.sim.config import (
     resolve_realism,
     rotation_from_rotvec,
 )
-from armlab.devices.sim.realism import RealCamera
 from armlab.devices.sim.feeder import FeederRuntime, parked_objects
 from armlab.devices.sim.gripper import SimGripper
-from armlab.devices.sim.arm_select import select_arm
 from armlab.devices.sim.mjcf import CAMERA_NAME, GRIPPER_SITE, OBJECT_PREFIX, build_model_xml, quat_wxyz_from_matrix
 from armlab.devices.sim.mjcf_dh import CUP_BODY, LIP_MARGIN_M, LIP_PREFIX, SUCTION_ACTUATOR, DhArmGeometry
-from armlab.devices.sim.suction import SuctionGripper, seal_object
 from armlab.devices.sim.path import PathRecorder
+from armlab.devices.sim.realism import RealCamera
 from armlab.devices.sim.render import RawImages, RenderThread
+from armlab.devices.sim.suction import SuctionGripper, seal_object
 from armlab.devices.sim.truth import SimTruth
 from armlab.scene import Scene
 from armlab.workcell import load_workcell
@@ -52,7 +53,8 @@ PAD_GEOMS = ("left_pad", "right_pad")
 
 
 class SimWorkcell(SimTruth):
-    """The simulated workcell (the RX200 with fingers, or a DH arm with a suction cup, per the workcell config). See the module docstring for the clock semantics."""
+    """The simulated workcell (the RX200 with fingers, or a DH arm with a suction cup, per the workcell config).
+    See the module docstring for the clock semantics."""
 
     def __init__(self, config: SimWorkcellConfig | None = None, scene: Scene | None = None) -> None:
         self.config = config or SimWorkcellConfig()

@@ -82,7 +82,7 @@ def test_readings_are_whole_encoder_counts_published_at_100_hz():
         q0 = cell.arm.read_joint_state().position_rad
         cell.arm.command_trajectory(move_trajectory(q0, level_ik(0.25, 0.1), 1.0))
         changes, last = [], cell.arm.read_joint_state().position_rad
-        for step in range(1, 600):
+        for _step in range(1, 600):
             cell.step(0.002)
             reading = cell.arm.read_joint_state().position_rad
             counts = reading / COUNT_RAD
