@@ -262,11 +262,23 @@ class BinSpec(StrictModel):
 GRIPPER_TYPES = ("fingers", "suction")
 
 
+class GripperMarkerSpec(StrictModel):
+    """A tag of the board's family fixed flat on the gripper, for finding the gripper in the camera
+    (armlab.vision.gripper_marker): its id (not a board tag's), the detected square's edge, and its
+    centre in the gripper-point frame (x along the approach, y along the fingers, z up when the
+    gripper is level), as measured on the arm."""
+
+    id: Annotated[int, Field(ge=0)]
+    size_m: Length
+    position_m: tuple[float, float, float]
+
+
 class GripperChoice(StrictModel):
     """The end effector on the arm: `fingers` (a parallel gripper: the arm file's `gripper:` width range)
-    or `suction` (a vacuum cup: the arm file's `suction_cup:`)."""
+    or `suction` (a vacuum cup: the arm file's `suction_cup:`); marker: the tag on it, if any."""
 
     type: Literal["fingers", "suction"] = "fingers"
+    marker: GripperMarkerSpec | None = None
 
 
 class ArmBaseSpec(StrictModel):
@@ -365,6 +377,9 @@ class Workcell(StrictModel):
                 raise ValueError(
                     f"block_tags.ids.{tag_id}.destination: place {entry.destination} is not in places_m {sorted(self.places_m)}"
                 )
+        marker = self.gripper.marker
+        if marker is not None and (marker.id in self.board_tags.centres_m or marker.id >= dictionary_size(self.board_tags.detector)):
+            raise ValueError(f"gripper.marker.id: {marker.id} is a board tag or not in {self.board_tags.detector}")
         overlap = set(self.board_tags.centres_m) & set(self.block_tags.ids)
         if overlap and self.board_tags.detector == self.block_tags.dictionary:
             raise ValueError(f"block_tags.ids: {sorted(overlap)} are also board tags of the same dictionary")

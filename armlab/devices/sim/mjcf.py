@@ -28,6 +28,7 @@ from armlab.workcell import Workcell, load_workcell
 CAMERA_NAME = "overhead"
 GRIPPER_SITE = "gripper_point"
 OBJECT_PREFIX = "obj:"
+GRIPPER_MARKER = "gripper_marker"
 STICKER_FRACTION = 0.9  # the ArUco sticker covers this fraction of a block's top face
 
 COLOR_RGBA = {
@@ -74,16 +75,17 @@ class ArmGeometry:
         )
 
 
-    def mjcf(self, sim: SimConfig) -> tuple[str, str]:
-        """(worldbody xml of the arm with its fingers, actuator xml)."""
-        return _arm_xml(self, sim), _finger_arm_actuators(self, sim)
+    def mjcf(self, sim: SimConfig, gripper_extras: str = "") -> tuple[str, str]:
+        """(worldbody xml of the arm with its fingers, actuator xml); gripper_extras: geoms added to the
+        gripper link (its frame: origin at the wrist_rotate joint, x = approach axis)."""
+        return _arm_xml(self, sim, gripper_extras), _finger_arm_actuators(self, sim)
 
     def tendon_xml(self) -> str:
         """The real arm's gear springs (`<tendon>` content), empty for the ideal arm."""
         return _gear_tendons(self)
 
 
-def _arm_xml(arm: ArmGeometry, sim: SimConfig) -> str:
+def _arm_xml(arm: ArmGeometry, sim: SimConfig, gripper_extras: str = "") -> str:
     """The arm's kinematic tree. Joint axes: waist z; shoulder, elbow, wrist_angle +y (positive pitches the
     arm forward and down); wrist_rotate +x. Fingers slide along the gripper's +-y axis."""
     o = arm.origins_m
@@ -159,6 +161,7 @@ def _arm_xml(arm: ArmGeometry, sim: SimConfig) -> str:
                 <geom name="palm" type="box" size="{0.5 * finger_start:.9g} {fmax + g.palm_side_margin_m:.9g} {g.palm_half_height_m:.9g}"
                       pos="{0.5 * finger_start:.9g} 0 0" material="arm_dark" {arm_geom}/>
                 <site name="{GRIPPER_SITE}" pos="{gp:.9g} 0 0" size="0.003" rgba="1 0 1 0.5" group="4"/>
+                {gripper_extras}
                 {finger("left", 1.0)}
                 {finger("right", -1.0)}
               </body>
@@ -277,6 +280,25 @@ def _object_xml(obj: SceneObject, density: float, friction: list[float], solref:
     return asset, body
 
 
+def _gripper_marker_xml(workcell: Workcell, arm: ArmGeometry, assets: dict[str, bytes]) -> tuple[str, str]:
+    """(asset xml, gripper-link geom xml) of the workcell's gripper marker: the tag with its white border on
+    a thin visual-only card whose top face is at the marker's position (the gripper-point frame moved to the
+    gripper link's); ("", "") without a marker. Adds the texture PNG to assets."""
+    marker = workcell.gripper.marker
+    if marker is None:
+        return "", ""
+    image, span = textures.tag_texture(marker.id, workcell.board_tags.detector)
+    assets[GRIPPER_MARKER + ".png"] = textures.encode_png(image)
+    half, thick = 0.5 * marker.size_m * span, 0.00005
+    x, y, z = marker.position_m
+    asset = (f'<texture name="{GRIPPER_MARKER}" type="2d" file="{GRIPPER_MARKER}.png"/>'
+             f'<material name="{GRIPPER_MARKER}" texture="{GRIPPER_MARKER}" specular="0" shininess="0"/>')
+    geom = (f'<geom name="{GRIPPER_MARKER}" type="box" size="{half:.9g} {half:.9g} {thick}" '
+            f'pos="{x + arm.origins_m["gripper_point"][0]:.9g} {y:.9g} {z - thick:.9g}" material="{GRIPPER_MARKER}" '
+            f'contype="0" conaffinity="0" mass="0" group="2"/>')
+    return asset, geom
+
+
 def camera_xml_attributes(T_world_camera: np.ndarray, camera: SimCameraConfig) -> str:
     """A MuJoCo camera (looks along its -z, y up) placed at an OpenCV-axes pose, with the intrinsics."""
     R_world_mj = T_world_camera[:3, :3] @ np.diag([1.0, -1.0, -1.0])
@@ -342,8 +364,10 @@ def build_model_xml(
                                   workcell, parked=is_parked)
         object_assets.append(asset)
         object_bodies.append(body)
-    arm_bodies, actuators = arm.mjcf(sim)  # the RX200 with fingers (above) or a DH arm with a cup (mjcf_dh)
-    tendons = arm.tendon_xml() if isinstance(arm, ArmGeometry) else ""
+    finger_arm = isinstance(arm, ArmGeometry)  # the RX200 with fingers (above), else a DH arm with a cup (mjcf_dh)
+    marker_asset, marker_geom = _gripper_marker_xml(workcell, arm, assets) if finger_arm else ("", "")
+    arm_bodies, actuators = arm.mjcf(sim, marker_geom) if finger_arm else arm.mjcf(sim)
+    tendons = arm.tendon_xml() if finger_arm else ""
     p = sim.physics
     xml = f"""<mujoco model="armlab_workcell">
   <compiler angle="radian" autolimits="true"/>
@@ -368,6 +392,7 @@ def build_model_xml(
     {colors}
     {''.join(object_assets)}
     {checker_asset}
+    {marker_asset}
   </asset>
   <worldbody>
     <light name="sun" directional="true" pos="0.2 0.3 2" dir="-0.1 -0.15 -1" castshadow="false" diffuse="0.55 0.55 0.55" specular="0 0 0"/>

@@ -33,6 +33,17 @@ class SimTruth:
         with self.lock:
             return self._data.site_xpos[self._gripper_site].copy()
 
+    def gripper_marker_m(self) -> np.ndarray:
+        """True world position of the centre of the gripper tag's face (the workcell's gripper.marker), for
+        tests of finding the gripper in the camera. ValueError when the workcell has no marker."""
+        import mujoco
+
+        with self.lock:
+            geom = mujoco.mj_name2id(self._model, mujoco.mjtObj.mjOBJ_GEOM, "gripper_marker")
+            if geom < 0:
+                raise ValueError("this workcell has no gripper marker")
+            return self._data.geom_xpos[geom] + self._data.geom_xmat[geom].reshape(3, 3)[:, 2] * self._model.geom_size[geom][2]
+
     def start_path_recording(self, period_s: float = 0.05, max_duration_s: float = MAX_DURATION_S) -> None:
         """Record the gripper point every period_s of simulated time from now on (inside the physics
         stepping, so fast mode records too), replacing any earlier recording. Memory is bounded: beyond
