@@ -104,8 +104,7 @@ def calibrate_arm_camera(station: Station, poses: Sequence[CalibrationPose] | No
         ctx.check()
         if use:
             install(station, fit, T_world_camera, intrinsics, np.array(seen_base), np.array(pixels), result)
-        log_result(station, result, use)
-        ctx.job.update(message=result["message"])
+        ctx.job.update(message=log_result(station, result, use))
         return result
 
     return station.start_job("calibrate", "calibrate", run, detail=JOB_DETAIL, source=source)
@@ -177,12 +176,15 @@ def install(station: Station, fit: ArmCameraFit, T_world_camera: np.ndarray, int
     result["reprojection_error_px"] = error_px
 
 
-def log_result(station: Station, result: dict, used_now: bool) -> None:
-    """One event: the fit, and how far it is from the calibration in use (a warning when they disagree)."""
+def log_result(station: Station, result: dict, used_now: bool) -> str:
+    """One event (returned, for the job's message): the fit, and how far it is from the calibration in use
+    (a warning when they disagree by more than AGREE_M or AGREE_DEG)."""
     check = result["tag_calibration"]
     if check is None:
-        station.events.add("info", f"{result['message']}; no calibration in use to compare with")
-        return
+        words = f"{result['message']}; no calibration in use to compare with"
+        station.events.add("info", words)
+        return words
     words = (f"{result['message']}; {check['position_mm']:.1f} mm and {check['rotation_deg']:.2f} deg from the "
              f"{check['method']} calibration" + (" (now replaced by it)" if used_now else ""))
     station.events.add("info" if check["agree"] else "warn", words)
+    return words
