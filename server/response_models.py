@@ -125,7 +125,7 @@ class CalibrationInfo(Wire):
     grid_points_px: list[list[float]] | None = None
     tags: list[TagInfo] | None = None
     time: float | None = None
-    method: str | None = Field(None, description="'points' for a calibration from clicked points (tags otherwise)")
+    method: str | None = Field(None, description="'points' for a calibration from clicked points, 'arm-camera' from the arm's gripper tag (tags otherwise)")
     points: dict | None = Field(None, description="clicked-point fit: homography, reprojection and per-point errors (px)")
 
 

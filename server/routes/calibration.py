@@ -32,6 +32,17 @@ async def post_calibrate_points(
     return await job_response(request, job, wait)
 
 
+@router.post("/calibrate/arm-camera", response_model=JobResponse, status_code=202, responses=WAITED_JOB)
+async def post_calibrate_arm_camera(
+    request: Request, station: StationDep, controller: ControlAuth, wait: bool = False, use: bool = False
+) -> JSONResponse:
+    """Calibrate the camera from the arm, without tags: checked poses over the board, the gripper's tag found in
+    each, Kabsch; each pose's residual and the disagreement with the calibration in use in the result. That
+    calibration stays unless use=true; too few usable poses or a bad fit fail the job saying why."""
+    job = await run_in_threadpool(skills.calibrate_arm_camera, station, use=use, source=controller)
+    return await job_response(request, job, wait)
+
+
 @router.get("/calibration", response_model=CalibrationInfo)
 def read_calibration(station: StationDep) -> dict:
     return station.calibration_info
