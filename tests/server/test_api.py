@@ -220,7 +220,7 @@ def test_calibrate_detect_frames_and_click_grab_drop(http, cell):
     truth = http.get("/api/sim/truth").json()
     camera_true = np.array(truth["camera"]["T_world_camera"])[:3, 3]
     assert np.linalg.norm(np.array(calibration["camera_position_m"]) - camera_true) < 0.01
-    assert len(calibration["grid_points_px"]) > 100 and {t["id"] for t in calibration["tags"]} == {1, 2, 3, 4}
+    assert len(calibration["grid_points_px"]) > 100 and {t["id"] for t in calibration["tags"]} - {10} == {1, 2, 3, 4}  # 10: the gripper's tag
     # The depth camera against the tags' plane, measured from the board in depth and reported (issue 17).
     assert isinstance(calibration["depth_offset_m"], float) and abs(calibration["depth_offset_m"]) < 0.03
     assert 0.0 <= calibration["depth_tilt_deg"] < 3.0 and "the tags' plane, tilted" in calibration["depth_model"]
