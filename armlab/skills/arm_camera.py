@@ -26,7 +26,7 @@ from armlab.vision.geometry import invert_transform, project_points, transform_p
 from armlab.vision.gripper_marker import MarkerNotFound, find_marker
 from armlab.workcell import load_workcell
 
-JOB_DETAIL = "from the arm (gripper tag + Kabsch)"
+JOB_NAME, JOB_DETAIL = "calibrate-arm-camera", "from the arm (gripper tag + Kabsch)"
 MIN_USABLE_POSES = 10  # poses whose gripper tag was seen: fewer and the fit is refused
 MAX_RESIDUAL_M = 0.010  # mean residual above this: refused (the camera saw something else, or FK is off)
 SETTLE_SPEED_RAD_S = 0.02  # the arm is still (for a frame) below this joint speed
@@ -107,7 +107,7 @@ def calibrate_arm_camera(station: Station, poses: Sequence[CalibrationPose] | No
         ctx.job.update(message=log_result(station, result, use))
         return result
 
-    return station.start_job("calibrate", "calibrate", run, detail=JOB_DETAIL, source=source)
+    return station.start_job("calibrate", JOB_NAME, run, detail=JOB_DETAIL, source=source)
 
 
 def pose_joints(station: Station, pose: CalibrationPose) -> np.ndarray:

@@ -5,11 +5,15 @@ refuse the fit with the reason and keep the calibration in use; use=True install
 
 from __future__ import annotations
 
+import dataclasses
+
 import numpy as np
 import pytest
 
 from armlab import skills
+from armlab.skills import arm_camera
 from armlab.skills.arm_camera import MIN_USABLE_POSES, CalibrationPose, calibrate_arm_camera, default_poses
+from armlab.workcell import load_workcell
 
 POSITION_TOL_M, ANGLE_TOL_DEG = 0.003, 0.5  # issue 19: the Kabsch camera pose within 3 mm and 0.5 deg
 
@@ -87,3 +91,20 @@ def test_use_installs_the_arm_calibration_in_place_of_the_tags(station):
     position_m, angle_deg = cell.camera_pose_error(station.calibration.T_world_camera)
     assert position_m < POSITION_TOL_M and angle_deg < ANGLE_TOL_DEG
     assert job.result["reprojection_error_px"] < 1.0
+
+
+def test_a_held_block_or_a_workcell_without_a_gripper_tag_is_refused_before_anything_moves(station, monkeypatch):
+    station, _cell = station
+    before, q_start = station.calibration, station.joints_rad()
+    real_state = station.gripper.read_state
+    monkeypatch.setattr(station.gripper, "read_state", lambda: dataclasses.replace(real_state(), holding=True))
+    job = run(station)
+    assert job.state == "failed" and "holds something" in job.message
+    monkeypatch.setattr(station.gripper, "read_state", real_state)
+    workcell = load_workcell(station.config.workcell)
+    bare = workcell.model_copy(update={"gripper": workcell.gripper.model_copy(update={"marker": None})})
+    monkeypatch.setattr(arm_camera, "load_workcell", lambda name: bare)
+    job = run(station)
+    assert job.state == "failed" and "no gripper marker" in job.message
+    assert station.calibration is before
+    np.testing.assert_allclose(station.joints_rad(), q_start, atol=1e-3)  # nothing moved
