@@ -30,6 +30,7 @@ from collections.abc import Sequence
 from dataclasses import dataclass
 from pathlib import Path
 
+from armlab.errors import ArmlabError
 from armlab.store_schema import NewerSchema, migrate
 
 log = logging.getLogger(__name__)
@@ -52,7 +53,7 @@ class UnusableDatabase(RuntimeError):
     start-up backup. The message is one line: the file, why, what to do."""
 
 
-class NotFound(LookupError):
+class NotFound(ArmlabError, LookupError):
     """A stored item (program, calibration) does not exist."""
 
 

@@ -12,6 +12,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from armlab.devices.arm import JointTrajectory
+from armlab.errors import PlanRefused
 from armlab.kinematics import Unreachable
 
 MAX_PARTS = 6  # a move is split into at most this many joint moves
@@ -67,7 +68,7 @@ def joint_moves_inside(model, q_start_rad, q_goal_rad, box: GripperBox | None,
     if problem is None:
         return [direct]
     if not (box.contains(gripper_path_m(model, q_start[None])[0]) and box.contains(gripper_path_m(model, q_goal[None])[0])):
-        raise ValueError(f"a move that starts or ends outside the gripper box: {problem}")
+        raise PlanRefused(f"a move that starts or ends outside the gripper box: {problem}")
 
     p_start, p_goal = gripper_path_m(model, np.vstack([q_start, q_goal]))
     for parts in range(2, MAX_PARTS + 1):
@@ -87,4 +88,4 @@ def joint_moves_inside(model, q_start_rad, q_goal_rad, box: GripperBox | None,
         if not any(problems):
             return moves
         problem = next(p for p in problems if p)
-    raise ValueError(f"no joint move inside the gripper box: {problem}")
+    raise PlanRefused(f"no joint move inside the gripper box: {problem}")

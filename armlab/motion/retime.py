@@ -8,6 +8,7 @@ from __future__ import annotations
 import numpy as np
 
 from armlab.devices.arm import JointTrajectory
+from armlab.errors import PlanRefused
 from armlab.motion.trajectory import DEFAULT_RATE_HZ, LIMIT_MARGIN, retime_path, sample_times, trapezoid_profile
 
 # Largest joint change between two 100 Hz samples that is still one continuous IK branch (radians).
@@ -44,4 +45,4 @@ def plan_retimed(arm, solve_at, duration_s: float, ramp_s: float, label: str, ra
         factor = slow_down * 1.02
         duration_s *= factor
         ramp_s *= factor
-    raise ValueError(f"{label}: joints still too fast after {_MAX_RETIMES} slow-downs (too close to a singularity)")
+    raise PlanRefused(f"{label}: joints still too fast after {_MAX_RETIMES} slow-downs (too close to a singularity)")

@@ -17,7 +17,7 @@ from contextlib import contextmanager
 import numpy as np
 
 from armlab.devices.arm import JointTrajectory
-from armlab.errors import ArmMoving, CommandRefused
+from armlab.errors import ArmMoving, CommandRefused, InvalidInput
 from armlab.motion import check_trajectory
 from armlab.motion.blend import arm_limits, plan_stop
 from armlab.motion.clearance import lowest_corner_m, self_collision
@@ -343,7 +343,7 @@ class MotionGate:
     def run_gripper(self, ctx: JobContext, action: str) -> None:
         """Inside a job: grasp or release (only while this job owns the arm) and wait for the fingers."""
         if action not in ("grasp", "release"):
-            raise ValueError(f"gripper action must be 'grasp' or 'release', not {action!r}")
+            raise InvalidInput(f"gripper action must be 'grasp' or 'release', not {action!r}")
         with self._sending():
             self._owns_arm(ctx)
             self._send_later(lambda: getattr(self.gripper, action)(wait=False))
