@@ -20,6 +20,8 @@ from armlab.errors import (
     NoArmError,
     NotController,
     PlanRefused,
+    RefusedByCheck,
+    ShuttingDown,
 )
 from armlab.kinematics import Unreachable
 from armlab.motion.safety import UnsafeTrajectory
@@ -68,6 +70,7 @@ def _classify(error: Exception) -> tuple[int, str]:
 # The library's error hierarchy (armlab.errors) → HTTP status and wire code, most specific first. Anything
 # not listed, a bare ValueError included (a bug, e.g. numpy's), is 500 "internal" with its traceback logged.
 ERROR_STATUS: tuple[tuple[type[BaseException], int, str], ...] = (
+    (ShuttingDown, 503, "device"),  # a refusal, but one that says the station is going away
     (NoArmError, 409, "no_arm"),
     (CommandRefused, 409, "wrong_state"),
     (NotController, 409, "not_controller"),
@@ -78,10 +81,11 @@ ERROR_STATUS: tuple[tuple[type[BaseException], int, str], ...] = (
     (Unreachable, 422, "unreachable"),
     (UnsafeTrajectory, 422, "unsafe"),
     (PlanRefused, 422, "invalid"),
+    (RefusedByCheck, 409, "wrong_state"),  # any other check's refusal: not allowed now
     (InvalidInput, 422, "invalid"),
     (ValidationError, 422, "invalid"),  # a pydantic model of the library refused a value (a scene, a workcell)
     (DeviceFault, 503, "device"),
-    (ConnectionError, 503, "device"),  # ShuttingDown, an OSError of a device's transport
+    (ConnectionError, 503, "device"),  # an OSError of a device's transport
     (TimeoutError, 503, "device"),
 )
 

@@ -80,7 +80,7 @@ def check_waypoints(station, waypoints) -> None:
         except UnsafeTrajectory as error:
             raise UnsafeTrajectory(f"waypoint {index}: {error}") from None
         except ValueError as error:
-            raise ValueError(f"waypoint {index}: {error}") from None
+            raise InvalidInput(f"waypoint {index}: {error}") from None
 
 
 def station_limits(station, settings: RepeatSettings) -> Limits:
