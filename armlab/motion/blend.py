@@ -64,7 +64,7 @@ class Run:
 
 
 def _ruckig_segment(q0, v0, a0, q1, v1, limits: Limits, minimum_s: float | None, tick_s: float):
-    """One ruckig trajectory from (q0, v0, a0) to (q1, v1, 0); ValueError if ruckig finds none."""
+    """One ruckig trajectory from (q0, v0, a0) to (q1, v1, 0); PlanRefused if ruckig finds none."""
     from ruckig import DurationDiscretization, InputParameter, Result, Ruckig, Trajectory
 
     dof = len(q0)
@@ -88,7 +88,7 @@ def _ruckig_segment(q0, v0, a0, q1, v1, limits: Limits, minimum_s: float | None,
 
 def _calculate(otg, inp, trajectory):
     """ruckig's calculate, its own errors (an invalid input, a result code its Python enum does not know such as
-    -101, a duration past its numerical range) as a ValueError that says where they come from."""
+    -101, a duration past its numerical range) as a PlanRefused that says where they come from."""
     try:
         return otg.calculate(inp, trajectory)
     except Exception as error:  # noqa: BLE001 - the library raises ValueError, RuntimeError or its own types
@@ -193,7 +193,7 @@ def plan_run(
     change). minimum_s[i]: the least time of the segment into point i (a waypoint's moving_time_s; [0]
     unused). Blended runs try the pass-through velocities at a few scales (PASS_SCALES) and keep the
     quickest: per-segment planning with zero acceleration at the waypoints can be slower with the
-    heuristic's full velocities on short segments. ValueError if ruckig fails."""
+    heuristic's full velocities on short segments. PlanRefused if ruckig fails."""
     options = dict(start_velocity=start_velocity, start_accel=start_accel, minimum_s=minimum_s, tick_s=tick_s, rate_hz=rate_hz)
     if stop_everywhere or len(points_rad) <= 2:
         return _plan_run_once(points_rad, limits, stop_everywhere=stop_everywhere, **options)

@@ -58,7 +58,7 @@ def joint_moves_inside(model, q_start_rad, q_goal_rad, box: GripperBox | None,
     """Joint moves q_start → q_goal (each planned by plan(q_a, q_b)) whose gripper path stays in `box`:
     one move when its path stays inside, else 2..MAX_PARTS moves through IK points on the straight
     line between the two gripper points (pitch left to IK, the wrist seeded from the joint-space
-    interpolation). ValueError naming where the path leaves when no split keeps it inside; a box of
+    interpolation). PlanRefused naming where the path leaves when no split keeps it inside; a box of
     None accepts the single move."""
     q_start, q_goal = np.asarray(q_start_rad, float), np.asarray(q_goal_rad, float)
     direct = plan(q_start, q_goal)

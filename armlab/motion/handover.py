@@ -108,7 +108,7 @@ def take_over(running: JointTrajectory, running_start_s: float, now_s: float, le
 
 def splice(handover: Handover, new: JointTrajectory) -> JointTrajectory:
     """The command that replaces the running trajectory: its prefix, then `new` (which must start at the
-    handover position; ValueError otherwise)."""
+    handover position; PlanRefused otherwise)."""
     gap = float(np.max(np.abs(new.positions_rad[0] - handover.position_rad)))
     if gap > 1e-9:
         raise PlanRefused(f"the new plan starts {gap:.2e} rad from the handover position")

@@ -30,7 +30,7 @@ def branch_jump(positions: np.ndarray) -> tuple[int, int, float] | None:
 def plan_retimed(arm, solve_at, duration_s: float, ramp_s: float, label: str, rate_hz: float = DEFAULT_RATE_HZ) -> JointTrajectory:
     """A rest-to-rest trajectory through solve_at(s) (joint rows for path fractions s in [0, 1]) on a
     trapezoid of duration_s with ramps of ramp_s; stretched (and re-solved) while a joint would exceed
-    its velocity or acceleration limit (near a singularity). ValueError naming `label` when
+    its velocity or acceleration limit (near a singularity). PlanRefused naming `label` when
     _MAX_RETIMES stretches are not enough."""
     velocity_limit = np.asarray(arm.velocity_limit_rad_s, float) * LIMIT_MARGIN
     accel_limit = np.asarray(arm.accel_limit_rad_s2, float) * LIMIT_MARGIN

@@ -45,7 +45,7 @@ class MoveTiming:
 
 
 def _as_joint_vector(name: str, value, dof: int) -> np.ndarray:
-    """A finite float vector of shape (dof,), else ValueError naming the argument."""
+    """A finite float vector of shape (dof,), else InvalidInput naming the argument."""
     array = np.asarray(value, dtype=float)
     if array.shape != (dof,):
         raise InvalidInput(f"{name} must have shape ({dof},), got {array.shape}")
@@ -203,7 +203,7 @@ def sample_times(duration_s: float, rate_hz: float = DEFAULT_RATE_HZ) -> np.ndar
 
 
 def check_joint_positions(name: str, q_rad, lower_rad: np.ndarray, upper_rad: np.ndarray, joint_names=None) -> np.ndarray:
-    """q as a (dof,) vector inside [lower, upper]; ValueError naming the joint otherwise."""
+    """q as a (dof,) vector inside [lower, upper]; InvalidInput naming the joint otherwise."""
     q = _as_joint_vector(name, q_rad, len(lower_rad))
     outside = np.flatnonzero((q < lower_rad) | (q > upper_rad))
     if outside.size:

@@ -17,7 +17,7 @@ import threading
 
 import numpy as np
 
-from armlab.errors import CommandRefused, InvalidInput, PlanRefused
+from armlab.errors import PLAN_REFUSALS, CommandRefused, InvalidInput, PlanRefused
 from armlab.motion.blend import Limits, Run, plan_run, plan_stop
 from armlab.skills.repeat_plan import (
     HOME_LABEL,
@@ -183,7 +183,7 @@ class _Runner:
 
             try:
                 trajectory, t0, _ = self.station.replace_trajectory(self.ctx, stop)
-            except (ValueError, CommandRefused):
+            except (*PLAN_REFUSALS, CommandRefused):
                 continue
             self.current = (trajectory, t0)
             break
@@ -220,7 +220,7 @@ class _Runner:
 
         try:
             trajectory, t0, run_start = self.station.replace_trajectory(self.ctx, plan)
-        except (ValueError, CommandRefused) as error:
+        except (*PLAN_REFUSALS, CommandRefused) as error:
             self.station.events.add("warn", f"repeat: speed {speed:g} % applies from the next stop ({error})")
             return None
         self.current = (trajectory, t0)

@@ -58,7 +58,7 @@ class RunControl:
             self._bump()
 
     def set_speed(self, speed_percent: float) -> None:
-        """Change the speed; ValueError (the job's reason, e.g. a waypoint the cycle fails at that speed) leaves it."""
+        """Change the speed; InvalidInput (the job's reason, e.g. a waypoint the cycle fails at that speed) leaves it."""
         value = checked_speed_percent(speed_percent)
         if self.validate_speed is not None:
             try:

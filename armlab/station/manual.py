@@ -12,7 +12,7 @@ import math
 import numpy as np
 
 from armlab.devices.arm import JointTrajectory
-from armlab.errors import ArmMoving, CommandRefused, InvalidInput, NeedsConfirmation, NotController
+from armlab.errors import PLAN_REFUSALS, ArmMoving, CommandRefused, InvalidInput, NeedsConfirmation, NotController
 from armlab.motion import plan_joint_move
 from armlab.motion.blend import arm_limits, plan_run
 from armlab.motion.gripper_step import StepSpeeds, plan_gripper_step
@@ -173,7 +173,7 @@ class ManualCommands:
             return False
         try:
             self.jog(jog["velocity"], source=source)
-        except (CommandRefused, NotController, ValueError):  # the jog runs out by itself
+        except (CommandRefused, NotController, *PLAN_REFUSALS):  # the jog runs out by itself
             return False
         return True
 

@@ -144,7 +144,7 @@ def unsupported_reason(job: str, workcell: Workcell | str | None = None) -> str 
 
 
 def check_supported(job: str, workcell: Workcell | str | None = None) -> None:
-    """JobUnsupported (a ValueError) naming the job, the workcell and what it lacks, unless the job runs there."""
+    """JobUnsupported (an InvalidInput) naming the job, the workcell and what it lacks, unless the job runs there."""
     reason = unsupported_reason(job, workcell)
     if reason:
         raise JobUnsupported(f"job '{job}' is not available on workcell '{as_workcell(workcell).name}': it needs {reason}")
