@@ -10,6 +10,7 @@ from pathlib import Path
 from pydantic import Field, model_validator
 
 from armlab.config import StrictModel, config_dir, load_config
+from armlab.errors import InvalidInput
 
 
 class MotionConfig(StrictModel):
@@ -64,7 +65,7 @@ class MotionConfig(StrictModel):
     def _workspace_box(self) -> MotionConfig:
         for axis, low, high in zip("xyz", self.workspace_min_m, self.workspace_max_m):
             if not (math.isfinite(low) and math.isfinite(high) and low < high):
-                raise ValueError(f"workspace box: {axis} must have finite min < max, got [{low}, {high}]")
+                raise InvalidInput(f"workspace box: {axis} must have finite min < max, got [{low}, {high}]")
         return self
 
     @property
@@ -75,7 +76,7 @@ class MotionConfig(StrictModel):
     @model_validator(mode="after")
     def _accel_within_move(self) -> MotionConfig:
         if self.move_time_s is not None and self.accel_time_s is not None and self.accel_time_s > self.move_time_s / 2:
-            raise ValueError(f"accel_time_s ({self.accel_time_s}) must be at most half of move_time_s ({self.move_time_s})")
+            raise InvalidInput(f"accel_time_s ({self.accel_time_s}) must be at most half of move_time_s ({self.move_time_s})")
         return self
 
     def grasp_depth_for(self, edge_m: float) -> float:
@@ -89,7 +90,7 @@ class MotionConfig(StrictModel):
         if gripper_type == "suction":
             return self.suction_press_m
         if gripper_type != "fingers":
-            raise ValueError(f"gripper type must be 'fingers' or 'suction', got {gripper_type!r}")
+            raise InvalidInput(f"gripper type must be 'fingers' or 'suction', got {gripper_type!r}")
         return self.grasp_depth_for(edge_m)
 
 

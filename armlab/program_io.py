@@ -16,6 +16,7 @@ import json
 import math
 from collections.abc import Sequence
 
+from armlab.errors import InvalidInput
 from armlab.store import MAX_PROGRAM_NAME_CHARS, Waypoint
 
 FORMAT_NAME = "armlab-program"
@@ -24,7 +25,7 @@ MAX_WAYPOINTS = 1000
 SAME_JOINTS_RAD = 1e-9  # rows this close are "the same joints" (a dwell or a gripper step)
 
 
-class ProgramFileError(ValueError):
+class ProgramFileError(InvalidInput):
     """A program file that cannot be imported; the message names the line (CSV) or the item (JSON) and why."""
 
 

@@ -12,6 +12,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from armlab.errors import InvalidInput
 from armlab.workcell import DEFAULT_SCENE_REACH_M, DEFAULT_WORKCELL, DISTRACTOR_SHAPES, Workcell, load_workcell
 
 _ID_PATTERN = re.compile(r"[A-Za-z0-9_.:-]{1,64}")
@@ -93,26 +94,26 @@ class SceneObject:
 
     def __post_init__(self) -> None:
         if not isinstance(self.id, str) or not _ID_PATTERN.fullmatch(self.id):
-            raise ValueError(f"SceneObject: id must be 1-64 letters, digits or _.:- characters, got {self.id!r}")
+            raise InvalidInput(f"SceneObject: id must be 1-64 letters, digits or _.:- characters, got {self.id!r}")
         if self.type not in OBJECT_TYPES:
-            raise ValueError(f"SceneObject {self.id}: type {self.type!r} not one of {OBJECT_TYPES}")
+            raise InvalidInput(f"SceneObject {self.id}: type {self.type!r} not one of {OBJECT_TYPES}")
         if self.color not in COLORS:
-            raise ValueError(f"SceneObject {self.id}: color {self.color!r} not one of {COLORS}")
+            raise InvalidInput(f"SceneObject {self.id}: color {self.color!r} not one of {COLORS}")
         if self.size not in (*SIZES, None) or (self.type == "block" and self.size is None):
-            raise ValueError(f"SceneObject {self.id}: size {self.size!r} invalid (blocks need 'large' or 'small')")
+            raise InvalidInput(f"SceneObject {self.id}: size {self.size!r} invalid (blocks need 'large' or 'small')")
         position = np.asarray(self.position_m, dtype=float)
         quat = np.asarray(self.quat_wxyz, dtype=float)
         if position.shape != (3,) or quat.shape != (4,):
-            raise ValueError(f"SceneObject {self.id}: position_m needs 3 values and quat_wxyz 4")
+            raise InvalidInput(f"SceneObject {self.id}: position_m needs 3 values and quat_wxyz 4")
         if not (np.all(np.isfinite(position)) and np.all(np.isfinite(quat))):
-            raise ValueError(f"SceneObject {self.id}: position_m and quat_wxyz must be finite")
+            raise InvalidInput(f"SceneObject {self.id}: position_m and quat_wxyz must be finite")
         if np.any(np.abs(position) > WORKCELL_BOUND_M):
-            raise ValueError(f"SceneObject {self.id}: position_m {position.tolist()} is far outside the workcell")
+            raise InvalidInput(f"SceneObject {self.id}: position_m {position.tolist()} is far outside the workcell")
         norm = float(np.linalg.norm(quat))
         if norm < 1e-6:
-            raise ValueError(f"SceneObject {self.id}: quat_wxyz must be non-zero")
+            raise InvalidInput(f"SceneObject {self.id}: quat_wxyz must be non-zero")
         if self.aruco_id is not None and (self.type != "block" or not 0 <= int(self.aruco_id) < 250):
-            raise ValueError(f"SceneObject {self.id}: aruco_id needs a block and an id in 0..249")
+            raise InvalidInput(f"SceneObject {self.id}: aruco_id needs a block and an id in 0..249")
         object.__setattr__(self, "position_m", tuple(float(v) for v in position))
         object.__setattr__(self, "quat_wxyz", tuple(float(v) for v in quat / norm))
         # Looked up once (the workcell config); not a dataclass field, so equality ignores it.
@@ -158,20 +159,20 @@ class SceneObject:
         """Accepts the ground-truth format; quat_wxyz wins over yaw_rad, which is used if it is alone.
         `workcell`: the workcell whose sizes the object has (None = the default)."""
         if not isinstance(data, dict):
-            raise ValueError(f"scene object must be a mapping, got {type(data).__name__}")
+            raise InvalidInput(f"scene object must be a mapping, got {type(data).__name__}")
         allowed = {"id", "type", "color", "size", "position_m", "yaw_rad", "quat_wxyz", "aruco_id"}
         unknown = set(data) - allowed
         if unknown:
-            raise ValueError(f"scene object {data.get('id')!r}: unknown fields {sorted(unknown)}")
+            raise InvalidInput(f"scene object {data.get('id')!r}: unknown fields {sorted(unknown)}")
         missing = {"id", "type", "color", "position_m"} - set(data)
         if missing:
-            raise ValueError(f"scene object {data.get('id')!r}: missing fields {sorted(missing)}")
+            raise InvalidInput(f"scene object {data.get('id')!r}: missing fields {sorted(missing)}")
         if data.get("quat_wxyz") is not None:
             quat = tuple(data["quat_wxyz"])
         else:
             yaw = float(data.get("yaw_rad", 0.0))
             if not math.isfinite(yaw):
-                raise ValueError(f"scene object {data['id']!r}: yaw_rad must be finite")
+                raise InvalidInput(f"scene object {data['id']!r}: yaw_rad must be finite")
             quat = quat_from_yaw(yaw)
         size = data.get("size", "large" if data["type"] == "block" else None)
         aruco = data.get("aruco_id")
@@ -200,11 +201,11 @@ class Feeder:
     def __post_init__(self) -> None:
         spot = np.asarray(self.spot_m, dtype=float)
         if spot.shape != (2,) or not np.all(np.isfinite(spot)) or np.any(np.abs(spot) > WORKCELL_BOUND_M):
-            raise ValueError(f"Feeder: spot_m must be 2 finite values (x, y) in metres, got {self.spot_m!r}")
+            raise InvalidInput(f"Feeder: spot_m must be 2 finite values (x, y) in metres, got {self.spot_m!r}")
         if isinstance(self.count, bool) or not isinstance(self.count, int | np.integer) or not 0 <= self.count <= 100:
-            raise ValueError(f"Feeder: count must be an integer in 0..100, got {self.count!r}")
+            raise InvalidInput(f"Feeder: count must be an integer in 0..100, got {self.count!r}")
         if isinstance(self.fed, bool) or not isinstance(self.fed, int | np.integer) or not 0 <= self.fed <= self.count:
-            raise ValueError(f"Feeder: fed must be an integer in 0..count ({self.count}), got {self.fed!r}")
+            raise InvalidInput(f"Feeder: fed must be an integer in 0..count ({self.count}), got {self.fed!r}")
         object.__setattr__(self, "spot_m", (float(spot[0]), float(spot[1])))
         object.__setattr__(self, "count", int(self.count))
         object.__setattr__(self, "fed", int(self.fed))
@@ -227,13 +228,13 @@ class Feeder:
     def from_dict(cls, data: dict) -> Feeder:
         """Accepts to_dict()'s format (remaining, if given, must equal count - fed)."""
         if not isinstance(data, dict):
-            raise ValueError(f"feeder must be a mapping, got {type(data).__name__}")
+            raise InvalidInput(f"feeder must be a mapping, got {type(data).__name__}")
         unknown = set(data) - {"spot_m", "count", "fed", "remaining"}
         if unknown or not {"spot_m", "count"} <= set(data):
-            raise ValueError(f"feeder needs spot_m and count (optional fed, remaining), got fields {sorted(data)}")
+            raise InvalidInput(f"feeder needs spot_m and count (optional fed, remaining), got fields {sorted(data)}")
         feeder = cls(spot_m=tuple(data["spot_m"]), count=data["count"], fed=data.get("fed", 0))
         if data.get("remaining") is not None and data["remaining"] != feeder.remaining:
-            raise ValueError(f"feeder: remaining {data['remaining']!r} != count - fed = {feeder.remaining}")
+            raise InvalidInput(f"feeder: remaining {data['remaining']!r} != count - fed = {feeder.remaining}")
         return feeder
 
 
@@ -250,11 +251,11 @@ class Scene:
         objects = tuple(self.objects)
         ids = [obj.id for obj in objects]
         if len(set(ids)) != len(ids):
-            raise ValueError(f"Scene: object ids must be unique, got {ids}")
+            raise InvalidInput(f"Scene: object ids must be unique, got {ids}")
         if self.feeder is not None:
             clash = sorted(set(ids) & set(self.feeder.waiting_ids()))
             if clash:
-                raise ValueError(f"Scene: object ids {clash} are reserved for blocks the feeder has not fed yet")
+                raise InvalidInput(f"Scene: object ids {clash} are reserved for blocks the feeder has not fed yet")
         object.__setattr__(self, "objects", objects)
 
     def to_dict(self) -> dict:
@@ -268,7 +269,7 @@ class Scene:
         """From to_dict()'s format or a ground-truth dict (its other keys are ignored); `workcell` names the
         workcell whose sizes its objects have (None = the default)."""
         if not isinstance(data, dict) or not isinstance(data.get("objects"), list):
-            raise ValueError("scene must be a mapping with an 'objects' list")
+            raise InvalidInput("scene must be a mapping with an 'objects' list")
         feeder = Feeder.from_dict(data["feeder"]) if data.get("feeder") is not None else None
         return cls(objects=tuple(SceneObject.from_dict(item, workcell) for item in data["objects"]), feeder=feeder,
                    workcell=workcell)
@@ -289,18 +290,18 @@ def check_can_stand(scene: Scene) -> None:
     overlapping (stacked objects only touch). MuJoCo pushes interpenetrating bodies apart violently: a
     block placed 1 m under the board flew to z = 98.8 m, and 100 blocks in one place exhausted its arena."""
     if len(scene.objects) > MAX_SCENE_OBJECTS:
-        raise ValueError(f"a scene has at most {MAX_SCENE_OBJECTS} objects, this one {len(scene.objects)}")
+        raise InvalidInput(f"a scene has at most {MAX_SCENE_OBJECTS} objects, this one {len(scene.objects)}")
     for obj in scene.objects:
         w, x, y, z = obj.quat_wxyz
         up = np.abs([2 * (x * z - w * y), 2 * (y * z + w * x), 1 - 2 * (x * x + y * y)])  # world z row of R
         lowest_m = obj.position_m[2] - 0.5 * float(up @ np.asarray(obj.dimensions_m))
         if lowest_m < -BOARD_TOLERANCE_M:
-            raise ValueError(f"scene object {obj.id} is below the board: its lowest point is at z = {lowest_m * 1000:.0f} mm")
+            raise InvalidInput(f"scene object {obj.id} is below the board: its lowest point is at z = {lowest_m * 1000:.0f} mm")
     pairs = scene.overlapping_pairs()
     if pairs:
         shown = "; ".join(f"{a} and {b} overlap" for a, b in pairs[:5])
         more = f" (and {len(pairs) - 5} more pairs)" if len(pairs) > 5 else ""
-        raise ValueError(f"scene objects may touch but not overlap: {shown}{more}")
+        raise InvalidInput(f"scene objects may touch but not overlap: {shown}{more}")
 
 
 def _boxes_overlap(first: SceneObject, second: SceneObject, tolerance_m: float = 1e-4) -> bool:
@@ -447,9 +448,9 @@ def generate_scene(event: str, level: int = 1, seed: int = 0, workcell: Workcell
 
 def _generate_scene(event: str, level: int, seed: int, workcell: Workcell) -> Scene:
     if event not in JOBS:
-        raise ValueError(f"unknown event {event!r}; events: {', '.join(JOBS)}")
+        raise InvalidInput(f"unknown event {event!r}; events: {', '.join(JOBS)}")
     if level not in JOBS[event]:
-        raise ValueError(f"event {event!r} has levels {JOBS[event]}, not {level!r}")
+        raise InvalidInput(f"event {event!r} has levels {JOBS[event]}, not {level!r}")
     rng = np.random.default_rng([int(seed), list(JOBS).index(event), int(level)])
     regions = _regions(workcell)
 
@@ -519,7 +520,7 @@ def _sort_by_tag(level: int, rng: np.random.Generator, workcell: Workcell, half:
     L1: one large block per id; L2: 6 blocks of random sizes and ids (ids repeat); L3: 8, piled up to 2 high."""
     tags = workcell.block_tags.ids
     if not tags:
-        raise ValueError(f"sort_by_tag needs block_tags.ids in the workcell config {workcell.name!r}")
+        raise InvalidInput(f"sort_by_tag needs block_tags.ids in the workcell config {workcell.name!r}")
     ids = sorted(tags)
     if level == 1:
         chosen, sizes = ids, ["large"] * len(ids)
@@ -579,12 +580,12 @@ def random_scene(
     random size and colour, n_distractors (default 0..2) distractors, stacks up to max_stack high;
     aruco=True puts the workcell's block tags on blocks of their colours (aruco_ids_by_color)."""
     if max_stack < 1:
-        raise ValueError("max_stack must be >= 1")
+        raise InvalidInput("max_stack must be >= 1")
     rng = np.random.default_rng([int(seed), 99])
     n_blocks = int(rng.integers(3, 11)) if n_blocks is None else int(n_blocks)
     n_distractors = int(rng.integers(0, 3)) if n_distractors is None else int(n_distractors)
     if not (0 <= n_blocks <= 16 and 0 <= n_distractors <= 6):
-        raise ValueError("random_scene: n_blocks must be 0..16 and n_distractors 0..6")
+        raise InvalidInput("random_scene: n_blocks must be 0..16 and n_distractors 0..6")
     sizes = [str(s) for s in rng.choice(SIZES, size=n_blocks)]
     colors = [str(c) for c in rng.choice(COLORS, size=n_blocks)]
     piles = _into_piles(_blocks(sizes, colors), max_stack, 0.35, rng)

@@ -30,6 +30,7 @@ from collections.abc import Sequence
 from dataclasses import dataclass
 from pathlib import Path
 
+from armlab.errors import ArmlabError, InvalidInput
 from armlab.store_schema import NewerSchema, migrate
 
 log = logging.getLogger(__name__)
@@ -52,7 +53,7 @@ class UnusableDatabase(RuntimeError):
     start-up backup. The message is one line: the file, why, what to do."""
 
 
-class NotFound(LookupError):
+class NotFound(ArmlabError, LookupError):
     """A stored item (program, calibration) does not exist."""
 
 
@@ -73,16 +74,16 @@ class Waypoint:
 
     def __post_init__(self) -> None:
         if not self.joints_rad or not all(math.isfinite(float(value)) for value in self.joints_rad):
-            raise ValueError("Waypoint.joints_rad must be a non-empty list of finite numbers")
+            raise InvalidInput("Waypoint.joints_rad must be a non-empty list of finite numbers")
         if self.gripper not in ("grasp", "release"):
-            raise ValueError(f"Waypoint.gripper must be 'grasp' or 'release', not {self.gripper!r}")
+            raise InvalidInput(f"Waypoint.gripper must be 'grasp' or 'release', not {self.gripper!r}")
         dwell = float(self.dwell_s)
         if not math.isfinite(dwell) or not 0.0 <= dwell <= MAX_DWELL_S:
-            raise ValueError(f"Waypoint.dwell_s must be from 0 to {MAX_DWELL_S:g} s, not {self.dwell_s!r}")
+            raise InvalidInput(f"Waypoint.dwell_s must be from 0 to {MAX_DWELL_S:g} s, not {self.dwell_s!r}")
         if self.moving_time_s is not None:
             moving = float(self.moving_time_s)
             if not math.isfinite(moving) or not 0.0 < moving <= MAX_DWELL_S:
-                raise ValueError(f"Waypoint.moving_time_s must be above 0 and at most {MAX_DWELL_S:g} s, not {self.moving_time_s!r}")
+                raise InvalidInput(f"Waypoint.moving_time_s must be above 0 and at most {MAX_DWELL_S:g} s, not {self.moving_time_s!r}")
             object.__setattr__(self, "moving_time_s", moving)
         object.__setattr__(self, "joints_rad", tuple(float(value) for value in self.joints_rad))
         object.__setattr__(self, "dwell_s", dwell)
@@ -495,11 +496,11 @@ def _checked_program(name: str, waypoints: Sequence[Waypoint]) -> tuple[str, str
     no waypoints."""
     name = str(name).strip()
     if not name:
-        raise ValueError("a program needs a name")
+        raise InvalidInput("a program needs a name")
     if len(name) > MAX_PROGRAM_NAME_CHARS:
-        raise ValueError(f"a program name has at most {MAX_PROGRAM_NAME_CHARS} characters, this one {len(name)}")
+        raise InvalidInput(f"a program name has at most {MAX_PROGRAM_NAME_CHARS} characters, this one {len(name)}")
     if not waypoints:
-        raise ValueError("a program needs at least one waypoint: record one before saving")
+        raise InvalidInput("a program needs at least one waypoint: record one before saving")
     return name, json.dumps([waypoint.to_dict() for waypoint in waypoints])
 
 
@@ -513,7 +514,7 @@ def _program_from_row(row: tuple) -> Program:
     """A Program from (id, name bytes, created_s, waypoints_json bytes, updated_s); raises one of _ROW_ERRORS if damaged."""
     name, items = row[1].decode("utf-8"), json.loads(row[3].decode("utf-8"))
     if not isinstance(items, list) or not items:
-        raise ValueError("waypoints_json is not a non-empty list")
+        raise InvalidInput("waypoints_json is not a non-empty list")
     waypoints = tuple(Waypoint.from_dict(item) for item in items)
     updated_s = float(row[4]) if len(row) > 4 and row[4] is not None else None
     return Program(int(row[0]), name, float(row[2]), waypoints, updated_s)

@@ -16,7 +16,7 @@ import numpy as np
 from pydantic import Field, field_validator, model_validator
 
 from armlab.config import StrictModel, config_dir, load_config, read_config_file, resolve_config_path
-from armlab.errors import ConfigError
+from armlab.errors import ConfigError, InvalidInput
 from armlab.kinematics import load_arm
 from armlab.kinematics.arm_model import ArmModel
 from armlab.motion_config import MotionConfig, load_motion_config
@@ -33,14 +33,14 @@ Point2 = tuple[float, float]
 
 def _ordered(name: str, bounds: tuple[float, float]) -> None:
     if not bounds[0] < bounds[1]:
-        raise ValueError(f"{name}: lower bound {bounds[0]} must be below upper bound {bounds[1]}")
+        raise InvalidInput(f"{name}: lower bound {bounds[0]} must be below upper bound {bounds[1]}")
 
 
 def _known_dictionary(name: str) -> str:
     import cv2
 
     if not name.startswith("DICT_") or not hasattr(cv2.aruco, name):
-        raise ValueError(f"unknown OpenCV ArUco dictionary '{name}' (e.g. DICT_APRILTAG_36h11, DICT_4X4_250)")
+        raise InvalidInput(f"unknown OpenCV ArUco dictionary '{name}' (e.g. DICT_APRILTAG_36h11, DICT_4X4_250)")
     return name
 
 
@@ -70,7 +70,7 @@ def known_family(name: str) -> str:
     try:
         return _known_dictionary(name)
     except ValueError:
-        raise ValueError(f"unknown tag family '{name}': AprilTag families {sorted(APRILTAG_FAMILY_SIZES)} "
+        raise InvalidInput(f"unknown tag family '{name}': AprilTag families {sorted(APRILTAG_FAMILY_SIZES)} "
                          "or an OpenCV ArUco dictionary (DICT_APRILTAG_36h11, DICT_4X4_250, ...)") from None
 
 
@@ -98,10 +98,10 @@ class BoardSpec(StrictModel):
         _ordered("x_range_m", self.x_range_m)
         _ordered("y_range_m", self.y_range_m)
         if not (self.x_range_m[1] - self.x_range_m[0] <= 4.0 and self.y_range_m[1] - self.y_range_m[0] <= 4.0):
-            raise ValueError("board larger than 4 m: are the ranges in metres?")
+            raise InvalidInput("board larger than 4 m: are the ranges in metres?")
         for axis, grid, board in (("x", self.grid.x_m, self.x_range_m), ("y", self.grid.y_m, self.y_range_m)):
             if grid[0] < board[0] - 1e-9 or grid[1] > board[1] + 1e-9:
-                raise ValueError(f"grid.{axis}_m {list(grid)} reaches outside the board {list(board)}")
+                raise InvalidInput(f"grid.{axis}_m {list(grid)} reaches outside the board {list(board)}")
         return self
 
     def contains(self, x_m: float, y_m: float, margin_m: float = 0.0) -> bool:
@@ -157,11 +157,11 @@ class BoardTagsSpec(StrictModel):
     @model_validator(mode="after")
     def _check(self) -> BoardTagsSpec:
         if len(self.centres_m) < 3:
-            raise ValueError("centres_m needs at least 3 tags for a calibration")
+            raise InvalidInput("centres_m needs at least 3 tags for a calibration")
         size = dictionary_size(self.detector)
         bad = [tag_id for tag_id in self.centres_m if not 0 <= tag_id < size]
         if bad:
-            raise ValueError(f"centres_m: ids {bad} are not in {self.detector} (0..{size - 1})")
+            raise InvalidInput(f"centres_m: ids {bad} are not in {self.detector} (0..{size - 1})")
         return self
 
 
@@ -169,7 +169,7 @@ def board_file(name: str) -> dict:
     """The board_tags mapping of config/boards/<name>.yaml (ConfigError listing the boards if absent)."""
     data = read_config_file(resolve_config_path(name, "boards"))
     if not isinstance(data.get("board_tags"), dict):
-        raise ValueError(f"config/boards/{name}.yaml has no board_tags mapping")
+        raise InvalidInput(f"config/boards/{name}.yaml has no board_tags mapping")
     return data["board_tags"]
 
 
@@ -179,9 +179,9 @@ class BlockSpec(StrictModel):
     @model_validator(mode="after")
     def _check(self) -> BlockSpec:
         if set(self.edges_m) != set(BLOCK_SIZES):
-            raise ValueError(f"edges_m must give exactly {list(BLOCK_SIZES)}, got {sorted(self.edges_m)}")
+            raise InvalidInput(f"edges_m must give exactly {list(BLOCK_SIZES)}, got {sorted(self.edges_m)}")
         if not self.edges_m["small"] < self.edges_m["large"]:
-            raise ValueError("edges_m: small must be below large")
+            raise InvalidInput("edges_m: small must be below large")
         return self
 
 
@@ -200,7 +200,7 @@ class DistractorSpec(StrictModel):
     @model_validator(mode="after")
     def _check(self) -> DistractorSpec:
         if set(self.shapes) != set(DISTRACTOR_SHAPES):
-            raise ValueError(f"shapes must describe exactly {list(DISTRACTOR_SHAPES)}, got {sorted(self.shapes)}")
+            raise InvalidInput(f"shapes must describe exactly {list(DISTRACTOR_SHAPES)}, got {sorted(self.shapes)}")
         return self
 
 
@@ -225,7 +225,7 @@ class BlockTagsSpec(StrictModel):
         size = dictionary_size(self.dictionary)
         bad = [tag_id for tag_id in self.ids if not 0 <= tag_id < size]
         if bad:
-            raise ValueError(f"ids {bad} are not in {self.dictionary} (0..{size - 1})")
+            raise InvalidInput(f"ids {bad} are not in {self.dictionary} (0..{size - 1})")
         return self
 
 
@@ -323,7 +323,7 @@ class SceneSpec(StrictModel):
     @model_validator(mode="after")
     def _check(self) -> SceneSpec:
         if not 0.0 <= self.reach_m[0] < self.reach_m[1] <= 5.0:
-            raise ValueError(f"reach_m: need 0 <= min < max <= 5 m, got {list(self.reach_m)}")
+            raise InvalidInput(f"reach_m: need 0 <= min < max <= 5 m, got {list(self.reach_m)}")
         return self
 
 
@@ -360,7 +360,7 @@ class Workcell(StrictModel):
             try:
                 MotionConfig.model_validate(self.motion)
             except Exception as error:  # pydantic ValidationError: name the field under motion
-                raise ValueError(f"motion: {error}") from None
+                raise InvalidInput(f"motion: {error}") from None
         return self
 
     @model_validator(mode="after")
@@ -368,13 +368,13 @@ class Workcell(StrictModel):
         half_tag = 0.5 * self.board_tags.size_m
         for tag_id, (x, y) in self.board_tags.centres_m.items():
             if not self.board.contains(x, y, half_tag):
-                raise ValueError(f"board_tags.centres_m.{tag_id}: ({x}, {y}) is not on the board")
+                raise InvalidInput(f"board_tags.centres_m.{tag_id}: ({x}, {y}) is not on the board")
         for place, (x, y) in self.places_m.items():
             if not self.board.contains(x, y):
-                raise ValueError(f"places_m.{place}: ({x}, {y}) is not on the board")
+                raise InvalidInput(f"places_m.{place}: ({x}, {y}) is not on the board")
         for tag_id, entry in self.block_tags.ids.items():
             if entry.destination not in self.places_m:
-                raise ValueError(
+                raise InvalidInput(
                     f"block_tags.ids.{tag_id}.destination: place {entry.destination} is not in places_m {sorted(self.places_m)}"
                 )
         marker = self.gripper.marker
@@ -382,12 +382,12 @@ class Workcell(StrictModel):
             raise ValueError(f"gripper.marker.id: {marker.id} is a board tag or not in {self.board_tags.detector}")
         overlap = set(self.board_tags.centres_m) & set(self.block_tags.ids)
         if overlap and self.board_tags.detector == self.block_tags.dictionary:
-            raise ValueError(f"block_tags.ids: {sorted(overlap)} are also board tags of the same dictionary")
+            raise InvalidInput(f"block_tags.ids: {sorted(overlap)} are also board tags of the same dictionary")
         if not self.board.contains(*self.feeder.spot_m, 0.5 * self.blocks.edges_m["large"]):
-            raise ValueError(f"feeder.spot_m: {list(self.feeder.spot_m)} is not on the board")
+            raise InvalidInput(f"feeder.spot_m: {list(self.feeder.spot_m)} is not on the board")
         corners = [(x, y) for x in self.bin.x_range_m for y in self.bin.y_range_m]
         if not all(self.board.contains(x, y) for x, y in corners):
-            raise ValueError("bin: the rectangle reaches outside the board")
+            raise InvalidInput("bin: the rectangle reaches outside the board")
         return self
 
     # ------------------------------------------------------------------ lookups
@@ -396,7 +396,7 @@ class Workcell(StrictModel):
         try:
             return float(self.blocks.edges_m[size])
         except KeyError:
-            raise ValueError(f"block size must be one of {list(BLOCK_SIZES)}, got {size!r}") from None
+            raise InvalidInput(f"block size must be one of {list(BLOCK_SIZES)}, got {size!r}") from None
 
     def object_dimensions_m(self, obj_type: str, size: str | None) -> tuple[float, float, float]:
         """(extent_x, extent_y, height) of a block or distractor in its body frame; size None = large."""
@@ -405,9 +405,9 @@ class Workcell(StrictModel):
             return (edge, edge, edge)
         shape = self.distractors.shapes.get(obj_type)
         if shape is None:
-            raise ValueError(f"unknown object type {obj_type!r}; distractors: {list(DISTRACTOR_SHAPES)}")
+            raise InvalidInput(f"unknown object type {obj_type!r}; distractors: {list(DISTRACTOR_SHAPES)}")
         if size not in (None, *BLOCK_SIZES):
-            raise ValueError(f"size must be one of {list(BLOCK_SIZES)} or None, got {size!r}")
+            raise InvalidInput(f"size must be one of {list(BLOCK_SIZES)} or None, got {size!r}")
         small_scale = self.distractors.small_scale or self.block_edge_m("small") / self.block_edge_m("large")
         scale = 1.0 if size in (None, "large") else small_scale
         return (shape.extent_x_m * scale, shape.extent_y_m * scale, shape.height_m * scale)
@@ -421,7 +421,7 @@ class Workcell(StrictModel):
     def place_m(self, destination: int) -> Point2:
         """Centre (x, y) of a sort_by_tag place."""
         if destination not in self.places_m:
-            raise ValueError(f"no place {destination!r}; places: {sorted(self.places_m)}")
+            raise InvalidInput(f"no place {destination!r}; places: {sorted(self.places_m)}")
         return self.places_m[destination]
 
     def check_arm_fits(self) -> None:

@@ -7,15 +7,21 @@ import logging
 from fastapi import FastAPI, Request
 from fastapi.exceptions import RequestValidationError
 from fastapi.responses import JSONResponse
+from pydantic import ValidationError
 from starlette.exceptions import HTTPException as StarletteHTTPException
 
 from armlab.errors import (
+    ArmlabError,
     CalibrationUntrusted,
     CommandRefused,
-    DeviceNotConnectedError,
+    DeviceFault,
+    InvalidInput,
     NeedsConfirmation,
     NoArmError,
     NotController,
+    PlanRefused,
+    RefusedByCheck,
+    ShuttingDown,
 )
 from armlab.kinematics import Unreachable
 from armlab.motion.safety import UnsafeTrajectory
@@ -54,28 +60,34 @@ def _validation_message(error: RequestValidationError) -> str:
 
 
 def _classify(error: Exception) -> tuple[int, str]:
-    """HTTP status and wire code for a library exception (the most specific class wins)."""
-    if isinstance(error, NoArmError):
-        return 409, "no_arm"
-    if isinstance(error, CommandRefused):
-        return 409, "wrong_state"
-    if isinstance(error, NotController):
-        return 409, "not_controller"
-    if isinstance(error, NeedsConfirmation):
-        return 409, "needs_confirmation"
-    if isinstance(error, (NotCalibrated, CalibrationUntrusted)):
-        return 409, "not_calibrated"
-    if isinstance(error, NotFound):
-        return 404, "not_found"
-    if isinstance(error, Unreachable):
-        return 422, "unreachable"
-    if isinstance(error, UnsafeTrajectory):
-        return 422, "unsafe"
-    if isinstance(error, (DeviceNotConnectedError, ConnectionError, TimeoutError)):
-        return 503, "device"
-    if isinstance(error, ValueError):
-        return 422, "invalid"
+    """HTTP status and wire code for an exception (the first row of ERROR_STATUS it is an instance of)."""
+    for error_class, status_code, code in ERROR_STATUS:
+        if isinstance(error, error_class):
+            return status_code, code
     return 500, "internal"
+
+
+# The library's error hierarchy (armlab.errors) → HTTP status and wire code, most specific first. Anything
+# not listed, a bare ValueError included (a bug, e.g. numpy's), is 500 "internal" with its traceback logged.
+ERROR_STATUS: tuple[tuple[type[BaseException], int, str], ...] = (
+    (ShuttingDown, 503, "device"),  # a refusal, but one that says the station is going away
+    (NoArmError, 409, "no_arm"),
+    (CommandRefused, 409, "wrong_state"),
+    (NotController, 409, "not_controller"),
+    (NeedsConfirmation, 409, "needs_confirmation"),
+    (NotCalibrated, 409, "not_calibrated"),
+    (CalibrationUntrusted, 409, "not_calibrated"),
+    (NotFound, 404, "not_found"),
+    (Unreachable, 422, "unreachable"),
+    (UnsafeTrajectory, 422, "unsafe"),
+    (PlanRefused, 422, "invalid"),
+    (RefusedByCheck, 409, "wrong_state"),  # any other check's refusal: not allowed now
+    (InvalidInput, 422, "invalid"),
+    (ValidationError, 422, "invalid"),  # a pydantic model of the library refused a value (a scene, a workcell)
+    (DeviceFault, 503, "device"),
+    (ConnectionError, 503, "device"),  # an OSError of a device's transport
+    (TimeoutError, 503, "device"),
+)
 
 
 # Error statuses every operation documents (all with the ErrorResponse body); 401 only where the
@@ -139,17 +151,17 @@ def install_error_handlers(app: FastAPI) -> None:
         }.get(error.status_code, str(error.detail))
         return error_response(error.status_code, code, message, headers=getattr(error, "headers", None))
 
-    async def _library(_: Request, error: Exception) -> JSONResponse:
+    async def _library(request: Request, error: Exception) -> JSONResponse:
         status_code, code = _classify(error)
         if status_code == 500:
-            log.exception("internal error", exc_info=error)
-            return error_response(500, code, f"internal error: {type(error).__name__}: {error}")
+            log.error("internal error in %s %s", request.method, request.url.path, exc_info=error)
+            return error_response(500, code, f"internal error ({type(error).__name__}); the server log has the traceback")
         allowed = error.allowed if isinstance(error, CommandRefused) else None
         return error_response(status_code, code, str(error), allowed)
 
     # Registered per base class so they are handled inside the app (a bare Exception handler runs in
     # Starlette's outermost middleware, which logs and re-raises).
     for error_class in (
-        CommandRefused, NotController, NeedsConfirmation, NotCalibrated, CalibrationUntrusted, NotFound, ValueError, ConnectionError, TimeoutError, Exception
+        ArmlabError, ValueError, ConnectionError, TimeoutError, Exception
     ):
         app.add_exception_handler(error_class, _library)

@@ -30,6 +30,7 @@ from typing import Annotated, Union
 from pydantic import Field, TypeAdapter, ValidationError
 from starlette.websockets import WebSocket, WebSocketDisconnect
 
+from armlab.errors import is_internal
 from armlab.station.arm_info import arm_info
 from armlab.station.core import Station
 from armlab.station.lease import checked_controller
@@ -40,6 +41,16 @@ from server.stream_models import CLIENT_MESSAGES, message_type
 from server.views import ViewKey, compose_view, encode_jpeg
 
 log = logging.getLogger(__name__)
+
+
+def _said(error: Exception) -> str:
+    """What a websocket client is told of a command's failure; a bug (armlab.errors.is_internal) is logged
+    with its traceback and reported as an internal error, as the HTTP routes answer 500."""
+    if is_internal(error):
+        log.error("internal error in a websocket command", exc_info=error)
+        return f"internal error ({type(error).__name__}); the server log has the traceback"
+    return str(error)
+
 
 # What a client may send: validated strictly (server/models.py), dispatched on "type".
 CLIENT_MESSAGE = TypeAdapter(Annotated[Union[CLIENT_MESSAGES], Field(discriminator="type")])  # noqa: UP007 - a tuple
@@ -328,7 +339,7 @@ class StreamHub:
                     try:
                         await self._off_loop(self.station.heartbeat, client.controller)
                     except Exception as error:  # noqa: BLE001 - reported; the session goes on
-                        await self._reply_error(client, f"heartbeat: {error}")
+                        await self._reply_error(client, f"heartbeat: {_said(error)}")
             else:
                 await self._command(client, parsed.name)
 
@@ -368,7 +379,7 @@ class StreamHub:
             else:
                 await self._off_loop(actions[name], client.controller)
         except Exception as error:  # noqa: BLE001 - reported to the client as an event
-            await self._reply_error(client, str(error))
+            await self._reply_error(client, _said(error))
 
     async def _reply_error(self, client: ClientSession, message: str) -> None:
         await client.websocket.send_text(json.dumps({"type": "event", "level": "error", "kind": "general", "message": message, "time_s": time.time()}))

@@ -8,6 +8,7 @@ import cv2
 import numpy as np
 
 from armlab.devices.camera import Frame
+from armlab.errors import InvalidInput
 from armlab.vision import OverlayLayers, draw_overlay, top_down_view
 
 VIEWS = ("color", "depth", "topdown")
@@ -24,10 +25,10 @@ class ViewKey:
     @classmethod
     def make(cls, view: str = "color", layers=()) -> ViewKey:
         if view not in VIEWS:
-            raise ValueError(f"view must be one of {', '.join(VIEWS)}, not {view!r}")
+            raise InvalidInput(f"view must be one of {', '.join(VIEWS)}, not {view!r}")
         unknown = [layer for layer in layers if layer not in LAYERS]
         if unknown:
-            raise ValueError(f"unknown layers {unknown}; known: {', '.join(LAYERS)}")
+            raise InvalidInput(f"unknown layers {unknown}; known: {', '.join(LAYERS)}")
         return cls(view, tuple(sorted(set(layers))))
 
     @classmethod

@@ -21,7 +21,7 @@ from pathlib import Path
 import numpy as np
 
 from armlab.config import load_config, resolve_config_path
-from armlab.errors import ConfigError
+from armlab.errors import ConfigError, InvalidInput
 from armlab.kinematics import ik_numeric, ik_numeric_batch, ik_rx200, ik_rx200_batch
 from armlab.kinematics.arm_config import ArmConfig
 from armlab.kinematics.dh import dh_frames, fk_dh, matrix_from_flat
@@ -40,9 +40,9 @@ def _finite_array(value, shape_text: str, name: str) -> np.ndarray:
     try:
         array = np.asarray(value, dtype=float)
     except (TypeError, ValueError) as error:
-        raise ValueError(f"{name}: expected numbers {shape_text}, got {value!r}") from error
+        raise InvalidInput(f"{name}: expected numbers {shape_text}, got {value!r}") from error
     if not np.all(np.isfinite(array)):
-        raise ValueError(f"{name}: values must be finite (no NaN or infinity), got {array.tolist()}")
+        raise InvalidInput(f"{name}: values must be finite (no NaN or infinity), got {array.tolist()}")
     return array
 
 
@@ -53,7 +53,7 @@ def _position_tuple(position_m) -> tuple[float, float, float]:
             return float(position_m[0]), float(position_m[1]), float(position_m[2])
     position = _finite_array(position_m, "[x, y, z]", "position_m")
     if position.shape != (3,):
-        raise ValueError(f"position_m: expected [x, y, z], got shape {position.shape}")
+        raise InvalidInput(f"position_m: expected [x, y, z], got shape {position.shape}")
     return float(position[0]), float(position[1]), float(position[2])
 
 
@@ -123,7 +123,7 @@ class ArmModel:
     def _joint_vectors(self, q, name: str = "q") -> np.ndarray:
         array = _finite_array(q, f"of shape ({self.dof},) or (N, {self.dof})", name)
         if array.ndim not in (1, 2) or array.shape[-1] != self.dof:
-            raise ValueError(f"{name}: expected shape ({self.dof},) or (N, {self.dof}) for {self.name}, got {array.shape}")
+            raise InvalidInput(f"{name}: expected shape ({self.dof},) or (N, {self.dof}) for {self.name}, got {array.shape}")
         return array
 
     def within_limits(self, q) -> bool:
@@ -201,7 +201,7 @@ class ArmModel:
             return self._home_tuple
         array = _finite_array(q_seed, f"of shape ({self.dof},)", "q_seed")
         if array.shape != (self.dof,):
-            raise ValueError(f"q_seed: expected shape ({self.dof},) for {self.name}, got {array.shape}")
+            raise InvalidInput(f"q_seed: expected shape ({self.dof},) for {self.name}, got {array.shape}")
         return tuple(float(v) for v in array)
 
     @staticmethod
@@ -212,7 +212,7 @@ class ArmModel:
             return float(value)
         array = _finite_array(value, "(one number)", name)
         if array.shape != ():
-            raise ValueError(f"{name}: expected one number, got shape {array.shape}")
+            raise InvalidInput(f"{name}: expected one number, got shape {array.shape}")
         return float(array)
 
     def ik(self, position_m, pitch=None, yaw=None, q_seed=None) -> np.ndarray:
@@ -248,7 +248,7 @@ class ArmModel:
         """
         positions = _finite_array(positions_m, "of shape (N, 3)", "positions_m")
         if positions.ndim != 2 or positions.shape[1] != 3:
-            raise ValueError(f"positions_m: expected shape (N, 3), got {positions.shape}")
+            raise InvalidInput(f"positions_m: expected shape (N, 3), got {positions.shape}")
         count = positions.shape[0]
 
         def per_target(value, name):
@@ -256,7 +256,7 @@ class ArmModel:
                 return None
             array = _finite_array(value, f"(a number or shape ({count},))", name)
             if array.shape not in ((), (count,)):
-                raise ValueError(f"{name}: expected a number or shape ({count},), got {array.shape}")
+                raise InvalidInput(f"{name}: expected a number or shape ({count},), got {array.shape}")
             return np.broadcast_to(array, (count,)).astype(float)
 
         pitches, yaws = per_target(pitch, "pitch"), per_target(yaw, "yaw")
@@ -284,10 +284,10 @@ class ArmModel:
         """
         target = _finite_array(T_world_target, "of shape (4, 4)", "T_world_target")
         if target.shape != (4, 4):
-            raise ValueError(f"T_world_target: expected shape (4, 4), got {target.shape}")
+            raise InvalidInput(f"T_world_target: expected shape (4, 4), got {target.shape}")
         rotation = target[:3, :3]
         if not np.allclose(rotation.T @ rotation, np.eye(3), atol=1e-6) or not np.allclose(target[3], [0, 0, 0, 1]):
-            raise ValueError("T_world_target: not a rigid transform (rotation not orthonormal or last row not [0, 0, 0, 1])")
+            raise InvalidInput("T_world_target: not a rigid transform (rotation not orthonormal or last row not [0, 0, 0, 1])")
         if target[2, 3] < 0.0:
             raise Unreachable(f"pose at {target[:3, 3].round(4).tolist()} m: below the table (z < 0)", "below the table")
         seed = self._seed(q_seed)
@@ -309,11 +309,11 @@ class ArmModel:
         """
         targets = _finite_array(T_world_targets, "of shape (N, 4, 4)", "T_world_targets")
         if targets.ndim != 3 or targets.shape[1:] != (4, 4):
-            raise ValueError(f"T_world_targets: expected shape (N, 4, 4), got {targets.shape}")
+            raise InvalidInput(f"T_world_targets: expected shape (N, 4, 4), got {targets.shape}")
         rotation = targets[:, :3, :3]
         gram = rotation.transpose(0, 2, 1) @ rotation
         if not np.allclose(gram, np.eye(3), atol=1e-6) or not np.allclose(targets[:, 3], [0, 0, 0, 1]):
-            raise ValueError("T_world_targets: not all rigid transforms (rotation not orthonormal or last row not [0, 0, 0, 1])")
+            raise InvalidInput("T_world_targets: not all rigid transforms (rotation not orthonormal or last row not [0, 0, 0, 1])")
         count = targets.shape[0]
         seeds = np.broadcast_to(self.home_rad if q_seed is None else self._joint_vectors(q_seed, "q_seed"), (count, self.dof))
         seeds = np.array(seeds, dtype=float)

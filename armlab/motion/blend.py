@@ -19,6 +19,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from armlab.devices.arm import JointTrajectory
+from armlab.errors import InvalidInput, PlanRefused
 
 DEFAULT_JERK_FACTOR_PER_S = 30.0  # jerk limit = acceleration limit × this (rad/s³ per rad/s²)
 DEFAULT_RATE_HZ = 100.0
@@ -36,7 +37,7 @@ class Limits:
         """The limits of a run at `speed_fraction` (0 < s ≤ 1) of full speed (time scaling: v·s, a·s², j·s³)."""
         s = float(speed_fraction)
         if not 0.0 < s <= 1.0:
-            raise ValueError(f"speed fraction must be in (0, 1], got {speed_fraction!r}")
+            raise InvalidInput(f"speed fraction must be in (0, 1], got {speed_fraction!r}")
         return Limits(self.velocity_rad_s * s, self.accel_rad_s2 * s * s, self.jerk_rad_s3 * s**3)
 
 
@@ -63,7 +64,7 @@ class Run:
 
 
 def _ruckig_segment(q0, v0, a0, q1, v1, limits: Limits, minimum_s: float | None, tick_s: float):
-    """One ruckig trajectory from (q0, v0, a0) to (q1, v1, 0); ValueError if ruckig finds none."""
+    """One ruckig trajectory from (q0, v0, a0) to (q1, v1, 0); PlanRefused if ruckig finds none."""
     from ruckig import DurationDiscretization, InputParameter, Result, Ruckig, Trajectory
 
     dof = len(q0)
@@ -81,18 +82,18 @@ def _ruckig_segment(q0, v0, a0, q1, v1, limits: Limits, minimum_s: float | None,
     trajectory = Trajectory(dof)
     result = _calculate(otg, inp, trajectory)
     if result not in (Result.Working, Result.Finished):
-        raise ValueError(f"no jerk-limited trajectory between these states ({result.name})")
+        raise PlanRefused(f"no jerk-limited trajectory between these states ({result.name})")
     return trajectory
 
 
 def _calculate(otg, inp, trajectory):
     """ruckig's calculate, its own errors (an invalid input, a result code its Python enum does not know such as
-    -101, a duration past its numerical range) as a ValueError that says where they come from."""
+    -101, a duration past its numerical range) as a PlanRefused that says where they come from."""
     try:
         return otg.calculate(inp, trajectory)
     except Exception as error:  # noqa: BLE001 - the library raises ValueError, RuntimeError or its own types
         first_line = (str(error).strip().splitlines() or [""])[0]
-        raise ValueError(f"the trajectory library (ruckig) found no trajectory: {type(error).__name__}: {first_line}") from None
+        raise PlanRefused(f"the trajectory library (ruckig) found no trajectory: {type(error).__name__}: {first_line}") from None
 
 
 def _rest_to_rest_time(delta: np.ndarray, limits: Limits) -> float:
@@ -144,7 +145,7 @@ def _plan_run_once(
     """One run with the pass-through velocities × pass_scale (see plan_run)."""
     points = np.asarray(points_rad, dtype=float)
     if points.ndim != 2 or points.shape[0] < 2:
-        raise ValueError("a run needs at least two points")
+        raise InvalidInput("a run needs at least two points")
     m, dof = points.shape
     passes = np.zeros((m, dof)) if stop_everywhere else pass_scale * pass_velocities(points, limits, minimum_s)
     velocity = np.zeros(dof) if start_velocity is None else np.asarray(start_velocity, dtype=float)
@@ -192,7 +193,7 @@ def plan_run(
     change). minimum_s[i]: the least time of the segment into point i (a waypoint's moving_time_s; [0]
     unused). Blended runs try the pass-through velocities at a few scales (PASS_SCALES) and keep the
     quickest: per-segment planning with zero acceleration at the waypoints can be slower with the
-    heuristic's full velocities on short segments. ValueError if ruckig fails."""
+    heuristic's full velocities on short segments. PlanRefused if ruckig fails."""
     options = dict(start_velocity=start_velocity, start_accel=start_accel, minimum_s=minimum_s, tick_s=tick_s, rate_hz=rate_hz)
     if stop_everywhere or len(points_rad) <= 2:
         return _plan_run_once(points_rad, limits, stop_everywhere=stop_everywhere, **options)
@@ -216,7 +217,7 @@ def plan_stop(position_rad, velocity_rad_s, accel_rad_s2, limits: Limits, rate_h
     inp.max_jerk = list(limits.jerk_rad_s3)
     trajectory = Trajectory(dof)
     if _calculate(otg, inp, trajectory) not in (Result.Working, Result.Finished):
-        raise ValueError("no stopping trajectory")
+        raise PlanRefused("no stopping trajectory")
     duration = max(float(trajectory.duration), 1.0 / rate_hz)
     count = max(1, math.ceil(duration * rate_hz - 1e-9))
     times = np.linspace(0.0, duration, count + 1)

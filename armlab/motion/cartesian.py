@@ -13,6 +13,7 @@ import math
 import numpy as np
 
 from armlab.devices.arm import JointTrajectory
+from armlab.errors import InvalidInput
 from armlab.motion.errors import DiscontinuousPath
 from armlab.motion.pose_path import holds_full_pose, plan_straight_pose_segment
 from armlab.motion.retime import branch_jump, plan_retimed
@@ -102,12 +103,12 @@ def plan_vertical_segment(
     """
     q_start = np.asarray(q_start_rad, dtype=float)
     if q_start.shape != (int(arm.dof),) or not np.all(np.isfinite(q_start)):
-        raise ValueError(f"q_start must be {int(arm.dof)} finite joint angles, got {q_start.tolist()}")
+        raise InvalidInput(f"q_start must be {int(arm.dof)} finite joint angles, got {q_start.tolist()}")
     for name, value in (("z_goal_m", z_goal_m), ("speed_m_s", speed_m_s), ("accel_m_s2", accel_m_s2)):
         if not math.isfinite(value):
-            raise ValueError(f"{name} must be finite, got {value}")
+            raise InvalidInput(f"{name} must be finite, got {value}")
     if speed_m_s <= 0 or accel_m_s2 <= 0:
-        raise ValueError(f"speed_m_s and accel_m_s2 must be > 0, got {speed_m_s}, {accel_m_s2}")
+        raise InvalidInput(f"speed_m_s and accel_m_s2 must be > 0, got {speed_m_s}, {accel_m_s2}")
     start_m = gripper_position_m(arm, q_start)
     if holds_full_pose(arm):
         return plan_straight_pose_segment(arm, q_start, [start_m[0], start_m[1], z_goal_m], speed_m_s, accel_m_s2,

@@ -3,10 +3,11 @@ gripper_step) so none needs another's module for its errors."""
 
 from __future__ import annotations
 
+from armlab.errors import PlanRefused
 from armlab.kinematics.errors import Unreachable
 
 
-class DiscontinuousPath(ValueError):
+class DiscontinuousPath(PlanRefused):
     """IK switched branch along a Cartesian segment (the joints would jump); the message names the joint."""
 
 

@@ -12,6 +12,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from armlab.devices.arm import JointTrajectory
+from armlab.errors import PlanRefused
 from armlab.kinematics import Unreachable
 
 MAX_PARTS = 6  # a move is split into at most this many joint moves
@@ -57,7 +58,7 @@ def joint_moves_inside(model, q_start_rad, q_goal_rad, box: GripperBox | None,
     """Joint moves q_start → q_goal (each planned by plan(q_a, q_b)) whose gripper path stays in `box`:
     one move when its path stays inside, else 2..MAX_PARTS moves through IK points on the straight
     line between the two gripper points (pitch left to IK, the wrist seeded from the joint-space
-    interpolation). ValueError naming where the path leaves when no split keeps it inside; a box of
+    interpolation). PlanRefused naming where the path leaves when no split keeps it inside; a box of
     None accepts the single move."""
     q_start, q_goal = np.asarray(q_start_rad, float), np.asarray(q_goal_rad, float)
     direct = plan(q_start, q_goal)
@@ -67,7 +68,7 @@ def joint_moves_inside(model, q_start_rad, q_goal_rad, box: GripperBox | None,
     if problem is None:
         return [direct]
     if not (box.contains(gripper_path_m(model, q_start[None])[0]) and box.contains(gripper_path_m(model, q_goal[None])[0])):
-        raise ValueError(f"a move that starts or ends outside the gripper box: {problem}")
+        raise PlanRefused(f"a move that starts or ends outside the gripper box: {problem}")
 
     p_start, p_goal = gripper_path_m(model, np.vstack([q_start, q_goal]))
     for parts in range(2, MAX_PARTS + 1):
@@ -87,4 +88,4 @@ def joint_moves_inside(model, q_start_rad, q_goal_rad, box: GripperBox | None,
         if not any(problems):
             return moves
         problem = next(p for p in problems if p)
-    raise ValueError(f"no joint move inside the gripper box: {problem}")
+    raise PlanRefused(f"no joint move inside the gripper box: {problem}")

@@ -20,6 +20,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from armlab.devices.arm import JointTrajectory
+from armlab.errors import InvalidInput
 from armlab.kinematics.errors import Unreachable
 from armlab.motion.cartesian import plan_path
 from armlab.motion.errors import DiscontinuousPath, StepRefused
@@ -135,12 +136,12 @@ def plan_gripper_step(
     ORIENTATION_TOL_RAD and the point within POSITION_TOL_M of the asked motion, or the fingers above the board.
     """
     if axis not in AXES:
-        raise ValueError(f"axis must be one of {', '.join(AXES)}, got {axis!r}")
+        raise InvalidInput(f"axis must be one of {', '.join(AXES)}, got {axis!r}")
     amount = float(amount)
     limit = MAX_STEP_M if axis in LINEAR_AXES else MAX_STEP_RAD
     if not (math.isfinite(amount) and 0.0 < abs(amount) <= limit):
         unit = "m" if axis in LINEAR_AXES else "rad"
-        raise ValueError(f"a {axis} step must be non-zero and at most {limit:.3f} {unit}, got {amount}")
+        raise InvalidInput(f"a {axis} step must be non-zero and at most {limit:.3f} {unit}, got {amount}")
     lower, upper = np.asarray(arm.lower_rad, float), np.asarray(arm.upper_rad, float)
     q_start = check_joint_positions("q_start", q_start_rad, lower - START_TOLERANCE_RAD, upper + START_TOLERANCE_RAD, arm.joint_names)
     q_start = np.clip(q_start, lower, upper)  # a measured start a hair outside a limit starts on it

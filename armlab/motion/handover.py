@@ -15,6 +15,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from armlab.devices.arm import JointTrajectory
+from armlab.errors import PlanRefused
 
 REST_SPEED_RAD_S = 1e-6  # a reference slower than this (every joint) is at rest
 
@@ -107,10 +108,10 @@ def take_over(running: JointTrajectory, running_start_s: float, now_s: float, le
 
 def splice(handover: Handover, new: JointTrajectory) -> JointTrajectory:
     """The command that replaces the running trajectory: its prefix, then `new` (which must start at the
-    handover position; ValueError otherwise)."""
+    handover position; PlanRefused otherwise)."""
     gap = float(np.max(np.abs(new.positions_rad[0] - handover.position_rad)))
     if gap > 1e-9:
-        raise ValueError(f"the new plan starts {gap:.2e} rad from the handover position")
+        raise PlanRefused(f"the new plan starts {gap:.2e} rad from the handover position")
     prefix = handover.prefix
     times = np.concatenate([prefix.times_s, prefix.duration_s + new.times_s[1:]])
     positions = np.vstack([prefix.positions_rad, new.positions_rad[1:]])

@@ -14,6 +14,7 @@ import math
 import numpy as np
 
 from armlab.devices.arm import JointTrajectory
+from armlab.errors import InvalidInput
 
 LIMIT_MARGIN_RAD = 0.01  # braking stops this far inside a joint limit
 
@@ -23,12 +24,12 @@ def checked_jog_velocity(velocity_rad_s, velocity_limit_rad_s, names) -> np.ndar
     velocity = np.asarray(velocity_rad_s, dtype=float)
     limit = np.asarray(velocity_limit_rad_s, dtype=float)
     if velocity.shape != limit.shape:
-        raise ValueError(f"velocity_rad_s must have {limit.size} values ({', '.join(names)}), got shape {velocity.shape}")
+        raise InvalidInput(f"velocity_rad_s must have {limit.size} values ({', '.join(names)}), got shape {velocity.shape}")
     if not np.all(np.isfinite(velocity)):
-        raise ValueError("velocity_rad_s must be finite numbers")
+        raise InvalidInput("velocity_rad_s must be finite numbers")
     for index, name in enumerate(names):
         if abs(velocity[index]) > limit[index] + 1e-9:
-            raise ValueError(f"joint '{name}' jog velocity {velocity[index]:.3f} rad/s is above its jog limit {limit[index]:.3f} rad/s")
+            raise InvalidInput(f"joint '{name}' jog velocity {velocity[index]:.3f} rad/s is above its jog limit {limit[index]:.3f} rad/s")
     return velocity
 
 
@@ -58,7 +59,7 @@ def plan_jog(
     low = np.asarray(lower_rad, dtype=float) + LIMIT_MARGIN_RAD
     high = np.asarray(upper_rad, dtype=float) - LIMIT_MARGIN_RAD
     if not (math.isfinite(hold_s) and hold_s > 0.0 and rate_hz > 0.0):
-        raise ValueError(f"hold_s and rate_hz must be positive, got {hold_s}, {rate_hz}")
+        raise InvalidInput(f"hold_s and rate_hz must be positive, got {hold_s}, {rate_hz}")
     dt = 1.0 / rate_hz
     dv_max = accel * dt
     positions, t = [q.copy()], 0.0

@@ -9,6 +9,7 @@ from __future__ import annotations
 import numpy as np
 
 from armlab.devices.arm import JointTrajectory
+from armlab.errors import InvalidInput
 from armlab.motion.cartesian import (
     DiscontinuousPath,
     branch_jump,
@@ -27,7 +28,7 @@ def plan_line_segment(arm, q_start_rad, goal_m, pitch_rad: float, yaw_rad: float
     q_start = np.asarray(q_start_rad, dtype=float)
     goal = np.asarray(goal_m, dtype=float)
     if q_start.shape != (int(arm.dof),) or not np.all(np.isfinite(q_start)) or goal.shape != (3,) or not np.all(np.isfinite(goal)):
-        raise ValueError(f"plan_line_segment: q_start must be {int(arm.dof)} finite angles and goal_m 3 finite coordinates")
+        raise InvalidInput(f"plan_line_segment: q_start must be {int(arm.dof)} finite angles and goal_m 3 finite coordinates")
     start = gripper_position_m(arm, q_start)
     distance_m = float(np.linalg.norm(goal - start))
     duration_s = vertical_profile_duration(distance_m, speed_m_s, accel_m_s2)

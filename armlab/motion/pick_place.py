@@ -20,6 +20,7 @@ from typing import Literal
 import numpy as np
 
 from armlab.devices.arm import JointTrajectory
+from armlab.errors import InvalidInput
 from armlab.kinematics import Unreachable
 from armlab.motion.cartesian import plan_vertical_segment
 from armlab.motion.safety import check_trajectory
@@ -55,14 +56,14 @@ Step = TrajectoryStep | GripperStep
 def _check_point(name: str, position_m) -> np.ndarray:
     position = np.asarray(position_m, dtype=float)
     if position.shape != (3,) or not np.all(np.isfinite(position)):
-        raise ValueError(f"{name} must be 3 finite coordinates in metres, got {np.asarray(position_m).tolist()}")
+        raise InvalidInput(f"{name} must be 3 finite coordinates in metres, got {np.asarray(position_m).tolist()}")
     return position
 
 
 def _check_finite(name: str, value: float) -> float:
     value = float(value)
     if not math.isfinite(value):
-        raise ValueError(f"{name} must be finite, got {value}")
+        raise InvalidInput(f"{name} must be finite, got {value}")
     return value
 
 
@@ -72,7 +73,7 @@ GRIPPER_TYPES = ("fingers", "suction")
 def checked_gripper_type(gripper_type: str) -> str:
     """gripper_type if it is one the planners know ('fingers', 'suction'), else ValueError."""
     if gripper_type not in GRIPPER_TYPES:
-        raise ValueError(f"gripper type must be one of {', '.join(GRIPPER_TYPES)}, got {gripper_type!r}")
+        raise InvalidInput(f"gripper type must be one of {', '.join(GRIPPER_TYPES)}, got {gripper_type!r}")
     return gripper_type
 
 
@@ -168,7 +169,7 @@ def plan_pick(
     if block_height_m is not None:
         height = _check_finite("block_height_m", block_height_m)
         if height <= 0.0:
-            raise ValueError(f"block_height_m must be > 0, got {height}")
+            raise InvalidInput(f"block_height_m must be > 0, got {height}")
         depth_m = config.held_below_top_m(height, gripper_type)
     grasp_m = top_m - np.array([0.0, 0.0, depth_m])
     pads_m = config.pad_reach_m if gripper_type == "fingers" else 0.0  # never grasp lower: the pads stay on the board
@@ -191,7 +192,7 @@ def plan_place(
     yaw = _check_finite("yaw_rad", yaw_rad)
     height = _check_finite("block_height_m", block_height_m)
     if height <= 0.0:
-        raise ValueError(f"block_height_m must be > 0, got {height}")
+        raise InvalidInput(f"block_height_m must be > 0, got {height}")
     held_below_top_m = config.held_below_top_m(height, checked_gripper_type(gripper_type))  # as plan_pick grasped it
     release_m = surface_m + np.array([0.0, 0.0, height - held_below_top_m + config.place_clearance_m])
     release_m[2] = max(release_m[2], config.board_clearance_m)

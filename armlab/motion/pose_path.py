@@ -14,6 +14,7 @@ import math
 import numpy as np
 
 from armlab.devices.arm import JointTrajectory
+from armlab.errors import InvalidInput
 from armlab.kinematics.errors import Unreachable
 from armlab.motion.errors import DiscontinuousPath
 from armlab.motion.retime import MAX_SAMPLE_STEP_RAD, branch_jump, plan_retimed
@@ -84,9 +85,9 @@ def plan_straight_pose_segment(arm, q_start_rad, goal_m, speed_m_s: float, accel
     T_start = np.asarray(arm.fk(q_start), float)
     goal = np.asarray(goal_m, float)
     if goal.shape != (3,) or not np.all(np.isfinite(goal)):
-        raise ValueError(f"goal_m must be 3 finite coordinates in metres, got {np.asarray(goal_m).tolist()}")
+        raise InvalidInput(f"goal_m must be 3 finite coordinates in metres, got {np.asarray(goal_m).tolist()}")
     if not (speed_m_s > 0.0 and accel_m_s2 > 0.0):
-        raise ValueError(f"speed_m_s and accel_m_s2 must be > 0, got {speed_m_s}, {accel_m_s2}")
+        raise InvalidInput(f"speed_m_s and accel_m_s2 must be > 0, got {speed_m_s}, {accel_m_s2}")
     offset = goal - T_start[:3, 3]
     distance_m = float(np.linalg.norm(offset))
     label = label or f"straight segment to ({', '.join(f'{v * 1000:.1f}' for v in goal)}) mm"

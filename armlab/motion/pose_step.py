@@ -13,6 +13,7 @@ from __future__ import annotations
 import numpy as np
 
 from armlab.devices.arm import JointTrajectory
+from armlab.errors import InvalidInput
 from armlab.motion.errors import DiscontinuousPath, StepRefused
 from armlab.motion.pose_path import plan_pose_path, rotation_about, rotation_angle_rad
 from armlab.motion.trajectory import minimum_time
@@ -65,7 +66,7 @@ def plan_pose_step(arm, q_start: np.ndarray, axis: str, amount: float, speeds, l
     elif axis == "pitch":
         duration_s, ramp_s = minimum_time(speeds.angular_rad_s / abs(amount), speeds.angular_accel_rad_s2 / abs(amount))
     else:
-        raise ValueError(f"plan_pose_step: axis must be x, y, z or pitch, got {axis!r}")
+        raise InvalidInput(f"plan_pose_step: axis must be x, y, z or pitch, got {axis!r}")
     poses_at = step_goal_poses(arm, T_start, axis, amount)
     try:
         trajectory = plan_pose_path(arm, q_start, poses_at, duration_s, ramp_s, label, rate_hz)

@@ -8,6 +8,7 @@ from __future__ import annotations
 import numpy as np
 
 from armlab.devices.arm import JointTrajectory
+from armlab.errors import PlanRefused
 from armlab.motion.trajectory import DEFAULT_RATE_HZ, LIMIT_MARGIN, retime_path, sample_times, trapezoid_profile
 
 # Largest joint change between two 100 Hz samples that is still one continuous IK branch (radians).
@@ -29,7 +30,7 @@ def branch_jump(positions: np.ndarray) -> tuple[int, int, float] | None:
 def plan_retimed(arm, solve_at, duration_s: float, ramp_s: float, label: str, rate_hz: float = DEFAULT_RATE_HZ) -> JointTrajectory:
     """A rest-to-rest trajectory through solve_at(s) (joint rows for path fractions s in [0, 1]) on a
     trapezoid of duration_s with ramps of ramp_s; stretched (and re-solved) while a joint would exceed
-    its velocity or acceleration limit (near a singularity). ValueError naming `label` when
+    its velocity or acceleration limit (near a singularity). PlanRefused naming `label` when
     _MAX_RETIMES stretches are not enough."""
     velocity_limit = np.asarray(arm.velocity_limit_rad_s, float) * LIMIT_MARGIN
     accel_limit = np.asarray(arm.accel_limit_rad_s2, float) * LIMIT_MARGIN
@@ -44,4 +45,4 @@ def plan_retimed(arm, solve_at, duration_s: float, ramp_s: float, label: str, ra
         factor = slow_down * 1.02
         duration_s *= factor
         ramp_s *= factor
-    raise ValueError(f"{label}: joints still too fast after {_MAX_RETIMES} slow-downs (too close to a singularity)")
+    raise PlanRefused(f"{label}: joints still too fast after {_MAX_RETIMES} slow-downs (too close to a singularity)")

@@ -14,6 +14,7 @@ from __future__ import annotations
 import numpy as np
 
 from armlab.devices.arm import JointTrajectory
+from armlab.errors import InvalidInput, PlanRefused
 
 # Relative tolerance on velocity/acceleration limits (finite differences of a plan exactly at the limit).
 LIMIT_RTOL = 1e-6
@@ -21,7 +22,7 @@ LIMIT_RTOL = 1e-6
 POSITION_TOL_RAD = 1e-9
 
 
-class UnsafeTrajectory(ValueError):
+class UnsafeTrajectory(PlanRefused):
     """A trajectory violates a joint limit or goes below the board; the message names joint/point and time."""
 
 
@@ -87,7 +88,7 @@ def check_trajectory(
     if positions.shape[1] != dof:
         raise UnsafeTrajectory(f"trajectory has {positions.shape[1]} joints, the arm has {dof}")
     if not np.isfinite(clearance_m) or not np.isfinite(board_z_m):
-        raise ValueError("clearance_m and board_z_m must be finite")
+        raise InvalidInput("clearance_m and board_z_m must be finite")
 
     lower, upper = np.asarray(arm.lower_rad, float), np.asarray(arm.upper_rad, float)
     below = positions < lower[None, :] - POSITION_TOL_RAD

@@ -15,6 +15,7 @@ from dataclasses import dataclass, replace
 import numpy as np
 
 from armlab.devices.arm import JointTrajectory
+from armlab.errors import InvalidInput
 
 DEFAULT_RATE_HZ = 100.0
 # Relative slack when deciding whether a requested timing already satisfies the limits.
@@ -44,12 +45,12 @@ class MoveTiming:
 
 
 def _as_joint_vector(name: str, value, dof: int) -> np.ndarray:
-    """A finite float vector of shape (dof,), else ValueError naming the argument."""
+    """A finite float vector of shape (dof,), else InvalidInput naming the argument."""
     array = np.asarray(value, dtype=float)
     if array.shape != (dof,):
-        raise ValueError(f"{name} must have shape ({dof},), got {array.shape}")
+        raise InvalidInput(f"{name} must have shape ({dof},), got {array.shape}")
     if not np.all(np.isfinite(array)):
-        raise ValueError(f"{name} must be finite, got {array.tolist()}")
+        raise InvalidInput(f"{name} must be finite, got {array.tolist()}")
     return array
 
 
@@ -58,7 +59,7 @@ def _check_duration(name: str, value: float | None) -> float | None:
         return None
     value = float(value)
     if not math.isfinite(value) or value < 0.0:
-        raise ValueError(f"{name} must be a finite number ≥ 0, got {value}")
+        raise InvalidInput(f"{name} must be a finite number ≥ 0, got {value}")
     return value
 
 
@@ -196,19 +197,19 @@ def trapezoid_profile(t_s: np.ndarray, moving_time_s: float, accel_time_s: float
 def sample_times(duration_s: float, rate_hz: float = DEFAULT_RATE_HZ) -> np.ndarray:
     """Uniform sample times 0 … duration_s at no less than rate_hz (at least two samples)."""
     if not math.isfinite(rate_hz) or rate_hz <= 0:
-        raise ValueError(f"rate_hz must be > 0, got {rate_hz}")
+        raise InvalidInput(f"rate_hz must be > 0, got {rate_hz}")
     count = max(1, math.ceil(duration_s * rate_hz - 1e-9))
     return np.linspace(0.0, duration_s, count + 1) if duration_s > 0 else np.array([0.0, 1.0 / rate_hz])
 
 
 def check_joint_positions(name: str, q_rad, lower_rad: np.ndarray, upper_rad: np.ndarray, joint_names=None) -> np.ndarray:
-    """q as a (dof,) vector inside [lower, upper]; ValueError naming the joint otherwise."""
+    """q as a (dof,) vector inside [lower, upper]; InvalidInput naming the joint otherwise."""
     q = _as_joint_vector(name, q_rad, len(lower_rad))
     outside = np.flatnonzero((q < lower_rad) | (q > upper_rad))
     if outside.size:
         index = int(outside[0])
         joint = joint_names[index] if joint_names is not None else f"joint {index}"
-        raise ValueError(
+        raise InvalidInput(
             f"{name}: {joint} = {q[index]:.4f} rad is outside its limits [{lower_rad[index]:.4f}, {upper_rad[index]:.4f}]"
         )
     return q

@@ -8,6 +8,7 @@ from collections.abc import Callable, Sequence
 
 import numpy as np
 
+from armlab.errors import PLAN_REFUSALS
 from armlab.kinematics import Unreachable
 from armlab.motion import GripperStep, TrajectoryStep, check_trajectory, plan_joint_move
 from armlab.motion import plan_pick as motion_plan_pick
@@ -25,7 +26,7 @@ from armlab.station.jobs import JobContext
 def plan_pick_steps(station: Station, top_center_m, yaw_rad: float | None, q_start_rad=None) -> list:
     """armlab.motion's pick plan from the current joints (open, above, straight down, grasp, straight up).
 
-    Unreachable / UnsafeTrajectory / ValueError before anything moves.
+    Unreachable / UnsafeTrajectory / InvalidInput (PLAN_REFUSALS) before anything moves.
     """
     q_start = station.joints_rad() if q_start_rad is None else np.asarray(q_start_rad, float)
     return motion_plan_pick(station.model, q_start, np.asarray(top_center_m, float), 0.0 if yaw_rad is None else yaw_rad, station.motion_config,
@@ -182,7 +183,7 @@ def _transfer_plan(station: Station, q_start, point_m, yaw_rad: float | None, bo
                     steps.append(TrajectoryStep("rise to transfer height", rise))
                     checked.append(rise)
                     q_from = rise.positions_rad[-1]
-                except (Unreachable, ValueError):
+                except PLAN_REFUSALS:
                     pass
             if z_transfer > near_m[2] + 0.005:  # over the target high, then down to the approach point
                 q_high = model.ik([point_m[0], point_m[1], z_transfer], yaw=yaw_rad, q_seed=q_near)
@@ -192,7 +193,7 @@ def _transfer_plan(station: Station, q_start, point_m, yaw_rad: float | None, bo
                 moves, back = joint_moves(q_from, q_near, words[0]), []
             steps += moves
             checked += [step.trajectory for step in moves + back]
-        except (Unreachable, ValueError) as error:
+        except PLAN_REFUSALS as error:
             last_problem = str(error)
             continue
         steps += final + back

@@ -9,6 +9,7 @@ import math
 
 import numpy as np
 
+from armlab.errors import InvalidInput
 from armlab.station.checks import checked_position
 from armlab.station.core import NotCalibrated, Station
 from armlab.station.jobs import JobContext
@@ -24,9 +25,9 @@ def finite_pixel(u, v) -> tuple[float, float]:
     try:
         u, v = float(u), float(v)
     except (TypeError, ValueError) as error:
-        raise ValueError(f"pixel must be two numbers, got ({u!r}, {v!r})") from error
+        raise InvalidInput(f"pixel must be two numbers, got ({u!r}, {v!r})") from error
     if not (math.isfinite(u) and math.isfinite(v)):
-        raise ValueError("pixel (u, v) must be finite")
+        raise InvalidInput("pixel (u, v) must be finite")
     return u, v
 
 
@@ -63,7 +64,7 @@ def robot_volume_of(station: Station, frame):
 def target_point(station: Station, position_m, pixel) -> tuple[np.ndarray, str]:
     """The clicked world point from position_m or pixel=(u, v) (exactly one of them)."""
     if (position_m is None) == (pixel is None):
-        raise ValueError("give either position_m or a pixel (u, v), not both or neither")
+        raise InvalidInput("give either position_m or a pixel (u, v), not both or neither")
     if pixel is not None:
         result = pixel_to_world(station, *pixel)
         return np.asarray(result["position_m"]), result["on"]
@@ -110,7 +111,7 @@ def surface_height_m(station: Station, xy_m, radius_m: float = 0.008, max_height
         raise NotCalibrated("measuring a height")
     frame, _ = station.frames.get()
     if frame is None or frame.depth_mm is None:
-        raise ValueError("measuring a height needs a depth image")
+        raise InvalidInput("measuring a height needs a depth image")
     heights = np.arange(max_height_m, -0.0001, -0.004)
     points = np.column_stack([np.full_like(heights, float(xy_m[0])), np.full_like(heights, float(xy_m[1])), heights])
     pixels = project_points(calibration.T_world_camera, calibration.K, calibration.dist, points)

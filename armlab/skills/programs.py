@@ -10,6 +10,7 @@ from __future__ import annotations
 from collections.abc import Sequence
 
 from armlab import program_io
+from armlab.errors import InvalidInput
 from armlab.skills.repeat_plan import RepeatSettings, check_waypoints, plan_transfer, same_pose
 from armlab.station.core import Station
 from armlab.store import MAX_PROGRAM_NAME_CHARS, Program, Waypoint
@@ -52,7 +53,7 @@ def export_program(station: Station, program_id: int, file_format: str) -> tuple
         return program_io.to_json(program.name, program.waypoints, station.model.joint_names), f"{stem}.json"
     if file_format == "csv":
         return program_io.to_csv(program.waypoints, move_times_s(station, program.waypoints)), f"{stem}.csv"
-    raise ValueError(f"format must be 'json' or 'csv', not {file_format!r}")
+    raise InvalidInput(f"format must be 'json' or 'csv', not {file_format!r}")
 
 
 def import_program(station: Station, file_format: str, content: str, name: str | None = None) -> Program:
@@ -64,6 +65,6 @@ def import_program(station: Station, file_format: str, content: str, name: str |
     elif file_format == "csv":
         file_name, waypoints = None, program_io.parse_csv(content, dof)
     else:
-        raise ValueError(f"format must be 'json' or 'csv', not {file_format!r}")
+        raise InvalidInput(f"format must be 'json' or 'csv', not {file_format!r}")
     check_waypoints(station, waypoints)
     return station.store.save_program(name or (file_name or "").strip() or "imported", waypoints)

@@ -17,7 +17,7 @@ import threading
 
 import numpy as np
 
-from armlab.errors import CommandRefused
+from armlab.errors import PLAN_REFUSALS, CommandRefused, InvalidInput, PlanRefused
 from armlab.motion.blend import Limits, Run, plan_run, plan_stop
 from armlab.skills.repeat_plan import (
     HOME_LABEL,
@@ -178,12 +178,12 @@ class _Runner:
 
             def stop(handover):
                 if handover is None:
-                    raise ValueError("the run has ended")
+                    raise PlanRefused("the run has ended")
                 return plan_stop(handover.position_rad, handover.velocity_rad_s, handover.accel_rad_s2, limits, self.settings.rate_hz)
 
             try:
                 trajectory, t0, _ = self.station.replace_trajectory(self.ctx, stop)
-            except (ValueError, CommandRefused):
+            except (*PLAN_REFUSALS, CommandRefused):
                 continue
             self.current = (trajectory, t0)
             break
@@ -211,7 +211,7 @@ class _Runner:
 
         def plan(handover):
             if handover is None:
-                raise ValueError("the run has ended")
+                raise PlanRefused("the run has ended")
             run = plan_run(np.vstack([handover.position_rad, [points[i] for i in targets]]), limits,
                            start_velocity=handover.velocity_rad_s, start_accel=handover.accel_rad_s2,
                            tick_s=tick_s(self.station), rate_hz=self.settings.rate_hz)
@@ -220,7 +220,7 @@ class _Runner:
 
         try:
             trajectory, t0, run_start = self.station.replace_trajectory(self.ctx, plan)
-        except (ValueError, CommandRefused) as error:
+        except (*PLAN_REFUSALS, CommandRefused) as error:
             self.station.events.add("warn", f"repeat: speed {speed:g} % applies from the next stop ({error})")
             return None
         self.current = (trajectory, t0)
@@ -368,7 +368,7 @@ def repeat(station: Station, program_id: int, cycles: int | None = 1, speed_perc
     does not allow it, the numbers are out of range, or a waypoint or segment fails the motion check."""
     station.allowed_or_raise("repeat", source)
     if cycles is not None and (isinstance(cycles, bool) or not isinstance(cycles, int) or not 1 <= cycles <= MAX_CYCLES):
-        raise ValueError(f"cycles must be an integer from 1 to {MAX_CYCLES} (or none: until stopped), got {cycles!r}")
+        raise InvalidInput(f"cycles must be an integer from 1 to {MAX_CYCLES} (or none: until stopped), got {cycles!r}")
     speed_percent = checked_speed_percent(speed_percent)
     program = station.store.get_program(program_id)
     plan = plan_cycle(station, program, speed_percent, settings)

@@ -17,6 +17,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from armlab.devices.arm import JointTrajectory
+from armlab.errors import InvalidInput
 from armlab.motion.blend import Limits, Run, arm_limits, plan_run
 from armlab.motion.safety import UnsafeTrajectory
 from armlab.store import Program, Waypoint
@@ -71,7 +72,7 @@ def check_waypoints(station, waypoints) -> None:
     """Every waypoint inside the joint limits, above the table and inside the workspace box (ValueError /
     UnsafeTrajectory naming the waypoint, 1-based)."""
     if not waypoints:
-        raise ValueError("the program has no waypoints: record at least one")
+        raise InvalidInput("the program has no waypoints: record at least one")
     for index, waypoint in enumerate(waypoints, start=1):
         try:
             q = station.checked_joints(waypoint.joints_rad)
@@ -79,7 +80,7 @@ def check_waypoints(station, waypoints) -> None:
         except UnsafeTrajectory as error:
             raise UnsafeTrajectory(f"waypoint {index}: {error}") from None
         except ValueError as error:
-            raise ValueError(f"waypoint {index}: {error}") from None
+            raise InvalidInput(f"waypoint {index}: {error}") from None
 
 
 def station_limits(station, settings: RepeatSettings) -> Limits:
@@ -171,7 +172,7 @@ def plan_cycle(station, program: Program, speed_percent: float, settings: Repeat
         step.offset_s = offset
         offset += step.duration_s
     if offset <= 0:
-        raise ValueError("the program does not move: it needs two different poses, a gripper change or a dwell to repeat")
+        raise InvalidInput("the program does not move: it needs two different poses, a gripper change or a dwell to repeat")
     moves = [step for step in steps if step.kind == "move"]
     return CyclePlan(
         speed_percent=float(speed_percent),

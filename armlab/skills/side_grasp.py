@@ -27,6 +27,7 @@ from functools import lru_cache
 import numpy as np
 
 from armlab.devices.finger_gripper import load_finger_gripper_outline
+from armlab.errors import PLAN_REFUSALS
 from armlab.kinematics import Unreachable
 from armlab.motion import GripperStep, TrajectoryStep, check_trajectory, plan_joint_move
 from armlab.motion.cartesian import plan_vertical_segment
@@ -265,7 +266,7 @@ def _exit(station: Station, q_from, then_rad: np.ndarray, boxes: list) -> list:
             _check(station, legs, boxes, None, 0.0, link_radius_m=PARK_LINK_RADIUS_M)
             _check(station, [_joint_move(station, q_from if q_via is None else q_via, then_rad)], boxes, None, 0.0,
                    link_radius_m=PARK_LINK_RADIUS_M)
-        except (Unreachable, ValueError) as error:
+        except PLAN_REFUSALS as error:
             problem = str(error)
             continue
         return legs
@@ -300,7 +301,7 @@ def plan_side_place(station: Station, surface_m, edge_m: float, grasp: SideGrasp
                 back.append(_line(station, (back[-1] if back else slide).positions_rad[-1], point, pitch))
             _check(station, [slide], boxes + links_support, grasp, edge_m, boxes + support)
             _check(station, back, boxes + links_support, None, edge_m)
-        except (Unreachable, ValueError) as error:  # UnsafeTrajectory is a ValueError
+        except PLAN_REFUSALS as error:  # UnsafeTrajectory is a PlanRefused
             problem = str(error)
             continue
         # Over to the way in: straight there; else straight up first; else to the way in's arm shape turned
@@ -323,7 +324,7 @@ def plan_side_place(station: Station, surface_m, edge_m: float, grasp: SideGrasp
                 transfer.append(_joint_move(station, q_from, q_in))
                 names.append("move beside the place")
                 _check(station, transfer, boxes + support, grasp, edge_m, boxes + support)
-            except (Unreachable, ValueError) as error:
+            except PLAN_REFUSALS as error:
                 problem = str(error)
                 continue
             exit_legs = [] if then_rad is None else _exit(station, back[-1].positions_rad[-1], np.asarray(then_rad, float),
@@ -349,7 +350,7 @@ def plan_side_pick_place(station: Station, top_center_m, surface_m, edge_m: floa
             pick, grasp = plan_side_pick(station, top_center_m, edge_m, pick_boxes, pitch, q_start=q_start)
             end = [step for step in pick if isinstance(step, TrajectoryStep)][-1].q_end_rad
             plan_side_place(station, surface_m, edge_m, grasp, place_boxes, q_start=end, then_rad=then_rad)
-        except (Unreachable, ValueError) as error:
+        except PLAN_REFUSALS as error:
             problems.append(f"{math.degrees(pitch):.0f}°: {error}")
             continue
         return pick, grasp

@@ -9,7 +9,7 @@ simulated board tag36h11, and a recording says nothing about which it holds. Its
 from __future__ import annotations
 
 from armlab.config import config_dir, read_config_file, resolve_config_path, validate_config
-from armlab.errors import ConfigError
+from armlab.errors import ConfigError, InvalidInput
 from armlab.vision import detect_tags, load_perception_config
 from armlab.workcell import Workcell, load_workcell
 
@@ -41,7 +41,7 @@ def board_perception_config(workcell: str, board: str | None, color_bgr=None):
     if board != AUTO:
         return load_perception_config(workcell=workcell_with_board(workcell, board)), f"board tags: config/boards/{board}.yaml"
     if color_bgr is None:
-        raise ValueError("board 'auto' needs a camera frame to look for tags in")
+        raise InvalidInput("board 'auto' needs a camera frame to look for tags in")
     candidates = [(None, load_perception_config(workcell=workcell))]
     candidates += [(name, load_perception_config(workcell=workcell_with_board(workcell, name))) for name in known_boards()]
     for name, config in candidates:

@@ -21,7 +21,7 @@ from typing import Any
 
 import numpy as np
 
-from armlab.errors import CalibrationUntrusted
+from armlab.errors import CalibrationUntrusted, InvalidInput
 from armlab.station.jobs import JobContext
 from armlab.station.perception import Perception
 from armlab.station.states import State
@@ -199,7 +199,7 @@ class CalibrationTrust:
     def set_self_recalibrate(self, enabled: bool, source: str | None = None) -> bool:
         """The operator's setting (the lease holder's, like any command that changes the station)."""
         if not isinstance(enabled, bool):
-            raise ValueError(f"self_recalibrate must be true or false, got {enabled!r}")
+            raise InvalidInput(f"self_recalibrate must be true or false, got {enabled!r}")
         with self._lock:
             if source is not None and self._lease.holder not in (None, source):
                 self._lease.require(source, "calibrate")  # NotController naming the holder

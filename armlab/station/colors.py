@@ -20,6 +20,7 @@ from typing import Any
 
 import numpy as np
 
+from armlab.errors import InvalidInput
 from armlab.vision.colors import ColorModel, ColorSample, board_region_mask, chroma, measure_at
 
 MAX_SAMPLES = 200
@@ -79,23 +80,23 @@ class StationColors:
 
     def check_name(self, name: str, field: str = "color") -> None:
         if name not in self.defaults.names:
-            raise ValueError(f"{field}: unknown colour '{name}' (known: {', '.join(self.defaults.names)})")
+            raise InvalidInput(f"{field}: unknown colour '{name}' (known: {', '.join(self.defaults.names)})")
 
     def measure(self, color_bgr: np.ndarray, u: float, v: float, name: str, field: str = "") -> ColorSample:
         """A sample of colour `name` from the face at pixel (u, v) of a frame (not yet used)."""
         self.check_name(name, f"{field}color")
         h, w = color_bgr.shape[:2]
         if not 0 <= u < w:
-            raise ValueError(f"{field}u: {u:g} is outside the image (0..{w - 1})")
+            raise InvalidInput(f"{field}u: {u:g} is outside the image (0..{w - 1})")
         if not 0 <= v < h:
-            raise ValueError(f"{field}v: {v:g} is outside the image (0..{h - 1})")
+            raise InvalidInput(f"{field}v: {v:g} is outside the image (0..{h - 1})")
         defaults = self.defaults
         try:
             lab = measure_at(defaults, color_bgr, (u, v), board_mask=self._board_mask(color_bgr.shape[:2]))
         except ValueError as error:
-            raise ValueError(f"{field}u, v: no board grey around ({u:g}, {v:g}) to measure against ({error})") from error
+            raise InvalidInput(f"{field}u, v: no board grey around ({u:g}, {v:g}) to measure against ({error})") from error
         if name in defaults.classes and chroma(lab) < defaults.min_chroma:
-            raise ValueError(f"{field}u, v: the face at ({u:g}, {v:g}) reads grey (Lab {[round(float(x), 1) for x in lab]}), "
+            raise InvalidInput(f"{field}u, v: the face at ({u:g}, {v:g}) reads grey (Lab {[round(float(x), 1) for x in lab]}), "
                              f"not {name}: click on the block's top")
         return ColorSample(name, tuple(round(float(x), 3) for x in lab), float(u), float(v), time.time())
 
@@ -118,9 +119,9 @@ class StationColors:
     def fit(self, color_bgr: np.ndarray, items: list[tuple[float, float, str]]) -> dict:
         """Replace the samples by those of a labelled frame (u, v, colour each); all checked before any is used."""
         if not items:
-            raise ValueError("samples: at least one (u, v, color)")
+            raise InvalidInput("samples: at least one (u, v, color)")
         if len(items) > MAX_SAMPLES:
-            raise ValueError(f"samples: at most {MAX_SAMPLES}")
+            raise InvalidInput(f"samples: at most {MAX_SAMPLES}")
         samples = [self.measure(color_bgr, u, v, name, field=f"samples[{i}].") for i, (u, v, name) in enumerate(items)]
         with self._write_lock:
             before = [self.model.classify_lab(s.lab).name for s in samples]

@@ -8,7 +8,7 @@ from typing import Literal
 from pydantic import Field, field_validator, model_validator
 
 from armlab.config import StrictModel, config_dir, load_config
-from armlab.errors import ConfigError
+from armlab.errors import ConfigError, InvalidInput
 from armlab.workcell import DEFAULT_WORKCELL, known_workcells, load_workcell
 
 
@@ -54,7 +54,7 @@ class StationConfig(StrictModel):
         """Bare host names or IP addresses: no scheme, path or port (the Host check compares names)."""
         for name in names:
             if not name.strip() or any(char in name for char in "/ \t@") or name.count(":") == 1:
-                raise ValueError(f"allowed_hosts: {name!r} is not a bare host name (no scheme, port or path)")
+                raise InvalidInput(f"allowed_hosts: {name!r} is not a bare host name (no scheme, port or path)")
         return tuple(name.strip() for name in names)
 
     @model_validator(mode="before")
@@ -70,10 +70,10 @@ class StationConfig(StrictModel):
         try:
             workcell = load_workcell(name)
         except ConfigError as error:
-            raise ValueError(f"workcell: {error}") from None
+            raise InvalidInput(f"workcell: {error}") from None
         arm = data.get("arm")
         if arm is not None and arm != workcell.arm:
-            raise ValueError(
+            raise InvalidInput(
                 f"arm: '{arm}' contradicts workcell '{name}', whose arm is '{workcell.arm}'; the workcell decides "
                 f"the arm: remove `arm:` or choose a workcell with that arm ({', '.join(_workcells_with_arm(arm)) or 'none'})"
             )

@@ -30,7 +30,7 @@ import numpy as np
 from armlab.devices.arm import Arm
 from armlab.devices.camera import Camera, Frame
 from armlab.devices.gripper import Gripper
-from armlab.errors import NoArmError, ShuttingDown
+from armlab.errors import InvalidInput, NoArmError, RefusedByCheck, ShuttingDown
 from armlab.station.calibration_trust import CalibrationTrust
 from armlab.station.checks import checked_joints
 from armlab.station.colors import StationColors
@@ -71,7 +71,7 @@ def return_freed_memory() -> None:
         trim(0)
 
 
-class NotCalibrated(RuntimeError):
+class NotCalibrated(RefusedByCheck, RuntimeError):
     """The command needs a camera calibration: run calibrate first."""
 
     def __init__(self, what: str = "this command") -> None:
@@ -366,7 +366,7 @@ class Station(Latch, MotionGate, ManualCommands, TeachCommands, JobControls, Per
         """Simulation: replace the objects (armlab.scene Scene). Checked (state, lease) under the lock; the
         scene change itself runs outside it, so an e-stop never waits for it."""
         if self.sim is None:
-            raise ValueError("set_scene needs the simulation backend")
+            raise InvalidInput("set_scene needs the simulation backend")
         with self._lock:
             self._transition("set_scene", source=source)
         _, version = self.frames.get()
@@ -482,7 +482,7 @@ class Station(Latch, MotionGate, ManualCommands, TeachCommands, JobControls, Per
         with self._lock:
             self._check(command, source)
             if command not in ("calibrate", "grab", "drop", "repeat", "auto"):
-                raise ValueError(f"'{command}' does not start a job")
+                raise InvalidInput(f"'{command}' does not start a job")
             job = Job(name=name, detail=detail, has_cleanup=cleanup is not None, control=control)
             self._transition(command, source=source, detail=detail or name)
             self._job = job

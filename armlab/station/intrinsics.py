@@ -20,6 +20,7 @@ from typing import Any
 import numpy as np
 
 from armlab.devices.camera import Camera, Intrinsics
+from armlab.errors import InvalidInput
 from armlab.vision.intrinsics_capture import (
     IntrinsicsCapture,
     IntrinsicsConfig,
@@ -45,7 +46,7 @@ def intrinsics_from_dict(data: dict) -> Intrinsics:
                         float(data["cy"]), tuple(float(x) for x in data["dist"]))
     numbers = [values.fx, values.fy, values.cx, values.cy, *values.dist]
     if not (all(np.isfinite(numbers)) and values.fx > 0 and values.fy > 0 and values.width > 0 and values.height > 0):
-        raise ValueError("stored intrinsics are not finite and positive")
+        raise InvalidInput("stored intrinsics are not finite and positive")
     return values
 
 

@@ -10,7 +10,7 @@ from __future__ import annotations
 
 import threading
 
-from armlab.errors import CommandRefused
+from armlab.errors import CommandRefused, InvalidInput
 
 SPEED_MIN_PERCENT = 10.0
 SPEED_MAX_PERCENT = 100.0
@@ -20,7 +20,7 @@ def checked_speed_percent(speed_percent: float) -> float:
     """A speed override in [10, 100] %, else ValueError."""
     value = float(speed_percent)
     if not SPEED_MIN_PERCENT <= value <= SPEED_MAX_PERCENT:
-        raise ValueError(f"speed_percent must be from {SPEED_MIN_PERCENT:g} to {SPEED_MAX_PERCENT:g} %, got {speed_percent!r}")
+        raise InvalidInput(f"speed_percent must be from {SPEED_MIN_PERCENT:g} to {SPEED_MAX_PERCENT:g} %, got {speed_percent!r}")
     return value
 
 
@@ -58,13 +58,13 @@ class RunControl:
             self._bump()
 
     def set_speed(self, speed_percent: float) -> None:
-        """Change the speed; ValueError (the job's reason, e.g. a waypoint the cycle fails at that speed) leaves it."""
+        """Change the speed; InvalidInput (the job's reason, e.g. a waypoint the cycle fails at that speed) leaves it."""
         value = checked_speed_percent(speed_percent)
         if self.validate_speed is not None:
             try:
                 self.validate_speed(value)
             except ValueError as error:
-                raise ValueError(f"speed {value:g} % refused, the job goes on at {self.speed_percent:g} %: {error}") from None
+                raise InvalidInput(f"speed {value:g} % refused, the job goes on at {self.speed_percent:g} %: {error}") from None
         with self._lock:
             self._speed_percent = value
             self._bump()

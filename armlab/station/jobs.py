@@ -15,6 +15,8 @@ from collections.abc import Callable
 from dataclasses import dataclass, field
 from typing import Any
 
+from armlab.errors import is_internal
+
 log = logging.getLogger(__name__)
 
 
@@ -135,7 +137,8 @@ def start_job_thread(
 
     Outcomes: returned → succeeded (its return value is the result); JobCancelled → cancelled;
     any other exception → failed with the exception's sentence (passed to on_end so the station can
-    tell device failures from refusals). After a cancel, cleanup(ctx) runs (its failure is reported in
+    tell device failures from refusals); a bug (armlab.errors.is_internal) → failed as "internal error: ...",
+    its traceback logged at ERROR. After a cancel, cleanup(ctx) runs (its failure is reported in
     the job's message).
     """
 
@@ -154,8 +157,12 @@ def start_job_thread(
             job.finish("cancelled", message)
         except Exception as failure:  # noqa: BLE001 - a job's failure is reported, never raised into the void
             error = failure
-            log.info("job %s failed", job.name, exc_info=True)
-            job.finish("failed", f"{type(failure).__name__}: {failure}")
+            if is_internal(failure):  # a bug (a bare ValueError from numpy...), not a refusal: say so, keep the traceback
+                log.error("job %s failed on an internal error", job.name, exc_info=True)
+                job.finish("failed", f"internal error: {type(failure).__name__}: {failure} (the server log has the traceback)")
+            else:
+                log.info("job %s failed", job.name, exc_info=True)
+                job.finish("failed", f"{type(failure).__name__}: {failure}")
         else:
             job.finish("succeeded", job.message or "done", result)
         try:

@@ -15,7 +15,7 @@ import re
 import time
 from dataclasses import dataclass
 
-from armlab.errors import NotController
+from armlab.errors import InvalidInput, NotController
 
 CONTROLLER_NAME = re.compile(r"^[A-Za-z0-9_.:-]{1,64}$")
 
@@ -23,7 +23,7 @@ CONTROLLER_NAME = re.compile(r"^[A-Za-z0-9_.:-]{1,64}$")
 def checked_controller(name: str) -> str:
     """A controller name (1-64 of letters, digits, _ . : -), else ValueError."""
     if not isinstance(name, str) or not CONTROLLER_NAME.match(name):
-        raise ValueError(f"controller name must be 1-64 letters, digits or _ . : -, got {name!r}")
+        raise InvalidInput(f"controller name must be 1-64 letters, digits or _ . : -, got {name!r}")
     return name
 
 

@@ -12,7 +12,7 @@ import math
 import numpy as np
 
 from armlab.devices.arm import JointTrajectory
-from armlab.errors import ArmMoving, CommandRefused, NeedsConfirmation, NotController
+from armlab.errors import PLAN_REFUSALS, ArmMoving, CommandRefused, InvalidInput, NeedsConfirmation, NotController
 from armlab.motion import plan_joint_move
 from armlab.motion.blend import arm_limits, plan_run
 from armlab.motion.gripper_step import StepSpeeds, plan_gripper_step
@@ -87,7 +87,7 @@ class ManualCommands:
         position = checked_position(position_m)
         for name, angle in (("pitch_rad", pitch_rad), ("yaw_rad", yaw_rad)):
             if angle is not None and not math.isfinite(float(angle)):
-                raise ValueError(f"{name} must be finite")
+                raise InvalidInput(f"{name} must be finite")
 
         if holds_full_pose(self.model):  # six joints or more: a full pose (ik_pose), the tool's heading kept without a yaw
             return solve_pose_move(self.model, position, pitch_rad, yaw_rad, self.joints_rad())
@@ -173,7 +173,7 @@ class ManualCommands:
             return False
         try:
             self.jog(jog["velocity"], source=source)
-        except (CommandRefused, NotController, ValueError):  # the jog runs out by itself
+        except (CommandRefused, NotController, *PLAN_REFUSALS):  # the jog runs out by itself
             return False
         return True
 
@@ -200,7 +200,7 @@ class ManualCommands:
     def gripper_command(self, action: str, wait: bool = True, source: str | None = None) -> None:
         """'grasp' or 'release'."""
         if action not in ("grasp", "release"):
-            raise ValueError(f"gripper action must be 'grasp' or 'release', not {action!r}")
+            raise InvalidInput(f"gripper action must be 'grasp' or 'release', not {action!r}")
         with self._sending():
             self._transition("gripper", source=source)
             self._send_later(lambda: getattr(self.gripper, action)(wait=False))
@@ -213,7 +213,7 @@ def checked_speed_percent(speed_percent) -> float:
     try:
         value = float(speed_percent)
     except (TypeError, ValueError) as error:
-        raise ValueError(f"speed_percent must be a number from 10 to 100, got {speed_percent!r}") from error
+        raise InvalidInput(f"speed_percent must be a number from 10 to 100, got {speed_percent!r}") from error
     if not (math.isfinite(value) and 10.0 <= value <= 100.0):
-        raise ValueError(f"speed_percent must be from 10 to 100, got {speed_percent!r}")
+        raise InvalidInput(f"speed_percent must be from 10 to 100, got {speed_percent!r}")
     return value

@@ -17,7 +17,7 @@ from contextlib import contextmanager
 import numpy as np
 
 from armlab.devices.arm import JointTrajectory
-from armlab.errors import ArmMoving, CommandRefused
+from armlab.errors import PLAN_REFUSALS, ArmMoving, CommandRefused, InvalidInput
 from armlab.motion import check_trajectory
 from armlab.motion.blend import arm_limits, plan_stop
 from armlab.motion.clearance import lowest_corner_m, self_collision
@@ -269,7 +269,7 @@ class MotionGate:
             owns = (lambda: self._owns_arm(ctx)) if ctx is not None else None
             try:
                 self._send_replacing(stop, owns, "stop")
-            except (HandoverLate, ValueError):  # the motion ended meanwhile, or the stop fails its check: it runs out
+            except (HandoverLate, *PLAN_REFUSALS):  # the motion ended meanwhile, or the stop fails its check: it runs out
                 pass
         self._wait_until(lambda: not self.arm.is_moving(), 30.0, ctx)
 
@@ -343,7 +343,7 @@ class MotionGate:
     def run_gripper(self, ctx: JobContext, action: str) -> None:
         """Inside a job: grasp or release (only while this job owns the arm) and wait for the fingers."""
         if action not in ("grasp", "release"):
-            raise ValueError(f"gripper action must be 'grasp' or 'release', not {action!r}")
+            raise InvalidInput(f"gripper action must be 'grasp' or 'release', not {action!r}")
         with self._sending():
             self._owns_arm(ctx)
             self._send_later(lambda: getattr(self.gripper, action)(wait=False))

@@ -12,6 +12,8 @@ from collections import deque
 from collections.abc import Callable
 from typing import Any, Generic, TypeVar
 
+from armlab.errors import InvalidInput
+
 ValueT = TypeVar("ValueT")
 
 
@@ -78,9 +80,9 @@ class EventLog:
 
     def add(self, level: str, message: str, kind: str = "general") -> dict:
         if level not in self.LEVELS:
-            raise ValueError(f"event level must be one of {self.LEVELS}, not {level!r}")
+            raise InvalidInput(f"event level must be one of {self.LEVELS}, not {level!r}")
         if kind not in self.KINDS:
-            raise ValueError(f"event kind must be one of {self.KINDS}, not {kind!r}")
+            raise InvalidInput(f"event kind must be one of {self.KINDS}, not {kind!r}")
         with self._lock:
             self._seq += 1
             event = {"seq": self._seq, "level": level, "kind": kind, "message": message, "time_s": time.time()}

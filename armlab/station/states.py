@@ -10,7 +10,7 @@ from __future__ import annotations
 from enum import Enum
 from types import MappingProxyType
 
-from armlab.errors import CommandRefused
+from armlab.errors import CommandRefused, InvalidInput
 
 
 class State(str, Enum):
@@ -118,7 +118,7 @@ def allowed_commands(state: State, has_arm: bool = True) -> list[str]:
 def next_state(state: State, command: str) -> State:
     """The state after `command` in `state`; CommandRefused (naming the allowed commands) if not allowed."""
     if command not in COMMANDS:
-        raise ValueError(f"unknown command '{command}'; known: {', '.join(COMMANDS)}")
+        raise InvalidInput(f"unknown command '{command}'; known: {', '.join(COMMANDS)}")
     state = State(state)
     row = TRANSITIONS[state]
     if command not in row:

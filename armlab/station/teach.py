@@ -16,7 +16,7 @@ import time
 
 import numpy as np
 
-from armlab.errors import CommandRefused, NotController, ShuttingDown
+from armlab.errors import CommandRefused, InvalidInput, NotController, ShuttingDown
 from armlab.station.states import State
 from armlab.store import Program, Waypoint
 
@@ -147,11 +147,11 @@ class TeachCommands:
         teach_continuous_stop() or teach_stop (ValueError for a bad rate or on a synchronous station)."""
         rate_hz = float(rate_hz)
         if not RATE_LIMITS_HZ[0] <= rate_hz <= RATE_LIMITS_HZ[1]:
-            raise ValueError(f"rate_hz must be from {RATE_LIMITS_HZ[0]:g} to {RATE_LIMITS_HZ[1]:g} Hz, got {rate_hz:g}")
+            raise InvalidInput(f"rate_hz must be from {RATE_LIMITS_HZ[0]:g} to {RATE_LIMITS_HZ[1]:g} Hz, got {rate_hz:g}")
         if not 0.0 < float(min_change_rad) <= 1.0:
-            raise ValueError(f"min_change_rad must be in (0, 1] rad, got {min_change_rad!r}")
+            raise InvalidInput(f"min_change_rad must be in (0, 1] rad, got {min_change_rad!r}")
         if self.synchronous:
-            raise ValueError("continuous recording needs the real-time station (the fast-mode simulation runs no threads)")
+            raise InvalidInput("continuous recording needs the real-time station (the fast-mode simulation runs no threads)")
         self.allowed_or_raise("teach_record", source)
         self.teach_continuous_stop()
         recorder = ContinuousRecorder(self, rate_hz, float(min_change_rad), source)

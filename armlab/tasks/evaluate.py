@@ -14,7 +14,7 @@ import time
 import traceback
 from collections.abc import Iterator, Sequence
 
-from armlab.errors import ConfigError
+from armlab.errors import ConfigError, InvalidInput
 from armlab.tasks.episode import episode_scene, run_episode
 from armlab.tasks.judge import EVENT_LIMITS_S
 from armlab.tasks.registry import JOBS, JobUnsupported, check_supported, checked_request
@@ -28,7 +28,7 @@ RUN_KEYS = ("event", "level", "seed", "points", "max_points", "sim_time_s", "wal
 _SEED_ITEM = re.compile(r"(\d+)(?:-(\d+))?")
 
 
-class EvalError(ValueError):
+class EvalError(InvalidInput):
     """A bad evaluation request (event, level, seeds, workers); the message says what is wrong."""
 
 

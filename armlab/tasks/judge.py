@@ -36,6 +36,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from armlab.errors import InvalidInput
 from armlab.scene import COLORS, EVENTS, WORKCELL_BOUND_M, Scene, SceneObject
 from armlab.vision import load_perception_config
 
@@ -172,7 +173,7 @@ def tls_line(points) -> tuple[np.ndarray, np.ndarray]:
     The direction's sign is canonical (x > 0, or y > 0 when vertical); callers read the line both ways."""
     pts = np.asarray(points, dtype=float)
     if pts.ndim != 2 or pts.shape[0] < 1 or pts.shape[1] not in (2, 3) or not np.all(np.isfinite(pts)):
-        raise ValueError(f"tls_line needs (N, 2) or (N, 3) finite points with N >= 1, got shape {pts.shape}")
+        raise InvalidInput(f"tls_line needs (N, 2) or (N, 3) finite points with N >= 1, got shape {pts.shape}")
     xy = pts[:, :2]
     centre = xy.mean(axis=0)
     _u, _s, vt = np.linalg.svd(xy - centre)
@@ -210,29 +211,29 @@ def board_tag_centres_m(workcell: str | None = None) -> tuple[tuple[float, float
 
 def _check_event_level(event: str, level: int) -> float:
     if event not in EVENT_LIMITS_S:
-        raise ValueError(f"judge: unknown event {event!r}; events: {', '.join(EVENT_LIMITS_S)}")
+        raise InvalidInput(f"judge: unknown event {event!r}; events: {', '.join(EVENT_LIMITS_S)}")
     levels = EVENTS.get(event, _SORT_STACK_LEVELS if event == "sort_stack" else ())
     if isinstance(level, bool) or not isinstance(level, (int, np.integer)) or level not in levels:
-        raise ValueError(f"judge: event {event!r} has levels {tuple(levels)}, not {level!r}")
+        raise InvalidInput(f"judge: event {event!r} has levels {tuple(levels)}, not {level!r}")
     return EVENT_LIMITS_S[event]
 
 
 def _check_truth(truth, workcell: str | None = None) -> tuple[SceneObject, ...]:
     if not isinstance(truth, Mapping) or not isinstance(truth.get("objects"), list):
-        raise ValueError("judge: truth must be a mapping with an 'objects' list (the SimWorkcell.truth() format)")
+        raise InvalidInput("judge: truth must be a mapping with an 'objects' list (the SimWorkcell.truth() format)")
     try:
         return Scene.from_dict({"objects": [_within_bound(obj) for obj in truth["objects"]]}, workcell=workcell).objects
     except (ValueError, TypeError) as error:
-        raise ValueError(f"judge: malformed truth object: {error}") from error
+        raise InvalidInput(f"judge: malformed truth object: {error}") from error
 
 
 def _check_time(sim_time_s) -> float:
     try:
         value = float(sim_time_s)
     except (TypeError, ValueError):
-        raise ValueError(f"judge: sim_time_s must be a number of seconds, got {sim_time_s!r}") from None
+        raise InvalidInput(f"judge: sim_time_s must be a number of seconds, got {sim_time_s!r}") from None
     if not math.isfinite(value) or value < 0.0:
-        raise ValueError(f"judge: sim_time_s must be finite and >= 0, got {sim_time_s!r}")
+        raise InvalidInput(f"judge: sim_time_s must be finite and >= 0, got {sim_time_s!r}")
     return value
 
 
@@ -242,11 +243,11 @@ def _check_path(gripper_path_m) -> np.ndarray | None:
     try:
         path = np.asarray(gripper_path_m, dtype=float)
     except (TypeError, ValueError):
-        raise ValueError("judge: gripper_path_m must be an (N, 3) sequence of positions in metres") from None
+        raise InvalidInput("judge: gripper_path_m must be an (N, 3) sequence of positions in metres") from None
     if path.size == 0:
         return np.zeros((0, 3))
     if path.ndim != 2 or path.shape[1] != 3 or not np.all(np.isfinite(path)):
-        raise ValueError(f"judge: gripper_path_m must be (N, 3) finite positions in metres, got shape {path.shape}")
+        raise InvalidInput(f"judge: gripper_path_m must be (N, 3) finite positions in metres, got shape {path.shape}")
     return path
 
 
@@ -255,9 +256,9 @@ def _check_tag_centres(tag_centres_m) -> np.ndarray:
     try:
         centres = np.asarray(list(values), dtype=float)
     except (TypeError, ValueError):
-        raise ValueError("judge: tag_centres_m must be (x, y) pairs in metres") from None
+        raise InvalidInput("judge: tag_centres_m must be (x, y) pairs in metres") from None
     if centres.ndim != 2 or centres.shape[0] < 1 or centres.shape[1] != 2 or not np.all(np.isfinite(centres)):
-        raise ValueError(f"judge: tag_centres_m must be one or more finite (x, y) pairs, got shape {centres.shape}")
+        raise InvalidInput(f"judge: tag_centres_m must be one or more finite (x, y) pairs, got shape {centres.shape}")
     return centres
 
 
@@ -424,7 +425,7 @@ def _to_the_sky(blocks, blocks_available):
     large = [b for b in blocks if b.size == "large"]
     available = len(large) if blocks_available is None else blocks_available
     if isinstance(available, bool) or not isinstance(available, (int, np.integer)) or available < len(large):
-        raise ValueError(f"judge: blocks_available must be an int >= the {len(large)} large blocks in truth, "
+        raise InvalidInput(f"judge: blocks_available must be an int >= the {len(large)} large blocks in truth, "
                          f"got {blocks_available!r}")
     stacks = columns([b for b in large if upright(b)])
     tallest = max(stacks, key=len) if stacks else ()
@@ -506,7 +507,7 @@ def judge(
     objects = _check_truth(truth, workcell)
     path = _check_path(gripper_path_m)
     if blocks_available is not None and event != "to_the_sky":
-        raise ValueError(f"judge: blocks_available applies to to_the_sky only, not {event!r}")
+        raise InvalidInput(f"judge: blocks_available applies to to_the_sky only, not {event!r}")
     if tag_centres_m is not None:
         tags = _check_tag_centres(tag_centres_m)
     elif event == "pick_stack":

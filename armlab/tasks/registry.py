@@ -6,6 +6,7 @@ import math
 from collections.abc import Callable
 from dataclasses import dataclass
 
+from armlab.errors import InvalidInput
 from armlab.scene import COLORS, SIZES, as_workcell
 from armlab.station.core import NotCalibrated, Station
 from armlab.station.jobs import Job, JobContext
@@ -25,7 +26,7 @@ from armlab.tasks.runner import Plan, TaskRunner
 from armlab.workcell import Workcell
 
 
-class JobUnsupported(ValueError):
+class JobUnsupported(InvalidInput):
     """A job the station's workcell cannot run (its gripper type or geometry): refused before anything moves."""
 
 
@@ -101,31 +102,31 @@ JOBS: dict[str, JobSpec] = {
 def checked_request(job: str, level, params) -> tuple[JobSpec, int | None, dict]:
     """Validate a job request: ValueError naming the problem (unknown job, level, parameter)."""
     if not isinstance(job, str) or job not in JOBS:
-        raise ValueError(f"unknown job {job!r}; jobs: {', '.join(JOBS)}")
+        raise InvalidInput(f"unknown job {job!r}; jobs: {', '.join(JOBS)}")
     spec = JOBS[job]
     if spec.levels:
         if level is None:
             level = spec.levels[-1]
         if isinstance(level, bool) or not isinstance(level, int) or level not in spec.levels:
-            raise ValueError(f"job '{job}' has levels {', '.join(map(str, spec.levels))}, not {level!r}")
+            raise InvalidInput(f"job '{job}' has levels {', '.join(map(str, spec.levels))}, not {level!r}")
     elif level is not None:
-        raise ValueError(f"job '{job}' has no levels; leave 'level' out")
+        raise InvalidInput(f"job '{job}' has no levels; leave 'level' out")
     params = {} if params is None else params
     if not isinstance(params, dict):
-        raise ValueError("params must be an object")
+        raise InvalidInput("params must be an object")
     known = dict(spec.param_types)
     for name, value in params.items():
         if name not in known:
-            raise ValueError(f"job '{job}' has no parameter {name!r}" + (f"; parameters: {', '.join(known)}" if known else ""))
+            raise InvalidInput(f"job '{job}' has no parameter {name!r}" + (f"; parameters: {', '.join(known)}" if known else ""))
         wanted = known[name]
         accepted = (int, float) if wanted is float else wanted
         if isinstance(value, bool) and wanted is not bool or not isinstance(value, accepted):
-            raise ValueError(f"parameter {name!r} of job '{job}' must be {wanted.__name__}, got {type(value).__name__}")
+            raise InvalidInput(f"parameter {name!r} of job '{job}' must be {wanted.__name__}, got {type(value).__name__}")
         if wanted is float and not (math.isfinite(value) and abs(value) <= 1.0):
-            raise ValueError(f"parameter {name!r} of job '{job}' must be a finite position within 1 m, got {value!r}")
+            raise InvalidInput(f"parameter {name!r} of job '{job}' must be a finite position within 1 m, got {value!r}")
 
     if params.get("color") not in (None, *COLORS) or params.get("size") not in (None, *SIZES):
-        raise ValueError(f"color must be one of {', '.join(COLORS)} and size one of {', '.join(SIZES)}")
+        raise InvalidInput(f"color must be one of {', '.join(COLORS)} and size one of {', '.join(SIZES)}")
     return spec, level, params
 
 
@@ -143,7 +144,7 @@ def unsupported_reason(job: str, workcell: Workcell | str | None = None) -> str 
 
 
 def check_supported(job: str, workcell: Workcell | str | None = None) -> None:
-    """JobUnsupported (a ValueError) naming the job, the workcell and what it lacks, unless the job runs there."""
+    """JobUnsupported (an InvalidInput) naming the job, the workcell and what it lacks, unless the job runs there."""
     reason = unsupported_reason(job, workcell)
     if reason:
         raise JobUnsupported(f"job '{job}' is not available on workcell '{as_workcell(workcell).name}': it needs {reason}")

@@ -15,7 +15,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from armlab import skills
-from armlab.kinematics import Unreachable
+from armlab.errors import PLAN_REFUSALS, InvalidInput
 from armlab.motion import TrajectoryStep, plan_joint_move
 from armlab.motion.cartesian import plan_vertical_segment
 from armlab.motion.clearance import box_around, first_collision
@@ -110,7 +110,7 @@ def look_pose(station: Station) -> np.ndarray:
     if q is None:
         return park_pose(station.model)
     if len(q) != station.model.dof:
-        raise ValueError(f"workcell look_pose_rad has {len(q)} joints; the arm has {station.model.dof}")
+        raise InvalidInput(f"workcell look_pose_rad has {len(q)} joints; the arm has {station.model.dof}")
     return np.asarray(q, float)
 
 
@@ -210,7 +210,7 @@ class TaskRunner:
                                          accel_m_s2=config.vertical_accel_m_s2, rate_hz=config.sample_rate_hz)
             routes.append([rise.positions_rad[-1]])
             routes.append([rise.positions_rad[-1], model.ik([0.0, 0.12, rise_z_m], q_seed=q_park)])
-        except (Unreachable, ValueError):
+        except PLAN_REFUSALS:
             pass
         def joint_move(q_a, q_b):
             return plan_joint_move(q_a, q_b, model, None, None, config.sample_rate_hz)
@@ -221,7 +221,7 @@ class TaskRunner:
                 for q_to in [*via, q_park]:
                     legs += joint_moves_inside(model, q_from, q_to, self.gripper_box, joint_move)
                     q_from = q_to
-            except ValueError:  # an IK point a hair outside a limit: try the next route
+            except PLAN_REFUSALS:  # an IK point a hair outside a limit: try the next route
                 continue
             if all(first_collision(model, leg, boxes, link_radius_m=PARK_CLEARANCE_M) is None for leg in legs):
                 for leg in legs:
@@ -292,7 +292,7 @@ class TaskRunner:
             try:
                 return plan_place(self.station, to, yaw, edge, place_boxes, q_start=q_start, max_transfer_z_m=self.max_transfer_z_m,
                                   finger_axis_rad=axis, max_tilt_rad=move.max_tilt_rad, gripper_box=self.gripper_box)
-            except (Unreachable, ValueError):
+            except PLAN_REFUSALS:
                 if not move.side_ok:
                     raise
                 return plan_side_place(self.station, to, edge, place_boxes, q_start=q_start)
@@ -305,12 +305,12 @@ class TaskRunner:
                 pick = plan_pick(self.station, block["position_m"], block.get("yaw_rad"), edge, self.boxes(objects, block),
                                  max_transfer_z_m=self.max_transfer_z_m, gripper_box=self.gripper_box,
                                  finger_axis_rad=finger_axis_away(block["position_m"], block.get("yaw_rad") or 0.0, objects, block))
-        except (Unreachable, ValueError) as error:
+        except PLAN_REFUSALS as error:
             self.fail(f"cannot pick the {name} at ({block['position_m'][0] * 1000:.0f}, {block['position_m'][1] * 1000:.0f}) mm: {error}")
             return False
         try:
             plan_the_place(pick_end_joints(pick))
-        except (Unreachable, ValueError) as error:
+        except PLAN_REFUSALS as error:
             self.fail(f"cannot place the {name} at ({to[0] * 1000:.0f}, {to[1] * 1000:.0f}, {to[2] * 1000:.0f}) mm: {error}")
             return False
         self.report(f"picking the {name}: {move.why}")
@@ -322,7 +322,7 @@ class TaskRunner:
         self.station.set_held_block({**block, "edge_m": edge})
         try:
             place = plan_the_place()
-        except (Unreachable, ValueError) as error:
+        except PLAN_REFUSALS as error:
             self.fail(f"cannot place the {name} at ({to[0] * 1000:.0f}, {to[1] * 1000:.0f}, {to[2] * 1000:.0f}) mm: {error}")
             self.put_down_held(objects)
             return False
@@ -412,7 +412,7 @@ class TaskRunner:
         """True if a block of edge_m can be set down top-down on surface_m from here (obstacles aside)."""
         try:
             plan_place(self.station, surface_m, 0.0, edge_m, [], max_transfer_z_m=self.max_transfer_z_m, gripper_box=self.gripper_box)
-        except (Unreachable, ValueError):
+        except PLAN_REFUSALS:
             return False
         return True
 

@@ -12,6 +12,7 @@ from __future__ import annotations
 
 import math
 
+from armlab.errors import InvalidInput
 from armlab.scene import as_workcell
 from armlab.tasks.judge import Rule, Score, columns, upright
 
@@ -56,7 +57,7 @@ def score_job(job: str, truth: dict, *, sim_time_s: float, params: dict | None =
             if wanted(obj):
                 rules.append(Rule("in the stack", int(obj["id"] in in_column), f"{obj['color']} {obj['size']}", (obj["id"],)))
     else:
-        raise ValueError(f"score_job scores {', '.join(SCORED_JOBS)}, not {job!r}")
+        raise InvalidInput(f"score_job scores {', '.join(SCORED_JOBS)}, not {job!r}")
     points, max_points = sum(r.points for r in rules), len(rules)
     within = sim_time_s <= TIME_LIMIT_S
     return Score(points, max_points, within, points == max_points and within, tuple(rules), TIME_LIMIT_S)

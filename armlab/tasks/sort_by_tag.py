@@ -6,12 +6,13 @@ the job fails once the others are sorted, naming that block (UnknownTagDestinati
 
 from __future__ import annotations
 
+from armlab.errors import InvalidInput
 from armlab.scene import as_workcell
 from armlab.tasks.columns import Column, unseen_as_none
 from armlab.tasks.runner import Move, Plan, TaskRunner, cubes, seeing_look_pose
 
 
-class UnknownTagDestination(ValueError):
+class UnknownTagDestination(InvalidInput):
     """sort_by_tag met blocks whose ArUco id names no place in the workcell config (block_tags.ids)."""
 
 

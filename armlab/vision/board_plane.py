@@ -21,8 +21,10 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from armlab.errors import InvalidInput
 
-class BoardPlaneError(ValueError):
+
+class BoardPlaneError(InvalidInput):
     """No board plane could be fitted (too few board pixels with depth, or no dominant plane)."""
 
 

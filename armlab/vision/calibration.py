@@ -12,6 +12,7 @@ import cv2
 import numpy as np
 
 from armlab.devices.camera import Intrinsics
+from armlab.errors import InvalidInput
 from armlab.vision.board_plane import (
     BoardPlaneError,
     BoardPlaneFitter,
@@ -33,7 +34,7 @@ from armlab.vision.geometry import (
 from armlab.vision.tags import Tag, check_color_image, detect_tags
 
 
-class CalibrationError(ValueError):
+class CalibrationError(InvalidInput):
     """A calibration could not be made or would be wrong; the message says why in one sentence."""
 
 

@@ -23,6 +23,7 @@ from functools import cached_property
 import cv2
 import numpy as np
 
+from armlab.errors import InvalidInput
 from armlab.vision.geometry import project_points
 
 UNKNOWN = "unknown"
@@ -78,7 +79,7 @@ def face_median_rgb(face_bgr: np.ndarray) -> np.ndarray:
     """The per-channel median (3,) RGB of a face's pixels (N, 3) BGR uint8; ValueError when there are none."""
     face = np.asarray(face_bgr).reshape(-1, 3)
     if face.shape[0] == 0:
-        raise ValueError("the face has no pixels")
+        raise InvalidInput("the face has no pixels")
     if face.shape[0] > MAX_FACE_SAMPLES:
         face = face[:: face.shape[0] // MAX_FACE_SAMPLES]
     return np.median(face, axis=0)[::-1]
@@ -90,7 +91,7 @@ def normalised_rgb(face_bgr: np.ndarray, board_bgr: np.ndarray, face_rgb: np.nda
     by channel by the board's."""
     board = np.asarray(board_bgr, dtype=float).reshape(3)
     if not np.all(np.isfinite(board)) or np.any(board <= 0):
-        raise ValueError(f"normalised_rgb: board grey must be 3 positive values (BGR), got {board.tolist()}")
+        raise InvalidInput(f"normalised_rgb: board grey must be 3 positive values (BGR), got {board.tolist()}")
     face_rgb = face_median_rgb(face_bgr) if face_rgb is None else face_rgb
     return srgb_to_linear(face_rgb) / np.maximum(srgb_to_linear(board[::-1]), 1e-4)
 
@@ -111,15 +112,15 @@ def board_reference_bgr(color_bgr: np.ndarray, board_mask: np.ndarray) -> np.nda
     color_bgr: (H, W, 3) uint8; board_mask: (H, W) bool, e.g. board-height pixels around a block.
     ValueError when fewer than MIN_BOARD_PIXELS such pixels remain."""
     if color_bgr.ndim != 3 or board_mask.shape != color_bgr.shape[:2]:
-        raise ValueError(f"board_reference_bgr: mask {board_mask.shape} does not match image {color_bgr.shape}")
+        raise InvalidInput(f"board_reference_bgr: mask {board_mask.shape} does not match image {color_bgr.shape}")
     pixels = color_bgr[board_mask.astype(bool)]
     if len(pixels) < MIN_BOARD_PIXELS:
-        raise ValueError(f"board_reference_bgr: only {len(pixels)} board pixels (needs {MIN_BOARD_PIXELS})")
+        raise InvalidInput(f"board_reference_bgr: only {len(pixels)} board pixels (needs {MIN_BOARD_PIXELS})")
     hi = pixels.max(axis=1).astype(np.int32)
     lo = pixels.min(axis=1).astype(np.int32)
     grey = pixels[(hi - lo) * 255 <= BOARD_MAX_SATURATION * np.maximum(hi, 1)]
     if len(grey) < MIN_BOARD_PIXELS:
-        raise ValueError(f"board_reference_bgr: only {len(grey)} grey board pixels (needs {MIN_BOARD_PIXELS})")
+        raise InvalidInput(f"board_reference_bgr: only {len(grey)} grey board pixels (needs {MIN_BOARD_PIXELS})")
     values = grey.astype(np.float32)
     total = values.sum(axis=1)
     blue, red = values[:, 0] / np.maximum(total, 1.0), values[:, 2] / np.maximum(total, 1.0)  # chromaticity
@@ -130,11 +131,11 @@ def board_reference_bgr(color_bgr: np.ndarray, board_mask: np.ndarray) -> np.nda
                 & (np.abs(blue - _median(blue[keep])) <= BOARD_CHROMATICITY_BAND)
                 & (np.abs(red - _median(red[keep])) <= BOARD_CHROMATICITY_BAND))
         if np.count_nonzero(keep) < MIN_BOARD_PIXELS:
-            raise ValueError("board_reference_bgr: the board pixels have no dominant grey")
+            raise InvalidInput("board_reference_bgr: the board pixels have no dominant grey")
     board = values[keep]
     reference = np.array([_median(board[:, channel]) for channel in range(3)], dtype=float)
     if np.any(reference <= 0):
-        raise ValueError("board_reference_bgr: the board reads black (no light?)")
+        raise InvalidInput("board_reference_bgr: the board reads black (no light?)")
     return reference
 
 
@@ -197,7 +198,7 @@ class ColorSample:
     def from_dict(cls, data: dict) -> ColorSample:
         lab = tuple(float(x) for x in data["lab"])
         if len(lab) != 3 or not all(math.isfinite(x) for x in lab):
-            raise ValueError(f"colour sample lab must be 3 finite numbers, got {data['lab']!r}")
+            raise InvalidInput(f"colour sample lab must be 3 finite numbers, got {data['lab']!r}")
         return cls(str(data["name"]), lab, data.get("u"), data.get("v"), data.get("time_s"))
 
 
@@ -237,7 +238,7 @@ class ColorModel:
         samples = tuple(samples)
         for i, sample in enumerate(samples):
             if sample.name not in self.names:
-                raise ValueError(f"samples[{i}].color: unknown colour '{sample.name}' (known: {', '.join(self.names)})")
+                raise InvalidInput(f"samples[{i}].color: unknown colour '{sample.name}' (known: {', '.join(self.names)})")
         shadowed = frozenset(
             (name, index) for name, refs in self.references.items() for index, ref in enumerate(refs)
             if any(s.name != name and lab_distance(s.lab, ref, self.k_lightness, self.k_chroma) < 0.5 * self.max_distance
@@ -371,7 +372,7 @@ def face_and_board_at(color_bgr: np.ndarray, center_px, side_px: float | None = 
     h, w = color_bgr.shape[:2]
     u, v = float(center_px[0]), float(center_px[1])
     if not (0 <= u < w and 0 <= v < h):
-        raise ValueError(f"pixel ({u:g}, {v:g}) is outside the {w}x{h} image")
+        raise InvalidInput(f"pixel ({u:g}, {v:g}) is outside the {w}x{h} image")
     side = float(side_px) if side_px is not None else CLICK_FACE_SIDE_PX * w / 1280.0
     patch = face_patch(color_bgr, (u, v), max(2, int(round(PATCH_FRACTION * side))))
     ring = board_mask_near((h, w), (u, v), int(RING_FACES[1] * side), int(RING_FACES[0] * side))

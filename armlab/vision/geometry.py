@@ -9,6 +9,8 @@ from __future__ import annotations
 import cv2
 import numpy as np
 
+from armlab.errors import InvalidInput
+
 
 def as_points(points: np.ndarray, dim: int, name: str = "points") -> np.ndarray:
     """Points as a finite float (N, dim) array; ValueError on the wrong shape or NaN/inf."""
@@ -16,9 +18,9 @@ def as_points(points: np.ndarray, dim: int, name: str = "points") -> np.ndarray:
     if arr.ndim == 1 and arr.shape[0] == dim:
         arr = arr[None, :]
     if arr.ndim != 2 or arr.shape[1] != dim:
-        raise ValueError(f"{name} must have shape (N, {dim}), got {np.shape(points)}")
+        raise InvalidInput(f"{name} must have shape (N, {dim}), got {np.shape(points)}")
     if not np.all(np.isfinite(arr)):
-        raise ValueError(f"{name} contains NaN or infinity")
+        raise InvalidInput(f"{name} contains NaN or infinity")
     return arr
 
 
@@ -30,13 +32,13 @@ def rigid_transform_3d(points_src: np.ndarray, points_dst: np.ndarray) -> np.nda
     src = as_points(points_src, 3, "points_src")
     dst = as_points(points_dst, 3, "points_dst")
     if src.shape != dst.shape:
-        raise ValueError(f"point sets differ in shape: {src.shape} vs {dst.shape}")
+        raise InvalidInput(f"point sets differ in shape: {src.shape} vs {dst.shape}")
     if src.shape[0] < 3:
-        raise ValueError(f"a rigid fit needs at least 3 points, got {src.shape[0]}")
+        raise InvalidInput(f"a rigid fit needs at least 3 points, got {src.shape[0]}")
     mu_src, mu_dst = src.mean(axis=0), dst.mean(axis=0)
     src_c, dst_c = src - mu_src, dst - mu_dst
     if np.linalg.matrix_rank(src_c, tol=1e-9) < 2 or np.linalg.matrix_rank(dst_c, tol=1e-9) < 2:
-        raise ValueError("points are collinear: the rotation is not determined")
+        raise InvalidInput("points are collinear: the rotation is not determined")
     u, _, vt = np.linalg.svd(src_c.T @ dst_c)
     d = np.sign(np.linalg.det(vt.T @ u.T)) or 1.0
     rotation = vt.T @ np.diag([1.0, 1.0, d]) @ u.T
@@ -75,7 +77,7 @@ def backproject(pixels: np.ndarray, depth_m: np.ndarray, K: np.ndarray, dist: np
     depth = np.asarray(depth_m, dtype=np.float64).reshape(-1)
     rays = normalized_rays(pixels, K, dist)
     if depth.shape[0] != rays.shape[0]:
-        raise ValueError(f"{rays.shape[0]} pixels but {depth.shape[0]} depths")
+        raise InvalidInput(f"{rays.shape[0]} pixels but {depth.shape[0]} depths")
     return rays * depth[:, None]
 
 
@@ -88,10 +90,10 @@ def intersect_rays_with_plane(T_world_camera: np.ndarray, rays_camera: np.ndarra
     directions = rays_camera @ T_world_camera[:3, :3].T
     dz = directions[:, 2]
     if np.any(np.abs(dz) < 1e-9):
-        raise ValueError("a viewing ray is parallel to the plane")
+        raise InvalidInput("a viewing ray is parallel to the plane")
     s = (plane_z_m - origin[2]) / dz
     if np.any(s <= 0):
-        raise ValueError(f"the plane z = {plane_z_m} m is behind the camera for this pixel")
+        raise InvalidInput(f"the plane z = {plane_z_m} m is behind the camera for this pixel")
     return origin + directions * s[:, None]
 
 

@@ -10,6 +10,7 @@ import cv2
 import numpy as np
 
 from armlab.devices.camera import Intrinsics
+from armlab.errors import InvalidInput
 
 
 @dataclass(frozen=True)
@@ -50,9 +51,9 @@ def parse_pattern(text: str) -> tuple[int, int]:
     try:
         cols, rows = (int(part) for part in text.lower().split("x"))
     except ValueError as error:
-        raise ValueError(f"pattern must look like 9x6 (inner corners), got {text!r}") from error
+        raise InvalidInput(f"pattern must look like 9x6 (inner corners), got {text!r}") from error
     if cols < 2 or rows < 2:
-        raise ValueError(f"pattern needs at least 2x2 inner corners, got {text!r}")
+        raise InvalidInput(f"pattern needs at least 2x2 inner corners, got {text!r}")
     return cols, rows
 
 
@@ -76,7 +77,7 @@ def calibrate_intrinsics(
     """Calibrate from checkerboard views (arrays or paths). Views where the board is not found are
     skipped; ValueError if fewer than min_views remain, the images differ in size, or square_m <= 0."""
     if not (np.isfinite(square_m) and square_m > 0):
-        raise ValueError(f"square size must be a positive number of metres, got {square_m}")
+        raise InvalidInput(f"square size must be a positive number of metres, got {square_m}")
     cols, rows = pattern
     objp = np.zeros((cols * rows, 3), np.float32)
     objp[:, :2] = np.mgrid[0:cols, 0:rows].T.reshape(-1, 2) * square_m
@@ -86,19 +87,19 @@ def calibrate_intrinsics(
         name = str(item) if isinstance(item, (str, Path)) else f"image[{index}]"
         image = cv2.imread(str(item), cv2.IMREAD_GRAYSCALE) if isinstance(item, (str, Path)) else item
         if image is None or not isinstance(image, np.ndarray) or image.size == 0:
-            raise ValueError(f"{name}: cannot read the image")
+            raise InvalidInput(f"{name}: cannot read the image")
         grey = image if image.ndim == 2 else cv2.cvtColor(image, cv2.COLOR_BGR2GRAY)
         if size is None:
             size = (grey.shape[1], grey.shape[0])
         elif size != (grey.shape[1], grey.shape[0]):
-            raise ValueError(f"{name}: size {grey.shape[1]}x{grey.shape[0]} differs from the first image's {size[0]}x{size[1]}")
+            raise InvalidInput(f"{name}: size {grey.shape[1]}x{grey.shape[0]} differs from the first image's {size[0]}x{size[1]}")
         corners = find_chessboard(grey, pattern, subpix_window)
         if corners is not None:
             object_points.append(objp)
             image_points.append(corners)
             names.append(name)
     if len(image_points) < min_views:
-        raise ValueError(f"the {cols}x{rows} checkerboard was found in {len(image_points)} image(s); {min_views} are needed")
+        raise InvalidInput(f"the {cols}x{rows} checkerboard was found in {len(image_points)} image(s); {min_views} are needed")
     flags = cv2.CALIB_FIX_ASPECT_RATIO if fix_aspect_ratio else 0
     rms, K, dist, rvecs, tvecs = cv2.calibrateCamera(object_points, image_points, size, np.eye(3), None, flags=flags)
     per_view = []

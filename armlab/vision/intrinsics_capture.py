@@ -16,10 +16,11 @@ import numpy as np
 from pydantic import Field
 
 from armlab.config import StrictModel, config_dir, load_config
+from armlab.errors import InvalidInput
 from armlab.vision.intrinsics import IntrinsicCalibration
 
 
-class IntrinsicsRejected(ValueError):
+class IntrinsicsRejected(InvalidInput):
     """A view or a solve refused, with a short wire code: not_found, blurry, duplicate, size,
     too_few_views, error_too_high, no_view. The message says what to do."""
 

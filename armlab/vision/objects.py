@@ -8,6 +8,7 @@ from dataclasses import dataclass
 import cv2
 import numpy as np
 
+from armlab.errors import InvalidInput
 from armlab.vision.calibration import Calibration
 from armlab.vision.config import PerceptionConfig
 from armlab.vision.geometry import transform_points
@@ -67,7 +68,7 @@ def fit_plane_ransac(points: np.ndarray, iterations: int, threshold_m: float, se
         if count > best_count:
             best_count, best = count, (normal, -normal @ a)
     if best is None or best_count < 0.1 * pts.shape[0]:
-        raise ValueError("no dominant plane in the depth data")
+        raise InvalidInput("no dominant plane in the depth data")
     normal, d = best
     inliers = np.abs(pts @ normal + d) < threshold_m
     centre = pts[inliers].mean(axis=0)
@@ -95,7 +96,7 @@ def detect_objects_from_depth(
     smoothed = cv2.medianBlur(np.ascontiguousarray(depth_mm, dtype=np.uint16), 5)  # depth noise, edges kept
     pts, valid = depth_to_points(smoothed, cal.K, step)
     if np.count_nonzero(valid) < 100:
-        raise ValueError("the depth image has too few valid readings for a plane fit")
+        raise InvalidInput("the depth image has too few valid readings for a plane fit")
     sample = pts[::4, ::4][valid[::4, ::4]]
     normal, d, _ = fit_plane_ransac(sample, oc.ransac_iterations, oc.ransac_threshold_m, seed)
     with np.errstate(invalid="ignore"):

@@ -9,6 +9,7 @@ from dataclasses import dataclass
 import cv2
 import numpy as np
 
+from armlab.errors import InvalidInput
 from armlab.vision.blocks import Block
 from armlab.vision.calibration import Calibration
 from armlab.vision.geometry import PlaneCamera, project_points
@@ -169,12 +170,12 @@ def top_down_view(
         y_range_m = board.y_range_m if y_range_m is None else y_range_m
     check_color_image(color_bgr)
     if not (math.isfinite(mm_per_px) and mm_per_px > 0):
-        raise ValueError(f"mm_per_px must be a positive number, got {mm_per_px}")
+        raise InvalidInput(f"mm_per_px must be a positive number, got {mm_per_px}")
     s = mm_per_px / 1000.0
     width = int(round((x_range_m[1] - x_range_m[0]) / s))
     height = int(round((y_range_m[1] - y_range_m[0]) / s))
     if width * height > 16_000_000:
-        raise ValueError(f"top-down view of {width}x{height} px is too large: raise mm_per_px")
+        raise InvalidInput(f"top-down view of {width}x{height} px is too large: raise mm_per_px")
     board_from_view = np.array([[s, 0, x_range_m[0] + s / 2], [0, -s, y_range_m[1] - s / 2], [0, 0, 1.0]])
     H = cal.H_image_board @ board_from_view
     src = color_bgr

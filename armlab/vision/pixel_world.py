@@ -7,6 +7,7 @@ import math
 
 import numpy as np
 
+from armlab.errors import InvalidInput
 from armlab.vision.calibration import Calibration, depth_at
 from armlab.vision.geometry import (
     backproject,
@@ -27,25 +28,25 @@ def pixel_to_world(
     ValueError for a non-finite or out-of-image pixel, or no valid depth reading there.
     """
     if not (math.isfinite(u) and math.isfinite(v)):
-        raise ValueError(f"pixel ({u}, {v}) is not finite")
+        raise InvalidInput(f"pixel ({u}, {v}) is not finite")
     if not (-0.5 <= u < cal.width - 0.5 and -0.5 <= v < cal.height - 0.5):
-        raise ValueError(f"pixel ({u:.1f}, {v:.1f}) is outside the {cal.width}x{cal.height} image")
+        raise InvalidInput(f"pixel ({u:.1f}, {v:.1f}) is outside the {cal.width}x{cal.height} image")
     pixel = np.array([[u, v]], dtype=np.float64)
     if depth_mm is None:
         if not math.isfinite(plane_z_m):
-            raise ValueError("plane_z_m must be finite")
+            raise InvalidInput("plane_z_m must be finite")
         rays = normalized_rays(pixel, cal.K, cal.dist)
         return intersect_rays_with_plane(cal.T_world_camera, rays, plane_z_m)[0]
     if isinstance(depth_mm, np.ndarray) and depth_mm.ndim == 2:
         if depth_mm.shape != (cal.height, cal.width):
-            raise ValueError(f"depth image is {depth_mm.shape[::-1]} but the calibration is for {cal.width}x{cal.height}")
+            raise InvalidInput(f"depth image is {depth_mm.shape[::-1]} but the calibration is for {cal.width}x{cal.height}")
         depth = depth_at(depth_mm, u, v, radius=1)
         if depth <= 0:
-            raise ValueError(f"no depth reading at pixel ({u:.0f}, {v:.0f})")
+            raise InvalidInput(f"no depth reading at pixel ({u:.0f}, {v:.0f})")
     else:
         depth = float(depth_mm)
         if not math.isfinite(depth) or depth <= 0:
-            raise ValueError(f"depth must be a positive number of mm, got {depth_mm}")
+            raise InvalidInput(f"depth must be a positive number of mm, got {depth_mm}")
     camera_point = backproject(pixel, np.array([depth / 1000.0]), cal.K, cal.dist)
     return transform_points(cal.T_world_depth, camera_point)[0]  # the depth camera's board lands at z = 0
 
@@ -68,7 +69,7 @@ def pixel_to_world_off_robot(
         if depth is None:
             continue
         if depth.shape != (cal.height, cal.width):
-            raise ValueError(f"depth image is {depth.shape[::-1]} but the calibration is for {cal.width}x{cal.height}")
+            raise InvalidInput(f"depth image is {depth.shape[::-1]} but the calibration is for {cal.width}x{cal.height}")
         ui, vi = int(round(u)), int(round(v))
         rows, cols = np.mgrid[max(0, vi - radius) : vi + radius + 1, max(0, ui - radius) : ui + radius + 1]
         rows, cols = rows.ravel(), cols.ravel()

@@ -10,6 +10,7 @@ from dataclasses import dataclass
 import cv2
 import numpy as np
 
+from armlab.errors import InvalidInput
 from armlab.vision.config import PerceptionConfig, TagDetectionConfig, is_apriltag_family
 
 # AprilTag corners run counter-clockwise from the tag's bottom-left (image y down); OpenCV's run
@@ -123,7 +124,7 @@ def make_detector(name: str, settings: TagDetectionConfig | None = None):
     if is_apriltag_family(name):
         return AprilTagDetector(name, settings)
     if not name.startswith("DICT_") or not hasattr(cv2.aruco, name):
-        raise ValueError(f"unknown tag family '{name}' (AprilTag: tag36h11, tagStandard41h12, ...; "
+        raise InvalidInput(f"unknown tag family '{name}' (AprilTag: tag36h11, tagStandard41h12, ...; "
                          f"OpenCV ArUco: DICT_APRILTAG_36h11, DICT_4X4_50, ...)")
     params = cv2.aruco.DetectorParameters()
     params.minMarkerPerimeterRate = 0.01

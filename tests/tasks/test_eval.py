@@ -222,4 +222,4 @@ def test_bad_seed_list_in_a_real_process():
 def test_a_run_that_raises_is_recorded_as_crashed():
     run = run_one(EVENT, 7, 5)  # run_episode refuses level 7: that seed's result, not the evaluation's end
     assert run["crashed"] and run["points"] == 0 and run["max_points"] is None and run["seed"] == 5
-    assert "crashed: ValueError" in run["failures"][0] and "levels" in run["failures"][0]
+    assert "crashed: InvalidInput" in run["failures"][0] and "levels" in run["failures"][0]

@@ -14,6 +14,7 @@ import numpy as np
 
 from armlab.devices.arm import Arm, JointState, JointTrajectory
 from armlab.devices.sim.device import SimDevice
+from armlab.errors import InvalidInput
 
 if TYPE_CHECKING:
     from armlab.devices.sim.workcell import SimWorkcell
@@ -102,7 +103,7 @@ class SimArm(SimDevice, Arm):
         with self._cell.lock:
             self._apply_halt()  # a stop requested before this command came first
             if not self._torque:
-                raise ValueError(f"{self}: torque is off; enable it before commanding motion")
+                raise InvalidInput(f"{self}: torque is off; enable it before commanding motion")
             self._trajectory = trajectory
             self._start_s = self._cell.sim_time_s
             self._cell.apply_arm_reference(*sample_trajectory(trajectory, 0.0))

@@ -12,7 +12,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from armlab.config import config_dir, read_config_file
-from armlab.errors import ConfigError
+from armlab.errors import ConfigError, InvalidInput
 
 BODY_NAME = "checkerboard"
 PARKED_POSITION_M = (0.0, 0.0, 10.0)  # 9 m above the camera, which looks down: never in view
@@ -82,11 +82,11 @@ def checked_pose(position_m, rotation_matrix) -> tuple[np.ndarray, np.ndarray]:
     position = np.asarray(position_m, dtype=float).reshape(3)
     R = np.asarray(rotation_matrix, dtype=float).reshape(3, 3)
     if not (np.all(np.isfinite(position)) and np.all(np.isfinite(R))):
-        raise ValueError("checkerboard pose: position and rotation must be finite")
+        raise InvalidInput("checkerboard pose: position and rotation must be finite")
     if np.linalg.norm(position) > 3.0:
-        raise ValueError(f"checkerboard pose: position {position.round(3).tolist()} m is more than 3 m from the origin")
+        raise InvalidInput(f"checkerboard pose: position {position.round(3).tolist()} m is more than 3 m from the origin")
     if not np.allclose(R.T @ R, np.eye(3), atol=1e-6) or np.linalg.det(R) < 0:
-        raise ValueError("checkerboard pose: the rotation is not a proper rotation matrix")
+        raise InvalidInput("checkerboard pose: the rotation is not a proper rotation matrix")
     return position, R
 
 

@@ -7,6 +7,8 @@ import math
 
 import numpy as np
 
+from armlab.errors import InvalidInput
+
 MAX_DURATION_S = 3600.0  # memory bound: at most this much simulated time of samples is kept
 
 
@@ -17,9 +19,9 @@ class PathRecorder:
 
     def __init__(self, period_s: float = 0.05, max_duration_s: float = MAX_DURATION_S) -> None:
         if not (isinstance(period_s, int | float) and math.isfinite(period_s) and 1e-4 <= period_s <= 10.0):
-            raise ValueError(f"period_s must be a number in [0.0001, 10] s, got {period_s!r}")
+            raise InvalidInput(f"period_s must be a number in [0.0001, 10] s, got {period_s!r}")
         if not (isinstance(max_duration_s, int | float) and math.isfinite(max_duration_s) and 0 < max_duration_s <= 86400):
-            raise ValueError(f"max_duration_s must be in (0, 86400] s, got {max_duration_s!r}")
+            raise InvalidInput(f"max_duration_s must be in (0, 86400] s, got {max_duration_s!r}")
         self.period_s = float(period_s)
         self.capacity = int(math.ceil(max_duration_s / period_s)) + 1
         self._buffer = np.empty((min(self.capacity, 1024), 4))

@@ -9,6 +9,7 @@ import numpy as np
 
 from armlab.devices.sim.path import MAX_DURATION_S, PathRecorder
 from armlab.devices.sim.suction import lip_touching
+from armlab.errors import InvalidInput
 
 
 class SimTruth:
@@ -65,7 +66,7 @@ class SimTruth:
         position and velocity references and the measured positions and velocities, to measure motion on the sim's clock.
         At most max_ticks are kept (then recording stops adding)."""
         if not (isinstance(max_ticks, int) and 0 < max_ticks <= 10_000_000):
-            raise ValueError(f"max_ticks must be an integer in 1..10000000, got {max_ticks!r}")
+            raise InvalidInput(f"max_ticks must be an integer in 1..10000000, got {max_ticks!r}")
         with self.lock:
             self._joint_trace = {"rows": [], "max": max_ticks}
 

@@ -43,6 +43,7 @@ from armlab.devices.sim.realism import RealCamera
 from armlab.devices.sim.render import RawImages, RenderThread
 from armlab.devices.sim.suction import SuctionGripper, seal_object
 from armlab.devices.sim.truth import SimTruth
+from armlab.errors import InvalidInput
 from armlab.scene import Scene
 from armlab.workcell import load_workcell
 
@@ -121,7 +122,7 @@ class SimWorkcell(SimTruth):
         """The slow half of a scene change (XML, compile, index look-ups): touches no shared state, so it
         runs outside the lock and the physics, the devices and an e-stop never wait for it."""
         if scene.workcell is not None and scene.workcell != self._workcell.name:
-            raise ValueError(f"the scene was made for workcell '{scene.workcell}' (its board, reach and sizes); this "
+            raise InvalidInput(f"the scene was made for workcell '{scene.workcell}' (its board, reach and sizes); this "
                              f"simulation runs workcell '{self._workcell.name}': generate the scene for it")
         realism_scene = self._sim.realism_scene if self.realism == "real" else None
         xml, assets = build_model_xml(self._geometry, self._sim, self._camera_config, self._T_world_camera, scene,
@@ -211,7 +212,7 @@ class SimWorkcell(SimTruth):
         if isinstance(scene, dict):
             scene = Scene.from_dict(scene, workcell=self._workcell.name)
         if not isinstance(scene, Scene):
-            raise ValueError(f"set_scene expects a Scene or a dict with 'objects', got {type(scene).__name__}")
+            raise InvalidInput(f"set_scene expects a Scene or a dict with 'objects', got {type(scene).__name__}")
         compiled = self._compile(scene)  # outside the lock: physics, devices and e-stop go on meanwhile
         with self.lock:
             data = self._data
@@ -354,7 +355,7 @@ class SimWorkcell(SimTruth):
         if self.realtime:
             raise RuntimeError("SimWorkcell.step() is for fast mode; in real time the physics thread advances it")
         if not (isinstance(duration_s, (int, float)) and math.isfinite(duration_s) and 0.0 <= duration_s <= 3600.0):
-            raise ValueError(f"step: duration_s must be finite and in [0, 3600], got {duration_s!r}")
+            raise InvalidInput(f"step: duration_s must be finite and in [0, 3600], got {duration_s!r}")
         self._advance(float(duration_s))
 
     def wait_for(self, predicate: Callable[[], bool], timeout_s: float) -> bool:

@@ -1,0 +1,65 @@
+"""A bug inside a job is an internal error, not a refusal (issue 20, item 3): the task runner catches the
+planners' typed refusals (armlab.errors.PLAN_REFUSALS) only, so a bare ValueError (what numpy raises on
+a shape mismatch) fails the job as "internal error" with its traceback logged, where it used to read as
+"cannot pick the block" and the job went on."""
+
+from __future__ import annotations
+
+import logging
+
+import pytest
+
+from armlab import skills
+from armlab.devices.sim import SimWorkcell, SimWorkcellConfig
+from armlab.kinematics import Unreachable, load_arm
+from armlab.scene import Scene
+from armlab.station.config import StationConfig
+from armlab.station.core import Station
+from armlab.store import Store
+from armlab.tasks import runner, start_auto
+
+ONE_BLOCK = {"objects": [
+    {"id": "red", "type": "block", "color": "red", "size": "large", "position_m": [0.10, 0.22, 0.019], "yaw_rad": 0.3},
+]}
+NUMPY_BUG = "operands could not be broadcast together with shapes (3,) (4,)"
+
+
+@pytest.fixture()
+def station(tmp_path):
+    """A synchronous station on a fast-mode simulation of ONE_BLOCK, calibrated."""
+    with SimWorkcell(SimWorkcellConfig(realtime=False, seed=5), scene=Scene.from_dict(ONE_BLOCK)) as cell:
+        station = Station(cell.arm, cell.gripper, cell.camera, model=load_arm("rx200"), config=StationConfig(),
+                          store=Store(tmp_path / "s.sqlite3"), sim=cell, synchronous=True)
+        station.start()
+        job = skills.calibrate(station)
+        assert job.wait(60) and job.state == "succeeded", job.message
+        yield station
+        station.close()
+
+
+def test_a_bare_value_error_in_planning_fails_the_job_as_an_internal_error(station, monkeypatch, caplog):
+    def buggy_plan_pick(*args, **kwargs):
+        raise ValueError(NUMPY_BUG)
+
+    monkeypatch.setattr(runner, "plan_pick", buggy_plan_pick)
+    with caplog.at_level(logging.ERROR, logger="armlab.station.jobs"):
+        job = start_auto(station, "pick_sort", 1)
+        assert job.wait(300)
+    assert job.state == "failed", job.message
+    assert job.message.startswith("internal error: ValueError"), job.message
+    failures = (job.to_dict()["extra"].get("task") or {}).get("failures", [])
+    assert not any("cannot pick" in failure for failure in failures), failures
+    logged = [r for r in caplog.records if r.levelno >= logging.ERROR and r.exc_info and NUMPY_BUG in str(r.exc_info[1])]
+    assert logged, "the traceback of the bug was not logged at ERROR"
+
+
+def test_an_unreachable_block_is_still_a_refusal_the_job_goes_on_from(station, monkeypatch):
+    def unreachable_pick(*args, **kwargs):
+        raise Unreachable("target (0.1, 0.22, 0.02) m: out of reach", "out of reach")
+
+    monkeypatch.setattr(runner, "plan_pick", unreachable_pick)
+    job = start_auto(station, "pick_sort", 1)
+    assert job.wait(300)
+    assert not job.message.startswith("internal error"), job.message
+    failures = job.to_dict()["extra"]["task"]["failures"]
+    assert any("cannot pick the red large block" in failure and "out of reach" in failure for failure in failures), failures
