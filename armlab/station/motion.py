@@ -90,6 +90,25 @@ class MotionGate:
         check_trajectory(self.model, trajectory, workspace_m=config.workspace_m, max_step_rad=config.max_step_rad)
         self.check_body(trajectory)
 
+    def check_pose(self, q_rad) -> np.ndarray:
+        """The arm standing at q_rad passes the trajectory check (limits, the table, the workspace box, the fingers
+        against the board, the arm against itself): returns the joints; ValueError / UnsafeTrajectory say why."""
+        q = self.checked_joints(q_rad)
+        self.check_motion(JointTrajectory(np.array([0.0, 0.01]), np.vstack([q, q])))
+        return q
+
+    def check_poses(self, poses_rad) -> None:
+        """check_pose of every pose, the error naming the 1-based waypoint (programs, drafts)."""
+        from armlab.motion.safety import UnsafeTrajectory
+
+        for index, q in enumerate(poses_rad, start=1):
+            try:
+                self.check_pose(q)
+            except UnsafeTrajectory as error:
+                raise UnsafeTrajectory(f"waypoint {index}: {error}") from None
+            except ValueError as error:
+                raise ValueError(f"waypoint {index}: {error}") from None
+
     @contextmanager
     def _sending(self) -> Iterator[None]:
         """`with self._sending():` instead of `with self._lock:` around checks that end in device commands: the
