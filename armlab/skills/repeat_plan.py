@@ -16,7 +16,6 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from armlab.devices.arm import JointTrajectory
 from armlab.motion.blend import Limits, Run, arm_limits, plan_run
 from armlab.motion.safety import UnsafeTrajectory
 from armlab.store import Program, Waypoint
