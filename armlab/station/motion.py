@@ -181,7 +181,10 @@ class MotionGate:
         and has checked the state; checked here: the latch, the start (no jump from the
         measured joints) and, while a commanded motion runs, that this one continues it: a splice from
         `handover` (taken from that very motion; trimmed to now: HandoverLate when now is past the handover)
-        or a trajectory starting at the running reference and its velocity (ArmMoving otherwise)."""
+        or a trajectory starting at the running reference and its velocity (ArmMoving otherwise). Either is sent
+        with its start on the arm's clock (Arm.command_trajectory's start_time_s: the station's clock is the arm's),
+        so a send held up after the check still continues the running curve; a motion from rest starts when the
+        arm takes it, and the record follows (_started_at)."""
         from armlab.motion.handover import continuity_problem, reference_velocity, trimmed
         from armlab.motion.safety import check_start
 
@@ -191,6 +194,7 @@ class MotionGate:
         now = self.clock_s()
         running = self._commanded
         planned, planned_t0 = trajectory, now  # remembered untrimmed: a later handover keeps its sample grid
+        continues = False  # sent while a commanded motion runs at speed (then on the station's clock)
         if handover is None and planned_after is not None and planned_after != self._command_count:
             raise HandoverLate("another motion was commanded while this one was planned from rest")
         if handover is not None:
@@ -206,23 +210,35 @@ class MotionGate:
             # Slower than one sample's worth of acceleration from rest, a plan from rest continues it as well.
             slow_rad_s = np.asarray(self.model.accel_limit_rad_s2, float) / self.motion_config.sample_rate_hz
             if np.any(np.abs(velocity) > slow_rad_s):
+                continues = True
                 position = running[0].sample(now - running[1])
                 problem = continuity_problem(trajectory, position, velocity, self.model.accel_limit_rad_s2, self.model.joint_names)
                 if problem is not None:
                     raise ArmMoving("move", state.value, allowed_commands(state), f"the new motion does not continue it: {problem}")
         check_start(trajectory, self.joints_rad(), self.motion_config.start_tolerance_rad, self.model.joint_names)
-        if handover is None:
-            self._send_later(lambda: self.arm.command_trajectory(trajectory))
-        else:  # trimmed again when it is sent (after the lock): the arm takes over where the splice is then
-            def send_spliced() -> None:
-                late_s = min(self.clock_s() - handover.planned_at_s, handover.lead_s - 1e-6)
-                self.arm.command_trajectory(trimmed(planned, late_s) if late_s > elapsed else trajectory)
-            self._send_later(send_spliced)
         self._command_count += 1
-        self._commanded = (planned, planned_t0, self._command_count)
+        record = self._commanded = (planned, planned_t0, self._command_count)
+        if handover is not None:  # the arm samples the splice at its own clock minus this: a late send continues it
+            start_s = handover.planned_at_s + elapsed
+            self._send_later(lambda: self.arm.command_trajectory(trajectory, start_time_s=start_s))
+        elif continues:  # it starts at the running reference now: the same, from now
+            self._send_later(lambda: self.arm.command_trajectory(trajectory, start_time_s=now))
+        else:  # from rest: a late send starts late without a jump, and the record follows the arm's start
+            self._send_later(lambda: self._started_at(record, self.arm.command_trajectory(trajectory)))
         self._motions.append((time.time() + trajectory.duration_s, swept_box))
         del self._motions[:-MOTION_MEMORY]
         return trajectory
+
+    def _started_at(self, record: tuple, started_s) -> None:
+        """After a motion from rest was sent: remember the arm's own start time of it (a send held up starts
+        later than the station's check), so a takeover planned from it continues what the arm really runs. A
+        new revision: a handover already planned from the old start is late (HandoverLate: planned again)."""
+        if not isinstance(started_s, (int, float)) or not np.isfinite(started_s):
+            return  # an arm that does not say when it started
+        with self._lock:
+            if self._commanded is record and started_s != record[1]:
+                self._command_count += 1
+                self._commanded = (record[0], float(started_s), self._command_count)
 
     def start_position(self) -> np.ndarray:
         """Where a motion from rest starts: the position the servos were last commanded to hold (the end of the

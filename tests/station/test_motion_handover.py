@@ -56,6 +56,49 @@ def test_a_move_sent_while_the_waist_turns_continues_its_motion(fast):
     assert not station.arm.is_moving() and abs(station.joints_rad()[0] + 1.0) < 0.01
 
 
+def test_a_takeover_that_reaches_the_arm_late_continues_the_same_curve(fast, monkeypatch):
+    """A CPU-starved send: the physics runs on 50 ms (simulated) between the station's send and the arm taking the
+    command. The arm samples the splice at its own clock minus the start the station gave, so the reversal
+    stays within the limit (before: the arm started the splice 50 ms late, shifted back, at 9x the limit)."""
+    station, cell = fast
+    _at_rest(station, [-1.5, 0.0, 0.0, 0.0, 0.0])
+    station.move_joints([1.5, 0.0, 0.0, 0.0, 0.0])
+    cell.step(0.8)  # the waist turns at ~3 rad/s
+    command_trajectory = cell.arm.command_trajectory
+
+    def late(*args, **kwargs):
+        cell.step(0.05)  # the physics (and the running move) goes on before the command gets the physics lock
+        return command_trajectory(*args, **kwargs)
+
+    monkeypatch.setattr(cell.arm, "command_trajectory", late)
+    cell.start_joint_recording()
+    station.move_joints([-1.0, 0.0, 0.0, 0.0, 0.0])  # reverse, sent late
+    monkeypatch.undo()
+    _assert_continuous(_figures(cell, 2.5))
+    assert not station.arm.is_moving() and abs(station.joints_rad()[0] + 1.0) < 0.01
+
+
+def test_a_move_from_rest_that_reaches_the_arm_late_is_then_taken_over_continuously(fast, monkeypatch):
+    """A move from rest sent late starts late (from rest nothing jumps) and the station follows the arm's start:
+    a takeover planned from it then continues the curve the arm really runs."""
+    station, cell = fast
+    _at_rest(station, [-1.5, 0.0, 0.0, 0.0, 0.0])
+    command_trajectory = cell.arm.command_trajectory
+
+    def late(*args, **kwargs):
+        cell.step(0.05)
+        return command_trajectory(*args, **kwargs)
+
+    monkeypatch.setattr(cell.arm, "command_trajectory", late)
+    cell.start_joint_recording()
+    station.move_joints([1.5, 0.0, 0.0, 0.0, 0.0])  # from rest, sent late
+    monkeypatch.undo()
+    cell.step(0.8)
+    station.move_joints([-1.0, 0.0, 0.0, 0.0, 0.0])  # reverse, sent at once
+    _assert_continuous(_figures(cell, 2.5))
+    assert not station.arm.is_moving() and abs(station.joints_rad()[0] + 1.0) < 0.01
+
+
 def test_moves_and_jogs_take_over_one_another_continuously(fast):
     station, cell = fast
     _at_rest(station, [0.0, -0.3, 0.3, 0.5, 0.0])

@@ -94,20 +94,31 @@ class SimArm(SimDevice, Arm):
                     f"[{self.lower_rad[j]:.4f}, {self.upper_rad[j]:.4f}] rad"
                 )
 
-    def command_trajectory(self, trajectory: JointTrajectory, wait: bool = False) -> None:
+    def command_trajectory(self, trajectory: JointTrajectory, wait: bool = False, start_time_s: float | None = None) -> float:
+        """See Arm.command_trajectory; the clock is the simulation's (the start is taken under the physics lock,
+        so a command held up by a physics batch still starts where start_time_s says)."""
         self._require()
         if not isinstance(trajectory, JointTrajectory):
             raise ValueError(f"{self}: expected a JointTrajectory, got {type(trajectory).__name__}")
+        if start_time_s is not None and not np.isfinite(start_time_s):
+            raise ValueError(f"{self}: start_time_s must be finite, got {start_time_s!r}")
         self.validate_positions(trajectory.positions_rad)
         with self._cell.lock:
             self._apply_halt()  # a stop requested before this command came first
             if not self._torque:
                 raise ValueError(f"{self}: torque is off; enable it before commanding motion")
+            now_s = self._cell.sim_time_s
             self._trajectory = trajectory
-            self._start_s = self._cell.sim_time_s
-            self._cell.apply_arm_reference(*sample_trajectory(trajectory, 0.0))
+            self._start_s = now_s if start_time_s is None else float(start_time_s)
+            self._cell.apply_arm_reference(*sample_trajectory(trajectory, max(0.0, now_s - self._start_s)))
+            started_s = self._start_s
         if wait:
             self.wait_until_done()
+        return started_s
+
+    def clock_s(self) -> float:
+        """The simulation's time (the clock start_time_s is on)."""
+        return self._cell.sim_time_s
 
     def is_moving(self) -> bool:
         self._require()
