@@ -276,22 +276,25 @@ class MotionGate:
         from armlab.motion.handover import splice
 
         lead = self.motion_config.handover_lead_s
-        for _ in range(3):
-            with self._lock:
-                seen = self._command_count
-            handover = self.motion_handover(lead)
-            new = plan(handover)
-            trajectory = splice(handover, new) if handover is not None else new
-            self.check_motion(trajectory)
-            swept_box = self._swept_box(trajectory)
-            try:
-                with self._sending():
-                    if under_lock is not None:
-                        under_lock()
-                    self._command_arm(trajectory, swept_box, handover, planned_after=seen)
-                return trajectory, handover
-            except HandoverLate:
-                lead *= 2.0
+        # One at a time: commands sent together (a script's burst, 42 clients) otherwise plan side by side, each from
+        # a handover the next one makes late, and the CPU-bound planners starve status, the waits and the physics.
+        with self._plan_lock:
+            for _ in range(3):
+                with self._lock:
+                    seen = self._command_count
+                handover = self.motion_handover(lead)
+                new = plan(handover)
+                trajectory = splice(handover, new) if handover is not None else new
+                self.check_motion(trajectory)
+                swept_box = self._swept_box(trajectory)
+                try:
+                    with self._sending():
+                        if under_lock is not None:
+                            under_lock()
+                        self._command_arm(trajectory, swept_box, handover, planned_after=seen)
+                    return trajectory, handover
+                except HandoverLate:
+                    lead *= 2.0
         state = self.state
         raise ArmMoving(command, state.value, allowed_commands(state), "planning could not keep up with the motion in progress")
 

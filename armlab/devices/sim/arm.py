@@ -72,10 +72,13 @@ class SimArm(SimDevice, Arm):
         super().close()
 
     def read_joint_state(self) -> JointState:
+        """Now, or while the physics holds the workcell's lock the state at its last control tick (never waits)."""
         self._require()
-        with self._cell.lock:
-            position, velocity = self._cell.arm_positions(), self._cell.arm_velocities()
-        return JointState(position_rad=position, velocity_rad_s=velocity, timestamp_s=time.time())
+        return self._fresh_or_last(self._measure)
+
+    def _measure(self) -> JointState:
+        """The joint state now (under the lock)."""
+        return JointState(position_rad=self._cell.arm_positions(), velocity_rad_s=self._cell.arm_velocities(), timestamp_s=time.time())
 
     def validate_positions(self, positions_rad: np.ndarray) -> None:
         """ValueError unless positions_rad is (N, dof), finite and inside the joint limits."""
@@ -121,10 +124,14 @@ class SimArm(SimDevice, Arm):
         return self._cell.sim_time_s
 
     def is_moving(self) -> bool:
+        """Tracking a trajectory (a halt requested counts as done); never waits for a physics batch."""
         self._require()
-        with self._cell.lock:
-            self._apply_halt()
-            return self._trajectory is not None
+        if self._cell.lock.acquire(blocking=False):
+            try:
+                self._apply_halt()
+            finally:
+                self._cell.lock.release()
+        return self._trajectory is not None and not self._halt_requested.is_set()
 
     def wait_until_done(self, timeout_s: float | None = None) -> bool:
         self._require()
@@ -182,6 +189,7 @@ class SimArm(SimDevice, Arm):
     def control(self, sim_time_s: float) -> None:
         """Feed the servos (called by the workcell under its lock at every control tick)."""
         self._apply_halt()
+        self._last_reading = self._measure()
         trajectory = self._trajectory
         if trajectory is None or not self._torque:
             return
