@@ -279,6 +279,10 @@ class MotionGate:
         # One at a time: commands sent together (a script's burst, 42 clients) otherwise plan side by side, each from
         # a handover the next one makes late, and the CPU-bound planners starve status, the waits and the physics.
         with self._plan_lock:
+            if self._halt.is_set():  # e-stopped while this waited its turn: refused at once, as it would be after planning
+                with self._lock:
+                    state = self._effective_state()
+                raise CommandRefused(command, state.value, allowed_commands(state))
             for _ in range(3):
                 with self._lock:
                     seen = self._command_count
