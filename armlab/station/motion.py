@@ -267,22 +267,34 @@ class MotionGate:
         lead = config.handover_lead_s if lead_s is None else lead_s
         return take_over(running[0], running[1], self.clock_s(), lead, config.sample_rate_hz, running[2])
 
-    def _send_replacing(self, plan: Callable, under_lock: Callable[[], None] | None = None, command: str = "move") -> tuple[JointTrajectory, Handover | None]:
+    def _send_replacing(self, plan: Callable, under_lock: Callable[[], None] | None = None, command: str = "move",
+                        replaceable: bool = False) -> tuple[JointTrajectory, Handover | None]:
         """Plan (plan(handover) -> the new trajectory, from the handover's state, or from the measured joints
         when it is None), check and send a motion that replaces whatever runs, continuously. under_lock() runs
         with the lock held just before sending (state transitions, the job's ownership). A handover missed
         because planning was slow is retried with a longer lead (twice), then ArmMoving. Returns (the
-        trajectory as planned, spliced; the handover or None)."""
+        trajectory as planned, spliced; the handover or None).
+
+        One motion is planned at a time: commands sent together (a script's burst, 42 clients) otherwise plan side
+        by side, each from a handover the next one makes late, and the CPU-bound planners starve status, the waits
+        and the physics. A replaceable one (a manual move) that a newer manual move overtook while it waited its
+        turn is refused unplanned (ArmMoving): it would be replaced as soon as it started."""
         from armlab.motion.handover import splice
 
         lead = self.motion_config.handover_lead_s
-        # One at a time: commands sent together (a script's burst, 42 clients) otherwise plan side by side, each from
-        # a handover the next one makes late, and the CPU-bound planners starve status, the waits and the physics.
+        if replaceable:
+            with self._lock:
+                self._newest_move += 1
+                ticket = self._newest_move
         with self._plan_lock:
+            with self._lock:
+                state = self._effective_state()
+                overtaken = replaceable and ticket != self._newest_move
             if self._halt.is_set():  # e-stopped while this waited its turn: refused at once, as it would be after planning
-                with self._lock:
-                    state = self._effective_state()
                 raise CommandRefused(command, state.value, allowed_commands(state))
+            if overtaken:
+                raise ArmMoving(command, state.value, allowed_commands(state),
+                                "a newer move came in while this one waited to be planned: the newer one replaces it")
             for _ in range(3):
                 with self._lock:
                     seen = self._command_count
