@@ -49,7 +49,7 @@ def _answers_within_hang(call) -> object:
 
 
 def test_status_answers_while_the_physics_holds_the_workcell_lock(served, cell):
-    app, url = served
+    _, url = served
     with httpx.Client(base_url=url, timeout=HANG_S * 2) as http:
         assert http.post("/api/arm/joints", json={"q_rad": FAR_Q, "moving_time_s": 3.0}, headers=AUTH).status_code == 200
         with cell.lock:  # a physics batch that does not end (a starved physics thread holds it for tens of ms)

@@ -196,7 +196,7 @@ def test_a_burst_of_moves_plans_only_the_newest(fast, monkeypatch):
     """Moves that come in while another is being planned (42 clients at once, a script's burst) wait their turn,
     and those a newer one replaces before their turn are refused unplanned (409): the planner's CPU went to ~40
     plans, each at once replaced, and starved status and the physics (bench/estop.py)."""
-    station, cell = fast
+    station, _ = fast
     _at_rest(station, [0.0, 0.0, 0.0, 0.0, 0.0])
     held, planned, entered, outcomes = threading.Event(), [], [], {}
     send_replacing, plan_move, plan_move_from = station._send_replacing, station.plan_move, station.plan_move_from
