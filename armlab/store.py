@@ -91,7 +91,7 @@ class Waypoint:
         return {"joints_rad": list(self.joints_rad), "gripper": self.gripper, "dwell_s": self.dwell_s, "moving_time_s": self.moving_time_s}
 
     @classmethod
-    def from_dict(cls, item: dict) -> "Waypoint":
+    def from_dict(cls, item: dict) -> Waypoint:
         """From to_dict()'s form (dwell_s and moving_time_s optional); KeyError/TypeError/ValueError if invalid."""
         if not isinstance(item, dict):
             raise TypeError("a waypoint must be a JSON object")

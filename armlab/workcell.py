@@ -1,7 +1,8 @@
 """The workcell (config/workcells/<name>.yaml): the arm (config/arms/<arm>.yaml) and its gripper type,
 the arm's base pose on the board, the camera and its mount, board and grid, board tags, block and
 distractor sizes, block-top ArUco ids, the spots the jobs use (sort_by_tag places, the to_the_sky
-feeder, the clear_table bin) and the approach heights (overrides of config/motion.yaml). One fact, one place: vision, scenes, the simulation, skills and the browser read it
+feeder, the clear_table bin) and the approach heights (overrides of config/motion.yaml). One fact, one place:
+vision, scenes, the simulation, skills and the browser read it
 from here (DESIGN §3). Validated at load; errors name the file and the field."""
 
 from __future__ import annotations
@@ -14,7 +15,11 @@ from typing import Annotated, Literal
 import numpy as np
 from pydantic import Field, field_validator, model_validator
 
-from armlab.config import StrictModel, load_config, read_config_file, resolve_config_path
+from armlab.config import StrictModel, config_dir, load_config, read_config_file, resolve_config_path
+from armlab.errors import ConfigError
+from armlab.kinematics import load_arm
+from armlab.kinematics.arm_model import ArmModel
+from armlab.motion_config import MotionConfig, load_motion_config
 
 DEFAULT_WORKCELL = "rx200_armlab"
 _REPO_CONFIG_DIR = str(Path(__file__).resolve().parents[1] / "config")
@@ -257,11 +262,23 @@ class BinSpec(StrictModel):
 GRIPPER_TYPES = ("fingers", "suction")
 
 
+class GripperMarkerSpec(StrictModel):
+    """A tag of the board's family fixed flat on the gripper, for finding the gripper in the camera
+    (armlab.vision.gripper_marker): its id (not a board tag's), the detected square's edge, and its
+    centre in the gripper-point frame (x along the approach, y along the fingers, z up when the
+    gripper is level), as measured on the arm."""
+
+    id: Annotated[int, Field(ge=0)]
+    size_m: Length
+    position_m: tuple[float, float, float]
+
+
 class GripperChoice(StrictModel):
     """The end effector on the arm: `fingers` (a parallel gripper: the arm file's `gripper:` width range)
-    or `suction` (a vacuum cup: the arm file's `suction_cup:`)."""
+    or `suction` (a vacuum cup: the arm file's `suction_cup:`); marker: the tag on it, if any."""
 
     type: Literal["fingers", "suction"] = "fingers"
+    marker: GripperMarkerSpec | None = None
 
 
 class ArmBaseSpec(StrictModel):
@@ -340,8 +357,6 @@ class Workcell(StrictModel):
     @model_validator(mode="after")
     def _motion_overrides_valid(self) -> Workcell:
         if self.motion:
-            from armlab.motion.config import MotionConfig
-
             try:
                 MotionConfig.model_validate(self.motion)
             except Exception as error:  # pydantic ValidationError: name the field under motion
@@ -362,6 +377,9 @@ class Workcell(StrictModel):
                 raise ValueError(
                     f"block_tags.ids.{tag_id}.destination: place {entry.destination} is not in places_m {sorted(self.places_m)}"
                 )
+        marker = self.gripper.marker
+        if marker is not None and (marker.id in self.board_tags.centres_m or marker.id >= dictionary_size(self.board_tags.detector)):
+            raise ValueError(f"gripper.marker.id: {marker.id} is a board tag or not in {self.board_tags.detector}")
         overlap = set(self.board_tags.centres_m) & set(self.block_tags.ids)
         if overlap and self.board_tags.detector == self.block_tags.dictionary:
             raise ValueError(f"block_tags.ids: {sorted(overlap)} are also board tags of the same dictionary")
@@ -409,8 +427,6 @@ class Workcell(StrictModel):
     def check_arm_fits(self) -> None:
         """ConfigError unless the arm file exists and carries what the gripper type needs (a finger width
         range for `fingers`, a suction cup for `suction`). Called when a station or simulation starts."""
-        from armlab.errors import ConfigError
-
         arm_file = resolve_config_path(self.arm, "arms")  # ConfigError listing the arms
         arm_data = read_config_file(arm_file)
         needs = {"fingers": ("gripper", "a finger width range (finger_offset_min_m, finger_offset_max_m)"),
@@ -469,8 +485,6 @@ def load_workcell(name: str | Path = DEFAULT_WORKCELL) -> Workcell:
     try:
         stat = os.stat(path)
     except OSError:
-        from armlab.errors import ConfigError
-
         try:
             path = str(resolve_config_path(name, "workcells"))
         except ConfigError:
@@ -483,16 +497,11 @@ def load_workcell(name: str | Path = DEFAULT_WORKCELL) -> Workcell:
 
 def known_workcells() -> list[str]:
     """Names of the workcell files in config/workcells/."""
-    from armlab.config import config_dir
-
     return sorted(path.stem for path in (config_dir() / "workcells").glob("*.yaml"))
 
 
 def load_workcell_arm(workcell: Workcell | str | Path = DEFAULT_WORKCELL):
     """The workcell's arm model: load_arm(workcell.arm) with the base pose the workcell gives it."""
-    from armlab.kinematics import load_arm
-    from armlab.kinematics.arm_model import ArmModel
-
     cell = workcell if isinstance(workcell, Workcell) else load_workcell(workcell)
     cell.check_arm_fits()
     model = load_arm(cell.arm)
@@ -504,8 +513,6 @@ def load_workcell_arm(workcell: Workcell | str | Path = DEFAULT_WORKCELL):
 
 def load_workcell_motion_config(workcell: Workcell | str | Path = DEFAULT_WORKCELL, path: str | Path | None = None):
     """config/motion.yaml (or `path`) with the workcell's `motion:` overrides applied (approach heights...)."""
-    from armlab.motion.config import MotionConfig, load_motion_config
-
     cell = workcell if isinstance(workcell, Workcell) else load_workcell(workcell)
     base = load_motion_config(path)
     if not cell.motion:

@@ -239,7 +239,7 @@ def main() -> int:
     parser.add_argument("--jobs", help="comma-separated job names (default: every job in armlab.tasks.JOBS)")
     parser.add_argument("--levels", help="comma-separated levels run for jobs that have them (default: all)")
     parser.add_argument("--realism", choices=("real", "ideal"), default=None,
-                        help="real or ideal simulation (default: config/sim.yaml `realism`)")
+                        help="real (the camera's and the arm's imperfections) or ideal simulation (default: config/sim.yaml `realism`)")
     parser.add_argument("--workcells", default=DEFAULT_WORKCELL,
                         help=f"comma-separated workcells (config/workcells; default {DEFAULT_WORKCELL}): each job runs on each")
     args = parser.parse_args()

@@ -25,7 +25,12 @@ import numpy as np  # noqa: E402
 from armlab.devices.sim import SimWorkcell, SimWorkcellConfig  # noqa: E402
 from armlab.devices.sim.checkerboard import calibration_poses, pose_in_camera_frame  # noqa: E402
 from armlab.vision import calibrate_extrinsics, load_perception_config  # noqa: E402
-from armlab.vision.intrinsics_capture import IntrinsicsCapture, IntrinsicsRejected, load_intrinsics_config, solve_intrinsics  # noqa: E402
+from armlab.vision.intrinsics_capture import (  # noqa: E402
+    IntrinsicsCapture,
+    IntrinsicsRejected,
+    load_intrinsics_config,
+    solve_intrinsics,
+)
 
 
 def main() -> None:

@@ -114,7 +114,8 @@ def bench_ours(rx200, ur3, rng, numeric_count: int) -> dict:
     figures["fk_list_us"] = per_call_us(rx200.fk, [(row.tolist(),) for row in q[:1000]])
     ik_args = [(targets[i].tolist(), float(pitch[i])) for i in range(1000)]
     figures["ik_us"] = per_call_us(rx200.ik, ik_args)
-    down = [([float(x), float(y), 0.03], math.pi / 2, float(yaw)) for x, y, yaw in zip(rng.uniform(-0.2, 0.2, 1000), rng.uniform(0.1, 0.3, 1000), rng.uniform(-3, 3, 1000))]
+    xs, ys, yaws = rng.uniform(-0.2, 0.2, 1000), rng.uniform(0.1, 0.3, 1000), rng.uniform(-3, 3, 1000)
+    down = [([float(x), float(y), 0.03], math.pi / 2, float(yaw)) for x, y, yaw in zip(xs, ys, yaws)]
     figures["ik_yaw_us"] = per_call_us(rx200.ik, down)
     board = [([float(x), float(y), 0.02],) for x, y in zip(rng.uniform(-0.45, 0.45, 300), rng.uniform(-0.15, 0.45, 300))]
     figures["ik_search_us"] = per_call_us(lambda p: _try(rx200.ik, p), board, repeats=3)

@@ -233,8 +233,8 @@ def main(argv: list[str] | None = None) -> int:
             print("1. replacements of running moves:", moves, flush=True)
             changes = speed_changes(station, cell, rng, args.changes)
             print("2. speed changes during repeats near the limits:", changes, flush=True)
-            print("3. released hold-to-run jog (jog_hold_s %.2f s, top %.2f rad/s):" % (station.motion_config.jog_hold_s,
-                  station.motion_config.jog_max_speed_rad_s))
+            mc = station.motion_config
+            print(f"3. released hold-to-run jog (jog_hold_s {mc.jog_hold_s:.2f} s, top {mc.jog_max_speed_rad_s:.2f} rad/s):")
             for row in deadman(station, cell):
                 print("   {speed_percent:3d} % ({speed_rad_s:.2f} rad/s): brakes after {braking_starts_s:.3f} s, at rest after "
                       "{stopped_after_s:.3f} s, travels {command_distance_rad:.3f} rad commanded / {measured_distance_rad:.3f} rad "

@@ -262,7 +262,7 @@ def report(args, seeds, total, click_errors, cam_errors, reproj, depth_checks, e
     yaw = np.degrees(np.array(total.yaw_errors_rad))
     clicks = np.concatenate(click_errors) * 1000
     print(f"perception bench: {len(seeds)} scenes, seeds {seeds[0]}..{seeds[-1]} (consecutive), "
-          f"event/level cycling {', '.join(f'{e}:{l}' for e, l in PAIRS)}; {elapsed:.0f} s")
+          f"event/level cycling {', '.join(f'{e}:{level}' for e, level in PAIRS)}; {elapsed:.0f} s")
     print(f"  variants: {tagged} with tagged blocks, {occluded} with the arm over a block, {touching} with touching twins")
     print(f"  calibration: reprojection mean {np.mean(reproj):.3f} px max {np.max(reproj):.3f} px; camera position error "
           f"mean {np.mean(cam_errors) * 1000:.2f} mm max {np.max(cam_errors) * 1000:.2f} mm; depth cross-check "

@@ -192,7 +192,8 @@ def main() -> int:
             print(f"{name:<14} (fewer than 4 labelled tags)")
             continue
         rows.append(row)
-        print(f"{name:<14} {row['reprojection_px']:>6.2f} {row['no_depth_columns']:>5} {row['offset_mm']:>6.1f}m {row['tilt_deg']:>5.2f} {row['rise_deg']:>6.0f} {row['board_range_mm']:>6.0f} "
+        print(f"{name:<14} {row['reprojection_px']:>6.2f} {row['no_depth_columns']:>5} {row['offset_mm']:>6.1f}m "
+              f"{row['tilt_deg']:>5.2f} {row['rise_deg']:>6.0f} {row['board_range_mm']:>6.0f} "
               f"{row['noise_std_mm_median']:>5.2f} {row['holes_board']:>6.3f} {row['holes_edge_band']:>6.3f} "
               f"{row['flying_edge_band']:>6.3f} {row['holes_dark']:>6.3f} {str(row['board_bgr']):>18} {row['light_spread']}")
     noise = np.concatenate([r["noise_by_range"] for r in rows])

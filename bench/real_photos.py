@@ -32,11 +32,10 @@ import numpy as np
 REPO = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(REPO / "tests" / "vision"))
 
-from rob550_dev import DEV, rob550_config  # noqa: E402
-from test_real_photos import PHOTOS, harder, library_corners, nearest_px, published, raw_library  # noqa: E402
-
 from armlab.vision import load_perception_config  # noqa: E402
 from armlab.vision.tags import detect_tags, free_library_detector, make_detector  # noqa: E402
+from rob550_dev import DEV, rob550_config  # noqa: E402
+from test_real_photos import PHOTOS, harder, library_corners, nearest_px, published, raw_library  # noqa: E402
 
 
 def edge_fit_corners(grey: np.ndarray, corners: np.ndarray) -> np.ndarray | None:

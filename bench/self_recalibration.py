@@ -21,7 +21,6 @@ import numpy as np
 os.environ.setdefault("MUJOCO_GL", "egl")
 sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "tests" / "server"))
 import live  # noqa: E402
-
 from armlab import skills  # noqa: E402
 
 

@@ -60,7 +60,7 @@ async def viewer(url: str, end: float, stats: dict, ack_delay_s: float = 0.0, re
                 try:
                     timeout = max(0.005, min(end - time.monotonic(), 0.05 if heartbeat_s else 1.0))
                     message = await asyncio.wait_for(ws.recv(), timeout=timeout)
-                except asyncio.TimeoutError:
+                except TimeoutError:
                     continue
                 now = time.time()
                 if isinstance(message, bytes):

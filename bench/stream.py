@@ -37,7 +37,7 @@ async def reader(url: str, duration_s: float, stats: dict) -> None:
         while time.monotonic() < end:
             try:
                 message = await asyncio.wait_for(ws.recv(), timeout=max(0.01, end - time.monotonic()))
-            except asyncio.TimeoutError:
+            except TimeoutError:
                 break
             now = time.time()
             if isinstance(message, bytes):

@@ -17,10 +17,26 @@ from fastapi import FastAPI
 from fastapi.staticfiles import StaticFiles
 
 import armlab
+from armlab.station import load_station_config
+from armlab.station.factory import make_sim_station
 from server.auth import resolve_token
 from server.errors import install_error_handlers
 from server.guard import HostOriginGuard
-from server.routes import arm, auto, calibration, calibration_settings, colors, detections, intrinsics, jobs, programs, repeat, sim, station, stream
+from server.routes import (
+    arm,
+    auto,
+    calibration,
+    calibration_settings,
+    colors,
+    detections,
+    intrinsics,
+    jobs,
+    programs,
+    repeat,
+    sim,
+    station,
+    stream,
+)
 from server.stream import StreamHub
 from server.waiting import Waiter
 
@@ -31,9 +47,6 @@ WEB_DIR = Path(__file__).resolve().parents[1] / "web"
 
 def default_station_factory():
     """The simulated workcell with the station of config/station.yaml."""
-    from armlab.station import load_station_config
-    from armlab.station.factory import make_sim_station
-
     return make_sim_station(load_station_config())
 
 

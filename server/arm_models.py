@@ -9,6 +9,7 @@ from pydantic import Field, model_validator
 
 from server.wire_base import Angle, MovingTime, Position, Request, SpeedPercent, Velocity
 
+
 class JointsRequest(Request):
     q_rad: list[Angle] = Field(min_length=1, max_length=12, description="joint positions, radians, in joint_names order")
     moving_time_s: MovingTime | None = Field(None, description="move duration; None = as fast as the limits allow")
@@ -58,7 +59,7 @@ class StepRequest(Request):
     speed_percent: SpeedPercent = 100.0
 
     @model_validator(mode="after")
-    def _one_amount(self) -> "StepRequest":
+    def _one_amount(self) -> StepRequest:
         linear = self.axis in ("x", "y", "z")
         amount, other = (self.distance_m, self.angle_rad) if linear else (self.angle_rad, self.distance_m)
         needed = "distance_m" if linear else "angle_rad"

@@ -15,8 +15,9 @@ from dataclasses import dataclass, field
 from typing import Any
 
 from armlab.station.jobs import Job, jsonable
+from armlab.tasks.episode import _after_first_motion, score_run
 from armlab.tasks.judge import EVENT_LIMITS_S
-from armlab.tasks.scorers import SCORED_JOBS
+from armlab.tasks.scorers import SCORED_JOBS, score_job
 
 log = logging.getLogger(__name__)
 
@@ -42,7 +43,7 @@ class AutoRun:
     scored: threading.Event = field(default_factory=threading.Event)
 
 
-    def start(self) -> "AutoRun":
+    def start(self) -> AutoRun:
         threading.Thread(target=self._watch, name=f"auto-score-{self.job.id}", daemon=True).start()
         return self
 
@@ -67,8 +68,6 @@ class AutoRun:
     def _judge(self) -> tuple[dict | None, str]:
         if not is_scored(self.name):
             return None, f"'{self.name}' has no judge or scorer"
-        from armlab.tasks.episode import _after_first_motion, score_run
-        from armlab.tasks.scorers import score_job
 
         truth = self.cell.truth()
         sim_time_s = self.sim_end_s - self.sim_start_s

@@ -9,9 +9,19 @@ from fastapi.exceptions import RequestValidationError
 from fastapi.responses import JSONResponse
 from starlette.exceptions import HTTPException as StarletteHTTPException
 
-from armlab.errors import CalibrationUntrusted, CommandRefused, DeviceNotConnectedError, NeedsConfirmation, NoArmError, NotController
+from armlab.errors import (
+    CalibrationUntrusted,
+    CommandRefused,
+    DeviceNotConnectedError,
+    NeedsConfirmation,
+    NoArmError,
+    NotController,
+)
+from armlab.kinematics import Unreachable
+from armlab.motion.safety import UnsafeTrajectory
 from armlab.station.core import NotCalibrated
 from armlab.store import NotFound
+from server.models import ErrorResponse
 
 log = logging.getLogger(__name__)
 
@@ -45,12 +55,6 @@ def _validation_message(error: RequestValidationError) -> str:
 
 def _classify(error: Exception) -> tuple[int, str]:
     """HTTP status and wire code for a library exception (the most specific class wins)."""
-    from armlab.motion.safety import UnsafeTrajectory
-
-    try:
-        from armlab.kinematics import Unreachable
-    except ImportError:  # kinematics not installed: nothing can raise it
-        Unreachable = ()  # type: ignore[assignment]  # noqa: N806
     if isinstance(error, NoArmError):
         return 409, "no_arm"
     if isinstance(error, CommandRefused):
@@ -63,7 +67,7 @@ def _classify(error: Exception) -> tuple[int, str]:
         return 409, "not_calibrated"
     if isinstance(error, NotFound):
         return 404, "not_found"
-    if Unreachable and isinstance(error, Unreachable):
+    if isinstance(error, Unreachable):
         return 422, "unreachable"
     if isinstance(error, UnsafeTrajectory):
         return 422, "unsafe"
@@ -92,8 +96,6 @@ _DOCUMENTED_ERRORS = {
 
 def document_error_responses(schema: dict) -> dict:
     """Add the documented error responses (ErrorResponse body) to every operation of an OpenAPI schema."""
-    from server.models import ErrorResponse
-
     components = schema.setdefault("components", {}).setdefault("schemas", {})
     definitions = ErrorResponse.model_json_schema(ref_template="#/components/schemas/{model}")
     components.update(definitions.pop("$defs", {}))

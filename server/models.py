@@ -113,7 +113,7 @@ class PointsCalibrationRequest(Request):
     points: list[ClickedPoint] = Field(min_length=1, max_length=200)
 
     @model_validator(mode="after")
-    def _one_world_dimension(self) -> "PointsCalibrationRequest":
+    def _one_world_dimension(self) -> PointsCalibrationRequest:
         if len({len(point.world_m) for point in self.points}) > 1:
             raise ValueError("points: world_m must be (x, y) for every point or (x, y, z) for every point, not a mix")
         return self
@@ -127,7 +127,7 @@ class TargetRequest(Request):
     v: Pixel | None = None
 
     @model_validator(mode="after")
-    def _one_target(self) -> "TargetRequest":
+    def _one_target(self) -> TargetRequest:
         has_pixel = self.u is not None or self.v is not None
         if has_pixel and (self.u is None or self.v is None):
             raise ValueError("a pixel target needs both u and v")

@@ -75,7 +75,7 @@ class ProgramUpdateRequest(Request):
     waypoints: list[WaypointRequest] | None = Field(None, min_length=1, max_length=WAYPOINTS_LIMIT)
 
     @model_validator(mode="after")
-    def _something(self) -> "ProgramUpdateRequest":
+    def _something(self) -> ProgramUpdateRequest:
         if self.name is None and self.waypoints is None:
             raise ValueError("give name and/or waypoints")
         return self

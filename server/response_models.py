@@ -8,6 +8,7 @@ from pydantic import Field
 
 from server.wire_base import Vector3, Wire
 
+
 class ErrorBody(Wire):
     code: str
     message: str
@@ -60,8 +61,11 @@ class Status(Wire):
     calibrated: bool
     camera_warning: str | None = Field(None, description='"camera moved: recalibrate (...)" when the board tags no longer sit where the calibration puts them')
     calibration_state: Literal["checking", "trusted", "untrusted", "rejected"] | None = Field(
-        None, description="trusted: in use; untrusted: in use, but the board tags do not confirm it (camera_warning says why): grabs, drops and jobs are refused; checking: restored at start, not used until the board tags confirm it; rejected: restored but the camera moved since (recalibrate); None: no calibration")
-    self_recalibrate: bool = Field(False, description="the station recalibrates itself from the board tags when idle once the camera moved (PUT /api/calibration/settings)")
+        None, description="trusted: in use; untrusted: in use, but the board tags do not confirm it (camera_warning says "
+        "why): grabs, drops and jobs are refused; checking: restored at start, not used until the board tags confirm it; "
+        "rejected: restored but the camera moved since (recalibrate); None: no calibration")
+    self_recalibrate: bool = Field(False, description="the station recalibrates itself from the board tags when idle once the "
+                                   "camera moved (PUT /api/calibration/settings)")
     backend: Literal["sim", "real"]
     controller: str | None = Field(description="who holds the control lease (None: free); only it may command")
     controller_since_s: float | None = Field(None, description="when it took control (time.time())")
@@ -121,7 +125,7 @@ class CalibrationInfo(Wire):
     grid_points_px: list[list[float]] | None = None
     tags: list[TagInfo] | None = None
     time: float | None = None
-    method: str | None = Field(None, description="'points' for a calibration from clicked points (tags otherwise)")
+    method: str | None = Field(None, description="'points' for a calibration from clicked points, 'arm-camera' from the arm's gripper tag (tags otherwise)")
     points: dict | None = Field(None, description="clicked-point fit: homography, reprojection and per-point errors (px)")
 
 

@@ -44,7 +44,7 @@ class SceneRequest(Request):
     objects: list[SceneObjectRequest] | None = Field(None, max_length=MAX_SCENE_OBJECTS)
 
     @model_validator(mode="after")
-    def _one_kind(self) -> "SceneRequest":
+    def _one_kind(self) -> SceneRequest:
         if (self.event is None) == (self.objects is None):
             raise ValueError("give either event (with level and seed) or objects")
         return self

@@ -52,7 +52,8 @@ def _message_error(text: str, error: ValidationError) -> str:
     """One line for the client: what was wrong with its message."""
     first = error.errors()[0]
     where = ".".join(str(part) for part in first.get("loc", ()))
-    return f"bad message {text[:80]!r}: {where + ': ' if where else ''}{first.get('msg')} (expected type {', '.join(_CLIENT_TYPES[:-1])} or {_CLIENT_TYPES[-1]})"
+    expected = f"{', '.join(_CLIENT_TYPES[:-1])} or {_CLIENT_TYPES[-1]}"
+    return f"bad message {text[:80]!r}: {where + ': ' if where else ''}{first.get('msg')} (expected type {expected})"
 
 
 @dataclass(frozen=True)

@@ -9,6 +9,7 @@ from pydantic import Field
 from server.response_models import CalibrationInfo, Detection, Status
 from server.wire_base import Layer, Request, View, Wire
 
+
 class FrameHeader(Wire):
     """Header of a binary frame: [uint32 LE header length N][N bytes of this JSON][JPEG bytes]."""
 

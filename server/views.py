@@ -8,6 +8,7 @@ import cv2
 import numpy as np
 
 from armlab.devices.camera import Frame
+from armlab.vision import OverlayLayers, draw_overlay, top_down_view
 
 VIEWS = ("color", "depth", "topdown")
 LAYERS = ("tags", "detections", "grid")
@@ -21,7 +22,7 @@ class ViewKey:
     layers: tuple[str, ...] = ()
 
     @classmethod
-    def make(cls, view: str = "color", layers=()) -> "ViewKey":
+    def make(cls, view: str = "color", layers=()) -> ViewKey:
         if view not in VIEWS:
             raise ValueError(f"view must be one of {', '.join(VIEWS)}, not {view!r}")
         unknown = [layer for layer in layers if layer not in LAYERS]
@@ -30,7 +31,7 @@ class ViewKey:
         return cls(view, tuple(sorted(set(layers))))
 
     @classmethod
-    def parse(cls, view: str | None, layers: str | None) -> "ViewKey":
+    def parse(cls, view: str | None, layers: str | None) -> ViewKey:
         """From query strings: view=color, layers=tags,detections,grid."""
         names = [name.strip() for name in (layers or "").split(",") if name.strip()]
         return cls.make(view or "color", names)
@@ -79,14 +80,11 @@ def compose_view(frame: Frame, key: ViewKey, perception=None, calibration=None, 
     if key.view == "depth" and frame.depth_mm is not None:
         image = depth_to_bgr(frame.depth_mm)
     elif key.view == "topdown" and calibration is not None:
-        from armlab.vision import top_down_view
-
         return top_down_view(frame.color_bgr, calibration)
     else:
         image = frame.color_bgr
     if not key.layers:
         return image
-    from armlab.vision import OverlayLayers, draw_overlay
 
     layers = OverlayLayers(**{name: name in key.layers for name in LAYERS})
     tags = list(perception.tags) if perception is not None else []

@@ -11,7 +11,6 @@ import pytest
 
 sys.path.insert(0, str(Path(__file__).parent / "server"))
 import live  # noqa: E402
-
 from armlab.client import InterbotixManipulatorXS, StationClient, StationError, base_to_world  # noqa: E402
 
 TOKEN = "client-token"

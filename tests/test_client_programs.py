@@ -10,7 +10,6 @@ import pytest
 
 sys.path.insert(0, str(Path(__file__).parent / "server"))
 import live  # noqa: E402
-
 from armlab.client import StationClient, StationError  # noqa: E402
 
 TOKEN = "client-programs-token"

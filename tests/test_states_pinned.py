@@ -15,9 +15,9 @@ from __future__ import annotations
 import pytest
 
 from armlab.errors import CommandRefused
-from armlab.station.states import COMMANDS, EVENTS, State, allowed_commands, after_event, next_state
+from armlab.station.states import COMMANDS, EVENTS, State, after_event, allowed_commands, next_state
 
-I, CAL, T, R, CG, CD, A, E, F = (
+I, CAL, T, R, CG, CD, A, E, F = (  # noqa: E741 (one letter a state: the table below reads as a grid)
     State.IDLE, State.CALIBRATE, State.TEACH, State.REPEAT, State.CLICK_GRAB, State.CLICK_DROP, State.AUTO_SORT, State.ESTOP, State.FAULT,
 )
 

@@ -14,11 +14,10 @@ import pytest
 
 sys.path.insert(0, str(Path(__file__).parent / "server"))
 import live  # noqa: E402
-
+from armlab import skills  # noqa: E402
 from armlab.errors import CommandRefused  # noqa: E402
 from armlab.scene import Scene  # noqa: E402
 from armlab.station import COMMANDS, State, allowed_commands  # noqa: E402
-from armlab import skills  # noqa: E402
 from armlab.station.states import JOB_STATES, TRANSITIONS  # noqa: E402
 
 JOB_COMMAND = {State.CALIBRATE: "calibrate", State.REPEAT: "repeat", State.CLICK_GRAB: "grab", State.CLICK_DROP: "drop", State.AUTO_SORT: "auto"}

@@ -66,6 +66,9 @@ def test_wire_form_is_json_and_carries_the_geometry_the_browser_needs():
         (lambda d: d["bin"].update(y_range_m=[-0.3, -0.1]), "bin"),
         (lambda d: d.update(wobble=1), "wobble"),
         (lambda d: d.pop("feeder"), "feeder"),
+        (lambda d: d["gripper"]["marker"].update(id=3), "gripper.marker.id"),  # a board tag's id
+        (lambda d: d["gripper"]["marker"].update(id=600), "gripper.marker.id"),  # beyond tag36h11's 587
+        (lambda d: d["gripper"]["marker"].update(size_m=0.0), "gripper.marker.size_m"),
     ],
 )
 def test_bad_workcell_names_the_file_and_the_field(tmp_path, mutate, field):

@@ -28,8 +28,8 @@ def register(subparsers: argparse._SubParsersAction) -> None:
     where.add_argument("--ray", metavar="ADDRESS", help="run the seeds as tasks on a Ray cluster: auto or host:port "
                                                       "(needs the cluster extra: pip install 'armlab[cluster]')")
     parser.add_argument("--realism", choices=("real", "ideal"), default=None,
-                        help="real: the simulated camera (and later the arm) with a real one's imperfections; ideal: "
-                             "exact. Default: config/sim.yaml `realism` (real)")
+                        help="real: the simulated camera and arm with a real one's imperfections (the RX200's droop, backlash, "
+                             "encoder counts, rig offsets); ideal: exact. Default: config/sim.yaml `realism`")
     parser.add_argument("--truth-out", type=Path, metavar="DIR",
                         help="write each run's final ground truth (+ gripper_path_m) to DIR/<seed>.json")
     parser.add_argument("--json", action="store_true", help='print {"runs": [...], "summary": {...}} only')
@@ -47,7 +47,12 @@ def _int_option(name: str, text: str | None) -> int | None:
 
 def run_eval(args: argparse.Namespace) -> int:
     from armlab.tasks.evaluate import (
-        EvalError, check_request, evaluate, parse_seeds, public_run, summarize,
+        EvalError,
+        check_request,
+        evaluate,
+        parse_seeds,
+        public_run,
+        summarize,
     )
 
     try:

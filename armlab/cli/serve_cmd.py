@@ -17,7 +17,8 @@ def register(subparsers: argparse._SubParsersAction) -> None:
     parser.add_argument("--level", type=int, default=None, help="starting scene level (1-3)")
     parser.add_argument("--scene-seed", type=int, default=None, help="starting scene seed")
     parser.add_argument("--realism", choices=("real", "ideal"), default=None,
-                        help="simulation: real (the camera's imperfections, shadows, clutter) or ideal (exact); "
+                        help="simulation: real (the camera's imperfections, shadows, clutter; the arm's droop, backlash, "
+                             "encoder counts and rig offsets) or ideal (exact); "
                              "default from the config, else config/sim.yaml `realism`")
     parser.add_argument("--workcell", default=None,
                         help="workcell (config/workcells/<name>.yaml: arm, gripper, board, camera); default from the config, rx200_armlab")
@@ -104,13 +105,12 @@ def run_serve(args: argparse.Namespace) -> int:
     import sys
 
     os.environ.setdefault("MUJOCO_GL", "egl")
+    from armlab.errors import ConfigError
     from armlab.station.factory import make_device_station, make_sim_station
     from server.app import create_app
     from server.auth import open_url, resolve_token
     from server.logging_config import log_config
     from server.serving import run
-
-    from armlab.errors import ConfigError
 
     try:
         config = build_station_config(args)  # the workcell decides the arm: unknown or contradicting names stop here

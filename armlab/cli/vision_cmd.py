@@ -93,7 +93,8 @@ def load_intrinsics(path: str | None):
         return read_intrinsics_file(source)[0]
     try:
         k = data["intrinsics"]
-        return Intrinsics(int(data["width"]), int(data["height"]), float(k["fx"]), float(k["fy"]), float(k["cx"]), float(k["cy"]), tuple(float(x) for x in k.get("dist", [0.0] * 5)))
+        return Intrinsics(int(data["width"]), int(data["height"]), float(k["fx"]), float(k["fy"]), float(k["cx"]), float(k["cy"]),
+                          tuple(float(x) for x in k.get("dist", [0.0] * 5)))
     except (KeyError, TypeError, ValueError, IndexError) as error:
         raise ValueError(f"{source}: no usable intrinsics ({error})") from error
 

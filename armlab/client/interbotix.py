@@ -17,7 +17,7 @@ from __future__ import annotations
 
 from collections.abc import Sequence
 
-from armlab.client.station_client import StationClient
+from armlab.client.station_client import StationClient, StationError
 
 
 def base_to_world(x: float, y: float, z: float) -> list[float]:
@@ -63,7 +63,6 @@ class InterbotixArmFacade:
         """
         if roll != 0.0:
             raise ValueError("the RX200 cannot set roll independently: use roll=0")
-        from armlab.client.station_client import StationError
 
         try:
             status = self._client.move_to(

@@ -77,7 +77,7 @@ class StationClient:
     def close(self) -> None:
         self._http.close()
 
-    def __enter__(self) -> "StationClient":
+    def __enter__(self) -> StationClient:
         return self
 
     def __exit__(self, *exc) -> None:

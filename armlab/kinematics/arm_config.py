@@ -89,7 +89,7 @@ class LimitsConfig(StrictModel):
     acceleration_rad_s2: FloatRow
 
     @model_validator(mode="after")
-    def _limits_are_sane(self) -> "LimitsConfig":
+    def _limits_are_sane(self) -> LimitsConfig:
         for index, (low, high) in enumerate(zip(self.lower_deg, self.upper_deg)):
             if not low < high:
                 raise ValueError(f"limits.lower_deg[{index}] = {low} must be below limits.upper_deg[{index}] = {high}")
@@ -116,7 +116,7 @@ class GripperConfig(StrictModel):
     grasp_effort_n: float = Field(gt=0.0)
 
     @model_validator(mode="after")
-    def _range_is_sane(self) -> "GripperConfig":
+    def _range_is_sane(self) -> GripperConfig:
         if not self.finger_offset_min_m < self.finger_offset_max_m:
             raise ValueError("gripper.finger_offset_min_m must be below gripper.finger_offset_max_m")
         if self.pad_thickness_m >= self.finger_offset_max_m:
@@ -159,7 +159,7 @@ class ArmConfig(StrictModel):
         return _check_rigid(value, "T_world_base")
 
     @model_validator(mode="after")
-    def _shapes_agree(self) -> "ArmConfig":
+    def _shapes_agree(self) -> ArmConfig:
         dof = len(self.joint_names)
         if len(set(self.joint_names)) != dof:
             raise ValueError(f"joint_names: names must be unique, got {self.joint_names}")

@@ -52,7 +52,7 @@ class DhKinematics:
     world_base: Flat
 
     @classmethod
-    def from_arrays(cls, rows: np.ndarray, tool: np.ndarray, T_world_base: np.ndarray) -> "DhKinematics":
+    def from_arrays(cls, rows: np.ndarray, tool: np.ndarray, T_world_base: np.ndarray) -> DhKinematics:
         return cls(rows=fast_rows(rows), tool=flat_from_matrix(tool), world_base=flat_from_matrix(T_world_base))
 
     def pose(self, q) -> Flat:

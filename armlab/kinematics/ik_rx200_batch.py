@@ -10,8 +10,9 @@ import math
 
 import numpy as np
 
-from armlab.kinematics.ik_rx200 import REFINE_STEPS, LIMIT_TOL_RAD, PITCH_MAX_RAD, PITCH_MIN_RAD, SEARCH_STEP_RAD
+from armlab.kinematics.ik_rx200 import LIMIT_TOL_RAD, PITCH_MAX_RAD, PITCH_MIN_RAD, REFINE_STEPS, SEARCH_STEP_RAD
 from armlab.kinematics.rx200_geometry import HALF_PI, Rx200Geometry, wrist_rotate_batch
+
 
 def _wrap_array(angles: np.ndarray) -> np.ndarray:
     """Angles within (-3pi, 3pi] wrapped into (-pi, pi] (two selects: cheaper than np.mod)."""

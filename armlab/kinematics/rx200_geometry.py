@@ -60,7 +60,7 @@ class Rx200Geometry:
     joint_names: tuple[str, ...]
 
     @classmethod
-    def from_config(cls, config: ArmConfig, source: str = "arm config") -> "Rx200Geometry":
+    def from_config(cls, config: ArmConfig, source: str = "arm config") -> Rx200Geometry:
         """Derive the planar parameters from the PoX axes; ConfigError if the arm is not of this family."""
         axes = np.asarray(config.pox.screw_axes, dtype=float)
         home = np.asarray(config.pox.M, dtype=float)

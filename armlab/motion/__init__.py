@@ -1,12 +1,11 @@
 """Motion planning: time-parameterised joint trajectories, vertical Cartesian segments, pick/place
 plans and the safety check every plan passes before it reaches the arm. Pure functions, no devices.
 
-Kinematics come from an arm model (armlab.kinematics.load_arm); imports of it are deferred to call
-time so `import armlab.motion` stays light.
+Kinematics come from an arm model (armlab.kinematics.load_arm).
 """
 
-from armlab.motion.cartesian import DiscontinuousPath, plan_vertical_segment
-from armlab.motion.config import MotionConfig, load_motion_config
+from armlab.motion.cartesian import plan_vertical_segment
+from armlab.motion.errors import DiscontinuousPath
 from armlab.motion.pick_place import (
     GripperStep,
     Step,
@@ -17,6 +16,7 @@ from armlab.motion.pick_place import (
 )
 from armlab.motion.safety import UnsafeTrajectory, check_trajectory
 from armlab.motion.trajectory import MoveTiming, plan_joint_move, plan_joint_move_timed
+from armlab.motion_config import MotionConfig, load_motion_config
 
 __all__ = [
     "DiscontinuousPath",

@@ -32,7 +32,7 @@ class Limits:
     accel_rad_s2: np.ndarray
     jerk_rad_s3: np.ndarray
 
-    def scaled(self, speed_fraction: float) -> "Limits":
+    def scaled(self, speed_fraction: float) -> Limits:
         """The limits of a run at `speed_fraction` (0 < s ≤ 1) of full speed (time scaling: v·s, a·s², j·s³)."""
         s = float(speed_fraction)
         if not 0.0 < s <= 1.0:

@@ -12,6 +12,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from armlab.devices.arm import JointTrajectory
+from armlab.kinematics import Unreachable
 
 MAX_PARTS = 6  # a move is split into at most this many joint moves
 
@@ -23,7 +24,7 @@ class GripperBox:
     min_m: tuple[float, float, float]
     max_m: tuple[float, float, float]
 
-    def shrunk(self, margin_m: float) -> "GripperBox":
+    def shrunk(self, margin_m: float) -> GripperBox:
         """The box with every face moved margin_m inward (room for tracking error)."""
         return GripperBox(tuple(v + margin_m for v in self.min_m), tuple(v - margin_m for v in self.max_m))
 
@@ -67,7 +68,6 @@ def joint_moves_inside(model, q_start_rad, q_goal_rad, box: GripperBox | None,
         return [direct]
     if not (box.contains(gripper_path_m(model, q_start[None])[0]) and box.contains(gripper_path_m(model, q_goal[None])[0])):
         raise ValueError(f"a move that starts or ends outside the gripper box: {problem}")
-    from armlab.kinematics import Unreachable
 
     p_start, p_goal = gripper_path_m(model, np.vstack([q_start, q_goal]))
     for parts in range(2, MAX_PARTS + 1):

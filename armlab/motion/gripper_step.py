@@ -21,10 +21,17 @@ import numpy as np
 
 from armlab.devices.arm import JointTrajectory
 from armlab.kinematics.errors import Unreachable
-from armlab.motion.cartesian import DiscontinuousPath, plan_path
+from armlab.motion.cartesian import plan_path
+from armlab.motion.errors import DiscontinuousPath, StepRefused
 from armlab.motion.pose_path import holds_full_pose
 from armlab.motion.pose_step import plan_pose_step
-from armlab.motion.trajectory import DEFAULT_RATE_HZ, START_TOLERANCE_RAD, check_joint_positions, minimum_time, plan_joint_move
+from armlab.motion.trajectory import (
+    DEFAULT_RATE_HZ,
+    START_TOLERANCE_RAD,
+    check_joint_positions,
+    minimum_time,
+    plan_joint_move,
+)
 
 AXES = ("x", "y", "z", "pitch", "roll")
 LINEAR_AXES = ("x", "y", "z")
@@ -37,10 +44,6 @@ MAX_STEP_RAD = math.pi / 4
 # Holding the yaw while the waist turns by w rolls the wrist by about w / sin(pitch) and tilts the fingers:
 # allowed while the gripper points nearly down (roll at most this many times the waist's turn, pitch 53-127°).
 MAX_ROLL_PER_WAIST = 1.25
-
-
-class StepRefused(Unreachable):
-    """A jog step that cannot keep the gripper's orientation or line within the tolerances (HTTP 422)."""
 
 
 @dataclass(frozen=True)

@@ -9,7 +9,13 @@ from __future__ import annotations
 import numpy as np
 
 from armlab.devices.arm import JointTrajectory
-from armlab.motion.cartesian import DiscontinuousPath, branch_jump, gripper_position_m, plan_retimed, vertical_profile_duration
+from armlab.motion.cartesian import (
+    DiscontinuousPath,
+    branch_jump,
+    gripper_position_m,
+    plan_retimed,
+    vertical_profile_duration,
+)
 from armlab.motion.trajectory import DEFAULT_RATE_HZ, minimum_time, sample_times
 
 

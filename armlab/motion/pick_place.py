@@ -15,15 +15,16 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
-from typing import Literal, Union
+from typing import Literal
 
 import numpy as np
 
 from armlab.devices.arm import JointTrajectory
+from armlab.kinematics import Unreachable
 from armlab.motion.cartesian import plan_vertical_segment
-from armlab.motion.config import MotionConfig
 from armlab.motion.safety import check_trajectory
 from armlab.motion.trajectory import plan_joint_move
+from armlab.motion_config import MotionConfig
 
 PITCH_STEP_RAD = math.radians(5.0)
 
@@ -48,13 +49,7 @@ class GripperStep:
     action: Literal["grasp", "release"]
 
 
-Step = Union[TrajectoryStep, GripperStep]
-
-
-def _unreachable_type():
-    from armlab.kinematics import Unreachable
-
-    return Unreachable
+Step = TrajectoryStep | GripperStep
 
 
 def _check_point(name: str, position_m) -> np.ndarray:
@@ -99,7 +94,6 @@ def solve_approach(arm, q_seed_rad, points_m: list[np.ndarray], yaw_rad: float |
     Points are solved in order, each seeded with the previous solution (so they share an IK branch).
     Raises Unreachable (from armlab.kinematics) with the first point's failure at the preferred pitch.
     """
-    unreachable = _unreachable_type()
     first_error = None
     for pitch in _pitch_candidates(preferred_pitch_rad, lowest_pitch_rad):
         seed = np.asarray(q_seed_rad, float)
@@ -108,14 +102,14 @@ def solve_approach(arm, q_seed_rad, points_m: list[np.ndarray], yaw_rad: float |
             for point in points_m:
                 seed = np.asarray(arm.ik(point, pitch=pitch, yaw=yaw_rad, q_seed=seed), float)
                 solutions.append(seed)
-        except unreachable as error:
+        except Unreachable as error:
             first_error = first_error or error
             continue
         return pitch, solutions
     pitches = (f"the gripper at {math.degrees(preferred_pitch_rad):.0f}° pitch (a suction cup seals only flat on a face) does not reach "
                if lowest_pitch_rad >= preferred_pitch_rad - 1e-9 else
                f"no gripper pitch between {math.degrees(preferred_pitch_rad):.0f}° and {math.degrees(lowest_pitch_rad):.0f}° reaches ")
-    raise unreachable(
+    raise Unreachable(
         pitches + f"{', '.join(f'({p[0] * 1000:.0f}, {p[1] * 1000:.0f}, {p[2] * 1000:.0f}) mm' for p in points_m)}: {first_error}",
         getattr(first_error, "reason", "out of reach"),
     )

@@ -14,7 +14,9 @@ import math
 import numpy as np
 
 from armlab.devices.arm import JointTrajectory
-from armlab.motion.cartesian import MAX_SAMPLE_STEP_RAD, DiscontinuousPath, branch_jump, plan_retimed
+from armlab.kinematics.errors import Unreachable
+from armlab.motion.errors import DiscontinuousPath
+from armlab.motion.retime import MAX_SAMPLE_STEP_RAD, branch_jump, plan_retimed
 from armlab.motion.trajectory import DEFAULT_RATE_HZ, minimum_time, sample_times
 
 FULL_POSE_MIN_DOF = 6  # arms with at least this many joints hold the whole tool orientation
@@ -129,8 +131,6 @@ def solve_pose_move(arm, position_m, pitch_rad: float | None, yaw_rad: float | N
     ArmModel.ik searches) and its y axis at heading yaw_rad (None: the heading it has now, kept; a
     yaw takes the quarter turn nearest the seed, the faces of a block being a quarter turn apart).
     Raises Unreachable (from the model) when no such pose is reachable."""
-    from armlab.kinematics.errors import Unreachable
-
     q_seed = np.asarray(q_seed, float)
     target = np.asarray(position_m, float)
     headings = [tool_heading_rad(np.asarray(arm.fk(q_seed), float))] if yaw_rad is None else \

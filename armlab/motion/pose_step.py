@@ -13,17 +13,11 @@ from __future__ import annotations
 import numpy as np
 
 from armlab.devices.arm import JointTrajectory
-from armlab.motion.cartesian import DiscontinuousPath
+from armlab.motion.errors import DiscontinuousPath, StepRefused
 from armlab.motion.pose_path import plan_pose_path, rotation_about, rotation_angle_rad
 from armlab.motion.trajectory import minimum_time
 
 LINEAR_AXES = ("x", "y", "z")
-
-
-def _step_refused():
-    from armlab.motion.gripper_step import StepRefused
-
-    return StepRefused
 
 
 def pitch_axis(arm, T_world_tool: np.ndarray) -> np.ndarray:
@@ -62,12 +56,11 @@ def step_goal_poses(arm, T_start: np.ndarray, axis: str, amount: float):
 def plan_pose_step(arm, q_start: np.ndarray, axis: str, amount: float, speeds, label: str, rate_hz: float,
                    position_tol_m: float, orientation_tol_rad: float) -> JointTrajectory:
     """A checked x|y|z|pitch step from q_start holding the full orientation (see the module doc)."""
-    refused = _step_refused()
     T_start = np.asarray(arm.fk(q_start), float)
     if axis in LINEAR_AXES:
         goal_z = T_start[2, 3] + (amount if axis == "z" else 0.0)
         if goal_z < 0.0:
-            raise refused(f"{label}: the gripper point would go to z = {goal_z * 1000:.1f} mm, below the board", "below the table")
+            raise StepRefused(f"{label}: the gripper point would go to z = {goal_z * 1000:.1f} mm, below the board", "below the table")
         duration_s, ramp_s = minimum_time(speeds.linear_m_s / abs(amount), speeds.linear_accel_m_s2 / abs(amount))
     elif axis == "pitch":
         duration_s, ramp_s = minimum_time(speeds.angular_rad_s / abs(amount), speeds.angular_accel_rad_s2 / abs(amount))
@@ -77,7 +70,7 @@ def plan_pose_step(arm, q_start: np.ndarray, axis: str, amount: float, speeds, l
     try:
         trajectory = plan_pose_path(arm, q_start, poses_at, duration_s, ramp_s, label, rate_hz)
     except DiscontinuousPath as error:
-        raise refused(f"the arm cannot follow the step continuously: {error}", "discontinuous") from error
+        raise StepRefused(f"the arm cannot follow the step continuously: {error}", "discontinuous") from error
     verify_pose_step(arm, trajectory.positions_rad, T_start, axis, amount, label, position_tol_m, orientation_tol_rad)
     return trajectory
 
@@ -87,7 +80,6 @@ def verify_pose_step(arm, positions_rad, T_start: np.ndarray, axis: str, amount:
     """StepRefused unless FK of every sample stays on the asked motion: a linear step on its line with the
     start's rotation, a pitch step at the start's point with a rotation about the pitch axis, and the
     last sample at the asked end pose (each within the tolerances)."""
-    refused = _step_refused()
     T = np.asarray(arm.fk(np.asarray(positions_rad, float)), float).reshape(-1, 4, 4)
     worst_off_m, worst_turn = 0.0, 0.0
     if axis in LINEAR_AXES:
@@ -109,8 +101,8 @@ def verify_pose_step(arm, positions_rad, T_start: np.ndarray, axis: str, amount:
             worst_turn = max(worst_turn, rotation_angle_rad(rotation_about(k, turned) @ T_start[:3, :3], pose[:3, :3]))
         end_error = rotation_angle_rad(rotation_about(k, amount) @ T_start[:3, :3], T[-1, :3, :3])
         if end_error > orientation_tol_rad:
-            raise refused(f"{label}: the tool would end {np.degrees(end_error):.2f}° off the asked rotation", "orientation")
+            raise StepRefused(f"{label}: the tool would end {np.degrees(end_error):.2f}° off the asked rotation", "orientation")
     if worst_off_m > position_tol_m:
-        raise refused(f"{label}: the gripper point would leave the asked motion by {worst_off_m * 1000:.1f} mm", "off the line")
+        raise StepRefused(f"{label}: the gripper point would leave the asked motion by {worst_off_m * 1000:.1f} mm", "off the line")
     if worst_turn > orientation_tol_rad:
-        raise refused(f"{label}: the tool's orientation would change by {np.degrees(worst_turn):.2f}°", "orientation")
+        raise StepRefused(f"{label}: the tool's orientation would change by {np.degrees(worst_turn):.2f}°", "orientation")

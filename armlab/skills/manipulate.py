@@ -8,6 +8,15 @@ from collections.abc import Callable, Sequence
 
 import numpy as np
 
+from armlab.kinematics import Unreachable
+from armlab.motion import GripperStep, TrajectoryStep, check_trajectory, plan_joint_move
+from armlab.motion import plan_pick as motion_plan_pick
+from armlab.motion import plan_place as motion_plan_place
+from armlab.motion.cartesian import plan_vertical_segment
+from armlab.motion.clearance import first_collision
+from armlab.motion.gripper_box import joint_moves_inside
+from armlab.motion.pick_place import lowest_pitch_rad, solve_approach
+from armlab.motion.safety import UnsafeTrajectory
 from armlab.station.arm_info import station_gripper_type
 from armlab.station.core import Station
 from armlab.station.jobs import JobContext
@@ -18,20 +27,16 @@ def plan_pick_steps(station: Station, top_center_m, yaw_rad: float | None, q_sta
 
     Unreachable / UnsafeTrajectory / ValueError before anything moves.
     """
-    from armlab.motion import plan_pick
-
     q_start = station.joints_rad() if q_start_rad is None else np.asarray(q_start_rad, float)
-    return plan_pick(station.model, q_start, np.asarray(top_center_m, float), 0.0 if yaw_rad is None else yaw_rad, station.motion_config,
+    return motion_plan_pick(station.model, q_start, np.asarray(top_center_m, float), 0.0 if yaw_rad is None else yaw_rad, station.motion_config,
                      gripper_type=station_gripper_type(station))
 
 
 def plan_place_steps(station: Station, surface_m, yaw_rad: float | None, held_height_m: float, q_start_rad=None) -> list:
     """armlab.motion's place plan: the held block's bottom centre onto surface_m, then release and retreat."""
-    from armlab.motion import plan_place
-
     q_start = station.joints_rad() if q_start_rad is None else np.asarray(q_start_rad, float)
     yaw = 0.0 if yaw_rad is None else yaw_rad
-    return plan_place(station.model, q_start, np.asarray(surface_m, float), yaw, station.motion_config, held_height_m,
+    return motion_plan_place(station.model, q_start, np.asarray(surface_m, float), yaw, station.motion_config, held_height_m,
                       gripper_type=station_gripper_type(station))
 
 
@@ -41,8 +46,6 @@ def run_steps(station: Station, ctx: JobContext, steps: Sequence, replan: Callab
 
     If the arm is no longer where the plan starts (it moved since planning), `replan()` plans again.
     """
-    from armlab.motion import TrajectoryStep
-
     first = next((step for step in steps if isinstance(step, TrajectoryStep)), None)
     if replan is not None and first is not None and np.abs(first.trajectory.positions_rad[0] - station.joints_rad()).max() > 0.01:
         steps = replan()
@@ -110,14 +113,6 @@ def _transfer_plan(station: Station, q_start, point_m, yaw_rad: float | None, bo
     that bulge out are split along the straight line). Unreachable / UnsafeTrajectory before anything moves.
     A suction cup comes straight down only (no tilted approach: it seals flat on a face), with no finger
     seed and no finger tips in the clearance check."""
-    from armlab.kinematics import Unreachable
-    from armlab.motion import GripperStep, TrajectoryStep, check_trajectory, plan_joint_move
-    from armlab.motion.cartesian import plan_vertical_segment
-    from armlab.motion.clearance import first_collision
-    from armlab.motion.gripper_box import joint_moves_inside
-    from armlab.motion.pick_place import lowest_pitch_rad, solve_approach
-    from armlab.motion.safety import UnsafeTrajectory
-
     config = station.motion_config
     model = station.model
     gripper_type = station_gripper_type(station)
@@ -221,8 +216,6 @@ def plan_pick(station: Station, top_center_m, yaw_rad: float | None, edge_m: flo
     """Plan picking the block whose top-face centre is top_center_m: open, transfer above it, descend
     to config.held_below_top_m(edge) below its top (a suction cup: onto it), grasp, rise. boxes: other objects; gripper_box: a
     GripperBox the gripper point keeps inside (None: no such limit)."""
-    from armlab.motion import GripperStep
-
     config = station.motion_config
     top = np.asarray(top_center_m, float)
     gripper_type = station_gripper_type(station)
@@ -256,12 +249,6 @@ def plan_side_place(station: Station, surface_m, edge_m: float, boxes: list, q_s
     horizontal (pitch 0), for surfaces too high for a top-down place (tall towers). The wrist turns
     to a multiple of 90° so the block's faces stay level; its centre lies (edge/2 - grasp depth)
     beyond the gripper point along the horizontal approach axis."""
-    from armlab.kinematics import Unreachable
-    from armlab.motion import GripperStep, TrajectoryStep, check_trajectory, plan_joint_move
-    from armlab.motion.cartesian import plan_vertical_segment
-    from armlab.motion.clearance import first_collision
-    from armlab.motion.safety import UnsafeTrajectory
-
     if station_gripper_type(station) != "fingers":
         raise Unreachable(f"a side place needs fingers: a {station_gripper_type(station)} gripper holds the block by its top face, "
                           "which would turn sideways", "out of reach")

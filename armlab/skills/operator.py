@@ -17,6 +17,9 @@ from armlab.station.arm_info import station_gripper_type
 from armlab.station.calibration_trust import calibration_summary
 from armlab.station.core import Station
 from armlab.station.jobs import Job, JobContext
+from armlab.vision import calibrate_extrinsics, detect_tags
+from armlab.vision.calibration import project_grid
+from armlab.vision.click_calibration import calibrate_from_points
 
 BOARD_NOISE_M = 0.006  # depth readings this close to the board are the board
 
@@ -34,9 +37,6 @@ def block_edge_m(station: Station, size: str | None) -> float:
 
 def calibrate(station: Station, source: str | None = None) -> Job:
     """Start the calibration job: tags → extrinsics (+ depth cross-check) → saved and installed."""
-    from armlab.vision import calibrate_extrinsics, detect_tags
-    from armlab.vision.calibration import project_grid
-
     def run(ctx: JobContext) -> dict:
         ctx.progress(0.1, "finding the board tags")
         frame = station.fresh_frame()
@@ -58,9 +58,6 @@ def calibrate_points(station: Station, pixels_px: Sequence, world_m: Sequence, s
     """Start a calibration job from >= 4 clicked pixels and their known world points (no tags needed):
     homography + PnP with the camera's intrinsics, cross-checked with the newest depth; saved and
     installed. A bad set of points fails the job saying why and keeps the old calibration."""
-    from armlab.vision.calibration import project_grid
-    from armlab.vision.click_calibration import calibrate_from_points
-
     def run(ctx: JobContext) -> dict:
         frame = station.fresh_frame()
         intrinsics = station.intrinsics.current()  # measured for this camera, else its own

@@ -13,6 +13,10 @@ from armlab.station.checks import checked_position
 from armlab.station.core import NotCalibrated, Station
 from armlab.station.jobs import JobContext
 from armlab.station.telemetry import block_to_dict
+from armlab.vision.config import SelfFilterConfig
+from armlab.vision.geometry import backproject, project_points, transform_points
+from armlab.vision.pixel_world import pixel_to_world_off_robot
+from armlab.vision.self_filter import robot_volume
 
 
 def finite_pixel(u, v) -> tuple[float, float]:
@@ -30,8 +34,6 @@ def pixel_to_world(station: Station, u: float, v: float) -> dict:
     """{position_m, on}: the world point under pixel (u, v), never on the robot. 'depth': the newest
     frame's depth outside the arm's volume (FK of the joints the frame was taken at + the calibration);
     'remembered': under the arm, the depth last seen there without it; else 'board' (z = 0)."""
-    from armlab.vision.pixel_world import pixel_to_world_off_robot
-
     u, v = finite_pixel(u, v)
     calibration = station.calibration
     if calibration is None:
@@ -50,9 +52,6 @@ def pixel_to_world(station: Station, u: float, v: float) -> dict:
 def robot_volume_of(station: Station, frame):
     """The robot's inflated volume (armlab.vision.self_filter) at the joints `frame` was taken at, with a
     held block unless the gripper was open; None when the frame has no joints or the station no arm model."""
-    from armlab.vision.config import SelfFilterConfig
-    from armlab.vision.self_filter import robot_volume
-
     joints = getattr(frame, "arm_joints_rad", None)
     if joints is None or station.model is None:
         return None
@@ -106,8 +105,6 @@ def surface_height_m(station: Station, xy_m, radius_m: float = 0.008, max_height
     (a ray cast down the column onto the depth surface). 0.0 for the bare board; `unseen` when no
     height at (x, y), not even the board's, is seen (e.g. a column whose top is outside the image and
     whose body hides its base); NotCalibrated without a calibration; ValueError without depth."""
-    from armlab.vision.geometry import backproject, project_points, transform_points
-
     calibration = station.calibration
     if calibration is None:
         raise NotCalibrated("measuring a height")

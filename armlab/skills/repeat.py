@@ -20,7 +20,15 @@ import numpy as np
 from armlab.errors import CommandRefused
 from armlab.motion.blend import Limits, Run, plan_run, plan_stop
 from armlab.skills.repeat_plan import (
-    HOME_LABEL, CyclePlan, RepeatSettings, Step, checked_run, plan_cycle, plan_ease_in, plan_transfer, station_limits,
+    HOME_LABEL,
+    CyclePlan,
+    RepeatSettings,
+    Step,
+    checked_run,
+    plan_cycle,
+    plan_ease_in,
+    plan_transfer,
+    station_limits,
     tick_s,
 )
 from armlab.station.core import Station
@@ -143,7 +151,9 @@ class _Runner:
         total = self.cycles or 0
         fraction = (self.cycle + min(1.0, max(0.0, (now - self.anchor_s - self.cycle * plan.cycle_s) / plan.cycle_s))) / total if total else 0.0
         cycles_text = f"{self.cycles}" if self.cycles is not None else "∞"
-        self.ctx.progress(min(fraction, 1.0), f"cycle {min(self.cycle + 1, self.cycles or self.cycle + 1)}/{cycles_text}, waypoint {self.waypoint + 1}/{len(self.program.waypoints)}")
+        cycle = min(self.cycle + 1, self.cycles or self.cycle + 1)
+        self.ctx.progress(min(fraction, 1.0),
+                          f"cycle {cycle}/{cycles_text}, waypoint {self.waypoint + 1}/{len(self.program.waypoints)}")
 
     # Moves with pause, step and speed changes -------------------------------------------------------
 

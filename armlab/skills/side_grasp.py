@@ -26,6 +26,14 @@ from functools import lru_cache
 
 import numpy as np
 
+from armlab.devices.finger_gripper import load_finger_gripper_outline
+from armlab.kinematics import Unreachable
+from armlab.motion import GripperStep, TrajectoryStep, check_trajectory, plan_joint_move
+from armlab.motion.cartesian import plan_vertical_segment
+from armlab.motion.clearance import box_around, first_collision
+from armlab.motion.line import plan_line_segment
+from armlab.motion.safety import UnsafeTrajectory
+from armlab.station.arm_info import station_gripper_type
 from armlab.station.core import Station
 
 PITCH_STEP_RAD = math.radians(5.0)
@@ -80,12 +88,9 @@ def gripper_rotation(model, pitch_rad: float, bearing: float) -> np.ndarray:
 
 @lru_cache(maxsize=1)
 def gripper_outline():
-    """The RX200 finger gripper's palm and fingers around the finger plane (armlab.devices.sim.mjcf's
+    """The RX200 finger gripper's palm and fingers around the finger plane (armlab.devices.finger_gripper's
     FingerGripperOutline, from config/arms/rx200.yaml and config/sim.yaml: the sizes the simulation builds)."""
-    from armlab.devices.sim.config import load_sim_config
-    from armlab.devices.sim.mjcf import ArmGeometry, finger_gripper_outline
-
-    return finger_gripper_outline(ArmGeometry.load("rx200"), load_sim_config())
+    return load_finger_gripper_outline("rx200")
 
 
 def lowest_below_gripper_point_m(pitch_rad: float) -> float:
@@ -155,10 +160,6 @@ def _check(station: Station, trajectories: list, boxes: list, grasp: SideGrasp |
            block_boxes: list | None = None, link_radius_m: float = LINK_RADIUS_M) -> None:
     """Limits and table for every trajectory; links and the gripper's sides against boxes; the held
     block against block_boxes."""
-    from armlab.motion import check_trajectory
-    from armlab.motion.clearance import first_collision
-    from armlab.motion.safety import UnsafeTrajectory
-
     model = station.model
     for trajectory in trajectories:
         check_trajectory(model, trajectory, clearance_m=station.motion_config.board_clearance_m)
@@ -174,24 +175,18 @@ def _check(station: Station, trajectories: list, boxes: list, grasp: SideGrasp |
 
 
 def _vertical(station: Station, q_start, z_m: float, pitch_rad: float):
-    from armlab.motion.cartesian import plan_vertical_segment
-
     c = station.motion_config
     return plan_vertical_segment(station.model, q_start, z_m, pitch_rad=pitch_rad, yaw_rad=None, speed_m_s=c.vertical_speed_m_s,
                                  accel_m_s2=c.vertical_accel_m_s2, rate_hz=c.sample_rate_hz)
 
 
 def _line(station: Station, q_start, goal_m, pitch_rad: float):
-    from armlab.motion.line import plan_line_segment
-
     c = station.motion_config
     return plan_line_segment(station.model, q_start, goal_m, pitch_rad, None, speed_m_s=c.vertical_speed_m_s,
                              accel_m_s2=c.vertical_accel_m_s2, rate_hz=c.sample_rate_hz)
 
 
 def _joint_move(station: Station, q_a, q_b):
-    from armlab.motion import plan_joint_move
-
     c = station.motion_config
     return plan_joint_move(np.asarray(q_a, float), np.asarray(q_b, float), station.model, c.move_time_s, c.accel_time_s,
                            c.sample_rate_hz)
@@ -208,8 +203,6 @@ def plan_side_pick(station: Station, top_center_m, edge_m: float, boxes: list, p
     """Steps to pick the block whose top-face centre is top_center_m at pitch_rad with the fingers
     closing horizontally: open, move above the grasp point, straight down, grasp, straight up
     (approach_height_m). boxes: the other objects. Also how the block will sit in the gripper."""
-    from armlab.motion import GripperStep, TrajectoryStep
-
     model = station.model
     config = station.motion_config
     q_start = station.joints_rad() if q_start is None else np.asarray(q_start, float)
@@ -263,9 +256,6 @@ def _exit(station: Station, q_from, then_rad: np.ndarray, boxes: list) -> list:
     every box and the new tower (none if the straight move already does). Folding the arm straight
     down from beside a tall tower swings the elbow into it, so first the waist alone turns away (every
     arm point keeps its distance from the base axis, so the arm slides along the tower, not into it)."""
-    from armlab.kinematics import Unreachable
-    from armlab.motion.safety import UnsafeTrajectory
-
     toward = 1.0 if then_rad[0] >= q_from[0] else -1.0
     candidates = [None] + [q_from + np.array([sign * turn, 0.0, 0.0, 0.0, 0.0]) for turn in EXIT_TURNS_RAD for sign in (toward, -toward)]
     problem = ""
@@ -289,10 +279,6 @@ def plan_side_place(station: Station, surface_m, edge_m: float, grasp: SideGrasp
     point, release, straight out. boxes: obstacles other than what stands at surface_m; the column
     under surface_m is added (the links keep clear of all but its top block, the held block of all).
     then_rad: where the arm goes next (the park pose): the plan ends where a joint move there is clear."""
-    from armlab.kinematics import Unreachable
-    from armlab.motion import GripperStep, TrajectoryStep
-    from armlab.motion.clearance import box_around
-
     model = station.model
     pitch = grasp.pitch_rad if pitch_rad is None else pitch_rad
     q_start = station.joints_rad() if q_start is None else np.asarray(q_start, float)
@@ -354,10 +340,6 @@ def plan_side_pick_place(station: Station, top_center_m, surface_m, edge_m: floa
     """The pick steps and grasp for the first of pitches_rad at which both the pick (from q_start) and
     the place after it (plan_side_place from the pick's end) plan and pass every check. Fingers only:
     another gripper type is refused (Unreachable) before anything is planned."""
-    from armlab.kinematics import Unreachable
-    from armlab.motion import TrajectoryStep
-    from armlab.station.arm_info import station_gripper_type
-
     if station_gripper_type(station) != "fingers":
         raise Unreachable(f"a side grasp needs fingers closing on the block's sides: this station's gripper is a "
                           f"{station_gripper_type(station)} gripper", "out of reach")
@@ -377,8 +359,6 @@ def plan_side_pick_place(station: Station, top_center_m, surface_m, edge_m: floa
 def reachable_pitches(station: Station, top_center_m, surface_m, edge_m: float) -> list[float]:
     """Pitches (steepest first, 5° steps from top-down to MIN_PITCH_RAD) at which both the grasp of the
     block at top_center_m and its release on surface_m are within the arm's reach (IK only: no obstacles)."""
-    from armlab.kinematics import Unreachable
-
     model = station.model
     found = []
     pitch = math.pi / 2
@@ -401,8 +381,6 @@ def reachable_pitches(station: Station, top_center_m, surface_m, edge_m: float) 
 
 
 def _reaches(model, point_m, pitch_rad: float) -> bool:
-    from armlab.kinematics import Unreachable
-
     try:
         model.ik(point_m, pitch=pitch_rad, yaw=None, q_seed=_seed(model.home_rad))
     except Unreachable:

@@ -5,6 +5,7 @@ guesses from the number of joints or the arm's name."""
 from __future__ import annotations
 
 from armlab.motion.pose_path import holds_full_pose
+from armlab.workcell import load_workcell
 
 NO_ARM_REASON = "this station has no arm (perception only: calibrate, detections, click → world)"
 
@@ -20,7 +21,6 @@ def station_gripper_type(station) -> str:
     workcell_name = getattr(getattr(station, "config", None), "workcell", None)
     if not workcell_name:
         return "fingers"
-    from armlab.workcell import load_workcell
 
     return load_workcell(workcell_name).gripper.type
 

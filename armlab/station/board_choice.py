@@ -8,8 +8,10 @@ simulated board tag36h11, and a recording says nothing about which it holds. Its
 
 from __future__ import annotations
 
-from armlab.config import config_dir, read_config_file, validate_config
+from armlab.config import config_dir, read_config_file, resolve_config_path, validate_config
 from armlab.errors import ConfigError
+from armlab.vision import detect_tags, load_perception_config
+from armlab.workcell import Workcell, load_workcell
 
 AUTO = "auto"
 MIN_TAGS = 3  # as many board tags as a calibration needs
@@ -22,9 +24,6 @@ def known_boards() -> list[str]:
 
 def workcell_with_board(workcell: str, board: str):
     """The workcell (config/workcells/<workcell>.yaml) with its board tags taken from config/boards/<board>.yaml."""
-    from armlab.config import resolve_config_path
-    from armlab.workcell import Workcell, load_workcell
-
     if board not in known_boards():
         raise ConfigError(f"board '{board}': no config/boards/{board}.yaml (known: {', '.join(known_boards()) or 'none'})")
     path = resolve_config_path(load_workcell(workcell).name, "workcells")
@@ -37,8 +36,6 @@ def board_perception_config(workcell: str, board: str | None, color_bgr=None):
     board None: the workcell's tags. A name: config/boards/<name>.yaml. "auto": the workcell's tags if
     `color_bgr` shows at least MIN_TAGS of them, else the first board in config/boards/ whose tags it shows,
     else the workcell's (the note says none was seen)."""
-    from armlab.vision import detect_tags, load_perception_config
-
     if board is None:
         return None, None
     if board != AUTO:

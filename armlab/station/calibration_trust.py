@@ -3,7 +3,8 @@ check (armlab.vision.drift): a calibration restored at start is held back until 
 it (status calibration_state 'checking' -> 'trusted', or 'rejected' with the camera-moved warning),
 the calibration in use is 'untrusted' while the check does not confirm it (the camera moved, or too few
 board tags are where it puts them): grabs, drops and autonomous jobs are then refused with the reason
-until the check confirms it again or the operator recalibrates (issue 18 item 3); and, when the operator enabled it, a calibration the camera has moved away from is redone from the
+until the check confirms it again or the operator recalibrates (issue 18 item 3); and, when the operator
+enabled it, a calibration the camera has moved away from is redone from the
 board tags while the station is idle (never while a job runs, the arm moves or the latch is set; never
 with too few board tags in view: the warning then stays).
 
@@ -22,8 +23,12 @@ import numpy as np
 
 from armlab.errors import CalibrationUntrusted
 from armlab.station.jobs import JobContext
+from armlab.station.perception import Perception
 from armlab.station.states import State
 from armlab.station.telemetry import tag_to_dict
+from armlab.vision import Calibration, calibrate_extrinsics, detect_tags
+from armlab.vision.calibration import project_grid
+from armlab.vision.drift import CAMERA_MOVED, board_tag_drift_px
 
 log = logging.getLogger(__name__)
 
@@ -56,9 +61,6 @@ def calibration_summary(calibration: Any, tags: Sequence, grid_px: np.ndarray) -
 def calibrate_from_board_tags(station: Any, frame: Any) -> tuple[Any, dict]:
     """A new Calibration from the board tags of `frame` (cross-checked with its depth) and its wire summary;
     CalibrationError saying why when the tags cannot give one."""
-    from armlab.vision import calibrate_extrinsics, detect_tags
-    from armlab.vision.calibration import project_grid
-
     intrinsics = station.intrinsics.current()  # measured for this camera, else its own (as the operator's calibration)
     tags = detect_tags(frame.color_bgr, station.perception_config)
     calibration = calibrate_extrinsics(frame.color_bgr, intrinsics, station.perception_config, frame.depth_mm, tags=tags)
@@ -81,8 +83,6 @@ class CalibrationTrust:
 
     def _restore_calibration(self) -> None:
         """Load the newest saved calibration as a candidate: checked against the board tags before use."""
-        from armlab.vision import Calibration
-
         data = self.store.latest_calibration()
         if data is None:
             return
@@ -97,10 +97,6 @@ class CalibrationTrust:
             self._restored_at_s = time.time()
         self.events.add("info", "saved calibration restored, checking it against the board tags before use")
         if self.synchronous:  # no perception thread: one look now
-            from armlab.station.perception import Perception
-            from armlab.vision.drift import CAMERA_MOVED, board_tag_drift_px
-            from armlab.vision.tags import detect_tags
-
             frame = self.sim.capture_next_frame()
             tags = tuple(detect_tags(frame.color_bgr, self.perception_config))
             drift_px = board_tag_drift_px(list(tags), calibration, self.perception_config)

@@ -8,6 +8,8 @@ from typing import Literal
 from pydantic import Field, field_validator, model_validator
 
 from armlab.config import StrictModel, config_dir, load_config
+from armlab.errors import ConfigError
+from armlab.workcell import DEFAULT_WORKCELL, known_workcells, load_workcell
 
 
 class SimStartConfig(StrictModel):
@@ -61,8 +63,6 @@ class StationConfig(StrictModel):
         """arm := the workcell's arm; an `arm:` that contradicts the workcell is an error naming both."""
         if not isinstance(data, dict):
             return data
-        from armlab.errors import ConfigError
-        from armlab.workcell import DEFAULT_WORKCELL, load_workcell
 
         name = data.get("workcell", DEFAULT_WORKCELL)
         if not isinstance(name, str):
@@ -86,8 +86,6 @@ class StationConfig(StrictModel):
 
 
 def _workcells_with_arm(arm: str) -> list[str]:
-    from armlab.workcell import known_workcells, load_workcell
-
     names = []
     for name in known_workcells():
         try:

@@ -36,6 +36,7 @@ from armlab.station.checks import checked_joints
 from armlab.station.colors import StationColors
 from armlab.station.config import StationConfig
 from armlab.station.intrinsics import CameraIntrinsics
+from armlab.station.job_control import JobControls
 from armlab.station.jobs import Job, JobContext, start_job_thread
 from armlab.station.latch import Latch
 from armlab.station.lease import ControlLease
@@ -45,11 +46,12 @@ from armlab.station.perceiving import Perceiving
 from armlab.station.perception import DEVICE_ERRORS, FrameSource, Perception, PerceptionLoop
 from armlab.station.slots import EventLog, NewestSlot
 from armlab.station.states import ARM_COMMANDS, JOB_STATES, State, after_event, allowed_commands, next_state
-from armlab.station.job_control import JobControls
 from armlab.station.teach import TeachCommands
 from armlab.station.telemetry import TelemetryPublisher, gripper_pose_from_matrix
 from armlab.station.watch import DeviceWatch
 from armlab.store import Store
+from armlab.vision import load_perception_config
+from armlab.workcell import load_workcell_motion_config
 
 log = logging.getLogger(__name__)
 
@@ -80,7 +82,8 @@ _UNLATCHED = ("estop",)  # the only command the latch and the lease never refuse
 
 
 class Station(Latch, MotionGate, ManualCommands, TeachCommands, JobControls, Perceiving, CalibrationTrust):
-    """The control station's gate (its parts: latch.py, motion.py, manual.py, teach.py, job_control.py, perceiving.py). Backends are injected; `sim` is the SimWorkcell when simulated (else None).
+    """The control station's gate (its parts: latch.py, motion.py, manual.py, teach.py, job_control.py, perceiving.py).
+    Backends are injected; `sim` is the SimWorkcell when simulated (else None).
 
     model: the armlab.kinematics ArmModel of the arm; perception_config: armlab.vision's config.
     synchronous: the sim runs in fast mode and nothing runs on threads (evaluations); frames are
@@ -165,8 +168,6 @@ class Station(Latch, MotionGate, ManualCommands, TeachCommands, JobControls, Per
             if not device.is_connected:
                 device.connect()
         if self.perception_config is None:
-            from armlab.vision import load_perception_config
-
             self.perception_config = load_perception_config(workcell=self.config.workcell)  # the station's board and tags
         self.intrinsics.restore()
         self.colors.restore()
@@ -350,8 +351,6 @@ class Station(Latch, MotionGate, ManualCommands, TeachCommands, JobControls, Per
         """armlab.motion's MotionConfig (config/motion.yaml with the workcell's `motion:` overrides, unless one
         was injected)."""
         if self._motion_config is None:
-            from armlab.workcell import load_workcell_motion_config
-
             self._motion_config = load_workcell_motion_config(self.config.workcell)
         return self._motion_config
 

@@ -4,9 +4,15 @@ from __future__ import annotations
 
 from pathlib import Path
 
+from armlab.devices.factory import make_devices
+from armlab.devices.none import NoArm, NoGripper
+from armlab.errors import ConfigError
+from armlab.scene import generate_scene
+from armlab.station.board_choice import AUTO, board_perception_config
 from armlab.station.config import StationConfig
 from armlab.station.core import Station
 from armlab.store import Store
+from armlab.workcell import load_workcell_arm
 
 
 class SimStation:
@@ -33,8 +39,10 @@ class SimStation:
 
 def make_sim_station(config: StationConfig | None = None, db_path: str | Path | None = None) -> SimStation:
     """Start a real-time SimWorkcell (seed and starting scene from config.sim) and a started Station on it."""
-    from armlab.devices.sim import SimWorkcell, SimWorkcellConfig
-    from armlab.workcell import load_workcell_arm
+    from armlab.devices.sim import (  # MuJoCo only when simulating (tests/test_layering.py)
+        SimWorkcell,
+        SimWorkcellConfig,
+    )
 
     config = config or StationConfig()
     cell = SimWorkcell(SimWorkcellConfig(realtime=True, seed=config.sim.seed, camera_fps=config.sim.camera_fps,
@@ -42,8 +50,6 @@ def make_sim_station(config: StationConfig | None = None, db_path: str | Path | 
     cell.start()
     try:
         if config.sim.event:
-            from armlab.scene import generate_scene
-
             cell.set_scene(generate_scene(config.sim.event, level=config.sim.level, seed=config.sim.scene_seed,
                                           workcell=config.workcell))
         store = Store(db_path if db_path is not None else config.database_file())
@@ -98,16 +104,10 @@ def make_device_station(
     error; whatever was opened is closed. board: the board's tags (armlab.station.board_choice): None the
     workcell's, a config/boards/ name, or "auto" (the known board whose tags the first frame shows).
     """
-    from armlab.devices.factory import make_devices
-    from armlab.devices.none import NoArm, NoGripper
-    from armlab.workcell import load_workcell_arm
-
     config = config or StationConfig()
     devices = make_devices(arm, gripper, camera)
     has_arm = not isinstance(devices.arm, NoArm)
     if not has_arm and not isinstance(devices.gripper, NoGripper):
-        from armlab.errors import ConfigError
-
         raise ConfigError(f"gripper '{gripper}': a station with no arm has no gripper either (use gripper 'none')")
     try:
         perception_config, board_note = _board(config.workcell, board, devices.camera)
@@ -127,8 +127,6 @@ def make_device_station(
 
 def _board(workcell: str, board: str | None, camera):
     """The perception config for `board` (None: the workcell's own) and a note; "auto" connects the camera to look."""
-    from armlab.station.board_choice import AUTO, board_perception_config
-
     frame = None
     if board == AUTO:
         if not camera.is_connected:

@@ -20,7 +20,12 @@ from typing import Any
 import numpy as np
 
 from armlab.devices.camera import Camera, Intrinsics
-from armlab.vision.intrinsics_capture import IntrinsicsCapture, IntrinsicsConfig, IntrinsicsRejected, load_intrinsics_config
+from armlab.vision.intrinsics_capture import (
+    IntrinsicsCapture,
+    IntrinsicsConfig,
+    IntrinsicsRejected,
+    load_intrinsics_config,
+)
 
 OUTDATED_NOTE = "the camera calibration was solved with other intrinsics: calibrate again to use these"
 

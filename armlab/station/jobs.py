@@ -26,7 +26,7 @@ class JobCancelled(Exception):
 class JobContext:
     """What a running job sees: its cancel flag and a progress reporter."""
 
-    job: "Job"
+    job: Job
     in_cleanup: bool = False  # True while the job's cleanup runs after a cancel
 
     def check(self) -> None:

@@ -13,6 +13,11 @@ import numpy as np
 
 from armlab.devices.arm import JointTrajectory
 from armlab.errors import ArmMoving, CommandRefused, NeedsConfirmation, NotController
+from armlab.motion import plan_joint_move
+from armlab.motion.blend import arm_limits, plan_run
+from armlab.motion.gripper_step import StepSpeeds, plan_gripper_step
+from armlab.motion.jog import checked_jog_velocity, plan_jog
+from armlab.motion.pose_path import holds_full_pose, solve_pose_move
 from armlab.station.checks import checked_moving_time, checked_position
 from armlab.station.states import State, allowed_commands
 
@@ -24,8 +29,6 @@ class ManualCommands:
 
     def plan_move(self, q_goal_rad, moving_time_s: float | None = None) -> JointTrajectory:
         """A checked joint move from the current position (ValueError/UnsafeTrajectory: nothing moves)."""
-        from armlab.motion import plan_joint_move
-
         q_goal = self.checked_joints(q_goal_rad)
         trajectory = plan_joint_move(
             self.start_position(), q_goal, self.model, moving_time_s=checked_moving_time(moving_time_s, self.config.max_moving_time_s)
@@ -38,9 +41,6 @@ class ManualCommands:
         synchronised trapezoid when the handover is at rest, else a jerk-limited blend (ruckig) from its
         position, velocity and acceleration within the arm's limits, ending at rest on the goal (moving_time_s:
         its least duration). ValueError when none can be planned. Not checked (the splice is)."""
-        from armlab.motion import plan_joint_move
-        from armlab.motion.blend import arm_limits, plan_run
-
         q_goal = self.checked_joints(q_goal_rad)
         moving_time = checked_moving_time(moving_time_s, self.config.max_moving_time_s)
         if handover.at_rest:
@@ -88,7 +88,6 @@ class ManualCommands:
         for name, angle in (("pitch_rad", pitch_rad), ("yaw_rad", yaw_rad)):
             if angle is not None and not math.isfinite(float(angle)):
                 raise ValueError(f"{name} must be finite")
-        from armlab.motion.pose_path import holds_full_pose, solve_pose_move
 
         if holds_full_pose(self.model):  # six joints or more: a full pose (ik_pose), the tool's heading kept without a yaw
             return solve_pose_move(self.model, position, pitch_rad, yaw_rad, self.joints_rad())
@@ -106,9 +105,6 @@ class ManualCommands:
     def jog(self, velocity_rad_s, source: str | None = None, speed_percent: float = 100.0) -> JointTrajectory:
         """Hold-to-run: move at these joint velocities (rad/s, scaled by speed_percent) for motion jog_hold_s,
         then stop by itself. Sending it again (or heartbeat()) within jog_hold_s keeps it going; zeros ramp down to rest."""
-        from armlab.motion.blend import arm_limits
-        from armlab.motion.jog import checked_jog_velocity, plan_jog
-
         self.require_arm("jog")
         config = self.motion_config
         allowed = np.minimum(np.asarray(self.model.velocity_limit_rad_s, dtype=float), config.jog_max_speed_rad_s)
@@ -140,8 +136,6 @@ class ManualCommands:
         Refused before anything moves: ArmMoving while the arm still moves, StepRefused/Unreachable (the
         reason) when the step cannot keep the gripper's orientation and line. A step that follows this
         station's previous step starts from that step's commanded end (the servos' sag does not add up)."""
-        from armlab.motion.gripper_step import StepSpeeds, plan_gripper_step
-
         scale = checked_speed_percent(speed_percent) / 100.0
         self.allowed_or_raise("jog", source)
         if self.arm.is_moving():

@@ -18,7 +18,13 @@ import numpy as np
 
 from armlab.devices.arm import JointTrajectory
 from armlab.errors import ArmMoving, CommandRefused
-from armlab.motion.handover import Handover
+from armlab.motion import check_trajectory
+from armlab.motion.blend import arm_limits, plan_stop
+from armlab.motion.clearance import lowest_corner_m, self_collision
+from armlab.motion.gripper_step import FingerBox
+from armlab.motion.handover import Handover, continuity_problem, reference_velocity, splice, take_over, trimmed
+from armlab.motion.safety import UnsafeTrajectory, check_start
+from armlab.station.arm_info import station_gripper_type
 from armlab.station.jobs import JobCancelled, JobContext
 from armlab.station.states import JOB_STATES, allowed_commands
 
@@ -82,8 +88,6 @@ class MotionGate:
     def check_motion(self, trajectory: JointTrajectory) -> None:
         """The full safety check of a trajectory (UnsafeTrajectory says why): joint, velocity and
         acceleration limits, the table, the workspace box, the per-step jump. No lock needed (pure)."""
-        from armlab.motion import check_trajectory
-
         config = self.motion_config
         # The table itself (no clearance): planners keep their own board_clearance_m; the straight joint-space
         # move from the sleep pose home passes the gripper point within 1 mm of the board.
@@ -99,8 +103,6 @@ class MotionGate:
 
     def check_poses(self, poses_rad) -> None:
         """check_pose of every pose, the error naming the 1-based waypoint (programs, drafts)."""
-        from armlab.motion.safety import UnsafeTrajectory
-
         for index, q in enumerate(poses_rad, start=1):
             try:
                 self.check_pose(q)
@@ -141,9 +143,6 @@ class MotionGate:
         """UnsafeTrajectory (with the reason and when) if the fingers (a box around them, or the suction cup's
         body) go into the board, or the gripper end of the arm (gripper point, finger tips, the held block) into
         the arm's own base or upper arm, at any sample (armlab.motion.clearance). No lock needed (pure)."""
-        from armlab.motion.clearance import lowest_corner_m, self_collision
-        from armlab.motion.safety import UnsafeTrajectory
-
         config, positions, times = self.motion_config, trajectory.positions_rad, trajectory.times_s
         sample, lowest_m, gripper_z_m = lowest_corner_m(self.model, positions, self.finger_box().corners_m())
         if lowest_m < -1e-6:
@@ -161,9 +160,6 @@ class MotionGate:
     def finger_box(self):
         """The box the gripper occupies beyond the wrist (armlab.motion.gripper_step.FingerBox): the open fingers
         from config, or the suction cup's body."""
-        from armlab.motion.gripper_step import FingerBox
-        from armlab.station.arm_info import station_gripper_type
-
         config = self.motion_config
         gripper = getattr(self.model.config, "gripper", None)
         cup = getattr(self.model.config, "suction_cup", None)
@@ -185,9 +181,6 @@ class MotionGate:
         with its start on the arm's clock (Arm.command_trajectory's start_time_s: the station's clock is the arm's),
         so a send held up after the check still continues the running curve; a motion from rest starts when the
         arm takes it, and the record follows (_started_at)."""
-        from armlab.motion.handover import continuity_problem, reference_velocity, trimmed
-        from armlab.motion.safety import check_start
-
         state = self._effective_state()
         if self._halt.is_set():
             raise CommandRefused("move", state.value, allowed_commands(state))
@@ -257,8 +250,6 @@ class MotionGate:
     def motion_handover(self, lead_s: float | None = None) -> Handover | None:
         """Where a motion replacing the commanded one takes over (lead_s, default handover_lead_s, from now),
         or None when no commanded motion is running (plan from the measured joints, at rest)."""
-        from armlab.motion.handover import take_over
-
         with self._lock:
             running = self._commanded
         if running is None:
@@ -279,8 +270,6 @@ class MotionGate:
         by side, each from a handover the next one makes late, and the CPU-bound planners starve status, the waits
         and the physics. A replaceable one (a manual move) that a newer manual move overtook while it waited its
         turn is refused unplanned (ArmMoving): it would be replaced as soon as it started."""
-        from armlab.motion.handover import splice
-
         lead = self.motion_config.handover_lead_s
         if replaceable:
             with self._lock:
@@ -317,8 +306,6 @@ class MotionGate:
     def brake_to_rest(self, ctx: JobContext | None = None) -> None:
         """Bring a motion in progress to rest on a jerk-limited stop at the arm's limits (no-op at rest), and
         wait until the arm stands still. Inside a job only while the job owns the arm."""
-        from armlab.motion.blend import arm_limits, plan_stop
-
         handover = self.motion_handover()
         if handover is None and not self.arm.is_moving():
             return

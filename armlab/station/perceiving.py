@@ -12,6 +12,7 @@ from armlab.devices.camera import Frame
 from armlab.station.jobs import JobContext
 from armlab.station.perception import Perception, analyse_frame
 from armlab.station.telemetry import block_to_dict
+from armlab.vision.pipeline import PerceptionPipeline
 
 
 class Perceiving:
@@ -70,8 +71,6 @@ class Perceiving:
 
         Synchronous mode: captured and analysed now. Otherwise: waits for the perception thread."""
         if self.synchronous:
-            from armlab.vision.pipeline import PerceptionPipeline
-
             if self._pipeline is None:
                 self._pipeline = PerceptionPipeline(self.perception_config, arm_model=self.model)
             self._pipeline.color_model = self.colors.model

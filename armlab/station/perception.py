@@ -24,6 +24,8 @@ from armlab.devices.arm import Arm
 from armlab.devices.camera import Camera, Frame
 from armlab.devices.gripper import Gripper
 from armlab.station.slots import NewestSlot
+from armlab.vision.drift import DriftMonitor
+from armlab.vision.pipeline import PerceptionPipeline
 
 log = logging.getLogger(__name__)
 
@@ -191,9 +193,6 @@ class PerceptionLoop(_Worker):
         self.period_s = 1.0 / rate_hz
 
     def _run(self) -> None:
-        from armlab.vision.drift import DriftMonitor
-        from armlab.vision.pipeline import PerceptionPipeline
-
         pipeline = PerceptionPipeline(self.config, self.arm_model)  # holds its detectors; tracks tags near calibrated spots
         drift = DriftMonitor(self.config.calibration)  # the camera-moved check of the calibration in use
         version, surface = 0, None

@@ -8,14 +8,13 @@ import math
 
 import numpy as np
 
+from armlab.scene import as_workcell
 from armlab.tasks.runner import Move, Plan, TaskRunner, near
 
 SPOT_PITCH_M = 0.045
 
 
 def make_policy(level: int | None, params: dict, runner: TaskRunner):
-    from armlab.scene import as_workcell
-
     bin_ = as_workcell(getattr(runner.station.config, "workcell", None)).bin  # the station's
     xs = np.arange(bin_.x_range_m[0] + 0.025, bin_.x_range_m[1] - 0.02 + 1e-9, SPOT_PITCH_M)
     ys = np.arange(bin_.y_range_m[0] + 0.025, bin_.y_range_m[1] - 0.02 + 1e-9, SPOT_PITCH_M)

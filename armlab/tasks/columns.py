@@ -11,6 +11,7 @@ from __future__ import annotations
 from collections.abc import Callable
 from dataclasses import dataclass, field
 
+from armlab import skills
 from armlab.tasks.runner import near
 
 COLUMN_RADIUS_M = 0.03  # a detection this close to the base (x-y) is the column's top (a tall column leans a little)
@@ -85,6 +86,4 @@ class Column:
 def unseen_as_none(runner) -> Callable[[tuple[float, float]], float | None]:
     """The runner's height measurement, None where the camera sees nothing at (x, y), not even the board
     (for Column.observe)."""
-    from armlab import skills
-
     return lambda xy_m: skills.surface_height_m(runner.station, xy_m, unseen=None)

@@ -10,7 +10,16 @@ import tempfile
 import time
 from pathlib import Path
 
+from armlab import skills
+from armlab.scene import generate_scene
+from armlab.station.config import StationConfig
+from armlab.station.core import Station
 from armlab.station.jobs import jsonable
+from armlab.store import Store
+from armlab.tasks.judge import EVENT_LIMITS_S, judge
+from armlab.tasks.registry import checked_request, start_auto
+from armlab.tasks.scorers import score_job
+from armlab.workcell import load_workcell_arm
 
 CALIBRATION_TIMEOUT_S = 60.0
 JOB_TIMEOUT_S = 1800.0  # wall time; a job that runs longer is cancelled and scored as it stands
@@ -19,8 +28,6 @@ JOB_TIMEOUT_S = 1800.0  # wall time; a job that runs longer is cancelled and sco
 def episode_scene(event: str, level: int | None, seed: int, workcell=None):
     """The starting scene of a headless run on `workcell` (None = the default): the event's generator;
     stack_here (no levels, no generator of its own) stacks pick_sort L2's six blocks."""
-    from armlab.scene import generate_scene
-
     if event == "stack_here":
         return generate_scene("pick_sort", level=2, seed=int(seed), workcell=workcell)
     return generate_scene(event, level=level, seed=int(seed), workcell=workcell)
@@ -29,9 +36,6 @@ def episode_scene(event: str, level: int | None, seed: int, workcell=None):
 def score_run(event: str, level: int | None, truth: dict, sim_time_s: float, gripper_path_m, workcell=None):
     """The judge's score for the competition events (DESIGN §7), armlab.tasks.scorers' for the others
     (on `workcell`: its places, block tags and sizes; None = the default)."""
-    from armlab.tasks.judge import EVENT_LIMITS_S, judge
-    from armlab.tasks.scorers import score_job
-
     if event in EVENT_LIMITS_S:
         feeder = truth.get("feeder")
         available = None if not feeder else sum(o["size"] == "large" for o in truth["objects"]) + int(feeder.get("remaining", 0))
@@ -48,13 +52,10 @@ def run_episode(event: str, level: int | None, seed: int, *, keep_truth: bool = 
     JSON-ready dict: {event, level, seed, workcell, points, max_points, sim_time_s, wall_time_s, breakdown,
     failures, full, within_limit} (+ truth with gripper_path_m when keep_truth). realism: real or ideal
     simulation (None: config/sim.yaml's)."""
-    from armlab import skills
-    from armlab.devices.sim import SimWorkcell, SimWorkcellConfig
-    from armlab.station.config import StationConfig
-    from armlab.station.core import Station
-    from armlab.store import Store
-    from armlab.tasks.registry import checked_request, start_auto
-    from armlab.workcell import load_workcell_arm
+    from armlab.devices.sim import (  # MuJoCo only when simulating (tests/test_layering.py)
+        SimWorkcell,
+        SimWorkcellConfig,
+    )
 
     checked_request(event, level, None)
     wall_start = time.monotonic()

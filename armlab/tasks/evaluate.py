@@ -14,6 +14,13 @@ import time
 import traceback
 from collections.abc import Iterator, Sequence
 
+from armlab.errors import ConfigError
+from armlab.tasks.episode import episode_scene, run_episode
+from armlab.tasks.judge import EVENT_LIMITS_S
+from armlab.tasks.registry import JOBS, JobUnsupported, check_supported, checked_request
+from armlab.tasks.scorers import SCORED_JOBS
+from armlab.workcell import load_workcell
+
 MAX_SEEDS = 10_000  # per evaluation; a larger sweep is several evaluations
 MAX_SEED = 2**32 - 1  # seeds are unsigned 32-bit, like most simulators' seeds
 MAX_WORKERS = 256
@@ -58,8 +65,6 @@ def parse_seeds(text: str) -> list[int]:
 def check_request(event: str, level: int | None, workcell: str | None = None) -> int | None:
     """The level to run `event` at; EvalError for an unknown job or workcell, a missing or out-of-range
     level, or a job the headless episode cannot run yet (no scene generator or judge for it)."""
-    from armlab.tasks.registry import JOBS, checked_request
-
     if event in JOBS and JOBS[event].levels and level is None:
         levels = ", ".join(map(str, JOBS[event].levels))
         raise EvalError(f"job '{event}' has levels {levels}; give --level")
@@ -68,14 +73,10 @@ def check_request(event: str, level: int | None, workcell: str | None = None) ->
     except ValueError as error:
         raise EvalError(str(error)) from None
     if workcell is not None:
-        from armlab.errors import ConfigError
-        from armlab.workcell import load_workcell
-
         try:
             load_workcell(workcell).check_arm_fits()
         except ConfigError as error:
             raise EvalError(str(error)) from None
-    from armlab.tasks.registry import JobUnsupported, check_supported
 
     try:
         check_supported(event, workcell)
@@ -90,10 +91,6 @@ def check_request(event: str, level: int | None, workcell: str | None = None) ->
 def episode_unsupported(event: str, level: int | None, workcell: str | None = None) -> str | None:
     """Why a headless episode of (event, level) cannot run yet, or None when it can: the episode needs a
     scene generator for the pair and a judge for the event. Cheap (generates one scene, judges nothing)."""
-    from armlab.tasks.episode import episode_scene
-    from armlab.tasks.judge import EVENT_LIMITS_S
-    from armlab.tasks.scorers import SCORED_JOBS
-
     try:
         episode_scene(event, level, 0, workcell)
     except (ValueError, TypeError) as error:
@@ -107,8 +104,6 @@ def run_one(event: str, level: int | None, seed: int, keep_truth: bool = False, 
             realism: str | None = None) -> dict:
     """One episode, in whichever process runs it; an exception becomes a crashed run with no points."""
     os.environ.setdefault("MUJOCO_GL", "egl")
-    from armlab.tasks.episode import run_episode
-
     started, cpu_started = time.monotonic(), time.process_time()
     try:
         result = run_episode(event, level, seed, keep_truth=keep_truth, workcell=workcell, realism=realism)

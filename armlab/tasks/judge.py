@@ -31,12 +31,13 @@ Readings chosen where §7 leaves a choice (one line each):
 from __future__ import annotations
 
 import math
-from collections.abc import Mapping, Sequence
+from collections.abc import Mapping
 from dataclasses import dataclass
 
 import numpy as np
 
 from armlab.scene import COLORS, EVENTS, WORKCELL_BOUND_M, Scene, SceneObject
+from armlab.vision import load_perception_config
 
 # Simulated seconds allowed per event (DESIGN §7).
 EVENT_LIMITS_S: dict[str, float] = {
@@ -200,8 +201,6 @@ def tower_points(height: int) -> int:
 
 def board_tag_centres_m(workcell: str | None = None) -> tuple[tuple[float, float], ...]:
     """pick_stack's tag centres (x, y), from the board layout in configuration (`workcell`'s; None = the default)."""
-    from armlab.vision import load_perception_config  # config lookup kept here, in one place
-
     return tuple((float(x), float(y)) for x, y in load_perception_config(workcell=workcell).tags.board_tags.values())
 
 

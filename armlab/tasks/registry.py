@@ -6,9 +6,21 @@ import math
 from collections.abc import Callable
 from dataclasses import dataclass
 
+from armlab.scene import COLORS, SIZES, as_workcell
 from armlab.station.core import NotCalibrated, Station
 from armlab.station.jobs import Job, JobContext
-from armlab.tasks import clear_table, line_up, pick_sort, pick_stack, sort_by_tag, sort_stack, stack_here, stack_high, to_the_sky
+from armlab.tasks import (
+    clear_table,
+    line_up,
+    pick_sort,
+    pick_stack,
+    sort_by_tag,
+    sort_stack,
+    stack_here,
+    stack_high,
+    to_the_sky,
+)
+from armlab.tasks.judge import GRIPPER_BOX_M as box
 from armlab.tasks.runner import Plan, TaskRunner
 from armlab.workcell import Workcell
 
@@ -20,8 +32,6 @@ class JobUnsupported(ValueError):
 def _tags_in_gripper_box(workcell: Workcell) -> str | None:
     """pick_stack's columns stand on the two board tags nearest the base, with the gripper kept inside
     the judge's fixed box (§7, the RX200 board's): both tags must lie inside it."""
-    from armlab.tasks.judge import GRIPPER_BOX_M as box
-
     tags = sorted(workcell.board_tags.centres_m.values(), key=lambda xy: (math.hypot(*xy), xy[0]))[:2]
     outside = [xy for xy in tags if not (abs(xy[0]) <= box["x_abs_max"] and box["y_min"] <= xy[1] <= box["y_max"])]
     if not outside:
@@ -113,7 +123,6 @@ def checked_request(job: str, level, params) -> tuple[JobSpec, int | None, dict]
             raise ValueError(f"parameter {name!r} of job '{job}' must be {wanted.__name__}, got {type(value).__name__}")
         if wanted is float and not (math.isfinite(value) and abs(value) <= 1.0):
             raise ValueError(f"parameter {name!r} of job '{job}' must be a finite position within 1 m, got {value!r}")
-    from armlab.scene import COLORS, SIZES
 
     if params.get("color") not in (None, *COLORS) or params.get("size") not in (None, *SIZES):
         raise ValueError(f"color must be one of {', '.join(COLORS)} and size one of {', '.join(SIZES)}")
@@ -123,8 +132,6 @@ def checked_request(job: str, level, params) -> tuple[JobSpec, int | None, dict]
 def unsupported_reason(job: str, workcell: Workcell | str | None = None) -> str | None:
     """What the workcell (a Workcell, a name, None = the default) lacks for the job, or None when the job
     can run there. Unknown jobs are checked_request's (None here)."""
-    from armlab.scene import as_workcell
-
     spec = JOBS.get(job)
     if spec is None:
         return None
@@ -137,8 +144,6 @@ def unsupported_reason(job: str, workcell: Workcell | str | None = None) -> str 
 
 def check_supported(job: str, workcell: Workcell | str | None = None) -> None:
     """JobUnsupported (a ValueError) naming the job, the workcell and what it lacks, unless the job runs there."""
-    from armlab.scene import as_workcell
-
     reason = unsupported_reason(job, workcell)
     if reason:
         raise JobUnsupported(f"job '{job}' is not available on workcell '{as_workcell(workcell).name}': it needs {reason}")

@@ -16,11 +16,17 @@ import numpy as np
 
 from armlab import skills
 from armlab.kinematics import Unreachable
-from armlab.motion.clearance import box_around
+from armlab.motion import TrajectoryStep, plan_joint_move
+from armlab.motion.cartesian import plan_vertical_segment
+from armlab.motion.clearance import box_around, first_collision
+from armlab.motion.gripper_box import joint_moves_inside
+from armlab.motion.safety import UnsafeTrajectory
+from armlab.scene import as_workcell
 from armlab.skills import side_grasp
 from armlab.skills.manipulate import plan_pick, plan_place, plan_side_place, run_steps
 from armlab.station.core import Station
 from armlab.station.jobs import JobContext
+from armlab.vision.geometry import project_points
 
 MAX_ATTEMPTS_PER_MOVE = 3
 MAX_LOOKS = 200  # a job that has looked this often without finishing stops (no endless loops)
@@ -100,8 +106,6 @@ def park_pose(model) -> np.ndarray:
 def look_pose(station: Station) -> np.ndarray:
     """Where a job parks the arm while the camera looks: the station's workcell's look_pose_rad (one that
     hides nothing from that workcell's camera), else the arm's sleep pose (park_pose)."""
-    from armlab.scene import as_workcell
-
     q = as_workcell(getattr(station.config, "workcell", None)).look_pose_rad
     if q is None:
         return park_pose(station.model)
@@ -129,8 +133,6 @@ def seeing_look_pose(station: Station) -> np.ndarray:
     """The look pose of a job that must see every block (pick_sort, pick_stack): the station's workcell's
     look_pose_rad when it defines one (chosen for that workcell's camera), else overhead_look_pose, which
     is the RX200's (its IK point is out of other arms' reach at pitch 90 deg, e.g. the UR3's)."""
-    from armlab.scene import as_workcell
-
     if as_workcell(getattr(station.config, "workcell", None)).look_pose_rad is not None:
         return look_pose(station)
     return overhead_look_pose(station.model)
@@ -138,8 +140,6 @@ def seeing_look_pose(station: Station) -> np.ndarray:
 
 def pick_end_joints(steps: list) -> np.ndarray:
     """The joints a plan's last trajectory ends at."""
-    from armlab.motion import TrajectoryStep
-
     return [step for step in steps if isinstance(step, TrajectoryStep)][-1].q_end_rad
 
 
@@ -194,11 +194,6 @@ class TaskRunner:
     def park(self) -> None:
         """Move to the park pose (park_pose: the arm hides no block from the camera) by a path that keeps
         clear of the objects seen last (straight there, else up first, else up and over the base)."""
-        from armlab.motion import plan_joint_move
-        from armlab.motion.cartesian import plan_vertical_segment
-        from armlab.motion.clearance import first_collision
-        from armlab.motion.gripper_box import joint_moves_inside
-
         model = self.station.model
         q_park = self.look_pose_rad
         self.progress.next_block = self.progress.next_target_m = None  # no move planned until the next look
@@ -346,8 +341,6 @@ class TaskRunner:
         """Run planned steps; a step the gate refuses (the arm is not where the plan starts, e.g. it
         was stopped by a contact) fails the move with the reason, puts down what is held, and the
         job goes on from a fresh look."""
-        from armlab.motion.safety import UnsafeTrajectory
-
         try:
             run_steps(self.station, self.ctx, steps, progress=False)
         except UnsafeTrajectory as error:
@@ -410,8 +403,6 @@ class TaskRunner:
 
     def in_view(self, xy_m, height_m: float, margin_px: float = 40.0) -> bool:
         """True if a column at (x, y) up to height_m stays inside the camera image (so it can be measured)."""
-        from armlab.vision.geometry import project_points
-
         calibration = self.station.calibration
         points = np.array([[xy_m[0], xy_m[1], z] for z in (0.0, height_m)])
         pixels = project_points(calibration.T_world_camera, calibration.K, calibration.dist, points)

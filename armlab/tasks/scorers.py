@@ -12,6 +12,7 @@ from __future__ import annotations
 
 import math
 
+from armlab.scene import as_workcell
 from armlab.tasks.judge import Rule, Score, columns, upright
 
 PLACE_TOLERANCE_M = 0.015
@@ -22,8 +23,6 @@ SCORED_JOBS = ("sort_by_tag", "clear_table", "stack_here")
 def score_job(job: str, truth: dict, *, sim_time_s: float, params: dict | None = None, workcell=None) -> Score:
     """The score of a non-competition job's final ground truth on `workcell` (a Workcell or its name: its
     places, block tags, bin and block sizes; None = the default workcell). ValueError for another job."""
-    from armlab.scene import as_workcell
-
     workcell = as_workcell(workcell)
     objects = truth["objects"]
     rules: list[Rule] = []

@@ -6,6 +6,7 @@ the job fails once the others are sorted, naming that block (UnknownTagDestinati
 
 from __future__ import annotations
 
+from armlab.scene import as_workcell
 from armlab.tasks.columns import Column, unseen_as_none
 from armlab.tasks.runner import Move, Plan, TaskRunner, cubes, seeing_look_pose
 
@@ -20,8 +21,6 @@ def _describe(block: dict) -> str:
 
 
 def make_policy(level: int | None, params: dict, runner: TaskRunner):
-    from armlab.scene import as_workcell
-
     workcell = as_workcell(getattr(runner.station.config, "workcell", None))  # the station's
     columns = {int(dest): Column(f"place {dest}", tuple(map(float, xy))) for dest, xy in workcell.places_m.items()}
     runner.reserved_m.extend(column.base_xy_m for column in columns.values())

@@ -3,13 +3,12 @@ first. Parameters: x_m, y_m (default: the workcell's sort_by_tag place nearest t
 
 from __future__ import annotations
 
+from armlab.scene import as_workcell
 from armlab.tasks.columns import Column, unseen_as_none
 from armlab.tasks.runner import Move, Plan, TaskRunner, cubes, seeing_look_pose
 
 
 def make_policy(level: int | None, params: dict, runner: TaskRunner):
-    from armlab.scene import as_workcell
-
     workcell = as_workcell(getattr(runner.station.config, "workcell", None))  # the station's
     default = min(workcell.places_m.values(), key=lambda xy: xy[0] ** 2 + xy[1] ** 2)
     column = Column("stack", (float(params.get("x_m", default[0])), float(params.get("y_m", default[1]))))

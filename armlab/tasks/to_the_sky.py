@@ -30,10 +30,10 @@ from armlab.tasks.runner import Move, Plan, TaskRunner, cubes, near
 TOWER_RADIUS_M = (0.21, 0.25)  # distance of the tower from the arm's base axis
 MAX_TOWER_HEIGHT_M = 0.55
 TOWER_FOOTPRINT_M = 0.05  # detections this close to the tower's base (x-y) are the tower
-FEED_CLEARANCE_M = 0.15
+FEED_CLEARANCE_M = 0.15  # the tower stands this far from the feed spot, out of the way to it
 CORRIDOR_MARGIN_RAD = math.radians(20.0)
 FEED_APPROACH_HALF_WIDTH_M = 0.10  # blocks this close to the way in to the feed spot (its inner half) are in the way
-ASIDE_REGION_M = ((-0.30, 0.30), (-0.15, 0.0))  # where blocks in the way are put: the half the tower never uses  # the tower stands this far from the feed spot, out of the way to it
+ASIDE_REGION_M = ((-0.30, 0.30), (-0.15, 0.0))  # where blocks in the way are put: the half the tower never uses
 
 
 def blocked_behind(xy, objects: list[dict]) -> int:

@@ -101,7 +101,7 @@ class Calibration:
         }
 
     @classmethod
-    def from_dict(cls, data: dict) -> "Calibration":
+    def from_dict(cls, data: dict) -> Calibration:
         """Rebuild from to_dict(); CalibrationError naming the field when it is missing or malformed."""
         try:
             T = _matrix(data["T_world_camera"], (4, 4), "T_world_camera")
@@ -138,7 +138,7 @@ class Calibration:
         Path(path).write_text(json.dumps(self.to_dict(), indent=2))
 
     @classmethod
-    def load(cls, path: str | Path) -> "Calibration":
+    def load(cls, path: str | Path) -> Calibration:
         try:
             data = json.loads(Path(path).read_text())
         except (OSError, json.JSONDecodeError) as error:

@@ -194,7 +194,7 @@ class ColorSample:
         return {"name": self.name, "lab": [round(float(x), 3) for x in self.lab], "u": self.u, "v": self.v, "time_s": self.time_s}
 
     @classmethod
-    def from_dict(cls, data: dict) -> "ColorSample":
+    def from_dict(cls, data: dict) -> ColorSample:
         lab = tuple(float(x) for x in data["lab"])
         if len(lab) != 3 or not all(math.isfinite(x) for x in lab):
             raise ValueError(f"colour sample lab must be 3 finite numbers, got {data['lab']!r}")
@@ -220,7 +220,7 @@ class ColorModel:
     shadowed: frozenset = field(default=frozenset())  # (class, index) of default references a sample of another name overrides
 
     @classmethod
-    def from_config(cls, cfg) -> "ColorModel":
+    def from_config(cls, cfg) -> ColorModel:
         """The defaults of a PerceptionConfig (its color_model section) or of a ColorModelConfig."""
         section = getattr(cfg, "color_model", cfg)
         return _model_from_section(section)
@@ -229,7 +229,7 @@ class ColorModel:
     def classes(self) -> tuple[str, ...]:
         return tuple(self.references)
 
-    def with_samples(self, samples) -> "ColorModel":
+    def with_samples(self, samples) -> ColorModel:
         """This model with the station's samples (replacing any it had); ValueError naming a sample's
         colour name the model does not know. The station's word wins over the defaults: a default
         reference closer than max_distance / 2 to a sample of another name is no longer used (a cube
@@ -380,13 +380,13 @@ def face_and_board_at(color_bgr: np.ndarray, center_px, side_px: float | None = 
     return patch, board_reference_bgr(color_bgr, ring)
 
 
-def measure_at(model: "ColorModel", color_bgr: np.ndarray, center_px, side_px: float | None = None,
+def measure_at(model: ColorModel, color_bgr: np.ndarray, center_px, side_px: float | None = None,
                board_mask: np.ndarray | None = None) -> np.ndarray:
     """Board-normalised CIELAB of the face centred at center_px (face_and_board_at)."""
     return model.measure(*face_and_board_at(color_bgr, center_px, side_px, board_mask))
 
 
-def classify_at(model: "ColorModel", color_bgr: np.ndarray, center_px, side_px: float | None = None,
+def classify_at(model: ColorModel, color_bgr: np.ndarray, center_px, side_px: float | None = None,
                 board_mask: np.ndarray | None = None) -> ColorReading:
     """The model's reading of the face centred at center_px (face_and_board_at), as detection reads a face."""
     return model.classify(*face_and_board_at(color_bgr, center_px, side_px, board_mask))

@@ -60,7 +60,7 @@ class TagConfig(StrictModel):
         return name
 
     @model_validator(mode="after")
-    def _enough_tags(self) -> "TagConfig":
+    def _enough_tags(self) -> TagConfig:
         if len(self.board_tags) < 3:
             raise ValueError("board_tags needs at least 3 tags for a calibration")
         overlap = set(self.board_tags) & set(self.block_tags)
@@ -91,7 +91,7 @@ class BoardConfig(StrictModel):
     grid_step_m: float = Field(gt=0.0)
 
     @model_validator(mode="after")
-    def _ordered(self) -> "BoardConfig":
+    def _ordered(self) -> BoardConfig:
         for name in ("x_range_m", "y_range_m", "grid_x_m", "grid_y_m"):
             low, high = getattr(self, name)
             if not low < high:
@@ -120,7 +120,7 @@ class BlockConfig(StrictModel):
     colors: dict[str, float]
 
     @model_validator(mode="after")
-    def _sane(self) -> "BlockConfig":
+    def _sane(self) -> BlockConfig:
         if not self.small_size_m < self.large_size_m:
             raise ValueError("small_size_m must be below large_size_m")
         if not self.min_height_m < self.max_height_m:
@@ -148,7 +148,7 @@ class ColorModelConfig(StrictModel):
     extra_names: tuple[str, ...] = ()
 
     @model_validator(mode="after")
-    def _sane(self) -> "ColorModelConfig":
+    def _sane(self) -> ColorModelConfig:
         for name, refs in self.references.items():
             if not refs:
                 raise ValueError(f"references.{name}: needs at least one reference colour [L, a, b]")
@@ -200,7 +200,7 @@ class SelfFilterConfig(StrictModel):
     pixel_step: int = Field(2, ge=1, le=8)
 
     @model_validator(mode="after")
-    def _ordered(self) -> "SelfFilterConfig":
+    def _ordered(self) -> SelfFilterConfig:
         low, high = self.gripper_x_m
         if not low < high:
             raise ValueError(f"gripper_x_m: lower bound {low} must be below upper bound {high}")
@@ -222,7 +222,7 @@ class PerceptionConfig(StrictModel):
     self_filter: SelfFilterConfig = SelfFilterConfig()
 
     @model_validator(mode="after")
-    def _block_tag_colours_known(self) -> "PerceptionConfig":
+    def _block_tag_colours_known(self) -> PerceptionConfig:
         for tag_id, entry in self.tags.block_tags.items():
             if entry.color not in self.blocks.colors:
                 raise ValueError(f"tags.block_tags.{tag_id}: colour '{entry.color}' is not in blocks.colors")

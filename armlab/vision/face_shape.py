@@ -6,18 +6,15 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
-from typing import TYPE_CHECKING
 
 import cv2
 import numpy as np
 
+from armlab.vision.block_geometry import BlockGeometry
 from armlab.vision.calibration import Calibration
 from armlab.vision.clipped_face import fit_clipped_square, on_image_border
 from armlab.vision.config import PerceptionConfig
 from armlab.vision.stacks import stack_candidates
-
-if TYPE_CHECKING:  # the type only: blocks.py builds on this module
-    from armlab.vision.blocks import BlockGeometry
 
 # Shape of a top face, from ideal shapes with room for real edges: area / minimum-area rectangle
 # (square 1, disc 0.785, triangle 0.5; real cube tops, edges worn and trimmed by depth smoothing, 0.77-0.91

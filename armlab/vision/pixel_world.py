@@ -8,7 +8,13 @@ import math
 import numpy as np
 
 from armlab.vision.calibration import Calibration, depth_at
-from armlab.vision.geometry import backproject, intersect_rays_with_plane, normalized_rays, project_points, transform_points
+from armlab.vision.geometry import (
+    backproject,
+    intersect_rays_with_plane,
+    normalized_rays,
+    project_points,
+    transform_points,
+)
 
 
 def pixel_to_world(

@@ -151,7 +151,7 @@ class FrameScore:
     misses: list[str] = field(default_factory=list)
     wrong: list[str] = field(default_factory=list)
 
-    def add(self, other: "FrameScore") -> None:
+    def add(self, other: FrameScore) -> None:
         for name, value in other.__dict__.items():
             setattr(self, name, getattr(self, name) + value)
 

@@ -64,7 +64,7 @@ def choose_stack(
 
     transitions = {c[1]: _transition_m(c[1], cfg) for c in close}
     seen = {h: ring_seen(h) for h in transitions.values() if h is not None}
-    for err, sizes in close:
+    for _err, sizes in close:
         h = transitions[sizes]
         consistent = seen[h] if h is not None else not any(seen.values())
         if consistent:

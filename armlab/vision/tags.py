@@ -38,7 +38,7 @@ class Tag:
         bottom-left, pixel centres at +0.5), to compare with the library's or apriltag_ros' output."""
         return self.corners_px[_APRILTAG_TO_OPENCV] + 0.5  # the reordering is its own inverse
 
-    def shifted(self, offset_px: np.ndarray) -> "Tag":
+    def shifted(self, offset_px: np.ndarray) -> Tag:
         """The same tag with its pixels moved by offset_px (a crop's origin)."""
         return Tag(self.id, self.corners_px + offset_px, self.center_px + offset_px, self.hamming, self.decision_margin)
 

@@ -8,7 +8,17 @@ from starlette.concurrency import run_in_threadpool
 
 from armlab.station.arm_info import arm_info
 from server.deps import ControlAuth, StationDep
-from server.models import ArmInfo, GripperRequest, JogRequest, JointsRequest, PoseNameRequest, PoseRequest, Status, StepRequest, TorqueRequest
+from server.models import (
+    ArmInfo,
+    GripperRequest,
+    JogRequest,
+    JointsRequest,
+    PoseNameRequest,
+    PoseRequest,
+    Status,
+    StepRequest,
+    TorqueRequest,
+)
 from server.waiting import until_arm_still, until_fingers_still
 
 router = APIRouter(prefix="/api", tags=["arm"])

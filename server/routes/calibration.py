@@ -7,7 +7,6 @@ from fastapi.responses import JSONResponse
 from starlette.concurrency import run_in_threadpool
 
 from armlab import skills
-
 from server.deps import ControlAuth, StationDep
 from server.models import CalibrationInfo, JobResponse, PixelRequest, PixelToWorldResponse, PointsCalibrationRequest
 from server.routes.jobs import WAITED_JOB, job_response
@@ -30,6 +29,17 @@ async def post_calibrate_points(
     pixels = [p.pixel for p in body.points]
     world = [p.world_m for p in body.points]
     job = await run_in_threadpool(skills.calibrate_points, station, pixels, world, source=controller)
+    return await job_response(request, job, wait)
+
+
+@router.post("/calibrate/arm-camera", response_model=JobResponse, status_code=202, responses=WAITED_JOB)
+async def post_calibrate_arm_camera(
+    request: Request, station: StationDep, controller: ControlAuth, wait: bool = False, use: bool = False
+) -> JSONResponse:
+    """Calibrate the camera from the arm, without tags: checked poses over the board, the gripper's tag found in
+    each, Kabsch; each pose's residual and the disagreement with the calibration in use in the result. That
+    calibration stays unless use=true; too few usable poses or a bad fit fail the job saying why."""
+    job = await run_in_threadpool(skills.calibrate_arm_camera, station, use=use, source=controller)
     return await job_response(request, job, wait)
 
 

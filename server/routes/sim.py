@@ -7,6 +7,7 @@ from typing import Annotated, Literal
 from fastapi import APIRouter
 from pydantic import Field
 
+from armlab.scene import Scene, check_can_stand, generate_scene
 from armlab.station.core import Station
 from armlab.station.jobs import jsonable
 from server.deps import ControlAuth, StationDep
@@ -26,8 +27,6 @@ def _cell(station: Station):
 def post_scene(body: SceneRequest, station: StationDep, controller: ControlAuth) -> dict:
     """Replace the objects: a generated event scene (event, level, seed) or explicit objects (at most 100,
     none below the board, none overlapping another: 422 naming them, and the scene stays)."""
-    from armlab.scene import Scene, check_can_stand, generate_scene
-
     _cell(station)
     station.allowed_or_raise("set_scene", controller)
     if body.objects is not None:
@@ -83,7 +82,7 @@ def post_checkerboard(body: CheckerboardRequest, station: StationDep, controller
     import cv2
     import numpy as np
 
-    from armlab.devices.sim.checkerboard import pose_in_camera_frame
+    from armlab.devices.sim.checkerboard import pose_in_camera_frame  # MuJoCo only on the simulation's route
 
     cell = _cell(station)
     station.allowed_or_raise("set_scene", controller)

@@ -11,9 +11,9 @@ from __future__ import annotations
 
 import threading
 import time
+from collections.abc import Callable
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Callable
 
 import numpy as np
 import pytest
@@ -52,9 +52,8 @@ def _recorded_slow(request) -> Camera:
     """A folder of two recorded RGB-D pairs (tests/devices/recorded_helpers.py) played at 2 frames/s. Its
     connect refuses bad input with a RecordingError naming the file (test_recorded_camera.py), not a
     ConnectionError: no failing case here."""
-    from recorded_helpers import write_pairs
-
     from armlab.devices.recorded import RecordedCamera, RecordedCameraConfig
+    from recorded_helpers import write_pairs
 
     folder = write_pairs(request.getfixturevalue("tmp_path") / "recording")
     return RecordedCamera(RecordedCameraConfig(source=str(folder), fps=SLOW_FPS))

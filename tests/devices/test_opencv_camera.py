@@ -17,7 +17,7 @@ from armlab.errors import ConfigError
 LEVELS = (20, 90, 160, 230)  # one grey level per frame: survives MJPG compression to within a few units
 
 
-def _video(tmp_path, count=len(LEVELS), size=(64, 48), fps=30.0):
+def _video(tmp_path, count=None, size=(64, 48), fps=30.0):
     width, height = size
     frames = []
     for level in LEVELS[:count]:

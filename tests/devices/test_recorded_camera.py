@@ -12,11 +12,11 @@ from pathlib import Path
 import cv2
 import numpy as np
 import pytest
-from recorded_helpers import DIST_TEST, K_TEST, pair_images, write_bag, write_intrinsics, write_pairs
 
 from armlab.devices.factory import make_camera
 from armlab.devices.recorded import RecordedCamera, RecordedCameraConfig, RecordingError
 from armlab.errors import ConfigError
+from recorded_helpers import DIST_TEST, K_TEST, pair_images, write_bag, write_intrinsics, write_pairs
 
 DEV = Path(__file__).resolve().parents[2].parent / "shared" / "data" / "rob550_dev"
 needs_dev_frames = pytest.mark.skipif(not DEV.is_dir(), reason=f"the real ROB 550 development frames are not on this machine ({DEV})")

@@ -13,9 +13,9 @@ from armlab.config import validate_config
 from armlab.errors import ConfigError
 from armlab.kinematics import Unreachable, load_arm
 from armlab.motion.cartesian import gripper_pitch_rad, gripper_position_m, plan_vertical_segment
-from armlab.motion.config import MotionConfig, load_motion_config
 from armlab.motion.pick_place import GripperStep, TrajectoryStep, plan_move_to_pose, plan_pick, plan_place
 from armlab.motion.safety import check_trajectory
+from armlab.motion_config import MotionConfig, load_motion_config
 
 ARM = load_arm("rx200")
 CONFIG = load_motion_config()

@@ -10,9 +10,9 @@ import pytest
 
 from armlab.devices.arm import JointTrajectory
 from armlab.kinematics import load_arm
-from armlab.motion.config import MotionConfig, load_motion_config
 from armlab.motion.safety import UnsafeTrajectory, check_start, check_trajectory
 from armlab.motion.trajectory import plan_joint_move
+from armlab.motion_config import MotionConfig, load_motion_config
 
 ARM = load_arm("rx200")
 # Home pose turned to face world +x: the gripper point at x = 408.575 mm, z = 304.57 mm + base height.

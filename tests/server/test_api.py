@@ -220,7 +220,7 @@ def test_calibrate_detect_frames_and_click_grab_drop(http, cell):
     truth = http.get("/api/sim/truth").json()
     camera_true = np.array(truth["camera"]["T_world_camera"])[:3, 3]
     assert np.linalg.norm(np.array(calibration["camera_position_m"]) - camera_true) < 0.01
-    assert len(calibration["grid_points_px"]) > 100 and {t["id"] for t in calibration["tags"]} == {1, 2, 3, 4}
+    assert len(calibration["grid_points_px"]) > 100 and {t["id"] for t in calibration["tags"]} - {10} == {1, 2, 3, 4}  # 10: the gripper's tag
     # The depth camera against the tags' plane, measured from the board in depth and reported (issue 17).
     assert isinstance(calibration["depth_offset_m"], float) and abs(calibration["depth_offset_m"]) < 0.03
     assert 0.0 <= calibration["depth_tilt_deg"] < 3.0 and "the tags' plane, tilted" in calibration["depth_model"]
@@ -272,7 +272,8 @@ def test_jobs_cancel_and_wrong_state(http):
 
 
 def test_sim_scene_validation(http):
-    _error(http.post("/api/sim/scene", json={"objects": [{"id": "x", "type": "blob", "color": "red", "position_m": [0, 0.2, 0]}]}, headers=AUTH), 422, "invalid")
+    blob = {"id": "x", "type": "blob", "color": "red", "position_m": [0, 0.2, 0]}
+    _error(http.post("/api/sim/scene", json={"objects": [blob]}, headers=AUTH), 422, "invalid")
     assert http.post("/api/sim/scene", json={"event": "pick_sort", "level": 1, "seed": 2}, headers=AUTH).json()["objects"] == 3
     assert len(http.get("/api/sim/truth").json()["objects"]) == 3
     _error(http.post("/api/sim/scene", json={"event": "pick_sort"}), 401, "unauthorized")

@@ -11,7 +11,6 @@ import numpy as np
 import pytest
 
 import live
-
 from armlab.kinematics import load_arm
 
 TOKEN = "step-token"

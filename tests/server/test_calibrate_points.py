@@ -6,7 +6,6 @@ from __future__ import annotations
 
 import httpx
 import numpy as np
-import pytest
 
 import live
 from armlab.vision.geometry import project_points

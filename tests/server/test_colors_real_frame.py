@@ -10,9 +10,9 @@ from pathlib import Path
 
 import httpx
 import pytest
-from live import serve, wait_for
 
 from armlab.station import StationConfig
+from live import serve, wait_for
 
 DATA = Path(__file__).resolve().parents[2].parent / "shared" / "data" / "rob550_dev"
 TOKEN = "real-colours-token"

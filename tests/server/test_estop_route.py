@@ -9,7 +9,6 @@ import threading
 
 import httpx
 import numpy as np
-import pytest
 
 import live
 

@@ -6,7 +6,6 @@ intrinsics survive a restart on the same SQLite file."""
 
 from __future__ import annotations
 
-import numpy as np
 import pytest
 
 import live

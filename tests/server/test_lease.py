@@ -12,6 +12,7 @@ import time
 import httpx
 import numpy as np
 import pytest
+from websockets.exceptions import WebSocketException
 from websockets.sync.client import connect
 
 import live
@@ -133,7 +134,7 @@ def test_a_view_only_session_cannot_take_control(http, url):
 
 def test_controller_names_are_checked(http, url):
     _error(http.post("/api/arm/home", headers={**AUTH, "X-Armlab-Controller": "bad name!"}), 422, "invalid")
-    with pytest.raises(Exception), _ws(url, f"?token={TOKEN}&controller=" + "x" * 65) as ws:
+    with pytest.raises(WebSocketException), _ws(url, f"?token={TOKEN}&controller=" + "x" * 65) as ws:
         ws.recv(timeout=5)
 
 

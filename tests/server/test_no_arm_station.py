@@ -9,12 +9,12 @@ import time
 
 import httpx
 import pytest
-from live import serve
-from recorded_helpers import write_pairs
 from websockets.sync.client import connect
 
 from armlab.station import StationConfig
 from armlab.store import Waypoint
+from live import serve
+from recorded_helpers import write_pairs
 
 TOKEN = "no-arm-token"
 AUTH = {"Authorization": f"Bearer {TOKEN}", "X-Armlab-Controller": "operator"}

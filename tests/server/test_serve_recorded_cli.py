@@ -11,9 +11,9 @@ from pathlib import Path
 
 import cv2
 import numpy as np
-from recorded_helpers import write_pairs
 
 import live
+from recorded_helpers import write_pairs
 
 REPO = Path(__file__).resolve().parents[2]
 

@@ -1,6 +1,7 @@
 """The simulation-only routes of this stop (POST/DELETE /api/sim/checkerboard) on a station that is not the
 simulation's (a station on device drivers: here the simulated devices without the simulation handle, as
-make_device_station builds one): 404 'not_found' saying the route exists only with the simulation, and nothing in the cell moves (the checkerboard stays parked: MuJoCo's mocap pose
+make_device_station builds one): 404 'not_found' saying the route exists only with the simulation, and nothing in
+the cell moves (the checkerboard stays parked: MuJoCo's mocap pose
 is the truth); without the token it is 401 first. The intrinsics routes, which are not simulation-only, still answer. Real HTTP."""
 
 from __future__ import annotations

@@ -188,8 +188,8 @@ def test_a_websocket_estop_latches_while_a_slow_message_of_the_same_session_is_i
     message: a take_control while the test holds the station's lock (as a long locked section or slow station call
     would); the e-stop sent after it must set the latch while it is still in flight (measured by the latch and the
     state, not by wall time). Its own station on the module's cell."""
-    from server.app import create_app
     from armlab.station import State
+    from server.app import create_app
 
     made = []
 

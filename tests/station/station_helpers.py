@@ -10,7 +10,6 @@ import numpy as np
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "server"))
 import live  # noqa: E402
-
 from armlab.station import State  # noqa: E402
 
 # A halted arm settles by a few mrad under gravity; a move that kept going would travel ~0.1 rad or more.

@@ -11,14 +11,13 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from station_helpers import live, wait_sim
-
 from armlab import skills
 from armlab.kinematics import load_arm
 from armlab.scene import Scene
 from armlab.station import Station, StationConfig
 from armlab.station.core import NotCalibrated
 from armlab.vision import load_perception_config
+from station_helpers import live, wait_sim
 
 CHECK_PERIOD_S = 1.0
 BUMP_5MM_1DEG = (np.array([0.005, 0.0, 0.0]), np.radians([1.0, 0.0, 0.0]))

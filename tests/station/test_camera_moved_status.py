@@ -11,7 +11,6 @@ import numpy as np
 
 sys.path.insert(0, str(Path(__file__).parents[1] / "server"))
 import live  # noqa: E402
-
 from armlab import skills  # noqa: E402
 
 

@@ -12,12 +12,11 @@ import numpy as np
 import pytest
 
 import live
-from station_helpers import FAR_Q, back_to_idle, make_station, still_for, wait_moving
-
 from armlab import skills
 from armlab.errors import CommandRefused, DeviceLost
 from armlab.station import State
 from armlab.store import Waypoint
+from station_helpers import FAR_Q, back_to_idle, make_station, still_for, wait_moving
 
 
 @pytest.fixture(scope="module")

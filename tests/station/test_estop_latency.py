@@ -13,12 +13,11 @@ import numpy as np
 import pytest
 
 import live
-from station_helpers import FAR_Q, DatabaseLock, SignallingStore, back_to_idle, make_station, still_for, wait_moving
-
 from armlab import skills
 from armlab.scene import Scene, SceneObject
 from armlab.station import State
 from armlab.station.states import JOB_STATES
+from station_helpers import FAR_Q, DatabaseLock, SignallingStore, back_to_idle, make_station, still_for, wait_moving
 
 JOB_COMMAND = {State.CALIBRATE: "calibrate", State.REPEAT: "repeat", State.CLICK_GRAB: "grab", State.CLICK_DROP: "drop", State.AUTO_SORT: "auto"}
 BLOCKED_WAIT_S = 3.0  # hang detector: the load stays blocked longer than this (SQLite's busy timeout is 5 s)

@@ -9,13 +9,12 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 import live
-from station_helpers import back_to_idle, make_station, still_for, wait_sim
-
 from armlab.errors import CommandRefused
 from armlab.kinematics import load_arm
 from armlab.motion import check_trajectory
 from armlab.motion.jog import LIMIT_MARGIN_RAD, plan_jog
 from armlab.motion.safety import finite_difference_rates
+from station_helpers import back_to_idle, make_station, still_for, wait_sim
 
 ARM = load_arm("rx200")
 WAIST_RAD_S = 0.5

@@ -9,13 +9,12 @@ import math
 import numpy as np
 import pytest
 
-from station_helpers import back_to_idle, still_for
-
 from armlab.devices.arm import JointTrajectory
-from armlab.motion.config import MotionConfig
 from armlab.motion.safety import UnsafeTrajectory
 from armlab.motion.trajectory import plan_joint_move
+from armlab.motion_config import MotionConfig
 from armlab.station import State
+from station_helpers import back_to_idle, still_for
 
 FACING_X = np.array([-math.pi / 2, 0.0, 0.0, 0.0, 0.0])  # gripper point at x = 0.41 m: outside the box
 

@@ -10,9 +10,8 @@ import threading
 import pytest
 
 import live
-from station_helpers import FAR_Q, back_to_idle, make_station, still_for, wait_moving, wait_sim
-
 from armlab.station import State
+from station_helpers import FAR_Q, back_to_idle, make_station, still_for, wait_moving, wait_sim
 
 
 @pytest.fixture(scope="module")

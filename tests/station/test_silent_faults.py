@@ -13,11 +13,10 @@ import numpy as np
 import pytest
 
 import live
-from station_helpers import FAR_Q, HALT_TOL_RAD, back_to_idle, joints, make_station, still_for
-
 from armlab.errors import CommandRefused, DeviceLost
 from armlab.kinematics import load_arm
 from armlab.station import State, Station, StationConfig
+from station_helpers import FAR_Q, HALT_TOL_RAD, back_to_idle, joints, make_station, still_for
 
 WAIT_S = 10.0  # generous bound on a condition that holds within a few device checks (never a timing assert)
 

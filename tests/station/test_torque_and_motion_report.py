@@ -7,10 +7,9 @@ import numpy as np
 import pytest
 
 import live
-from station_helpers import back_to_idle, make_station, still_for
-
 from armlab.errors import NeedsConfirmation
 from armlab.station import State
+from station_helpers import back_to_idle, make_station, still_for
 
 RAISED_Q = np.array([0.0, 0.2, 0.3, 0.0, 0.0])  # forearm out: it falls when limp
 

@@ -13,7 +13,7 @@ import pytest
 
 from armlab.kinematics import load_arm
 from armlab.motion import TrajectoryStep, plan_joint_move
-from armlab.motion.config import load_motion_config
+from armlab.motion_config import load_motion_config
 from armlab.skills.manipulate import plan_pick, plan_place
 from armlab.tasks import pick_stack
 

@@ -21,7 +21,7 @@ import pytest
 
 from armlab.kinematics import load_arm
 from armlab.motion import TrajectoryStep
-from armlab.motion.config import load_motion_config
+from armlab.motion_config import load_motion_config
 from armlab.skills.manipulate import plan_place
 from armlab.tasks.columns import Column
 

@@ -15,8 +15,8 @@ import pytest
 from armlab.devices.sim.config import load_camera_config, nominal_T_world_camera
 from armlab.kinematics import Unreachable, load_arm
 from armlab.motion.clearance import box_around
-from armlab.motion.config import load_motion_config
 from armlab.motion.safety import UnsafeTrajectory
+from armlab.motion_config import load_motion_config
 from armlab.scene import generate_scene
 from armlab.skills.manipulate import plan_pick
 from armlab.tasks import stack_high
@@ -108,7 +108,7 @@ class PlanWorld:
         for b, pile in tops:
             top = b["z"] + EDGES_M[b["size"]]
             hidden = False
-            for other, other_pile in tops:
+            for other, _other_pile in tops:
                 if other is b:
                     continue
                 height = other["z"] + EDGES_M[other["size"]]

@@ -9,9 +9,8 @@ import pytest
 
 sys.path.insert(0, str(Path(__file__).parent))
 
-from synth import L515, look_at_pose, render_board, render_sim  # noqa: E402
-
 from armlab.vision import load_perception_config  # noqa: E402
+from synth import L515, look_at_pose, render_board, render_sim  # noqa: E402
 
 
 @pytest.fixture(scope="session")

@@ -4,12 +4,10 @@ stored with the calibration and applied to depth -> world, touching cubes split,
 
 from __future__ import annotations
 
-import math
 import sys
 from dataclasses import replace
 from pathlib import Path
 
-import cv2
 import numpy as np
 import pytest
 

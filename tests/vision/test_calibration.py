@@ -6,11 +6,11 @@ import json
 
 import numpy as np
 import pytest
-from synth import L515, look_at_pose, render_board
 
 from armlab.devices.camera import Intrinsics
 from armlab.vision import Calibration, CalibrationError, calibrate_extrinsics, project_grid, top_down_view
 from armlab.vision.geometry import project_points
+from synth import L515, look_at_pose, render_board
 
 
 def test_pose_from_tags_matches_the_true_camera(cfg, board_frame, board_pose):

@@ -10,10 +10,10 @@ import json
 
 import cv2
 import pytest
-from rob550_dev import DEV, f21_intrinsics, needs_dev_frames, rob550_config
 
 from armlab.cli import main
 from armlab.vision import calibrate_extrinsics
+from rob550_dev import DEV, f21_intrinsics, needs_dev_frames, rob550_config
 
 SLEEP_RAD = "0,-1.80,1.55,0.8,0"  # the RX200's sleep pose (DESIGN §4), where the course frames show it
 FRAME = "blocks"

@@ -4,10 +4,10 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
-from synth import L515, look_at_pose
 
 from armlab.vision import Calibration, pixel_to_world, world_to_pixel
 from armlab.vision.geometry import rigid_transform_3d, transform_points
+from synth import L515, look_at_pose
 
 
 def _rotation(axis, angle):

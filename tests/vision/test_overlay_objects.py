@@ -4,10 +4,18 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
-from synth import L515
 
-from armlab.vision import Block, OverlayLayers, calibrate_extrinsics, detect_objects_from_depth, detect_tags, draw_overlay, project_grid
+from armlab.vision import (
+    Block,
+    OverlayLayers,
+    calibrate_extrinsics,
+    detect_objects_from_depth,
+    detect_tags,
+    draw_overlay,
+    project_grid,
+)
 from armlab.vision.objects import fit_plane_ransac
+from synth import L515
 
 
 @pytest.fixture(scope="module")
@@ -52,7 +60,6 @@ def test_objects_from_depth_on_a_synthetic_table(cfg, board_frame, cal, board_po
     """Two boxes of 40 and 60 mm pushed into an exact plane depth image: found with the right heights."""
     depth = board_frame[1].copy()
     K = L515.K
-    T_cw = np.linalg.inv(board_pose)
     for (x, y, size, height) in [(0.1, 0.2, 0.04, 0.04), (-0.2, 0.05, 0.03, 0.06)]:
         # Rasterise the box top: pixels whose board point lies under the top face get the top's depth.
         u, v = np.meshgrid(np.arange(1280), np.arange(720))

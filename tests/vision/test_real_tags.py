@@ -15,14 +15,14 @@ import json
 import cv2
 import numpy as np
 import pytest
-from rob550_dev import dev_images, needs_dev_frames, rob550_config
-from test_real_photos import PHOTOS, published
-from test_tag_families import _place, _square
 
 from armlab.devices.sim.tag_bitmaps import tag_bitmap
 from armlab.vision import detect_tags, load_perception_config
 from armlab.vision.config import TagDetectionConfig
 from armlab.vision.tags import free_library_detector, make_detector
+from rob550_dev import dev_images, needs_dev_frames, rob550_config
+from test_real_photos import PHOTOS, published
+from test_tag_families import _place, _square
 
 PHOTO_TAGS = 47
 MIN_FOUND = 44  # what the AprilTag library finds with its defaults at full resolution (quad_decimate 1)

@@ -5,10 +5,10 @@ from __future__ import annotations
 import cv2
 import numpy as np
 import pytest
-from synth import L515, look_at_pose, render_board
 
 from armlab.vision import detect_tags
 from armlab.vision.geometry import project_points
+from synth import L515, look_at_pose, render_board
 
 
 def _true_corners(cfg, pose, tag_id):

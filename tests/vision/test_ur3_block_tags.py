@@ -8,7 +8,6 @@ read from the workcell file). Real MuJoCo frame, real calibration from the tags.
 from __future__ import annotations
 
 import math
-
 from pathlib import Path
 
 import numpy as np

@@ -134,7 +134,7 @@ export const EVENT_KINDS = Object.freeze(["general", "scene"]);
  * @property {(Array<Array<number>>|null)} [grid_points_px]
  * @property {(Array<TagInfo>|null)} [tags]
  * @property {(number|null)} [time]
- * @property {(string|null)} [method] 'points' for a calibration from clicked points (tags otherwise)
+ * @property {(string|null)} [method] 'points' for a calibration from clicked points, 'arm-camera' from the arm's gripper tag (tags otherwise)
  * @property {(Object<string, *>|null)} [points] clicked-point fit: homography, reprojection and per-point errors (px)
  */
 
@@ -155,7 +155,7 @@ export const EVENT_KINDS = Object.freeze(["general", "scene"]);
  * @property {(Array<Array<number>>|null)} [grid_points_px]
  * @property {(Array<TagInfo>|null)} [tags]
  * @property {(number|null)} [time]
- * @property {(string|null)} [method] 'points' for a calibration from clicked points (tags otherwise)
+ * @property {(string|null)} [method] 'points' for a calibration from clicked points, 'arm-camera' from the arm's gripper tag (tags otherwise)
  * @property {(Object<string, *>|null)} [points] clicked-point fit: homography, reprojection and per-point errors (px)
  * @property {"calibration"} [type]
  */

@@ -15,9 +15,9 @@ import numpy as np
 
 from armlab.config import read_config_file, resolve_config_path
 from armlab.devices.arm import Arm, JointState, JointTrajectory
+from armlab.devices.frame_buffer import ReaderThread
 from armlab.devices.interbotix.configuration_interbotix import InterbotixArmConfig
 from armlab.devices.interbotix.connection import InterbotixConnection
-from armlab.devices.frame_buffer import ReaderThread
 from armlab.errors import DeviceAlreadyConnectedError, DeviceNotConnectedError
 
 

@@ -34,7 +34,7 @@ class InterbotixArmConfig(StrictModel):
     profile_accel_time_s: float = Field(0.0, ge=0.0, le=1.0)
 
     @model_validator(mode="after")
-    def _check(self) -> "InterbotixArmConfig":
+    def _check(self) -> InterbotixArmConfig:
         if self.profile_accel_time_s > self.profile_time_s / 2:
             raise ValueError("profile_accel_time_s must be at most half of profile_time_s")
         return self

@@ -42,7 +42,7 @@ class OpenCVCameraConfig(StrictModel):
     max_consecutive_failures: int = Field(30, ge=1, le=10000)
 
     @model_validator(mode="after")
-    def _check(self) -> "OpenCVCameraConfig":
+    def _check(self) -> OpenCVCameraConfig:
         if isinstance(self.source, int) and self.source < 0:
             raise ValueError(f"source: a device index must be ≥ 0, got {self.source}")
         if isinstance(self.source, str) and not self.source.strip():

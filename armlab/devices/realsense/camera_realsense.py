@@ -8,7 +8,6 @@ test machine has the hardware.
 
 from __future__ import annotations
 
-
 import numpy as np
 
 from armlab.devices.camera import Intrinsics

@@ -13,6 +13,7 @@ import time
 
 from armlab.devices.recorded.configuration_recorded import RecordedCameraConfig
 from armlab.devices.recorded.folder import RecordingError
+from armlab.devices.recorded.players import open_player
 from armlab.devices.threaded_camera import ThreadedCamera
 from armlab.errors import DeviceAlreadyConnectedError
 
@@ -36,7 +37,6 @@ class RecordedCamera(ThreadedCamera):
         """Open and check the recording, start the reader thread and wait for the first frame."""
         if self.is_connected:
             raise DeviceAlreadyConnectedError(f"{self}: already connected; call close() before connecting again")
-        from armlab.devices.recorded.players import open_player
 
         try:
             self._player = open_player(self.config)

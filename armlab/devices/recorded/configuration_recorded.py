@@ -40,7 +40,7 @@ class RecordedCameraConfig(StrictModel):
     max_consecutive_failures: int = Field(10, ge=1, le=10000)
 
     @model_validator(mode="after")
-    def _check(self) -> "RecordedCameraConfig":
+    def _check(self) -> RecordedCameraConfig:
         if not self.source.strip():
             raise ValueError("source: empty path (a folder of image_*.png + depth_*.png, or a ROS bag)")
         if self.frame is not None and not self.frame.strip():

@@ -9,6 +9,7 @@ from pathlib import Path
 
 import numpy as np
 
+from armlab.devices.recorded.bag import BagRecording
 from armlab.devices.recorded.configuration_recorded import RecordedCameraConfig
 from armlab.devices.recorded.folder import RecordingError, checked_pairs, read_pair
 from armlab.devices.recorded.intrinsics_file import holds_intrinsics, read_intrinsics_file
@@ -86,8 +87,6 @@ class BagPlayer:
     """A bag's colour/depth pairs at their recorded timing (times playback_speed), looping if configured."""
 
     def __init__(self, config: RecordedCameraConfig) -> None:
-        from armlab.devices.recorded.bag import BagRecording
-
         self.config = config
         self.bag = BagRecording(Path(config.source), config.color_topic, config.depth_topic, config.info_topic, config.max_skew_s)
         try:

@@ -77,8 +77,9 @@ class SimArm(SimDevice, Arm):
         return self._fresh_or_last(self._measure)
 
     def _measure(self) -> JointState:
-        """The joint state now (under the lock)."""
-        return JointState(position_rad=self._cell.arm_positions(), velocity_rad_s=self._cell.arm_velocities(), timestamp_s=time.time())
+        """What the driver reports now (under the lock; stamped with the reading's own age)."""
+        position, velocity, age_s = self._cell.arm_reading()
+        return JointState(position_rad=position, velocity_rad_s=velocity, timestamp_s=time.time() - age_s)
 
     def validate_positions(self, positions_rad: np.ndarray) -> None:
         """ValueError unless positions_rad is (N, dof), finite and inside the joint limits."""
@@ -173,7 +174,7 @@ class SimArm(SimDevice, Arm):
             return
         self._halt_requested.clear()
         self._trajectory = None
-        self._hold_rad = self._cell.arm_positions()
+        self._hold_rad = self._cell.arm_reading()[0]  # as the driver holds: where the arm last read
         self._cell.apply_arm_reference(self._hold_rad, np.zeros_like(self._hold_rad))
         self._last_halt_s = (self._halt_requested_s, self._cell.sim_time_s)
 
@@ -181,7 +182,7 @@ class SimArm(SimDevice, Arm):
         self._require()
         with self._cell.lock:
             self._trajectory = None
-            self._hold_rad = self._cell.arm_positions()
+            self._hold_rad = self._cell.arm_reading()[0]
             self._cell.apply_arm_reference(self._hold_rad, np.zeros_like(self._hold_rad))
             self._cell.set_arm_torque(bool(enabled))
             self._torque = bool(enabled)

@@ -12,6 +12,8 @@ from pydantic import Field, model_validator
 
 from armlab.config import StrictModel, load_config, resolve_config_path
 from armlab.devices.camera import Intrinsics
+from armlab.devices.finger_gripper import FingerGripperConfig
+from armlab.devices.sim.arm_realism import ArmRealismConfig
 
 Positive = Annotated[float, Field(gt=0.0)]
 NonNegative = Annotated[float, Field(ge=0.0)]
@@ -26,6 +28,7 @@ class SimWorkcellConfig(StrictModel):
     realtime: bool = False
     seed: int = 0
     camera_pose_error: bool = True
+    arm_rig_error: bool = True  # realism real: the arm's seeded joint offsets, link lengths and base pose (False: nominal)
     color_noise: bool = True
     depth_noise: bool = True
     camera_fps: Positive = 30.0
@@ -34,8 +37,9 @@ class SimWorkcellConfig(StrictModel):
     sim: str = "sim"  # config/<sim>.yaml
     workcell: str = "rx200_armlab"  # config/workcells/<workcell>.yaml: arm, gripper, board, tags, camera, feeder
     # real: the camera's imperfections of the real L515 (its file's `realism:`), a second light with shadows
-    # and clutter on the board (config/sim.yaml `realism_scene:`); ideal: the exact camera. None: $ARMLAB_REALISM,
-    # else config/sim.yaml `realism`.
+    # and clutter on the board (config/sim.yaml `realism_scene:`), and the arm as the real one runs (its servos'
+    # `realism:` in config/sim.yaml, armlab.devices.sim.arm_realism; an arm without one stays ideal); ideal: the
+    # exact camera and arm. None: $ARMLAB_REALISM, else config/sim.yaml `realism`.
     realism: Realism | None = None
     depth_offset_m: float | None = None  # realism real: replace the camera file's depth offset / tilt (tests)
     depth_tilt_deg: float | None = None
@@ -66,12 +70,15 @@ class ArmServoConfig(StrictModel):
     force_limit_nm: list[Positive]
     link_masses_kg: list[Positive]
     link_radius_m: list[Positive] | None = None  # DH-built arms: the capsule radius of each link
+    realism: ArmRealismConfig | None = None  # `realism: real` runs this arm as the real one; None: ideal even then
 
     @model_validator(mode="after")
     def _same_lengths(self) -> ArmServoConfig:
         lengths = {len(self.kp), len(self.kv), len(self.armature), len(self.damping), len(self.force_limit_nm)}
         if len(lengths) != 1 or len(self.link_masses_kg) != len(self.kp):
             raise ValueError("arm: kp, kv, armature, damping, force_limit_nm, link_masses_kg need one value per joint")
+        if self.realism is not None and len(self.realism.stall_torque_nm) != len(self.kp):
+            raise ValueError("arm: realism: needs one value per joint (as kp)")
         if self.link_radius_m is not None and len(self.link_radius_m) != len(self.kp):
             raise ValueError("link_radius_m needs one value per joint")
         return self
@@ -95,25 +102,6 @@ class SuctionSimConfig(StrictModel):
     max_acceleration_m_s2: Positive
     acceleration_filter_s: Positive
     settle_time_s: Positive  # grasp(wait=True) waits this long for the seal to form (release: to vent)
-
-
-class GripperSimConfig(StrictModel):
-    kp_n_m: Positive
-    damping_n_s_m: NonNegative
-    armature_kg: NonNegative
-    finger_mass_kg: Positive
-    pad_width_m: Positive
-    pad_length_m: Positive
-    tip_beyond_gripper_point_m: float
-    palm_depth_m: Positive
-    palm_half_height_m: Positive
-    palm_side_margin_m: NonNegative
-    finger_link_margin_m: NonNegative
-    pad_friction: list[NonNegative] = Field(min_length=3, max_length=3)
-    pad_solref: list[float] = Field(min_length=2, max_length=2)
-    pad_solimp: list[float] = Field(min_length=3, max_length=5)
-    stop_speed_m_s: Positive
-    stop_time_s: Positive
 
 
 class ObjectsConfig(StrictModel):
@@ -180,7 +168,7 @@ class SimConfig(StrictModel):
     physics: PhysicsConfig
     arm: ArmServoConfig  # the RX200's servos
     arms: dict[str, ArmServoConfig] = {}  # other arms' servos, by arm name (config/arms/<name>.yaml)
-    gripper: GripperSimConfig
+    gripper: FingerGripperConfig  # the finger gripper's dimensions (armlab.devices.finger_gripper)
     suction: SuctionSimConfig | None = None
     objects: ObjectsConfig
     camera_pose_error: PoseErrorConfig

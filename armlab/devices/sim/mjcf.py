@@ -13,18 +13,22 @@ import numpy as np
 
 from armlab.config import read_config_file, resolve_config_path
 from armlab.devices.sim import textures
-from armlab.devices.sim.checkerboard import BODY_NAME as CHECKERBOARD, checkerboard_texture, checkerboard_xml, load_checkerboard_target
+from armlab.devices.sim.arm_realism import GEAR_ARMATURE, GEAR_SUFFIX, RealArm
+from armlab.devices.sim.checkerboard import BODY_NAME as CHECKERBOARD
+from armlab.devices.sim.checkerboard import checkerboard_texture, checkerboard_xml, load_checkerboard_target
 from armlab.devices.sim.clutter import realism_world_xml
 from armlab.devices.sim.config import SceneRealismConfig, SimCameraConfig, SimConfig
 from armlab.devices.sim.feeder import FEEDER_PROBE, parked_objects
 from armlab.devices.sim.mjcf_dh import DhArmGeometry
-from armlab.devices.sim.mjcf_numbers import fmt_numbers as _fmt, quat_wxyz_from_matrix
+from armlab.devices.sim.mjcf_numbers import fmt_numbers as _fmt
+from armlab.devices.sim.mjcf_numbers import quat_wxyz_from_matrix
 from armlab.scene import Scene, SceneObject
 from armlab.workcell import Workcell, load_workcell
 
 CAMERA_NAME = "overhead"
 GRIPPER_SITE = "gripper_point"
 OBJECT_PREFIX = "obj:"
+GRIPPER_MARKER = "gripper_marker"
 STICKER_FRACTION = 0.9  # the ArUco sticker covers this fraction of a block's top face
 
 COLOR_RGBA = {
@@ -51,6 +55,7 @@ class ArmGeometry:
     grasp_effort_n: float
     T_world_base: np.ndarray
     sleep_rad: np.ndarray
+    real: RealArm | None = None  # the real arm (armlab.devices.sim.arm_realism; origins and base already the rig's)
 
     @classmethod
     def load(cls, name: str = "rx200") -> ArmGeometry:
@@ -70,39 +75,17 @@ class ArmGeometry:
         )
 
 
-    def mjcf(self, sim: SimConfig) -> tuple[str, str]:
-        """(worldbody xml of the arm with its fingers, actuator xml)."""
-        return _arm_xml(self, sim), _finger_arm_actuators(self, sim)
+    def mjcf(self, sim: SimConfig, gripper_extras: str = "") -> tuple[str, str]:
+        """(worldbody xml of the arm with its fingers, actuator xml); gripper_extras: geoms added to the
+        gripper link (its frame: origin at the wrist_rotate joint, x = approach axis)."""
+        return _arm_xml(self, sim, gripper_extras), _finger_arm_actuators(self, sim)
+
+    def tendon_xml(self) -> str:
+        """The real arm's gear springs (`<tendon>` content), empty for the ideal arm."""
+        return _gear_tendons(self)
 
 
-@dataclass(frozen=True)
-class FingerGripperOutline:
-    """The finger gripper's parts around the finger plane, relative to the gripper point (x = approach axis),
-    as _arm_xml builds them: for planners that keep the palm and open fingers clear of things."""
-
-    palm_half_height_m: float  # palm extent either side of the finger plane
-    palm_front_behind_m: float  # the palm's front face, this far behind the gripper point
-    palm_back_behind_m: float  # the palm's back face (the wrist_rotate joint), this far behind it
-    finger_half_height_m: float  # finger link extent either side of the finger plane
-    finger_tip_beyond_m: float  # the finger tips, this far beyond the gripper point
-    open_outer_m: float  # the palm's and the open fingers' outer faces from the finger plane's centre
-
-
-def finger_gripper_outline(arm: ArmGeometry, sim: SimConfig) -> FingerGripperOutline:
-    """The outline of `arm`'s simulated finger gripper (config/arms/<arm>.yaml gripper, config/sim.yaml gripper)."""
-    g = sim.gripper
-    gripper_point_m = arm.origins_m["gripper_point"][0]
-    return FingerGripperOutline(
-        palm_half_height_m=g.palm_half_height_m,
-        palm_front_behind_m=gripper_point_m - g.palm_depth_m,
-        palm_back_behind_m=gripper_point_m,
-        finger_half_height_m=0.5 * g.pad_width_m + g.finger_link_margin_m,
-        finger_tip_beyond_m=g.tip_beyond_gripper_point_m,
-        open_outer_m=arm.finger_offset_max_m + g.palm_side_margin_m,
-    )
-
-
-def _arm_xml(arm: ArmGeometry, sim: SimConfig) -> str:
+def _arm_xml(arm: ArmGeometry, sim: SimConfig, gripper_extras: str = "") -> str:
     """The arm's kinematic tree. Joint axes: waist z; shoulder, elbow, wrist_angle +y (positive pitches the
     arm forward and down); wrist_rotate +x. Fingers slide along the gripper's +-y axis."""
     o = arm.origins_m
@@ -113,10 +96,20 @@ def _arm_xml(arm: ArmGeometry, sim: SimConfig) -> str:
     names = arm.joint_names
     m = servo.link_masses_kg
 
+    real = arm.real
+    gravcomp = 1 if real is None else 0  # the ideal servos compensate gravity; the real firmware does not
+
     def joint(i: int, axis: str) -> str:
+        if real is None:
+            return (
+                f'<joint name="{names[i]}" axis="{axis}" range="{lo[i]:.9g} {hi[i]:.9g}" armature="{servo.armature[i]}" '
+                f'damping="{servo.damping[i]}" actuatorfrcrange="{-servo.force_limit_nm[i]} {servo.force_limit_nm[i]}"/>'
+            )
+        # The motor (its reading; the link stands at reading + the rig's zero offset: ref), then the gear behind it.
         return (
             f'<joint name="{names[i]}" axis="{axis}" range="{lo[i]:.9g} {hi[i]:.9g}" armature="{servo.armature[i]}" '
-            f'damping="{servo.damping[i]}" actuatorfrcrange="{-servo.force_limit_nm[i]} {servo.force_limit_nm[i]}"/>'
+            f'damping="{servo.damping[i]}" ref="{-real.rig.joint_offset_rad[i]:.9g}"/>'
+            f'<joint name="{names[i]}{GEAR_SUFFIX}" axis="{axis}" armature="{GEAR_ARMATURE}"/>'
         )
 
     # Gripper geometry in the gripper link's frame (origin at the wrist_rotate joint, x = approach axis).
@@ -132,7 +125,7 @@ def _arm_xml(arm: ArmGeometry, sim: SimConfig) -> str:
 
     def finger(side: str, sign: float) -> str:
         return f"""
-                <body name="{side}_finger" pos="0 {sign * fmax:.9g} 0" gravcomp="1">
+                <body name="{side}_finger" pos="0 {sign * fmax:.9g} 0" gravcomp="{gravcomp}">
                   <inertial pos="{finger_start + 0.5 * finger_len:.9g} {sign * 0.004:.9g} 0" mass="{g.finger_mass_kg}" diaginertia="4e-6 4e-6 1e-6"/>
                   <joint name="{side}_finger" type="slide" axis="0 {sign:g} 0" range="{fmin} {fmax}" ref="{fmax}"
                          armature="{g.armature_kg}" damping="{g.damping_n_s_m}"/>
@@ -144,29 +137,31 @@ def _arm_xml(arm: ArmGeometry, sim: SimConfig) -> str:
                 </body>"""
 
     return f"""
-    <body name="base" quat="{_fmt(base_quat)}">
+    <body name="base" pos="{_fmt(arm.T_world_base[:3, 3])}" quat="{_fmt(base_quat)}">
       <geom name="base_link" type="box" size="0.05 0.05 0.03" pos="-0.01 0 0.03" material="arm_dark" {arm_geom}/>
-      <body name="waist_link" pos="{_fmt(o['waist'])}" gravcomp="1">
+      <body name="waist_link" pos="{_fmt(o['waist'])}" gravcomp="{gravcomp}">
         <inertial pos="0 0 0.02" mass="{m[0]}" diaginertia="3e-4 3e-4 3e-4"/>
         {joint(0, "0 0 1")}
         <geom name="waist_geom" type="cylinder" size="0.04 0.015" pos="0 0 0.017" material="arm_dark" {arm_geom}/>
-        <body name="shoulder_link" pos="{_fmt(o['shoulder'])}" gravcomp="1">
+        <body name="shoulder_link" pos="{_fmt(o['shoulder'])}" gravcomp="{gravcomp}">
           <inertial pos="0.025 0 0.1" mass="{m[1]}" diaginertia="1e-3 1e-3 1e-4"/>
           {joint(1, "0 1 0")}
           <geom name="upper_arm" type="capsule" size="0.018" fromto="0 0 0 {_fmt(o['elbow'])}" material="arm" {arm_geom}/>
-          <body name="forearm_link" pos="{_fmt(o['elbow'])}" gravcomp="1">
+          <body name="forearm_link" pos="{_fmt(o['elbow'])}" gravcomp="{gravcomp}">
             <inertial pos="0.1 0 0" mass="{m[2]}" diaginertia="1e-4 6e-4 6e-4"/>
             {joint(2, "0 1 0")}
             <geom name="forearm" type="capsule" size="0.016" fromto="0.02 0 0 {_fmt(o['wrist_angle'])}" material="arm" {arm_geom}/>
-            <body name="wrist_link" pos="{_fmt(o['wrist_angle'])}" gravcomp="1">
+            <body name="wrist_link" pos="{_fmt(o['wrist_angle'])}" gravcomp="{gravcomp}">
               <inertial pos="0.03 0 0" mass="{m[3]}" diaginertia="5e-5 5e-5 5e-5"/>
               {joint(3, "0 1 0")}
               <geom name="wrist" type="capsule" size="0.016" fromto="0.01 0 0 {o['wrist_rotate'][0] - 0.01:.9g} 0 0" material="arm_dark" {arm_geom}/>
-              <body name="gripper_link" pos="{_fmt(o['wrist_rotate'])}" gravcomp="1">
+              <body name="gripper_link" pos="{_fmt(o['wrist_rotate'])}" gravcomp="{gravcomp}">
                 <inertial pos="0.03 0 0" mass="{m[4]}" diaginertia="1e-4 1e-4 1e-4"/>
                 {joint(4, "1 0 0")}
-                <geom name="palm" type="box" size="{0.5 * finger_start:.9g} {fmax + g.palm_side_margin_m:.9g} {g.palm_half_height_m:.9g}" pos="{0.5 * finger_start:.9g} 0 0" material="arm_dark" {arm_geom}/>
+                <geom name="palm" type="box" size="{0.5 * finger_start:.9g} {fmax + g.palm_side_margin_m:.9g} {g.palm_half_height_m:.9g}"
+                      pos="{0.5 * finger_start:.9g} 0 0" material="arm_dark" {arm_geom}/>
                 <site name="{GRIPPER_SITE}" pos="{gp:.9g} 0 0" size="0.003" rgba="1 0 1 0.5" group="4"/>
+                {gripper_extras}
                 {finger("left", 1.0)}
                 {finger("right", -1.0)}
               </body>
@@ -177,15 +172,43 @@ def _arm_xml(arm: ArmGeometry, sim: SimConfig) -> str:
     </body>"""
 
 
+def _gear_tendons(arm: ArmGeometry) -> str:
+    """The real arm's gears: per joint a spring on its passive gear joint, slack within +-backlash/2 (a
+    tendon's dead band), of the joint's gear stiffness beyond; and the link's bearing friction against the frame
+    (a tendon on motor + gear: the link's angle). Nothing for the ideal arm."""
+    real = arm.real
+    if real is None:
+        return ""
+    half = 0.5 * real.backlash_rad
+    return "".join(
+        f'<fixed name="{name}{GEAR_SUFFIX}" stiffness="{real.gear_stiffness_nm_rad[i]:.9g}" '
+        f'damping="{real.gear_damping_nm_s_rad[i]:.9g}" springlength="{-half:.9g} {half:.9g}">'
+        f'<joint joint="{name}{GEAR_SUFFIX}" coef="1"/></fixed>'
+        f'<fixed name="{name}_link" frictionloss="{real.link_friction_nm:.9g}">'
+        f'<joint joint="{name}" coef="1"/><joint joint="{name}{GEAR_SUFFIX}" coef="1"/></fixed>'
+        for i, name in enumerate(arm.joint_names))
+
+
 def _finger_arm_actuators(arm: ArmGeometry, sim: SimConfig) -> str:
-    """Position + velocity servo per joint, a position servo per finger capped at the grasp effort."""
+    """Position + velocity servo per joint, a position servo per finger capped at the grasp effort. The real
+    arm's: the firmware's P gain with its PWM (torque) saturating at the stall torque, and the motor's back-EMF
+    damping (the velocity actuator, fed no velocity: the firmware's feed-forward gains are 0)."""
     actuators = []
+    real = arm.real
     for i, name in enumerate(arm.joint_names):
+        if real is None:
+            actuators.append(
+                f'<position name="{name}_pos" joint="{name}" kp="{sim.arm.kp[i]}" '
+                f'ctrlrange="{arm.lower_rad[i]:.9g} {arm.upper_rad[i]:.9g}"/>'
+            )
+            actuators.append(f'<velocity name="{name}_vel" joint="{name}" kv="{sim.arm.kv[i]}" ctrlrange="-10 10"/>')
+            continue
+        stall = real.stall_torque_nm[i]
         actuators.append(
-            f'<position name="{name}_pos" joint="{name}" kp="{sim.arm.kp[i]}" '
-            f'ctrlrange="{arm.lower_rad[i]:.9g} {arm.upper_rad[i]:.9g}"/>'
+            f'<position name="{name}_pos" joint="{name}" kp="{real.kp_nm_rad[i]:.9g}" '
+            f'ctrlrange="{arm.lower_rad[i]:.9g} {arm.upper_rad[i]:.9g}" forcerange="{-stall:.9g} {stall:.9g}"/>'
         )
-        actuators.append(f'<velocity name="{name}_vel" joint="{name}" kv="{sim.arm.kv[i]}" ctrlrange="-10 10"/>')
+        actuators.append(f'<velocity name="{name}_vel" joint="{name}" kv="{real.kv_nm_s_rad[i]:.9g}" ctrlrange="-10 10"/>')
     for side in ("left", "right"):
         actuators.append(
             f'<position name="{side}_finger" joint="{side}_finger" kp="{sim.gripper.kp_n_m}" '
@@ -257,6 +280,25 @@ def _object_xml(obj: SceneObject, density: float, friction: list[float], solref:
     return asset, body
 
 
+def _gripper_marker_xml(workcell: Workcell, arm: ArmGeometry, assets: dict[str, bytes]) -> tuple[str, str]:
+    """(asset xml, gripper-link geom xml) of the workcell's gripper marker: the tag with its white border on
+    a thin visual-only card whose top face is at the marker's position (the gripper-point frame moved to the
+    gripper link's); ("", "") without a marker. Adds the texture PNG to assets."""
+    marker = workcell.gripper.marker
+    if marker is None:
+        return "", ""
+    image, span = textures.tag_texture(marker.id, workcell.board_tags.detector)
+    assets[GRIPPER_MARKER + ".png"] = textures.encode_png(image)
+    half, thick = 0.5 * marker.size_m * span, 0.00005
+    x, y, z = marker.position_m
+    asset = (f'<texture name="{GRIPPER_MARKER}" type="2d" file="{GRIPPER_MARKER}.png"/>'
+             f'<material name="{GRIPPER_MARKER}" texture="{GRIPPER_MARKER}" specular="0" shininess="0"/>')
+    geom = (f'<geom name="{GRIPPER_MARKER}" type="box" size="{half:.9g} {half:.9g} {thick}" '
+            f'pos="{x + arm.origins_m["gripper_point"][0]:.9g} {y:.9g} {z - thick:.9g}" material="{GRIPPER_MARKER}" '
+            f'contype="0" conaffinity="0" mass="0" group="2"/>')
+    return asset, geom
+
+
 def camera_xml_attributes(T_world_camera: np.ndarray, camera: SimCameraConfig) -> str:
     """A MuJoCo camera (looks along its -z, y up) placed at an OpenCV-axes pose, with the intrinsics."""
     R_world_mj = T_world_camera[:3, :3] @ np.diag([1.0, -1.0, -1.0])
@@ -322,7 +364,10 @@ def build_model_xml(
                                   workcell, parked=is_parked)
         object_assets.append(asset)
         object_bodies.append(body)
-    arm_bodies, actuators = arm.mjcf(sim)  # the RX200 with fingers (above) or a DH arm with a cup (mjcf_dh)
+    finger_arm = isinstance(arm, ArmGeometry)  # the RX200 with fingers (above), else a DH arm with a cup (mjcf_dh)
+    marker_asset, marker_geom = _gripper_marker_xml(workcell, arm, assets) if finger_arm else ("", "")
+    arm_bodies, actuators = arm.mjcf(sim, marker_geom) if finger_arm else arm.mjcf(sim)
+    tendons = arm.tendon_xml() if finger_arm else ""
     p = sim.physics
     xml = f"""<mujoco model="armlab_workcell">
   <compiler angle="radian" autolimits="true"/>
@@ -347,10 +392,12 @@ def build_model_xml(
     {colors}
     {''.join(object_assets)}
     {checker_asset}
+    {marker_asset}
   </asset>
   <worldbody>
     <light name="sun" directional="true" pos="0.2 0.3 2" dir="-0.1 -0.15 -1" castshadow="false" diffuse="0.55 0.55 0.55" specular="0 0 0"/>
-    <geom name="board" type="plane" size="{0.5 * board.size_m[0]:.9g} {0.5 * board.size_m[1]:.9g} 0.05" pos="{_fmt(np.mean(board.corners_m, axis=0))} 0" material="board"
+    <geom name="board" type="plane" size="{0.5 * board.size_m[0]:.9g} {0.5 * board.size_m[1]:.9g} 0.05"
+          pos="{_fmt(np.mean(board.corners_m, axis=0))} 0" material="board"
           friction="{_fmt(sim.objects.board_friction)}" solref="{_fmt(sim.objects.solref)}" contype="1" conaffinity="1"/>
     <geom name="table" type="plane" size="1.5 1.5 0.05" pos="0 0.15 -0.003" material="table" contype="1" conaffinity="1"/>
     {''.join(tag_geoms)}
@@ -361,6 +408,7 @@ def build_model_xml(
     {''.join(object_bodies)}
     {checker_body}
   </worldbody>
+  {f"<tendon>{tendons}</tendon>" if tendons else ""}
   <actuator>
     {actuators}
   </actuator>

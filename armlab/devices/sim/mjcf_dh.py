@@ -19,7 +19,9 @@ import numpy as np
 
 from armlab.config import read_config_file, resolve_config_path
 from armlab.devices.sim.config import ArmServoConfig, SimConfig
-from armlab.devices.sim.mjcf_numbers import fmt_numbers as _fmt, quat_wxyz_from_matrix as _quat
+from armlab.devices.sim.mjcf_numbers import fmt_numbers as _fmt
+from armlab.devices.sim.mjcf_numbers import quat_wxyz_from_matrix as _quat
+from armlab.kinematics import load_arm
 
 GRIPPER_SITE = "gripper_point"  # same name as the RX200 model's (armlab.devices.sim.mjcf)
 CUP_BODY = "suction_cup"
@@ -71,8 +73,6 @@ class DhArmGeometry:
     def load(cls, name: str, T_world_base: np.ndarray | None = None) -> DhArmGeometry:
         """From config/arms/<name>.yaml; T_world_base (the workcell's base pose) replaces the file's if given.
         ValueError naming the file and field if the arm has no dh table or no suction_cup."""
-        from armlab.kinematics import load_arm
-
         path = resolve_config_path(name, "arms")
         config = load_arm(path).config  # validated
         if config.dh is None:

@@ -14,10 +14,35 @@ from armlab.devices.sim.suction import lip_touching
 class SimTruth:
     """Ground truth of a SimWorkcell (the methods read its _model/_data and scene index under self.lock)."""
 
+    @property
+    def rig(self) -> dict | None:
+        """The real arm's drawn rig (joint zero offsets, link length changes, base shift and yaw), None when ideal."""
+        real = getattr(self._geometry, "real", None)
+        return None if real is None else real.rig.to_dict()
+
+    def link_positions(self) -> np.ndarray:
+        """The links' true angles against the nominal arm (call under the lock): the motors plus (real arm) the
+        rig's zero offsets and the gears' play and deflection. Ideal: the joints."""
+        real = getattr(self._geometry, "real", None)
+        if real is None:
+            return self.arm_positions()
+        return self.arm_positions() + real.rig.joint_offset_rad + self._data.qpos[self._gear_qpos]
+
     def gripper_point_m(self) -> np.ndarray:
         """True world position of the gripper point (for tests and scorers)."""
         with self.lock:
             return self._data.site_xpos[self._gripper_site].copy()
+
+    def gripper_marker_m(self) -> np.ndarray:
+        """True world position of the centre of the gripper tag's face (the workcell's gripper.marker), for
+        tests of finding the gripper in the camera. ValueError when the workcell has no marker."""
+        import mujoco
+
+        with self.lock:
+            geom = mujoco.mj_name2id(self._model, mujoco.mjtObj.mjOBJ_GEOM, "gripper_marker")
+            if geom < 0:
+                raise ValueError("this workcell has no gripper marker")
+            return self._data.geom_xpos[geom] + self._data.geom_xmat[geom].reshape(3, 3)[:, 2] * self._model.geom_size[geom][2]
 
     def start_path_recording(self, period_s: float = 0.05, max_duration_s: float = MAX_DURATION_S) -> None:
         """Record the gripper point every period_s of simulated time from now on (inside the physics
@@ -146,6 +171,8 @@ class SimTruth:
                 "quat_wxyz": data.xquat[self._gripper_body].tolist(),
             }
             arm = {"joint_names": list(self._geometry.joint_names), "position_rad": self.arm_positions().tolist()}
+            if self.rig is not None:  # the real arm: the links' true angles and the rig drawn for this seed
+                arm.update(link_rad=self.link_positions().tolist(), rig=self.rig)
             sim_time = float(data.time)
             feeder = self._feeder.status() if self._feeder is not None else None
         K = self.camera.intrinsics.K

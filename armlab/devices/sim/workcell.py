@@ -19,8 +19,11 @@ import numpy as np
 
 from armlab.devices.camera import Frame
 from armlab.devices.sim.arm import SimArm
+from armlab.devices.sim.arm_realism import GEAR_SUFFIX, JointStatePublisher, real_geometry
+from armlab.devices.sim.arm_select import select_arm
 from armlab.devices.sim.camera import NoiseModel, SimCamera
-from armlab.devices.sim.checkerboard import BODY_NAME as CHECKERBOARD, PARKED_POSITION_M, checked_pose
+from armlab.devices.sim.checkerboard import BODY_NAME as CHECKERBOARD
+from armlab.devices.sim.checkerboard import PARKED_POSITION_M, checked_pose
 from armlab.devices.sim.config import (
     MountConfig,
     SimWorkcellConfig,
@@ -31,15 +34,14 @@ from armlab.devices.sim.config import (
     resolve_realism,
     rotation_from_rotvec,
 )
-from armlab.devices.sim.realism import RealCamera
 from armlab.devices.sim.feeder import FeederRuntime, parked_objects
 from armlab.devices.sim.gripper import SimGripper
-from armlab.devices.sim.arm_select import select_arm
 from armlab.devices.sim.mjcf import CAMERA_NAME, GRIPPER_SITE, OBJECT_PREFIX, build_model_xml, quat_wxyz_from_matrix
 from armlab.devices.sim.mjcf_dh import CUP_BODY, LIP_MARGIN_M, LIP_PREFIX, SUCTION_ACTUATOR, DhArmGeometry
-from armlab.devices.sim.suction import SuctionGripper, seal_object
 from armlab.devices.sim.path import PathRecorder
+from armlab.devices.sim.realism import RealCamera
 from armlab.devices.sim.render import RawImages, RenderThread
+from armlab.devices.sim.suction import SuctionGripper, seal_object
 from armlab.devices.sim.truth import SimTruth
 from armlab.scene import Scene
 from armlab.workcell import load_workcell
@@ -51,7 +53,8 @@ PAD_GEOMS = ("left_pad", "right_pad")
 
 
 class SimWorkcell(SimTruth):
-    """The simulated workcell (the RX200 with fingers, or a DH arm with a suction cup, per the workcell config). See the module docstring for the clock semantics."""
+    """The simulated workcell (the RX200 with fingers, or a DH arm with a suction cup, per the workcell config).
+    See the module docstring for the clock semantics."""
 
     def __init__(self, config: SimWorkcellConfig | None = None, scene: Scene | None = None) -> None:
         self.config = config or SimWorkcellConfig()
@@ -66,7 +69,13 @@ class SimWorkcell(SimTruth):
             self._camera_config = self._camera_config.model_copy(
                 update={"mount": MountConfig(position_m=list(mount.position_m), tilt_deg=mount.tilt_deg)})
         self.realism = resolve_realism(self.config.realism, self._sim)
-        pose_rng, noise_rng, real_rng = (np.random.default_rng(s) for s in np.random.SeedSequence(self.config.seed).spawn(3))
+        pose_rng, noise_rng, real_rng, rig_rng = (np.random.default_rng(s) for s in np.random.SeedSequence(self.config.seed).spawn(4))
+        self._publisher = None  # the real arm's joint-state publisher; None: the ideal arm (readings are the truth)
+        config = None if self.realism != "real" or self._suction else self._sim.servos(self._workcell.arm).realism
+        if config is not None:  # the DH arms (the UR3) stay ideal: see config/sim.yaml arms
+            self._geometry = real_geometry(self._geometry, config, rig_rng, self.config.arm_rig_error)
+            self._publisher = JointStatePublisher(config)
+            self._commanded_velocity = np.zeros(len(self._geometry.joint_names))
         T_nominal = nominal_T_world_camera(self._camera_config.mount)
         self._T_world_camera = (
             T_nominal @ draw_pose_error(pose_rng, self._sim.camera_pose_error) if self.config.camera_pose_error else T_nominal
@@ -78,8 +87,11 @@ class SimWorkcell(SimTruth):
         self._path: PathRecorder | None = None
         self._build(self._scene, previous=None)
         physics = self._sim.physics
+        # The real arm's trajectory is done at its end time, as the Interbotix driver's (the servos' steady error
+        # would never settle within the tolerance); the ideal one's once it has settled.
+        settle_tolerance_rad = math.inf if self._publisher is not None else physics.settle_tolerance_rad
         self.arm = SimArm(self, self._geometry.joint_names, self._geometry.lower_rad, self._geometry.upper_rad,
-                          physics.settle_tolerance_rad, physics.settle_timeout_s)
+                          settle_tolerance_rad, physics.settle_timeout_s)
         if self._suction:
             self.gripper = SuctionGripper(self, self._sim.suction, self._workcell.arm)
         else:
@@ -116,6 +128,7 @@ class SimWorkcell(SimTruth):
                                       self._workcell, realism_scene)
         model = mujoco.MjModel.from_xml_string(xml, assets)
         names = self._geometry.joint_names
+        real = self._publisher is not None
         arm_root = model.body("base").id
         pos_act = np.array([model.actuator(f"{n}_pos").id for n in names])
         vel_act = np.array([model.actuator(f"{n}_vel").id for n in names])
@@ -128,6 +141,8 @@ class SimWorkcell(SimTruth):
             "data": mujoco.MjData(model),
             "_arm_qpos": np.array([model.jnt_qposadr[model.joint(n).id] for n in names]),
             "_arm_qvel": np.array([model.jnt_dofadr[model.joint(n).id] for n in names]),
+            "_gear_qpos": np.array([model.jnt_qposadr[model.joint(n + GEAR_SUFFIX).id] for n in names] if real else [], dtype=int),
+            "_gear_qvel": np.array([model.jnt_dofadr[model.joint(n + GEAR_SUFFIX).id] for n in names] if real else [], dtype=int),
             "_finger_qpos": np.array([model.jnt_qposadr[model.joint(f"{s}_finger").id] for s in sides], dtype=int),
             "_finger_qvel": np.array([model.jnt_dofadr[model.joint(f"{s}_finger").id] for s in sides], dtype=int),
             "_pos_act": pos_act,
@@ -167,6 +182,8 @@ class SimWorkcell(SimTruth):
             data.time = previous["time"]
             data.qpos[self._arm_qpos] = previous["arm_qpos"]
             data.qvel[self._arm_qvel] = previous["arm_qvel"]
+            data.qpos[self._gear_qpos] = previous["gear_qpos"]
+            data.qvel[self._gear_qvel] = previous["gear_qvel"]
             data.qpos[self._finger_qpos] = previous["finger_qpos"]
             data.qvel[self._finger_qvel] = previous["finger_qvel"]
             data.ctrl[self._pos_act] = previous["pos_ctrl"]
@@ -175,6 +192,8 @@ class SimWorkcell(SimTruth):
             if not previous["torque"]:
                 self._apply_torque(model, False)
         mujoco.mj_forward(model, data)
+        if self._publisher is not None and previous is None:
+            self._publisher.publish(float(data.time), data.qpos[self._arm_qpos], data.qvel[self._arm_qvel])
         self._feeder = None
         if scene.feeder is not None:
             arm_geoms = np.flatnonzero(model.body_rootid[model.geom_bodyid] == arm_root).tolist()
@@ -200,6 +219,8 @@ class SimWorkcell(SimTruth):
                 "time": data.time,
                 "arm_qpos": data.qpos[self._arm_qpos].copy(),
                 "arm_qvel": data.qvel[self._arm_qvel].copy(),
+                "gear_qpos": data.qpos[self._gear_qpos].copy(),
+                "gear_qvel": data.qvel[self._gear_qvel].copy(),
                 "finger_qpos": data.qpos[self._finger_qpos].copy(),
                 "finger_qvel": data.qvel[self._finger_qvel].copy(),
                 "pos_ctrl": data.ctrl[self._pos_act].copy(),
@@ -243,8 +264,19 @@ class SimWorkcell(SimTruth):
         return self._data.ctrl[self._pos_act].copy()
 
     def arm_reference_velocity(self) -> np.ndarray:
-        """The servos' velocity feed-forward: the commanded trajectory's slope now."""
+        """The servos' velocity feed-forward: the commanded trajectory's slope now (the real arm's firmware is
+        given it but uses none)."""
+        if self._publisher is not None:
+            return self._commanded_velocity.copy()
         return self._data.ctrl[self._vel_act].copy()
+
+    def arm_reading(self) -> tuple[np.ndarray, np.ndarray, float]:
+        """What the driver reports: (position, velocity, age in simulated s). Ideal: the joints now, exactly;
+        real: the last published joint state (encoder counts, at the driver's rate)."""
+        if self._publisher is None:
+            return self.arm_positions(), self.arm_velocities(), 0.0
+        position, velocity, at_s = self._publisher.sample
+        return position.copy(), velocity.copy(), float(self._data.time) - at_s
 
     def arm_velocities(self) -> np.ndarray:
         return self._data.qvel[self._arm_qvel].copy()
@@ -259,6 +291,9 @@ class SimWorkcell(SimTruth):
 
     def apply_arm_reference(self, position_rad: np.ndarray, velocity_rad_s: np.ndarray) -> None:
         self._data.ctrl[self._pos_act] = position_rad
+        if self._publisher is not None:  # the real firmware: no velocity feed-forward (its velocity actuator is the motor's damping)
+            self._commanded_velocity = np.clip(np.asarray(velocity_rad_s, dtype=float), -10.0, 10.0)
+            return
         self._data.ctrl[self._vel_act] = np.clip(velocity_rad_s, -10.0, 10.0)
 
     def apply_finger_reference(self, offset_m: float) -> None:
@@ -303,6 +338,8 @@ class SimWorkcell(SimTruth):
             if self._feeder is not None:
                 self._feeder.tick(self._model, data)
         mujoco.mj_step(self._model, data)
+        if self._publisher is not None and self._publisher.due(data.time):
+            self._publisher.publish(float(data.time), data.qpos[self._arm_qpos], data.qvel[self._arm_qvel])
         if self._path is not None and self._path.due(data.time):
             self._path.record(float(data.time), data.site_xpos[self._gripper_site])
 

@@ -71,3 +71,32 @@ def move_to(cell: SimWorkcell, position_m, yaw_rad: float = 0.0, **kwargs) -> No
     current = cell.arm.read_joint_state().position_rad
     seed = float(np.clip(current[4], -math.pi / 2, math.pi / 2))
     move(cell, topdown_ik(position_m, yaw_rad, seed), **kwargs)
+
+
+def level_ik(reach_m: float, height_m: float) -> np.ndarray:
+    """Joints putting the gripper point at reach_m straight ahead of the base (waist 0: world +y) and height_m,
+    the gripper level (pointing away from the base), elbow up."""
+    l1 = math.hypot(*UPPER_ARM)
+    alpha0 = math.atan2(UPPER_ARM[1], UPPER_ARM[0])
+    dx, dz = reach_m - WRIST_TO_POINT_M, height_m - SHOULDER_HEIGHT_M
+    cos_delta = (dx * dx + dz * dz - l1 * l1 - FOREARM_M**2) / (2 * l1 * FOREARM_M)
+    if abs(cos_delta) > 1:
+        raise ValueError(f"unreachable level target at reach {reach_m} m, height {height_m} m")
+    delta = math.acos(cos_delta)
+    e1 = math.atan2(dz, dx) + math.atan2(FOREARM_M * math.sin(delta), l1 + FOREARM_M * math.cos(delta))
+    q2 = alpha0 - e1
+    q3 = -(e1 - delta) - q2
+    return np.array([0.0, q2, q3, -q2 - q3, 0.0])
+
+
+def planar_fk(q) -> tuple[float, float]:
+    """(reach, height) of the gripper point of the nominal RX200 at joints q (waist ignored): the inverse of
+    level_ik, for any wrist angle. Positive shoulder, elbow and wrist angles pitch forward and down."""
+    def turn(a, x, z):
+        return x * math.cos(a) + z * math.sin(a), -x * math.sin(a) + z * math.cos(a)
+
+    _, q2, q3, q4, _ = (float(v) for v in q)
+    x, z = turn(q2, *UPPER_ARM)
+    fx, fz = turn(q2 + q3, FOREARM_M, 0.0)
+    gx, gz = turn(q2 + q3 + q4, WRIST_TO_POINT_M, 0.0)
+    return x + fx + gx, SHOULDER_HEIGHT_M + z + fz + gz

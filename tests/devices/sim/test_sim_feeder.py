@@ -7,12 +7,12 @@ import math
 import mujoco
 import numpy as np
 import pytest
-from sim_helpers import move_to
 
 from armlab.devices.sim import SimWorkcell, SimWorkcellConfig
 from armlab.devices.sim.mjcf import OBJECT_PREFIX
 from armlab.scene import Feeder, Scene, SceneObject, generate_scene
 from armlab.workcell import load_workcell
+from sim_helpers import move_to
 
 WORKCELL = load_workcell()
 SPOT = WORKCELL.feeder.spot_m

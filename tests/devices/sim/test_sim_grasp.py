@@ -4,10 +4,10 @@ nothing, stacks of six stand and a block released half off a stack falls."""
 
 import numpy as np
 import pytest
-from sim_helpers import move_to
 
 from armlab.devices.sim import SimWorkcell, SimWorkcellConfig
 from armlab.scene import Scene, SceneObject, quat_from_yaw
+from sim_helpers import move_to
 
 BLOCK_XY = np.array([0.05, 0.25])
 BLOCK_YAW = 0.2

@@ -3,11 +3,11 @@ records while a blocking move runs), equal to gripper_point_m() at those times, 
 
 import numpy as np
 import pytest
-from sim_helpers import move, topdown_ik
 
 from armlab.devices.arm import JointTrajectory
 from armlab.devices.sim import SimWorkcell, SimWorkcellConfig
 from armlab.devices.sim.path import PathRecorder
+from sim_helpers import move, topdown_ik
 
 
 @pytest.fixture(scope="module")

@@ -4,7 +4,6 @@ at edges and on dark faces, the side band without depth, drifting colour, a shad
 judge never sees); `ideal` gives the exact depth; the `--realism` switch reaches the workcell."""
 
 import math
-import types
 
 import numpy as np
 import pytest

@@ -17,7 +17,6 @@ from armlab.devices.sim import SimWorkcell, SimWorkcellConfig
 from armlab.errors import ConfigError
 from armlab.kinematics import load_arm
 from armlab.workcell import load_workcell, load_workcell_arm
-
 from suction_helpers import (
     WORKCELL,
     block_scene,

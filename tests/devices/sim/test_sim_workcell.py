@@ -7,12 +7,12 @@ import time
 
 import numpy as np
 import pytest
-from sim_helpers import move
 
 from armlab.devices.arm import JointTrajectory
 from armlab.devices.sim import SimWorkcell, SimWorkcellConfig
 from armlab.errors import DeviceAlreadyConnectedError, DeviceNotConnectedError
 from armlab.scene import generate_scene
+from sim_helpers import move
 
 
 @pytest.fixture(scope="module")

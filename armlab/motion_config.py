@@ -1,4 +1,6 @@
-"""MotionConfig: pick/place heights, vertical-segment speeds and safety clearance (config/motion.yaml)."""
+"""MotionConfig: pick/place heights, vertical-segment speeds and safety clearance (config/motion.yaml).
+
+A config-level module (it needs only armlab.config), below the workcell, whose `motion:` overrides it validates."""
 
 from __future__ import annotations
 
@@ -59,7 +61,7 @@ class MotionConfig(StrictModel):
     suction_press_m: float = Field(0.002, ge=0.0, le=0.01)
 
     @model_validator(mode="after")
-    def _workspace_box(self) -> "MotionConfig":
+    def _workspace_box(self) -> MotionConfig:
         for axis, low, high in zip("xyz", self.workspace_min_m, self.workspace_max_m):
             if not (math.isfinite(low) and math.isfinite(high) and low < high):
                 raise ValueError(f"workspace box: {axis} must have finite min < max, got [{low}, {high}]")
@@ -71,7 +73,7 @@ class MotionConfig(StrictModel):
         return self.workspace_min_m, self.workspace_max_m
 
     @model_validator(mode="after")
-    def _accel_within_move(self) -> "MotionConfig":
+    def _accel_within_move(self) -> MotionConfig:
         if self.move_time_s is not None and self.accel_time_s is not None and self.accel_time_s > self.move_time_s / 2:
             raise ValueError(f"accel_time_s ({self.accel_time_s}) must be at most half of move_time_s ({self.move_time_s})")
         return self

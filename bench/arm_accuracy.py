@@ -1,0 +1,125 @@
+"""Arm accuracy on the real arm in the simulation (issue 19, "Must show", first part): the gripper point (MuJoCo
+truth) against its commanded target, uncalibrated, at board points x heights, for several rigs (seeds).
+
+    MUJOCO_GL=egl .venv/bin/python bench/arm_accuracy.py [--seeds 0 1 2] [--points 50] [--realism real|ideal]
+
+Each target is solved by the station's nominal kinematics (armlab.kinematics, the workcell's base pose; top-down
+where reachable), sent as a smooth joint move from the measured joints, and measured once the arm has rested
+`--settle-s`. Printed per rig: mean and max error (3-D, and its vertical part), by height, and how much of it the
+joint readings show (FK of the readings against the target: what the station could see without a camera). The
+real arm must miss by >= 15 mm on average uncalibrated, or it is not the real arm. Prints figures; asserts nothing.
+"""
+
+from __future__ import annotations
+
+import argparse
+import os
+import sys
+import time
+from pathlib import Path
+
+os.environ.setdefault("MUJOCO_GL", "egl")
+sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
+
+import numpy as np  # noqa: E402
+
+HEIGHTS_M = (0.03, 0.08, 0.15)  # gripper point above the board: at a block's top, an approach, a carry
+
+
+def board_points(count: int, model) -> list[np.ndarray]:
+    """`count` board (x, y) points on a jittered grid over the reachable board in front of the arm, each top-down
+    reachable at every height."""
+    from armlab.kinematics import Unreachable
+
+    rng = np.random.default_rng(7)
+    points = []
+    while len(points) < count:
+        x, y = rng.uniform(-0.32, 0.32), rng.uniform(0.0, 0.34)
+        radius = float(np.hypot(x, y))
+        if not 0.12 <= radius <= 0.34:
+            continue
+        try:
+            for z in HEIGHTS_M:
+                model.ik([x, y, z], pitch=np.pi / 2, yaw=0.0)
+        except Unreachable:
+            continue
+        points.append(np.array([x, y]))
+    return points
+
+
+def smooth_move(cell, q_target, speed_rad_s: float = 1.0) -> None:
+    """A quintic joint move from the measured joints, as the station would send it; waits for its end."""
+    from armlab.devices.arm import JointTrajectory
+
+    q0 = cell.arm.read_joint_state().position_rad
+    q1 = np.asarray(q_target, float)
+    duration_s = max(0.4, float(np.max(np.abs(q1 - q0))) / speed_rad_s * 1.9)
+    times = np.linspace(0.0, duration_s, int(duration_s * 100) + 1)
+    s = times / duration_s
+    positions = q0 + np.outer(10 * s**3 - 15 * s**4 + 6 * s**5, q1 - q0)
+    cell.arm.command_trajectory(JointTrajectory(times, positions), wait=True)
+
+
+def measure_rig(seed: int, points, realism: str, settle_s: float) -> dict:
+    from armlab.devices.sim import SimWorkcell, SimWorkcellConfig
+    from armlab.workcell import load_workcell_arm
+
+    model = load_workcell_arm()
+    errors, seen = {z: [] for z in HEIGHTS_M}, {z: [] for z in HEIGHTS_M}
+    with SimWorkcell(SimWorkcellConfig(seed=seed, realism=realism)) as cell:
+        for x, y in points:
+            q_seed = cell.arm.read_joint_state().position_rad
+            for z in sorted(HEIGHTS_M, reverse=True):  # down from the carry height...
+                target = np.array([x, y, z])
+                smooth_move(cell, model.ik(target, pitch=np.pi / 2, yaw=0.0, q_seed=q_seed))
+                cell.step(settle_s)
+                errors[z].append(cell.gripper_point_m() - target)
+                seen[z].append(model.fk(cell.arm.read_joint_state().position_rad)[:3, 3] - target)
+            smooth_move(cell, model.ik([x, y, max(HEIGHTS_M)], pitch=np.pi / 2, yaw=0.0, q_seed=q_seed))  # ...and back up
+        rig = cell.rig
+    return {"errors": errors, "seen": seen, "rig": rig}
+
+
+def report(seed: int, result: dict) -> float:
+    errors = np.concatenate([np.array(v) for v in result["errors"].values()])
+    seen = np.concatenate([np.array(v) for v in result["seen"].values()])
+    norm_mm = 1000.0 * np.linalg.norm(errors, axis=1)
+    rig = result["rig"]
+    rig_text = ("ideal arm" if rig is None else
+                f"offsets {np.round(np.degrees(rig['joint_offset_rad']), 2).tolist()} deg, base shift "
+                f"{np.round(1000 * np.array(rig['base_shift_m']), 1).tolist()} mm, yaw {np.degrees(rig['base_yaw_rad']):.2f} deg")
+    print(f"rig seed {seed} ({rig_text}): {len(norm_mm)} targets: mean {norm_mm.mean():.1f} mm, max {norm_mm.max():.1f} mm; "
+          f"vertical mean {1000 * errors[:, 2].mean():+.1f} mm; the readings show mean "
+          f"{1000 * np.linalg.norm(seen, axis=1).mean():.1f} mm")
+    for z, rows in result["errors"].items():
+        rows_mm = 1000.0 * np.linalg.norm(np.array(rows), axis=1)
+        print(f"    {1000 * z:5.0f} mm high: mean {rows_mm.mean():5.1f} mm, max {rows_mm.max():5.1f} mm, "
+              f"vertical mean {1000 * np.array(rows)[:, 2].mean():+6.1f} mm")
+    return float(norm_mm.mean())
+
+
+def main(argv=None) -> int:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--seeds", type=int, nargs="+", default=[0, 1, 2])
+    parser.add_argument("--points", type=int, default=50)
+    parser.add_argument("--realism", choices=("real", "ideal"), default="real")
+    parser.add_argument("--settle-s", type=float, default=0.5, help="simulated rest after each move before measuring")
+    args = parser.parse_args(argv)
+    from armlab.workcell import load_workcell_arm
+
+    points = board_points(args.points, load_workcell_arm())
+    print(f"arm accuracy, uncalibrated, realism {args.realism}: {len(points)} board points x {len(HEIGHTS_M)} heights "
+          f"{[round(1000 * z) for z in HEIGHTS_M]} mm, top-down, per rig")
+    means = []
+    for seed in args.seeds:
+        start = time.perf_counter()
+        means.append(report(seed, measure_rig(seed, points, args.realism, args.settle_s)))
+        print(f"    ({time.perf_counter() - start:.0f} s wall)")
+    verdict = "the real arm" if min(means) >= 15.0 else "NOT the real arm (uncalibrated mean < 15 mm)"
+    print(f"uncalibrated mean over rigs: {np.mean(means):.1f} mm (min {min(means):.1f}): {verdict}"
+          if args.realism == "real" else f"uncalibrated mean over rigs: {np.mean(means):.1f} mm")
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
