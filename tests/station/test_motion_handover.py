@@ -101,6 +101,28 @@ def test_a_move_from_rest_that_reaches_the_arm_late_is_then_taken_over_continuou
     assert not station.arm.is_moving() and abs(station.joints_rad()[0] + 1.0) < 0.01
 
 
+def test_a_takeover_whose_start_check_reads_the_arm_late_is_not_refused(fast, monkeypatch):
+    """The physics runs on 40 ms (simulated) between the gate's clock and its reading of the joints (a CPU-starved
+    batch): the arm is that much further along the same curve, which is no jump (before: 422 'the trajectory starts
+    0.12 rad from where waist is', seen over HTTP under CPU hogs)."""
+    station, cell = fast
+    _at_rest(station, [-1.5, 0.0, 0.0, 0.0, 0.0])
+    station.move_joints([1.5, 0.0, 0.0, 0.0, 0.0])
+    cell.step(0.8)  # the waist turns at ~3 rad/s
+    joints_rad = station.joints_rad
+
+    def late_reading():
+        cell.step(0.04)
+        return joints_rad()
+
+    monkeypatch.setattr(station, "joints_rad", late_reading)
+    cell.start_joint_recording()
+    station.move_joints([-1.0, 0.0, 0.0, 0.0, 0.0])  # reverse
+    monkeypatch.undo()
+    _assert_continuous(_figures(cell, 2.5))
+    assert not station.arm.is_moving() and abs(station.joints_rad()[0] + 1.0) < 0.01
+
+
 def test_moves_and_jogs_take_over_one_another_continuously(fast):
     station, cell = fast
     _at_rest(station, [0.0, -0.3, 0.3, 0.5, 0.0])
