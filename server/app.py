@@ -51,6 +51,7 @@ def default_station_factory():
 
 
 SAFETY_THREADS = 4  # the e-stop's own pool: it never queues behind blocked `?wait=true` requests
+STATUS_THREADS = 4  # status and reset: never queued behind commands that hold the worker threads (planning, sends)
 
 
 def _open_station(factory: Callable[[], Any]):
@@ -80,6 +81,7 @@ def create_app(
         station_obj, close = _open_station(factory)
         app.state.station = station_obj
         app.state.safety_pool = ThreadPoolExecutor(SAFETY_THREADS, thread_name_prefix="armlab-safety")
+        app.state.status_pool = ThreadPoolExecutor(STATUS_THREADS, thread_name_prefix="armlab-status")
         app.state.hub = StreamHub(station_obj, station_obj.config.jpeg_quality, app.state.safety_pool)
         app.state.hub.start()
         app.state.waiter = Waiter(station_obj)  # `?wait=true` requests wait here, not on worker threads
@@ -93,6 +95,7 @@ def create_app(
             app.state.station = None
             report = close() or {}
             app.state.safety_pool.shutdown(wait=False, cancel_futures=True)
+            app.state.status_pool.shutdown(wait=False, cancel_futures=True)
             app.state.close_report = report
             if report.get("alive"):
                 log.warning("shutdown: threads still running: %s", ", ".join(report["alive"]))

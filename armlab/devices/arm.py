@@ -81,12 +81,22 @@ class Arm(abc.ABC):
         """The newest measured joint state; never blocks on motion."""
 
     @abc.abstractmethod
-    def command_trajectory(self, trajectory: JointTrajectory, wait: bool = False) -> None:
-        """Start tracking `trajectory` (replacing any running one) from now.
+    def command_trajectory(self, trajectory: JointTrajectory, wait: bool = False, start_time_s: float | None = None) -> float:
+        """Start tracking `trajectory` (replacing any running one); returns its start (clock_s() of its t = 0).
 
-        The first sample should equal the current position. With wait=True, block until it ends or
-        stop() is called. Raises ValueError for a wrong dof or joints outside the limits (nothing moves).
+        start_time_s: when its t = 0 is, on this arm's clock (clock_s()); the arm tracks the sample at
+        clock_s() - start_time_s, so a command that reaches it late continues the same curve rather than
+        starting it late (a takeover planned to splice onto the running motion at a given moment). None: now
+        (a motion from rest). The sample it starts at should equal the current position. With wait=True, block
+        until it ends or stop() is called. Raises ValueError for a wrong dof or joints outside the limits
+        (nothing moves).
         """
+
+    def clock_s(self) -> float:
+        """The arm's clock for start_time_s: monotonic wall time (a simulated arm: the simulation's time)."""
+        import time
+
+        return time.monotonic()
 
     @abc.abstractmethod
     def is_moving(self) -> bool:

@@ -16,7 +16,6 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from armlab.devices.arm import JointTrajectory
 from armlab.errors import InvalidInput
 from armlab.motion.blend import Limits, Run, arm_limits, plan_run
 from armlab.motion.safety import UnsafeTrajectory
@@ -69,18 +68,11 @@ def same_pose(a: Waypoint, b: Waypoint) -> bool:
 
 
 def check_waypoints(station, waypoints) -> None:
-    """Every waypoint inside the joint limits, above the table and inside the workspace box (ValueError /
-    UnsafeTrajectory naming the waypoint, 1-based)."""
+    """Every waypoint inside the joint limits, above the table and inside the workspace box, the fingers clear of the
+    board and the arm clear of itself (ValueError / UnsafeTrajectory naming the waypoint, 1-based)."""
     if not waypoints:
         raise InvalidInput("the program has no waypoints: record at least one")
-    for index, waypoint in enumerate(waypoints, start=1):
-        try:
-            q = station.checked_joints(waypoint.joints_rad)
-            station.check_motion(JointTrajectory(np.array([0.0, 0.01]), np.vstack([q, q])))
-        except UnsafeTrajectory as error:
-            raise UnsafeTrajectory(f"waypoint {index}: {error}") from None
-        except ValueError as error:
-            raise InvalidInput(f"waypoint {index}: {error}") from None
+    station.check_poses([waypoint.joints_rad for waypoint in waypoints])
 
 
 def station_limits(station, settings: RepeatSettings) -> Limits:

@@ -121,6 +121,8 @@ class Station(Latch, MotionGate, ManualCommands, TeachCommands, JobControls, Per
         self.backend = backend
         self.synchronous = synchronous
         self._lock = threading.RLock()
+        self._plan_lock = threading.RLock()  # one replacing motion planned at a time (motion.py _send_replacing)
+        self._newest_move = 0  # the ticket of the newest manual move waiting to be planned (motion.py _send_replacing)
         self._send_lock = threading.Lock()  # one sender of device commands at a time, taken before _lock (motion.py _sending)
         self._outbox: list | None = None  # device commands queued under the lock, sent after it (motion.py _sending)
         self._halts = 0  # how many times the devices were halted (latch.py _halt_devices)

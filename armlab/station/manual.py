@@ -67,7 +67,7 @@ class ManualCommands:
             self._transition(command, source=source)  # state unchanged: idle/teach stay
             self._jog = None
 
-        trajectory, _ = self._send_replacing(plan, under_lock, command)
+        trajectory, _ = self._send_replacing(plan, under_lock, command, replaceable=True)
         if wait:
             self.wait_motion(trajectory.duration_s + 5.0)
 

@@ -94,6 +94,23 @@ class MotionGate:
         check_trajectory(self.model, trajectory, workspace_m=config.workspace_m, max_step_rad=config.max_step_rad)
         self.check_body(trajectory)
 
+    def check_pose(self, q_rad) -> np.ndarray:
+        """The arm standing at q_rad passes the trajectory check (limits, the table, the workspace box, the fingers
+        against the board, the arm against itself): returns the joints; ValueError / UnsafeTrajectory say why."""
+        q = self.checked_joints(q_rad)
+        self.check_motion(JointTrajectory(np.array([0.0, 0.01]), np.vstack([q, q])))
+        return q
+
+    def check_poses(self, poses_rad) -> None:
+        """check_pose of every pose, the error naming the 1-based waypoint (programs, drafts)."""
+        for index, q in enumerate(poses_rad, start=1):
+            try:
+                self.check_pose(q)
+            except UnsafeTrajectory as error:
+                raise UnsafeTrajectory(f"waypoint {index}: {error}") from None
+            except InvalidInput as error:
+                raise InvalidInput(f"waypoint {index}: {error}") from None
+
     @contextmanager
     def _sending(self) -> Iterator[None]:
         """`with self._sending():` instead of `with self._lock:` around checks that end in device commands: the
@@ -160,13 +177,17 @@ class MotionGate:
         and has checked the state; checked here: the latch, the start (no jump from the
         measured joints) and, while a commanded motion runs, that this one continues it: a splice from
         `handover` (taken from that very motion; trimmed to now: HandoverLate when now is past the handover)
-        or a trajectory starting at the running reference and its velocity (ArmMoving otherwise)."""
+        or a trajectory starting at the running reference and its velocity (ArmMoving otherwise). Either is sent
+        with its start on the arm's clock (Arm.command_trajectory's start_time_s: the station's clock is the arm's),
+        so a send held up after the check still continues the running curve; a motion from rest starts when the
+        arm takes it, and the record follows (_started_at)."""
         state = self._effective_state()
         if self._halt.is_set():
             raise CommandRefused("move", state.value, allowed_commands(state))
         now = self.clock_s()
         running = self._commanded
         planned, planned_t0 = trajectory, now  # remembered untrimmed: a later handover keeps its sample grid
+        continues = False  # sent while a commanded motion runs at speed (then on the station's clock)
         if handover is None and planned_after is not None and planned_after != self._command_count:
             raise HandoverLate("another motion was commanded while this one was planned from rest")
         if handover is not None:
@@ -182,23 +203,43 @@ class MotionGate:
             # Slower than one sample's worth of acceleration from rest, a plan from rest continues it as well.
             slow_rad_s = np.asarray(self.model.accel_limit_rad_s2, float) / self.motion_config.sample_rate_hz
             if np.any(np.abs(velocity) > slow_rad_s):
+                continues = True
                 position = running[0].sample(now - running[1])
                 problem = continuity_problem(trajectory, position, velocity, self.model.accel_limit_rad_s2, self.model.joint_names)
                 if problem is not None:
                     raise ArmMoving("move", state.value, allowed_commands(state), f"the new motion does not continue it: {problem}")
-        check_start(trajectory, self.joints_rad(), self.motion_config.start_tolerance_rad, self.model.joint_names)
-        if handover is None:
-            self._send_later(lambda: self.arm.command_trajectory(trajectory))
-        else:  # trimmed again when it is sent (after the lock): the arm takes over where the splice is then
-            def send_spliced() -> None:
-                late_s = min(self.clock_s() - handover.planned_at_s, handover.lead_s - 1e-6)
-                self.arm.command_trajectory(trimmed(planned, late_s) if late_s > elapsed else trajectory)
-            self._send_later(send_spliced)
+        measured, read_s = self.joints_rad(), self.clock_s()
+        try:
+            check_start(trajectory, measured, self.motion_config.start_tolerance_rad, self.model.joint_names)
+        except UnsafeTrajectory:
+            if read_s <= now:
+                raise
+            # The physics ran on between the check's clock and the reading (a CPU-starved batch): the arm is that much
+            # further along the commanded curve, where the trajectory is at the reading's time.
+            check_start(trimmed(trajectory, read_s - now), measured, self.motion_config.start_tolerance_rad, self.model.joint_names)
         self._command_count += 1
-        self._commanded = (planned, planned_t0, self._command_count)
+        record = self._commanded = (planned, planned_t0, self._command_count)
+        if handover is not None:  # the arm samples the splice at its own clock minus this: a late send continues it
+            start_s = handover.planned_at_s + elapsed
+            self._send_later(lambda: self.arm.command_trajectory(trajectory, start_time_s=start_s))
+        elif continues:  # it starts at the running reference now: the same, from now
+            self._send_later(lambda: self.arm.command_trajectory(trajectory, start_time_s=now))
+        else:  # from rest: a late send starts late without a jump, and the record follows the arm's start
+            self._send_later(lambda: self._started_at(record, self.arm.command_trajectory(trajectory)))
         self._motions.append((time.time() + trajectory.duration_s, swept_box))
         del self._motions[:-MOTION_MEMORY]
         return trajectory
+
+    def _started_at(self, record: tuple, started_s) -> None:
+        """After a motion from rest was sent: remember the arm's own start time of it (a send held up starts
+        later than the station's check), so a takeover planned from it continues what the arm really runs. A
+        new revision: a handover already planned from the old start is late (HandoverLate: planned again)."""
+        if not isinstance(started_s, (int, float)) or not np.isfinite(started_s):
+            return  # an arm that does not say when it started
+        with self._lock:
+            if self._commanded is record and started_s != record[1]:
+                self._command_count += 1
+                self._commanded = (record[0], float(started_s), self._command_count)
 
     def start_position(self) -> np.ndarray:
         """Where a motion from rest starts: the position the servos were last commanded to hold (the end of the
@@ -225,29 +266,48 @@ class MotionGate:
         lead = config.handover_lead_s if lead_s is None else lead_s
         return take_over(running[0], running[1], self.clock_s(), lead, config.sample_rate_hz, running[2])
 
-    def _send_replacing(self, plan: Callable, under_lock: Callable[[], None] | None = None, command: str = "move") -> tuple[JointTrajectory, Handover | None]:
+    def _send_replacing(self, plan: Callable, under_lock: Callable[[], None] | None = None, command: str = "move",
+                        replaceable: bool = False) -> tuple[JointTrajectory, Handover | None]:
         """Plan (plan(handover) -> the new trajectory, from the handover's state, or from the measured joints
         when it is None), check and send a motion that replaces whatever runs, continuously. under_lock() runs
         with the lock held just before sending (state transitions, the job's ownership). A handover missed
         because planning was slow is retried with a longer lead (twice), then ArmMoving. Returns (the
-        trajectory as planned, spliced; the handover or None)."""
+        trajectory as planned, spliced; the handover or None).
+
+        One motion is planned at a time: commands sent together (a script's burst, 42 clients) otherwise plan side
+        by side, each from a handover the next one makes late, and the CPU-bound planners starve status, the waits
+        and the physics. A replaceable one (a manual move) that a newer manual move overtook while it waited its
+        turn is refused unplanned (ArmMoving): it would be replaced as soon as it started."""
         lead = self.motion_config.handover_lead_s
-        for _ in range(3):
+        if replaceable:
             with self._lock:
-                seen = self._command_count
-            handover = self.motion_handover(lead)
-            new = plan(handover)
-            trajectory = splice(handover, new) if handover is not None else new
-            self.check_motion(trajectory)
-            swept_box = self._swept_box(trajectory)
-            try:
-                with self._sending():
-                    if under_lock is not None:
-                        under_lock()
-                    self._command_arm(trajectory, swept_box, handover, planned_after=seen)
-                return trajectory, handover
-            except HandoverLate:
-                lead *= 2.0
+                self._newest_move += 1
+                ticket = self._newest_move
+        with self._plan_lock:
+            with self._lock:
+                state = self._effective_state()
+                overtaken = replaceable and ticket != self._newest_move
+            if self._halt.is_set():  # e-stopped while this waited its turn: refused at once, as it would be after planning
+                raise CommandRefused(command, state.value, allowed_commands(state))
+            if overtaken:
+                raise ArmMoving(command, state.value, allowed_commands(state),
+                                "a newer move came in while this one waited to be planned: the newer one replaces it")
+            for _ in range(3):
+                with self._lock:
+                    seen = self._command_count
+                handover = self.motion_handover(lead)
+                new = plan(handover)
+                trajectory = splice(handover, new) if handover is not None else new
+                self.check_motion(trajectory)
+                swept_box = self._swept_box(trajectory)
+                try:
+                    with self._sending():
+                        if under_lock is not None:
+                            under_lock()
+                        self._command_arm(trajectory, swept_box, handover, planned_after=seen)
+                    return trajectory, handover
+                except HandoverLate:
+                    lead *= 2.0
         state = self.state
         raise ArmMoving(command, state.value, allowed_commands(state), "planning could not keep up with the motion in progress")
 

@@ -75,6 +75,8 @@ class ContinuousRecorder(threading.Thread):
             except (NotController, ShuttingDown) as error:
                 self.error = str(error)
                 return
+            except ValueError:  # a pose no move may reach (the fingers in the board, say): not a waypoint
+                continue
             self.recorded += 1
             last_q, last_gripper, last_t = q, gripper, now
 
@@ -123,9 +125,14 @@ class TeachCommands:
 
     def teach_record(self, source: str | None = None, dwell_s: float = 0.0, moving_time_s: float | None = None) -> tuple[Waypoint, int]:
         """Add the current joints and gripper command as a waypoint, committed to the draft before this
-        returns: (the waypoint, how many the draft holds)."""
+        returns: (the waypoint, how many the draft holds). A pose no move may reach (the fingers in the board,
+        the arm in itself, outside the limits) is not recorded: UnsafeTrajectory / ValueError say why."""
         self.allowed_or_raise("teach_record", source)
         q = self.joints_rad()
+        try:
+            self.check_pose(q)
+        except ValueError as error:
+            raise type(error)(f"this pose is not recorded: {error}") from None
         command = self.gripper.read_state().command
         waypoint = Waypoint(
             tuple(float(v) for v in q), command if command in ("grasp", "release") else "release", dwell_s, moving_time_s
@@ -193,6 +200,7 @@ class TeachCommands:
 
         def save() -> Program:
             waypoints, _ = self.store.read_draft()
+            self.check_poses([waypoint.joints_rad for waypoint in waypoints])  # a draft from before the record check
             return self.store.save_program(name, waypoints, clear_draft=True)
 
         with self._lock:

@@ -20,15 +20,27 @@ async def run_safety(request: Request, function, *args):
     return await loop.run_in_executor(request.app.state.safety_pool, partial(function, *args))
 
 
+async def run_status(request: Request, function, *args):
+    """Run status or reset on the app's status pool: they answer while commands hold every worker thread."""
+    loop = asyncio.get_running_loop()
+    return await loop.run_in_executor(request.app.state.status_pool, partial(function, *args))
+
+
+def _reset(station, controller: str) -> dict:
+    station.reset(source=controller)
+    return station.status()
+
+
 def _estop(station, controller: str) -> dict:
     station.estop(source=controller)
     return station.status()
 
 
 @router.get("/status", response_model=Status)
-def read_status(station: StationDep) -> dict:
-    """State, joints, gripper, gripper pose, controller (lease holder), lost devices, job, allowed commands."""
-    return station.status()
+async def read_status(request: Request, station: StationDep) -> dict:
+    """State, joints, gripper, gripper pose, controller (lease holder), lost devices, job, allowed commands.
+    Served from its own threads and never waiting for the physics (the devices' last control tick)."""
+    return await run_status(request, station.status)
 
 
 @router.post("/estop", response_model=Status)
@@ -41,10 +53,9 @@ async def post_estop(request: Request, station: StationDep, controller: StopSour
 
 
 @router.post("/reset", response_model=Status)
-def post_reset(station: StationDep, controller: ControlAuth) -> dict:
+async def post_reset(request: Request, station: StationDep, controller: ControlAuth) -> dict:
     """Leave estop/fault for idle without moving the arm (503 while a lost device is still gone)."""
-    station.reset(source=controller)
-    return station.status()
+    return await run_status(request, _reset, station, controller)
 
 
 @router.post("/control/take", response_model=Status)

@@ -11,9 +11,12 @@ import numpy as np
 import pytest
 
 import live
+from armlab.kinematics import load_arm
+from armlab.motion.measure import motion_figures
 
 TOKEN = "motion-safety-token"
 HEADERS = {"Authorization": f"Bearer {TOKEN}", "X-Armlab-Controller": "script"}
+ACCEL = np.asarray(load_arm("rx200").accel_limit_rad_s2, dtype=float)
 
 cell, url = live.module_fixtures(seed=5, token=TOKEN)
 
@@ -34,11 +37,13 @@ def test_a_joint_move_sent_while_the_waist_turns_continues_its_motion(url, cell)
         assert reply.status_code in (200, 202), reply.text
         live.wait_for(lambda: not cell.arm.is_moving(), 20, 0.01)
         _sim_wait(cell, 0.1)
-    cell.stop_joint_recording()
-    # Over HTTP the reversal is accepted, not refused, and ends where asked. The acceleration and step
-    # figures are asserted on the synchronous sim (tests/station/test_motion_handover.py, the same station
-    # code): this real-time sim, starved of CPU, can start a takeover a few ms late (the sim arm takes its
-    # start time when it gets the physics lock), a 9-11x spike seen under load that is the rig's, not the plan's.
+    figures = motion_figures(cell.stop_joint_recording())
+    # The command within the limit (a lone trapezoid reads 1.002x in this 20 ms measure), no jump, on the simulation's
+    # clock, also on a CPU-starved machine: the arm takes the takeover's start from the station (start_time_s), so a
+    # send held up by a physics batch continues the same curve (before: 9-11x under load, 1 run in 4 with 3 CPU hogs).
+    command, measured = figures.ratio(ACCEL)
+    assert command <= 1.01 and figures.step_rad.max() < 1e-3, (command, figures.step_rad.max())
+    assert measured <= 1.5, measured
     assert abs(cell.arm.read_joint_state().position_rad[0] + 1.0) < 0.02
 
 

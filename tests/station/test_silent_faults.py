@@ -99,9 +99,9 @@ class SlowArm:
         self.entered.set()
         assert self.release.wait(60.0)
 
-    def command_trajectory(self, trajectory, wait: bool = False) -> None:
+    def command_trajectory(self, trajectory, wait: bool = False, start_time_s: float | None = None) -> float:
         self._wait_for_release()
-        self._arm.command_trajectory(trajectory, wait)
+        return self._arm.command_trajectory(trajectory, wait, start_time_s)
 
     def set_torque(self, enabled: bool) -> None:
         self._wait_for_release()

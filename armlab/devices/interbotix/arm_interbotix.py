@@ -93,7 +93,8 @@ class InterbotixArm(Arm):
             velocity = np.array([states.velocity[i] for i in indices], float) if states.velocity else np.zeros(len(indices))
         return JointState(position_rad=position, velocity_rad_s=velocity, timestamp_s=time.time())
 
-    def command_trajectory(self, trajectory: JointTrajectory, wait: bool = False) -> None:
+    def command_trajectory(self, trajectory: JointTrajectory, wait: bool = False, start_time_s: float | None = None) -> float:
+        """See Arm.command_trajectory: streamed from start_time_s on time.monotonic() (None: now)."""
         bot = self._require_connected()
         positions = trajectory.positions_rad
         if positions.shape[1] != len(self.joint_names):
@@ -108,10 +109,12 @@ class InterbotixArm(Arm):
         bot.arm.set_trajectory_time(self.config.profile_time_s, self.config.profile_accel_time_s)
         with self._lock:
             self._trajectory = trajectory
-            self._trajectory_start_s = time.monotonic()
+            self._trajectory_start_s = time.monotonic() if start_time_s is None else float(start_time_s)
+            started_s = self._trajectory_start_s
             self._done.clear()
         if wait:
             self._done.wait()
+        return started_s
 
     def _clear_trajectory(self) -> None:
         with self._lock:

@@ -56,7 +56,7 @@ class NoArm(Arm):
     def read_joint_state(self) -> JointState:
         return JointState(position_rad=np.zeros(0), velocity_rad_s=np.zeros(0), timestamp_s=time.time())
 
-    def command_trajectory(self, trajectory: JointTrajectory, wait: bool = False) -> None:
+    def command_trajectory(self, trajectory: JointTrajectory, wait: bool = False, start_time_s: float | None = None) -> float:
         raise NoArmError("move")
 
     def is_moving(self) -> bool:

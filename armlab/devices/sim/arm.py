@@ -73,9 +73,13 @@ class SimArm(SimDevice, Arm):
         super().close()
 
     def read_joint_state(self) -> JointState:
+        """Now, or while the physics holds the workcell's lock the state at its last control tick (never waits)."""
         self._require()
-        with self._cell.lock:
-            position, velocity, age_s = self._cell.arm_reading()
+        return self._fresh_or_last(self._measure)
+
+    def _measure(self) -> JointState:
+        """What the driver reports now (under the lock; stamped with the reading's own age)."""
+        position, velocity, age_s = self._cell.arm_reading()
         return JointState(position_rad=position, velocity_rad_s=velocity, timestamp_s=time.time() - age_s)
 
     def validate_positions(self, positions_rad: np.ndarray) -> None:
@@ -95,26 +99,41 @@ class SimArm(SimDevice, Arm):
                     f"[{self.lower_rad[j]:.4f}, {self.upper_rad[j]:.4f}] rad"
                 )
 
-    def command_trajectory(self, trajectory: JointTrajectory, wait: bool = False) -> None:
+    def command_trajectory(self, trajectory: JointTrajectory, wait: bool = False, start_time_s: float | None = None) -> float:
+        """See Arm.command_trajectory; the clock is the simulation's (the start is taken under the physics lock,
+        so a command held up by a physics batch still starts where start_time_s says)."""
         self._require()
         if not isinstance(trajectory, JointTrajectory):
             raise ValueError(f"{self}: expected a JointTrajectory, got {type(trajectory).__name__}")
+        if start_time_s is not None and not np.isfinite(start_time_s):
+            raise ValueError(f"{self}: start_time_s must be finite, got {start_time_s!r}")
         self.validate_positions(trajectory.positions_rad)
         with self._cell.lock:
             self._apply_halt()  # a stop requested before this command came first
             if not self._torque:
                 raise InvalidInput(f"{self}: torque is off; enable it before commanding motion")
+            now_s = self._cell.sim_time_s
             self._trajectory = trajectory
-            self._start_s = self._cell.sim_time_s
-            self._cell.apply_arm_reference(*sample_trajectory(trajectory, 0.0))
+            self._start_s = now_s if start_time_s is None else float(start_time_s)
+            self._cell.apply_arm_reference(*sample_trajectory(trajectory, max(0.0, now_s - self._start_s)))
+            started_s = self._start_s
         if wait:
             self.wait_until_done()
+        return started_s
+
+    def clock_s(self) -> float:
+        """The simulation's time (the clock start_time_s is on)."""
+        return self._cell.sim_time_s
 
     def is_moving(self) -> bool:
+        """Tracking a trajectory (a halt requested counts as done); never waits for a physics batch."""
         self._require()
-        with self._cell.lock:
-            self._apply_halt()
-            return self._trajectory is not None
+        if self._cell.lock.acquire(blocking=False):
+            try:
+                self._apply_halt()
+            finally:
+                self._cell.lock.release()
+        return self._trajectory is not None and not self._halt_requested.is_set()
 
     def wait_until_done(self, timeout_s: float | None = None) -> bool:
         self._require()
@@ -172,6 +191,7 @@ class SimArm(SimDevice, Arm):
     def control(self, sim_time_s: float) -> None:
         """Feed the servos (called by the workcell under its lock at every control tick)."""
         self._apply_halt()
+        self._last_reading = self._measure()
         trajectory = self._trajectory
         if trajectory is None or not self._torque:
             return

@@ -14,6 +14,7 @@ class SimDevice:
     """connect()/close()/is_connected and the not-connected guard for a device owned by a SimWorkcell."""
 
     _connected = False
+    _last_reading = None  # the newest reading (_fresh_or_last), refreshed at every control tick too
 
     @property
     def is_connected(self) -> bool:
@@ -39,3 +40,17 @@ class SimDevice:
         fault = getattr(getattr(self, "_cell", None), "physics_fault", None)
         if fault is not None:
             raise DeviceLost(f"{self}: the simulation's physics stopped ({fault}); restart the station")
+
+    def _fresh_or_last(self, read):
+        """read() under the workcell's lock when it is free, else the reading of the last control tick (at most one
+        control period of simulated time old): a status or a waiting request never waits for a physics batch, which
+        a CPU-starved physics thread may hold for tens of milliseconds. Devices refresh it in control()."""
+        cell = self._cell
+        if self._last_reading is None or cell.lock.acquire(blocking=False):
+            if self._last_reading is None:
+                cell.lock.acquire()
+            try:
+                self._last_reading = read()
+            finally:
+                cell.lock.release()
+        return self._last_reading

@@ -57,6 +57,7 @@ class SimGripper(SimDevice, Gripper):
             self._command_s = self._cell.sim_time_s
             self._still_since_s = None
             self._cell.apply_finger_reference(offset_m)
+            self._last_reading = self._measure()
 
     def grasp(self, wait: bool = True) -> None:
         self._require()
@@ -96,12 +97,16 @@ class SimGripper(SimDevice, Gripper):
         return self._still_since_s is not None and self._cell.sim_time_s - self._still_since_s >= self._stop_time_s
 
     def read_state(self) -> GripperState:
+        """Now, or while the physics holds the workcell's lock the state at its last control tick (never waits)."""
         self._require()
-        with self._cell.lock:
-            left, right = self._cell.finger_positions()
-            width = left + right - 2.0 * self._pad_thickness_m
-            holding = self._command == "grasp" and self._stopped() and width > self.min_width_m + HOLDING_MARGIN_M
-            return GripperState(width_m=width, command=self._command, holding=holding, timestamp_s=time.time())
+        return self._fresh_or_last(self._measure)
+
+    def _measure(self) -> GripperState:
+        """The gripper's state now (under the lock)."""
+        left, right = self._cell.finger_positions()
+        width = left + right - 2.0 * self._pad_thickness_m
+        holding = self._command == "grasp" and self._stopped() and width > self.min_width_m + HOLDING_MARGIN_M
+        return GripperState(width_m=width, command=self._command, holding=holding, timestamp_s=time.time())
 
     def control(self, sim_time_s: float) -> None:
         """Track whether the fingers have stopped (called by the workcell under its lock)."""
@@ -112,3 +117,4 @@ class SimGripper(SimDevice, Gripper):
                 self._still_since_s = sim_time_s
         else:
             self._still_since_s = None
+        self._last_reading = self._measure()

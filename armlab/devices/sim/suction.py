@@ -109,6 +109,7 @@ class SuctionGripper(SimDevice, Gripper):
             if command == "release":
                 self._sealed_on = None
                 self._cell.apply_suction(0.0)
+            self._last_reading = self._measure()
 
     def grasp(self, wait: bool = True) -> None:
         """Vacuum on; with wait=True, block until the lip seals or settle_time_s passes (a miss)."""
@@ -135,9 +136,12 @@ class SuctionGripper(SimDevice, Gripper):
         self._require()
 
     def read_state(self) -> GripperState:
+        """Now, or while the physics holds the workcell's lock the state at its last control tick (never waits)."""
         self._require()
-        with self._cell.lock:
-            return GripperState(width_m=0.0, command=self._command, holding=self._sealed_on is not None, timestamp_s=time.time())
+        return self._fresh_or_last(self._measure)
+
+    def _measure(self) -> GripperState:
+        return GripperState(width_m=0.0, command=self._command, holding=self._sealed_on is not None, timestamp_s=time.time())
 
     def control(self, sim_time_s: float) -> None:
         """Seal, vacuum and the acceleration limit (called by the workcell under its lock every control tick)."""
@@ -154,3 +158,4 @@ class SuctionGripper(SimDevice, Gripper):
             sealed_on = None
         self._sealed_on = sealed_on
         self._cell.apply_suction(1.0 if sealed_on is not None else 0.0)
+        self._last_reading = self._measure()
