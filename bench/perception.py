@@ -34,7 +34,8 @@ import numpy as np  # noqa: E402
 from armlab.devices.sim import SimWorkcell, SimWorkcellConfig  # noqa: E402
 from armlab.errors import ConfigError  # noqa: E402
 from armlab.kinematics.arm_model import load_arm  # noqa: E402
-from armlab.scene import EVENTS, Scene, generate_scene  # noqa: E402
+from armlab.scene import Scene, generate_scene  # noqa: E402
+from armlab.scene.events import EVENTS  # noqa: E402
 from armlab.vision import PerceptionPipeline, calibrate_extrinsics, load_perception_config  # noqa: E402
 from armlab.vision.evaluate import SceneScore, click_grid_errors, expected_tops, score_blocks  # noqa: E402
 

@@ -18,7 +18,7 @@ import numpy as np  # noqa: E402
 
 from armlab.devices.arm import JointTrajectory  # noqa: E402
 from armlab.devices.sim import SimWorkcell, SimWorkcellConfig  # noqa: E402
-from armlab.scene import random_scene  # noqa: E402
+from armlab.scene.random_layout import random_scene  # noqa: E402
 
 SEED = 3
 

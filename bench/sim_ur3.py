@@ -20,7 +20,7 @@ import numpy as np  # noqa: E402
 
 from armlab.devices.arm import JointTrajectory  # noqa: E402
 from armlab.devices.sim import SimWorkcell, SimWorkcellConfig  # noqa: E402
-from armlab.scene import random_scene  # noqa: E402
+from armlab.scene.random_layout import random_scene  # noqa: E402
 from suction_helpers import WORKCELL, cup_pose, move_line, move_to_pose  # noqa: E402
 
 SEED = 3

@@ -6,8 +6,9 @@ from typing import Annotated, Literal
 
 from pydantic import Field, model_validator
 
-from armlab.scene import COLORS, MAX_SCENE_OBJECTS, OBJECT_TYPES, SIZES
-from armlab.scene import JOBS as SCENE_JOBS
+from armlab.scene import COLORS
+from armlab.scene.events import JOBS as SCENE_JOBS
+from armlab.scene.model import MAX_SCENE_OBJECTS, OBJECT_TYPES, SIZES
 from server.wire_base import Angle, Position, Request
 
 

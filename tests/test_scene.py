@@ -7,18 +7,11 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from armlab.scene import (
-    COLORS,
-    JOBS,
-    REACH_MAX_M,
-    REACH_MIN_M,
-    Feeder,
-    Scene,
-    SceneObject,
-    generate_scene,
-    quat_from_yaw,
-    random_scene,
-)
+from armlab.scene import COLORS, Scene, SceneObject, generate_scene, quat_from_yaw
+from armlab.scene.events import JOBS
+from armlab.scene.layout import REACH_MAX_M, REACH_MIN_M
+from armlab.scene.model import Feeder
+from armlab.scene.random_layout import random_scene
 from armlab.workcell import load_workcell
 
 WORKCELL = load_workcell()
@@ -307,7 +300,8 @@ def test_object_sizes_come_from_the_workcell_config(tmp_path, monkeypatch):
 def test_every_generated_scene_can_stand():
     """check_can_stand (what POST /api/sim/scene asks of explicit objects) passes every generated scene:
     stacks touch, nothing is under the board (issue 18 item 8)."""
-    from armlab.scene import JOBS, check_can_stand
+    from armlab.scene.events import JOBS
+    from armlab.scene.model import check_can_stand
 
     checked = 0
     for event in JOBS:

@@ -37,7 +37,8 @@ def register(subparsers: argparse._SubParsersAction) -> None:
 def load_scene(args: argparse.Namespace):
     """The scene chosen on the command line (event/level, file, or a random layout from the seed)."""
     from armlab.config import read_config_file
-    from armlab.scene import Scene, generate_scene, random_scene
+    from armlab.scene import Scene, generate_scene
+    from armlab.scene.random_layout import random_scene
 
     if args.scene is not None:
         return Scene.from_dict(read_config_file(args.scene))
@@ -95,7 +96,7 @@ def run_render(args: argparse.Namespace) -> int:
 def run_scene(args: argparse.Namespace) -> int:
     import sys
 
-    from armlab.scene import with_aruco_tops
+    from armlab.scene.aruco_tops import with_aruco_tops
 
     try:
         scene = load_scene(args)

@@ -37,7 +37,9 @@ from dataclasses import dataclass
 import numpy as np
 
 from armlab.errors import InvalidInput
-from armlab.scene import COLORS, EVENTS, WORKCELL_BOUND_M, Scene, SceneObject
+from armlab.scene import COLORS, Scene, SceneObject
+from armlab.scene.events import EVENTS
+from armlab.scene.model import WORKCELL_BOUND_M
 from armlab.vision import load_perception_config
 
 # Simulated seconds allowed per event (DESIGN §7).

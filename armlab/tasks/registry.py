@@ -7,7 +7,8 @@ from collections.abc import Callable
 from dataclasses import dataclass
 
 from armlab.errors import InvalidInput
-from armlab.scene import COLORS, SIZES, as_workcell
+from armlab.scene import COLORS, as_workcell
+from armlab.scene.model import SIZES
 from armlab.station.core import NotCalibrated, Station
 from armlab.station.jobs import Job, JobContext
 from armlab.tasks import (

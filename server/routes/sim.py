@@ -7,7 +7,8 @@ from typing import Annotated, Literal
 from fastapi import APIRouter
 from pydantic import Field
 
-from armlab.scene import Scene, check_can_stand, generate_scene
+from armlab.scene import Scene, generate_scene
+from armlab.scene.model import check_can_stand
 from armlab.station.core import Station
 from armlab.station.jobs import jsonable
 from server.deps import ControlAuth, StationDep

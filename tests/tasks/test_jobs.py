@@ -139,7 +139,7 @@ def test_a_job_needs_a_calibration(tmp_path):
 
 
 def test_every_competition_event_has_a_job_with_its_levels():
-    from armlab.scene import EVENTS
+    from armlab.scene.events import EVENTS
 
     for event, levels in EVENTS.items():
         assert event in JOBS, event

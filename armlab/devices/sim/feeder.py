@@ -13,7 +13,8 @@ import math
 import mujoco
 import numpy as np
 
-from armlab.scene import COLORS, Feeder, SceneObject
+from armlab.scene import COLORS, SceneObject
+from armlab.scene.model import Feeder
 from armlab.workcell import FeederSpec, Workcell
 
 FEEDER_PROBE = "feeder_probe"  # invisible block-sized geom at the spot, for the arm's distance to it

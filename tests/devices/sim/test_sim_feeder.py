@@ -10,7 +10,8 @@ import pytest
 
 from armlab.devices.sim import SimWorkcell, SimWorkcellConfig
 from armlab.devices.sim.mjcf import OBJECT_PREFIX
-from armlab.scene import Feeder, Scene, SceneObject, generate_scene
+from armlab.scene import Scene, SceneObject, generate_scene
+from armlab.scene.model import Feeder
 from armlab.workcell import load_workcell
 from sim_helpers import move_to
 

@@ -151,7 +151,7 @@ def test_grip_comes_from_pad_friction_not_from_proximity(tmp_path):
 
 
 def test_distractors_rest_stably_where_they_were_placed(cell):
-    from armlab.scene import DISTRACTOR_TYPES, object_dimensions_m
+    from armlab.scene.model import DISTRACTOR_TYPES, object_dimensions_m
 
     objects = []
     for i, kind in enumerate(DISTRACTOR_TYPES):
