@@ -34,7 +34,8 @@ os.environ.setdefault("MUJOCO_GL", "egl")
 from armlab.scene import COLORS  # noqa: E402
 from armlab.tasks import JOBS  # noqa: E402
 from armlab.tasks.evaluate import EvalError, episode_unsupported, evaluate, parse_seeds, summarize  # noqa: E402
-from armlab.workcell import DEFAULT_WORKCELL, known_workcells  # noqa: E402
+from armlab.workcell import DEFAULT_WORKCELL  # noqa: E402
+from armlab.workcell.loading import known_workcells  # noqa: E402
 
 DEFAULT_SEEDS = "0-19"
 FULL_RATE_TARGETS = {("pick_sort", 3): 0.95, ("pick_stack", 3): 0.95, ("line_up", 3): 0.95,

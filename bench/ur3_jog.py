@@ -26,7 +26,8 @@ from armlab.kinematics import Unreachable  # noqa: E402
 from armlab.station.config import StationConfig  # noqa: E402
 from armlab.station.core import Station  # noqa: E402
 from armlab.store import Store  # noqa: E402
-from armlab.workcell import load_workcell_arm, load_workcell_motion_config  # noqa: E402
+from armlab.workcell import load_workcell_arm  # noqa: E402
+from armlab.workcell.loading import load_workcell_motion_config  # noqa: E402
 
 WORKCELL = "ur3_suction"
 

@@ -9,7 +9,8 @@ import yaml
 
 from armlab.config import config_dir
 from armlab.errors import ConfigError
-from armlab.workcell import block_edge_m, load_workcell
+from armlab.workcell import load_workcell
+from armlab.workcell.loading import block_edge_m
 
 DEFAULT_FILE = config_dir() / "workcells" / "rx200_armlab.yaml"
 

@@ -9,7 +9,8 @@ from dataclasses import dataclass
 import numpy as np
 
 from armlab.scene.model import Feeder, Scene, SceneObject, as_workcell, object_dimensions_m, quat_from_yaw
-from armlab.workcell import DEFAULT_SCENE_REACH_M, Workcell
+from armlab.workcell import Workcell
+from armlab.workcell.spots import DEFAULT_SCENE_REACH_M
 
 # Generator choices (not workcell facts): the margin kept from the board edges (x, y), the tag keep-out and
 # the gap between piles. Where a top-down grasp reaches comfortably (radius from the base axis) is the

@@ -12,7 +12,8 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from armlab.errors import InvalidInput
-from armlab.workcell import DEFAULT_WORKCELL, DISTRACTOR_SHAPES, Workcell, load_workcell
+from armlab.workcell import DEFAULT_WORKCELL, Workcell, load_workcell
+from armlab.workcell.objects import DISTRACTOR_SHAPES
 
 _ID_PATTERN = re.compile(r"[A-Za-z0-9_.:-]{1,64}")
 OBJECT_TYPES = ("block", *DISTRACTOR_SHAPES)

@@ -9,7 +9,8 @@ from pydantic import Field, field_validator, model_validator
 
 from armlab.config import StrictModel, config_dir, load_config
 from armlab.errors import ConfigError, InvalidInput
-from armlab.workcell import DEFAULT_WORKCELL, known_workcells, load_workcell
+from armlab.workcell import DEFAULT_WORKCELL, load_workcell
+from armlab.workcell.loading import known_workcells
 
 
 class SimStartConfig(StrictModel):

@@ -51,7 +51,7 @@ from armlab.station.telemetry import TelemetryPublisher, gripper_pose_from_matri
 from armlab.station.watch import DeviceWatch
 from armlab.store import Store
 from armlab.vision import load_perception_config
-from armlab.workcell import load_workcell_motion_config
+from armlab.workcell.loading import load_workcell_motion_config
 
 log = logging.getLogger(__name__)
 

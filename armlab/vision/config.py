@@ -15,7 +15,9 @@ from pydantic import Field, field_validator, model_validator
 
 from armlab.config import StrictModel, config_dir, read_config_file, validate_config
 from armlab.errors import ConfigError
-from armlab.workcell import DEFAULT_WORKCELL, BlockTagEntry, Workcell, is_apriltag_family, known_family, load_workcell
+from armlab.workcell import DEFAULT_WORKCELL, Workcell, load_workcell
+from armlab.workcell.objects import BlockTagEntry
+from armlab.workcell.tag_families import is_apriltag_family, known_family
 
 COLOR_NAME = re.compile(r"[a-z][a-z0-9_]{0,31}")
 

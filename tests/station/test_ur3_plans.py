@@ -16,7 +16,8 @@ from armlab.skills.manipulate import plan_pick, plan_place, plan_side_place
 from armlab.station.config import StationConfig
 from armlab.station.core import Station
 from armlab.store import Store
-from armlab.workcell import load_workcell_arm, load_workcell_motion_config
+from armlab.workcell import load_workcell_arm
+from armlab.workcell.loading import load_workcell_motion_config
 
 WORKCELL = "ur3_suction"
 TOP_M = np.array([0.10, 0.30, 0.038])

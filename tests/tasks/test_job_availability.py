@@ -11,7 +11,7 @@ import yaml
 
 from armlab.cli import main
 from armlab.tasks.evaluate import check_request
-from armlab.workcell import _REPO_CONFIG_DIR
+from armlab.workcell.loading import _REPO_CONFIG_DIR
 
 UR3_FILE = yaml.safe_load(open(f"{_REPO_CONFIG_DIR}/workcells/ur3_suction.yaml"))
 

@@ -15,7 +15,8 @@ import numpy as np
 
 from armlab.scene import COLORS, SceneObject
 from armlab.scene.model import Feeder
-from armlab.workcell import FeederSpec, Workcell
+from armlab.workcell import Workcell
+from armlab.workcell.spots import FeederSpec
 
 FEEDER_PROBE = "feeder_probe"  # invisible block-sized geom at the spot, for the arm's distance to it
 PARK_ORIGIN_M = (3.0, 3.0, 0.5)  # far outside the board and the camera's view

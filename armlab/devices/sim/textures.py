@@ -10,7 +10,7 @@ import cv2
 import numpy as np
 
 from armlab.devices.sim.tag_bitmaps import tag_bitmap
-from armlab.workcell import BoardSpec
+from armlab.workcell.board import BoardSpec
 
 BOARD_RGB = (150, 150, 146)
 GRID_RGB = (70, 70, 70)
