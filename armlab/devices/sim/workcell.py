@@ -1,6 +1,7 @@
 """SimWorkcell: the MuJoCo workcell that owns the model, its lock, the clock (real-time threads or
-deterministic fast stepping) and the ground truth (its queries: armlab.devices.sim.truth), and hands out
-the sim Arm, Gripper and Camera.
+deterministic fast stepping: armlab.devices.sim.clock), the camera mount and checkerboard
+(armlab.devices.sim.camera_rig) and the ground truth (its queries: armlab.devices.sim.truth), and hands
+out the sim Arm, Gripper and Camera.
 
 Fast mode (realtime=False): physics advances only in step() and in blocking device calls, so a seed and
 a sequence of calls always give the same result. Real-time mode: a physics thread paced to the wall
@@ -8,11 +9,8 @@ clock (servo references updated every control period) and a render thread at the
 
 from __future__ import annotations
 
-import logging
 import math
 import threading
-import time
-from collections.abc import Callable
 
 import mujoco
 import numpy as np
@@ -22,8 +20,8 @@ from armlab.devices.sim.arm import SimArm
 from armlab.devices.sim.arm_realism import GEAR_SUFFIX, JointStatePublisher, real_geometry
 from armlab.devices.sim.arm_select import select_arm
 from armlab.devices.sim.camera import NoiseModel, SimCamera
-from armlab.devices.sim.checkerboard import BODY_NAME as CHECKERBOARD
-from armlab.devices.sim.checkerboard import PARKED_POSITION_M, checked_pose
+from armlab.devices.sim.camera_rig import SimCameraRig
+from armlab.devices.sim.clock import SimClock
 from armlab.devices.sim.config import (
     MountConfig,
     SimWorkcellConfig,
@@ -32,11 +30,10 @@ from armlab.devices.sim.config import (
     load_sim_config,
     nominal_T_world_camera,
     resolve_realism,
-    rotation_from_rotvec,
 )
 from armlab.devices.sim.feeder import FeederRuntime, parked_objects
 from armlab.devices.sim.gripper import SimGripper
-from armlab.devices.sim.mjcf import CAMERA_NAME, GRIPPER_SITE, OBJECT_PREFIX, build_model_xml, quat_wxyz_from_matrix
+from armlab.devices.sim.mjcf import CAMERA_NAME, GRIPPER_SITE, OBJECT_PREFIX, build_model_xml
 from armlab.devices.sim.mjcf_dh import CUP_BODY, LIP_MARGIN_M, LIP_PREFIX, SUCTION_ACTUATOR, DhArmGeometry
 from armlab.devices.sim.path import PathRecorder
 from armlab.devices.sim.realism import RealCamera
@@ -47,13 +44,10 @@ from armlab.errors import InvalidInput
 from armlab.scene import Scene
 from armlab.workcell import load_workcell
 
-logger = logging.getLogger(__name__)
-
-MAX_CATCH_UP_S = 0.1  # real time: if physics falls this far behind the wall clock, it drops the backlog
 PAD_GEOMS = ("left_pad", "right_pad")
 
 
-class SimWorkcell(SimTruth):
+class SimWorkcell(SimClock, SimCameraRig, SimTruth):
     """The simulated workcell (the RX200 with fingers, or a DH arm with a suction cup, per the workcell config).
     See the module docstring for the clock semantics."""
 
@@ -243,19 +237,6 @@ class SimWorkcell(SimTruth):
     def model(self) -> mujoco.MjModel:
         return self._model
 
-    @property
-    def realtime(self) -> bool:
-        return self.config.realtime
-
-    @property
-    def control_period_s(self) -> float:
-        """How often the servo references are updated (simulated seconds): the e-stop's halt bound."""
-        return float(self._sim.physics.control_period_s)
-
-    @property
-    def sim_time_s(self) -> float:
-        return float(self._data.time)
-
     # ------------------------------------------------------------ device hooks (call under self.lock)
     def arm_positions(self) -> np.ndarray:
         return self._data.qpos[self._arm_qpos].copy()
@@ -326,85 +307,6 @@ class SimWorkcell(SimTruth):
     def set_arm_torque(self, enabled: bool) -> None:
         self._apply_torque(self._model, enabled)
         self._torque = enabled
-
-    # ------------------------------------------------------------------ clock
-    def _step_once(self) -> None:
-        data = self._data
-        if data.time + 1e-9 >= self._next_control_s:
-            self._next_control_s = data.time + self._sim.physics.control_period_s
-            if self.arm.is_connected:
-                self.arm.control(data.time)
-                self._record_joints()
-            self.gripper.control(data.time)
-            if self._feeder is not None:
-                self._feeder.tick(self._model, data)
-        mujoco.mj_step(self._model, data)
-        if self._publisher is not None and self._publisher.due(data.time):
-            self._publisher.publish(float(data.time), data.qpos[self._arm_qpos], data.qvel[self._arm_qvel])
-        if self._path is not None and self._path.due(data.time):
-            self._path.record(float(data.time), data.site_xpos[self._gripper_site])
-
-    def _advance(self, duration_s: float) -> None:
-        steps = int(round(duration_s / self._model.opt.timestep))
-        with self.lock:
-            for _ in range(steps):
-                self._step_once()
-
-    def step(self, duration_s: float) -> None:
-        """Fast mode: advance the physics by duration_s of simulated time, as fast as possible."""
-        if self.realtime:
-            raise RuntimeError("SimWorkcell.step() is for fast mode; in real time the physics thread advances it")
-        if not (isinstance(duration_s, (int, float)) and math.isfinite(duration_s) and 0.0 <= duration_s <= 3600.0):
-            raise InvalidInput(f"step: duration_s must be finite and in [0, 3600], got {duration_s!r}")
-        self._advance(float(duration_s))
-
-    def wait_for(self, predicate: Callable[[], bool], timeout_s: float) -> bool:
-        """Block until predicate() (checked under the lock) holds; fast mode steps the physics meanwhile.
-        timeout_s is simulated time in fast mode and wall time in real time. Returns predicate()."""
-        chunk_s = self._sim.physics.control_period_s
-        if not self.realtime:
-            elapsed = 0.0
-            while True:
-                with self.lock:
-                    if predicate():
-                        return True
-                if elapsed >= timeout_s:
-                    return False
-                self._advance(chunk_s)
-                elapsed += chunk_s
-        deadline = time.monotonic() + timeout_s
-        while True:
-            with self.lock:
-                if predicate():
-                    return True
-            if time.monotonic() >= deadline:
-                return False
-            time.sleep(0.002)
-
-    def _physics_loop(self) -> None:
-        """The real-time physics thread. If it dies, physics would freeze while reads and renders still succeed:
-        instead the reason is kept in physics_fault and every device raises DeviceLost naming it (the station's
-        device watch then faults and halts), and it is logged."""
-        try:
-            self._run_physics()
-        except Exception as error:  # noqa: BLE001 - whatever ended it, it must not end silently
-            self.physics_fault = f"{type(error).__name__}: {error}"
-            logger.exception("simulation physics thread died: the simulated devices now report lost")
-
-    def _run_physics(self) -> None:
-        wall0 = time.monotonic()
-        sim0 = self.sim_time_s
-        timestep = self._model.opt.timestep
-        while not self._stop_event.is_set():
-            with self.lock:
-                target = sim0 + (time.monotonic() - wall0)
-                steps = 0
-                while self._data.time < target and steps < int(MAX_CATCH_UP_S / timestep):
-                    self._step_once()
-                    steps += 1
-                if self._data.time < target - MAX_CATCH_UP_S:
-                    wall0, sim0 = time.monotonic(), self._data.time
-            time.sleep(0.001)
 
     # ---------------------------------------------------------------- camera
     def _snapshot(self, renderer) -> tuple[float, np.ndarray, bool]:
@@ -479,45 +381,3 @@ class SimWorkcell(SimTruth):
 
     def __exit__(self, *exc) -> None:
         self.close()
-
-    # ------------------------------------------------------------ the rig (camera mount, checkerboard)
-    def bump_camera(self, T_old_new: np.ndarray) -> None:
-        """Move the camera mount by T_old_new (4x4, in the camera's own OpenCV frame), as a knock on
-        the rig would: later frames and truth() use the new pose; scene changes keep it."""
-        with self.lock:
-            self._T_world_camera = self._T_world_camera @ np.asarray(T_old_new, dtype=float)
-            camera_id = mujoco.mj_name2id(self._model, mujoco.mjtObj.mjOBJ_CAMERA, CAMERA_NAME)
-            self._model.cam_pos[camera_id] = self._T_world_camera[:3, 3]
-            R_world_mj = self._T_world_camera[:3, :3] @ np.diag([1.0, -1.0, -1.0])  # MuJoCo cameras look along -z, y up
-            self._model.cam_quat[camera_id] = quat_wxyz_from_matrix(R_world_mj)
-            self._data.cam_xpos[camera_id] = self._T_world_camera[:3, 3]  # the next physics step would recompute these
-            self._data.cam_xmat[camera_id] = R_world_mj.ravel()
-            self.camera.set_board(self._T_world_camera, self._depth_pivot_m())  # the depth's tilt pivots there
-
-    def _depth_pivot_m(self) -> np.ndarray:
-        """Where the realistic depth's offset is measured and its tilt pivots: the board tags' centre."""
-        return np.mean(np.asarray(list(self._workcell.board_tags.centres_m.values()), dtype=float), axis=0)
-
-    def knock_camera(self, translation_m, rotation_rad) -> None:
-        """bump_camera by a translation (m) and then a rotation vector (rad), both in the camera's frame."""
-        T_old_new = np.eye(4)
-        T_old_new[:3, :3] = rotation_from_rotvec(np.asarray(rotation_rad, dtype=float))
-        T_old_new[:3, 3] = np.asarray(translation_m, dtype=float)
-        self.bump_camera(T_old_new)
-
-    def place_checkerboard(self, position_m=None, R_world_board=None) -> None:
-        """Put the intrinsics checkerboard (checkerboard.py: board frame, z out of the printed face) at a world
-        pose, or park it out of sight with no arguments. Contact-free: nothing else in the cell moves."""
-        pose = None if position_m is None else checked_pose(position_m, np.eye(3) if R_world_board is None else R_world_board)
-        with self.lock:
-            self._checkerboard_pose = pose
-            self._show_checkerboard()
-
-    def _show_checkerboard(self) -> None:
-        """Move the checkerboard's mocap body to its pose (or parked) and update the drawn positions (under the lock)."""
-        pose = getattr(self, "_checkerboard_pose", None)
-        position, R = (np.asarray(PARKED_POSITION_M), np.eye(3)) if pose is None else pose
-        mocap = self._model.body_mocapid[self._model.body(CHECKERBOARD).id]
-        self._data.mocap_pos[mocap] = position
-        self._data.mocap_quat[mocap] = quat_wxyz_from_matrix(R)
-        mujoco.mj_kinematics(self._model, self._data)
