@@ -63,11 +63,27 @@ class Run:
         return self.trajectory.duration_s
 
 
+def overshoot_free_accel(velocity_rad_s, accel_rad_s2, limits: Limits) -> np.ndarray:
+    """The start acceleration cut so that no plan from (velocity, accel) need pass the velocity limit: an
+    acceleration still pushing a joint toward its limit takes a²/2j more velocity to bring to zero at the jerk
+    limit, so it may be at most sqrt(2·j·(v_max − |v|)) (0 at or above the limit). Velocity is kept (continuity);
+    only the acceleration steps, by less than the acceleration limit. Without this a takeover at cruise speed while
+    still accelerating was planned ~0.7 % over the waist's velocity limit and refused."""
+    velocity = np.asarray(velocity_rad_s, dtype=float)
+    accel = np.asarray(accel_rad_s2, dtype=float)
+    room = np.maximum(limits.velocity_rad_s - np.abs(velocity), 0.0)
+    allowed = np.sqrt(2.0 * limits.jerk_rad_s3 * room)
+    outward = (accel * velocity) > 0.0
+    return np.where(outward, np.sign(accel) * np.minimum(np.abs(accel), allowed), accel)
+
+
 def _ruckig_segment(q0, v0, a0, q1, v1, limits: Limits, minimum_s: float | None, tick_s: float):
-    """One ruckig trajectory from (q0, v0, a0) to (q1, v1, 0); PlanRefused if ruckig finds none."""
+    """One ruckig trajectory from (q0, v0, a0) to (q1, v1, 0); PlanRefused if ruckig finds none. a0 is cut where it
+    would carry a joint past its velocity limit (overshoot_free_accel)."""
     from ruckig import DurationDiscretization, InputParameter, Result, Ruckig, Trajectory
 
     dof = len(q0)
+    a0 = overshoot_free_accel(v0, a0, limits)
     otg = Ruckig(dof, tick_s) if tick_s > 0 else Ruckig(dof)
     inp = InputParameter(dof)
     inp.current_position, inp.current_velocity, inp.current_acceleration = list(q0), list(v0), list(a0)
@@ -210,7 +226,7 @@ def plan_stop(position_rad, velocity_rad_s, accel_rad_s2, limits: Limits, rate_h
     inp.control_interface = ControlInterface.Velocity
     inp.current_position = [float(v) for v in position_rad]
     inp.current_velocity = [float(v) for v in velocity_rad_s]
-    inp.current_acceleration = [float(v) for v in accel_rad_s2]
+    inp.current_acceleration = [float(v) for v in overshoot_free_accel(velocity_rad_s, accel_rad_s2, limits)]
     inp.target_velocity, inp.target_acceleration = [0.0] * dof, [0.0] * dof
     inp.max_velocity = list(limits.velocity_rad_s)
     inp.max_acceleration = list(limits.accel_rad_s2)

@@ -103,3 +103,23 @@ def test_a_trajectory_library_failure_is_a_clear_value_error():
     tiny = Limits(np.ones(2), np.full(2, 1e-3), np.full(2, 1e-3))
     with pytest.raises(ValueError, match=r"trajectory library \(ruckig\) found no trajectory"):
         plan_run(np.array([[0.0, 0.0], [1.0, 1.0]]), tiny, start_velocity=[1e3, 0.0])
+
+
+@pytest.mark.parametrize("plan", ["run", "stop"])
+def test_a_start_still_accelerating_near_the_velocity_limit_never_passes_it(plan):
+    """A takeover at cruise speed while still accelerating (the waist at 99.5 % of its limit, accelerating at the
+    limit toward it): the plan keeps the start velocity and stays within the velocity limit (an accelerating start
+    carried over, a²/2j past it, was refused as 'waist moves at 3.164 rad/s ... above its velocity limit')."""
+    limits = arm_limits(ARM)
+    v_max, a_max = float(limits.velocity_rad_s[0]), float(limits.accel_rad_s2[0])
+    start = np.array([-1.0, 0.0, 0.0, 0.9, 0.0])
+    velocity = np.array([0.995 * v_max, 0.0, 0.0, 0.0, 0.0])
+    accel = np.array([a_max, 0.0, 0.0, 0.0, 0.0])
+    if plan == "run":
+        trajectory = plan_run(np.array([start, start + [2.5, 0.0, 0.0, 0.0, 0.0]]), limits,
+                              start_velocity=velocity, start_accel=accel, tick_s=0.004).trajectory
+    else:
+        trajectory = plan_stop(start, velocity, accel, limits)
+    rates, _ = finite_difference_rates(trajectory)
+    assert np.abs(rates[:, 0]).max() <= v_max + 1e-9, (np.abs(rates[:, 0]).max(), v_max)
+    assert abs(rates[0, 0] - velocity[0]) <= a_max * float(trajectory.times_s[1]) + 1e-6  # the start velocity is kept
