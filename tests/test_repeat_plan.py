@@ -11,6 +11,7 @@ from armlab.kinematics import load_arm
 from armlab.motion.safety import UnsafeTrajectory
 from armlab.skills.repeat_plan import RepeatSettings, plan_cycle, plan_ease_in
 from armlab.station.checks import checked_joints
+from armlab.station.motion import MotionGate
 from armlab.store import Program, Waypoint
 
 ARM = load_arm("rx200")
@@ -19,7 +20,7 @@ SIDE = np.array([-0.9, 0.3, 0.2, 1.0, 0.0])
 
 
 class FakeStation:
-    """What the planner uses of a Station: model, sim (none: no ticks), checked_joints, check_motion."""
+    """What the planner uses of a Station: model, sim (none: no ticks), checked_joints, check_motion, check_poses."""
 
     def __init__(self, refuse=lambda trajectory: None) -> None:
         self.model, self.sim, self.refuse = ARM, None, refuse
@@ -31,6 +32,9 @@ class FakeStation:
         reason = self.refuse(trajectory)
         if reason:
             raise UnsafeTrajectory(reason)
+
+    check_pose = MotionGate.check_pose  # the station's own: a standing arm through check_motion
+    check_poses = MotionGate.check_poses  # the station's own: naming the waypoint
 
 
 def _through_front_low(trajectory) -> str | None:
