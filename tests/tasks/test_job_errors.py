@@ -9,13 +9,7 @@ import logging
 
 import pytest
 
-from armlab import skills
-from armlab.devices.sim import SimWorkcell, SimWorkcellConfig
-from armlab.kinematics import Unreachable, load_arm
-from armlab.scene import Scene
-from armlab.station.config import StationConfig
-from armlab.station.core import Station
-from armlab.store import Store
+from armlab.kinematics import Unreachable
 from armlab.tasks import runner, start_auto
 
 ONE_BLOCK = {"objects": [
@@ -25,16 +19,9 @@ NUMPY_BUG = "operands could not be broadcast together with shapes (3,) (4,)"
 
 
 @pytest.fixture()
-def station(tmp_path):
+def station(calibrated_station):
     """A synchronous station on a fast-mode simulation of ONE_BLOCK, calibrated."""
-    with SimWorkcell(SimWorkcellConfig(realtime=False, seed=5), scene=Scene.from_dict(ONE_BLOCK)) as cell:
-        station = Station(cell.arm, cell.gripper, cell.camera, model=load_arm("rx200"), config=StationConfig(),
-                          store=Store(tmp_path / "s.sqlite3"), sim=cell, synchronous=True)
-        station.start()
-        job = skills.calibrate(station)
-        assert job.wait(60) and job.state == "succeeded", job.message
-        yield station
-        station.close()
+    return calibrated_station(ONE_BLOCK)
 
 
 def test_a_bare_value_error_in_planning_fails_the_job_as_an_internal_error(station, monkeypatch, caplog):

@@ -25,16 +25,9 @@ TWO_BLOCKS = {"objects": [
 
 
 @pytest.fixture()
-def station(tmp_path):
+def station(calibrated_station):
     """A synchronous station on a fast-mode simulation of TWO_BLOCKS, calibrated."""
-    with SimWorkcell(SimWorkcellConfig(realtime=False, seed=5), scene=Scene.from_dict(TWO_BLOCKS)) as cell:
-        station = Station(cell.arm, cell.gripper, cell.camera, model=load_arm("rx200"), config=StationConfig(),
-                          store=Store(tmp_path / "s.sqlite3"), sim=cell, synchronous=True)
-        station.start()
-        job = skills.calibrate(station)
-        assert job.wait(60) and job.state == "succeeded", job.message
-        yield station
-        station.close()
+    return calibrated_station(TWO_BLOCKS)
 
 
 def truth_by_id(station) -> dict:

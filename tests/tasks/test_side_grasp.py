@@ -10,16 +10,11 @@ import math
 import numpy as np
 import pytest
 
-from armlab import skills
-from armlab.devices.sim import SimWorkcell, SimWorkcellConfig
-from armlab.kinematics import Unreachable, load_arm
+from armlab.kinematics import Unreachable
 from armlab.motion.safety import UnsafeTrajectory
 from armlab.scene import Scene
 from armlab.skills import side_grasp
 from armlab.skills.manipulate import plan_place, run_steps
-from armlab.station.config import StationConfig
-from armlab.station.core import Station
-from armlab.store import Store
 from armlab.tasks.episode import run_episode
 
 EDGE_M = 0.038
@@ -45,16 +40,9 @@ def tower_scene() -> Scene:
 
 
 @pytest.fixture()
-def station(tmp_path):
+def station(calibrated_station):
     """A synchronous, calibrated station on a fast-mode simulation of tower_scene()."""
-    with SimWorkcell(SimWorkcellConfig(realtime=False, seed=7), scene=tower_scene()) as cell:
-        station = Station(cell.arm, cell.gripper, cell.camera, model=load_arm("rx200"), config=StationConfig(),
-                          store=Store(tmp_path / "s.sqlite3"), sim=cell, synchronous=True)
-        station.start()
-        job = skills.calibrate(station)
-        assert job.wait(60) and job.state == "succeeded", job.message
-        yield station
-        station.close()
+    return calibrated_station(tower_scene(), seed=7)
 
 
 def test_a_block_side_grasped_from_the_board_stands_upright_on_a_tower_out_of_top_down_reach(station):
