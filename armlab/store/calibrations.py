@@ -50,15 +50,7 @@ class CalibrationTables(Database):
         logged and skipped), else None."""
         rows = self._run("SELECT id, created_s, data_json FROM intrinsics WHERE camera = ? ORDER BY id DESC LIMIT 20",
                          (camera,), raw_text=True)
-        for row_id, created_s, data in rows:
-            try:
-                value = json.loads(data.decode("utf-8"))
-                if not isinstance(value, dict):
-                    raise ValueError("not a JSON object")
-                return {**value, "created_s": float(created_s)}
-            except ROW_ERRORS as error:
-                self._skip(f"intrinsics {row_id}", error)
-        return None
+        return self._newest_json_object(rows, "intrinsics")
 
     # Colour calibration ---------------------------------------------------------------------------
 
@@ -72,6 +64,11 @@ class CalibrationTables(Database):
         """The newest colour calibration that reads back ({"created_s", **data}; damaged rows are logged
         and skipped), else None."""
         rows = self._run("SELECT id, created_s, data_json FROM color_calibrations ORDER BY id DESC LIMIT 20", raw_text=True)
+        return self._newest_json_object(rows, "colour calibration")
+
+    def _newest_json_object(self, rows, what: str) -> dict | None:
+        """The first of (id, created_s, data_json) rows whose data reads back as a JSON object ({"created_s",
+        **data}); damaged rows are logged and skipped. None when none does."""
         for row_id, created_s, data in rows:
             try:
                 value = json.loads(data.decode("utf-8"))
@@ -79,5 +76,5 @@ class CalibrationTables(Database):
                     raise ValueError("not a JSON object")
                 return {**value, "created_s": float(created_s)}
             except ROW_ERRORS as error:
-                self._skip(f"colour calibration {row_id}", error)
+                self._skip(f"{what} {row_id}", error)
         return None
