@@ -21,7 +21,7 @@ from armlab.vision.block import Block
 from armlab.vision.block_geometry import STEP, BlockGeometry, frame_geometry, roi_heights
 from armlab.vision.block_tags import face_looks_tagged, with_tag
 from armlab.vision.calibration import Calibration
-from armlab.vision.colors import BoardGrey, ColorModel, board_region_mask
+from armlab.vision.colors import BoardGrey, ColorModel, board_region_mask, frame_clip_levels_rgb
 from armlab.vision.config import PerceptionConfig
 from armlab.vision.distractors import (
     dark_and_colourless,
@@ -220,7 +220,8 @@ def detect_blocks(
     board_small &= board_region_mask(z_small.shape, cal.T_world_camera, cal.K, cal.dist, cfg.board.x_range_m, cfg.board.y_range_m, step)
     if ignore_mask is not None:
         board_small &= ~ignore_mask[::step, ::step]
-    colour_of = _face_colour(color_model or ColorModel.from_config(cfg), BoardGrey(small_bgr, board_small, scale=step))
+    colour_of = _face_colour(color_model or ColorModel.from_config(cfg), BoardGrey(small_bgr, board_small, scale=step),
+                             frame_clip_levels_rgb(small_bgr))
     coloured = (classes > 0).astype(np.uint8)
     # A tag on a block's top is white and black: bridge its white (next to colour, never the dark arm)
     # so the thin coloured ring around it stays one candidate at this resolution.
@@ -310,9 +311,10 @@ class _Region:
             self.z[ignored] = np.nan
 
 
-def _face_colour(model: ColorModel, grey: BoardGrey):
-    """colour_of(face_bgr, centre_px) -> ColorReading: the model's reading against the board's grey near the face."""
-    return lambda face_bgr, centre_px: model.classify(face_bgr, grey.near(centre_px))
+def _face_colour(model: ColorModel, grey: BoardGrey, clip_from_rgb: np.ndarray):
+    """colour_of(face_bgr, centre_px) -> ColorReading: the model's reading against the board's grey near
+    the face, channels clipped from the frame's clip_from_rgb (frame_clip_levels_rgb)."""
+    return lambda face_bgr, centre_px: model.classify(face_bgr, grey.near(centre_px), clip_from_rgb)
 
 
 def _blocks_from_region(color_bgr, geo: BlockGeometry, cfg, region: _Region, top_m, names, ci, z_small, step,

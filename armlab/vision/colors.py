@@ -36,6 +36,14 @@ BOARD_LUMINANCE_BAND = 0.2  # board pixels within this fraction of the median br
 BOARD_CHROMATICITY_BAND = 0.03  # ... and within this of the median chromaticity (r, b of r + g + b; drops wood, paper, cables)
 MIN_BOARD_PIXELS = 20
 CLIPPED = 250  # an 8-bit channel at or above this may be clipped: the face is compared with references as the camera would clip them
+# A camera that scales its channels after the sensor clipped (white balance, digital gain) and adds noise
+# shows a clipped channel as a noisy plateau below 255 (the simulated L515 at a red gain of 0.92: an orange
+# face's red at 234 +- 2). Where each channel clips in a frame: CLIP_TOP_PIXELS from its brightest pixel
+# (a small cube's top is ~25 pixels at the detector's resolution), less CLIP_MARGIN (~4 sigma of the noise),
+# when that is at least MIN_CLIP_LEVEL (a frame with nothing overexposed keeps CLIPPED).
+CLIP_TOP_PIXELS = 8
+CLIP_MARGIN = 8
+MIN_CLIP_LEVEL = 215
 MAX_FACE_GAIN = 2.0  # a clipped face's exposure against its board grey, fitted on >= 2 unclipped channels, within this factor
 
 
@@ -250,30 +258,32 @@ class ColorModel:
         """The face's board-normalised CIELAB (3,) (face_rgb: face_median_rgb(face_bgr), if at hand)."""
         return lab_from_relative_rgb(normalised_rgb(face_bgr, board_bgr, face_rgb), self.board_reflectance)
 
-    def classify(self, face_bgr: np.ndarray, board_bgr: np.ndarray) -> ColorReading:
+    def classify(self, face_bgr: np.ndarray, board_bgr: np.ndarray, clip_from_rgb=None) -> ColorReading:
         """The colour of a block face: face_bgr (N, 3) uint8 BGR pixels of the top face, board_bgr the
         board's grey near it (board_reference_bgr). A face with a channel at the camera's ceiling
         (overexposed: its true colour is unknown in that channel) is compared with each reference as the
         camera would show it, clipped the same way: its hue and chroma at the exposure that best fits the
         face's unclipped channels (a top face may be lit more than the board near it: a highlight, the
         board's ring in the cube's shadow), its lightness at the board's exposure (so a dim yellow is not
-        a bright orange)."""
+        a bright orange). clip_from_rgb (3,): the level from which each channel is clipped in this frame
+        (frame_clip_levels_rgb; default CLIPPED)."""
         face_rgb = face_median_rgb(face_bgr)
         lab = self.measure(face_bgr, board_bgr, face_rgb)
-        if face_rgb.max() >= CLIPPED:
-            return self.classify_lab(lab, seen=self._as_clipped(board_bgr, face_rgb))
+        clip_from = np.full(3, float(CLIPPED)) if clip_from_rgb is None else np.asarray(clip_from_rgb, dtype=float).reshape(3)
+        if np.any(face_rgb >= clip_from):
+            return self.classify_lab(lab, seen=self._as_clipped(board_bgr, face_rgb, clip_from))
         return self.classify_lab(lab)
 
-    def _as_clipped(self, board_bgr, face_rgb: np.ndarray) -> np.ndarray:
-        """The references (M, 3) as this camera shows them on a face whose channels at or above CLIPPED
-        are clipped (CIELAB against the board): hue and chroma of each reference scaled to the face's
-        unclipped channels (least squares in linear light, within MAX_FACE_GAIN) and clipped; lightness
-        of the reference at the board's exposure, clipped."""
+    def _as_clipped(self, board_bgr, face_rgb: np.ndarray, clip_from: np.ndarray) -> np.ndarray:
+        """The references (M, 3) as this camera shows them on a face whose channels at or above clip_from
+        (3,) are clipped at the face's value, the others at 255 (CIELAB against the board): hue and chroma
+        of each reference scaled to the face's unclipped channels (least squares in linear light, within
+        MAX_FACE_GAIN) and clipped; lightness of the reference at the board's exposure, clipped."""
         board_lin = np.maximum(srgb_to_linear(np.asarray(board_bgr, dtype=float)[::-1]), 1e-4)
-        ceiling = float(srgb_to_linear(CLIPPED))
+        free = face_rgb < clip_from
+        ceiling = srgb_to_linear(np.where(free, 255.0, face_rgb))
         ref_lin = self._table[2] * board_lin  # (M, 3)
         at_board = lab_from_relative_rgb(np.minimum(ref_lin, ceiling) / board_lin, self.board_reflectance)
-        free = face_rgb < CLIPPED
         if np.count_nonzero(free) >= 2:
             norm = np.einsum("ij,ij->i", ref_lin[:, free], ref_lin[:, free])
             fit = ref_lin[:, free] @ srgb_to_linear(face_rgb[free])
@@ -381,6 +391,18 @@ def face_and_board_at(color_bgr: np.ndarray, center_px, side_px: float | None = 
     return patch, board_reference_bgr(color_bgr, ring)
 
 
+def frame_clip_levels_rgb(color_bgr: np.ndarray) -> np.ndarray:
+    """(3,) RGB: the level from which each channel counts as clipped in this BGR frame (the CLIP_TOP_PIXELS-th
+    brightest value less CLIP_MARGIN, never above CLIPPED; CLIPPED where that is below MIN_CLIP_LEVEL)."""
+    levels = []
+    for channel in (2, 1, 0):
+        counts = np.bincount(np.asarray(color_bgr)[..., channel].ravel(), minlength=256)
+        top = int(np.searchsorted(np.cumsum(counts[::-1]), CLIP_TOP_PIXELS))  # levels down from 255
+        level = 255 - top - CLIP_MARGIN
+        levels.append(float(min(CLIPPED, level)) if level >= MIN_CLIP_LEVEL else float(CLIPPED))
+    return np.array(levels)
+
+
 def measure_at(model: ColorModel, color_bgr: np.ndarray, center_px, side_px: float | None = None,
                board_mask: np.ndarray | None = None) -> np.ndarray:
     """Board-normalised CIELAB of the face centred at center_px (face_and_board_at)."""
@@ -430,5 +452,5 @@ class BoardGrey:
 
 
 __all__ = ["UNKNOWN", "BoardGrey", "ColorModel", "ColorReading", "ColorSample", "board_mask_near", "board_reference_bgr",
-           "board_region_mask", "classify_at", "face_and_board_at", "face_patch", "lab_distance", "lab_from_relative_rgb",
+           "board_region_mask", "classify_at", "frame_clip_levels_rgb", "face_and_board_at", "face_patch", "lab_distance", "lab_from_relative_rgb",
            "measure_at", "normalised_rgb", "relative_rgb_from_lab", "srgb_to_linear"]

@@ -174,3 +174,32 @@ def test_a_face_brighter_than_its_board_with_a_clipped_channel_keeps_its_class(m
             face = np.tile(np.round(255 * srgb[::-1]).astype(np.uint8), (20, 1))
             reading = model.classify(face, board)
             assert reading.name == name, f"{name} {ref} x{face_gain} (face BGR {face[0].tolist()}): {reading}"
+
+
+@pytest.mark.parametrize("red_gain", [0.92, 0.98, 1.0])
+def test_a_channel_clipped_below_255_by_white_balance_still_reads_as_clipped(model, red_gain):
+    """A camera that clips on the sensor and then scales red by its white balance and adds noise shows an
+    overexposed orange's red as a noisy plateau at ~255 * gain (the simulated L515: 234 +- 2 at 0.92);
+    read against 250, that orange looks yellow. The frame's own clip levels (frame_clip_levels_rgb) keep
+    every class's faces, lit until a channel clips, in their class."""
+    from armlab.vision.colors import CLIPPED, frame_clip_levels_rgb, relative_rgb_from_lab, srgb_to_linear
+
+    rng = np.random.default_rng(7)
+    board = np.array([150.0, 160.0, 170.0])  # BGR, before white balance
+    faces = [(name, ref) for name in model.classes for ref in model.references[name]]
+    frame = np.empty((40, 40 * len(faces), 3), float)
+    frame[:] = board
+    for i, (_, ref) in enumerate(faces):
+        lin = relative_rgb_from_lab(ref, model.board_reflectance) * srgb_to_linear(board[::-1]) * 1.25
+        srgb = np.where(np.clip(lin, 0, 1) <= 0.0031308, 12.92 * lin, 1.055 * np.clip(lin, 0, 1) ** (1 / 2.4) - 0.055)
+        frame[8:33, 40 * i + 8:40 * i + 33] = np.clip(255 * srgb[::-1], 0, 255)  # the sensor clips...
+    white_balance_bgr = np.array([0.95, 1.0, red_gain])
+    seen = np.clip(np.round(frame * white_balance_bgr + rng.normal(0.0, 2.0, frame.shape)), 0, 255).astype(np.uint8)  # ...then scales
+    levels = frame_clip_levels_rgb(seen)
+    assert levels[0] <= 255 * red_gain - 2  # the red plateau is found where it is, not at 250
+    for i, (name, ref) in enumerate(faces):
+        face = seen[12:29, 40 * i + 12:40 * i + 29].reshape(-1, 3)
+        reading = model.classify(face, board * white_balance_bgr, levels)
+        assert reading.name == name, f"{name} {ref} at red gain {red_gain}: {reading}"
+    board_only = np.clip(np.round(np.tile(board, (40, 200, 1)) + rng.normal(0.0, 2.0, (40, 200, 3))), 0, 255).astype(np.uint8)
+    assert np.all(frame_clip_levels_rgb(board_only) == CLIPPED)  # nothing overexposed: nothing read as clipped
