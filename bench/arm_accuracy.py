@@ -102,7 +102,7 @@ def main(argv=None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--seeds", type=int, nargs="+", default=[0, 1, 2])
     parser.add_argument("--points", type=int, default=50)
-    parser.add_argument("--realism", choices=("real", "ideal"), default="real")
+    parser.add_argument("--realism", choices=("real", "camera", "ideal"), default="real")
     parser.add_argument("--settle-s", type=float, default=0.5, help="simulated rest after each move before measuring")
     args = parser.parse_args(argv)
     from armlab.workcell import load_workcell_arm

@@ -239,8 +239,9 @@ def main() -> int:
     parser.add_argument("--ray", metavar="ADDRESS", help="run on a Ray cluster instead of local processes")
     parser.add_argument("--jobs", help="comma-separated job names (default: every job in armlab.tasks.JOBS)")
     parser.add_argument("--levels", help="comma-separated levels run for jobs that have them (default: all)")
-    parser.add_argument("--realism", choices=("real", "ideal"), default=None,
-                        help="real (the camera's and the arm's imperfections) or ideal simulation (default: config/sim.yaml `realism`)")
+    parser.add_argument("--realism", choices=("real", "camera", "ideal"), default=None,
+                        help="real (the camera's and the arm's imperfections), camera (the camera's only) or ideal "
+                             "(default: config/sim.yaml `realism`)")
     parser.add_argument("--workcells", default=DEFAULT_WORKCELL,
                         help=f"comma-separated workcells (config/workcells; default {DEFAULT_WORKCELL}): each job runs on each")
     args = parser.parse_args()

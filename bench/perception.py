@@ -334,7 +334,7 @@ def main(argv=None) -> int:
     parser.add_argument("--repeats", type=int, default=20)
     parser.add_argument("--verbose", action="store_true")
     parser.add_argument("--board-scenes", type=int, default=5, help="rigs per board in the 36h11 vs 41h12 comparison (0: skip)")
-    parser.add_argument("--realism", choices=("real", "ideal"), default=None, help="simulated camera (default: config/sim.yaml)")
+    parser.add_argument("--realism", choices=("real", "camera", "ideal"), default=None, help="simulated camera (default: config/sim.yaml)")
     parser.add_argument("--depth-offset-m", type=float, default=None, help="realism real: the depth plane's offset (m)")
     parser.add_argument("--depth-tilt-deg", type=float, default=None, help="realism real: the depth plane's tilt (deg)")
     args = parser.parse_args(argv)

@@ -27,9 +27,9 @@ def register(subparsers: argparse._SubParsersAction) -> None:
     where.add_argument("--workers", default="1", help="processes running seeds in parallel (default 1: this process)")
     where.add_argument("--ray", metavar="ADDRESS", help="run the seeds as tasks on a Ray cluster: auto or host:port "
                                                       "(needs the cluster extra: pip install 'armlab[cluster]')")
-    parser.add_argument("--realism", choices=("real", "ideal"), default=None,
+    parser.add_argument("--realism", choices=("real", "camera", "ideal"), default=None,
                         help="real: the simulated camera and arm with a real one's imperfections (the RX200's droop, backlash, "
-                             "encoder counts, rig offsets); ideal: exact. Default: config/sim.yaml `realism`")
+                             "encoder counts, rig offsets); camera: the real camera with the exact arm; ideal: exact. Default: config/sim.yaml `realism`")
     parser.add_argument("--truth-out", type=Path, metavar="DIR",
                         help="write each run's final ground truth (+ gripper_path_m) to DIR/<seed>.json")
     parser.add_argument("--json", action="store_true", help='print {"runs": [...], "summary": {...}} only')

@@ -16,9 +16,9 @@ def register(subparsers: argparse._SubParsersAction) -> None:
     parser.add_argument("--event", default=None, help="starting scene: pick_sort, pick_stack, line_up, stack_high, to_the_sky")
     parser.add_argument("--level", type=int, default=None, help="starting scene level (1-3)")
     parser.add_argument("--scene-seed", type=int, default=None, help="starting scene seed")
-    parser.add_argument("--realism", choices=("real", "ideal"), default=None,
+    parser.add_argument("--realism", choices=("real", "camera", "ideal"), default=None,
                         help="simulation: real (the camera's imperfections, shadows, clutter; the arm's droop, backlash, "
-                             "encoder counts and rig offsets) or ideal (exact); "
+                             "encoder counts and rig offsets), camera (the real camera, the exact arm) or ideal (exact); "
                              "default from the config, else config/sim.yaml `realism`")
     parser.add_argument("--workcell", default=None,
                         help="workcell (config/workcells/<name>.yaml: arm, gripper, board, camera); default from the config, rx200_armlab")

@@ -20,7 +20,7 @@ def register(subparsers: argparse._SubParsersAction) -> None:
     parser.add_argument("--truth", type=Path, help="ground-truth JSON path")
     parser.add_argument("--no-noise", action="store_true", help="turn colour and depth noise off")
     parser.add_argument("--no-pose-error", action="store_true", help="mount the camera exactly at its nominal pose")
-    parser.add_argument("--realism", choices=("real", "ideal"), default=None,
+    parser.add_argument("--realism", choices=("real", "camera", "ideal"), default=None,
                         help="real: a real L515's imperfections, shadows and clutter; ideal: exact (default: config/sim.yaml)")
     parser.add_argument("--settle", type=float, default=0.3, help="seconds of physics before the frame (default 0.3)")
     parser.set_defaults(func=run_render)

@@ -6,10 +6,11 @@ Imports go one way: armlab.tasks → armlab.skills → armlab.station → armlab
 from armlab.skills.arm_camera import calibrate_arm_camera
 from armlab.skills.manipulate import plan_pick_steps, plan_place_steps, run_steps
 from armlab.skills.operator import calibrate, calibrate_points, calibration_summary, drop, grab
-from armlab.skills.perceive import block_near, is_stale, look, pixel_to_world, surface_height_m
+from armlab.skills.perceive import arm_hides_block, block_near, is_stale, look, pixel_to_world, surface_height_m
 from armlab.skills.repeat import repeat
 
 __all__ = [
+    "arm_hides_block",
     "block_near",
     "calibrate",
     "calibrate_arm_camera",

@@ -61,6 +61,21 @@ def robot_volume_of(station: Station, frame):
     return robot_volume(station.model, np.asarray(joints, dtype=float), config, held_edge_m)
 
 
+def arm_hides_block(station: Station, joints_rad, xy_m, edge_m: float) -> bool:
+    """True when the arm at joints_rad (gripper open) would hide part of a block of edge_m standing at xy_m
+    on the board from the calibrated camera (a block put there would read occluded while the arm waits
+    there); False without a calibration or an arm model."""
+    calibration = station.calibration
+    if calibration is None or station.model is None:
+        return False
+    perception_config = getattr(station, "perception_config", None)
+    config = perception_config.self_filter if perception_config is not None else SelfFilterConfig()
+    volume = robot_volume(station.model, np.asarray(joints_rad, dtype=float), config, 0.0)
+    half = 0.5 * edge_m
+    top = [(xy_m[0] + dx, xy_m[1] + dy, edge_m) for dx in (-half, 0.0, half) for dy in (-half, 0.0, half)]
+    return volume.hides(np.asarray(calibration.T_world_camera)[:3, 3], np.array(top))
+
+
 def target_point(station: Station, position_m, pixel) -> tuple[np.ndarray, str]:
     """The clicked world point from position_m or pixel=(u, v) (exactly one of them)."""
     if (position_m is None) == (pixel is None):

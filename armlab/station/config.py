@@ -21,7 +21,7 @@ class SimStartConfig(StrictModel):
     level: int = Field(1, ge=1, le=3)
     scene_seed: int = 0
     camera_fps: float = Field(30.0, gt=0.0, le=120.0)
-    realism: Literal["real", "ideal"] | None = None  # None: config/sim.yaml `realism` (`armlab serve --realism`)
+    realism: Literal["real", "camera", "ideal"] | None = None  # None: config/sim.yaml `realism` (`armlab serve --realism`)
 
 
 class StationConfig(StrictModel):

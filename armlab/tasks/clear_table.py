@@ -12,10 +12,13 @@ from armlab.scene import as_workcell
 from armlab.tasks.runner import Move, Plan, TaskRunner, near
 
 SPOT_PITCH_M = 0.045
+BEYOND_REACH_MARGIN_M = 0.05  # past the workcell's scene reach by this much: nothing the arm can clear (a hand, tools at the board's edge)
 
 
 def make_policy(level: int | None, params: dict, runner: TaskRunner):
-    bin_ = as_workcell(getattr(runner.station.config, "workcell", None)).bin  # the station's
+    workcell = as_workcell(getattr(runner.station.config, "workcell", None))  # the station's
+    bin_ = workcell.bin
+    reach_m = workcell.scene.reach_m[1] + BEYOND_REACH_MARGIN_M
     xs = np.arange(bin_.x_range_m[0] + 0.025, bin_.x_range_m[1] - 0.02 + 1e-9, SPOT_PITCH_M)
     ys = np.arange(bin_.y_range_m[0] + 0.025, bin_.y_range_m[1] - 0.02 + 1e-9, SPOT_PITCH_M)
     spots = [(float(x), float(y)) for y in ys for x in xs if 0.14 <= math.hypot(x, y) <= 0.36]
@@ -23,6 +26,9 @@ def make_policy(level: int | None, params: dict, runner: TaskRunner):
     def policy(objects: list[dict], given_up: set) -> Plan:
         inside = [o for o in objects if bin_.contains(*o["position_m"][:2])]
         outside = [o for o in objects if not bin_.contains(*o["position_m"][:2]) and not o.get("unseen")]
+        for obj in [o for o in outside if math.hypot(*o["position_m"][:2]) > reach_m]:
+            runner.note_once(f"left the {_kind(obj)} beyond the arm's reach")
+        outside = [o for o in outside if math.hypot(*o["position_m"][:2]) <= reach_m]
         free = [s for s in spots if not any(near(o["position_m"], s, 0.035) for o in inside)]
         moves = []
         for obj in sorted(outside, key=lambda o: (-o.get("stack_level", 1), not o.get("is_cube", True))):
@@ -33,9 +39,14 @@ def make_policy(level: int | None, params: dict, runner: TaskRunner):
                 if not bases or not obj.get("is_cube", True):
                     continue
                 target = tuple(bases[0]["position_m"])
-            kind = f"{obj.get('color') or ''} {obj.get('size') or ''} {'block' if obj.get('is_cube', True) else 'object'}"
-            moves.append(Move(obj, target, f"{' '.join(kind.split())} into the bin", yaw_rad=None))
+            moves.append(Move(obj, target, f"{_kind(obj)} into the bin", yaw_rad=None))
         hidden = sum(o.get("stack_level", 1) - 1 for o in outside)
         return Plan(moves, done=len(inside), left=len(outside) + hidden, finished=not outside)
 
     return policy
+
+
+def _kind(obj: dict) -> str:
+    """'red large block', 'unknown large object': how the job names what it moves or leaves."""
+    kind = f"{obj.get('color') or ''} {obj.get('size') or ''} {'block' if obj.get('is_cube', True) else 'object'}"
+    return " ".join(kind.split())

@@ -370,11 +370,13 @@ class TaskRunner:
     def free_spot(self, objects: list[dict], edge_m: float, region=None, avoid_m: list | None = None,
                   allowed: Callable[[tuple[float, float]], bool] | None = None) -> tuple[float, float]:
         """A reachable board spot in `region` ((x_min, x_max), (y_min, y_max); default y > 0.06) at least
-        one block plus a finger gap from every object and `avoid_m` point (and where allowed(x, y), if given)."""
+        one block plus a finger gap from every object and `avoid_m` point (and where allowed(x, y), if given),
+        the one farthest from them whose block the arm, waiting at look_pose_rad, leaves in the camera's view
+        (a block beside the parked gripper reads occluded, and a job leaves occluded blocks where they are)."""
         (x_min, x_max), (y_min, y_max) = region or ((-0.30, 0.30), (0.08, 0.32))
         taken = [o["position_m"][:2] for o in objects] + [p[:2] for p in (avoid_m or [])] + list(self.reserved_m)
         gap = edge_m / 2 + 0.019 + 0.03
-        best, best_score = None, -1.0
+        scored = []
         for x in np.arange(x_min, x_max + 1e-9, 0.02):
             for y in np.arange(y_min, y_max + 1e-9, 0.02):
                 r = math.hypot(x, y)
@@ -383,11 +385,13 @@ class TaskRunner:
                 if allowed is not None and not allowed((float(x), float(y))):
                     continue
                 clearance = min((math.dist((x, y), t) for t in taken), default=1.0)
-                if clearance >= gap and clearance > best_score:
-                    best, best_score = (float(x), float(y)), clearance
-        if best is None:
-            raise RuntimeError("no free spot on the board to put a block aside")
-        return best
+                if clearance >= gap:
+                    scored.append((-clearance, float(x), float(y)))
+        scored.sort()  # stable: among equals the first in the scan, as before
+        for _, x, y in scored:
+            if not skills.arm_hides_block(self.station, self.look_pose_rad, (x, y), edge_m):
+                return (x, y)
+        raise RuntimeError("no free spot on the board to put a block aside" + (" that the parked arm leaves in view" if scored else ""))
 
     def height_at(self, xy_m) -> float:
         """Measured height of what stands at (x, y) in the newest look's depth image (0 = board)."""

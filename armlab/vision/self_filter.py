@@ -51,6 +51,14 @@ class RobotVolume:
             inside |= _in_box(pts[:, 0], pts[:, 1], pts[:, 2], T, half)
         return inside
 
+    def hides(self, camera_position_m, points_m, samples: int = 32) -> bool:
+        """True when the volume stands between the camera and any of the world points (N, 3): a point on
+        some line of sight, sampled from the point up to the camera, lies inside it."""
+        pts = as_points(points_m, 3, "points_m")
+        t = np.linspace(0.0, 1.0, samples + 1)[1:, None, None]  # (S, 1, 1), the point itself left out
+        along = pts[None] + t * (np.asarray(camera_position_m, dtype=float)[None, None] - pts[None])
+        return bool(np.any(self.contains(along.reshape(-1, 3))))
+
     def hull_corners_m(self) -> np.ndarray:
         """(N + M, 8, 3): the corners of a box around each part (a capsule's is oriented along it).
         Each part's projected silhouette lies inside the convex hull of its corners' pixels."""

@@ -18,7 +18,18 @@ from armlab.devices.sim.arm_realism import ArmRealismConfig
 Positive = Annotated[float, Field(gt=0.0)]
 NonNegative = Annotated[float, Field(ge=0.0)]
 Fraction = Annotated[float, Field(ge=0.0, le=1.0)]
-Realism = Literal["real", "ideal"]
+Realism = Literal["real", "camera", "ideal"]
+REALISMS = ("real", "camera", "ideal")  # the choices of every --realism
+
+
+def camera_is_real(realism: str) -> bool:
+    """real and camera: the real L515's imperfections, the second light and the clutter on the board."""
+    return realism in ("real", "camera")
+
+
+def arm_is_real(realism: str) -> bool:
+    """real only: the arm as the real one runs (camera keeps the exact arm until the station calibrates the arm)."""
+    return realism == "real"
 REALISM_ENV = "ARMLAB_REALISM"  # overrides config/sim.yaml's realism where no caller chose one (the test suite: ideal)
 
 
@@ -39,7 +50,8 @@ class SimWorkcellConfig(StrictModel):
     # real: the camera's imperfections of the real L515 (its file's `realism:`), a second light with shadows
     # and clutter on the board (config/sim.yaml `realism_scene:`), and the arm as the real one runs (its servos'
     # `realism:` in config/sim.yaml, armlab.devices.sim.arm_realism; an arm without one stays ideal); ideal: the
-    # exact camera and arm. None: $ARMLAB_REALISM, else config/sim.yaml `realism`.
+    # exact camera and arm; camera: the real camera and board with the exact arm. None: $ARMLAB_REALISM, else
+    # config/sim.yaml `realism`.
     realism: Realism | None = None
     depth_offset_m: float | None = None  # realism real: replace the camera file's depth offset / tilt (tests)
     depth_tilt_deg: float | None = None
@@ -282,8 +294,8 @@ def resolve_realism(requested: str | None, sim: SimConfig) -> str:
         return requested
     value = os.environ.get(REALISM_ENV, "").strip()
     if value:
-        if value not in ("real", "ideal"):
-            raise ValueError(f"${REALISM_ENV}: expected real or ideal, got {value!r}")
+        if value not in REALISMS:
+            raise ValueError(f"${REALISM_ENV}: expected one of {', '.join(REALISMS)}, got {value!r}")
         return value
     return sim.realism
 

@@ -25,6 +25,8 @@ from armlab.devices.sim.clock import SimClock
 from armlab.devices.sim.config import (
     MountConfig,
     SimWorkcellConfig,
+    arm_is_real,
+    camera_is_real,
     draw_pose_error,
     load_camera_config,
     load_sim_config,
@@ -66,7 +68,7 @@ class SimWorkcell(SimClock, SimCameraRig, SimTruth):
         self.realism = resolve_realism(self.config.realism, self._sim)
         pose_rng, noise_rng, real_rng, rig_rng = (np.random.default_rng(s) for s in np.random.SeedSequence(self.config.seed).spawn(4))
         self._publisher = None  # the real arm's joint-state publisher; None: the ideal arm (readings are the truth)
-        config = None if self.realism != "real" or self._suction else self._sim.servos(self._workcell.arm).realism
+        config = None if not arm_is_real(self.realism) or self._suction else self._sim.servos(self._workcell.arm).realism
         if config is not None:  # the DH arms (the UR3) stay ideal: see config/sim.yaml arms
             self._geometry = real_geometry(self._geometry, config, rig_rng, self.config.arm_rig_error)
             self._publisher = JointStatePublisher(config)
@@ -94,7 +96,7 @@ class SimWorkcell(SimClock, SimCameraRig, SimTruth):
                                       self._geometry.pad_thickness_m, self._sim.gripper.stop_speed_m_s,
                                       self._sim.gripper.stop_time_s)
         real = None
-        if self.realism == "real" and self._camera_config.realism is not None:
+        if camera_is_real(self.realism) and self._camera_config.realism is not None:
             real = RealCamera(self._camera_config, self._camera_config.realism, real_rng, self.config.depth_noise)
             real.with_depth(self.config.depth_offset_m, self.config.depth_tilt_deg)
         noise = NoiseModel(self._camera_config, noise_rng, self.config.color_noise, self.config.depth_noise, real)
@@ -118,7 +120,7 @@ class SimWorkcell(SimClock, SimCameraRig, SimTruth):
         if scene.workcell is not None and scene.workcell != self._workcell.name:
             raise InvalidInput(f"the scene was made for workcell '{scene.workcell}' (its board, reach and sizes); this "
                              f"simulation runs workcell '{self._workcell.name}': generate the scene for it")
-        realism_scene = self._sim.realism_scene if self.realism == "real" else None
+        realism_scene = self._sim.realism_scene if camera_is_real(self.realism) else None
         xml, assets = build_model_xml(self._geometry, self._sim, self._camera_config, self._T_world_camera, scene,
                                       self._workcell, realism_scene)
         model = mujoco.MjModel.from_xml_string(xml, assets)
@@ -320,7 +322,7 @@ class SimWorkcell(SimClock, SimCameraRig, SimTruth):
     def _renderer(self) -> RenderThread:
         if self._render_thread is None:
             cam = self._camera_config
-            shadows = self.realism == "real" and self._sim.realism_scene is not None
+            shadows = camera_is_real(self.realism) and self._sim.realism_scene is not None
             self._render_thread = RenderThread(self._model, CAMERA_NAME, cam.width, cam.height, self._snapshot, shadows=shadows)
         return self._render_thread
 

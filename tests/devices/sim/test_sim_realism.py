@@ -218,11 +218,16 @@ def test_realism_flag_reaches_the_workcell():
     # run_one hands the value on to the episode's SimWorkcellConfig: a bad one fails there, naming it.
     crashed = run_one("pick_sort", 3, 0, realism="sometimes")
     assert crashed["crashed"] and "realism" in crashed["failures"][-1]
-    for requested, expected in (("real", "real"), (None, "ideal")):  # None: the suite's $ARMLAB_REALISM (tests/conftest.py)
+    args = build_parser().parse_args(["serve", "--realism", "camera"])
+    assert build_station_config(args).sim.realism == "camera"
+    # None: the suite's $ARMLAB_REALISM (tests/conftest.py); camera: the real camera and board, the exact arm.
+    for requested, expected, real_camera, real_arm in (("real", "real", True, True), ("camera", "camera", True, False),
+                                                       (None, "ideal", False, False)):
         cell = SimWorkcell(SimWorkcellConfig(realism=requested))  # not started: no renderer needed
         try:
-            assert cell.realism == expected and (cell.camera._noise.real is not None) == (expected == "real")
-            assert any((cell.model.geom(i).name or "").startswith("clutter:") for i in range(cell.model.ngeom)) == (expected == "real")
+            assert cell.realism == expected and (cell.camera._noise.real is not None) == real_camera
+            assert any((cell.model.geom(i).name or "").startswith("clutter:") for i in range(cell.model.ngeom)) == real_camera
+            assert (cell._publisher is not None) == real_arm  # the real arm's joint-state publisher
         finally:
             cell.close()
 
