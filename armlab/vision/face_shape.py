@@ -53,21 +53,35 @@ class Face:
     classes: np.ndarray | None = None  # (N,) colour index + 1 of those pixels (0: colourless)
 
 
-def measure_rect(points_xy: np.ndarray, pitch_m: float) -> tuple[np.ndarray, float, float, float, float]:
-    """(centre xy, side_a, side_b, yaw mod pi/2 in [-pi/4, pi/4), fill) of a point set's minimum rectangle."""
+def measure_rect(points_xy: np.ndarray, pitch_m: float, count: int | None = None) -> tuple[np.ndarray, float, float, float, float]:
+    """(centre xy, side_a, side_b, yaw mod pi/2 in [-pi/4, pi/4), fill) of a point set's minimum rectangle.
+    count: the set's size when points_xy is only its convex hull (face_hull_xy)."""
     (cx, cy), (wa, wb), angle_deg = cv2.minAreaRect(points_xy.astype(np.float32))
     wa, wb = wa + pitch_m, wb + pitch_m  # pixel centres sit half a pixel inside the edges
     yaw = math.radians(angle_deg)
     yaw = (yaw + math.pi / 4) % (math.pi / 2) - math.pi / 4
-    fill = points_xy.shape[0] * pitch_m * pitch_m / max(wa * wb, 1e-12)
+    fill = (points_xy.shape[0] if count is None else count) * pitch_m * pitch_m / max(wa * wb, 1e-12)
     return np.array([cx, cy]), wa, wb, yaw, fill
 
 
-def circle_fill(points_xy: np.ndarray, pitch_m: float) -> float:
-    """A point set's area / its minimum enclosing circle's (square 0.64, disc 1)."""
+def circle_fill(points_xy: np.ndarray, pitch_m: float, count: int | None = None) -> float:
+    """A point set's area / its minimum enclosing circle's (square 0.64, disc 1); count as for measure_rect."""
     _, radius = cv2.minEnclosingCircle(points_xy.astype(np.float32))
     radius += 0.5 * pitch_m
-    return points_xy.shape[0] * pitch_m * pitch_m / max(math.pi * radius * radius, 1e-12)
+    return (points_xy.shape[0] if count is None else count) * pitch_m * pitch_m / max(math.pi * radius * radius, 1e-12)
+
+
+def face_hull_xy(face: Face) -> np.ndarray:
+    """What a face's minimum rectangle and circle are measured on: the convex hull of its points (the
+    rectangle's and the circle's own first step, on a few dozen points instead of thousands). Without
+    lens distortion the plane's homography maps the hull of the face's pixels, which is the hull of its
+    outline (contour_px), onto the hull of its points; otherwise all points."""
+    if face.plane_H is None or face.pixels_px is None or len(face.contour_px) < 3:
+        return face.points_xy
+    hull_px = cv2.convexHull(face.contour_px.astype(np.float32)).reshape(-1, 2).astype(np.float64)
+    H_inv = np.linalg.inv(face.plane_H)
+    xyw = hull_px @ H_inv[:, :2].T + H_inv[:, 2]
+    return xyw[:, :2] / xyw[:, 2:3]
 
 
 @dataclass(frozen=True)
@@ -82,9 +96,10 @@ class ClassifiedFace:
 
 def classify_face(face: Face, cfg: PerceptionConfig, rect: tuple | None = None) -> ClassifiedFace:
     """Size, side, yaw, cube or not, centre and candidate stacks from the face's metric footprint and height.
-    rect: measure_rect(face.points_xy, pitch) if the caller has it."""
+    rect: measure_rect of its face_hull_xy if the caller has it."""
     pitch = math.sqrt(face.pixel_area_m2)
-    centre, wa, wb, yaw, fill = rect or measure_rect(face.points_xy, pitch)
+    hull = face_hull_xy(face)
+    centre, wa, wb, yaw, fill = rect or measure_rect(hull, pitch, face.pixel_count)
     side = math.sqrt(wa * wb)
     large, small = cfg.blocks.large_size_m, cfg.blocks.small_size_m
     size = "large" if abs(side - large) < abs(side - small) else "small"
@@ -96,7 +111,7 @@ def classify_face(face: Face, cfg: PerceptionConfig, rect: tuple | None = None) 
         and max(wa, wb) / max(min(wa, wb), 1e-9) <= MAX_ASPECT
         and abs(side - edge) <= SIZE_TOLERANCE * edge
         and height_err <= cfg.blocks.stack_height_tolerance_m
-        and circle_fill(face.points_xy, pitch) <= MAX_CIRCLE_FILL
+        and circle_fill(hull, pitch, face.pixel_count) <= MAX_CIRCLE_FILL
     )
     centroid = face.points_xy.mean(axis=0)
     return ClassifiedFace(size, side, yaw, is_cube, centroid if is_cube else centre, stacks)
@@ -156,7 +171,7 @@ def split_touching_classified(face: Face, cfg: PerceptionConfig) -> list[tuple[F
 
     def face_fills() -> bool:
         if not whole_fills:
-            whole_fills.append(measure_rect(face.points_xy, pitch)[4] >= SPLIT_MIN_FILL)
+            whole_fills.append(measure_rect(face_hull_xy(face), pitch, face.pixel_count)[4] >= SPLIT_MIN_FILL)
         return whole_fills[0]
 
     rank = np.argsort(np.argsort(along))
@@ -164,7 +179,7 @@ def split_touching_classified(face: Face, cfg: PerceptionConfig) -> list[tuple[F
     large, small = cfg.blocks.large_size_m, cfg.blocks.small_size_m
 
     def classified_if_fits(part: Face) -> ClassifiedFace | None:
-        rect = measure_rect(part.points_xy, pitch)
+        rect = measure_rect(face_hull_xy(part), pitch, part.pixel_count)
         _, wa, wb, _, fill = rect
         side = math.sqrt(wa * wb)
         edge = large if abs(side - large) < abs(side - small) else small  # classify_face's size
