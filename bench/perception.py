@@ -1,6 +1,7 @@
 """Perception benchmark over seeded simulated scenes of every event and level, with the camera pose
 perturbed per scene (the sim's "bumped rig"), against ground truth; then the per-frame time of the
-whole perception pass on one core and the JPEG encode time.
+whole perception pass on one core and the JPEG encode time, against the seed report's block detection
+(bench/seed_recipe.py) on the same frames in the same run.
 
     MUJOCO_GL=egl .venv/bin/python bench/perception.py [--scenes 110] [--first-seed 0] [--board-scenes 5]
         [--realism real|ideal] [--depth-offset-m M] [--depth-tilt-deg D]
@@ -38,6 +39,9 @@ from armlab.scene import Scene, generate_scene  # noqa: E402
 from armlab.scene.events import EVENTS  # noqa: E402
 from armlab.vision import PerceptionPipeline, calibrate_extrinsics, load_perception_config  # noqa: E402
 from armlab.vision.evaluate import SceneScore, click_grid_errors, expected_tops, score_blocks  # noqa: E402
+
+sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+from seed_recipe import SeedRecipe  # noqa: E402
 
 PAIRS = [(event, level) for event, levels in EVENTS.items() for level in levels]
 
@@ -290,11 +294,13 @@ def report(args, seeds, total, click_errors, cam_errors, reproj, depth_checks, e
 
 def time_pass(pipeline: PerceptionPipeline, frames, repeats: int) -> None:
     """Median wall time and CPU time (this thread) per stage; CPU time is what the pass costs one core
-    when the machine is shared, wall time what it costs when it is not (they agree on an idle machine)."""
+    when the machine is shared, wall time what it costs when it is not (they agree on an idle machine).
+    The seed report's recipe (bench/seed_recipe.py) is timed on the same frames in the same loop, right
+    before the pass, so both see the same load."""
     cv2.setNumThreads(1)
     from armlab.vision import detect_blocks, draw_overlay
 
-    stages = {name: ([], []) for name in ("pass", "pass_unfiltered", "tags", "self_filter", "blocks", "overlay", "jpeg")}
+    stages = {name: ([], []) for name in ("recipe", "pass", "pass_unfiltered", "tags", "self_filter", "blocks", "overlay", "jpeg")}
 
     def timed(name, fn):
         wall, cpu = time.perf_counter(), time.thread_time()
@@ -304,7 +310,9 @@ def time_pass(pipeline: PerceptionPipeline, frames, repeats: int) -> None:
         return result
 
     for color, depth, cal, joints in frames:
+        recipe = SeedRecipe(cal, pipeline.cfg)  # the student's constants for this rig, set once
         for _ in range(repeats):
+            timed("recipe", lambda: recipe.detect(color, depth))
             result = timed("pass", lambda: pipeline.process(color, depth, cal, arm_joints_rad=joints))
             timed("pass_unfiltered", lambda: pipeline.process(color, depth, cal))
             tags = timed("tags", lambda: pipeline.find_tags(color, cal))
@@ -324,6 +332,11 @@ def time_pass(pipeline: PerceptionPipeline, frames, repeats: int) -> None:
     print(f"    the same without the self-filter: {ms('pass_unfiltered')}")
     print(f"    tags {ms('tags')}; self-filter mask {ms('self_filter')}; blocks {ms('blocks')}; overlay {ms('overlay')}")
     print(f"  JPEG encode (quality 80): {ms('jpeg')}")
+    ratio_cpu = statistics.median(stages["pass"][1]) / statistics.median(stages["recipe"][1])
+    ratio_wall = statistics.median(stages["pass"][0]) / statistics.median(stages["recipe"][0])
+    print(f"  the seed report's recipe (bench/seed_recipe.py: blur, HSV, space and depth masks, 6 colour ranges, "
+          f"contours drawn and labelled, colour, size and world position per contour): {ms('recipe')}")
+    print(f"  whole pass / recipe: {ratio_cpu:.2f}x CPU, {ratio_wall:.2f}x wall   (target <= 0.70x)")
 
 
 def main(argv=None) -> int:

@@ -38,7 +38,7 @@ from armlab.vision.face_shape import (
     face_colour,
     quantile,
     runs_off_image,
-    split_touching,
+    split_touching_classified,
 )
 from armlab.vision.geometry import PlaneCamera, height_map_m
 from armlab.vision.stacks import choose_stack, stack_candidates, stack_from_height
@@ -386,7 +386,7 @@ def _blocks_from_region(color_bgr, geo: BlockGeometry, cfg, region: _Region, top
     if classified.is_cube:
         blocks = [block_of(face, classified)]
     else:
-        blocks = [block_of(part) for part in split_touching(face, cfg)]
+        blocks = [block_of(part, part_classified or classified) for part, part_classified in split_touching_classified(face, cfg)]
     if any(b.is_cube for b in blocks) and part_of_more():
         blocks = [not_cube(b) for b in blocks]
     return [(block, face_looks_tagged(color_bgr, block, roi, hsv, region.board_value)) for block in blocks]

@@ -75,12 +75,13 @@ def fit_inverse_depth_plane(
         return (1.0 - d * (A @ coef)) / norm
 
     best, best_count = None, -1
-    for idx in rng.integers(0, n, size=(iterations, 3)):
-        try:
-            coef = np.linalg.solve(A[idx], w[idx])
-        except np.linalg.LinAlgError:
-            continue
-        if not np.all(np.isfinite(coef)) or coef[2] <= 0:
+    samples = rng.integers(0, n, size=(iterations, 3))
+    try:  # every sample's plane in one call (the same LAPACK solve per 3 x 3 system), one by one if any is singular
+        coefs = list(np.linalg.solve(A[samples], w[samples][..., None])[..., 0])
+    except np.linalg.LinAlgError:
+        coefs = [_solve_or_none(A[idx], w[idx]) for idx in samples]
+    for coef in coefs:
+        if coef is None or not np.all(np.isfinite(coef)) or coef[2] <= 0:
             continue  # the plane must face the camera
         count = int(np.count_nonzero(np.abs(heights(coef)) < inlier_m))
         if count > best_count:
@@ -96,6 +97,13 @@ def fit_inverse_depth_plane(
     norm = math.sqrt(float(coef @ coef))
     return BoardPlane(normal=-coef / norm, distance_m=1.0 / norm, rms_m=float(np.sqrt(np.mean(h * h))),
                       inliers=int(inliers.sum()), inlier_fraction=float(inliers.mean()))
+
+
+def _solve_or_none(M: np.ndarray, b: np.ndarray) -> np.ndarray | None:
+    try:
+        return np.linalg.solve(M, b)
+    except np.linalg.LinAlgError:
+        return None
 
 
 def _plane_lstsq(points: np.ndarray) -> np.ndarray:

@@ -26,6 +26,7 @@ MAX_CIRCLE_FILL = 0.82
 MAX_ASPECT = 1.3
 SIZE_TOLERANCE = 0.22  # measured side within this fraction of the class size
 SPLIT_SIZE_TOLERANCE = 0.12  # each side of a part split from touching cubes, within this of the edge
+SPLIT_SAMPLE_POINTS = 400  # a split's first k-means runs on about this many of a face's points
 BORDER_MARGIN_PX = 2  # a face with pixels this close to the image's edge runs off the image
 MAX_EDGE_RESIDUAL = 0.025  # a cut face's outline this close to a square's edges on average (x edge): cubes ~0.013, discs ~0.036
 
@@ -52,21 +53,35 @@ class Face:
     classes: np.ndarray | None = None  # (N,) colour index + 1 of those pixels (0: colourless)
 
 
-def measure_rect(points_xy: np.ndarray, pitch_m: float) -> tuple[np.ndarray, float, float, float, float]:
-    """(centre xy, side_a, side_b, yaw mod pi/2 in [-pi/4, pi/4), fill) of a point set's minimum rectangle."""
+def measure_rect(points_xy: np.ndarray, pitch_m: float, count: int | None = None) -> tuple[np.ndarray, float, float, float, float]:
+    """(centre xy, side_a, side_b, yaw mod pi/2 in [-pi/4, pi/4), fill) of a point set's minimum rectangle.
+    count: the set's size when points_xy is only its convex hull (face_hull_xy)."""
     (cx, cy), (wa, wb), angle_deg = cv2.minAreaRect(points_xy.astype(np.float32))
     wa, wb = wa + pitch_m, wb + pitch_m  # pixel centres sit half a pixel inside the edges
     yaw = math.radians(angle_deg)
     yaw = (yaw + math.pi / 4) % (math.pi / 2) - math.pi / 4
-    fill = points_xy.shape[0] * pitch_m * pitch_m / max(wa * wb, 1e-12)
+    fill = (points_xy.shape[0] if count is None else count) * pitch_m * pitch_m / max(wa * wb, 1e-12)
     return np.array([cx, cy]), wa, wb, yaw, fill
 
 
-def circle_fill(points_xy: np.ndarray, pitch_m: float) -> float:
-    """A point set's area / its minimum enclosing circle's (square 0.64, disc 1)."""
+def circle_fill(points_xy: np.ndarray, pitch_m: float, count: int | None = None) -> float:
+    """A point set's area / its minimum enclosing circle's (square 0.64, disc 1); count as for measure_rect."""
     _, radius = cv2.minEnclosingCircle(points_xy.astype(np.float32))
     radius += 0.5 * pitch_m
-    return points_xy.shape[0] * pitch_m * pitch_m / max(math.pi * radius * radius, 1e-12)
+    return (points_xy.shape[0] if count is None else count) * pitch_m * pitch_m / max(math.pi * radius * radius, 1e-12)
+
+
+def face_hull_xy(face: Face) -> np.ndarray:
+    """What a face's minimum rectangle and circle are measured on: the convex hull of its points (the
+    rectangle's and the circle's own first step, on a few dozen points instead of thousands). Without
+    lens distortion the plane's homography maps the hull of the face's pixels, which is the hull of its
+    outline (contour_px), onto the hull of its points; otherwise all points."""
+    if face.plane_H is None or face.pixels_px is None or len(face.contour_px) < 3:
+        return face.points_xy
+    hull_px = cv2.convexHull(face.contour_px.astype(np.float32)).reshape(-1, 2).astype(np.float64)
+    H_inv = np.linalg.inv(face.plane_H)
+    xyw = hull_px @ H_inv[:, :2].T + H_inv[:, 2]
+    return xyw[:, :2] / xyw[:, 2:3]
 
 
 @dataclass(frozen=True)
@@ -79,10 +94,12 @@ class ClassifiedFace:
     stacks: list[tuple[float, tuple[str, ...]]]  # stack_candidates(top, size), best first
 
 
-def classify_face(face: Face, cfg: PerceptionConfig) -> ClassifiedFace:
-    """Size, side, yaw, cube or not, centre and candidate stacks from the face's metric footprint and height."""
+def classify_face(face: Face, cfg: PerceptionConfig, rect: tuple | None = None) -> ClassifiedFace:
+    """Size, side, yaw, cube or not, centre and candidate stacks from the face's metric footprint and height.
+    rect: measure_rect of its face_hull_xy if the caller has it."""
     pitch = math.sqrt(face.pixel_area_m2)
-    centre, wa, wb, yaw, fill = measure_rect(face.points_xy, pitch)
+    hull = face_hull_xy(face)
+    centre, wa, wb, yaw, fill = rect or measure_rect(hull, pitch, face.pixel_count)
     side = math.sqrt(wa * wb)
     large, small = cfg.blocks.large_size_m, cfg.blocks.small_size_m
     size = "large" if abs(side - large) < abs(side - small) else "small"
@@ -91,13 +108,20 @@ def classify_face(face: Face, cfg: PerceptionConfig) -> ClassifiedFace:
     height_err = stacks[0][0]
     is_cube = (
         fill >= MIN_FILL
-        and circle_fill(face.points_xy, pitch) <= MAX_CIRCLE_FILL
         and max(wa, wb) / max(min(wa, wb), 1e-9) <= MAX_ASPECT
         and abs(side - edge) <= SIZE_TOLERANCE * edge
         and height_err <= cfg.blocks.stack_height_tolerance_m
+        and circle_fill(hull, pitch, face.pixel_count) <= MAX_CIRCLE_FILL
     )
     centroid = face.points_xy.mean(axis=0)
     return ClassifiedFace(size, side, yaw, is_cube, centroid if is_cube else centre, stacks)
+
+
+def fits_some_stack(top_m: float, cfg: PerceptionConfig) -> bool:
+    """Whether a top at top_m is the height of some pile (with a large or a small block on top) within the
+    stack tolerance: a face that is not can be no cube, nor can any part of it (a hand, pliers, a cable)."""
+    tol = cfg.blocks.stack_height_tolerance_m
+    return any(stack_candidates(top_m, size, cfg)[0][0] <= tol for size in ("large", "small"))
 
 
 def face_part(face: Face, sel: np.ndarray) -> Face:
@@ -121,12 +145,21 @@ def face_colour(classes: np.ndarray | None, fallback: int) -> int:
 
 def split_touching(face: Face, cfg: PerceptionConfig) -> list[Face]:
     """Split a face holding several touching same-colour cubes by k-means on its points; [face] if no split fits."""
+    return [part for part, _ in split_touching_classified(face, cfg)]
+
+
+def split_touching_classified(face: Face, cfg: PerceptionConfig) -> list[tuple[Face, ClassifiedFace | None]]:
+    """split_touching with each part's classify_face: [(face, None)] when no split fits."""
     area = face.pixel_count * face.pixel_area_m2
     candidates = []
     for edge in (cfg.blocks.large_size_m, cfg.blocks.small_size_m):
         n = int(round(area / (edge * edge)))
         if 2 <= n <= 6:
             candidates.append(n)
+    # Every part keeps the face's height: at a height no pile has, no part is a cube (clutter: a hand,
+    # pliers, cables), so no clustering is tried.
+    if not candidates or not fits_some_stack(face.top_m, cfg):
+        return [(face, None)]
     pts = face.points_xy.astype(np.float32)
     centred = pts - pts.mean(axis=0)
     axis = np.linalg.svd(centred, full_matrices=False)[2][0]  # the row of cubes lies along this axis
@@ -134,28 +167,57 @@ def split_touching(face: Face, cfg: PerceptionConfig) -> list[Face]:
     pitch = math.sqrt(face.pixel_area_m2)
     # A face that fills its rectangle as cubes in a row do vouches for its parts' shape: a real depth's
     # holes and flying pixels fray one part's edge (0.76 of its rectangle beside a 0.91 twin, the pair 0.88).
-    whole_fills = measure_rect(face.points_xy, pitch)[4] >= SPLIT_MIN_FILL
-    for n in candidates:
-        # Deterministic start: n equal slices along the main axis, then k-means refines the split.
-        labels = np.minimum((np.argsort(np.argsort(along)) * n) // len(along), n - 1).astype(np.int32).reshape(-1, 1)
-        criteria = (cv2.TERM_CRITERIA_EPS + cv2.TERM_CRITERIA_MAX_ITER, 50, 1e-5)
-        _, labels, _ = cv2.kmeans(pts, n, labels, criteria, 1, cv2.KMEANS_USE_INITIAL_LABELS)
+    whole_fills: list[bool] = []  # measured when a part's own fill falls short
+
+    def face_fills() -> bool:
+        if not whole_fills:
+            whole_fills.append(measure_rect(face_hull_xy(face), pitch, face.pixel_count)[4] >= SPLIT_MIN_FILL)
+        return whole_fills[0]
+
+    rank = np.argsort(np.argsort(along))
+    sample = max(1, -(-len(pts) // SPLIT_SAMPLE_POINTS))
+    large, small = cfg.blocks.large_size_m, cfg.blocks.small_size_m
+
+    def classified_if_fits(part: Face) -> ClassifiedFace | None:
+        rect = measure_rect(face_hull_xy(part), pitch, part.pixel_count)
+        _, wa, wb, _, fill = rect
+        side = math.sqrt(wa * wb)
+        edge = large if abs(side - large) < abs(side - small) else small  # classify_face's size
+        if not (max(abs(wa - edge), abs(wb - edge)) <= SPLIT_SIZE_TOLERANCE * edge and (fill >= SPLIT_MIN_FILL or face_fills())):
+            return None
+        classified = classify_face(part, cfg, rect)
+        return classified if classified.is_cube else None
+
+    def parts_if_all_fit(labels: np.ndarray) -> list[tuple[Face, ClassifiedFace]] | None:
         parts = []
         for k in range(n):
-            sel = labels.ravel() == k
-            parts.append(face_part(face, sel))
+            part = face_part(face, labels == k)
+            classified = classified_if_fits(part)
+            if classified is None:
+                return None
+            parts.append((part, classified))
+        return parts
 
-        def fits(part: Face) -> bool:
-            classified = classify_face(part, cfg)
-            edge = cfg.blocks.large_size_m if classified.size == "large" else cfg.blocks.small_size_m
-            _, wa, wb, _, _ = measure_rect(part.points_xy, pitch)
-            fill = measure_rect(part.points_xy, pitch)[4]
-            return (classified.is_cube and (fill >= SPLIT_MIN_FILL or whole_fills)
-                    and max(abs(wa - edge), abs(wb - edge)) <= SPLIT_SIZE_TOLERANCE * edge)
-
-        if all(fits(p) for p in parts):
+    criteria = (cv2.TERM_CRITERIA_EPS + cv2.TERM_CRITERIA_MAX_ITER, 50, 1e-5)
+    for n in candidates:
+        # Deterministic start: n equal slices along the main axis, then k-means refines the split.
+        labels = np.minimum((rank * n) // len(along), n - 1).astype(np.int32).reshape(-1, 1)
+        if sample > 1:
+            # k-means on an even subsample first, every point to its nearest centre: when those parts are
+            # not all cubes (clutter: a hand, pliers), no split is; when they are, the full set's k-means
+            # starts there and settles in a few iterations.
+            _, _, centres = cv2.kmeans(np.ascontiguousarray(pts[::sample]), n, np.ascontiguousarray(labels[::sample]), criteria, 1,
+                                       cv2.KMEANS_USE_INITIAL_LABELS)
+            dx, dy = pts[:, :1] - centres[:, 0], pts[:, 1:] - centres[:, 1]
+            labels = np.argmin(dx * dx + dy * dy, axis=1).astype(np.int32)
+            if parts_if_all_fit(labels) is None:
+                continue
+            labels = labels.reshape(-1, 1)
+        _, labels, _ = cv2.kmeans(pts, n, labels, criteria, 1, cv2.KMEANS_USE_INITIAL_LABELS)
+        parts = parts_if_all_fit(labels.ravel())
+        if parts is not None:
             return parts
-    return [face]
+    return [(face, None)]
 
 
 def runs_off_image(ys: np.ndarray, xs: np.ndarray, roi, cal: Calibration) -> bool:

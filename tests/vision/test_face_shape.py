@@ -40,3 +40,18 @@ def test_a_semicircle_is_not_split_into_quarter_discs(cfg):
     pts = _grid((-radius, radius), (0.0, radius))
     semicircle = pts[np.hypot(pts[:, 0], pts[:, 1]) <= radius]
     assert len(split_touching(_face(semicircle, cfg.blocks.large_size_m), cfg)) == 1
+
+
+def test_a_face_at_a_height_no_pile_has_is_not_clustered(cfg, monkeypatch):
+    """Two cubes' footprint 12 mm above the board (pliers' handles, a cable: no pile of cubes is that high):
+    no part could be a cube, so it stays whole without any k-means run (the same footprint at a cube's
+    height splits, test above)."""
+    import armlab.vision.face_shape as face_shape
+
+    def no_kmeans(*args, **kwargs):
+        raise AssertionError("k-means run for a face no cube can be part of")
+
+    monkeypatch.setattr(face_shape.cv2, "kmeans", no_kmeans)
+    edge = cfg.blocks.large_size_m
+    pair = np.vstack([_grid((0.0, edge), (0.0, edge)), _grid((edge, 2 * edge), (0.0, edge))])
+    assert len(split_touching(_face(pair, 0.012), cfg)) == 1
