@@ -9,7 +9,7 @@ import math
 import numpy as np
 
 from armlab.scene import as_workcell
-from armlab.tasks.runner import Move, Plan, TaskRunner, near
+from armlab.tasks.runner import Move, Plan, TaskRunner, near, seeing_look_pose
 
 SPOT_PITCH_M = 0.045
 BEYOND_REACH_MARGIN_M = 0.05  # past the workcell's scene reach by this much: nothing the arm can clear (a hand, tools at the board's edge)
@@ -19,6 +19,7 @@ def make_policy(level: int | None, params: dict, runner: TaskRunner):
     workcell = as_workcell(getattr(runner.station.config, "workcell", None))  # the station's
     bin_ = workcell.bin
     reach_m = workcell.scene.reach_m[1] + BEYOND_REACH_MARGIN_M
+    runner.look_pose_rad = seeing_look_pose(runner.station)  # every object must be seen: the sleep pose hides those near (0, 140) mm
     xs = np.arange(bin_.x_range_m[0] + 0.025, bin_.x_range_m[1] - 0.02 + 1e-9, SPOT_PITCH_M)
     ys = np.arange(bin_.y_range_m[0] + 0.025, bin_.y_range_m[1] - 0.02 + 1e-9, SPOT_PITCH_M)
     spots = [(float(x), float(y)) for y in ys for x in xs if 0.14 <= math.hypot(x, y) <= 0.36]
