@@ -31,6 +31,7 @@ from armlab.devices.arm import Arm
 from armlab.devices.camera import Camera, Frame
 from armlab.devices.gripper import Gripper
 from armlab.errors import InvalidInput, NoArmError, RefusedByCheck, ShuttingDown
+from armlab.kinematics.calibrated_arm import CalibratedArm
 from armlab.station.calibration_trust import CalibrationTrust
 from armlab.station.checks import checked_joints
 from armlab.station.colors import StationColors
@@ -111,7 +112,9 @@ class Station(Latch, MotionGate, ManualCommands, TeachCommands, JobControls, Per
         if synchronous and (sim is None or sim.realtime):
             raise ValueError("synchronous mode needs a fast-mode simulation (SimWorkcell with realtime=False)")
         self.arm, self.gripper, self.camera = arm, gripper, camera
-        self.model = model
+        # The one arm model every planner uses: the nominal one, corrected once the arm is calibrated
+        # (set_arm_calibration swaps the calibration inside it; armlab.kinematics.calibrated_arm).
+        self.model = CalibratedArm(model) if model is not None and hasattr(model, "ik_with_pitch") else model
         self.has_arm = model is not None
         self.config = config or StationConfig()
         self.store = store or Store(self.config.database_file())
@@ -398,6 +401,11 @@ class Station(Latch, MotionGate, ManualCommands, TeachCommands, JobControls, Per
         """The motion clock: simulated time on the simulation, else monotonic wall time."""
         return self.sim.sim_time_s if self.sim is not None else time.monotonic()
 
+    def _gripper_pose_matrix(self, q_read: np.ndarray) -> np.ndarray:
+        """The gripper's pose from joint readings: the calibrated arm's (fk_measured) when there is one."""
+        fk_measured = getattr(self.model, "fk_measured", None)
+        return fk_measured(q_read) if fk_measured is not None else self.model.fk(q_read)
+
     def status(self) -> dict:
         """GET /api/status: the wire dict (SI units). Works with a device lost (its last reading is shown)."""
         moving_measured, gripper_dict = False, {"width_m": 0.0, "holding": False, "command": "release"}
@@ -429,7 +437,7 @@ class Station(Latch, MotionGate, ManualCommands, TeachCommands, JobControls, Per
             "joint_names": list(self.model.joint_names) if self.has_arm else [],
             "joint_limits_rad": [[float(lo), float(hi)] for lo, hi in zip(self.model.lower_rad, self.model.upper_rad)] if self.has_arm else [],
             "gripper": gripper_dict,
-            "gripper_pose": gripper_pose_from_matrix(self.model.fk(q), np.asarray(self.model.T_world_base)[:3, 3]) if self.has_arm else None,
+            "gripper_pose": gripper_pose_from_matrix(self._gripper_pose_matrix(q), np.asarray(self.model.T_world_base)[:3, 3]) if self.has_arm else None,
             "moving": moving_measured,
             "torque_enabled": self._torque_enabled,
             "calibrated": calibrated,
