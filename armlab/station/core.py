@@ -32,6 +32,7 @@ from armlab.devices.camera import Camera, Frame
 from armlab.devices.gripper import Gripper
 from armlab.errors import InvalidInput, NoArmError, RefusedByCheck, ShuttingDown
 from armlab.kinematics.calibrated_arm import CalibratedArm
+from armlab.station.arm_calibration import ArmCalibrationKeeper
 from armlab.station.calibration_trust import CalibrationTrust
 from armlab.station.checks import checked_joints
 from armlab.station.colors import StationColors
@@ -82,7 +83,7 @@ class NotCalibrated(RefusedByCheck, RuntimeError):
 _UNLATCHED = ("estop",)  # the only command the latch and the lease never refuse
 
 
-class Station(Latch, MotionGate, ManualCommands, TeachCommands, JobControls, Perceiving, CalibrationTrust):
+class Station(Latch, MotionGate, ManualCommands, TeachCommands, JobControls, Perceiving, CalibrationTrust, ArmCalibrationKeeper):
     """The control station's gate (its parts: latch.py, motion.py, manual.py, teach.py, job_control.py, perceiving.py).
     Backends are injected; `sim` is the SimWorkcell when simulated (else None).
 
@@ -179,6 +180,7 @@ class Station(Latch, MotionGate, ManualCommands, TeachCommands, JobControls, Per
             self.events.add("warn", f"{interrupted} job(s) were cut off when the station last stopped: marked interrupted")
         if self.config.restore_calibration:
             self._restore_calibration()
+            self._restore_arm_calibration()
         self._closing.clear()
         if not self.synchronous:
             self._frame_source = FrameSource(self.camera, self.frames, self.arm, self.gripper)
@@ -443,6 +445,7 @@ class Station(Latch, MotionGate, ManualCommands, TeachCommands, JobControls, Per
             "calibrated": calibrated,
             "camera_warning": camera_warning,
             "calibration_state": self.calibration_state,
+            "arm_calibration": self.arm_calibration_status if self.has_arm else None,
             "self_recalibrate": self.self_recalibrate,
             "backend": self.backend,
             "controller": lease["controller"],
