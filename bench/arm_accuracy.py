@@ -106,7 +106,7 @@ def measure_rig(seed: int, points, realism: str, settle_s: float, calibrate: boo
                 smooth_move(cell, model.ik(target, pitch=np.pi / 2, yaw=0.0, q_seed=q_seed))
                 cell.step(settle_s)
                 errors[z].append(cell.gripper_point_m() - target)
-                seen[z].append(model.fk(cell.arm.read_joint_state().position_rad)[:3, 3] - target)
+                seen[z].append(getattr(model, "fk_measured", model.fk)(cell.arm.read_joint_state().position_rad)[:3, 3] - target)
             smooth_move(cell, model.ik([x, y, max(HEIGHTS_M)], pitch=np.pi / 2, yaw=0.0, q_seed=q_seed))  # ...and back up
         rig = cell.rig
         if station is not None:

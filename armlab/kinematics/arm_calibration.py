@@ -36,6 +36,7 @@ from armlab.errors import InvalidInput
 GRAVITY_M_S2 = 9.81
 MIN_POSES = 12
 MAX_ITERATIONS = 60
+OUTLIER_FACTOR, OUTLIER_MIN_M = 3.0, 0.003  # a pose further off the fit than both: fitted again without it
 MIN_IMPROVEMENT_M = 1e-4  # a fit must bring the mean residual down by this much to be worth using
 _STEP = {"offset": 1e-6, "compliance": 1e-5, "shift": 1e-6, "angle": 1e-6}
 
@@ -158,6 +159,7 @@ class ArmCalibration:
     length_delta_m: np.ndarray = field(default_factory=lambda: np.zeros(0))  # per URDF origin (dof+1), or empty
     residuals_before_m: np.ndarray = field(default_factory=lambda: np.zeros(0))
     residuals_after_m: np.ndarray = field(default_factory=lambda: np.zeros(0))
+    outliers: np.ndarray = field(default_factory=lambda: np.zeros(0, int))  # indices of poses left out of the fit
 
     @property
     def residual_before_mm(self) -> float:
@@ -313,12 +315,30 @@ def fit_arm(model, commanded_rad, measured_rad, seen_world_m, marker_in_tool_m, 
         return (points - seen).ravel()
 
     before = np.linalg.norm(_marker_points(model, q_cmd, marker, np.eye(4), np.zeros(model.dof + 1)) - seen, axis=1)
-    p = layout.start()
+    keep = np.ones(len(q_cmd), bool)
+    p = _solve(lambda p: residuals(p)[np.repeat(keep, 3)], layout.start(), layout.steps())
+    after = np.linalg.norm(residuals(p).reshape(-1, 3), axis=1)
+    outliers = after > max(OUTLIER_FACTOR * float(np.median(after)), OUTLIER_MIN_M)
+    if outliers.any() and int((~outliers).sum()) >= max(min_poses, int(np.ceil(0.75 * len(q_cmd)))):
+        keep = ~outliers  # a sighting far off the rest (a tag seen edge-on, a finger over it): fitted without
+        p = _solve(lambda p: residuals(p)[np.repeat(keep, 3)], p, layout.steps())
+    r = residuals(p)[np.repeat(keep, 3)]
+    before = before[keep]
+    after = np.linalg.norm(r.reshape(-1, 3), axis=1)
+    if not np.all(np.isfinite(after)) or after.mean() > before.mean() - MIN_IMPROVEMENT_M:
+        raise ArmCalibrationError(f"the arm calibration's residual ({1000 * after.mean():.2f} mm mean) is no better than the "
+                                  f"nominal model's ({1000 * before.mean():.2f} mm): not used")
+    offsets, compliance, base, lengths = layout.unpack(p, model.dof)
+    return ArmCalibration(offsets, compliance, servo, base, lengths, before, after, np.flatnonzero(~keep))
+
+
+def _solve(residuals, p: np.ndarray, steps: np.ndarray) -> np.ndarray:
+    """Levenberg-Marquardt from p with forward-difference Jacobians (steps per parameter)."""
     r = residuals(p)
-    cost, damping, steps = float(r @ r), 1e-3, layout.steps()
+    cost, damping = float(r @ r), 1e-3
     for _ in range(MAX_ITERATIONS):
-        J = np.empty((len(r), layout.size))
-        for i in range(layout.size):
+        J = np.empty((len(r), len(p)))
+        for i in range(len(p)):
             shifted = p.copy()
             shifted[i] += steps[i]
             J[:, i] = (residuals(shifted) - r) / steps[i]
@@ -339,12 +359,7 @@ def fit_arm(model, commanded_rad, measured_rad, seen_world_m, marker_in_tool_m, 
         cost = cost_new
         if converged:
             break
-    after = np.linalg.norm(r.reshape(-1, 3), axis=1)
-    if not np.all(np.isfinite(after)) or after.mean() > before.mean() - MIN_IMPROVEMENT_M:
-        raise ArmCalibrationError(f"the arm calibration's residual ({1000 * after.mean():.2f} mm mean) is no better than the "
-                                  f"nominal model's ({1000 * before.mean():.2f} mm): not used")
-    offsets, compliance, base, lengths = layout.unpack(p, model.dof)
-    return ArmCalibration(offsets, compliance, servo, base, lengths, before, after)
+    return p
 
 
 def servo_compliance(q_cmd: np.ndarray, q_read: np.ndarray, tau: np.ndarray, loaded: np.ndarray) -> np.ndarray:

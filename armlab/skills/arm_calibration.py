@@ -33,11 +33,12 @@ JOB_NAME, JOB_DETAIL = "calibrate-arm", "the arm from the camera (gripper tag, o
 
 
 def arm_calibration_poses() -> list[CalibrationPose]:
-    """16 poses over the RX200 board in a snake order: x -0.2..0.2 m, y 0.16..0.36 m, z 0.08..0.22 m, pitched
+    """20 poses over the RX200 board in a snake order: x -0.2..0.2 m, y 0.16..0.37 m, z 0.08..0.22 m, pitched
     0, 0.4 or 0.8 rad down (the wrist's load and the arm's reach both vary: the offsets and the compliance come
     apart) with wrist_rotate 0 or +-0.3 rad (its zero); the gripper's tag faces the overhead camera in each."""
     poses = []
-    rows = ((0.16, (-0.2, -0.1, 0.0, 0.1, 0.2)), (0.26, (0.2, 0.1, 0.0, -0.1, -0.2)), (0.36, (-0.15, -0.05, 0.05, 0.15)))
+    rows = ((0.16, (-0.2, -0.1, 0.0, 0.1, 0.2)), (0.23, (0.17, 0.06, -0.06, -0.17)), (0.30, (-0.2, -0.1, 0.0, 0.1, 0.2)),
+            (0.37, (0.15, 0.05, -0.05, -0.15)))
     for j, (y, xs) in enumerate(rows):
         for i, x in enumerate(xs):
             k = len(poses)
@@ -113,6 +114,7 @@ def summary(fit: ArmCalibration, used: list[int], skipped: list[dict], planned: 
     return {
         "poses_planned": planned,
         "poses_used": used,
+        "outliers": [used[i] for i in np.asarray(fit.outliers, int)],  # seen, but left out of the fit (far off the rest)
         "skipped": skipped,
         "residual_before_mm": fit.residual_before_mm,
         "residual_mm": fit.residual_mm,
