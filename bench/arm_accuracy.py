@@ -93,7 +93,7 @@ def measure_rig(seed: int, points, realism: str, settle_s: float, calibrate: boo
     from armlab.workcell import load_workcell_arm
 
     model = load_workcell_arm()
-    errors, seen = {z: [] for z in HEIGHTS_M}, {z: [] for z in HEIGHTS_M}
+    errors, seen, targets = {z: [] for z in HEIGHTS_M}, {z: [] for z in HEIGHTS_M}, {z: [] for z in HEIGHTS_M}
     station, fit = None, None
     with SimWorkcell(SimWorkcellConfig(seed=seed, realism=realism, realtime=False)) as cell:
         if calibrate:
@@ -106,12 +106,13 @@ def measure_rig(seed: int, points, realism: str, settle_s: float, calibrate: boo
                 smooth_move(cell, model.ik(target, pitch=np.pi / 2, yaw=0.0, q_seed=q_seed))
                 cell.step(settle_s)
                 errors[z].append(cell.gripper_point_m() - target)
+                targets[z].append(target)
                 seen[z].append(getattr(model, "fk_measured", model.fk)(cell.arm.read_joint_state().position_rad)[:3, 3] - target)
             smooth_move(cell, model.ik([x, y, max(HEIGHTS_M)], pitch=np.pi / 2, yaw=0.0, q_seed=q_seed))  # ...and back up
         rig = cell.rig
         if station is not None:
             station.close()
-    return {"errors": errors, "seen": seen, "rig": rig, "fit": fit}
+    return {"errors": errors, "seen": seen, "rig": rig, "fit": fit, "targets": targets}
 
 
 def report(seed: int, result: dict) -> float:
@@ -130,6 +131,11 @@ def report(seed: int, result: dict) -> float:
         print(f"    {1000 * z:5.0f} mm high: mean {rows_mm.mean():5.1f} mm, max {rows_mm.max():5.1f} mm, "
               f"vertical mean {1000 * np.array(rows)[:, 2].mean():+6.1f} mm")
     fit = result.get("fit")
+    if fit is not None:
+        targets = np.concatenate([np.array(v) for v in result["targets"].values()])
+        worst = np.argsort(norm_mm)[::-1][:3]
+        print("    worst: " + "; ".join(f"{np.round(1000 * targets[i]).astype(int).tolist()} mm off by "
+                                       f"{np.round(1000 * errors[i], 1).tolist()}" for i in worst))
     if fit is not None and rig is not None:
         drawn = np.degrees(rig["joint_offset_rad"])
         print(f"    arm calibration: {len(fit['poses_used'])}/{fit['poses_planned']} poses, residual {fit['residual_before_mm']:.1f} -> "
