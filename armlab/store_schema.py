@@ -66,6 +66,15 @@ MIGRATIONS: tuple[str, ...] = (
         data_json TEXT NOT NULL
     );
     """,
+    # 5: the arm's calibration from the camera (joint offsets, compliance, base pose: armlab.kinematics.
+    # arm_calibration), beside the camera's; the newest row is the one in use (issue 19 item 2).
+    """
+    CREATE TABLE IF NOT EXISTS arm_calibrations (
+        id INTEGER PRIMARY KEY AUTOINCREMENT,
+        created_s REAL NOT NULL,
+        data_json TEXT NOT NULL
+    );
+    """,
 )
 
 SCHEMA_VERSION = len(MIGRATIONS)

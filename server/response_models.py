@@ -48,6 +48,12 @@ class JobResponse(Wire):
     job: JobInfo | None
 
 
+class ArmCalibrationStatus(Wire):
+    calibrated: bool
+    residual_mm: float | None = Field(None, description="the arm calibration's mean residual (mm) at the gripper tag")
+    at: float | None = Field(None, description="when it was made (time.time())")
+
+
 class Status(Wire):
     state: Literal["idle", "calibrate", "teach", "repeat", "click_grab", "click_drop", "auto_sort", "estop", "fault"]
     detail: str
@@ -64,6 +70,8 @@ class Status(Wire):
         None, description="trusted: in use; untrusted: in use, but the board tags do not confirm it (camera_warning says "
         "why): grabs, drops and jobs are refused; checking: restored at start, not used until the board tags confirm it; "
         "rejected: restored but the camera moved since (recalibrate); None: no calibration")
+    arm_calibration: ArmCalibrationStatus | None = Field(None, description="the arm's calibration from the camera "
+                                                         "(POST /api/calibrate/arm); None on a station with no arm")
     self_recalibrate: bool = Field(False, description="the station recalibrates itself from the board tags when idle once the "
                                    "camera moved (PUT /api/calibration/settings)")
     backend: Literal["sim", "real"]

@@ -30,6 +30,8 @@ def register(subparsers: argparse._SubParsersAction) -> None:
     parser.add_argument("--realism", choices=("real", "camera", "ideal"), default=None,
                         help="real: the simulated camera and arm with a real one's imperfections (the RX200's droop, backlash, "
                              "encoder counts, rig offsets); camera: the real camera with the exact arm; ideal: exact. Default: config/sim.yaml `realism`")
+    parser.add_argument("--no-arm-calibration", action="store_true",
+                        help="with --realism real: skip calibrating the arm from the camera before the job's clock starts")
     parser.add_argument("--truth-out", type=Path, metavar="DIR",
                         help="write each run's final ground truth (+ gripper_path_m) to DIR/<seed>.json")
     parser.add_argument("--json", action="store_true", help='print {"runs": [...], "summary": {...}} only')
@@ -60,7 +62,8 @@ def run_eval(args: argparse.Namespace) -> int:
         seeds = parse_seeds(args.seeds)
         workers = _int_option("--workers", args.workers)
         runs_iter = evaluate(args.event, level, seeds, workers=workers, ray_address=args.ray,
-                             keep_truth=args.truth_out is not None, workcell=args.workcell, realism=args.realism)
+                             keep_truth=args.truth_out is not None, workcell=args.workcell, realism=args.realism,
+                             arm_calibration=not args.no_arm_calibration)
         if args.truth_out is not None:
             if args.truth_out.exists() and not args.truth_out.is_dir():
                 raise EvalError(f"--truth-out {args.truth_out} exists and is not a directory")

@@ -175,6 +175,11 @@ class StationClient:
         """Run the calibration job; with wait, the finished job (check job['state'] == 'succeeded')."""
         return self._post("/api/calibrate", wait=wait, timeout_s=120.0)["job"]
 
+    def calibrate_arm(self, wait: bool = True) -> dict:
+        """Calibrate the arm from the camera (POST /api/calibrate/arm); with wait, the finished job (its result:
+        residual before/after, the fitted offsets). Status carries arm_calibration {calibrated, residual_mm, at}."""
+        return self._post("/api/calibrate/arm", wait=wait, timeout_s=600.0)["job"]
+
     def calibration(self) -> dict:
         return self._get("/api/calibration")
 

@@ -8,7 +8,7 @@ a ConfigError naming the file and the field, instead of moving the arm somewhere
 from __future__ import annotations
 
 import math
-from typing import Literal
+from typing import Annotated, Literal
 
 import numpy as np
 from pydantic import Field, field_validator, model_validator
@@ -152,6 +152,9 @@ class ArmConfig(StrictModel):
     payload_kg: float | None = Field(default=None, gt=0.0)
     reach_m: float | None = Field(default=None, gt=0.0)
     accuracy_m: float | None = Field(default=None, gt=0.0)
+    # Nominal mass of each joint's link (kg, the link joint i moves, its centre halfway to the next joint origin):
+    # the gravity torques of the arm calibration's compliance (armlab.kinematics.arm_calibration). None: equal masses.
+    link_masses_kg: list[Annotated[float, Field(ge=0.0)]] | None = None
 
     @field_validator("T_world_base")
     @classmethod
@@ -173,6 +176,8 @@ class ArmConfig(StrictModel):
             values = getattr(self.limits, field)
             if len(values) != dof:
                 raise ValueError(f"limits.{field}: expected {dof} values (one per joint), got {len(values)}")
+        if self.link_masses_kg is not None and len(self.link_masses_kg) != dof:
+            raise ValueError(f"link_masses_kg: expected {dof} values (one per joint), got {len(self.link_masses_kg)}")
         lower = np.radians(self.limits.lower_deg)
         upper = np.radians(self.limits.upper_deg)
         for field in ("home_rad", "sleep_rad"):

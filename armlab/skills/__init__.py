@@ -3,6 +3,7 @@
 Imports go one way: armlab.tasks → armlab.skills → armlab.station → armlab.devices.
 """
 
+from armlab.skills.arm_calibration import calibrate_arm
 from armlab.skills.arm_camera import calibrate_arm_camera
 from armlab.skills.manipulate import plan_pick_steps, plan_place_steps, run_steps
 from armlab.skills.operator import calibrate, calibrate_points, calibration_summary, drop, grab
@@ -13,6 +14,7 @@ __all__ = [
     "arm_hides_block",
     "block_near",
     "calibrate",
+    "calibrate_arm",
     "calibrate_arm_camera",
     "calibrate_points",
     "calibration_summary",

@@ -31,6 +31,8 @@ from armlab.devices.arm import Arm
 from armlab.devices.camera import Camera, Frame
 from armlab.devices.gripper import Gripper
 from armlab.errors import InvalidInput, NoArmError, RefusedByCheck, ShuttingDown
+from armlab.kinematics.calibrated_arm import CalibratedArm
+from armlab.station.arm_calibration import ArmCalibrationKeeper
 from armlab.station.calibration_trust import CalibrationTrust
 from armlab.station.checks import checked_joints
 from armlab.station.colors import StationColors
@@ -81,7 +83,7 @@ class NotCalibrated(RefusedByCheck, RuntimeError):
 _UNLATCHED = ("estop",)  # the only command the latch and the lease never refuse
 
 
-class Station(Latch, MotionGate, ManualCommands, TeachCommands, JobControls, Perceiving, CalibrationTrust):
+class Station(Latch, MotionGate, ManualCommands, TeachCommands, JobControls, Perceiving, CalibrationTrust, ArmCalibrationKeeper):
     """The control station's gate (its parts: latch.py, motion.py, manual.py, teach.py, job_control.py, perceiving.py).
     Backends are injected; `sim` is the SimWorkcell when simulated (else None).
 
@@ -111,7 +113,9 @@ class Station(Latch, MotionGate, ManualCommands, TeachCommands, JobControls, Per
         if synchronous and (sim is None or sim.realtime):
             raise ValueError("synchronous mode needs a fast-mode simulation (SimWorkcell with realtime=False)")
         self.arm, self.gripper, self.camera = arm, gripper, camera
-        self.model = model
+        # The one arm model every planner uses: the nominal one, corrected once the arm is calibrated
+        # (set_arm_calibration swaps the calibration inside it; armlab.kinematics.calibrated_arm).
+        self.model = CalibratedArm(model) if model is not None and hasattr(model, "ik_with_pitch") else model
         self.has_arm = model is not None
         self.config = config or StationConfig()
         self.store = store or Store(self.config.database_file())
@@ -176,6 +180,7 @@ class Station(Latch, MotionGate, ManualCommands, TeachCommands, JobControls, Per
             self.events.add("warn", f"{interrupted} job(s) were cut off when the station last stopped: marked interrupted")
         if self.config.restore_calibration:
             self._restore_calibration()
+            self._restore_arm_calibration()
         self._closing.clear()
         if not self.synchronous:
             self._frame_source = FrameSource(self.camera, self.frames, self.arm, self.gripper)
@@ -398,6 +403,11 @@ class Station(Latch, MotionGate, ManualCommands, TeachCommands, JobControls, Per
         """The motion clock: simulated time on the simulation, else monotonic wall time."""
         return self.sim.sim_time_s if self.sim is not None else time.monotonic()
 
+    def _gripper_pose_matrix(self, q_read: np.ndarray) -> np.ndarray:
+        """The gripper's pose from joint readings: the calibrated arm's (fk_measured) when there is one."""
+        fk_measured = getattr(self.model, "fk_measured", None)
+        return fk_measured(q_read) if fk_measured is not None else self.model.fk(q_read)
+
     def status(self) -> dict:
         """GET /api/status: the wire dict (SI units). Works with a device lost (its last reading is shown)."""
         moving_measured, gripper_dict = False, {"width_m": 0.0, "holding": False, "command": "release"}
@@ -429,12 +439,13 @@ class Station(Latch, MotionGate, ManualCommands, TeachCommands, JobControls, Per
             "joint_names": list(self.model.joint_names) if self.has_arm else [],
             "joint_limits_rad": [[float(lo), float(hi)] for lo, hi in zip(self.model.lower_rad, self.model.upper_rad)] if self.has_arm else [],
             "gripper": gripper_dict,
-            "gripper_pose": gripper_pose_from_matrix(self.model.fk(q), np.asarray(self.model.T_world_base)[:3, 3]) if self.has_arm else None,
+            "gripper_pose": gripper_pose_from_matrix(self._gripper_pose_matrix(q), np.asarray(self.model.T_world_base)[:3, 3]) if self.has_arm else None,
             "moving": moving_measured,
             "torque_enabled": self._torque_enabled,
             "calibrated": calibrated,
             "camera_warning": camera_warning,
             "calibration_state": self.calibration_state,
+            "arm_calibration": self.arm_calibration_status if self.has_arm else None,
             "self_recalibrate": self.self_recalibrate,
             "backend": self.backend,
             "controller": lease["controller"],

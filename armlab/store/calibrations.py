@@ -1,4 +1,4 @@
-"""Calibrations, camera intrinsics and colour calibrations: JSON documents, newest first; a damaged row is
+"""Calibrations (the camera's and the arm's), camera intrinsics and colour calibrations: JSON documents, newest first; a damaged row is
 logged and skipped for the newest one that reads back. Each save is one INSERT in one transaction."""
 
 from __future__ import annotations
@@ -10,7 +10,7 @@ from armlab.store.database import ROW_ERRORS, Database
 
 
 class CalibrationTables(Database):
-    """The calibrations, intrinsics and color_calibrations tables of the station's database."""
+    """The calibrations, arm_calibrations, intrinsics and color_calibrations tables of the station's database."""
 
     def save_calibration(self, data: dict) -> int:
         """Save a calibration (its JSON dict); returns its id."""
@@ -36,6 +36,19 @@ class CalibrationTables(Database):
             except ROW_ERRORS as error:
                 self._skip(f"calibration {calibration_id}", error)
         return None
+
+    # The arm's calibration -----------------------------------------------------------------------
+
+    def save_arm_calibration(self, data: dict) -> int:
+        """Save the arm's calibration (its JSON dict: {"calibration", "info"}); returns the row id."""
+        rows = self._run("INSERT INTO arm_calibrations (created_s, data_json) VALUES (?, ?) RETURNING id",
+                         (time.time(), json.dumps(data)))
+        return int(rows[0][0])
+
+    def latest_arm_calibration(self) -> dict | None:
+        """The newest arm calibration that reads back ({"created_s", **data}; damaged rows skipped), else None."""
+        rows = self._run("SELECT id, created_s, data_json FROM arm_calibrations ORDER BY id DESC LIMIT 20", raw_text=True)
+        return self._newest_json_object(rows, "arm calibration")
 
     # Intrinsics ----------------------------------------------------------------------------------
 

@@ -21,6 +21,7 @@ from armlab.tasks.registry import checked_request, start_auto
 from armlab.tasks.scorers import score_job
 from armlab.workcell import load_workcell_arm
 
+ARM_CALIBRATION_TIMEOUT_S = 600.0  # wall seconds for the arm's calibration (20 poses, ~24 s simulated)
 CALIBRATION_TIMEOUT_S = 60.0
 JOB_TIMEOUT_S = 1800.0  # wall time; a job that runs longer is cancelled and scored as it stands
 
@@ -46,12 +47,13 @@ def score_run(event: str, level: int | None, truth: dict, sim_time_s: float, gri
 
 
 def run_episode(event: str, level: int | None, seed: int, *, keep_truth: bool = False, workcell: str | None = None,
-                realism: str | None = None) -> dict:
+                realism: str | None = None, arm_calibration: bool = True) -> dict:
     """Run job `event` at `level` on the scene of `seed` on `workcell` (config/workcells/<name>.yaml: its
     arm, gripper, board and scene; None = the default, the RX200); return the judged result as a
     JSON-ready dict: {event, level, seed, workcell, points, max_points, sim_time_s, wall_time_s, breakdown,
     failures, full, within_limit} (+ truth with gripper_path_m when keep_truth). realism: real or ideal
-    simulation (None: config/sim.yaml's)."""
+    simulation (None: config/sim.yaml's). arm_calibration: on the real arm (a drawn rig), calibrate it from the
+    camera after the camera and before the job's clock starts, as a team does before its run (False: skip)."""
     from armlab.devices.sim import (  # MuJoCo only when simulating (tests/test_layering.py)
         SimWorkcell,
         SimWorkcellConfig,
@@ -72,6 +74,11 @@ def run_episode(event: str, level: int | None, seed: int, *, keep_truth: bool = 
             calibration.wait(CALIBRATION_TIMEOUT_S)
             if calibration.state != "succeeded":
                 raise RuntimeError(f"calibration failed: {calibration.message}")
+            if arm_calibration and cell.rig is not None:
+                arm = skills.calibrate_arm(station)
+                arm.wait(ARM_CALIBRATION_TIMEOUT_S)
+                if arm.state != "succeeded":
+                    raise RuntimeError(f"arm calibration failed: {arm.message}")
             sim_start = cell.sim_time_s
             recorder = getattr(cell, "start_path_recording", None)
             if recorder is not None:

@@ -32,6 +32,7 @@ MAX_ATTEMPTS_PER_MOVE = 3
 MAX_LOOKS = 200  # a job that has looked this often without finishing stops (no endless loops)
 PARK_CLEARANCE_M = 0.015  # the sleep pose is low beside the base: it passes blocks closer than transfers do
 PARK_RISE_Z_M = 0.32  # how high the gripper rises before parking when the straight way is blocked
+PARK_FRONT_VIA_M = (0.0, 0.16, 0.16)  # else through here, in front of the base, clear of it and of the board
 OBJECT_BOX_RADIUS_M = 0.032  # half-width of the box around a detected object (a 38 mm cube at any yaw + margin)
 
 
@@ -212,6 +213,11 @@ class TaskRunner:
             routes.append([rise.positions_rad[-1], model.ik([0.0, 0.12, rise_z_m], q_seed=q_park)])
         except PLAN_REFUSALS:
             pass
+        try:  # out in front first: from the sleep pose, the drooping real arm's straight way passes by its base
+            routes.append([model.ik(PARK_FRONT_VIA_M, pitch=None, yaw=None, q_seed=q_park)])
+        except PLAN_REFUSALS:
+            pass
+
         def joint_move(q_a, q_b):
             return plan_joint_move(q_a, q_b, model, None, None, config.sample_rate_hz)
 
@@ -221,7 +227,9 @@ class TaskRunner:
                 for q_to in [*via, q_park]:
                     legs += joint_moves_inside(model, q_from, q_to, self.gripper_box, joint_move)
                     q_from = q_to
-            except PLAN_REFUSALS:  # an IK point a hair outside a limit: try the next route
+                for leg in legs:  # the gate's own body check (the arm's base, the board): the calibrated arm,
+                    self.station.check_body(leg)  # drooping, passes nearer its base than the nominal one
+            except PLAN_REFUSALS:  # an IK point a hair outside a limit, or a leg through the arm's base: the next route
                 continue
             if all(first_collision(model, leg, boxes, link_radius_m=PARK_CLEARANCE_M) is None for leg in legs):
                 for leg in legs:

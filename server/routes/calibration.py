@@ -43,6 +43,15 @@ async def post_calibrate_arm_camera(
     return await job_response(request, job, wait)
 
 
+@router.post("/calibrate/arm", response_model=JobResponse, status_code=202, responses=WAITED_JOB)
+async def post_calibrate_arm(request: Request, station: StationDep, controller: ControlAuth, wait: bool = False) -> JSONResponse:
+    """Calibrate the arm from the camera: checked poses over the board, the gripper's tag seen by the calibrated
+    camera in each, the fit (joint offsets, compliance, base pose; residual before and after in the result),
+    installed for every motion and saved. Refused (the job fails saying why, the arm calibration in use kept)
+    with the camera uncalibrated, a block held, the tag seen at too few poses, or a fit no better than nominal."""
+    return await job_response(request, await run_in_threadpool(skills.calibrate_arm, station, source=controller), wait)
+
+
 @router.get("/calibration", response_model=CalibrationInfo)
 def read_calibration(station: StationDep) -> dict:
     return station.calibration_info

@@ -129,6 +129,7 @@ export class Api {
   torque(enabled, confirm = false) { return this.post("/api/arm/torque", confirm ? { enabled, confirm } : { enabled }); }
   gripper(action) { return this.post("/api/gripper", { action }); }
   calibrate() { return this.post("/api/calibrate"); }
+  calibrateArm() { return this.post("/api/calibrate/arm"); }
   pixelToWorld(u, v) { return this.post("/api/pixel-to-world", { u, v }); }
   grab(target) { return this.post("/api/grab", target); }
   drop(target) { return this.post("/api/drop", target); }

@@ -101,6 +101,11 @@ export class ClickCalibration {
     state.textContent = text;
     state.dataset.state = s.calibration_state || "none";
     state.hidden = !text;
+    const arm = s.arm_calibration;
+    const armBadge = $("arm-calib");
+    armBadge.hidden = !arm;
+    armBadge.dataset.ok = String(Boolean(arm && arm.calibrated));
+    armBadge.textContent = arm && arm.calibrated ? `arm calibrated, residual ${Number(arm.residual_mm).toFixed(1)} mm` : "arm not calibrated";
   }
 
   async setSelfRecalibrate(enabled) {

@@ -428,6 +428,7 @@ class App {
     on("btn-close", () => this.run("gripper close", () => this.api.gripper("grasp")));
     on("btn-reset", () => this.run("reset", () => this.api.reset()));
     on("btn-calibrate", () => this.run("calibrate", () => this.api.calibrate()));
+    on("btn-calibrate-arm", () => this.run("calibrate arm", () => this.api.calibrateArm()));
     on("btn-cancel-job", () => this.run("cancel job", () => this.api.cancelJob()));
     on("btn-send-joints", () => this.sendJoints(this.sliders.valuesRad()));
     on("btn-sliders-from-arm", () => this.status && this.sliders.follow(this.status.joints_rad, true));

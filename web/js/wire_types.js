@@ -19,6 +19,13 @@ export const EVENT_KINDS = Object.freeze(["general", "scene"]);
  */
 
 /**
+ * @typedef {Object} ArmCalibrationStatus
+ * @property {boolean} calibrated
+ * @property {(number|null)} [residual_mm] the arm calibration's mean residual (mm) at the gripper tag
+ * @property {(number|null)} [at] when it was made (time.time())
+ */
+
+/**
  * The station's arm and gripper (armlab.station.arm_info), sent once in the hello: the page builds its
  * jog sliders, joint readouts, plot and teach table from these, never from names of its own.
  * @typedef {Object} ArmInfo
@@ -519,6 +526,7 @@ export const EVENT_KINDS = Object.freeze(["general", "scene"]);
  * @property {boolean} calibrated
  * @property {(string|null)} [camera_warning] "camera moved: recalibrate (...)" when the board tags no longer sit where the calibration puts them
  * @property {(("checking"|"trusted"|"untrusted"|"rejected")|null)} [calibration_state] trusted: in use; untrusted: in use, but the board tags do not confirm it (camera_warning says why): grabs, drops and jobs are refused; checking: restored at start, not used until the board tags confirm it; rejected: restored but the camera moved since (recalibrate); None: no calibration
+ * @property {(ArmCalibrationStatus|null)} [arm_calibration] the arm's calibration from the camera (POST /api/calibrate/arm); None on a station with no arm
  * @property {boolean} [self_recalibrate] the station recalibrates itself from the board tags when idle once the camera moved (PUT /api/calibration/settings)
  * @property {("sim"|"real")} backend
  * @property {(string|null)} controller who holds the control lease (None: free); only it may command
@@ -626,6 +634,7 @@ export const EVENT_KINDS = Object.freeze(["general", "scene"]);
  * @property {boolean} calibrated
  * @property {(string|null)} [camera_warning] "camera moved: recalibrate (...)" when the board tags no longer sit where the calibration puts them
  * @property {(("checking"|"trusted"|"untrusted"|"rejected")|null)} [calibration_state] trusted: in use; untrusted: in use, but the board tags do not confirm it (camera_warning says why): grabs, drops and jobs are refused; checking: restored at start, not used until the board tags confirm it; rejected: restored but the camera moved since (recalibrate); None: no calibration
+ * @property {(ArmCalibrationStatus|null)} [arm_calibration] the arm's calibration from the camera (POST /api/calibrate/arm); None on a station with no arm
  * @property {boolean} [self_recalibrate] the station recalibrates itself from the board tags when idle once the camera moved (PUT /api/calibration/settings)
  * @property {("sim"|"real")} backend
  * @property {(string|null)} controller who holds the control lease (None: free); only it may command
