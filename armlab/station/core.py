@@ -201,7 +201,7 @@ class Station(Latch, MotionGate, ManualCommands, TeachCommands, JobControls, Per
         self._halt.set()
         job = self._job
         if job is not None:
-            job.cancel()
+            job.cancel(halted=True)
         self._halt_devices()
 
     def close(self) -> dict:
