@@ -45,6 +45,11 @@ class PlanRefused(RefusedByCheck, ValueError):
     near a singularity, outside the gripper box, no jerk-limited trajectory. Nothing moved."""
 
 
+class SpotHidden(RefusedByCheck):
+    """A clicked spot is hidden (under the arm) and may have changed since it was last seen: its height is not
+    guessed (HTTP 409); the message says how to see it."""
+
+
 class WrongArm(RefusedByCheck):
     """A stored item (a taught program) belongs to another arm or workcell than this station's (HTTP 409): its
     joints mean nothing here. The message names both."""

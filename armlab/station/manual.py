@@ -207,6 +207,7 @@ class ManualCommands:
         with self._sending():
             self._transition("gripper", source=source)
             self._send_later(lambda: getattr(self.gripper, action)(wait=False))
+        self.note_gripper_change()  # what is under the gripper may change (a block let go): remembered depth there is stale
         if wait:
             self.wait_gripper()
 
