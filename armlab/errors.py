@@ -4,6 +4,7 @@ ArmlabError
 ├── InvalidInput (ValueError)      a value the caller gave is wrong; nothing moved (ConfigError, ...)
 ├── Unreachable (ValueError)       no joint vector reaches the target within the limits
 ├── RefusedByCheck                 a check refused the command: state, lease, calibration (CommandRefused, ...)
+│   ├── WrongArm                   a program taught on another arm or workcell
 │   └── PlanRefused (ValueError)   no motion passes the planner's checks (UnsafeTrajectory, DiscontinuousPath)
 └── DeviceFault (ConnectionError)  a device is not connected, stopped answering or timed out
 
@@ -42,6 +43,16 @@ class RefusedByCheck(ArmlabError):
 class PlanRefused(RefusedByCheck, ValueError):
     """A planner found no motion that passes its checks: unsafe (UnsafeTrajectory), discontinuous, too fast
     near a singularity, outside the gripper box, no jerk-limited trajectory. Nothing moved."""
+
+
+class SpotHidden(RefusedByCheck):
+    """A clicked spot is hidden (under the arm) and may have changed since it was last seen: its height is not
+    guessed (HTTP 409); the message says how to see it."""
+
+
+class WrongArm(RefusedByCheck):
+    """A stored item (a taught program) belongs to another arm or workcell than this station's (HTTP 409): its
+    joints mean nothing here. The message names both."""
 
 
 class DeviceFault(ArmlabError, ConnectionError):

@@ -75,6 +75,14 @@ MIGRATIONS: tuple[str, ...] = (
         data_json TEXT NOT NULL
     );
     """,
+    # 6: programs and the teach draft belong to an arm and a workcell (one file shared by the RX200 and the
+    # UR3 stations, issue 21 item 1). Rows from before have NULL: they belong to an arm with as many joints.
+    """
+    ALTER TABLE programs ADD COLUMN arm TEXT;
+    ALTER TABLE programs ADD COLUMN workcell TEXT;
+    ALTER TABLE teach_draft ADD COLUMN arm TEXT;
+    ALTER TABLE teach_draft ADD COLUMN workcell TEXT;
+    """,
 )
 
 SCHEMA_VERSION = len(MIGRATIONS)

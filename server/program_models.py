@@ -122,13 +122,27 @@ class ProgramInfo(Wire):
     name: str
     created_s: float
     updated_s: float | None = None
+    arm: str | None = Field(None, description="the arm it was taught on (None: saved before programs had an arm)")
+    workcell: str | None = Field(None, description="the workcell it was taught in (None: saved before programs had one)")
     waypoints: list[WaypointInfo]
 
 
+class OtherPrograms(Wire):
+    """Programs in the same database that belong to another arm or workcell (not listed: their joints mean nothing here)."""
+
+    arm: str | None = Field(description="None: saved before programs had an arm, with another number of joints")
+    workcell: str | None
+    count: int
+
+
 class ProgramsResponse(Wire):
+    """GET /api/programs: this station's arm's (and workcell's) programs."""
+
     data: list[ProgramInfo]
     count: int
     skipped: list[str] = Field([], description="damaged rows left out of data, one line each (also logged)")
+    others_count: int = Field(0, description="programs of other arms or workcells in the same database (not in data)")
+    others: list[OtherPrograms] = Field([], description="those programs, counted by arm and workcell")
 
 
 class TeachRecordResponse(WaypointInfo):
@@ -194,6 +208,7 @@ PROGRAM_WIRE_MODELS = (
     SpeedRequest,
     WaypointInfo,
     ProgramInfo,
+    OtherPrograms,
     ProgramsResponse,
     TeachRecordResponse,
     TeachUndoResponse,

@@ -43,4 +43,5 @@ class Gripper(abc.ABC):
 
     @abc.abstractmethod
     def stop(self) -> None:
-        """Hold the fingers where they are."""
+        """Halt the fingers where they are; fingers closed on something (holding) keep squeezing it: an
+        e-stop never drops what is held (a cup keeps its vacuum)."""

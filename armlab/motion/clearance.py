@@ -56,13 +56,21 @@ def first_collision(
     link_radius_m: float = 0.03,
     finger_length_m: float = 0.03,
     held_edge_m: float | None = None,
+    gripper_checked_m: float = 0.0,
 ) -> str | None:
     """None when every sampled arm point keeps link_radius_m outside every box, else a sentence naming
-    the first box hit and when."""
+    the first box hit and when. gripper_checked_m: link points this close to the gripper point are left out
+    (fingers_hit checks the gripper's own box exactly there); the held block's point never is."""
     if not boxes:
         return None
     positions = trajectory.positions_rad[:: max(1, len(trajectory.positions_rad) // 40)]
     points = arm_points_m(model, positions, finger_length_m, held_edge_m)  # (N, P, 3)
+    if gripper_checked_m > 0.0:
+        gripper = np.asarray(model.fk(np.asarray(positions, float)), float).reshape(-1, 4, 4)[:, None, :3, 3]
+        near = np.linalg.norm(points - gripper, axis=-1) <= gripper_checked_m
+        if held_edge_m is not None:
+            near[:, -1] = False
+        points = np.where(near[..., None], np.inf, points)  # far from every box
     for box in boxes:
         dx = np.abs(points[..., 0] - box.center_xy_m[0]) - box.half_xy_m[0]
         dy = np.abs(points[..., 1] - box.center_xy_m[1]) - box.half_xy_m[1]
@@ -126,4 +134,35 @@ def self_collision(
                             f"z = {point[2] * 1000:.0f} mm; the base is {base_radius_m * 1000:.0f} mm wide up to "
                             f"{base_top[sample] * 1000:.0f} mm)")
         return sample, f"{name} would come within {gap[sample, k] * 1000:.0f} mm of the arm's upper arm"
+    return None
+
+
+OBJECT_BOX_RADIUS_M = 0.032  # half-width of the box around a detected object (a 38 mm cube at any yaw + margin)
+FINGER_GRID = (4, 5, 2)  # points of the finger box sampled along its approach, closing and normal axes
+
+
+def fingers_hit(model, trajectory: JointTrajectory, fingers, boxes: list[ObstacleBox], margin_m: float = 0.003) -> str | None:
+    """None when the box the gripper occupies (`fingers`: armlab.motion.gripper_step.FingerBox, open fingers or
+    a cup, in the gripper frame) stays margin_m outside every box at every sample, else a sentence naming the box
+    and how low the gripper point was. The link check (first_collision) sees the finger tips only, not how wide
+    open fingers reach sideways: a straight descent beside a stack needs this one."""
+    if not boxes:
+        return None
+    nx, ny, nz = FINGER_GRID
+    grid = np.array([[x, y, z] for x in np.linspace(-fingers.back_m, fingers.reach_m, nx)
+                     for y in np.linspace(-fingers.half_width_m, fingers.half_width_m, ny)
+                     for z in np.linspace(-fingers.half_height_m, fingers.half_height_m, nz)])
+    positions = trajectory.positions_rad[:: max(1, len(trajectory.positions_rad) // 40)]
+    T = np.asarray(model.fk(np.asarray(positions, float)), float).reshape(-1, 4, 4)
+    points = np.einsum("nij,kj->nki", T[:, :3, :3], grid) + T[:, None, :3, 3]  # (N, K, 3)
+    for box in boxes:
+        inside = ((np.abs(points[..., 0] - box.center_xy_m[0]) < box.half_xy_m[0] + margin_m)
+                  & (np.abs(points[..., 1] - box.center_xy_m[1]) < box.half_xy_m[1] + margin_m)
+                  & (points[..., 2] < box.top_z_m + margin_m))
+        if inside[0].any():
+            continue  # the gripper starts this close (e.g. right after setting a block down there): moving away is the way out
+        if inside.any():
+            sample = int(np.argwhere(inside)[0][0])
+            return (f"the open fingers would touch {box.name} (top {box.top_z_m * 1000:.0f} mm) with the gripper point at "
+                    f"z = {T[sample, 2, 3] * 1000:.0f} mm")
     return None

@@ -4,11 +4,13 @@
 A Cartesian step (axis x, y or z) moves the gripper point along that world axis and keeps the
 gripper's pitch (approach axis below the horizontal, in the arm's vertical plane) and yaw (heading of
 the fingers' closing axis in the board plane, as GET /api/status reports it). A 5-joint arm turns the
-gripper with the waist, so a step that changes the waist keeps the yaw by rolling the wrist; with the
-gripper level (pitch ≈ 0) the roll cannot do that and such a step is refused. A pitch step turns the
-approach axis about the gripper point (wrist roll unchanged); a roll step turns wrist_rotate only.
-Whatever cannot be kept within the tolerances (1 mm off the asked motion, 0.5° of pitch or yaw) is
-refused with StepRefused (an Unreachable) naming the numbers. An arm with six joints or more keeps
+gripper with the waist, so a step that changes the waist keeps the yaw by rolling the wrist while the
+gripper points (nearly) down; level (Home) or tilted, the roll cannot hold it, and the step keeps the wrist
+roll instead: the yaw turns with the waist, exactly as much (yaw_turn_rad says how much; issue 21: an X
+step from Home was always refused). A pitch step turns the approach axis about the gripper point (wrist
+roll unchanged); a roll step turns wrist_rotate only. Whatever cannot be kept within the tolerances (1 mm
+off the asked motion, 0.5° of pitch, of yaw or of the yaw the waist gives) is refused with StepRefused
+(an Unreachable) naming the numbers. An arm with six joints or more keeps
 the tool's whole orientation instead (armlab.motion.pose_step, through ik_pose). Pure: no devices.
 """
 
@@ -39,7 +41,6 @@ LINEAR_AXES = ("x", "y", "z")
 POSITION_TOL_M = 0.001  # the gripper point stays this close to the asked motion
 ORIENTATION_TOL_RAD = math.radians(0.5)  # pitch and yaw kept (or changed by the asked step) this closely
 EXACT_TOL_RAD = math.radians(0.02)  # a plan that keeps the wrist roll must keep the yaw this closely, else it rolls
-FALLBACK_TOL_RAD = math.radians(0.3)  # ... unless rolling is impossible: then this much (the servos add < 0.2°)
 MAX_STEP_M = 0.1
 MAX_STEP_RAD = math.pi / 4
 # Holding the yaw while the waist turns by w rolls the wrist by about w / sin(pitch) and tilts the fingers:
@@ -197,9 +198,12 @@ def _plan_linear(arm, q_start, start: GripperPose, axis: str, amount: float, spe
         return np.full(s.size, start.pitch_rad)
 
     # Keep the wrist roll when that keeps the yaw exactly (a step that leaves the waist alone), else let IK
-    # roll the wrist to hold the closing axis' heading; the uncompensated plan only if that is impossible.
-    def attempt(yaw, tol_rad):
-        return _checked_path(arm, q_start, targets_at, pitch_at, yaw, duration_s, ramp_s, label, axis, amount, rate_hz, tol_rad)
+    # roll the wrist to hold the closing axis' heading. When the roll cannot (the gripper level or tilted: the
+    # roll would tip the fingers, or IK flips the wrist a quarter turn), keep the roll and let the yaw turn
+    # with the waist, the one thing a 5-joint arm can do there (verified: exactly the waist's turn).
+    def attempt(yaw, tol_rad, follows_waist=False):
+        return _checked_path(arm, q_start, targets_at, pitch_at, yaw, duration_s, ramp_s, label, axis, amount, rate_hz, tol_rad,
+                             follows_waist)
 
     try:
         return attempt(None, EXACT_TOL_RAD)
@@ -210,21 +214,22 @@ def _plan_linear(arm, q_start, start: GripperPose, axis: str, amount: float, spe
             return attempt(start.yaw_rad, ORIENTATION_TOL_RAD)
         except Unreachable as rolled:
             try:
-                return attempt(None, FALLBACK_TOL_RAD)
-            except StepRefused:
-                pass
-            raise StepRefused(f"{kept_roll}; rolling the wrist to hold it: {rolled}", kept_roll.reason) from rolled
+                return attempt(None, ORIENTATION_TOL_RAD, follows_waist=True)
+            except Unreachable as followed:
+                raise StepRefused(f"{kept_roll}; rolling the wrist to hold it: {rolled}; keeping the wrist: {followed}",
+                                  kept_roll.reason) from rolled
 
 
 def _checked_path(
-    arm, q_start, targets_at, pitch_at, yaw, duration_s, ramp_s, label, axis, amount, rate_hz, tol_rad=ORIENTATION_TOL_RAD
+    arm, q_start, targets_at, pitch_at, yaw, duration_s, ramp_s, label, axis, amount, rate_hz, tol_rad=ORIENTATION_TOL_RAD,
+    follows_waist: bool = False,
 ) -> JointTrajectory:
     """plan_path, then verify_step; an IK branch switch along the way is refused (StepRefused) too."""
     try:
         trajectory = plan_path(arm, q_start, targets_at, pitch_at, yaw, duration_s, ramp_s, label, rate_hz)
     except DiscontinuousPath as error:
         raise StepRefused(f"the arm cannot follow the step continuously: {error}", "discontinuous") from error
-    verify_step(arm, trajectory.positions_rad, axis, amount, tol_rad)
+    verify_step(arm, trajectory.positions_rad, axis, amount, tol_rad, follows_waist)
     return trajectory
 
 
@@ -255,26 +260,34 @@ def _plan_roll(arm, q_start, amount: float, speeds: StepSpeeds, rate_hz: float):
     return plan_joint_move(q_start, q_goal, arm, moving_time_s=duration_s, rate_hz=rate_hz)
 
 
-def verify_step(arm, positions_rad: np.ndarray, axis: str, amount: float, tol_rad: float = ORIENTATION_TOL_RAD) -> None:
+def verify_step(arm, positions_rad: np.ndarray, axis: str, amount: float, tol_rad: float = ORIENTATION_TOL_RAD,
+                follows_waist: bool = False) -> None:
     """StepRefused unless every sample keeps the gripper on the asked motion (FK of the planned joints):
     Cartesian: on the line within POSITION_TOL_M, pitch and yaw within ORIENTATION_TOL_RAD of the start's,
     ending within POSITION_TOL_M of the goal; pitch: the point kept, ending at start + amount; roll: the
-    point and the pitch kept."""
+    point and the pitch kept. follows_waist (a Cartesian step that keeps the wrist roll): the yaw may turn
+    with the waist, by what the waist's turn alone gives (the start's other joints with each sample's waist)."""
     poses = gripper_poses(arm, positions_rad)
     start, end = poses[0], poses[-1]
+    if follows_waist:  # the yaw each sample's waist gives the start's gripper: the reference instead of the start's
+        waist_only = np.repeat(np.asarray(positions_rad[:1], float), len(positions_rad), axis=0)
+        waist_only[:, 0] = np.asarray(positions_rad, float)[:, 0]
+        reference_yaws = [pose.yaw_rad for pose in gripper_poses(arm, waist_only)]
+    else:
+        reference_yaws = [start.yaw_rad] * len(poses)
     label = _step_text(axis, amount)
     direction = np.zeros(3)
     if axis in LINEAR_AXES:
         direction[LINEAR_AXES.index(axis)] = 1.0
     worst_off_m, worst_pitch, worst_yaw = 0.0, 0.0, 0.0
-    for pose in poses:
+    for pose, reference_yaw in zip(poses, reference_yaws):
         offset = pose.position_m - start.position_m
         along = float(offset @ direction)
         worst_off_m = max(worst_off_m, float(np.linalg.norm(offset - along * direction)))
         if axis != "pitch":
             worst_pitch = max(worst_pitch, abs(angle_difference_rad(pose.pitch_rad, start.pitch_rad)))
         if axis in LINEAR_AXES:
-            worst_yaw = max(worst_yaw, abs(angle_difference_rad(pose.yaw_rad, start.yaw_rad)))
+            worst_yaw = max(worst_yaw, abs(angle_difference_rad(pose.yaw_rad, reference_yaw)))
     if axis in LINEAR_AXES:
         end_error_m = float(np.linalg.norm(end.position_m - (start.position_m + amount * direction)))
         worst_off_m = max(worst_off_m, end_error_m)
@@ -286,7 +299,7 @@ def verify_step(arm, positions_rad: np.ndarray, axis: str, amount: float, tol_ra
         raise StepRefused(f"{label}: the gripper point would leave the asked motion by {worst_off_m * 1000:.1f} mm", "off the line")
     if worst_pitch > tol_rad:
         raise StepRefused(f"{label}: the gripper's pitch would change by {math.degrees(worst_pitch):.2f}°", "orientation")
-    if axis in LINEAR_AXES:
+    if axis in LINEAR_AXES and not follows_waist:
         waist_turn, roll = abs(positions_rad[-1][0] - positions_rad[0][0]), abs(positions_rad[-1][-1] - positions_rad[0][-1])
         if roll > MAX_ROLL_PER_WAIST * waist_turn + 1e-3:
             raise StepRefused(
@@ -296,8 +309,18 @@ def verify_step(arm, positions_rad: np.ndarray, axis: str, amount: float, tol_ra
                 "orientation",
             )
     if worst_yaw > tol_rad:
+        if follows_waist:
+            raise StepRefused(f"{label}: the gripper's yaw would leave the waist's heading by {math.degrees(worst_yaw):.2f}°",
+                              "orientation")
         raise StepRefused(
             f"{label}: the gripper's yaw would change by {math.degrees(worst_yaw):.2f}° (a 5-joint arm turns the gripper "
             "with the waist)",
             "orientation",
         )
+
+
+def yaw_turn_rad(arm, positions_rad) -> float:
+    """How much a planned motion turns the gripper's yaw, start to end (wrapped; a 5-joint arm's Cartesian step
+    from a level or tilted gripper turns it with the waist)."""
+    poses = gripper_poses(arm, np.asarray(positions_rad, float)[[0, -1]])
+    return angle_difference_rad(poses[1].yaw_rad, poses[0].yaw_rad)

@@ -125,13 +125,16 @@ def _approach_steps(
     action: Literal["grasp", "release"],
     words: tuple[str, str, str],
     gripper_type: str = "fingers",
+    q_seed_rad=None,
 ) -> list[Step]:
-    """Move above point_m, descend to it, do `action`, lift; all trajectories checked."""
+    """Move above point_m, descend to it, do `action`, lift; all trajectories checked. q_seed_rad: the IK seed
+    (default q_now): its last joint picks which of the equivalent finger headings the approach takes."""
     above_m = point_m + np.array([0.0, 0.0, config.approach_height_m])
     lift_m = point_m + np.array([0.0, 0.0, config.lift_height_m])
     # Solving the low point first fixes the pitch and IK branch; the descent itself reaches it.
+    seed = q_now_rad if q_seed_rad is None else q_seed_rad
     pitch, (_q_point, q_above, _q_lift) = solve_approach(
-        arm, q_now_rad, [point_m, above_m, lift_m], yaw_rad, config.top_down_pitch_rad, lowest_pitch_rad(config, gripper_type)
+        arm, seed, [point_m, above_m, lift_m], yaw_rad, config.top_down_pitch_rad, lowest_pitch_rad(config, gripper_type)
     )
     vertical = dict(pitch_rad=pitch, yaw_rad=yaw_rad, speed_m_s=config.vertical_speed_m_s,
                     accel_m_s2=config.vertical_accel_m_s2, rate_hz=config.sample_rate_hz)
@@ -152,7 +155,7 @@ def _approach_steps(
 
 def plan_pick(
     arm, q_now_rad, position_m, yaw_rad: float, config: MotionConfig, block_height_m: float | None = None,
-    gripper_type: str = "fingers",
+    gripper_type: str = "fingers", q_seed_rad=None,
 ) -> list[Step]:
     """Steps to pick the block whose top-face centre is position_m (world, metres) with yaw yaw_rad.
 
@@ -175,12 +178,13 @@ def plan_pick(
     pads_m = config.pad_reach_m if gripper_type == "fingers" else 0.0  # never grasp lower: the pads stay on the board
     grasp_m[2] = max(grasp_m[2], config.board_clearance_m, pads_m)
     steps = _approach_steps(arm, q_now_rad, grasp_m, yaw, config, "grasp", ("move above block", "descend to grasp", "lift"),
-                            gripper_type)
+                            gripper_type, q_seed_rad)
     return [GripperStep("open before pick" if gripper_type == "fingers" else "vacuum off before pick", "release"), *steps]
 
 
 def plan_place(
     arm, q_now_rad, position_m, yaw_rad: float, config: MotionConfig, block_height_m: float, gripper_type: str = "fingers",
+    q_seed_rad=None,
 ) -> list[Step]:
     """Steps to set the held block down with its bottom-face centre at position_m (world, metres).
 
@@ -197,7 +201,7 @@ def plan_place(
     release_m = surface_m + np.array([0.0, 0.0, height - held_below_top_m + config.place_clearance_m])
     release_m[2] = max(release_m[2], config.board_clearance_m)
     return _approach_steps(arm, q_now_rad, release_m, yaw, config, "release", ("move above place", "descend to place", "retreat"),
-                           gripper_type)
+                           gripper_type, q_seed_rad)
 
 
 def plan_move_to_pose(

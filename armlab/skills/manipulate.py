@@ -23,22 +23,33 @@ from armlab.station.core import Station
 from armlab.station.jobs import JobContext
 
 
-def plan_pick_steps(station: Station, top_center_m, yaw_rad: float | None, q_start_rad=None) -> list:
+def plan_pick_steps(station: Station, top_center_m, yaw_rad: float | None, q_start_rad=None, wrist_offset_rad: float = 0.0) -> list:
     """armlab.motion's pick plan from the current joints (open, above, straight down, grasp, straight up).
+    wrist_offset_rad: IK seeded with the last joint turned this much (π/2: the fingers across the other faces).
 
     Unreachable / UnsafeTrajectory / InvalidInput (PLAN_REFUSALS) before anything moves.
     """
     q_start = station.joints_rad() if q_start_rad is None else np.asarray(q_start_rad, float)
     return motion_plan_pick(station.model, q_start, np.asarray(top_center_m, float), 0.0 if yaw_rad is None else yaw_rad, station.motion_config,
-                     gripper_type=station_gripper_type(station))
+                            gripper_type=station_gripper_type(station), q_seed_rad=_wrist_turned(q_start, wrist_offset_rad))
 
 
-def plan_place_steps(station: Station, surface_m, yaw_rad: float | None, held_height_m: float, q_start_rad=None) -> list:
+def plan_place_steps(station: Station, surface_m, yaw_rad: float | None, held_height_m: float, q_start_rad=None,
+                     wrist_offset_rad: float = 0.0) -> list:
     """armlab.motion's place plan: the held block's bottom centre onto surface_m, then release and retreat."""
     q_start = station.joints_rad() if q_start_rad is None else np.asarray(q_start_rad, float)
     yaw = 0.0 if yaw_rad is None else yaw_rad
     return motion_plan_place(station.model, q_start, np.asarray(surface_m, float), yaw, station.motion_config, held_height_m,
-                      gripper_type=station_gripper_type(station))
+                             gripper_type=station_gripper_type(station), q_seed_rad=_wrist_turned(q_start, wrist_offset_rad))
+
+
+def _wrist_turned(q_rad: np.ndarray, offset_rad: float) -> np.ndarray | None:
+    """q with its last joint (the wrist's roll) turned by offset_rad, as an IK seed (None for no turn)."""
+    if offset_rad == 0.0:
+        return None
+    seed = np.array(q_rad, dtype=float)
+    seed[-1] += offset_rad
+    return seed
 
 
 def run_steps(station: Station, ctx: JobContext, steps: Sequence, replan: Callable[[], list] | None = None,

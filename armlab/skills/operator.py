@@ -11,7 +11,8 @@ from collections.abc import Sequence
 
 import numpy as np
 
-from armlab.skills.manipulate import plan_pick_steps, plan_place_steps, run_steps
+from armlab.skills.clear_path import known_obstacles, plan_clear_pick, plan_clear_place
+from armlab.skills.manipulate import run_steps
 from armlab.skills.perceive import block_near, target_point
 from armlab.station.arm_info import station_gripper_type
 from armlab.station.calibration_trust import calibration_summary
@@ -89,10 +90,15 @@ def grab(station: Station, position_m=None, pixel=None, source: str | None = Non
     else:
         top, yaw, edge = point, None, station.config.default_block_height_m
         detail = f"point ({top[0] * 1000:.0f}, {top[1] * 1000:.0f}, {top[2] * 1000:.0f}) mm ({on})"
-    steps = plan_pick_steps(station, top, yaw)
+    boxes = known_obstacles(station, top, *([top] if block is not None else []))
+
+    def plan() -> list:  # clear of every other block and stack the station sees (issue 21)
+        return plan_clear_pick(station, top, yaw, edge, boxes)
+
+    steps = plan()
 
     def run(ctx: JobContext) -> dict:
-        run_steps(station, ctx, steps, replan=lambda: plan_pick_steps(station, top, yaw))
+        run_steps(station, ctx, steps, replan=plan)
         holding = bool(station.gripper.read_state().holding)
         station.set_held_block({**(block or {}), "edge_m": edge, "yaw_rad": yaw} if holding else None)
         if not holding:
@@ -119,14 +125,19 @@ def drop(station: Station, position_m=None, pixel=None, source: str | None = Non
     surface[2] = surface[2] if surface[2] > BOARD_NOISE_M else 0.0  # depth noise on the board reads as board
     held = station.held_block or {}
     edge = float(held.get("edge_m", station.config.default_block_height_m))
-    steps = plan_place_steps(station, surface, yaw, edge)
+    boxes = known_obstacles(station, surface, *([surface] if below is not None else []))
+
+    def plan() -> list:  # clear of every other block and stack the station sees (issue 21)
+        return plan_clear_place(station, surface, yaw, edge, boxes)
+
+    steps = plan()
     detail = f"onto {on} at ({surface[0] * 1000:.0f}, {surface[1] * 1000:.0f}, {surface[2] * 1000:.0f}) mm"
 
     def run(ctx: JobContext) -> dict:
         if not station.gripper.read_state().holding:  # checked in the job: the page shows why it failed
             station.set_held_block(None)
             raise GripperEmpty("the gripper is empty: nothing to drop (grab a block first)")
-        run_steps(station, ctx, steps, replan=lambda: plan_place_steps(station, surface, yaw, edge))
+        run_steps(station, ctx, steps, replan=plan)
         station.set_held_block(None)
         return {"target_m": [float(x) for x in surface], "on": on}
 

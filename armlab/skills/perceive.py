@@ -9,7 +9,7 @@ import math
 
 import numpy as np
 
-from armlab.errors import InvalidInput
+from armlab.errors import InvalidInput, SpotHidden
 from armlab.station.checks import checked_position
 from armlab.station.core import NotCalibrated, Station
 from armlab.station.jobs import JobContext
@@ -47,7 +47,25 @@ def pixel_to_world(station: Station, u: float, v: float) -> dict:
     if depth is not None and robot is None and getattr(station, "has_arm", True):
         depth = None  # the arm's pose is unknown: its depth cannot be told from the board's (no arm: all depth is the scene's)
     point, on = pixel_to_world_off_robot(calibration, u, v, depth, robot, remembered)
+    if on == "remembered":
+        seen_s = _seen_time_s(perception, u, v)
+        if seen_s is None or station.changed_at_since(point, seen_s):
+            raise SpotHidden(
+                f"the spot at ({point[0] * 1000:.0f}, {point[1] * 1000:.0f}) mm is hidden under the arm and the gripper went down "
+                "there since it was last seen (a drop, a grab or a move through it): move the arm out of the camera's view "
+                "(Sleep) to look again, then click")
     return {"position_m": [float(x) for x in point], "on": on}
+
+
+def _seen_time_s(perception, u: float, v: float, radius: int = 1) -> float | None:
+    """When the remembered depth around pixel (u, v) was seen: the oldest of the window's seen pixels (None: unknown)."""
+    times = getattr(perception, "surface_time_s", None)
+    if times is None:
+        return None
+    ui, vi = int(round(u)), int(round(v))
+    window = times[max(0, vi - radius): vi + radius + 1, max(0, ui - radius): ui + radius + 1]
+    seen = window[window > 0]
+    return float(seen.min()) if seen.size else None
 
 
 def robot_volume_of(station: Station, frame):

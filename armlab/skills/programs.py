@@ -3,6 +3,9 @@
 Every waypoint written is checked first (joint limits, above the table, inside the workspace box) and a
 malformed file is refused naming the line and the reason; the database is written only after all
 checks pass, in one transaction, so a refused edit or import changes nothing stored.
+
+A station sees only its own arm's and workcell's programs (station.program_owner): another arm's program is
+counted in the list, never read as joints, and refused by name (WrongArm) when asked for by id.
 """
 
 from __future__ import annotations
@@ -13,11 +16,31 @@ from armlab import program_io
 from armlab.errors import InvalidInput
 from armlab.skills.repeat_plan import RepeatSettings, check_waypoints, plan_transfer, same_pose
 from armlab.station.core import Station
-from armlab.store import MAX_PROGRAM_NAME_CHARS, Program, Waypoint
+from armlab.store import MAX_PROGRAM_NAME_CHARS, DamagedRecord, OwnedPrograms, Program, Waypoint
+
+
+def station_programs(station: Station) -> OwnedPrograms:
+    """This station's programs (its arm and workcell), its damaged rows, and how many other arms' there are."""
+    return station.store.programs_of(station.program_owner)
+
+
+def get_program(station: Station, program_id: int) -> Program:
+    """The program with this id if it is this station's arm's; NotFound, DamagedRecord, WrongArm."""
+    return station.store.get_program(program_id, station.program_owner)
+
+
+def delete_program(station: Station, program_id: int) -> None:
+    """Delete this arm's program (a damaged one too); another arm's is deleted from its own station (WrongArm)."""
+    try:
+        get_program(station, program_id)
+    except DamagedRecord:
+        pass  # its owner was checked before its waypoints were read: a damaged row of this arm goes
+    station.store.delete_program(program_id)
 
 
 def update_program(station: Station, program_id: int, name: str | None = None, waypoints: Sequence[Waypoint] | None = None) -> Program:
-    """Rename and/or replace the waypoints (checked); NotFound, ValueError, UnsafeTrajectory."""
+    """Rename and/or replace the waypoints (checked); NotFound, ValueError, UnsafeTrajectory, WrongArm."""
+    get_program(station, program_id)
     if waypoints is not None:
         station.require_arm("editing a program's waypoints")
         check_waypoints(station, list(waypoints))
@@ -25,9 +48,10 @@ def update_program(station: Station, program_id: int, name: str | None = None, w
 
 
 def duplicate_program(station: Station, program_id: int, name: str | None = None) -> Program:
-    program = station.store.get_program(program_id)
+    program = get_program(station, program_id)
     suffix = " (copy)"
-    return station.store.save_program(name or program.name[: MAX_PROGRAM_NAME_CHARS - len(suffix)] + suffix, program.waypoints)
+    name = name or program.name[: MAX_PROGRAM_NAME_CHARS - len(suffix)] + suffix
+    return station.store.save_program(name, program.waypoints, owner=station.program_owner)
 
 
 def move_times_s(station: Station, waypoints: Sequence[Waypoint]) -> list[float]:
@@ -47,7 +71,7 @@ def move_times_s(station: Station, waypoints: Sequence[Waypoint]) -> list[float]
 def export_program(station: Station, program_id: int, file_format: str) -> tuple[str, str]:
     """(file text, suggested file name) of a program as JSON or CSV."""
     station.require_arm("exporting a program (its joints and move times are the arm's)")
-    program = station.store.get_program(program_id)
+    program = get_program(station, program_id)
     stem = "".join(c if c.isalnum() or c in "-_" else "_" for c in program.name)[:60] or f"program-{program.id}"
     if file_format == "json":
         return program_io.to_json(program.name, program.waypoints, station.model.joint_names), f"{stem}.json"
@@ -67,4 +91,4 @@ def import_program(station: Station, file_format: str, content: str, name: str |
     else:
         raise InvalidInput(f"format must be 'json' or 'csv', not {file_format!r}")
     check_waypoints(station, waypoints)
-    return station.store.save_program(name or (file_name or "").strip() or "imported", waypoints)
+    return station.store.save_program(name or (file_name or "").strip() or "imported", waypoints, owner=station.program_owner)

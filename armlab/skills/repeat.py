@@ -370,7 +370,7 @@ def repeat(station: Station, program_id: int, cycles: int | None = 1, speed_perc
     if cycles is not None and (isinstance(cycles, bool) or not isinstance(cycles, int) or not 1 <= cycles <= MAX_CYCLES):
         raise InvalidInput(f"cycles must be an integer from 1 to {MAX_CYCLES} (or none: until stopped), got {cycles!r}")
     speed_percent = checked_speed_percent(speed_percent)
-    program = station.store.get_program(program_id)
+    program = station.store.get_program(program_id, station.program_owner)  # another arm's program: WrongArm
     plan = plan_cycle(station, program, speed_percent, settings)
     plan_ease_in(station, station.joints_rad(), program.waypoints[0].joints_rad, speed_percent, settings)
     plan_transfer(station, program.waypoints[-1].joints_rad, station.model.home_rad, speed_percent, settings,

@@ -146,7 +146,7 @@ class Station(Latch, MotionGate, ManualCommands, TeachCommands, JobControls, Per
         self._lost: dict[str, str] = {}  # devices not answering: {name: reason}
         self._last_joints: np.ndarray | None = None
         self._torque_enabled = True  # connect() leaves the arm holding; set_torque() changes it
-        self._motions: list[tuple[float, np.ndarray]] = []  # (end time_s, xy box [xmin, ymin, xmax, ymax])
+        self._motions: list[tuple[float, np.ndarray]] = []  # (end time_s, [xmin, ymin, xmax, ymax, x, y, z of the gripper's sampled path...])
         self._commanded: tuple | None = None  # the last trajectory sent: (trajectory, clock_s at its t = 0, count)
         self._command_count = 0
         self._pipeline: Any = None  # synchronous mode's perception pipeline
@@ -206,7 +206,7 @@ class Station(Latch, MotionGate, ManualCommands, TeachCommands, JobControls, Per
         self._halt.set()
         job = self._job
         if job is not None:
-            job.cancel()
+            job.cancel(halted=True)
         self._halt_devices()
 
     def close(self) -> dict:

@@ -61,6 +61,7 @@ class Job:
     started_s: float = field(default_factory=time.time)
     finished_s: float | None = None
     has_cleanup: bool = False  # a cleanup runs after a cancel (the station waits for it)
+    halted: bool = False  # cancelled by an e-stop or a device loss: no cleanup, the gripper keeps what it holds
     extra: dict = field(default_factory=dict)  # job-specific live details (e.g. a task's progress)
     control: Any = field(default=None, repr=False)  # pause/resume/step/speed mailbox (job_control.RunControl) if the job has one
     cancel_event: threading.Event = field(default_factory=threading.Event, repr=False)
@@ -89,7 +90,10 @@ class Job:
             if state == "succeeded":
                 self.progress = 1.0
 
-    def cancel(self) -> None:
+    def cancel(self, halted: bool = False) -> None:
+        """Cancel; halted: by an e-stop or a device loss (the arm is halted and latched: no cleanup runs)."""
+        if halted:
+            self.halted = True
         self.cancel_event.set()
 
     @property
@@ -139,7 +143,7 @@ def start_job_thread(
     any other exception → failed with the exception's sentence (passed to on_end so the station can
     tell device failures from refusals); a bug (armlab.errors.is_internal) → failed as "internal error: ...",
     its traceback logged at ERROR. After a cancel, cleanup(ctx) runs (its failure is reported in
-    the job's message).
+    the job's message), except after an e-stop or a device loss (job.halted): the arm stays halted.
     """
 
     def run() -> None:
@@ -148,7 +152,9 @@ def start_job_thread(
             result = function(JobContext(job))
         except JobCancelled as cancelled:
             message = str(cancelled) or "cancelled"
-            if cleanup is not None:
+            if job.halted:  # e-stop or device loss: nothing moves until reset; a held block stays held
+                message += "; halted where it was (e-stop or a lost device): the gripper keeps what it holds"
+            elif cleanup is not None:
                 try:
                     outcome = cleanup(JobContext(job, in_cleanup=True))
                     message += f"; {outcome}" if outcome else ""

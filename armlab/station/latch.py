@@ -45,7 +45,7 @@ class Latch:
         self._halt.set()
         job = self._job
         if job is not None:
-            job.cancel()
+            job.cancel(halted=True)
         failures = self._halt_devices()
         with self._lock:
             self._jog = None
@@ -85,7 +85,7 @@ class Latch:
         self._halt.set()
         job = self._job
         if job is not None:
-            job.cancel()
+            job.cancel(halted=True)
         self._halt_devices()
         with self._lock:
             self._jog = None
@@ -99,7 +99,7 @@ class Latch:
         self._halt.set()
         job = self._job
         if job is not None:
-            job.cancel()
+            job.cancel(halted=True)
         self._halt_devices()
         with self._lock:
             self._jog = None

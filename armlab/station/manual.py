@@ -15,7 +15,7 @@ from armlab.devices.arm import JointTrajectory
 from armlab.errors import PLAN_REFUSALS, ArmMoving, CommandRefused, InvalidInput, NeedsConfirmation, NotController
 from armlab.motion import plan_joint_move
 from armlab.motion.blend import arm_limits, plan_run
-from armlab.motion.gripper_step import StepSpeeds, plan_gripper_step
+from armlab.motion.gripper_step import LINEAR_AXES, ORIENTATION_TOL_RAD, StepSpeeds, plan_gripper_step, yaw_turn_rad
 from armlab.motion.jog import checked_jog_velocity, plan_jog
 from armlab.motion.pose_path import holds_full_pose, solve_pose_move
 from armlab.station.checks import checked_moving_time, checked_position
@@ -160,6 +160,9 @@ class ManualCommands:
             self._jog = None
             self._command_arm(trajectory, swept_box)
             self._step_anchor = (trajectory.positions_rad[-1].copy(), self._motions[-1])
+        if axis in LINEAR_AXES and abs(turn := yaw_turn_rad(self.model, trajectory.positions_rad)) > ORIENTATION_TOL_RAD:
+            self.events.add("info", f"{axis} step: the gripper's yaw turned {math.degrees(turn):+.1f}° with the waist (a 5-joint arm "
+                                    "holds its heading only pointing down)")
         if wait:
             self.wait_motion(trajectory.duration_s + 5.0)
         return trajectory
@@ -204,6 +207,7 @@ class ManualCommands:
         with self._sending():
             self._transition("gripper", source=source)
             self._send_later(lambda: getattr(self.gripper, action)(wait=False))
+        self.note_gripper_change()  # what is under the gripper may change (a block let go): remembered depth there is stale
         if wait:
             self.wait_gripper()
 

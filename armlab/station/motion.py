@@ -29,6 +29,7 @@ from armlab.station.jobs import JobCancelled, JobContext
 from armlab.station.states import JOB_STATES, allowed_commands
 
 WAIT_CHUNK_S = 0.05  # waits on the devices check cancel/e-stop this often (simulated time in fast mode)
+CHANGE_ABOVE_M = 0.06  # the gripper point this close above a spot's surface can have changed it (fingers, a held block)
 MOTION_MEMORY = 256  # how many recent arm motions the gate remembers for stale-perception checks
 
 
@@ -334,11 +335,12 @@ class MotionGate:
         self._wait_until(lambda: not self.arm.is_moving(), 30.0, ctx)
 
     def _swept_box(self, trajectory: JointTrajectory) -> np.ndarray:
-        """[xmin, ymin, xmax, ymax] of the gripper point along a trajectory (sampled; no lock needed)."""
+        """[xmin, ymin, xmax, ymax] of the gripper point along a trajectory, then the sampled points' x, y, z
+        (for changed_at_since; sampled, no lock needed)."""
         positions = trajectory.positions_rad
-        tips = self.model.fk(positions[:: max(1, len(positions) // 20)])[:, :2, 3]
-        tips = np.vstack([tips, self.model.fk(positions[-1])[:2, 3]])
-        return np.concatenate([tips.min(axis=0), tips.max(axis=0)])
+        tips = self.model.fk(positions[:: max(1, len(positions) // 40)])[:, :3, 3]
+        tips = np.vstack([tips, self.model.fk(positions[-1])[:3, 3]])
+        return np.concatenate([tips[:, :2].min(axis=0), tips[:, :2].max(axis=0), tips.ravel()])
 
     def _owns_arm(self, ctx: JobContext) -> None:
         """Inside a job, under the lock: JobCancelled unless this job may still command the devices
@@ -355,10 +357,37 @@ class MotionGate:
         x, y = float(point_m[0]), float(point_m[1])
         with self._lock:
             motions = list(self._motions)
-        for end_s, (xmin, ymin, xmax, ymax) in motions:
+        for end_s, box in motions:
+            xmin, ymin, xmax, ymax = box[:4]
             if end_s > since_s and xmin - radius_m <= x <= xmax + radius_m and ymin - radius_m <= y <= ymax + radius_m:
                 return True
         return False
+
+    def changed_at_since(self, point_m, since_s: float, radius_m: float = 0.06, above_m: float = CHANGE_ABOVE_M) -> bool:
+        """True if after `since_s` the gripper came down within above_m of point_m's height within radius_m of it
+        in x-y (a motion through the spot, a drop or a grab there, a gripper opened or closed over it): what was
+        seen there at since_s may have changed."""
+        spot = np.asarray(point_m[:3], float)
+        with self._lock:
+            motions = list(self._motions)
+        for end_s, box in motions:
+            points = np.asarray(box[4:], float).reshape(-1, 3)  # the gripper's sampled path
+            if end_s > since_s and np.any((np.linalg.norm(points[:, :2] - spot[:2], axis=1) <= radius_m) & (points[:, 2] < spot[2] + above_m)):
+                return True
+        return False
+
+    def note_gripper_change(self) -> None:
+        """A grasp or release where the gripper is: a change there for changed_at_since (no motion of the arm)."""
+        if self.model is None:
+            return
+        try:
+            point = np.asarray(self.model.fk(self.joints_rad()), float)[:3, 3]
+        except (ConnectionError, TimeoutError, OSError):  # the arm not answering: its own fault path reports that
+            return
+        with self._lock:
+            # whatever it held falls straight down: every spot below the gripper may have changed
+            self._motions.append((time.time(), np.array([point[0], point[1], point[0], point[1], point[0], point[1], -np.inf])))
+            del self._motions[:-MOTION_MEMORY]
 
     def start_trajectory(self, ctx: JobContext, trajectory: JointTrajectory) -> None:
         """Inside a job: check the trajectory (check_motion) and command it (only while this job owns the

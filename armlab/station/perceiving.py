@@ -76,7 +76,8 @@ class Perceiving:
             self._pipeline.color_model = self.colors.model
             frame = self.fresh_frame()
             previous, _ = self.perception.get()
-            perception = analyse_frame(self._pipeline, frame, self.calibration, previous.surface_depth_mm if previous else None)
+            perception = analyse_frame(self._pipeline, frame, self.calibration, previous.surface_depth_mm if previous else None,
+                                      previous.surface_time_s if previous else None)
             self.perception.publish(perception)
             return perception
         asked_s = time.time()

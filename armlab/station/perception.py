@@ -39,6 +39,8 @@ class Perception:
     None without joints, arm model or calibration), e.g. for pixel-to-world to ignore the arm's depth.
     surface_depth_mm: (H, W) uint16 the newest depth of each pixel while the robot did not cover it
     (earlier frames' where it does now; 0 = never seen): what pixel-to-world falls back on under the arm.
+    surface_time_s: (H, W) the capture time of each pixel's surface_depth_mm (0 = never seen): a remembered
+    depth older than the last motion through its spot is not used (issue 21).
     """
 
     blocks: tuple = ()
@@ -49,6 +51,7 @@ class Perception:
     arm_joints_rad: tuple[float, ...] | None = None
     robot_mask: np.ndarray | None = field(default=None, repr=False)
     surface_depth_mm: np.ndarray | None = field(default=None, repr=False)
+    surface_time_s: np.ndarray | None = field(default=None, repr=False)
     camera_warning: str | None = None  # "camera moved: recalibrate (...)" while the calibration no longer fits the board tags
 
 
@@ -195,7 +198,7 @@ class PerceptionLoop(_Worker):
     def _run(self) -> None:
         pipeline = PerceptionPipeline(self.config, self.arm_model)  # holds its detectors; tracks tags near calibrated spots
         drift = DriftMonitor(self.config.calibration)  # the camera-moved check of the calibration in use
-        version, surface = 0, None
+        version, surface, surface_time = 0, None, None
         while not self._stop.is_set():
             frame, version = self.frames.wait_newer(version, timeout_s=0.5)
             if frame is None:
@@ -204,7 +207,7 @@ class PerceptionLoop(_Worker):
             calibration = self.get_calibration()
             if self.get_color_model is not None:
                 pipeline.color_model = self.get_color_model()  # the station's colour calibration, at once
-            perception = analyse_frame(pipeline, frame, calibration, surface)
+            perception = analyse_frame(pipeline, frame, calibration, surface, surface_time)
             checked = self.get_check_calibration()
             warning = drift.update(frame.timestamp_s, list(perception.tags), checked, self.config)
             if warning is not None:
@@ -214,18 +217,19 @@ class PerceptionLoop(_Worker):
                     self.on_check(checked, drift.last_drift_px, warning, perception)
                 except Exception:  # noqa: BLE001 - the station's reaction failing must not stop perception
                     log.exception("the camera-moved check's handler failed")
-            surface = perception.surface_depth_mm
+            surface, surface_time = perception.surface_depth_mm, perception.surface_time_s
             self.out.publish(perception)
             # At most the configured rate, and at most half of one core (sleep at least as long as we worked).
             elapsed = time.monotonic() - started
             self._stop.wait(max(self.period_s - elapsed, elapsed))
 
 
-def analyse_frame(pipeline: Any, frame: Frame, calibration: Any, surface_depth_mm: np.ndarray | None = None) -> Perception:
+def analyse_frame(pipeline: Any, frame: Frame, calibration: Any, surface_depth_mm: np.ndarray | None = None,
+                  surface_time_s: np.ndarray | None = None) -> Perception:
     """Tags and (with a calibration and depth) blocks of one frame, each block stamped with the
     frame's time and arm joints; the robot is filtered out when the frame carries the arm's joints
     and the pipeline has an arm model (with a held block's volume unless the gripper was open).
-    surface_depth_mm: the previous Perception's, updated with this frame's depth off the robot.
+    surface_depth_mm, surface_time_s: the previous Perception's, updated with this frame's depth off the robot.
     A failed pass logs and reports none."""
     joints = frame.arm_joints_rad
     filter_joints = joints if getattr(pipeline, "self_filter", None) is not None else None
@@ -247,6 +251,7 @@ def analyse_frame(pipeline: Any, frame: Frame, calibration: Any, surface_depth_m
         blocks=blocks, tags=tags, frame_sequence=frame.sequence, capture_time_s=frame.timestamp_s,
         arm_joints_rad=None if joints is None else tuple(float(v) for v in np.ravel(joints)), robot_mask=robot_mask,
         surface_depth_mm=surface_off_robot(frame.depth_mm, robot_mask, surface_depth_mm),
+        surface_time_s=surface_times(frame.depth_mm, robot_mask, surface_time_s, frame.timestamp_s),
     )
 
 
@@ -260,3 +265,16 @@ def surface_off_robot(depth_mm: np.ndarray | None, robot_mask: np.ndarray | None
         usable = previous_mm is not None and previous_mm.shape == surface.shape
         surface[robot_mask] = previous_mm[robot_mask] if usable else 0
     return surface
+
+
+def surface_times(depth_mm: np.ndarray | None, robot_mask: np.ndarray | None, previous_s: np.ndarray | None,
+                  capture_time_s: float) -> np.ndarray | None:
+    """When each pixel of surface_off_robot's image was seen: this frame's capture time off the robot, the
+    previous time (0: never) under it."""
+    if depth_mm is None:
+        return None
+    times = np.full(np.shape(depth_mm), float(capture_time_s))
+    if robot_mask is not None and robot_mask.shape == times.shape:
+        usable = previous_s is not None and previous_s.shape == times.shape
+        times[robot_mask] = previous_s[robot_mask] if usable else 0.0
+    return times

@@ -18,7 +18,7 @@ import numpy as np
 
 from armlab.errors import CommandRefused, InvalidInput, NotController, ShuttingDown
 from armlab.station.states import State
-from armlab.store import Program, Waypoint
+from armlab.store import Owner, Program, Waypoint
 
 RATE_LIMITS_HZ = (0.5, 20.0)
 
@@ -84,6 +84,13 @@ class ContinuousRecorder(threading.Thread):
 class TeachCommands:
     """teach_start, teach_record, teach_continuous(_stop), teach_undo, teach_stop, teach_draft."""
 
+    @property
+    def program_owner(self) -> Owner | None:
+        """Whose programs and draft this station reads and writes: its arm and workcell (None: no arm, all rows)."""
+        if self.model is None:
+            return None
+        return Owner(str(self.model.name), getattr(self.config, "workcell", None), int(self.model.dof))
+
     def _teach_write(self, command: str, source: str | None, write, detail):
         """Check `command` (state, latch, lease), run write() outside the lock with the teach flag held,
         then set the detail from detail(result). Returns write()'s result."""
@@ -108,8 +115,8 @@ class TeachCommands:
             self._check("teach_start", source)
         self.teach_continuous_stop()  # a recorder left from a teach session that ended by e-stop stops here
         if discard_draft:
-            self.store.clear_draft()
-        waypoints, skipped = self.store.read_draft()
+            self.store.clear_draft(self.program_owner)
+        waypoints, skipped = self.store.read_draft(self.program_owner)
         count = len(waypoints)
         with self._lock:
             self._transition(
@@ -138,13 +145,15 @@ class TeachCommands:
             tuple(float(v) for v in q), command if command in ("grasp", "release") else "release", dwell_s, moving_time_s
         )
         count = self._teach_write(
-            "teach_record", source, lambda: self.store.append_draft(waypoint), lambda n: f"teaching: {n} waypoints"
+            "teach_record", source, lambda: self.store.append_draft(waypoint, self.program_owner), lambda n: f"teaching: {n} waypoints"
         )
         return waypoint, count
 
     def teach_undo(self, source: str | None = None) -> tuple[Waypoint | None, int]:
         """Remove the newest recorded waypoint: (it, or None when the draft was empty; how many are left)."""
-        removed, left = self._teach_write("teach_undo", source, self.store.undo_draft, lambda r: f"teaching: {r[1]} waypoints")
+        removed, left = self._teach_write(
+            "teach_undo", source, lambda: self.store.undo_draft(self.program_owner), lambda r: f"teaching: {r[1]} waypoints"
+        )
         if removed is not None:
             self.events.add("info", f"teach: last waypoint removed ({left} left)")
         return removed, left
@@ -189,7 +198,7 @@ class TeachCommands:
 
     def teach_draft(self) -> list[Waypoint]:
         """The recorded, not yet saved waypoints (the draft; kept across restarts)."""
-        return self.store.read_draft()[0]
+        return self.store.read_draft(self.program_owner)[0]
 
     def teach_stop(self, name: str, source: str | None = None) -> Program:
         """Save the draft as a program named `name` and return to idle (ValueError for an empty name or
@@ -199,9 +208,9 @@ class TeachCommands:
         self.teach_continuous_stop()  # its last record is in the draft before the save reads it
 
         def save() -> Program:
-            waypoints, _ = self.store.read_draft()
+            waypoints, _ = self.store.read_draft(self.program_owner)
             self.check_poses([waypoint.joints_rad for waypoint in waypoints])  # a draft from before the record check
-            return self.store.save_program(name, waypoints, clear_draft=True)
+            return self.store.save_program(name, waypoints, clear_draft=True, owner=self.program_owner)
 
         with self._lock:
             self._check("teach_stop", source)

@@ -8,7 +8,15 @@ calibrations.py (calibrations, intrinsics, colour calibrations), jobs.py (job hi
 from armlab.store.calibrations import CalibrationTables
 from armlab.store.database import DEFAULT_DB_PATH, DamagedDatabase, DamagedRecord, NotFound, UnusableDatabase
 from armlab.store.jobs import JobTables
-from armlab.store.programs import MAX_DWELL_S, MAX_PROGRAM_NAME_CHARS, Program, ProgramTables, Waypoint
+from armlab.store.programs import (
+    MAX_DWELL_S,
+    MAX_PROGRAM_NAME_CHARS,
+    OwnedPrograms,
+    Owner,
+    Program,
+    ProgramTables,
+    Waypoint,
+)
 
 
 class Store(ProgramTables, CalibrationTables, JobTables):
@@ -23,6 +31,8 @@ __all__ = [
     "DamagedDatabase",
     "DamagedRecord",
     "NotFound",
+    "OwnedPrograms",
+    "Owner",
     "Program",
     "Store",
     "UnusableDatabase",

@@ -18,7 +18,7 @@ from armlab import skills
 from armlab.errors import PLAN_REFUSALS, InvalidInput
 from armlab.motion import TrajectoryStep, plan_joint_move
 from armlab.motion.cartesian import plan_vertical_segment
-from armlab.motion.clearance import box_around, first_collision
+from armlab.motion.clearance import OBJECT_BOX_RADIUS_M, box_around, first_collision
 from armlab.motion.gripper_box import joint_moves_inside
 from armlab.motion.safety import UnsafeTrajectory
 from armlab.scene import as_workcell
@@ -33,7 +33,6 @@ MAX_LOOKS = 200  # a job that has looked this often without finishing stops (no 
 PARK_CLEARANCE_M = 0.015  # the sleep pose is low beside the base: it passes blocks closer than transfers do
 PARK_RISE_Z_M = 0.32  # how high the gripper rises before parking when the straight way is blocked
 PARK_FRONT_VIA_M = (0.0, 0.16, 0.16)  # else through here, in front of the base, clear of it and of the board
-OBJECT_BOX_RADIUS_M = 0.032  # half-width of the box around a detected object (a 38 mm cube at any yaw + margin)
 
 
 @dataclass(frozen=True)

@@ -11,6 +11,7 @@ from typing import Literal
 
 from fastapi import APIRouter, Response
 
+from armlab.errors import ArmlabError
 from armlab.skills import programs as program_edits
 from armlab.store import Waypoint
 from server.deps import ControlAuth, StationDep
@@ -87,7 +88,7 @@ def post_teach_undo(station: StationDep, controller: ControlAuth) -> dict:
 @router.get("/teach/draft", response_model=TeachDraftResponse)
 def read_teach_draft(station: StationDep) -> dict:
     """The recorded, not yet saved waypoints (kept across restarts until teach/stop saves them)."""
-    waypoints, skipped = station.store.read_draft()
+    waypoints, skipped = station.store.read_draft(station.program_owner)
     return {"waypoints": [waypoint_out(station, w) for w in waypoints], "count": len(waypoints), "skipped": skipped}
 
 
@@ -106,14 +107,23 @@ def post_teach_exit(station: StationDep, controller: ControlAuth) -> dict:
 
 @router.get("/programs", response_model=ProgramsResponse)
 def read_programs(station: StationDep) -> dict:
-    """Saved programs; a damaged row is left out and named in `skipped`, never hiding the others."""
-    programs, skipped = station.store.read_programs()
-    return {"data": [program_out(station, program) for program in programs], "count": len(programs), "skipped": skipped}
+    """This arm's (and workcell's) saved programs; a damaged row is left out and named in `skipped`, never
+    hiding the others; programs of other arms or workcells in the same database are counted in `others`."""
+    owned = program_edits.station_programs(station)
+    data, skipped = [], list(owned.skipped)
+    for program in owned.programs:
+        try:
+            data.append(program_out(station, program))
+        except ArmlabError as error:  # a row this arm cannot draw never hides the others
+            skipped.append(f"program {program.id} left out: {error}")
+    others = [{"arm": arm, "workcell": workcell, "count": count} for (arm, workcell), count in sorted(owned.others.items(), key=str)]
+    return {"data": data, "count": len(data), "skipped": skipped, "others": others, "others_count": sum(owned.others.values())}
 
 
 @router.get("/programs/{program_id}", response_model=ProgramInfo)
 def read_program(program_id: ProgramId, station: StationDep) -> dict:
-    return program_out(station, station.store.get_program(program_id))
+    """One program of this arm (another arm's: 409 naming its arm)."""
+    return program_out(station, program_edits.get_program(station, program_id))
 
 
 @router.patch("/programs/{program_id}", response_model=ProgramInfo)
@@ -137,7 +147,7 @@ def post_duplicate(program_id: ProgramId, station: StationDep, controller: Contr
 def delete_program(program_id: ProgramId, station: StationDep, controller: ControlAuth) -> dict:
     """Delete a program (the lease holder's command, like every edit)."""
     station.require_control("delete_program", controller)
-    station.store.delete_program(program_id)
+    program_edits.delete_program(station, program_id)
     return {"deleted": program_id}
 
 

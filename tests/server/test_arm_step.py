@@ -44,8 +44,8 @@ def test_refused_steps_say_why_and_move_nothing(url, cell):
     with httpx.Client(base_url=url, timeout=30, headers=PAGE) as http:
         assert http.post("/api/arm/home", params={"wait": "true"}).status_code == 200
         _, q0 = gripper(cell)
-        level = http.post("/api/arm/step", json={"axis": "x", "distance_m": 0.01})
-        assert level.status_code == 422 and "yaw" in level.json()["error"]["message"]
+        too_far = http.post("/api/arm/step", json={"axis": "pitch", "angle_rad": 0.7})  # stretched out level: no reach left
+        assert too_far.status_code == 422 and "out of reach" in too_far.json()["error"]["message"], too_far.text
         for body in (
             {"axis": "z", "angle_rad": 0.1},
             {"axis": "pitch", "distance_m": 0.01},
@@ -90,5 +90,5 @@ def test_the_python_client_steps_and_reports_refusals(url, cell):
         T1, _ = gripper(cell)
         assert (T1[:3, 3] - T0[:3, 3]) == pytest.approx([0.0, 0.02, 0.0], abs=0.001)
         with pytest.raises(StationError) as refused:
-            client.jog_step("x", 0.01)
-        assert refused.value.status_code == 422 and "yaw" in str(refused.value)
+            client.jog_step("pitch", 0.7)  # stretched out level: no reach left to tilt down about the point
+        assert refused.value.status_code == 422 and "out of reach" in str(refused.value)

@@ -72,3 +72,22 @@ def test_a_fault_halts_an_arm_in_motion(cell, idle):
     live.wait_for(lambda: station.state is State.FAULT, 10)
     assert not station.arm.is_moving()
     assert still_for(cell, station, 0.5), "the arm kept moving in fault"
+
+
+def test_estop_runs_no_cleanup_and_says_the_grip_is_kept(cell, idle):
+    """Issue 21: a job cancelled by the e-stop ran its cleanup (put the held block down), which the latch
+    refused: "cleanup failed: JobCancelled: job is no longer current". The e-stop halts: no cleanup runs,
+    the job says the gripper keeps what it holds. A plain cancel still runs it."""
+    station = idle
+    cleanups = []
+    for halt in (station.estop, station.cancel_job):
+        job = station.start_job("auto", "carry", lambda ctx: station.move_in_job(ctx, FAR_Q, moving_time_s=20.0),
+                                cleanup=lambda ctx: cleanups.append(ctx.job.id) or "put down")
+        wait_moving(station)
+        halt()
+        assert job.wait(10) and job.state == "cancelled"
+        back_to_idle(station)
+        if halt == station.estop:
+            assert cleanups == [] and "cleanup failed" not in job.message and "keeps what it holds" in job.message, job.message
+        else:
+            assert cleanups == [job.id] and job.message.endswith("put down"), job.message

@@ -51,3 +51,36 @@ def test_keys_step_the_gripper(browser, server):
     finally:
         page.close()
         server.post("/api/arm/home?wait=true", {"moving_time_s": 1.5})
+
+
+def _truth_gripper_m(server) -> list[float]:
+    server.wait_status(lambda s: not s["moving"] and s["state"] == "idle", 20.0, "the arm still")
+    return server.get("/api/sim/truth")["gripper"]["position_m"]
+
+
+def test_x_buttons_from_home_move_along_x(browser, server):
+    """Issue 21: X jog from Home was always refused ('yaw would change by 3.50°'); the page's +X/−X buttons at
+    25 mm from Home now move the gripper along x (the simulation's ground truth), each answered ok."""
+    ready_idle(server)
+    server.post("/api/arm/home?wait=true", {"moving_time_s": 1.5})
+    page = open_page(browser, f"{server.base_url}/?token={server.token}")
+    try:
+        wait_frames(page, 2)
+        page.wait_for_function("!document.querySelector(\"[data-jog='x+']\").disabled", timeout=10_000)
+        page.select_option("#jog-step", "0.025")
+        for button, sign in (("x+", 1), ("x-", -1)):
+            before = _truth_gripper_m(server)
+            page.evaluate("window.armlab.log.clear()")
+            page.click(f"[data-jog='{button}']")
+            page.wait_for_function("[...document.querySelectorAll('#event-log li')].some(li => li.textContent.includes('jog x'))",
+                                   timeout=10_000)
+            lines = page.eval_on_selector_all("#event-log li", "els => els.map(e => e.textContent)")
+            assert any("jog x" in line and ": ok" in line for line in lines), f"{button}: {lines}"
+            assert any("yaw turned" in line for line in lines), lines  # the operator is told the heading followed the waist
+            after = _truth_gripper_m(server)
+            moved = [a - b for a, b in zip(after, before)]
+            assert moved[0] == pytest.approx(sign * 0.025, abs=0.003) and abs(moved[1]) < 0.003 and abs(moved[2]) < 0.003, (button, moved)
+        assert page.errors == []
+    finally:
+        page.close()
+        server.post("/api/arm/home?wait=true", {"moving_time_s": 1.5})

@@ -133,13 +133,20 @@ export class TeachPanel {
   }
 
   async refresh() {
+    this.listError = null;
     try {
       const payload = await this.api.programs();
       this.programs = payload.data || [];
-    } catch {
+      this.others = payload.others || [];
+      this.skipped = payload.skipped || [];
+    } catch (error) {
       this.programs = [];
+      this.others = [];
+      this.skipped = [];
+      this.listError = error && error.message ? error.message : String(error);
     }
     this.renderList();
+    this.renderOthers();
     this.renderEditor();
     this.afterChange();
   }
@@ -148,11 +155,33 @@ export class TeachPanel {
     return this.programs.find((p) => p.id === this.selectedId) || null;
   }
 
+  /** Programs of other arms or workcells in the same database, and rows left out: said, never hidden. */
+  renderOthers() {
+    const p = $("program-others");
+    const parts = [];
+    const count = (this.others || []).reduce((sum, o) => sum + o.count, 0);
+    if (count) {
+      const whose = this.others.map((o) => `${o.count} of ${o.arm || "an arm with other joints"}${o.workcell ? ` (${o.workcell})` : ""}`);
+      parts.push(`${count} program${count === 1 ? "" : "s"} of other arms not shown: ${whose.join(", ")}`);
+    }
+    if ((this.skipped || []).length) parts.push(`${this.skipped.length} damaged left out (see the log)`);
+    p.textContent = parts.join("; ");
+    p.hidden = !parts.length;
+    this.loggedSkips = this.loggedSkips || new Set();
+    for (const line of this.skipped || []) {
+      if (!this.loggedSkips.has(line)) this.log.add("warn", line);
+      this.loggedSkips.add(line);
+    }
+  }
+
   renderList() {
     const ul = $("program-list");
     if (!this.programs.length) {
       const li = document.createElement("li");
-      li.innerHTML = "<small>no programs yet</small>";
+      const small = document.createElement("small");
+      small.textContent = this.listError ? `programs could not be read: ${this.listError}` : "no programs yet for this arm";
+      if (this.listError) small.classList.add("error");
+      li.append(small);
       ul.replaceChildren(li);
       return;
     }

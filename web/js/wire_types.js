@@ -399,6 +399,14 @@ export const EVENT_KINDS = Object.freeze(["general", "scene"]);
  */
 
 /**
+ * Programs in the same database that belong to another arm or workcell (not listed: their joints mean nothing here).
+ * @typedef {Object} OtherPrograms
+ * @property {(string|null)} arm None: saved before programs had an arm, with another number of joints
+ * @property {(string|null)} workcell
+ * @property {number} count
+ */
+
+/**
  * @typedef {Object} PixelRequest
  * @property {number} u pixel column in the colour image
  * @property {number} v pixel row in the colour image
@@ -433,6 +441,8 @@ export const EVENT_KINDS = Object.freeze(["general", "scene"]);
  * @property {string} name
  * @property {number} created_s
  * @property {(number|null)} [updated_s]
+ * @property {(string|null)} [arm] the arm it was taught on (None: saved before programs had an arm)
+ * @property {(string|null)} [workcell] the workcell it was taught in (None: saved before programs had one)
  * @property {Array<WaypointInfo>} waypoints
  */
 
@@ -446,10 +456,13 @@ export const EVENT_KINDS = Object.freeze(["general", "scene"]);
  */
 
 /**
+ * GET /api/programs: this station's arm's (and workcell's) programs.
  * @typedef {Object} ProgramsResponse
  * @property {Array<ProgramInfo>} data
  * @property {number} count
  * @property {Array<string>} [skipped] damaged rows left out of data, one line each (also logged)
+ * @property {number} [others_count] programs of other arms or workcells in the same database (not in data)
+ * @property {Array<OtherPrograms>} [others] those programs, counted by arm and workcell
  */
 
 /**

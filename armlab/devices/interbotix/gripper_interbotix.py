@@ -81,5 +81,9 @@ class InterbotixGripper(Gripper):
         return GripperState(width_m=width_m, command=self._command, holding=holding, timestamp_s=time.time())
 
     def stop(self) -> None:
+        """Zero the finger PWM (halts them), unless they are closed on something: then the grasp PWM keeps
+        squeezing it (zero PWM would let a held block fall)."""
         bot = self._require_connected()
+        if self.read_state().holding:
+            return
         bot.gripper.gripper_controller(0.0, 0.0)

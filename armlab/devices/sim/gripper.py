@@ -75,7 +75,9 @@ class SimGripper(SimDevice, Gripper):
             )
 
     def stop(self) -> None:
-        """Hold the fingers where they are: at once if the workcell's lock is free, else at the next tick."""
+        """Hold the fingers where they are (at once if the workcell's lock is free, else at the next tick);
+        closed on a block (holding) they keep squeezing it: the reference stays inside the block, so the
+        grip force holds (a reference set to where the pads touch it would let it fall, issue 21)."""
         self._require()
         self._stop_requested.set()
         if self._cell.lock.acquire(blocking=False):
@@ -89,6 +91,8 @@ class SimGripper(SimDevice, Gripper):
         if not self._stop_requested.is_set():
             return
         self._stop_requested.clear()
+        if self._measure().holding:
+            return
         left, right = self._cell.finger_positions()
         self._cell.apply_finger_reference(0.5 * (left + right))
 
