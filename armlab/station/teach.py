@@ -28,8 +28,9 @@ log = logging.getLogger(__name__)
 class ContinuousRecorder(threading.Thread):
     """Trajectory mode: records the pose at `rate_hz` while the arm moves (a joint changed by min_change_rad
     or the gripper command changed since the last record), each record committed like teach_record, with
-    moving_time_s = the time since the previous one so repeat follows the recorded pace. Ends on stop(),
-    on leaving teach (a refused record) or at shutdown; any other failure (a locked or damaged database, a
+    moving_time_s = the time since the previous one so repeat follows the recorded pace. Ends on stop() (with
+    one last record of where the arm is, if it moved since: a loaded machine's late tick must not cut the
+    motion's end off the program), on leaving teach (a refused record) or at shutdown; any other failure (a locked or damaged database, a
     device error) ends it as a station fault (state, detail, event, log) that halts the arm, never silently."""
 
     def __init__(self, station, rate_hz: float, min_change_rad: float, source: str | None) -> None:
@@ -57,7 +58,9 @@ class ContinuousRecorder(threading.Thread):
         station = self.station
         last_q, last_gripper, last_t = station.joints_rad(), station.gripper.read_state().command, time.monotonic()
         next_t = last_t + self.period_s
-        while not self._stop_event.wait(max(0.0, next_t - time.monotonic())):
+        stopping = False
+        while not stopping:
+            stopping = self._stop_event.wait(max(0.0, next_t - time.monotonic()))
             next_t += self.period_s
             if station._closing.is_set():
                 return

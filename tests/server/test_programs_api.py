@@ -127,6 +127,23 @@ def test_trajectory_mode_records_the_motion_at_the_chosen_rate(http, cell):
     assert len(program["waypoints"]) == count
 
 
+def test_stopping_the_recorder_keeps_where_the_motion_ended(http, cell):
+    """A recorder tick that comes late (a loaded machine; here a slow rate) must not cut the motion's end off
+    the program: stopping records where the arm is, if it moved since the last record (the suite under load
+    once ended a recorded 0 -> 0.8 rad move at 0.657 rad)."""
+    http.post("/api/teach/start", json={"discard_draft": True}, headers=AUTH)
+    _move(http, [0.0, 0.0, 0.0, 0.0, 0.0])
+    assert http.post("/api/teach/continuous", json={"rate_hz": 0.5}, headers=AUTH).status_code == 200  # a tick every 2 s
+    response = http.post("/api/arm/joints", params={"wait": "true"}, json={"q_rad": [0.8, 0.0, 0.0, 0.0, 0.0], "moving_time_s": 1.0}, headers=AUTH)
+    assert response.status_code in (200, 202)
+    live.wait_for(lambda: not http.get("/api/status").json()["moving"], 10)
+    stopped = http.post("/api/teach/continuous/stop", headers=AUTH).json()
+    draft = http.get("/api/teach/draft").json()["waypoints"]
+    assert stopped["count"] == len(draft) >= 1
+    assert abs(draft[-1]["joints_rad"][0] - 0.8) < 0.02, [w["joints_rad"][0] for w in draft]
+    http.post("/api/teach/stop", json={"name": "ends where it ended"}, headers=AUTH)
+
+
 def test_teach_start_resumes_an_unsaved_draft_unless_discarded(http):
     http.post("/api/teach/start", json={"discard_draft": True}, headers=AUTH)
     _move(http, POSE_C)
