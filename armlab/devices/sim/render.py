@@ -23,8 +23,8 @@ logger = logging.getLogger(__name__)
 class RawImages:
     """One render: rgb (H, W, 3) uint8 in RGB order, depth_m (H, W) float32 along the optical axis;
     arm_joints_rad and gripper_closed: the arm's joint positions and whether the gripper was commanded
-    closed in the rendered state (None if the snapshot gave none). wall_time_s: time.time() when the
-    state was copied (the capture time: the drawing takes a while after it)."""
+    closed in the rendered state (None if the snapshot gave none). wall_time_s: time.time() just before
+    the state was copied (the capture time: the drawing takes a while after it)."""
 
     rgb: np.ndarray
     depth_m: np.ndarray
@@ -173,8 +173,11 @@ class RenderThread:
         self._thread.join(timeout=10.0)
 
     def _render_once(self, renderer: _GLRenderer) -> RawImages:
-        sim_time_s, arm_joints_rad, gripper_closed = self._snapshot(renderer)
+        # Stamped before the snapshot, never after: a thread preempted between the two on a loaded machine
+        # stamped a state from before a scene change with a time after it, and a request that asked for a frame
+        # taken after its arrival (frame_after) got the old scene.
         captured_s = time.time()
+        sim_time_s, arm_joints_rad, gripper_closed = self._snapshot(renderer)
         rgb, depth = renderer.draw()
         return RawImages(rgb=rgb, depth_m=depth, sim_time_s=sim_time_s, arm_joints_rad=arm_joints_rad,
                          gripper_closed=gripper_closed, wall_time_s=captured_s)
