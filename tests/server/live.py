@@ -24,11 +24,35 @@ def free_port() -> int:
         return sock.getsockname()[1]
 
 
-def start_cell(seed: int = 0):
-    """A real-time SimWorkcell, started."""
+# The tests' real-time cells render TEST_CAMERA_FPS frames a second, not the product's 30: a 1280x720 render takes
+# ~55 ms of CPU on llvmpipe (no GPU on CI), so a 30 fps camera renders back to back and keeps one of the machine's
+# two cores busy for as long as its module runs, slowing every other thread of the test. 10 fps is still twice the
+# station's perception rate (perception_rate_hz 5), so every detection, calibration and camera-moved check sees the
+# frames it would see at 30 fps; tests of the frame clock itself choose their own rate (test_sim_workcell, test_camera_contract).
+TEST_CAMERA_FPS = 10.0
+
+
+def serve_config(folder) -> str:
+    """A copy of config/station.yaml in `folder` with the simulated camera at TEST_CAMERA_FPS, for the tests'
+    `armlab serve --config` subprocesses (same reason as above); returns its path."""
+    from pathlib import Path
+
+    import yaml
+
+    from armlab.config import config_dir
+
+    config = yaml.safe_load((config_dir() / "station.yaml").read_text())
+    config["sim"] = {**config.get("sim", {}), "camera_fps": TEST_CAMERA_FPS}
+    path = Path(folder) / "station_test_fps.yaml"
+    path.write_text(yaml.safe_dump(config))
+    return str(path)
+
+
+def start_cell(seed: int = 0, camera_fps: float = TEST_CAMERA_FPS):
+    """A real-time SimWorkcell (camera at camera_fps), started."""
     from armlab.devices.sim import SimWorkcell, SimWorkcellConfig
 
-    cell = SimWorkcell(SimWorkcellConfig(realtime=True, seed=seed))
+    cell = SimWorkcell(SimWorkcellConfig(realtime=True, seed=seed, camera_fps=camera_fps))
     cell.start()
     return cell
 

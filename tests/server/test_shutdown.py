@@ -29,7 +29,8 @@ def _serve(tmp_path: Path, log_path: Path) -> tuple[subprocess.Popen, str]:
     env = {**os.environ, "MUJOCO_GL": os.environ.get("MUJOCO_GL", "egl")}
     with log_path.open("w") as log:
         process = subprocess.Popen(
-            [sys.executable, "-m", "armlab.cli", "serve", "--port", str(port), "--token", TOKEN, "--db", str(tmp_path / "db.sqlite3")],
+            [sys.executable, "-m", "armlab.cli", "serve", "--port", str(port), "--token", TOKEN, "--db", str(tmp_path / "db.sqlite3"),
+             "--config", live.serve_config(tmp_path)],
             cwd=REPO, env=env, stdout=log, stderr=subprocess.STDOUT, text=True,
         )
     base = f"http://127.0.0.1:{port}"

@@ -34,7 +34,8 @@ def _start(db_path: Path) -> tuple[subprocess.Popen, str]:
     env = {key: value for key, value in os.environ.items() if key != "ARMLAB_TOKEN"}
     env.setdefault("MUJOCO_GL", "egl")
     process = subprocess.Popen(
-        [sys.executable, "-m", "armlab.cli", "serve", "--port", str(port), "--token", TOKEN, "--db", str(db_path)],
+        [sys.executable, "-m", "armlab.cli", "serve", "--port", str(port), "--token", TOKEN, "--db", str(db_path),
+         "--config", live.serve_config(Path(db_path).parent)],
         cwd=REPO, env=env, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL,
     )
     base = f"http://127.0.0.1:{port}"

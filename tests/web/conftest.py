@@ -17,6 +17,7 @@ from pathlib import Path
 
 import httpx
 import pytest
+import yaml
 from browser_helpers import OPERATOR
 
 REPO = Path(__file__).resolve().parents[2]
@@ -31,6 +32,11 @@ CHROMIUM_ARGS = [
     "--disable-sync",
 ]
 SERVER_START_TIMEOUT_S = 90.0
+# The servers' simulated camera renders 10 frames a second, not config/station.yaml's 30: each 1280x720 render
+# takes ~55 ms of CPU on llvmpipe (no GPU on CI), so at 30 fps the server's render thread (and the JPEG stream
+# behind it) keeps a whole core busy while the pages and the test share the other. 10 fps is twice the
+# station's perception rate, so the page sees every detection it would see at 30 fps, and frames keep streaming.
+TEST_CAMERA_FPS = 10.0
 # A fixed scene: three large cubes (R, G, B) in reach in the positive half-plane.
 SCENE_ARGS = ["--event", "pick_sort", "--level", "1", "--scene-seed", "3", "--seed", "1"]
 
@@ -93,9 +99,14 @@ class Server:
 
 @contextlib.contextmanager
 def running_server(folder: Path, args: tuple[str, ...] = tuple(SCENE_ARGS)) -> Iterator[Server]:
-    """A fresh `armlab serve` (its own port, token and SQLite file in `folder`) until the block ends;
-    args: the scene and workcell options (default: the RX200 workcell with SCENE_ARGS)."""
+    """A fresh `armlab serve` (its own port, token and SQLite file in `folder`; config/station.yaml with the
+    camera at TEST_CAMERA_FPS) until the block ends; args: the scene and workcell options (default: the RX200
+    workcell with SCENE_ARGS)."""
     port = free_port()
+    config = yaml.safe_load((REPO / "config" / "station.yaml").read_text())
+    config["sim"] = {**config.get("sim", {}), "camera_fps": TEST_CAMERA_FPS}
+    config_path = folder / "station.yaml"
+    config_path.write_text(yaml.safe_dump(config))
     token = secrets.token_urlsafe(16)
     log_path = folder / "serve.log"
     env = dict(os.environ, MUJOCO_GL=os.environ.get("MUJOCO_GL", "egl"))
@@ -103,7 +114,7 @@ def running_server(folder: Path, args: tuple[str, ...] = tuple(SCENE_ARGS)) -> I
     with log_path.open("wb") as log:
         process = subprocess.Popen(
             [*armlab_command(), "serve", "--host", "127.0.0.1", "--port", str(port), f"--token={token}",
-             "--db", str(db_path), *args],
+             "--config", str(config_path), "--db", str(db_path), *args],
             cwd=REPO,
             env=env,
             stdout=log,
