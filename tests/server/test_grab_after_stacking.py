@@ -42,19 +42,24 @@ def _truth(cell) -> dict:
     return {o["id"]: np.asarray(o["position_m"], float) for o in cell.truth()["objects"]}
 
 
-def test_a_click_on_the_block_just_stacked_never_goes_for_the_one_below(served):
-    sim, url = served
-    cell = sim.cell
+def _holding_the_loose_block(cell, http) -> None:
+    """The red base and the loose blue block on the board, the camera calibrated, the blue block grabbed."""
     cell.set_scene(Scene.from_dict({"objects": [
         {"id": "base", "type": "block", "color": "red", "size": "large", "position_m": [*BASE_XY, EDGE_M / 2], "yaw_rad": 0.0},
         {"id": "loose", "type": "block", "color": "blue", "size": "small", "position_m": [*LOOSE_XY, SMALL_M / 2], "yaw_rad": 0.0},
     ]}))
+    assert http.post("/api/arm/home", params={"wait": "true"}, headers=AUTH).status_code == 200
+    assert http.post("/api/calibrate", params={"wait": "true"}, headers=AUTH).json()["job"]["state"] == "succeeded"
+    live.wait_for(lambda: len(http.get("/api/detections").json()["data"]) == 2, 20, 0.1)
+    grabbed = http.post("/api/grab", params={"wait": "true"}, json={"position_m": [*LOOSE_XY, SMALL_M]}, headers=AUTH)
+    assert grabbed.json()["job"]["state"] == "succeeded", grabbed.text
+
+
+def test_a_click_on_the_block_just_stacked_never_goes_for_the_one_below(served):
+    sim, url = served
+    cell = sim.cell
     with httpx.Client(base_url=url, timeout=120) as http:
-        assert http.post("/api/arm/home", params={"wait": "true"}, headers=AUTH).status_code == 200
-        assert http.post("/api/calibrate", params={"wait": "true"}, headers=AUTH).json()["job"]["state"] == "succeeded"
-        live.wait_for(lambda: len(http.get("/api/detections").json()["data"]) == 2, 20, 0.1)
-        grabbed = http.post("/api/grab", params={"wait": "true"}, json={"position_m": [*LOOSE_XY, SMALL_M]}, headers=AUTH)
-        assert grabbed.json()["job"]["state"] == "succeeded", grabbed.text
+        _holding_the_loose_block(cell, http)
         dropped = http.post("/api/drop", params={"wait": "true"}, json={"position_m": [*BASE_XY, EDGE_M]}, headers=AUTH)
         assert dropped.json()["job"]["state"] == "succeeded", dropped.text
         stacked = _truth(cell)
@@ -89,16 +94,8 @@ def test_a_block_let_go_over_a_hidden_spot_is_not_read_from_the_old_depth(served
     (nothing moves); after Sleep the same click grabs the blue block, the red one stays."""
     sim, url = served
     cell = sim.cell
-    cell.set_scene(Scene.from_dict({"objects": [
-        {"id": "base", "type": "block", "color": "red", "size": "large", "position_m": [*BASE_XY, EDGE_M / 2], "yaw_rad": 0.0},
-        {"id": "loose", "type": "block", "color": "blue", "size": "small", "position_m": [*LOOSE_XY, SMALL_M / 2], "yaw_rad": 0.0},
-    ]}))
     with httpx.Client(base_url=url, timeout=120) as http:
-        assert http.post("/api/arm/home", params={"wait": "true"}, headers=AUTH).status_code == 200
-        assert http.post("/api/calibrate", params={"wait": "true"}, headers=AUTH).json()["job"]["state"] == "succeeded"
-        live.wait_for(lambda: len(http.get("/api/detections").json()["data"]) == 2, 20, 0.1)
-        grabbed = http.post("/api/grab", params={"wait": "true"}, json={"position_m": [*LOOSE_XY, SMALL_M]}, headers=AUTH)
-        assert grabbed.json()["job"]["state"] == "succeeded", grabbed.text
+        _holding_the_loose_block(cell, http)
         hover = http.post("/api/arm/pose", params={"wait": "true"}, headers=AUTH,
                           json={"position_m": [*BASE_XY, EDGE_M + 0.045], "pitch_rad": 1.5708, "yaw_rad": 0.0})
         assert hover.status_code == 200, hover.text
