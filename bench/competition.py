@@ -2,8 +2,9 @@
 same seeds (>= 20 by default), run headless by `armlab.tasks.evaluate` and scored by the judge; plus the
 success rate of the jobs without levels (sort_by_tag, clear_table, stack_here) on random scenes.
 
-Per (job, level): mean and minimum points as a fraction of the maximum, full-points rate within the time
-limit, mean simulated time, mean wall time per run, the real-time factor per worker (simulated / wall
+Per (job, level): mean and minimum points as a fraction of the maximum (the mean with its seeded percentile
+bootstrap 95 % interval), full-points rate within the time limit (with its Wilson 95 % score interval; both
+from armlab.tasks.stats), mean simulated time, mean wall time per run, the real-time factor per worker (simulated / wall
 seconds; also per CPU second, which other load on a shared machine does not lower), and the reasons of
 every failure grouped with counts. Targets, printed next to the figures:
 - full points within the time limit in >= 95 % of seeds: pick_sort L3, pick_stack L3, line_up L3,
@@ -13,15 +14,17 @@ every failure grouped with counts. Targets, printed next to the figures:
 - eval at >= 10x real time per worker.
 - sort_by_tag L3 and stack_here (issue 12, the UR3 write-up's jobs) full points in >= 95 % of seeds on every
   workcell run (--workcells rx200_armlab,ur3_suction: the RX200 with fingers, the UR3 with the suction cup).
-Prints figures; asserts nothing.
+Prints figures; asserts nothing. --json-out FILE writes every (job, level)'s runs, summary (with the intervals)
+and record (git commit, config hash, seeds, realism) as {"cells": [...]}, which `armlab eval --compare` reads.
 
     MUJOCO_GL=egl .venv/bin/python bench/competition.py [--seeds 0-19] [--workers 2] [--jobs pick_sort,line_up]
-        [--workcells rx200_armlab,ur3_suction]
+        [--workcells rx200_armlab,ur3_suction] [--json-out FILE]
 """
 
 from __future__ import annotations
 
 import argparse
+import json
 import os
 import re
 import sys
@@ -33,7 +36,8 @@ os.environ.setdefault("MUJOCO_GL", "egl")
 
 from armlab.scene import COLORS  # noqa: E402
 from armlab.tasks import JOBS  # noqa: E402
-from armlab.tasks.evaluate import EvalError, episode_unsupported, evaluate, parse_seeds, summarize  # noqa: E402
+from armlab.tasks.evaluate import EvalError, episode_unsupported, evaluate, parse_seeds, public_run, summarize  # noqa: E402
+from armlab.tasks.run_record import now_utc, run_record  # noqa: E402
 from armlab.workcell import DEFAULT_WORKCELL  # noqa: E402
 from armlab.workcell.loading import known_workcells  # noqa: E402
 
@@ -58,6 +62,7 @@ class Cell:
     runs: list[dict] = field(default_factory=list)
     skipped: str = ""
     workcell: str = DEFAULT_WORKCELL
+    started_utc: str = ""
 
     @property
     def name(self) -> str:
@@ -93,6 +98,11 @@ def tower_blocks(run: dict) -> int | None:
     return len(rules[0]["object_ids"]) if rules else None
 
 
+def interval(values) -> str:
+    """A 95 % interval as "[low, high]" in per cent."""
+    return "" if not values else f"[{100 * values[0]:.1f}, {100 * values[1]:.1f}]"
+
+
 def mark(met: bool) -> str:
     return "met" if met else "MISSED"
 
@@ -110,6 +120,7 @@ def run_cell(cell: Cell, seeds: list[int], workers: int, ray_address: str | None
     if reason:
         cell.skipped = f"not run: {reason}"
         return
+    cell.started_utc = now_utc()
     for run in evaluate(cell.job, cell.level, seeds, workers=workers, ray_address=ray_address, workcell=cell.workcell,
                         realism=realism):
         cell.runs.append(run)
@@ -139,8 +150,9 @@ def print_row(cell: Cell) -> None:
                          f"{mark(mean_tower >= TOWER_TARGET_BLOCKS)}")
     if s["crashed"]:
         notes.append(f"{s['crashed']} crashed")
-    print(f"{cell.name:<28} {s['runs']:>4}  {percent(s['mean_points_fraction']):>8}  {percent(s['min_points_fraction']):>8}  "
-          f"{percent(s['full_rate']):>8}  {seconds(s['mean_sim_time_s']):>8}  {seconds(s['mean_wall_time_s'], 2):>8}  "
+    print(f"{cell.name:<28} {s['runs']:>4}  {percent(s['mean_points_fraction']):>8} {interval(s['mean_points_ci95']):>14}  "
+          f"{percent(s['min_points_fraction']):>8}  {percent(s['full_rate']):>8} {interval(s['full_points_ci95']):>14}  "
+          f"{seconds(s['mean_sim_time_s']):>8}  {seconds(s['mean_wall_time_s'], 2):>8}  "
           f"{rtf:>6}  {rtf_cpu:>7}  {'; '.join(notes)}")
 
 
@@ -176,8 +188,10 @@ def print_targets(cells: dict[tuple[str, str, int | None], Cell], all_runs: list
         if cell is None:
             print(f"  {label:<66} {why}")
         else:
-            rate = summarize(cell.runs)["full_rate"]
-            print(f"  {label:<66} {percent(rate):>8}  {mark(rate >= target)}")
+            s = summarize(cell.runs)
+            rate = s["full_rate"]
+            print(f"  {label:<66} {percent(rate):>8}  {mark(rate >= target)}   95 % interval {interval(s['full_points_ci95'])} "
+                  f"over {s['runs']} seeds")
     for key, target_s in SIM_TIME_TARGETS_S.items():
         cell, why = cell_or_reason(key)
         label = f"{key[0]} L{key[1]} mean simulated time <= {target_s:.0f} s"
@@ -221,7 +235,8 @@ def print_targets(cells: dict[tuple[str, str, int | None], Cell], all_runs: list
             else:
                 s = summarize(cell.runs)
                 print(f"  {label:<66} {percent(s['full_rate']):>8}  {mark(s['full_rate'] >= target)}   "
-                      f"mean sim {seconds(s['mean_sim_time_s'])} over {s['runs']} seeds")
+                      f"95 % interval {interval(s['full_points_ci95'])}, mean sim {seconds(s['mean_sim_time_s'])} over "
+                      f"{s['runs']} seeds")
 
 
 def success_rate(runs: list[dict]) -> float | None:
@@ -244,6 +259,8 @@ def main() -> int:
                              "(default: config/sim.yaml `realism`)")
     parser.add_argument("--workcells", default=DEFAULT_WORKCELL,
                         help=f"comma-separated workcells (config/workcells; default {DEFAULT_WORKCELL}): each job runs on each")
+    parser.add_argument("--json-out", metavar="FILE",
+                        help="write every (job, level)'s runs, summary and record to FILE (for armlab eval --compare)")
     args = parser.parse_args()
     try:
         seeds = parse_seeds(args.seeds)
@@ -265,6 +282,9 @@ def main() -> int:
     except ValueError:
         print(f"competition: --levels takes comma-separated integers, not {args.levels!r}", file=sys.stderr)
         return 2
+    if args.json_out and not os.path.isdir(os.path.dirname(os.path.abspath(args.json_out))):
+        print(f"competition: --json-out {args.json_out}: no such folder", file=sys.stderr)
+        return 2
     where = f"Ray cluster {args.ray}" if args.ray else f"{args.workers} worker process(es)"
     print(f"seeds ({len(seeds)}): {', '.join(map(str, seeds))}")
     print(f"jobs in armlab.tasks.JOBS: {', '.join(f'{n} L{min(s.levels)}-{max(s.levels)}' if s.levels else n for n, s in JOBS.items())}")
@@ -285,7 +305,8 @@ def main() -> int:
                 print(f" {cell.skipped or 'done'}", flush=True)
     elapsed_s = time.monotonic() - started
 
-    print(f"\n{'job':<28} {'runs':>4}  {'mean pts':>8}  {'min pts':>8}  {'full':>8}  {'mean sim':>8}  "
+    print(f"\n{'job':<28} {'runs':>4}  {'mean pts':>8} {'95 % interval':>14}  {'min pts':>8}  {'full':>8} "
+          f"{'95 % interval':>14}  {'mean sim':>8}  "
           f"{'wall/run':>8}  {'rtf':>6}  {'rtf cpu':>7}  targets")
     for cell in cells.values():
         print_row(cell)
@@ -294,7 +315,21 @@ def main() -> int:
     print_targets(cells, all_runs, workcells)
     print(f"\n{len(all_runs)} runs in {elapsed_s:.0f} s wall on {where}; load average (1 min) "
           f"{load_start:.1f} at the start, {os.getloadavg()[0]:.1f} at the end, on {os.cpu_count()} CPUs")
+    print("intervals: full points = Wilson score 95 %; mean points = percentile bootstrap 95 %, 2000 resamples, seed 0")
+    if args.json_out:
+        write_cells(args.json_out, [cell for cell in cells.values() if not cell.skipped], args.realism)
+        print(f"runs, summaries and records written to {args.json_out} (armlab eval --compare reads it)")
     return 0
+
+
+def write_cells(path: str, cells: list[Cell], realism: str | None) -> None:
+    """{"cells": [{"runs", "summary", "record"}, ...]}: one `armlab eval --json` output per (job, level)."""
+    out = [{"runs": [public_run(run) for run in cell.runs], "summary": summarize(cell.runs),
+            "record": run_record(cell.job, cell.level, [run["seed"] for run in cell.runs], workcell=cell.workcell,
+                                 realism_requested=realism, runs=cell.runs, started_utc=cell.started_utc)}
+           for cell in cells]
+    with open(path, "w") as file:
+        json.dump({"cells": out}, file)
 
 
 if __name__ == "__main__":

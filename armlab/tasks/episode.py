@@ -50,7 +50,7 @@ def run_episode(event: str, level: int | None, seed: int, *, keep_truth: bool = 
                 realism: str | None = None, arm_calibration: bool = True) -> dict:
     """Run job `event` at `level` on the scene of `seed` on `workcell` (config/workcells/<name>.yaml: its
     arm, gripper, board and scene; None = the default, the RX200); return the judged result as a
-    JSON-ready dict: {event, level, seed, workcell, points, max_points, sim_time_s, wall_time_s, breakdown,
+    JSON-ready dict: {event, level, seed, workcell, realism (the one that ran), points, max_points, sim_time_s, wall_time_s, breakdown,
     failures, full, within_limit} (+ truth with gripper_path_m when keep_truth). realism: real or ideal
     simulation (None: config/sim.yaml's). arm_calibration: on the real arm (a drawn rig), calibrate it from the
     camera after the camera and before the job's clock starts, as a team does before its run (False: skip)."""
@@ -98,7 +98,8 @@ def run_episode(event: str, level: int | None, seed: int, *, keep_truth: bool = 
     if job.state != "succeeded":
         failures.append(f"job {job.state}: {job.message}")
     result = {
-        "event": event, "level": level, "seed": int(seed), "workcell": config.workcell, **{k: v for k, v in score.to_dict().items() if k != "breakdown"},
+        "event": event, "level": level, "seed": int(seed), "workcell": config.workcell, "realism": cell.realism,
+        **{k: v for k, v in score.to_dict().items() if k != "breakdown"},
         "sim_time_s": round(sim_time_s, 3), "wall_time_s": round(time.monotonic() - wall_start, 3),
         "breakdown": score.to_dict()["breakdown"], "failures": failures,
     }

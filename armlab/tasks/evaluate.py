@@ -12,18 +12,22 @@ import os
 import re
 import time
 import traceback
-from collections.abc import Iterator, Sequence
+from collections.abc import Callable, Iterable, Iterator, Sequence
 
 from armlab.errors import ConfigError, InvalidInput
 from armlab.tasks.episode import episode_scene, run_episode
 from armlab.tasks.judge import EVENT_LIMITS_S
 from armlab.tasks.registry import JOBS, JobUnsupported, check_supported, checked_request
+from armlab.tasks.run_record import seed_text  # noqa: F401 - armlab eval's import
 from armlab.tasks.scorers import SCORED_JOBS
+from armlab.tasks.stats import BOOTSTRAP_RESAMPLES, BOOTSTRAP_SEED, bootstrap_mean_interval, wilson_interval
 from armlab.workcell import load_workcell
 
 MAX_SEEDS = 10_000  # per evaluation; a larger sweep is several evaluations
 MAX_SEED = 2**32 - 1  # seeds are unsigned 32-bit, like most simulators' seeds
 MAX_WORKERS = 256
+UNTIL_CI_MAX_SEEDS = 1000  # --until-ci's default bound on the seeds run
+UNTIL_CI_BATCH_SEEDS = 20  # --until-ci's default seeds added per batch
 RUN_KEYS = ("event", "level", "seed", "points", "max_points", "sim_time_s", "wall_time_s", "breakdown", "failures")
 _SEED_ITEM = re.compile(r"(\d+)(?:-(\d+))?")
 
@@ -174,6 +178,71 @@ def _over_ray(event, level, seeds, address, keep_truth, workcell=None, realism=N
             ray.shutdown()
 
 
+class UntilCi:
+    """Seeds in batches until the full-points rate's Wilson 95 % interval is at most `width` wide, or `max_seeds`
+    seeds have run. `run_seeds(seeds)` runs a batch and yields its runs (armlab eval: `evaluate` with the
+    request's arguments; tests: a fake). The first batch is `first_seeds`; each further batch is the next
+    `batch_seeds` consecutive seeds after the largest run so far (fewer to stay within max_seeds).
+
+    `runs()` yields every run as it arrives; `on_batch(status)` is called after each batch with `status()`.
+    After the runs: `stopped_by` is "width" (the interval is narrow enough), "max_seeds" (the bound stopped
+    it first) or "seed_range" (no seeds left below MAX_SEED)."""
+
+    def __init__(self, run_seeds: Callable[[list[int]], Iterable[dict]], first_seeds: Sequence[int], width: float,
+                 max_seeds: int = UNTIL_CI_MAX_SEEDS, batch_seeds: int = UNTIL_CI_BATCH_SEEDS,
+                 on_batch: Callable[[dict], None] | None = None) -> None:
+        if isinstance(width, bool) or not isinstance(width, int | float) or not 0.0 < width <= 1.0:
+            raise EvalError(f"--until-ci: the interval width must be a fraction in (0, 1], not {width!r}")
+        for name, value in (("--max-seeds", max_seeds), ("--batch-seeds", batch_seeds)):
+            if isinstance(value, bool) or not isinstance(value, int) or not 1 <= value <= MAX_SEEDS:
+                raise EvalError(f"{name} must be an integer in 1..{MAX_SEEDS}, not {value!r}")
+        first = sorted(int(seed) for seed in first_seeds)
+        if not first:
+            raise EvalError("--until-ci needs a first batch of seeds (--seeds)")
+        if len(first) > max_seeds:
+            raise EvalError(f"--seeds gives {len(first)} seeds, more than --max-seeds {max_seeds}")
+        self.run_seeds, self.first_seeds, self.width = run_seeds, first, float(width)
+        self.max_seeds, self.batch_seeds, self.on_batch = max_seeds, batch_seeds, on_batch
+        self.seeds: list[int] = []
+        self.full_runs = 0
+        self.batches = 0
+        self.stopped_by: str | None = None
+
+    def interval(self) -> tuple[float, float]:
+        return wilson_interval(self.full_runs, len(self.seeds))
+
+    def status(self) -> dict:
+        """Where the search stands: seeds run, full-points runs, the interval and its width, why it stopped."""
+        low, high = self.interval()
+        return {"width_wanted": self.width, "width": round(high - low, 6), "full_points_ci95": [round(low, 6), round(high, 6)],
+                "seeds_run": len(self.seeds), "full_points_runs": self.full_runs, "batches": self.batches,
+                "max_seeds": self.max_seeds, "batch_seeds": self.batch_seeds, "stopped_by": self.stopped_by}
+
+    def runs(self) -> Iterator[dict]:
+        batch = self.first_seeds
+        while True:
+            for run in self.run_seeds(batch):
+                self.full_runs += bool(run.get("full"))
+                self.seeds.append(int(run["seed"]))
+                yield run
+            self.batches += 1
+            low, high = self.interval()
+            if high - low <= self.width:
+                self.stopped_by = "width"
+            elif len(self.seeds) >= self.max_seeds:
+                self.stopped_by = "max_seeds"
+            else:
+                start = max(self.seeds) + 1
+                count = min(self.batch_seeds, self.max_seeds - len(self.seeds), MAX_SEED + 1 - start)
+                if count <= 0:
+                    self.stopped_by = "seed_range"
+                batch = list(range(start, start + max(count, 0)))
+            if self.on_batch is not None:
+                self.on_batch(self.status())
+            if self.stopped_by is not None:
+                return
+
+
 def public_run(run: dict) -> dict:
     """A run as `armlab eval --json` prints it (RUN_KEYS only; truth and the judge's extras left out)."""
     return {key: run.get(key) for key in RUN_KEYS}
@@ -187,9 +256,16 @@ def points_fraction(run: dict) -> float:
 def summarize(runs: Sequence[dict]) -> dict:
     """Figures over runs: mean and minimum points fraction, full-points rate within the time limit, mean
     simulated and wall time per run, and the real-time factor per worker (simulated / wall seconds) and
-    per CPU second (simulated / CPU seconds of the worker, which a loaded machine does not inflate)."""
+    per CPU second (simulated / CPU seconds of the worker, which a loaded machine does not inflate).
+
+    Error bars (armlab.tasks.stats): `full_points_ci95`, the Wilson 95 % score interval of the full-points
+    rate (`full_points_runs` of `runs`), and `mean_points_ci95`, the percentile bootstrap 95 % interval of
+    the mean points fraction (BOOTSTRAP_RESAMPLES resamples seeded with BOOTSTRAP_SEED: the same runs give
+    the same interval). A crashed run counts as a run without full points and with 0 points. `full_rate`
+    is `full_points_rate` under its older name."""
     ran = [run for run in runs if not run.get("crashed")]
     fractions = [points_fraction(run) for run in runs]
+    full_runs = sum(bool(run.get("full")) for run in runs)
     sim_s = sum(run["sim_time_s"] for run in ran)
     wall_s = sum(run["wall_time_s"] for run in ran)
     cpu_s = sum(run.get("cpu_time_s", 0.0) for run in ran)
@@ -198,16 +274,25 @@ def summarize(runs: Sequence[dict]) -> dict:
         values = list(values)
         return round(sum(values) / len(values), 4) if values else None
 
+    def rounded(interval) -> list[float]:  # 6 digits: a printed per cent with one decimal is not rounded twice
+        return [round(interval[0], 6), round(interval[1], 6)]
+
+    full_rate = round(full_runs / len(runs), 4) if runs else None
     return {
         "runs": len(runs),
         "crashed": len(runs) - len(ran),
         "mean_points_fraction": mean(fractions),
+        "mean_points_ci95": rounded(bootstrap_mean_interval(fractions)) if fractions else None,
         "min_points_fraction": round(min(fractions), 4) if fractions else None,
-        "full_rate": mean(float(bool(run.get("full"))) for run in runs),
+        "full_points_runs": full_runs,
+        "full_points_rate": full_rate,
+        "full_points_ci95": rounded(wilson_interval(full_runs, len(runs))) if runs else None,
+        "full_rate": full_rate,
         "mean_points": mean(run["points"] for run in runs),
         "mean_sim_time_s": mean(run["sim_time_s"] for run in ran),
         "mean_wall_time_s": mean(run["wall_time_s"] for run in ran),
         "realtime_factor_per_worker": round(sim_s / wall_s, 2) if wall_s > 0 else None,
         "realtime_factor_per_cpu_s": round(sim_s / cpu_s, 2) if cpu_s > 0 else None,
+        "intervals": {"full_points_ci95": "Wilson score, z = 1.96",
+                      "mean_points_ci95": f"percentile bootstrap, {BOOTSTRAP_RESAMPLES} resamples, seed {BOOTSTRAP_SEED}"},
     }
-

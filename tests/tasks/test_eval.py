@@ -53,7 +53,7 @@ def serial() -> dict:
 
 @pytest.mark.slow
 def test_json_shape_and_summary(serial):
-    assert set(serial) == {"runs", "summary"}
+    assert set(serial) == {"runs", "summary", "record"}
     runs = serial["runs"]
     assert [run["seed"] for run in runs] == SEEDS
     for run in runs:
@@ -75,6 +75,19 @@ def test_json_shape_and_summary(serial):
     assert summary["realtime_factor_per_worker"] == pytest.approx(rtf, rel=1e-2)
     assert summary["realtime_factor_per_cpu_s"] > 0
     assert 0.0 <= summary["full_rate"] <= 1.0
+    full = summary["full_points_runs"]
+    assert summary["full_points_rate"] == full / 2 == summary["full_rate"]
+    assert summary["full_points_ci95"] == pytest.approx(
+        {0: [0.0, 0.6576], 1: [0.0945, 0.9055], 2: [0.3424, 1.0]}[full], abs=1e-4)  # Wilson of n = 2, by hand
+    low, high = summary["mean_points_ci95"]
+    assert low <= summary["mean_points_fraction"] <= high
+    record = serial["record"]
+    assert record["event"] == EVENT and record["level"] == 1 and record["seeds"] == SEEDS
+    assert record["realism"] in ("real", "camera", "ideal") and record["workcell"] == "rx200_armlab"
+    head = subprocess.run(["git", "-C", str(Path(__file__).resolve().parents[2]), "rev-parse", "HEAD"],
+                          capture_output=True, text=True)
+    if head.returncode == 0:
+        assert record["git"]["commit"] == head.stdout.strip()
 
 
 @pytest.mark.slow
