@@ -156,6 +156,12 @@ def _record_text(cells: list[dict]) -> str:
     return ", ".join(parts)
 
 
+def _seeds(cells: list[dict]) -> set[int]:
+    """Every seed a file's records name."""
+    seeds = (cell["record"].get("seeds") for cell in cells)
+    return {seed for listed in seeds if isinstance(listed, list) for seed in listed if isinstance(seed, int)}
+
+
 def _percent(value: float | None) -> str:
     return "-" if value is None else f"{100 * value:.1f} %"
 
@@ -167,6 +173,10 @@ def comparison_lines(result: dict, path_a: Path, path_b: Path, cells_a: list[dic
 
     lines = [f"A: {path_a} ({_record_text(cells_a)})", f"B: {path_b} ({_record_text(cells_b)})",
              f"test: {result['test']}", f"test: {result['test_mean_points']}"]
+    seeds_a, seeds_b = (_seeds(cells) for cells in (cells_a, cells_b))
+    if seeds_a & seeds_b:
+        lines.append(f"note: A and B share {len(seeds_a & seeds_b)} seed(s); the tests treat the runs as independent, "
+                     "which is conservative for runs on the same seeds (a paired test would be more sensitive)")
     for item in result["comparisons"]:
         a, b = item["a"], item["b"]
         low, high = item["difference_ci95"]

@@ -206,6 +206,10 @@ def test_compare_25_of_50_against_29_of_50_is_no_difference(tmp_path, capsys):
     assert "A 25/50 = 50.0 %" in line and "B 29/50 = 58.0 %" in line
     assert "B - A +8.0 percentage points, 95 % interval [-11.2, +26.4]: no difference beyond chance" in line
     assert "seeds 0-49" in out and "seeds 50-99" in out and "commit 0123456789" in out
+    assert "share" not in out  # different seeds: no note
+    same_seeds = eval_file(tmp_path / "c.json", 29, 50)
+    assert main(["eval", "--compare", a, same_seeds]) == 0
+    assert "note: A and B share 50 seed(s); the tests treat the runs as independent" in capsys.readouterr().out
 
 
 def test_compare_5_of_50_against_45_of_50_differs(tmp_path, capsys):
