@@ -113,7 +113,7 @@ def _limited(positions: np.ndarray, times_s, joint_names, lower_rad, upper_rad, 
         return positions, {}, 0
     refused = excess > clamp_rad + 1e-9
     if refused.any():
-        row, joint = (int(v) for v in np.argwhere(refused)[0])
+        row, joint = (int(v) for v in np.unravel_index(int(np.argmax(excess)), excess.shape))  # the worst sample
         value = positions[row, joint]
         how = "" if clamp_rad <= 0 else f", more than the {clamp_rad:g} rad clamp allows"
         raise ProgramFileError(
