@@ -102,6 +102,7 @@ def test_beyond_the_limits_is_refused_unless_clamped_by_an_explicit_amount(tmp_p
         ([(0.0, [0.0] * 6)], ["shoulder_pan_joint", "shoulder_lift_joint", "elbow_joint", "wrist_1_joint", "wrist_2_joint", "wrist_3_joint"],
          "not this arm's .* unknown shoulder_pan_joint"),
         ([(0.0, [0.0] * 4)], RX200_NAMES[:4], "missing wrist_rotate"),
+        ([(0.0, [0.0] * 9)], [*RX200_NAMES, "camera_pan"], "not this arm's .*: unknown camera_pan$"),  # the arm's joints and another's
         ([(0.0, [0.0] * 5)], RX200_NAMES[:6], "6 joint names but 5 positions"),
         ([], RX200_NAMES, "has no messages"),
     ],

@@ -84,6 +84,7 @@ def _bad_bags(tmp_path):
         ([str(write_joint_bag(tmp_path / "counts", [(0.0, [0.0] * 7)], names=RX200_NAMES))], "8 joint names but 7 positions"),
         ([str(write_joint_bag(tmp_path / "over", over))], "joint 'shoulder' = 2.5000 rad is outside its limits"),
         ([str(tmp_path / "over"), "--clamp", "0.1"], "more than the 0.1 rad clamp allows"),
+        ([str(write_joint_bag(tmp_path / "table", pick_rows(pose_b=(0.0, 1.9, 1.6, 0.0, 0.0))))], "waypoint 2: .*below the board"),
         ([str(tmp_path / "empty.mcap")], "empty"),
         ([str(cut)], "not a readable ROS 2 bag|damaged or truncated"),
         ([str(tmp_path / "whole"), "--format", "csv"], "is a folder, not a csv file"),
