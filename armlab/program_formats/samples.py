@@ -6,9 +6,10 @@ limits (refused, or clamped by at most `clamp_rad` when the caller asks: the res
 keeps, in either mode:
 
 - the first and the last sample;
-- holds: a run of samples within `hold_tol_rad` of its first one, with one gripper command, lasting at least
-  `hold_min_s` (or repeating the very same joints, as a program's own export does). The hold's first sample
-  is a waypoint whose dwell_s is the hold's duration;
+- holds: in a run of samples within `hold_tol_rad` of its first one with one gripper command, the samples
+  around its middle one within half of hold_tol_rad of it, lasting at least `hold_min_s` (or repeating the
+  very same joints, as a program's own export does): a waypoint at the middle sample's joints whose dwell_s is
+  the hold's duration (the approach and the departure around it are path);
 - gripper steps: where the command changes, the last sample before (unless a hold already stands there) and
   the first after; when the arm stood still (within hold_tol_rad) the step keeps the joints before it exactly,
   so the program has a gripper step, not a move.
