@@ -81,3 +81,25 @@ def test_bad_uploads_are_refused_with_nothing_stored(http, tmp_path):
     anonymous = http.post("/api/programs/import/file", params={"format": "rosbag2"}, content=whole,
                           headers={"Content-Type": "application/octet-stream"})
     assert anonymous.status_code == 401 and _stored(http) == before
+
+
+def test_the_repeats_cycle_trace_downloads_as_a_bag(http, tmp_path):
+    from rosbags.highlevel import AnyReader
+    from rosbags.typesys import Stores, get_typestore
+
+    rows = [(0.0, POSE_A, "release"), (1.0, POSE_B, "release")]
+    text = "".join(f"{t}, [{', '.join(map(str, q))}, 0]\n" for t, q, _ in rows).encode()
+    program = http.post("/api/programs/import/file", params={"format": "jointdata", "name": "two"}, content=text, headers=BINARY).json()
+    job = http.post(f"/api/programs/{program['id']}/repeat", params={"wait": "true"}, json={"cycles": 1}, headers=AUTH, timeout=120)
+    assert job.status_code == 200 and job.json()["job"]["state"] == "succeeded", job.text
+    trace = http.get("/api/jobs/current/trace").json()
+    download = http.get("/api/jobs/current/trace", params={"format": "rosbag2"})
+    assert download.status_code == 200 and download.headers["content-type"] == "application/octet-stream"
+    path = tmp_path / "trace.mcap"
+    path.write_bytes(download.content)
+    with AnyReader([path], default_typestore=get_typestore(Stores.ROS2_HUMBLE)) as reader:
+        counts = {c.topic: c.msgcount for c in reader.connections}
+        measured = [list(reader.deserialize(raw, c.msgtype).position)
+                    for c, _, raw in reader.messages(connections=[c for c in reader.connections if c.topic == "/rx200/joint_states"])]
+    assert counts == {"/rx200/joint_states": len(trace["samples"]), "/rx200/commanded/joint_states": len(trace["samples"])}
+    assert measured == [row[6:11] for row in trace["samples"]]
