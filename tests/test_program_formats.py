@@ -165,7 +165,8 @@ def test_the_courses_timed_lines_and_rows_of_five_angles():
         "[ 0.45  0.05  0.35  1.0   0.  ]",
         "[ 9.00000000e-01  2.00000000e-01  1.00000000e-01  1.10000000e+00  3.00000000e-01]",
         "Open",
-        "0.9, 0.2, 0.1, 1.1, 0.3",
+        "[ 9.00000000e-01  2.00000000e-01  1.00000000e-01",  # numpy wraps a long row
+        "  1.10000000e+00  3.00000000e-01]",
     ])
     got = _convert(parse_jointdata(rows, 5)).waypoints
     assert [(w.joints_rad, w.gripper) for w in got] == [
@@ -183,6 +184,7 @@ def test_the_courses_timed_lines_and_rows_of_five_angles():
         ("0.0, [0, 0, 0, 0, 0, 7]", "line 1: gripper = 7"),
         ("[0 0 abc 0 0]", "line 1: value 3 = 'abc' is not a number"),
         ("\x89MCAP0\r\n\x00\x01", "line 1"),
+        ("[0 0 0 0 0]\n[0.1 0.2\n", "line 2: the bracket opened here is never closed"),
     ],
 )
 def test_malformed_course_text_is_refused_naming_the_line(text, message):

@@ -2,8 +2,8 @@
 
 - timed lines `t, [q1, ..., qn, gripper]` (t in seconds; the bracket may also hold only the n joints;
   gripper 1 = closed = 'grasp', 0 = open = 'release', or one of the words below);
-- rows of n angles, as numpy prints an array (`[ 0.0046 -1.7963 -1.6291 -0.5998  0.0245]`) or separated by
-  commas or spaces, untimed; a line `Open` or `Close` (also release/grasp, opened/closed) sets the gripper for
+- rows of n angles, as numpy prints an array (`[ 0.0046 -1.7963 -1.6291 -0.5998  0.0245]`, also wrapped over
+  lines) or separated by commas or spaces, untimed; a line `Open` or `Close` (also release/grasp, opened/closed) sets the gripper for
   the rows after it (the course's recorders print these between rows).
 
 Blank lines and lines starting with # are skipped. A file is all timed or all untimed lines. Any other line
@@ -36,8 +36,7 @@ def parse_jointdata(text: str, dof: int) -> JointSamples:
     lines = text.splitlines()
     if len(lines) > MAX_LINES:
         raise ProgramFileError(f"the file has more than {MAX_LINES} lines")
-    for number, raw in enumerate(lines, start=1):
-        line = raw.strip()
+    for number, line in _logical_lines(lines):
         if not line or line.startswith("#"):
             continue
         word = line.lower().strip(" .,;:")
@@ -75,6 +74,25 @@ def parse_jointdata(text: str, dof: int) -> JointSamples:
     times_s = np.asarray(times) - times[0] if timed else None
     note = f"read {len(rows)} {'timed' if timed else 'untimed'} joint rows"
     return JointSamples(times_s, np.asarray(rows, dtype=float), tuple(grippers), (note,))
+
+
+def _logical_lines(lines: list[str]):
+    """(first line number, stripped text) with a bracket numpy wrapped over several lines joined into one."""
+    pending, start = "", 0
+    for number, raw in enumerate(lines, start=1):
+        line = raw.strip()
+        if pending:
+            pending += " " + line
+            if "]" in line:
+                yield start, pending
+                pending = ""
+            continue
+        if "[" in line and "]" not in line and not line.startswith("#"):
+            pending, start = line, number
+            continue
+        yield number, line
+    if pending:
+        raise ProgramFileError(f"line {start}: the bracket opened here is never closed")
 
 
 def _number(text: str, line: int, what: str) -> float:
