@@ -63,6 +63,15 @@ def test_names_match_with_a_namespace_and_in_any_order(tmp_path):
     assert [w.joints_rad for w in got] == [POSE_A, POSE_B, POSE_B, POSE_C]
 
 
+def test_a_ur_drivers_joint_names_match_the_ur3s(tmp_path):
+    ur3 = load_arm("ur3")
+    names = [f"{name}_joint" for name in ur3.joint_names]
+    pose = [0.1, -1.2, 1.0, -1.4, -1.57, 0.2]
+    samples = read_joint_states(write_joint_bag(tmp_path / "ur", [(0.0, pose), (0.5, pose)], names=names), list(ur3.joint_names))
+    assert samples.positions_rad.tolist() == [pose, pose] and samples.gripper == ("release", "release")
+    assert any("no gripper joints" in note for note in samples.notes)
+
+
 def test_the_gripper_joint_alone_gives_the_steps(tmp_path):
     rows = [(t, q[:6]) for t, q in pick_rows()]
     samples = read_joint_states(write_joint_bag(tmp_path / "b", rows, names=RX200_NAMES[:6]), NAMES, FINGERS_M)

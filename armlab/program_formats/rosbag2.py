@@ -4,8 +4,9 @@
 Reading: a bag folder (metadata.yaml and its .db3 or .mcap files), a bare .mcap or .db3 file, or (bytes, from
 an upload) one of those files or a .zip of the folder. The joint states topic is the only JointState topic,
 else the only one whose name has no "command" in it, else the one asked for. Names are matched to the arm's
-(`waist` or `rx200/waist` both name the RX200's waist); every arm joint must be in every message, and a name
-that is neither an arm joint nor a gripper joint (GRIPPER_JOINTS) refuses the bag. The gripper command of
+(`waist` or `rx200/waist` both name the RX200's waist; a UR driver's `shoulder_pan_joint` names the UR3's
+`shoulder_pan`); every arm joint must be in every message, and a name that is neither an arm joint nor a
+gripper joint (GRIPPER_JOINTS) refuses the bag. The gripper command of
 each sample comes from the fingers (`left_finger`, or `right_finger` negated: metres from the centre line,
 the Interbotix convention): closed by more than a quarter of the arm's finger travel is 'grasp'; without
 fingers, from the `gripper` joint (rad): its higher half is open, when it moves by at least 0.2 rad; with
@@ -168,7 +169,7 @@ def _samples(rows, stamps_ns: np.ndarray, joint_names: Sequence[str], finger_ran
         where = f"{topic} message {index + 1}"
         if len(values) != len(names):
             raise ProgramFileError(f"{where}: {len(names)} joint names but {len(values)} positions")
-        short = [str(name).rsplit("/", 1)[-1] for name in names]
+        short = [_short(str(name), arm) for name in names]
         unknown = [name for name in short if name not in arm and name not in GRIPPER_JOINTS]
         missing = [name for name in arm if name not in short]
         if unknown or missing:
@@ -190,6 +191,13 @@ def _samples(rows, stamps_ns: np.ndarray, joint_names: Sequence[str], finger_ran
     times_s = (stamps_ns[order] - stamps_ns[order][0]) / 1e9
     gripper, gripper_note = _gripper(fingers, angles, finger_range_m)
     return JointSamples(times_s, positions, gripper, tuple([*notes, f"read {len(rows)} joint states from {topic}", gripper_note]))
+
+
+def _short(name: str, arm: list[str]) -> str:
+    """A message's joint name as the arm names it: without a namespace (`rx200/waist`) and, when that makes it
+    the arm's, without a `_joint` suffix (a UR driver's `shoulder_pan_joint`)."""
+    name = name.rsplit("/", 1)[-1]
+    return name[: -len("_joint")] if name not in arm and name.endswith("_joint") and name[: -len("_joint")] in arm else name
 
 
 def _gripper(fingers: np.ndarray, angles: np.ndarray, finger_range_m) -> tuple[tuple[str, ...], str]:
