@@ -60,6 +60,20 @@ def test_import_list_export_and_reimport_round_trip(tmp_path, capsys):
     assert code == 1 and "exists already" in err
 
 
+def test_a_zipped_bag_folder_imports(tmp_path, capsys):
+    import zipfile
+
+    db = str(tmp_path / "station.sqlite3")
+    bag = write_joint_bag(tmp_path / "pick", pick_rows(), storage="sqlite3")
+    with zipfile.ZipFile(tmp_path / "pick.zip", "w") as archive:
+        for file in bag.iterdir():
+            archive.write(file, f"pick/{file.name}")
+    code, out, err = _run(capsys, "programs", "import", str(tmp_path / "pick.zip"), "--db", db)
+    assert code == 0, err
+    program = _programs(db)[0]
+    assert program.name == "pick" and [(w.joints_rad, w.gripper) for w in program.waypoints] == PICK
+
+
 def test_the_courses_text_imports(tmp_path, capsys):
     db = str(tmp_path / "station.sqlite3")
     text = tmp_path / "recordedPath.txt"

@@ -59,6 +59,8 @@ def read_joint_states(path: str | Path, joint_names: Sequence[str], finger_range
         raise ProgramFileError(f"{path}: no such file or folder")
     if path.is_file() and path.stat().st_size == 0:
         raise ProgramFileError(f"{path}: the file is empty, not a ROS 2 bag")
+    if path.is_file() and path.suffix.lower() == ".zip":
+        return read_joint_states_bytes(path.read_bytes(), joint_names, finger_range_m, topic)
     try:
         reader = AnyReader([path], default_typestore=_typestore())
         reader.open()
