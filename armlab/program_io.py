@@ -50,15 +50,24 @@ def to_csv(waypoints: Sequence[Waypoint], move_times_s: Sequence[float]) -> str:
     dof = len(waypoints[0].joints_rad) if waypoints else 0
     writer = csv.writer(out, lineterminator="\n")
     writer.writerow(["t_s", *(f"q{i + 1}" for i in range(dof)), "gripper"])
-    t_s = 0.0
+    for t_s, joints, gripper in timed_rows(waypoints, move_times_s):
+        writer.writerow([f"{t_s:.6f}", *(f"{q:.9f}" for q in joints), gripper])
+    return out.getvalue()
+
+
+def timed_rows(waypoints: Sequence[Waypoint], move_times_s: Sequence[float]) -> list[tuple[float, tuple[float, ...], str]]:
+    """The program's timed path, one (t_s, joints_rad, gripper) per CSV row: a row when each waypoint is reached
+    (move_times_s[i]: the move into waypoint i; the first is ignored, t_s starts at 0) and one more when its
+    dwell ends. The CSV export and the ROS 2 bag export (armlab.program_formats) write these rows."""
+    rows, t_s = [], 0.0
     for index, waypoint in enumerate(waypoints):
         if index > 0:
             t_s += float(move_times_s[index])
-        writer.writerow([f"{t_s:.6f}", *(f"{q:.9f}" for q in waypoint.joints_rad), waypoint.gripper])
+        rows.append((t_s, waypoint.joints_rad, waypoint.gripper))
         if waypoint.dwell_s > 0:
             t_s += waypoint.dwell_s
-            writer.writerow([f"{t_s:.6f}", *(f"{q:.9f}" for q in waypoint.joints_rad), waypoint.gripper])
-    return out.getvalue()
+            rows.append((t_s, waypoint.joints_rad, waypoint.gripper))
+    return rows
 
 
 def parse_json(text: str, dof: int) -> tuple[str | None, list[Waypoint]]:

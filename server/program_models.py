@@ -13,6 +13,7 @@ from server.models import Angle, MovingTime, Request, Wire
 DWELL_LIMIT_S = 3600.0
 WAYPOINTS_LIMIT = 1000
 IMPORT_TEXT_LIMIT = 1_000_000
+IMPORT_FILE_LIMIT = 200_000_000  # an uploaded bag
 CYCLES_LIMIT = 100_000
 
 Speed = Annotated[float, Field(ge=10.0, le=100.0, description="speed override, % of full speed (10-100)")]
@@ -127,6 +128,15 @@ class ProgramInfo(Wire):
     waypoints: list[WaypointInfo]
 
 
+class ImportFileResponse(ProgramInfo):
+    """POST /api/programs/import/file: the stored program and how the file became it."""
+
+    notes: list[str] = Field([], description="what the import read and did, one line each (topic, gripper source, thinning)")
+    clamped_rad: dict[str, float] = Field({}, description="joints clamped into their limits: the largest correction, rad")
+    clamped_samples: int = Field(0, description="samples clamped (only with clamp_rad)")
+    samples: int = Field(0, description="joint samples read (0: a CSV or JSON program)")
+
+
 class OtherPrograms(Wire):
     """Programs in the same database that belong to another arm or workcell (not listed: their joints mean nothing here)."""
 
@@ -208,6 +218,7 @@ PROGRAM_WIRE_MODELS = (
     SpeedRequest,
     WaypointInfo,
     ProgramInfo,
+    ImportFileResponse,
     OtherPrograms,
     ProgramsResponse,
     TeachRecordResponse,

@@ -51,6 +51,15 @@ def test_teach_edit_export_import_and_repeat_with_the_client(station):
     with pytest.raises(StationError) as caught:
         station.import_program("t_s,q1\n", "csv")
     assert caught.value.status_code == 422 and "line 1" in caught.value.message
+    bag = station.export_program_file(copy["id"], "rosbag2")  # a ROS 2 bag (one MCAP file) and back
+    assert bag.startswith(b"\x89MCAP0\r\n")
+    from_bag = station.import_program_file(bag, "rosbag2", name="from a bag")
+    assert [w["joints_rad"] for w in from_bag["waypoints"]] == [w["joints_rad"] for w in copy["waypoints"]]
+    assert from_bag["samples"] == 3 and from_bag["waypoints"][0]["dwell_s"] == pytest.approx(0.2)  # 2 waypoints, one dwell row
+    with pytest.raises(StationError) as caught:
+        station.import_program_file(bag[:100], "rosbag2")
+    assert caught.value.status_code == 422 and "ROS 2 bag" in caught.value.message
+    station.delete_program(from_bag["id"])
     station.delete_program(copy["id"])
     assert copy["id"] not in [p["id"] for p in station.programs()]
 

@@ -14,6 +14,7 @@ COMMAND_MODULES = (
     "armlab.cli.sim_cmd",
     "armlab.cli.vision_cmd",
     "armlab.cli.eval_cmd",
+    "armlab.cli.programs_cmd",
 )
 
 

@@ -91,14 +91,17 @@ class StationClient:
             kwargs["json"] = body
         if timeout_s is not None:
             kwargs["timeout"] = timeout_s
-        response = self._http.request(method, path, **kwargs)
+        return self._checked(self._http.request(method, path, **kwargs))
+
+    def _checked(self, response: httpx.Response, raw: bool = False):
+        """The answer's JSON (its bytes when raw or not JSON); StationError for an error status."""
         if response.status_code >= 400:
             try:
                 error = response.json()["error"]
             except (ValueError, KeyError, TypeError):
                 raise StationError(response.status_code, "http", response.text[:200]) from None
             raise StationError(response.status_code, error.get("code", "error"), error.get("message", ""), error.get("allowed"))
-        if response.headers.get("content-type", "").startswith("application/json"):
+        if not raw and response.headers.get("content-type", "").startswith("application/json"):
             return response.json()
         return response.content
 
@@ -310,6 +313,21 @@ class StationClient:
         if name is not None:
             body["name"] = name
         return self._post("/api/programs/import", body)
+
+    def export_program_file(self, program_id: int, format: str = "rosbag2") -> bytes:
+        """The program file's bytes: a ROS 2 bag (one MCAP file of sensor_msgs/JointState), CSV or JSON."""
+        return self._checked(self._http.get(f"/api/programs/{int(program_id)}/export", params={"format": format}), raw=True)
+
+    def import_program_file(self, data: bytes, format: str = "rosbag2", name: str | None = None, mode: str = "waypoints",
+                            clamp_rad: float = 0.0, topic: str | None = None) -> dict:
+        """Store a file's bytes as a new program: a ROS 2 bag (.mcap, .db3 or a .zip of the bag folder), the course's
+        joint text (jointdata), CSV or JSON; the program with notes, clamped_rad, clamped_samples, samples.
+        StationError (422) saying why a file is refused; nothing is stored then."""
+        params = {"format": format, "mode": mode, "clamp_rad": clamp_rad}
+        params.update({key: value for key, value in (("name", name), ("topic", topic)) if value is not None})
+        response = self._http.post("/api/programs/import/file", params=params, content=bytes(data),
+                                   headers={"Content-Type": "application/octet-stream"})
+        return self._checked(response)
 
     def repeat(self, program_id: int, cycles: int | None = 1, speed_percent: float = 100.0, wait: bool = True,
                timeout_s: float = 3600.0) -> dict:

@@ -133,3 +133,16 @@ def _board(workcell: str, board: str | None, camera):
             camera.connect()
         frame = camera.read().color_bgr
     return board_perception_config(workcell, board, frame)
+
+
+def make_offline_station(config: StationConfig | None = None, db_path: str | Path | None = None) -> Station:
+    """A station for scripts that read and write its database (`armlab programs`): the workcell's arm model, its
+    saved arm calibration (as a started station restores it) and every pose check, no devices, never started;
+    nothing it does moves anything. The database is the one `armlab serve` opens with the same config and --db."""
+    config = config or StationConfig()
+    store = Store(db_path if db_path is not None else config.database_file(), backups=0)
+    station = Station(NoArm(), NoGripper(), None, model=load_workcell_arm(config.workcell), config=config, store=store,
+                      backend="offline")
+    if config.restore_calibration:
+        station._restore_arm_calibration()
+    return station

@@ -7,19 +7,24 @@ while teaching resumes the draft on the next /api/teach/start (GET /api/teach/dr
 
 from __future__ import annotations
 
-from typing import Literal
+from typing import Annotated, Literal
 
-from fastapi import APIRouter, Response
+from fastapi import APIRouter, Body, Query, Response
 
 from armlab.errors import ArmlabError
+from armlab.program_formats import ImportOptions
+from armlab.skills import program_files
 from armlab.skills import programs as program_edits
-from armlab.store import Waypoint
+from armlab.store import MAX_PROGRAM_NAME_CHARS, Waypoint
 from server.deps import ControlAuth, StationDep
+from server.errors import ApiError
 from server.models import ProgramId, Status
 from server.program_models import (
+    IMPORT_FILE_LIMIT,
     ContinuousRequest,
     ContinuousResponse,
     DuplicateRequest,
+    ImportFileResponse,
     ImportRequest,
     ProgramInfo,
     ProgramsResponse,
@@ -154,13 +159,13 @@ def delete_program(program_id: ProgramId, station: StationDep, controller: Contr
 @router.get(
     "/programs/{program_id}/export",
     response_class=Response,
-    responses={200: {"content": {"application/json": {}, "text/csv": {}}, "description": "the program file"}},
+    responses={200: {"content": {"application/json": {}, "text/csv": {}, "application/octet-stream": {}}, "description": "the program file"}},
 )
-def export_program(program_id: ProgramId, station: StationDep, format: Literal["json", "csv"] = "json") -> Response:
-    """The program as a file: JSON (everything) or CSV `t_s, q1..qn, gripper` (radians; t_s when each waypoint is reached)."""
-    text, filename = program_edits.export_program(station, program_id, format)
-    media = "application/json" if format == "json" else "text/csv"
-    return Response(text, media_type=media, headers={"Content-Disposition": f'attachment; filename="{filename}"'})
+def export_program(program_id: ProgramId, station: StationDep, format: Literal["json", "csv", "rosbag2"] = "json") -> Response:
+    """The program as a file: JSON (everything), CSV `t_s, q1..qn, gripper` (radians; t_s when each waypoint is
+    reached) or a ROS 2 bag (one MCAP file: the same timed rows as sensor_msgs/JointState on /<arm>/joint_states)."""
+    data, filename, media = program_files.export_program_file(station, program_id, format)
+    return Response(data, media_type=media, headers={"Content-Disposition": f'attachment; filename="{filename}"'})
 
 
 @router.post("/programs/import", response_model=ProgramInfo, status_code=201)
@@ -169,3 +174,26 @@ def post_import(body: ImportRequest, station: StationDep, controller: ControlAut
     the reason) and nothing stored changes."""
     station.require_control("import_program", controller)
     return program_out(station, program_edits.import_program(station, body.format, body.content, body.name))
+
+
+@router.post("/programs/import/file", response_model=ImportFileResponse, status_code=201)
+def post_import_file(
+    station: StationDep,
+    controller: ControlAuth,
+    content: Annotated[bytes, Body(media_type="application/octet-stream", description="the file's bytes")],
+    format: Literal["rosbag2", "jointdata", "csv", "json"],
+    name: Annotated[str | None, Query(min_length=1, max_length=MAX_PROGRAM_NAME_CHARS, description="default: the file's own or 'imported <format>'")] = None,
+    mode: Literal["waypoints", "trajectory"] = "waypoints",
+    clamp_rad: Annotated[float, Query(ge=0.0, le=1.0, description="clamp samples beyond a joint limit by at most this (0: refuse them)")] = 0.0,
+    topic: Annotated[str | None, Query(min_length=1, max_length=256, description="rosbag2: the JointState topic")] = None,
+) -> dict:
+    """Store an uploaded file as a new program: a ROS 2 bag (one .mcap or .db3 file, or a .zip of the bag folder)
+    of joint states, the course's joint text (jointdata), or the station's CSV or JSON. Refused (422 saying why:
+    no joint states, other joint names, beyond the limits without clamp_rad, a damaged file) with nothing stored."""
+    station.require_control("import_program", controller)
+    if len(content) > IMPORT_FILE_LIMIT:
+        raise ApiError(413, "invalid", f"the file has {len(content)} bytes; at most {IMPORT_FILE_LIMIT}")
+    imported = program_files.import_program_file(station, format, data=content, name=name, topic=topic,
+                                                 options=ImportOptions(mode=mode, clamp_rad=clamp_rad))
+    return {**program_out(station, imported.program), "notes": imported.notes, "clamped_rad": imported.clamped_rad,
+            "clamped_samples": imported.clamped_samples, "samples": imported.samples}

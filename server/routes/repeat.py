@@ -11,6 +11,7 @@ from fastapi.responses import JSONResponse
 from starlette.concurrency import run_in_threadpool
 
 from armlab import skills
+from armlab.skills import program_files
 from server.deps import ControlAuth, StationDep
 from server.errors import ApiError
 from server.models import JobResponse, ProgramId
@@ -63,10 +64,11 @@ def patch_current_job(body: SpeedRequest, station: StationDep, controller: Contr
 @router.get(
     "/jobs/current/trace",
     response_model=TraceResponse,
-    responses={200: {"content": {"application/json": {}, "text/csv": {}}, "description": "the trace"}},
+    responses={200: {"content": {"application/json": {}, "text/csv": {}, "application/octet-stream": {}}, "description": "the trace"}},
 )
-def read_trace(station: StationDep, format: Literal["json", "csv"] = "json"):
-    """Commanded and measured joint angles (rad) over the last complete cycle of the current or last repeat."""
+def read_trace(station: StationDep, format: Literal["json", "csv", "rosbag2"] = "json"):
+    """Commanded and measured joint angles (rad) over the last complete cycle of the current or last repeat (rosbag2:
+    one MCAP file, measured on /<arm>/joint_states and commanded on /<arm>/commanded/joint_states)."""
     job = station.current_job()
     trace = getattr(getattr(job, "control", None), "trace", None)
     if trace is None:
@@ -74,6 +76,10 @@ def read_trace(station: StationDep, format: Literal["json", "csv"] = "json"):
     snapshot = trace.snapshot()
     names = snapshot["joint_names"]
     columns = ["t_s", *(f"{n}_cmd_rad" for n in names), *(f"{n}_meas_rad" for n in names)]
+    if format == "rosbag2":
+        data = program_files.trace_bag(station, snapshot["samples"], names)
+        filename = f"repeat-{job.id}-cycle-{snapshot['cycle']}.mcap"
+        return Response(data, media_type="application/octet-stream", headers={"Content-Disposition": f'attachment; filename="{filename}"'})
     if format == "csv":
         out = io.StringIO()
         writer = csv.writer(out, lineterminator="\n")

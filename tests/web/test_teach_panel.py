@@ -1,6 +1,6 @@
 """The teach panel as an operator uses it (issue 9, teach and repeat): record three waypoints with the
 buttons and the R key, undo, save; edit values in the waypoint table, rename, duplicate, delete; repeat at a
-chosen speed with pause and resume; the cycle's joint plot and its CSV download."""
+chosen speed with pause and resume; the cycle's joint plot and its CSV download; the program's bag download."""
 
 from __future__ import annotations
 
@@ -84,6 +84,11 @@ def test_teach_edit_repeat_pause_plot_and_csv(browser, server, tmp_path):
         page.press("#program-table tbody tr[data-index='2'] input[data-field='q1']", "Enter")
         page.locator(".toast", has_text="not a number").first.wait_for(timeout=5_000)
         assert stored(server, "panel-wave")["waypoints"] == program["waypoints"]
+        with page.expect_download() as info:  # the program as a ROS 2 bag: one MCAP file
+            page.click("#program-export-bag")
+        assert info.value.suggested_filename == "panel-wave.mcap"
+        info.value.save_as(tmp_path / "panel-wave.mcap")
+        assert (tmp_path / "panel-wave.mcap").read_bytes().startswith(b"\x89MCAP0\r\n")
 
         # Rename, duplicate, delete the copy.
         page.fill("#program-name", "panel-wave-2")

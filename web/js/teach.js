@@ -215,6 +215,7 @@ export class TeachPanel {
     $("program-name").value = p.name;
     $("program-export-csv").href = `/api/programs/${p.id}/export?format=csv`;
     $("program-export-json").href = `/api/programs/${p.id}/export?format=json`;
+    $("program-export-bag").href = `/api/programs/${p.id}/export?format=rosbag2`;
     this.renderTable($("program-table"), p.waypoints, p);
   }
 

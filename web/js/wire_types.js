@@ -352,6 +352,22 @@ export const EVENT_KINDS = Object.freeze(["general", "scene"]);
  */
 
 /**
+ * POST /api/programs/import/file: the stored program and how the file became it.
+ * @typedef {Object} ImportFileResponse
+ * @property {number} id
+ * @property {string} name
+ * @property {number} created_s
+ * @property {(number|null)} [updated_s]
+ * @property {(string|null)} [arm] the arm it was taught on (None: saved before programs had an arm)
+ * @property {(string|null)} [workcell] the workcell it was taught in (None: saved before programs had one)
+ * @property {Array<WaypointInfo>} waypoints
+ * @property {Array<string>} [notes] what the import read and did, one line each (topic, gripper source, thinning)
+ * @property {Object<string, *>} [clamped_rad] joints clamped into their limits: the largest correction, rad
+ * @property {number} [clamped_samples] samples clamped (only with clamp_rad)
+ * @property {number} [samples] joint samples read (0: a CSV or JSON program)
+ */
+
+/**
  * POST /api/programs/import: a file's text as exported (JSON or CSV `t_s, q1..qn, gripper`).
  * @typedef {Object} ImportRequest
  * @property {("json"|"csv")} format
