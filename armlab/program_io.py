@@ -25,6 +25,17 @@ MAX_WAYPOINTS = 1000
 SAME_JOINTS_RAD = 1e-9  # rows this close are "the same joints" (a dwell or a gripper step)
 
 
+def file_number(text: str, line: int, what: str) -> float:
+    """A finite number from a program file's cell, else ProgramFileError naming the line and the field."""
+    try:
+        value = float(text)
+    except ValueError:
+        raise ProgramFileError(f"line {line}: {what} = {text.strip()!r} is not a number") from None
+    if not math.isfinite(value):
+        raise ProgramFileError(f"line {line}: {what} = {text.strip()!r} is not finite")
+    return value
+
+
 class ProgramFileError(InvalidInput):
     """A program file that cannot be imported; the message names the line (CSV) or the item (JSON) and why."""
 
@@ -138,13 +149,7 @@ def parse_csv(text: str, dof: int) -> list[Waypoint]:
             raise ProgramFileError(f"line {line}: {len(row)} values, expected {len(expected)} ({','.join(expected)})")
         values = []
         for column, cell in zip(expected[:-1], row[:-1]):
-            try:
-                value = float(cell)
-            except ValueError:
-                raise ProgramFileError(f"line {line}: {column} = {cell.strip()!r} is not a number") from None
-            if not math.isfinite(value):
-                raise ProgramFileError(f"line {line}: {column} = {cell.strip()!r} is not finite")
-            values.append(value)
+            values.append(file_number(cell, line, column))
         gripper = row[-1].strip()
         if gripper not in ("grasp", "release"):
             raise ProgramFileError(f"line {line}: gripper = {gripper!r}; expected 'grasp' or 'release'")

@@ -12,13 +12,12 @@ refuses the file (ProgramFileError naming the line). Pure: no station, no databa
 
 from __future__ import annotations
 
-import math
 import re
 
 import numpy as np
 
 from armlab.program_formats.samples import JointSamples
-from armlab.program_io import ProgramFileError
+from armlab.program_io import ProgramFileError, file_number
 
 MAX_LINES = 2_000_000
 OPEN_WORDS = ("open", "opened", "release", "released")
@@ -51,7 +50,7 @@ def parse_jointdata(text: str, dof: int) -> JointSamples:
             raise ProgramFileError(f"line {number}: {'a timed' if is_timed else 'an untimed'} line in a file of "
                                    f"{'timed' if timed else 'untimed'} lines ({line[:60]!r})")
         if is_timed:
-            t_s = _number(match.group(1), number, "t")
+            t_s = file_number(match.group(1), number, "t")
             values = _numbers(match.group(2), number, allow_words=True)
             if len(values) == dof + 1:
                 gripper = _gripper_value(values[-1], number)
@@ -95,16 +94,6 @@ def _logical_lines(lines: list[str]):
         raise ProgramFileError(f"line {start}: the bracket opened here is never closed")
 
 
-def _number(text: str, line: int, what: str) -> float:
-    try:
-        value = float(text)
-    except ValueError:
-        raise ProgramFileError(f"line {line}: {what} = {text.strip()!r} is not a number") from None
-    if not math.isfinite(value):
-        raise ProgramFileError(f"line {line}: {what} = {text.strip()!r} is not finite")
-    return value
-
-
 def _numbers(text: str, line: int, allow_words: bool = False) -> list:
     cells = [cell for cell in re.split(r"[,\s]+", text.strip()) if cell]
     values: list = []
@@ -112,7 +101,7 @@ def _numbers(text: str, line: int, allow_words: bool = False) -> list:
         if allow_words and index == len(cells) - 1 and cell.lower() in (*OPEN_WORDS, *CLOSE_WORDS, "true", "false"):
             values.append(cell.lower())
         else:
-            values.append(_number(cell, line, f"value {index + 1}"))
+            values.append(file_number(cell, line, f"value {index + 1}"))
     return values
 
 
