@@ -21,7 +21,7 @@ import numpy as np
 from armlab.kinematics import Unreachable
 from armlab.kinematics.arm_calibration import MIN_POSES, ArmCalibration, ArmCalibrationError, fit_arm
 from armlab.motion.safety import UnsafeTrajectory
-from armlab.skills.arm_camera import SETTLE_SPEED_RAD_S, CalibrationPose, frame_after, pose_joints
+from armlab.skills.arm_camera import SETTLE_SPEED_RAD_S, CalibrationPose, pose_joints
 from armlab.station.core import Station
 from armlab.station.jobs import Job, JobContext
 from armlab.vision import detect_tags
@@ -79,7 +79,7 @@ def calibrate_arm(station: Station, poses: Sequence[CalibrationPose] | None = No
                 skipped.append({"pose": index, "reason": f"not visited: {error}"})
                 continue
             station.wait_in_job(ctx, lambda: float(np.abs(station.arm.read_joint_state().velocity_rad_s).max()) < SETTLE_SPEED_RAD_S, 2.0)
-            frame = frame_after(station, time.time())
+            frame = station.frame_after(time.time())
             try:
                 sighting = find_marker(detect_tags(frame.color_bgr, station.perception_config), marker.id, frame.depth_mm, K, dist)
             except MarkerNotFound as error:

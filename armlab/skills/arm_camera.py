@@ -83,7 +83,7 @@ def calibrate_arm_camera(station: Station, poses: Sequence[CalibrationPose] | No
                 skipped.append({"pose": index, "reason": f"not visited: {error}"})
                 continue
             station.wait_in_job(ctx, lambda: float(np.abs(station.arm.read_joint_state().velocity_rad_s).max()) < SETTLE_SPEED_RAD_S, 2.0)
-            frame = frame_after(station, time.time())
+            frame = station.frame_after(time.time())
             q = station.joints_rad()
             try:
                 sighting = find_marker(detect_tags(frame.color_bgr, station.perception_config), marker.id, frame.depth_mm, K, dist)
@@ -117,17 +117,6 @@ def pose_joints(station: Station, pose: CalibrationPose) -> np.ndarray:
     if not station.model.within_limits(q):
         raise Unreachable(f"wrist_rotate {pose.wrist_rotate_rad:.2f} rad is beyond its limits")
     return q
-
-
-def frame_after(station: Station, t_s: float, timeout_s: float = 3.0) -> object:
-    """The first camera frame captured at or after wall time t_s (the arm at rest in it)."""
-    frame = station.fresh_frame()
-    deadline = time.monotonic() + timeout_s
-    while frame.timestamp_s < t_s:
-        if time.monotonic() > deadline:
-            raise TimeoutError(f"no camera frame newer than the arm's arrival within {timeout_s} s")
-        frame = station.fresh_frame(max_age_s=0.0)
-    return frame
 
 
 def fit_summary(fit: ArmCameraFit, T_world_camera: np.ndarray, used: list[int], skipped: list[dict], planned: int) -> dict:

@@ -7,6 +7,7 @@ run_trajectory/run_gripper.
 
 from __future__ import annotations
 
+import time
 from collections.abc import Sequence
 
 import numpy as np
@@ -38,9 +39,11 @@ def block_edge_m(station: Station, size: str | None) -> float:
 
 def calibrate(station: Station, source: str | None = None) -> Job:
     """Start the calibration job: tags → extrinsics (+ depth cross-check) → saved and installed."""
+    asked_s = time.time()
+
     def run(ctx: JobContext) -> dict:
         ctx.progress(0.1, "finding the board tags")
-        frame = station.fresh_frame()
+        frame = station.frame_after(asked_s)  # not a frame from before the request (the scene may just have changed)
         intrinsics = station.intrinsics.current()  # measured for this camera, else its own
         tags = detect_tags(frame.color_bgr, station.perception_config)
         ctx.progress(0.4, f"{len(tags)} tags found; solving the camera pose")
@@ -59,8 +62,10 @@ def calibrate_points(station: Station, pixels_px: Sequence, world_m: Sequence, s
     """Start a calibration job from >= 4 clicked pixels and their known world points (no tags needed):
     homography + PnP with the camera's intrinsics, cross-checked with the newest depth; saved and
     installed. A bad set of points fails the job saying why and keeps the old calibration."""
+    asked_s = time.time()
+
     def run(ctx: JobContext) -> dict:
-        frame = station.fresh_frame()
+        frame = station.frame_after(asked_s)
         intrinsics = station.intrinsics.current()  # measured for this camera, else its own
         ctx.progress(0.3, f"fitting the camera pose to {len(pixels_px)} clicked points")
         calibration, report = calibrate_from_points(pixels_px, world_m, intrinsics, station.perception_config, frame.depth_mm)

@@ -263,7 +263,7 @@ class CalibrationTrust:
     def _self_recalibration_job(self, ctx: JobContext) -> dict:
         before = self._calibration_to_check()
         ctx.progress(0.2, "finding the board tags")
-        frame = self.fresh_frame()
+        frame = self.frame_after(time.time())
         if self._arm_moving() is not None:
             raise RuntimeError("the arm moved during self-recalibration: abandoned, the old calibration kept")
         calibration, info = calibrate_from_board_tags(self, frame)

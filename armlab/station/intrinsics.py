@@ -128,7 +128,11 @@ class CameraIntrinsics:
         """Check and keep one view (IntrinsicsRejected saying why not); returns the session."""
         with self._lock:
             session = self._require_session()
-            session.add(color_bgr)
+        view = session.measure(color_bgr)  # the slow part (finding the board), outside the lock that GET /api/intrinsics needs
+        with self._lock:
+            if self._session is not session:
+                raise IntrinsicsRejected("no_session", "the capture was cancelled or restarted while this view was measured")
+            session.keep(view)
             self._solution = None
             return self._session_dict()
 

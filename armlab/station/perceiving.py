@@ -66,6 +66,23 @@ class Perceiving:
             raise TimeoutError(f"no fresh camera frame within {timeout_s} s: is the camera running?")
         return frame
 
+    def frame_after(self, since_s: float, timeout_s: float = 3.0) -> Frame:
+        """The first camera frame whose picture was taken at or after wall time since_s (synchronous mode:
+        rendered now). What a command that follows a change (a scene, the arm's arrival, a request) must
+        look at: the newest frame may show the world a second ago, more on a busy machine. TimeoutError
+        when the camera gives none in timeout_s."""
+        if self.synchronous:
+            return self.fresh_frame()
+        deadline = time.monotonic() + timeout_s
+        frame, version = self.frames.get()
+        while frame is None or frame.timestamp_s < since_s:
+            remaining = deadline - time.monotonic()
+            if remaining <= 0:
+                raise TimeoutError(f"no camera frame newer than {time.time() - since_s:.1f} s ago within {timeout_s:g} s: "
+                                   "is the camera running?")
+            frame, version = self.frames.wait_newer(version, remaining)
+        return frame
+
     def fresh_perception(self, ctx: JobContext | None = None, timeout_s: float = 5.0) -> Perception:
         """Perception of a frame captured after this call began (so after the last motion ended).
 

@@ -28,20 +28,6 @@ def _refused(error: IntrinsicsRejected) -> ApiError:
     return ApiError(422, "invalid", str(error))
 
 
-def frame_after(station, since_s: float):
-    """The first camera frame captured at or after since_s (time.time()); TimeoutError after FRAME_WAIT_S."""
-    if station.synchronous:
-        return station.fresh_frame()
-    deadline = time.monotonic() + FRAME_WAIT_S
-    frame, version = station.frames.get()
-    while frame is None or frame.timestamp_s < since_s:
-        remaining = deadline - time.monotonic()
-        if remaining <= 0:
-            raise TimeoutError(f"no camera frame within {FRAME_WAIT_S:g} s: is the camera running?")
-        frame, version = station.frames.wait_newer(version, remaining)
-    return frame
-
-
 @router.get("")
 def read_intrinsics(station: StationDep) -> dict:
     """The intrinsics in use (source: measured or factory), the camera's own, whether the camera
@@ -66,7 +52,7 @@ def delete_session(station: StationDep, controller: ControlAuth) -> dict:
 def post_capture(station: StationDep, controller: ControlAuth) -> dict:
     """Check the newest frame (taken after this request arrived) and keep it as a view, or say why not."""
     keeper = _checked(station, controller)
-    frame = frame_after(station, time.time())
+    frame = station.frame_after(time.time(), FRAME_WAIT_S)
     try:
         return keeper.capture(frame.color_bgr)
     except IntrinsicsRejected as error:

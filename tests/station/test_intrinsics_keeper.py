@@ -17,6 +17,7 @@ from armlab.devices.factory import make_camera  # noqa: E402
 from armlab.station.intrinsics import CameraIntrinsics  # noqa: E402
 from armlab.station.slots import EventLog  # noqa: E402
 from armlab.store import Store  # noqa: E402
+from armlab.vision.intrinsics_capture import IntrinsicsRejected  # noqa: E402
 
 
 def connected_realsense(monkeypatch, serial: str):
@@ -81,5 +82,59 @@ def test_a_damaged_stored_row_keeps_the_factory_intrinsics(monkeypatch, tmp_path
         keeper.restore()
         assert keeper.current().fx == 6.0
         assert any("not used" in entry["message"] and entry["level"] == "warn" for entry in events.since(0))
+    finally:
+        camera.close()
+
+
+def _capture_blocked_in_measure(monkeypatch, keeper):
+    """Start keeper.capture in a thread whose measure() waits for `release`; returns (thread, entered, release, out)."""
+    import threading
+
+    from armlab.vision import intrinsics_capture
+
+    entered, release, out = threading.Event(), threading.Event(), {}
+    measure = intrinsics_capture.IntrinsicsCapture.measure
+
+    def slow_measure(self, image):
+        entered.set()
+        release.wait(30)
+        return measure(self, image)
+
+    monkeypatch.setattr(intrinsics_capture.IntrinsicsCapture, "measure", slow_measure)
+
+    def run():
+        try:
+            out["result"] = keeper.capture(__import__("numpy").zeros((6, 8, 3), "uint8"))
+        except Exception as error:  # noqa: BLE001 - the test looks at which
+            out["error"] = error
+
+    thread = threading.Thread(target=run, daemon=True)
+    thread.start()
+    assert entered.wait(10)
+    return thread, release, out
+
+
+def test_the_intrinsics_answer_while_a_view_is_measured(monkeypatch, tmp_path):
+    """Finding the board takes seconds on a busy machine: GET /api/intrinsics (the page's refresh) and a
+    cancel must not wait behind it (the CI run where the panel's refusal never showed)."""
+    import threading
+
+    camera = connected_realsense(monkeypatch, "f0220315")
+    try:
+        keeper = CameraIntrinsics(camera, Store(tmp_path / "s.sqlite3"), EventLog())
+        keeper.restore()
+        keeper.start_session()
+        thread, release, out = _capture_blocked_in_measure(monkeypatch, keeper)
+        answered = {}
+        reader = threading.Thread(target=lambda: answered.update(info=keeper.info(), cancel=keeper.cancel()), daemon=True)
+        reader.start()
+        reader.join(10)
+        released_late = reader.is_alive()
+        release.set()
+        thread.join(10)
+        assert not released_late, "info()/cancel() waited for the board search"
+        assert answered["info"]["session"] is not None and answered["info"]["session"]["views"] == []
+        assert isinstance(out["error"], IntrinsicsRejected)  # no board in the stand-in's image; nothing kept anywhere
+        assert keeper.info()["session"] is None
     finally:
         camera.close()
