@@ -8,3 +8,17 @@ os.environ.setdefault("MUJOCO_GL", "egl")
 # simulation whatever that default is, and so do the stations they start in subprocesses (the variable is inherited); a test of
 # the realistic simulation asks for it explicitly (SimWorkcellConfig(realism="real"), `--realism real`).
 os.environ["ARMLAB_REALISM"] = "ideal"
+
+
+def pytest_collection_modifyitems(items):
+    """Give every test a node id of its own. Schemathesis's per-operation tests (tests/server/test_schema_fuzz.py)
+    come out of pytest 9 all with the one id of their function, the operation only in their name; pytest-xdist
+    hands out work by node id, so all but one of them would never run on a worker."""
+    for item in items:
+        module_part, _, last = item.nodeid.rpartition("::")
+        if item.name != last and item.name.startswith(last + "["):
+            unique = f"{module_part}::{item.name}"
+            if hasattr(item, "_id"):  # pytest >= 9.2 keeps a structured NodeId
+                item._id = type(item._id).parse(unique)
+            else:
+                item._nodeid = unique

@@ -30,6 +30,7 @@ from armlab.vision.geometry import project_points
 
 MAX_ATTEMPTS_PER_MOVE = 3
 MAX_LOOKS = 200  # a job that has looked this often without finishing stops (no endless loops)
+MAX_CONFIRM_LOOKS = 2  # looks again, at most this often a run, when it would finish seeing fewer blocks than before
 PARK_CLEARANCE_M = 0.015  # the sleep pose is low beside the base: it passes blocks closer than transfers do
 PARK_RISE_Z_M = 0.32  # how high the gripper rises before parking when the straight way is blocked
 PARK_FRONT_VIA_M = (0.0, 0.16, 0.16)  # else through here, in front of the base, clear of it and of the board
@@ -89,6 +90,18 @@ Policy = Callable[[list[dict], set], Plan]
 def cubes(objects: list[dict]) -> list[dict]:
     """The detections that are blocks (not distractors)."""
     return [o for o in objects if o.get("is_cube", True)]
+
+
+def blocks_seen(objects: list[dict]) -> int:
+    """How many blocks a look accounts for: every cube detection with the blocks under it (stack_level)."""
+    return sum(max(1, int(o.get("stack_level", 1) or 1)) for o in cubes(objects))
+
+
+def confirm_finish(plan: Plan, seen_now: int, seen_before: int | None) -> bool:
+    """Whether a look that would end the job must be repeated first: it sees fewer blocks than the look
+    before it. Blocks do not vanish; a detection that misses one (a frame caught mid-exposure, a busy
+    machine) would otherwise end the job counting it neither done nor left (CI: pick_sort done 2 of 3)."""
+    return plan.finished and seen_before is not None and seen_now < seen_before
 
 
 def near(a, b, radius_m: float) -> bool:
@@ -440,10 +453,17 @@ class TaskRunner:
 
     def run(self, policy: Policy) -> dict:
         """Look, move, repeat until the policy is finished or has nothing left it can try."""
+        seen_before, confirm_looks = None, 0
         for _ in range(MAX_LOOKS):
             objects = self.look()
             plan = policy(objects, self._given_up)
             self.progress.done, self.progress.left = plan.done, plan.left
+            seen_now = blocks_seen(objects)
+            if confirm_looks < MAX_CONFIRM_LOOKS and confirm_finish(plan, seen_now, seen_before):
+                confirm_looks += 1
+                self.station.events.add("info", f"{self.name}: {seen_now} block(s) seen, {seen_before} before: looking again")
+                continue
+            seen_before = seen_now
             moves = [m for m in plan.moves if m.key() not in self._given_up]
             if plan.finished or not moves:
                 if not plan.finished:
