@@ -48,8 +48,10 @@ def _holding_the_loose_block(cell, http) -> None:
         {"id": "base", "type": "block", "color": "red", "size": "large", "position_m": [*BASE_XY, EDGE_M / 2], "yaw_rad": 0.0},
         {"id": "loose", "type": "block", "color": "blue", "size": "small", "position_m": [*LOOSE_XY, SMALL_M / 2], "yaw_rad": 0.0},
     ]}))
-    assert http.post("/api/arm/home", params={"wait": "true"}, headers=AUTH).status_code == 200
-    assert http.post("/api/calibrate", params={"wait": "true"}, headers=AUTH).json()["job"]["state"] == "succeeded"
+    homed = http.post("/api/arm/home", params={"wait": "true"}, headers=AUTH)
+    assert homed.status_code == 200, homed.text
+    calibrated = http.post("/api/calibrate", params={"wait": "true"}, headers=AUTH)
+    assert calibrated.json()["job"]["state"] == "succeeded", calibrated.text
     live.wait_for(lambda: len(http.get("/api/detections").json()["data"]) == 2, 20, 0.1)
     grabbed = http.post("/api/grab", params={"wait": "true"}, json={"position_m": [*LOOSE_XY, SMALL_M]}, headers=AUTH)
     assert grabbed.json()["job"]["state"] == "succeeded", grabbed.text
