@@ -22,6 +22,7 @@ from armlab.tasks import (
     stack_high,
     to_the_sky,
 )
+from armlab.tasks.judge import EVENT_LIMITS_S
 from armlab.tasks.judge import GRIPPER_BOX_M as box
 from armlab.tasks.runner import Plan, TaskRunner
 from armlab.workcell import Workcell
@@ -164,6 +165,7 @@ def start_auto(station: Station, job: str, level: int | None = None, params: dic
 
     def run(ctx: JobContext) -> dict:
         runner = runners["runner"] = TaskRunner(station, ctx, job)
+        runner.time_limit_s = EVENT_LIMITS_S.get(job)
         return runner.run(spec.make_policy(level, params, runner))
 
     def cleanup(ctx: JobContext) -> str:

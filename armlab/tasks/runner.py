@@ -184,6 +184,7 @@ class TaskRunner:
         self.look_pose_rad = look_pose(station)  # where the arm waits while the camera looks (a job may change it)
         self.keep_occluded = False  # a job that must find every block acts also on those the parked arm partly hides
         self.gripper_box = None  # a GripperBox every planned motion keeps the gripper point inside (pick_stack)
+        self.time_limit_s: float | None = None  # the event's limit (station clock): no new move starts after it
 
     # Reporting -------------------------------------------------------------------------------------
 
@@ -451,10 +452,21 @@ class TaskRunner:
 
     # The loop --------------------------------------------------------------------------------------
 
+    def out_of_time(self, started_s: float) -> bool:
+        """True (and said once) when the job has used its event's time limit: a job ends within its event's
+        limit (a stack_high run once went on for 3,108 s simulated), with the blocks placed so far."""
+        if self.time_limit_s is None or self.station.clock_s() - started_s < self.time_limit_s:
+            return False
+        self.fail(f"stopped at the event's time limit ({self.time_limit_s:.0f} s): {self.progress.left} block(s) left")
+        return True
+
     def run(self, policy: Policy) -> dict:
         """Look, move, repeat until the policy is finished or has nothing left it can try."""
         seen_before, confirm_looks = None, 0
+        started_s = self.station.clock_s()
         for _ in range(MAX_LOOKS):
+            if self.out_of_time(started_s):
+                break
             objects = self.look()
             plan = policy(objects, self._given_up)
             self.progress.done, self.progress.left = plan.done, plan.left

@@ -30,6 +30,7 @@ def free_port() -> int:
 # station's perception rate (perception_rate_hz 5), so every detection, calibration and camera-moved check sees the
 # frames it would see at 30 fps; tests of the frame clock itself choose their own rate (test_sim_workcell, test_camera_contract).
 TEST_CAMERA_FPS = 10.0
+TEST_CAMERA_TIMEOUT_S = 10.0
 
 
 def serve_config(folder) -> str:
@@ -43,6 +44,9 @@ def serve_config(folder) -> str:
 
     config = yaml.safe_load((config_dir() / "station.yaml").read_text())
     config["sim"] = {**config.get("sim", {}), "camera_fps": TEST_CAMERA_FPS}
+    # A loaded machine can starve the simulated camera's render thread for seconds; the product's 2 s watchdog is
+    # for real cameras (a shared test server faulted mid-test at load 13); the camera-loss tests set their own.
+    config["camera_timeout_s"] = TEST_CAMERA_TIMEOUT_S
     path = Path(folder) / "station_test_fps.yaml"
     path.write_text(yaml.safe_dump(config))
     return str(path)

@@ -1,6 +1,7 @@
-"""A job does not end on a look that misses a block it saw before: it looks again (at most twice). In CI
-pick_sort L1 ended "succeeded" with done 2 of 3 and left 0: the final look missed a sorted block, and
-a policy's finished (nothing left to move) cannot tell a missed block from a done one."""
+"""The runner's loop over scripted looks. A job does not end on a look that misses a block it saw before: it
+looks again (at most twice; in CI pick_sort L1 ended "succeeded" with done 2 of 3 and left 0: the final look
+missed a sorted block, and a policy's finished cannot tell a missed block from a done one). A job starts no
+move once its event's time limit has passed (issue 19: a stack_high run went on for 3,108 s simulated)."""
 
 from __future__ import annotations
 
@@ -28,7 +29,10 @@ class ScriptedRunner(TaskRunner):
         self.name = "pick_sort"
         self.progress = Progress()
         self._attempts, self._given_up = {}, set()
-        self.station = SimpleNamespace(events=EventLog())
+        self.time_limit_s = None
+        self.clock_s = 0.0
+        self.move_s = 50.0  # each move takes this long on the station clock
+        self.station = SimpleNamespace(events=EventLog(), clock_s=lambda: self.clock_s)
         self.ctx = SimpleNamespace(progress=lambda *a, **k: None, job=SimpleNamespace(update_extra=lambda **k: None))
 
     def look(self) -> list[dict]:
@@ -40,6 +44,7 @@ class ScriptedRunner(TaskRunner):
 
     def execute(self, move, objects) -> bool:
         self.progress.moves += 1
+        self.clock_s += self.move_s
         return True  # the next scripted look shows where it went
 
 
@@ -65,3 +70,22 @@ def test_a_block_that_stays_gone_ends_the_job_after_the_confirming_looks():
     runner = ScriptedRunner([FIRST, SORTED[:2]])  # gone for good (e.g. knocked off the board)
     result = runner.run(lambda objects, given_up: policy(objects, given_up))
     assert runner.looked == 2 + MAX_CONFIRM_LOOKS and result["done"] == 2
+
+
+def _never_sorted(look: int) -> list[dict]:
+    """A small block on the wrong side, somewhere new at every look (a move that never sticks)."""
+    return [cube(-0.15 + 0.03 * (look % 8), 0.20, "small")]
+
+
+def test_no_move_starts_after_the_events_time_limit():
+    runner = ScriptedRunner([_never_sorted(i) for i in range(300)])
+    runner.time_limit_s = 180.0
+    result = runner.run(lambda objects, given_up: policy(objects, given_up))
+    assert result["moves"] == 4 and runner.clock_s == 200.0  # moves start at 0, 50, 100, 150 s; none at 200 s
+    assert any("stopped at the event's time limit (180 s)" in f for f in result["failures"]), result["failures"]
+
+
+def test_without_a_limit_the_same_job_goes_on():
+    runner = ScriptedRunner([_never_sorted(i) for i in range(300)])
+    result = runner.run(lambda objects, given_up: policy(objects, given_up))
+    assert result["moves"] > 4 and not any("time limit" in f for f in result["failures"])

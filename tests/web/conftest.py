@@ -37,6 +37,7 @@ SERVER_START_TIMEOUT_S = 90.0
 # behind it) keeps a whole core busy while the pages and the test share the other. 10 fps is twice the
 # station's perception rate, so the page sees every detection it would see at 30 fps, and frames keep streaming.
 TEST_CAMERA_FPS = 10.0
+TEST_CAMERA_TIMEOUT_S = 10.0
 # A fixed scene: three large cubes (R, G, B) in reach in the positive half-plane.
 SCENE_ARGS = ["--event", "pick_sort", "--level", "1", "--scene-seed", "3", "--seed", "1"]
 
@@ -105,6 +106,9 @@ def running_server(folder: Path, args: tuple[str, ...] = tuple(SCENE_ARGS)) -> I
     port = free_port()
     config = yaml.safe_load((REPO / "config" / "station.yaml").read_text())
     config["sim"] = {**config.get("sim", {}), "camera_fps": TEST_CAMERA_FPS}
+    # A loaded machine can starve the simulated camera's render thread for seconds; the product's 2 s watchdog is
+    # for real cameras (a shared test server faulted mid-test at load 13); the camera-loss tests set their own.
+    config["camera_timeout_s"] = TEST_CAMERA_TIMEOUT_S
     config_path = folder / "station.yaml"
     config_path.write_text(yaml.safe_dump(config))
     token = secrets.token_urlsafe(16)
