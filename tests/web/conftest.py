@@ -7,7 +7,6 @@ import contextlib
 import os
 import secrets
 import shutil
-import socket
 import subprocess
 import sys
 import time
@@ -17,8 +16,11 @@ from pathlib import Path
 
 import httpx
 import pytest
-import yaml
+
 from browser_helpers import OPERATOR
+
+sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "server"))
+import live  # noqa: E402  (tests/server/live.py: the test servers' config, free ports)
 
 REPO = Path(__file__).resolve().parents[2]
 CHROMIUM = "/usr/bin/chromium"
@@ -32,20 +34,8 @@ CHROMIUM_ARGS = [
     "--disable-sync",
 ]
 SERVER_START_TIMEOUT_S = 90.0
-# The servers' simulated camera renders 10 frames a second, not config/station.yaml's 30: each 1280x720 render
-# takes ~55 ms of CPU on llvmpipe (no GPU on CI), so at 30 fps the server's render thread (and the JPEG stream
-# behind it) keeps a whole core busy while the pages and the test share the other. 10 fps is twice the
-# station's perception rate, so the page sees every detection it would see at 30 fps, and frames keep streaming.
-TEST_CAMERA_FPS = 10.0
-TEST_CAMERA_TIMEOUT_S = 10.0
 # A fixed scene: three large cubes (R, G, B) in reach in the positive half-plane.
 SCENE_ARGS = ["--event", "pick_sort", "--level", "1", "--scene-seed", "3", "--seed", "1"]
-
-
-def free_port() -> int:
-    with socket.socket() as sock:
-        sock.bind(("127.0.0.1", 0))
-        return sock.getsockname()[1]
 
 
 def armlab_command() -> list[str]:
@@ -101,16 +91,10 @@ class Server:
 @contextlib.contextmanager
 def running_server(folder: Path, args: tuple[str, ...] = tuple(SCENE_ARGS)) -> Iterator[Server]:
     """A fresh `armlab serve` (its own port, token and SQLite file in `folder`; config/station.yaml with the
-    camera at TEST_CAMERA_FPS) until the block ends; args: the scene and workcell options (default: the RX200
+    tests' camera, live.serve_config) until the block ends; args: the scene and workcell options (default: the RX200
     workcell with SCENE_ARGS)."""
-    port = free_port()
-    config = yaml.safe_load((REPO / "config" / "station.yaml").read_text())
-    config["sim"] = {**config.get("sim", {}), "camera_fps": TEST_CAMERA_FPS}
-    # A loaded machine can starve the simulated camera's render thread for seconds; the product's 2 s watchdog is
-    # for real cameras (a shared test server faulted mid-test at load 13); the camera-loss tests set their own.
-    config["camera_timeout_s"] = TEST_CAMERA_TIMEOUT_S
-    config_path = folder / "station.yaml"
-    config_path.write_text(yaml.safe_dump(config))
+    port = live.free_port()
+    config_path = live.serve_config(folder)  # the tests' camera rate and watchdog, as for the HTTP tests' servers
     token = secrets.token_urlsafe(16)
     log_path = folder / "serve.log"
     env = dict(os.environ, MUJOCO_GL=os.environ.get("MUJOCO_GL", "egl"))
@@ -118,7 +102,7 @@ def running_server(folder: Path, args: tuple[str, ...] = tuple(SCENE_ARGS)) -> I
     with log_path.open("wb") as log:
         process = subprocess.Popen(
             [*armlab_command(), "serve", "--host", "127.0.0.1", "--port", str(port), f"--token={token}",
-             "--config", str(config_path), "--db", str(db_path), *args],
+             "--config", config_path, "--db", str(db_path), *args],
             cwd=REPO,
             env=env,
             stdout=log,
