@@ -73,6 +73,7 @@ def grey_of(image: np.ndarray) -> np.ndarray:
 
 MIN_IMAGE_SIDE_PX = 64  # smaller images hold no board worth calibrating from (and break the detectors' filters)
 PRESENCE_SCALE = 0.5  # the board is first looked for at half size: an empty view is refused in a tenth of the time
+CLASSIC_FLAGS = cv2.CALIB_CB_ADAPTIVE_THRESH | cv2.CALIB_CB_NORMALIZE_IMAGE | cv2.CALIB_CB_FAST_CHECK  # findChessboardCorners
 
 
 def board_in_view(grey: np.ndarray, pattern: tuple[int, int]) -> bool:
@@ -80,8 +81,7 @@ def board_in_view(grey: np.ndarray, pattern: tuple[int, int]) -> bool:
     (one too small to find at half size is too small for calibration anyway). An empty 1280x720 view costs
     ~0.15 s here instead of ~0.6 s at full size, ten times that on a busy machine."""
     small = cv2.resize(grey, None, fx=PRESENCE_SCALE, fy=PRESENCE_SCALE, interpolation=cv2.INTER_AREA)
-    flags = cv2.CALIB_CB_ADAPTIVE_THRESH | cv2.CALIB_CB_NORMALIZE_IMAGE | cv2.CALIB_CB_FAST_CHECK
-    found, _ = cv2.findChessboardCorners(small, pattern, flags)  # a few ms when the board is there
+    found, _ = cv2.findChessboardCorners(small, pattern, CLASSIC_FLAGS)  # a few ms when the board is there
     if found:
         return True
     found, _ = cv2.findChessboardCornersSB(small, pattern, cv2.CALIB_CB_NORMALIZE_IMAGE)
@@ -94,8 +94,7 @@ def find_corners(grey: np.ndarray, pattern: tuple[int, int]) -> np.ndarray | Non
     full size (fast), the sector-based detector as a fallback."""
     if min(grey.shape) < MIN_IMAGE_SIDE_PX or not board_in_view(grey, pattern):
         return None
-    flags = cv2.CALIB_CB_ADAPTIVE_THRESH | cv2.CALIB_CB_NORMALIZE_IMAGE | cv2.CALIB_CB_FAST_CHECK
-    found, corners = cv2.findChessboardCorners(grey, pattern, flags)
+    found, corners = cv2.findChessboardCorners(grey, pattern, CLASSIC_FLAGS)
     if found:
         spacing = np.median(np.linalg.norm(np.diff(corners.reshape(-1, 2), axis=0), axis=1))
         window = int(np.clip(spacing * 0.4, 3, 15))
