@@ -17,6 +17,7 @@ from fastapi import FastAPI
 from fastapi.staticfiles import StaticFiles
 
 import armlab
+from armlab.recording import RecordingLibrary
 from armlab.station import load_station_config
 from armlab.station.factory import make_sim_station
 from server.auth import resolve_token
@@ -32,6 +33,7 @@ from server.routes import (
     intrinsics,
     jobs,
     programs,
+    recordings,
     repeat,
     sim,
     station,
@@ -67,12 +69,15 @@ def create_app(
     web_dir: str | Path | None = WEB_DIR,
     allowed_hosts: Iterable[str] = (),
     on_close: Callable[[dict], None] | None = None,
+    recordings_dir: str | Path | None = None,
 ) -> FastAPI:
     """The app. token: the control token (default: $ARMLAB_TOKEN, else generated: read app.state.token).
 
     allowed_hosts: Host names served besides the loopback names (the --host name, config allowed_hosts);
     any other Host, and any foreign Origin, gets 403 (server/guard.py).
     on_close(report): called at shutdown with the station's close report ({"joined", "alive"} thread names).
+    recordings_dir: where MCAP recordings go (default: the config's recording.directory, else recordings/ next to
+    the station's database).
     """
     factory = station_factory or default_station_factory
 
@@ -86,10 +91,13 @@ def create_app(
         app.state.hub.start()
         app.state.waiter = Waiter(station_obj)  # `?wait=true` requests wait here, not on worker threads
         app.state.waiter.start()
+        store_path = getattr(station_obj.store, "path", None)
+        app.state.recordings = RecordingLibrary(recordings_dir or station_obj.config.recordings_dir(store_path), station_obj.config.recording)
         try:
             yield
         finally:
             station_obj.begin_shutdown()  # halt and end the job first: waiting requests return at once
+            app.state.recordings.close()  # the halt is in it; the file closed complete
             app.state.waiter.stop()
             app.state.hub.stop()
             app.state.station = None
@@ -118,7 +126,7 @@ def create_app(
         """Liveness check."""
         return {"status": "ok", "version": armlab.__version__}
 
-    for module in (station, arm, calibration, calibration_settings, colors, intrinsics, detections, jobs, auto, programs, repeat, sim, stream):
+    for module in (station, arm, calibration, calibration_settings, colors, intrinsics, detections, jobs, auto, programs, recordings, repeat, sim, stream):
         app.include_router(module.router)
     if web_dir is not None and Path(web_dir, "index.html").exists():
         app.mount("/", StaticFiles(directory=str(web_dir), html=True), name="web")

@@ -25,6 +25,7 @@ from armlab.errors import (
 )
 from armlab.kinematics import Unreachable
 from armlab.motion.safety import UnsafeTrajectory
+from armlab.recording import DiskFull
 from armlab.station.core import NotCalibrated
 from armlab.store import NotFound
 from server.models import ErrorResponse
@@ -78,6 +79,7 @@ ERROR_STATUS: tuple[tuple[type[BaseException], int, str], ...] = (
     (NotCalibrated, 409, "not_calibrated"),
     (CalibrationUntrusted, 409, "not_calibrated"),
     (NotFound, 404, "not_found"),
+    (DiskFull, 507, "disk_full"),  # a recording cannot start: too little free disk
     (Unreachable, 422, "unreachable"),
     (UnsafeTrajectory, 422, "unsafe"),
     (PlanRefused, 422, "invalid"),

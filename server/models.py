@@ -39,6 +39,7 @@ from server.auto_models import (
     TaskProgress,
 )
 from server.colors_models import COLOR_WIRE_MODELS
+from server.recording_models import RECORDING_WIRE_MODELS
 from server.response_models import (
     CalibrationInfo,
     Detection,
@@ -180,6 +181,7 @@ WIRE_MODELS: tuple[type[BaseModel], ...] = (
 WIRE_MODELS = (
     *WIRE_MODELS,
     *COLOR_WIRE_MODELS,
+    *RECORDING_WIRE_MODELS,
     AutoRequest,
     AutoParam,
     AutoJobInfo,

@@ -28,6 +28,7 @@ ERROR_CODES = (
     "needs_confirmation",
     "no_arm",
     "device",
+    "disk_full",
     "internal",
 )
 

@@ -12,6 +12,8 @@ def register(subparsers: argparse._SubParsersAction) -> None:
     parser.add_argument("--token", default=None, help="control token (default: $ARMLAB_TOKEN, else generated)")
     parser.add_argument("--config", default=None, help="station config file (default config/station.yaml)")
     parser.add_argument("--db", default=None, help="SQLite file for programs/calibrations/jobs (default from the config)")
+    parser.add_argument("--recordings", default=None, metavar="DIR",
+                        help="where MCAP recordings go (default: the config's recording.directory, else recordings/ next to the database)")
     parser.add_argument("--seed", type=int, default=None, help="simulation seed (camera mount error, noise)")
     parser.add_argument("--event", default=None, help="starting scene: pick_sort, pick_stack, line_up, stack_high, to_the_sky")
     parser.add_argument("--level", type=int, default=None, help="starting scene level (1-3)")
@@ -140,12 +142,15 @@ def run_serve(args: argparse.Namespace) -> int:
     else:
         def factory():
             return make_sim_station(config, db_path=args.db)
+    recordings_dir = args.recordings or config.recordings_dir(args.db)
     app = create_app(
-        station_factory=factory, token=token, allowed_hosts=[args.host, *config.allowed_hosts], on_close=print_close_report
+        station_factory=factory, token=token, allowed_hosts=[args.host, *config.allowed_hosts], on_close=print_close_report,
+        recordings_dir=recordings_dir,
     )
     url = open_url(args.host, args.port, token)
     origin = "generated" if generated else "given"
     print(f"ArmLab control station ({origin} control token). Open:\n    {url}\n", flush=True)
+    print(f"recordings go to {recordings_dir}", flush=True)
     if args.host not in ("127.0.0.1", "localhost", "::1"):
         print(f"warning: listening on {args.host}: anyone who can reach it can watch; the token guards control", flush=True)
     try:

@@ -24,6 +24,21 @@ class SimStartConfig(StrictModel):
     realism: Literal["real", "camera", "ideal"] | None = None  # None: config/sim.yaml `realism` (`armlab serve --realism`)
 
 
+class RecordingConfig(StrictModel):
+    """MCAP recordings (armlab.recording): where they go, their disk budget and what is sampled how often."""
+
+    directory: str | None = None  # None: `recordings/` next to the station's database (`armlab serve --recordings DIR`)
+    budget_mb: float = Field(2000.0, gt=0.0)  # all recordings together; the oldest finished ones are deleted first
+    min_free_mb: float = Field(200.0, ge=0.0)  # a recording stops (kept, readable) when the disk has less free than this
+    camera_rate_hz: float = Field(30.0, ge=0.0, le=120.0)  # colour frames as JPEG (0: none)
+    jpeg_quality: int = Field(80, ge=10, le=100)
+    depth_rate_hz: float = Field(5.0, ge=0.0, le=120.0)  # depth frames as 16UC1 raw images (0: none)
+    joint_rate_hz: float = Field(100.0, gt=0.0, le=1000.0)  # measured and commanded joints
+    transforms_rate_hz: float = Field(30.0, gt=0.0, le=200.0)  # frame transforms and the gripper
+    chunk_size_kb: int = Field(1024, ge=16, le=65536)  # MCAP chunk (zstd): the most a SIGKILL loses, with flush_interval_s
+    flush_interval_s: float = Field(1.0, gt=0.0, le=60.0)  # a chunk is closed at least this often
+
+
 class StationConfig(StrictModel):
     # The workcell (config/workcells/<name>.yaml) decides the arm, its gripper, board and camera. `arm`
     # is filled in from it; a config that names a different arm is refused (one place decides the arm).
@@ -48,6 +63,7 @@ class StationConfig(StrictModel):
     moving_speed_rad_s: float = Field(0.05, gt=0.0, le=1.0)
     close_timeout_s: float = Field(2.0, gt=0.0, le=30.0)
     sim: SimStartConfig = SimStartConfig()
+    recording: RecordingConfig = RecordingConfig()
 
     @field_validator("allowed_hosts")
     @classmethod
@@ -84,6 +100,14 @@ class StationConfig(StrictModel):
         """database_path; a relative path is relative to the repository root."""
         path = Path(self.database_path)
         return path if path.is_absolute() else config_dir().parent / path
+
+    def recordings_dir(self, database_file: str | Path | None = None) -> Path:
+        """recording.directory (relative: to the repository root), else `recordings/` next to the database
+        (`database_file`, default this config's)."""
+        if self.recording.directory:
+            path = Path(self.recording.directory)
+            return path if path.is_absolute() else config_dir().parent / path
+        return Path(database_file or self.database_file()).parent / "recordings"
 
 
 def _workcells_with_arm(arm: str) -> list[str]:

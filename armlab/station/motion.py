@@ -242,6 +242,16 @@ class MotionGate:
                 self._command_count += 1
                 self._commanded = (record[0], float(started_s), self._command_count)
 
+    def commanded_joints_rad(self) -> np.ndarray | None:
+        """The commanded reference now (rad): the last trajectory sent, sampled at the station's clock (its end once
+        it has run out); None before any motion was sent or after a halt. Reads one attribute, takes no lock: a
+        recorder samples it at 100 Hz."""
+        running = self._commanded  # one attribute read: atomic; the tuple is never changed in place
+        if running is None:
+            return None
+        trajectory, t0_s = running[0], running[1]
+        return np.asarray(trajectory.sample(min(max(0.0, self.clock_s() - t0_s), trajectory.duration_s)), dtype=float)
+
     def start_position(self) -> np.ndarray:
         """Where a motion from rest starts: the position the servos were last commanded to hold (the end of the
         last trajectory sent) while the arm is measured within half the start tolerance of it, so the command

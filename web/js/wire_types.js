@@ -7,7 +7,7 @@ export const COMMANDS = Object.freeze(["estop", "reset", "home", "sleep", "move_
 export const ARM_COMMANDS = Object.freeze(["home", "sleep", "move_joints", "move_to", "jog", "torque", "gripper", "grab", "drop", "teach_start", "teach_record", "teach_stop", "teach_undo", "repeat", "auto", "pause", "resume", "step", "set_speed"]);
 export const VIEWS = Object.freeze(["color", "depth", "topdown"]);
 export const LAYERS = Object.freeze(["tags", "detections", "grid"]);
-export const ERROR_CODES = Object.freeze(["wrong_state", "unreachable", "unsafe", "invalid", "not_found", "not_calibrated", "unauthorized", "forbidden", "not_controller", "needs_confirmation", "no_arm", "device", "internal"]);
+export const ERROR_CODES = Object.freeze(["wrong_state", "unreachable", "unsafe", "invalid", "not_found", "not_calibrated", "unauthorized", "forbidden", "not_controller", "needs_confirmation", "no_arm", "device", "disk_full", "internal"]);
 export const SERVER_MESSAGE_TYPES = Object.freeze(["frame", "telemetry", "event", "calibration", "hello"]);
 export const CLIENT_MESSAGE_TYPES = Object.freeze(["ack", "view", "command", "heartbeat"]);
 export const EVENT_KINDS = Object.freeze(["general", "scene"]);
@@ -479,6 +479,45 @@ export const EVENT_KINDS = Object.freeze(["general", "scene"]);
  * @property {Array<string>} [skipped] damaged rows left out of data, one line each (also logged)
  * @property {number} [others_count] programs of other arms or workcells in the same database (not in data)
  * @property {Array<OtherPrograms>} [others] those programs, counted by arm and workcell
+ */
+
+/**
+ * One recording: an MCAP file in Foxglove's schemas (joint states, gripper, transforms, camera, detections, events).
+ * @typedef {Object} RecordingInfo
+ * @property {string} id e.g. 20261203T100000Z-a1b2c3 (its UTC start time)
+ * @property {string} [label]
+ * @property {(string|null)} [source] who started it (the controller's name)
+ * @property {string} started_utc
+ * @property {string} state recording, finished or damaged
+ * @property {(string|null)} [stop_reason] why it ended: stopped, disk full, budget reached, cut short, ...
+ * @property {number} duration_s
+ * @property {number} size_bytes
+ * @property {boolean} complete the file was closed with MCAP's summary
+ * @property {boolean} truncated cut short (the station was killed): readable up to its last complete chunk
+ * @property {Object<string, *>} topics messages per topic
+ * @property {Array<string>} jobs the jobs that ran while it recorded
+ * @property {(string|null)} [sampler_error]
+ */
+
+/**
+ * @typedef {Object} RecordingResponse
+ * @property {RecordingInfo} recording
+ */
+
+/**
+ * Start recording the station to MCAP (one recording at a time).
+ * @typedef {Object} RecordingStartRequest
+ * @property {string} [label] what is recorded, for the list (e.g. 'teach: stack of three')
+ */
+
+/**
+ * @typedef {Object} RecordingsResponse
+ * @property {Array<RecordingInfo>} data
+ * @property {number} count
+ * @property {(RecordingInfo|null)} active the recording running now, if any
+ * @property {string} directory
+ * @property {number} total_bytes
+ * @property {number} budget_bytes
  */
 
 /**

@@ -1,0 +1,17 @@
+"""Recording the station to MCAP files in Foxglove's schemas (issue 23 item 2).
+
+channels.py: the topics and their messages (shared with any other Foxglove sink, e.g. a live server);
+sampler.py: the threads that sample the station into them; recorder.py: one recording file; library.py: the
+recordings folder (start/stop one at a time, list, delete, the disk budget); reader.py: reading them back,
+files cut short included.
+"""
+
+from armlab.recording.channels import TOPICS, StationChannels
+from armlab.recording.library import AlreadyRecording, DiskFull, NotRecording, RecordingBusy, RecordingLibrary
+from armlab.recording.reader import DamagedRecording, RecordingSummary, iter_messages, summarize
+from armlab.recording.recorder import Recording
+
+__all__ = [
+    "TOPICS", "AlreadyRecording", "DamagedRecording", "DiskFull", "NotRecording", "Recording", "RecordingBusy",
+    "RecordingLibrary", "RecordingSummary", "StationChannels", "iter_messages", "summarize",
+]

@@ -1,0 +1,185 @@
+"""The station's channels in Foxglove's schemas: topic names, and pure builders of each message from station data.
+
+One definition for every sink: an MCAP recording (recorder.py) and, later, the live Foxglove server open the same
+channels on a foxglove Context (`StationChannels(context)`) and log the same messages. Units: SI; times in
+nanoseconds since the Unix epoch; frame ids: "world", "base", one per joint ("<joint>" at its origin, as the arm
+model's joint_frames), "gripper" (the gripper point) and "camera" (the colour camera's optical frame: +z along
+the view, +x right, +y down, as OpenCV's and Foxglove's).
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+from foxglove import Channel, Context
+from foxglove.channels import (
+    CameraCalibrationChannel,
+    CompressedImageChannel,
+    FrameTransformsChannel,
+    JointStatesChannel,
+    LogChannel,
+    RawImageChannel,
+    SceneUpdateChannel,
+)
+from foxglove.messages import (
+    CameraCalibration,
+    Color,
+    CompressedImage,
+    CubePrimitive,
+    FrameTransform,
+    FrameTransforms,
+    JointState,
+    JointStates,
+    Log,
+    LogLevel,
+    Pose,
+    Quaternion,
+    RawImage,
+    SceneEntity,
+    SceneUpdate,
+    Timestamp,
+    Vector3,
+)
+
+# topic -> Foxglove schema name (JSON channels: their own schema title). The tests and readers key on these.
+TOPICS = {
+    "/joint_states": "foxglove.JointStates",  # measured (rad, rad/s)
+    "/joint_commands": "foxglove.JointStates",  # the commanded reference now (rad)
+    "/gripper": "armlab.Gripper",  # JSON: width_m, holding, command
+    "/tf": "foxglove.FrameTransforms",  # world -> base, joints, gripper, camera
+    "/camera/color/compressed": "foxglove.CompressedImage",  # JPEG
+    "/camera/depth": "foxglove.RawImage",  # 16UC1, millimetres (0: no reading)
+    "/camera/calibration": "foxglove.CameraCalibration",
+    "/detections": "armlab.Detections",  # JSON: the blocks of GET /api/detections
+    "/detections/scene": "foxglove.SceneUpdate",  # the same blocks as cubes in the world frame
+    "/events": "foxglove.Log",  # the station's event log, its state changes and its jobs
+}
+
+GRIPPER_SCHEMA = {
+    "title": "armlab.Gripper", "type": "object",
+    "properties": {"time_s": {"type": "number"}, "width_m": {"type": "number"}, "holding": {"type": "boolean"},
+                   "command": {"type": "string"}},
+}
+DETECTIONS_SCHEMA = {
+    "title": "armlab.Detections", "type": "object",
+    "properties": {"time_s": {"type": "number"}, "frame_sequence": {"type": "integer"}, "blocks": {"type": "array", "items": {"type": "object"}}},
+}
+LOG_LEVELS = {"info": LogLevel.Info, "warn": LogLevel.Warning, "error": LogLevel.Error}
+BLOCK_RGBA = {  # a display colour per block colour name; unknown names are grey
+    "red": (0.85, 0.1, 0.1), "orange": (1.0, 0.5, 0.0), "yellow": (0.95, 0.85, 0.1), "green": (0.1, 0.7, 0.2),
+    "blue": (0.1, 0.3, 0.9), "violet": (0.5, 0.2, 0.7), "purple": (0.5, 0.2, 0.7), "pink": (1.0, 0.4, 0.7),
+}
+
+
+def stamp(time_ns: int) -> Timestamp:
+    return Timestamp(sec=int(time_ns // 1_000_000_000), nsec=int(time_ns % 1_000_000_000))
+
+
+def seconds_to_ns(time_s: float) -> int:
+    return int(round(float(time_s) * 1e9))
+
+
+def joint_states(time_ns: int, names, positions_rad, velocities_rad_s=None) -> JointStates:
+    velocities = [math.nan] * len(names) if velocities_rad_s is None else [float(v) for v in velocities_rad_s]
+    return JointStates(timestamp=stamp(time_ns), joints=[
+        JointState(name=str(name), position=float(q), velocity=float(v)) for name, q, v in zip(names, positions_rad, velocities)])
+
+
+def quaternion(rotation: np.ndarray) -> Quaternion:
+    """A rotation matrix as a unit quaternion (x, y, z, w)."""
+    R = np.asarray(rotation, dtype=float)[:3, :3]
+    w = math.sqrt(max(0.0, 1.0 + R[0, 0] + R[1, 1] + R[2, 2])) / 2.0
+    x = math.copysign(math.sqrt(max(0.0, 1.0 + R[0, 0] - R[1, 1] - R[2, 2])) / 2.0, R[2, 1] - R[1, 2])
+    y = math.copysign(math.sqrt(max(0.0, 1.0 - R[0, 0] + R[1, 1] - R[2, 2])) / 2.0, R[0, 2] - R[2, 0])
+    z = math.copysign(math.sqrt(max(0.0, 1.0 - R[0, 0] - R[1, 1] + R[2, 2])) / 2.0, R[1, 0] - R[0, 1])
+    return Quaternion(x=x, y=y, z=z, w=w)
+
+
+def frame_transform(time_ns: int, parent: str, child: str, T_parent_child: np.ndarray) -> FrameTransform:
+    T = np.asarray(T_parent_child, dtype=float)
+    return FrameTransform(timestamp=stamp(time_ns), parent_frame_id=parent, child_frame_id=child,
+                          translation=Vector3(x=float(T[0, 3]), y=float(T[1, 3]), z=float(T[2, 3])), rotation=quaternion(T))
+
+
+def frame_transforms(time_ns: int, poses_in_world: dict[str, np.ndarray]) -> FrameTransforms:
+    """{child frame: its 4x4 pose in the world frame} as transforms from "world"."""
+    return FrameTransforms(transforms=[frame_transform(time_ns, "world", child, T) for child, T in poses_in_world.items()])
+
+
+def compressed_image(time_ns: int, jpeg: bytes, frame_id: str = "camera") -> CompressedImage:
+    return CompressedImage(timestamp=stamp(time_ns), frame_id=frame_id, data=jpeg, format="jpeg")
+
+
+def depth_image(time_ns: int, depth_mm: np.ndarray, frame_id: str = "camera") -> RawImage:
+    depth = np.ascontiguousarray(depth_mm, dtype="<u2")
+    return RawImage(timestamp=stamp(time_ns), frame_id=frame_id, width=int(depth.shape[1]), height=int(depth.shape[0]),
+                    encoding="16UC1", step=int(depth.shape[1] * 2), data=depth.tobytes())
+
+
+def camera_calibration(time_ns: int, intrinsics, frame_id: str = "camera") -> CameraCalibration:
+    """armlab.devices.camera Intrinsics (pinhole, OpenCV's plumb_bob distortion) as Foxglove's calibration."""
+    fx, fy, cx, cy = float(intrinsics.fx), float(intrinsics.fy), float(intrinsics.cx), float(intrinsics.cy)
+    return CameraCalibration(
+        timestamp=stamp(time_ns), frame_id=frame_id, width=int(intrinsics.width), height=int(intrinsics.height),
+        distortion_model="plumb_bob", D=[float(d) for d in intrinsics.dist],
+        K=[fx, 0.0, cx, 0.0, fy, cy, 0.0, 0.0, 1.0], R=[1.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 1.0],
+        P=[fx, 0.0, cx, 0.0, 0.0, fy, cy, 0.0, 0.0, 0.0, 1.0, 0.0])
+
+
+def log_message(time_ns: int, level: str, message: str, name: str = "station") -> Log:
+    return Log(timestamp=stamp(time_ns), level=LOG_LEVELS.get(level, LogLevel.Info), message=message, name=name, file="", line=0)
+
+
+def detections_scene(time_ns: int, blocks: list[dict]) -> SceneUpdate:
+    """Detected blocks (wire dicts of GET /api/detections) as cubes in the world frame: a cube of the block's
+    height standing on the board at its position, turned by its yaw."""
+    entities = []
+    for block in blocks:
+        edge_m = float(block.get("height_m") or 0.0) or 0.02
+        x, y, z = (float(v) for v in block["position_m"])
+        yaw = float(block.get("yaw_rad", 0.0))
+        r, g, b = BLOCK_RGBA.get(str(block.get("color")), (0.6, 0.6, 0.6))
+        cube = CubePrimitive(
+            pose=Pose(position=Vector3(x=x, y=y, z=z - edge_m / 2.0),
+                      orientation=Quaternion(x=0.0, y=0.0, z=math.sin(yaw / 2.0), w=math.cos(yaw / 2.0))),
+            size=Vector3(x=edge_m, y=edge_m, z=edge_m), color=Color(r=r, g=g, b=b, a=0.8))
+        entities.append(SceneEntity(timestamp=stamp(time_ns), frame_id="world", id=f"block-{block.get('id')}",
+                                    frame_locked=False, cubes=[cube]))
+    return SceneUpdate(entities=entities)
+
+
+@dataclass
+class StationChannels:
+    """The channels of TOPICS opened on one foxglove Context (each sink of the context gets every message)."""
+
+    joint_states: JointStatesChannel
+    joint_commands: JointStatesChannel
+    gripper: Channel
+    tf: FrameTransformsChannel
+    color: CompressedImageChannel
+    depth: RawImageChannel
+    calibration: CameraCalibrationChannel
+    detections: Channel
+    detections_scene: SceneUpdateChannel
+    events: LogChannel
+
+    @classmethod
+    def open(cls, context: Context) -> StationChannels:
+        return cls(
+            joint_states=JointStatesChannel("/joint_states", context=context),
+            joint_commands=JointStatesChannel("/joint_commands", context=context),
+            gripper=Channel("/gripper", schema=GRIPPER_SCHEMA, context=context),
+            tf=FrameTransformsChannel("/tf", context=context),
+            color=CompressedImageChannel("/camera/color/compressed", context=context),
+            depth=RawImageChannel("/camera/depth", context=context),
+            calibration=CameraCalibrationChannel("/camera/calibration", context=context),
+            detections=Channel("/detections", schema=DETECTIONS_SCHEMA, context=context),
+            detections_scene=SceneUpdateChannel("/detections/scene", context=context),
+            events=LogChannel("/events", context=context),
+        )
+
+    def close(self) -> None:
+        for channel in vars(self).values():
+            channel.close()

@@ -1,0 +1,182 @@
+"""One MCAP recording of a station: a file written by foxglove-sdk's MCAP writer, fed by a StationSampler.
+
+The writer runs on the sampler's threads (encode and write there, never on the station's threads or under its lock).
+Chunks are zstd-compressed and closed at least every flush_interval_s, so a recording cut by SIGKILL is readable up
+to its last closed chunk. Every flush also checks the disk: below min_free_mb free, or over its share of the budget,
+the recording stops by itself and closes the file (what was recorded stays, readable to the end); its `stop_reason`
+says why. A sidecar <id>.json holds the summary once the recording has ended (library.py lists from it).
+"""
+
+from __future__ import annotations
+
+import json
+import logging
+import os
+import shutil
+import threading
+import time
+from collections.abc import Callable
+from pathlib import Path
+from typing import Any
+
+import foxglove
+from foxglove import Context
+from foxglove.mcap import MCAPCompression, MCAPWriteOptions
+
+import armlab
+from armlab.recording.channels import StationChannels
+from armlab.recording.sampler import StationSampler
+from armlab.station.config import RecordingConfig
+
+log = logging.getLogger(__name__)
+
+MB = 1_000_000
+
+
+def write_json_atomically(path: Path, data: dict) -> None:
+    partial = path.with_name(path.name + ".partial")
+    partial.write_text(json.dumps(data, indent=1) + "\n")
+    partial.replace(path)
+
+
+class Recording:
+    """One recording to `path` (an .mcap that must not exist). start(), then stop(reason) (or it stops itself: disk).
+
+    over_budget(size_bytes) -> str | None: asked at every flush; a reason stops the recording (the library's budget).
+    on_end(recording): called once when it has ended, from whichever thread ended it."""
+
+    def __init__(self, station: Any, path: Path, config: RecordingConfig, *, label: str = "", source: str | None = None,
+                 over_budget: Callable[[int], str | None] | None = None,
+                 on_end: Callable[[Recording], None] | None = None) -> None:
+        self.station, self.path, self.config = station, Path(path), config
+        self.id = self.path.stem
+        self.label, self.source = label, source
+        self.over_budget, self.on_end = over_budget, on_end
+        self.started_utc = ""
+        self.started_ns = 0
+        self.ended_ns: int | None = None
+        self.stop_reason: str | None = None
+        self._end_lock = threading.Lock()
+        self._ended = threading.Event()
+        self._writer: Any = None
+        self._context: Context | None = None
+        self._channels: StationChannels | None = None
+        self._sampler: StationSampler | None = None
+        self._next_flush_s = 0.0
+
+    def start(self) -> None:
+        self.started_ns = time.time_ns()
+        self.started_utc = time.strftime("%Y-%m-%dT%H:%M:%SZ", time.gmtime(self.started_ns / 1e9))
+        context = self._context = Context()  # kept: the channels stop logging once their context is collected
+        options = MCAPWriteOptions(compression=MCAPCompression.Zstd, chunk_size=self.config.chunk_size_kb * 1024,
+                                   compression_threads=0, profile="")
+        self._writer = foxglove.open_mcap(self.path, context=context, writer_options=options)
+        try:
+            self._channels = StationChannels.open(context)
+            self._writer.write_metadata("armlab", {
+                "id": self.id, "label": self.label, "source": self.source or "", "started_utc": self.started_utc,
+                "backend": str(getattr(self.station, "backend", "")), "armlab_version": armlab.__version__,
+                "workcell": str(getattr(self.station.config, "workcell", "")),
+                "joint_names": ",".join(self.station.model.joint_names) if self.station.has_arm else "",
+            })
+            self._writer.flush()  # the header, the metadata and the channels are on disk before the first sample
+            self._next_flush_s = time.monotonic() + self.config.flush_interval_s
+            self._sampler = StationSampler(self.station, self._channels, self.config, housekeeping=self._housekeeping)
+            self._sampler.start()
+        except BaseException:
+            self._writer.close()
+            raise
+
+    @property
+    def running(self) -> bool:
+        return self._writer is not None and not self._ended.is_set()
+
+    @property
+    def size_bytes(self) -> int:
+        try:
+            return self.path.stat().st_size
+        except OSError:
+            return 0
+
+    @property
+    def duration_s(self) -> float:
+        end_ns = self.ended_ns if self.ended_ns is not None else time.time_ns()
+        return max(0.0, (end_ns - self.started_ns) / 1e9) if self.started_ns else 0.0
+
+    def _housekeeping(self) -> None:
+        """On the sample loop: close a chunk every flush_interval_s, then check the disk and the budget."""
+        now_s = time.monotonic()
+        if now_s < self._next_flush_s or self._ended.is_set():
+            return
+        self._next_flush_s = now_s + self.config.flush_interval_s
+        self._writer.flush()
+        reason = self._disk_problem()
+        if reason is None and self.over_budget is not None:
+            reason = self.over_budget(self.size_bytes)
+        if reason is not None:
+            self.stop(reason)
+
+    def _disk_problem(self) -> str | None:
+        try:
+            free_mb = shutil.disk_usage(self.path.parent).free / MB
+        except OSError as error:
+            return f"the recordings folder cannot be read: {error}"
+        if free_mb < self.config.min_free_mb:
+            return f"disk full: {free_mb:.0f} MB free, less than recording.min_free_mb {self.config.min_free_mb:g} MB"
+        return None
+
+    def stop(self, reason: str = "stopped") -> dict:
+        """End the recording (idempotent; from any thread, the sampler's own included): stop sampling, close the
+        file (summary written), write the sidecar. Returns info()."""
+        with self._end_lock:
+            if self._ended.is_set() or self._writer is None:
+                return self.info()
+            self.stop_reason = reason
+            self._ended.set()
+        sampler = self._sampler
+        if sampler is not None:
+            sampler.stop()
+        try:
+            if self._channels is not None:
+                self._channels.close()
+            self._writer.close()
+        except Exception as error:  # noqa: BLE001 - the file keeps what it has; say why it is short
+            log.warning("recording %s: closing the file failed: %s", self.id, error)
+            self.stop_reason = f"{reason}; closing the file failed: {error}"
+        self.ended_ns = time.time_ns()
+        level = "info" if reason == "stopped" else "error"
+        self.station.events.add(level, f"recording {self.id} ended ({self.stop_reason}): {self.duration_s:.1f} s, "
+                                       f"{self.size_bytes / MB:.1f} MB")
+        info = self.info()
+        try:
+            write_json_atomically(self.path.with_suffix(".json"), info)
+        except OSError as error:  # a full disk: the listing reads the MCAP itself
+            log.warning("recording %s: cannot write its summary: %s", self.id, error)
+        if self.on_end is not None:
+            self.on_end(self)
+        return info
+
+    def info(self) -> dict:
+        sampler = self._sampler
+        counts = {topic: count for topic, count in (sampler.counts if sampler else {}).items() if count}
+        return {
+            "id": self.id, "label": self.label, "source": self.source, "started_utc": self.started_utc,
+            "state": "recording" if self.running else "finished", "stop_reason": self.stop_reason,
+            "duration_s": round(self.duration_s, 3), "size_bytes": self.size_bytes, "complete": not self.running,
+            "truncated": False, "topics": counts, "jobs": list(sampler.jobs) if sampler else [],
+            "sampler_error": sampler.error if sampler else None,
+        }
+
+
+def fsync_dir(path: Path) -> None:
+    """Make a new or deleted name in `path` durable (POSIX)."""
+    try:
+        fd = os.open(path, os.O_RDONLY)
+    except OSError:
+        return
+    try:
+        os.fsync(fd)
+    except OSError:
+        pass
+    finally:
+        os.close(fd)

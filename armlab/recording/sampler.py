@@ -1,0 +1,222 @@
+"""Sampling the station into StationChannels, on two threads of the recorder's own (never the station's).
+
+- the sample loop (joint_rate_hz): measured and commanded joints every tick; every 1/transforms_rate_hz the frame
+  transforms, the gripper, the state and job, new detections and the event log's new entries (the log's listener
+  only appends to a bounded deque; nothing waits on the station's lock beyond its own short reads);
+- the image loop: the newest camera frame (NewestSlot: newest value wins, a slow encoder skips frames, nothing
+  queues), at most camera_rate_hz colour frames as JPEG and depth_rate_hz depth frames, with the camera's
+  calibration when it changes and every CALIBRATION_PERIOD_S (a file cut short still has one near its end).
+
+Every message's log time is time.time_ns() when it was sampled; its header timestamp is the reading's own
+(the joint state's or the frame's capture time). `housekeeping()` (the recorder's flush, disk and budget checks) runs
+on the sample loop between ticks.
+"""
+
+from __future__ import annotations
+
+import logging
+import threading
+import time
+from collections import deque
+from collections.abc import Callable
+from typing import Any
+
+import cv2
+import numpy as np
+
+from armlab.recording import channels as ch
+from armlab.station.config import RecordingConfig
+from armlab.station.perception import DEVICE_ERRORS
+from armlab.station.telemetry import block_to_dict
+
+log = logging.getLogger(__name__)
+
+CALIBRATION_PERIOD_S = 5.0
+EVENT_BACKLOG = 1000  # events waiting for the sample loop; older ones are dropped (and counted)
+
+
+class StationSampler:
+    """Samples `station` into `channels` (a StationChannels) until stop(). counts: messages logged per topic."""
+
+    def __init__(self, station: Any, channels: ch.StationChannels, config: RecordingConfig,
+                 housekeeping: Callable[[], None] | None = None) -> None:
+        self.station, self.channels, self.config = station, channels, config
+        self.housekeeping = housekeeping
+        self.counts: dict[str, int] = dict.fromkeys(ch.TOPICS, 0)
+        self.jobs: list[str] = []  # the names of the jobs seen running, in order
+        self.dropped_events = 0
+        self.error: str | None = None  # the first sampling error (the loop goes on)
+        self._events: deque[dict] = deque(maxlen=EVENT_BACKLOG)
+        self._stop = threading.Event()
+        self._threads: list[threading.Thread] = []
+        self._state: str | None = None
+        self._job_id: str | None = None
+        self._perception_version = 0
+        self._calibration_key: tuple | None = None
+        self._calibration_s = -float("inf")
+
+    # Lifecycle ------------------------------------------------------------------------------------
+
+    def start(self) -> None:
+        self.station.events.add_listener(self._on_event)
+        self._threads = [threading.Thread(target=self._guarded, args=(self._sample_loop,), name="recording-sampler", daemon=True)]
+        if self.config.camera_rate_hz > 0 or self.config.depth_rate_hz > 0:
+            self._threads.append(threading.Thread(target=self._guarded, args=(self._image_loop,), name="recording-images", daemon=True))
+        for thread in self._threads:
+            thread.start()
+
+    def request_stop(self) -> None:
+        self._stop.set()
+
+    def stop(self, timeout_s: float = 5.0) -> bool:
+        """Stop both loops (from any thread, one of the loops included); True if every other loop ended."""
+        self._stop.set()
+        self.station.events.remove_listener(self._on_event)
+        deadline = time.monotonic() + timeout_s
+        ended = True
+        for thread in self._threads:
+            if thread is not threading.current_thread():
+                thread.join(max(0.0, deadline - time.monotonic()))
+                ended = ended and not thread.is_alive()
+        return ended
+
+    def _guarded(self, loop: Callable[[], None]) -> None:
+        try:
+            loop()
+        except Exception as error:  # noqa: BLE001 - a recording bug must never reach the station
+            log.exception("recording loop %s failed", threading.current_thread().name)
+            self.error = self.error or f"{type(error).__name__}: {error}"
+
+    def _log(self, topic: str, channel: Any, message: Any, time_ns: int) -> None:
+        channel.log(message, log_time=time_ns)
+        self.counts[topic] += 1
+
+    def _on_event(self, event: dict) -> None:  # on the publishing thread: append only
+        if len(self._events) == self._events.maxlen:
+            self.dropped_events += 1
+        self._events.append(event)
+
+    # The sample loop --------------------------------------------------------------------------------
+
+    def _sample_loop(self) -> None:
+        period_s = 1.0 / self.config.joint_rate_hz
+        slow_every = max(1, round(self.config.joint_rate_hz / self.config.transforms_rate_hz))
+        tick, next_s = 0, time.monotonic()
+        while not self._stop.is_set():
+            q = self._joints()
+            if tick % slow_every == 0:
+                self._slow(q)
+                if self.housekeeping is not None:
+                    self.housekeeping()
+            tick += 1
+            next_s += period_s
+            delay = next_s - time.monotonic()
+            if delay < -period_s:  # far behind (a busy machine): do not burst to catch up
+                next_s, delay = time.monotonic(), 0.0
+            self._stop.wait(max(0.0, delay))
+
+    def _joints(self) -> np.ndarray | None:
+        station = self.station
+        if not station.has_arm:
+            return None
+        try:
+            reading = station.arm.read_joint_state()
+        except DEVICE_ERRORS:
+            return None
+        now_ns = time.time_ns()
+        names = station.model.joint_names
+        self._log("/joint_states", self.channels.joint_states,
+                  ch.joint_states(ch.seconds_to_ns(reading.timestamp_s), names, reading.position_rad, reading.velocity_rad_s), now_ns)
+        commanded = station.commanded_joints_rad()
+        if commanded is not None:
+            self._log("/joint_commands", self.channels.joint_commands, ch.joint_states(now_ns, names, commanded), now_ns)
+        return np.asarray(reading.position_rad, dtype=float)
+
+    def _slow(self, q: np.ndarray | None) -> None:
+        """Transforms, gripper, state and job, detections, events."""
+        station, now_ns = self.station, time.time_ns()
+        poses: dict[str, np.ndarray] = {}
+        if station.has_arm:
+            poses["base"] = np.asarray(station.model.T_world_base)
+            if q is not None:
+                frames = station.model.joint_frames(q)
+                poses.update({name: frame for name, frame in zip(station.model.joint_names, frames[:-1])})
+                poses["gripper"] = frames[-1]
+        calibration = station.calibration
+        if calibration is not None:
+            poses["camera"] = np.asarray(calibration.T_world_camera)
+        if poses:
+            self._log("/tf", self.channels.tf, ch.frame_transforms(now_ns, poses), now_ns)
+        try:
+            gripper = station.gripper.read_state()
+            self._log("/gripper", self.channels.gripper, {"time_s": now_ns / 1e9, "width_m": float(gripper.width_m),
+                                                          "holding": bool(gripper.holding), "command": str(gripper.command)}, now_ns)
+        except DEVICE_ERRORS:
+            pass
+        self._state_and_job(now_ns)
+        self._detections(now_ns)
+        while self._events:
+            event = self._events.popleft()
+            event_ns = ch.seconds_to_ns(event["time_s"])
+            self._log("/events", self.channels.events, ch.log_message(event_ns, event["level"], event["message"]), max(now_ns, event_ns))
+
+    def _state_and_job(self, now_ns: int) -> None:
+        state = self.station.state.value
+        if state != self._state:
+            previous, self._state = self._state, state
+            text = f"state: {state}" if previous is None else f"state: {previous} -> {state}"
+            self._log("/events", self.channels.events, ch.log_message(now_ns, "info", text, "state"), now_ns)
+        job = self.station.current_job()
+        if job is not None and job.id != self._job_id and job.state == "running":
+            self._job_id = job.id
+            self.jobs.append(job.name)
+
+    def _detections(self, now_ns: int) -> None:
+        perception, version = self.station.perception.get()
+        if perception is None or version == self._perception_version:
+            return
+        self._perception_version = version
+        blocks = [block_to_dict(index, block) for index, block in enumerate(perception.blocks)]
+        self._log("/detections", self.channels.detections,
+                  {"time_s": float(perception.capture_time_s), "frame_sequence": int(perception.frame_sequence), "blocks": blocks}, now_ns)
+        self._log("/detections/scene", self.channels.detections_scene, ch.detections_scene(now_ns, blocks), now_ns)
+
+    # The image loop ---------------------------------------------------------------------------------
+
+    def _image_loop(self) -> None:
+        color_period_s = 1.0 / self.config.camera_rate_hz if self.config.camera_rate_hz > 0 else None
+        depth_period_s = 1.0 / self.config.depth_rate_hz if self.config.depth_rate_hz > 0 else None
+        next_color_s = next_depth_s = 0.0
+        quality = [int(cv2.IMWRITE_JPEG_QUALITY), int(self.config.jpeg_quality)]
+        _, version = self.station.frames.get()
+        version -= 1  # the frame already there counts as new
+        while not self._stop.is_set():
+            frame, newer = self.station.frames.wait_newer(version, 0.2)
+            if frame is None or newer == version:
+                continue
+            version = newer
+            now_s, now_ns = time.monotonic(), time.time_ns()
+            frame_ns = ch.seconds_to_ns(frame.timestamp_s)
+            if color_period_s is not None and now_s >= next_color_s:
+                next_color_s = max(next_color_s + color_period_s, now_s - color_period_s)
+                ok, jpeg = cv2.imencode(".jpg", frame.color_bgr, quality)
+                if ok:
+                    self._calibration(frame, frame_ns, now_ns)
+                    self._log("/camera/color/compressed", self.channels.color, ch.compressed_image(frame_ns, jpeg.tobytes()), now_ns)
+            if depth_period_s is not None and frame.depth_mm is not None and now_s >= next_depth_s:
+                next_depth_s = max(next_depth_s + depth_period_s, now_s - depth_period_s)
+                self._calibration(frame, frame_ns, now_ns)
+                self._log("/camera/depth", self.channels.depth, ch.depth_image(frame_ns, frame.depth_mm), now_ns)
+
+    def _calibration(self, frame: Any, frame_ns: int, now_ns: int) -> None:
+        try:
+            intrinsics = self.station.intrinsics.current()  # measured for this camera, else the device's own
+        except DEVICE_ERRORS:
+            intrinsics = frame.intrinsics
+        if intrinsics is None:
+            return
+        key = (intrinsics.width, intrinsics.height, intrinsics.fx, intrinsics.fy, intrinsics.cx, intrinsics.cy, tuple(intrinsics.dist))
+        now_s = time.monotonic()
+        if key != self._calibration_key or now_s - self._calibration_s >= CALIBRATION_PERIOD_S:
+            self._calibration_key, self._calibration_s = key, now_s
+            self._log("/camera/calibration", self.channels.calibration, ch.camera_calibration(frame_ns, intrinsics), now_ns)
