@@ -106,17 +106,21 @@ def summarize(path: str | Path) -> RecordingSummary:
     return _scan(path)
 
 
+MAGIC = b"\x89MCAP0\r\n"
+
+
 def _scan(path: Path) -> RecordingSummary:
     result = RecordingSummary(complete=False, truncated=False)
     try:
+        with open(path, "rb") as stream:
+            if stream.read(len(MAGIC)) != MAGIC:
+                raise DamagedRecording(f"{path.name} is not an MCAP recording (it does not start with MCAP's magic bytes)")
         for schema, channel, message in _stream(path, result.metadata):
             topic = result.topics.setdefault(channel.topic, {"schema": schema.name if schema else "", "count": 0})
             topic["count"] += 1
             result.start_ns = message.log_time if result.start_ns is None else min(result.start_ns, message.log_time)
             result.end_ns = message.log_time if result.end_ns is None else max(result.end_ns, message.log_time)
-    except _Truncated as error:
-        if not result.topics and path.stat().st_size < 8:
-            raise DamagedRecording(f"{path.name} is not an MCAP recording: {error}") from None
+    except _Truncated:
         result.truncated = True
     except OSError as error:
         raise DamagedRecording(f"{path.name} cannot be read: {error}") from None

@@ -25,12 +25,14 @@ from foxglove.mcap import MCAPCompression, MCAPWriteOptions
 
 import armlab
 from armlab.recording.channels import StationChannels
+from armlab.recording.reader import DamagedRecording, summarize
 from armlab.recording.sampler import StationSampler
 from armlab.station.config import RecordingConfig
 
 log = logging.getLogger(__name__)
 
 MB = 1_000_000
+CLOSE_WAIT_S = 15.0  # a stop that finds another one closing the file waits this long for it
 
 
 def write_json_atomically(path: Path, data: dict) -> None:
@@ -57,12 +59,14 @@ class Recording:
         self.ended_ns: int | None = None
         self.stop_reason: str | None = None
         self._end_lock = threading.Lock()
-        self._ended = threading.Event()
+        self._ended = threading.Event()  # stopping or stopped
+        self._closed = threading.Event()  # stopped: the file closed and its sidecar written
         self._writer: Any = None
         self._context: Context | None = None
         self._channels: StationChannels | None = None
         self._sampler: StationSampler | None = None
         self._next_flush_s = 0.0
+        self._written: Any = None  # the file's RecordingSummary once it has ended
 
     def start(self) -> None:
         self.started_ns = time.time_ns()
@@ -89,7 +93,8 @@ class Recording:
 
     @property
     def running(self) -> bool:
-        return self._writer is not None and not self._ended.is_set()
+        """Started and not yet closed (a recording being stopped still runs until its file is closed)."""
+        return self._writer is not None and not self._closed.is_set()
 
     @property
     def size_bytes(self) -> int:
@@ -129,10 +134,14 @@ class Recording:
         """End the recording (idempotent; from any thread, the sampler's own included): stop sampling, close the
         file (summary written), write the sidecar. Returns info()."""
         with self._end_lock:
-            if self._ended.is_set() or self._writer is None:
-                return self.info()
-            self.stop_reason = reason
-            self._ended.set()
+            stopping = self._ended.is_set()
+            if not stopping and self._writer is not None:
+                self.stop_reason = reason
+                self._ended.set()
+        if stopping or self._writer is None:
+            if stopping and threading.current_thread() not in self._sampler_threads():
+                self._closed.wait(CLOSE_WAIT_S)  # another thread is closing it: answer once it is closed
+            return self.info()
         sampler = self._sampler
         if sampler is not None:
             sampler.stop()
@@ -144,25 +153,37 @@ class Recording:
             log.warning("recording %s: closing the file failed: %s", self.id, error)
             self.stop_reason = f"{reason}; closing the file failed: {error}"
         self.ended_ns = time.time_ns()
+        try:  # what the file holds (the summary just written), not what was handed to the writer
+            self._written = summarize(self.path)
+        except DamagedRecording as error:
+            log.warning("recording %s: cannot read it back: %s", self.id, error)
         level = "info" if reason == "stopped" else "error"
         self.station.events.add(level, f"recording {self.id} ended ({self.stop_reason}): {self.duration_s:.1f} s, "
                                        f"{self.size_bytes / MB:.1f} MB")
-        info = self.info()
+        info = {**self.info(), "state": "finished", "complete": bool(self._written is not None and self._written.complete)}
         try:
             write_json_atomically(self.path.with_suffix(".json"), info)
         except OSError as error:  # a full disk: the listing reads the MCAP itself
             log.warning("recording %s: cannot write its summary: %s", self.id, error)
+        self._closed.set()
         if self.on_end is not None:
             self.on_end(self)
-        return info
+        return self.info()
+
+    def _sampler_threads(self) -> list[threading.Thread]:
+        return list(self._sampler._threads) if self._sampler is not None else []
 
     def info(self) -> dict:
-        sampler = self._sampler
-        counts = {topic: count for topic, count in (sampler.counts if sampler else {}).items() if count}
+        sampler, written = self._sampler, self._written
+        if written is not None:
+            counts = {topic: data["count"] for topic, data in written.topics.items() if data["count"]}
+        else:
+            counts = {topic: count for topic, count in (sampler.counts if sampler else {}).items() if count}
         return {
             "id": self.id, "label": self.label, "source": self.source, "started_utc": self.started_utc,
             "state": "recording" if self.running else "finished", "stop_reason": self.stop_reason,
-            "duration_s": round(self.duration_s, 3), "size_bytes": self.size_bytes, "complete": not self.running,
+            "duration_s": round(self.duration_s, 3), "size_bytes": self.size_bytes,
+            "complete": bool(written is not None and written.complete),
             "truncated": False, "topics": counts, "jobs": list(sampler.jobs) if sampler else [],
             "sampler_error": sampler.error if sampler else None,
         }
