@@ -52,6 +52,7 @@ class StationSampler:
         self._state: str | None = None
         self._job_id: str | None = None
         self._perception_version = 0
+        self._reading_ns = 0  # the newest joint reading's own time, recorded
         self._calibration_key: tuple | None = None
         self._calibration_s = -float("inf")
 
@@ -123,10 +124,12 @@ class StationSampler:
             reading = station.arm.read_joint_state()
         except DEVICE_ERRORS:
             return None
-        now_ns = time.time_ns()
+        now_ns, reading_ns = time.time_ns(), ch.seconds_to_ns(reading.timestamp_s)
         names = station.model.joint_names
-        self._log("/joint_states", self.channels.joint_states,
-                  ch.joint_states(ch.seconds_to_ns(reading.timestamp_s), names, reading.position_rad, reading.velocity_rad_s), now_ns)
+        if reading_ns > self._reading_ns:  # a driver publishing slower than joint_rate_hz repeats its last reading: once
+            self._reading_ns = reading_ns
+            self._log("/joint_states", self.channels.joint_states,
+                      ch.joint_states(reading_ns, names, reading.position_rad, reading.velocity_rad_s), now_ns)
         commanded = station.commanded_joints_rad()
         if commanded is not None:
             self._log("/joint_commands", self.channels.joint_commands, ch.joint_states(now_ns, names, commanded), now_ns)
