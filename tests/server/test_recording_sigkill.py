@@ -28,7 +28,7 @@ FLUSH_INTERVAL_S = 0.2
 def _start(folder: Path) -> tuple[subprocess.Popen, str]:
     config_path = Path(live.serve_config(folder))
     config = yaml.safe_load(config_path.read_text())
-    config["recording"] = {**config.get("recording", {}), "flush_interval_s": FLUSH_INTERVAL_S}
+    config["recording"] = {**config.get("recording", {}), "flush_interval_s": FLUSH_INTERVAL_S, "chunk_size_kb": 65536}  # only the flush closes chunks
     config_path.write_text(yaml.safe_dump(config))
     port = live.free_port()
     env = {key: value for key, value in os.environ.items() if key != "ARMLAB_TOKEN"}
