@@ -27,6 +27,7 @@ import { RepeatPanel } from "./repeat.js";
 import { RateMeter, Stream } from "./stream.js";
 import { TeachPanel } from "./teach.js";
 import { TorqueButton } from "./torque.js";
+import { RecordingPanel } from "./recording.js";
 import { COMMANDS, LAYERS, VIEWS } from "./wire_types.js";
 
 const $ = (id) => document.getElementById(id);
@@ -71,6 +72,7 @@ class App {
     this.lease = new ControlLease({ api: this.api, log: this.log, onChange: () => this.refreshAllowed() });
     this.intrinsics = new IntrinsicsPanel({ root: $("intrinsics-panel"), api: this.api, log: this.log });
     this.torque = new TorqueButton({ button: $("btn-torque"), run: (a, c) => this.run(a, c), api: this.api });
+    this.recording = new RecordingPanel({ api: this.api, run: (a, c) => this.run(a, c), root: $("recording-panel") });
     this.live = new LiveView({
       canvas: $("live"),
       wrap: $("view-wrap"),
