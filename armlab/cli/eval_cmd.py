@@ -38,6 +38,9 @@ def register(subparsers: argparse._SubParsersAction) -> None:
                         help="with --realism real: skip calibrating the arm from the camera before the job's clock starts")
     parser.add_argument("--truth-out", type=Path, metavar="DIR",
                         help="write each run's final ground truth (+ gripper_path_m) to DIR/<seed>.json")
+    parser.add_argument("--record", type=Path, metavar="DIR",
+                        help="record each run (calibration and job: joints, gripper, transforms, camera, detections, events) "
+                             "to an MCAP file in DIR (open it in Foxglove)")
     parser.add_argument("--json", action="store_true", help='print {"runs": [...], "summary": {...}, "record": {...}} only')
     parser.add_argument("--out", type=Path, metavar="FILE",
                         help="also write the --json output (runs, summary with intervals, record) to FILE")
@@ -81,7 +84,8 @@ def check_arguments(args: argparse.Namespace) -> None:
     parser = args.parser
     if args.compare:
         given = [name for name, value in (("a job", args.event), ("--seeds", args.seeds), ("--until-ci", args.until_ci),
-                                          ("--out", args.out), ("--truth-out", args.truth_out)) if value is not None]
+                                          ("--out", args.out), ("--truth-out", args.truth_out),
+                                          ("--record", args.record)) if value is not None]
         if given:
             parser.error(f"--compare runs nothing: leave out {', '.join(given)}")
         return
@@ -130,7 +134,8 @@ def run_eval(args: argparse.Namespace) -> int:
         def run_seeds(batch: list[int]):
             return evaluate(args.event, level, batch, workers=workers, ray_address=args.ray,
                             keep_truth=args.truth_out is not None, workcell=args.workcell, realism=args.realism,
-                            arm_calibration=not args.no_arm_calibration)
+                            arm_calibration=not args.no_arm_calibration,
+                            record_dir=None if args.record is None else str(args.record.resolve()))
 
         if args.until_ci is not None:
             until = UntilCi(run_seeds, seeds, args.until_ci, max_seeds=args.max_seeds or UNTIL_CI_MAX_SEEDS,
@@ -139,6 +144,10 @@ def run_eval(args: argparse.Namespace) -> int:
             runs_iter = until.runs()
         else:
             runs_iter = run_seeds(seeds)
+        if args.record is not None:
+            if args.record.exists() and not args.record.is_dir():
+                raise EvalError(f"--record {args.record} exists and is not a directory")
+            args.record.mkdir(parents=True, exist_ok=True)
         if args.truth_out is not None:
             if args.truth_out.exists() and not args.truth_out.is_dir():
                 raise EvalError(f"--truth-out {args.truth_out} exists and is not a directory")
@@ -253,6 +262,8 @@ def print_run(run: dict) -> None:
         print(f"    {rule['rule']:<11} {rule['points']:>+5}  {ids + '  ' if ids else ''}{rule['detail']}")
     for failure in run["failures"]:
         print(f"    failure: {failure}")
+    if run.get("recording"):
+        print(f"    recording: {run['recording']}")
     sys.stdout.flush()
 
 

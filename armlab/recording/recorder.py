@@ -143,9 +143,10 @@ class Recording:
                 self._closed.wait(CLOSE_WAIT_S)  # another thread is closing it: answer once it is closed
             return self.info()
         sampler = self._sampler
-        if sampler is not None:
-            sampler.stop()
         try:
+            if sampler is not None:
+                sampler.stop()
+                sampler.log_events(time.time_ns())  # what happened since the last tick, the stop's cause included
             if self._channels is not None:
                 self._channels.close()
             self._writer.close()

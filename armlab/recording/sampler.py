@@ -158,6 +158,10 @@ class StationSampler:
             pass
         self._state_and_job(now_ns)
         self._detections(now_ns)
+        self.log_events(now_ns)
+
+    def log_events(self, now_ns: int) -> None:
+        """The event log's new entries (also called once more after the loops stop: the last ones are kept)."""
         while self._events:
             event = self._events.popleft()
             event_ns = ch.seconds_to_ns(event["time_s"])

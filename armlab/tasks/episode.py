@@ -11,6 +11,8 @@ import time
 from pathlib import Path
 
 from armlab import skills
+from armlab.recording import Recording
+from armlab.recording.library import new_id
 from armlab.scene import generate_scene
 from armlab.station.config import StationConfig
 from armlab.station.core import Station
@@ -47,13 +49,15 @@ def score_run(event: str, level: int | None, truth: dict, sim_time_s: float, gri
 
 
 def run_episode(event: str, level: int | None, seed: int, *, keep_truth: bool = False, workcell: str | None = None,
-                realism: str | None = None, arm_calibration: bool = True) -> dict:
+                realism: str | None = None, arm_calibration: bool = True, record_dir: str | Path | None = None) -> dict:
     """Run job `event` at `level` on the scene of `seed` on `workcell` (config/workcells/<name>.yaml: its
     arm, gripper, board and scene; None = the default, the RX200); return the judged result as a
     JSON-ready dict: {event, level, seed, workcell, realism (the one that ran), points, max_points, sim_time_s, wall_time_s, breakdown,
     failures, full, within_limit} (+ truth with gripper_path_m when keep_truth). realism: real or ideal
     simulation (None: config/sim.yaml's). arm_calibration: on the real arm (a drawn rig), calibrate it from the
-    camera after the camera and before the job's clock starts, as a team does before its run (False: skip)."""
+    camera after the camera and before the job's clock starts, as a team does before its run (False: skip).
+    record_dir: record the run (calibrations and job) to <event>-L<level>-seed<seed>-<id>.mcap there (its path in the
+    result's "recording"); the simulation runs in fast mode, so the recording samples it in wall time."""
     from armlab.devices.sim import (  # MuJoCo only when simulating (tests/test_layering.py)
         SimWorkcell,
         SimWorkcellConfig,
@@ -69,6 +73,7 @@ def run_episode(event: str, level: int | None, seed: int, *, keep_truth: bool = 
         station = Station(cell.arm, cell.gripper, cell.camera, model=load_workcell_arm(config.workcell), config=config,
                           store=Store(Path(tmp) / "eval.sqlite3"), sim=cell, backend="sim", synchronous=True)
         station.start()
+        recording = _start_recording(station, record_dir, event, level, seed)
         try:
             calibration = skills.calibrate(station)
             calibration.wait(CALIBRATION_TIMEOUT_S)
@@ -91,6 +96,8 @@ def run_episode(event: str, level: int | None, seed: int, *, keep_truth: bool = 
             truth = cell.truth()
             path = cell.gripper_path() if hasattr(cell, "gripper_path") else None
         finally:
+            if recording is not None:
+                recording.stop("the run ended")
             station.close()
     gripper_path_m = None if path is None else [list(map(float, row[1:4])) for row in path]
     score = score_run(event, level, truth, sim_time_s, _after_first_motion(path), config.workcell)
@@ -103,9 +110,22 @@ def run_episode(event: str, level: int | None, seed: int, *, keep_truth: bool = 
         "sim_time_s": round(sim_time_s, 3), "wall_time_s": round(time.monotonic() - wall_start, 3),
         "breakdown": score.to_dict()["breakdown"], "failures": failures,
     }
+    if recording is not None:
+        result["recording"] = str(recording.path)
     if keep_truth:
         result["truth"] = {**jsonable(truth), "gripper_path_m": gripper_path_m}
     return result
+
+
+def _start_recording(station: Station, record_dir, event: str, level: int | None, seed: int) -> Recording | None:
+    if record_dir is None:
+        return None
+    folder = Path(record_dir)
+    folder.mkdir(parents=True, exist_ok=True)
+    name = f"{event}-L{level}-seed{int(seed)}-{new_id()}" if level is not None else f"{event}-seed{int(seed)}-{new_id()}"
+    recording = Recording(station, folder / f"{name}.mcap", station.config.recording, label=f"eval {name}", source="eval")
+    recording.start()
+    return recording
 
 
 def _after_first_motion(path):
