@@ -10,7 +10,7 @@ the view, +x right, +y down, as OpenCV's and Foxglove's).
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import numpy as np
 from foxglove import Channel, Context
@@ -116,6 +116,16 @@ def depth_image(time_ns: int, depth_mm: np.ndarray, frame_id: str = "camera") ->
     depth = np.ascontiguousarray(depth_mm, dtype="<u2")
     return RawImage(timestamp=stamp(time_ns), frame_id=frame_id, width=int(depth.shape[1]), height=int(depth.shape[0]),
                     encoding="16UC1", step=int(depth.shape[1] * 2), data=depth.tobytes())
+
+
+def scaled_intrinsics(intrinsics, scale: float):
+    """The intrinsics of the image resized by `scale` (pixel centres kept: c' = (c + 0.5) * s - 0.5)."""
+    if scale >= 1.0:
+        return intrinsics
+    width, height = max(1, round(intrinsics.width * scale)), max(1, round(intrinsics.height * scale))
+    sx, sy = width / intrinsics.width, height / intrinsics.height
+    return replace(intrinsics, width=width, height=height, fx=intrinsics.fx * sx, fy=intrinsics.fy * sy,
+                   cx=(intrinsics.cx + 0.5) * sx - 0.5, cy=(intrinsics.cy + 0.5) * sy - 0.5)
 
 
 def camera_calibration(time_ns: int, intrinsics, frame_id: str = "camera") -> CameraCalibration:

@@ -53,6 +53,8 @@ class StationSampler:
         self._job_id: str | None = None
         self._perception_version = 0
         self._reading_ns = 0  # the newest joint reading's own time, recorded
+        self._link_q: np.ndarray | None = None
+        self._link_poses: dict[str, np.ndarray] | None = None  # the links' world poses at _link_q
         self._calibration_key: tuple | None = None
         self._calibration_s = -float("inf")
 
@@ -142,9 +144,11 @@ class StationSampler:
         if station.has_arm:
             poses["base"] = np.asarray(station.model.T_world_base)
             if q is not None:
-                frames = station.model.joint_frames(q)
-                poses.update({name: frame for name, frame in zip(station.model.joint_names, frames[:-1])})
-                poses["gripper"] = frames[-1]
+                if self._link_poses is None or not np.array_equal(q, self._link_q):  # the arm at rest: computed once
+                    frames = station.model.joint_frames(q)
+                    self._link_q, self._link_poses = q, {
+                        **{name: frame for name, frame in zip(station.model.joint_names, frames[:-1])}, "gripper": frames[-1]}
+                poses.update(self._link_poses)
         calibration = station.calibration
         if calibration is not None:
             poses["camera"] = np.asarray(calibration.T_world_camera)
@@ -206,14 +210,22 @@ class StationSampler:
             frame_ns = ch.seconds_to_ns(frame.timestamp_s)
             if color_period_s is not None and now_s >= next_color_s:
                 next_color_s = max(next_color_s + color_period_s, now_s - color_period_s)
-                ok, jpeg = cv2.imencode(".jpg", frame.color_bgr, quality)
+                ok, jpeg = cv2.imencode(".jpg", self._scaled(frame.color_bgr, cv2.INTER_AREA), quality)
                 if ok:
                     self._calibration(frame, frame_ns, now_ns)
                     self._log("/camera/color/compressed", self.channels.color, ch.compressed_image(frame_ns, jpeg.tobytes()), now_ns)
             if depth_period_s is not None and frame.depth_mm is not None and now_s >= next_depth_s:
                 next_depth_s = max(next_depth_s + depth_period_s, now_s - depth_period_s)
                 self._calibration(frame, frame_ns, now_ns)
-                self._log("/camera/depth", self.channels.depth, ch.depth_image(frame_ns, frame.depth_mm), now_ns)
+                self._log("/camera/depth", self.channels.depth, ch.depth_image(frame_ns, self._scaled(frame.depth_mm, cv2.INTER_NEAREST)), now_ns)
+
+    def _scaled(self, image: np.ndarray, interpolation: int) -> np.ndarray:
+        """camera_scale of the image (depth: nearest, so every value is one the camera measured)."""
+        scale = self.config.camera_scale
+        if scale >= 1.0:
+            return image
+        height, width = image.shape[:2]
+        return cv2.resize(image, (max(1, round(width * scale)), max(1, round(height * scale))), interpolation=interpolation)
 
     def _calibration(self, frame: Any, frame_ns: int, now_ns: int) -> None:
         try:
@@ -226,4 +238,5 @@ class StationSampler:
         now_s = time.monotonic()
         if key != self._calibration_key or now_s - self._calibration_s >= CALIBRATION_PERIOD_S:
             self._calibration_key, self._calibration_s = key, now_s
-            self._log("/camera/calibration", self.channels.calibration, ch.camera_calibration(frame_ns, intrinsics), now_ns)
+            scaled = ch.scaled_intrinsics(intrinsics, self.config.camera_scale)
+            self._log("/camera/calibration", self.channels.calibration, ch.camera_calibration(frame_ns, scaled), now_ns)

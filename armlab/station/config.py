@@ -32,6 +32,7 @@ class RecordingConfig(StrictModel):
     min_free_mb: float = Field(200.0, ge=0.0)  # a recording stops (kept, readable) when the disk has less free than this
     camera_rate_hz: float = Field(30.0, ge=0.0, le=120.0)  # colour frames as JPEG (0: none)
     jpeg_quality: int = Field(80, ge=10, le=100)
+    camera_scale: float = Field(0.5, ge=0.1, le=1.0)  # colour and depth resized by this before encoding (0.5: a quarter of the pixels)
     depth_rate_hz: float = Field(5.0, ge=0.0, le=120.0)  # depth frames as 16UC1 raw images (0: none)
     joint_rate_hz: float = Field(100.0, gt=0.0, le=1000.0)  # measured and commanded joints
     transforms_rate_hz: float = Field(30.0, gt=0.0, le=200.0)  # frame transforms and the gripper

@@ -113,9 +113,12 @@ def test_a_recording_has_its_channels_with_their_schemas_and_ordered_times(tmp_p
     for topic, _, log_time, message in iter_messages(library.path(info["id"])):
         assert log_time >= last.get(topic, 0), topic
         last[topic] = log_time
-        if topic == "/camera/depth":
-            assert (message.width, message.height, message.encoding) == (64, 48, "16UC1")
+        if topic == "/camera/depth":  # camera_scale 0.5 (the default): half the size, its calibration too
+            assert (message.width, message.height, message.encoding) == (32, 24, "16UC1")
             depth_values.append(int(np.frombuffer(message.data, "<u2")[0]))
+        if topic == "/camera/calibration":
+            assert (message.width, message.height) == (32, 24)
+            assert list(message.K) == pytest.approx([25.0, 0.0, 15.75, 0.0, 25.0, 11.75, 0.0, 0.0, 1.0])
     assert depth_values and all(value > 500 for value in depth_values)  # the frames' own depth, not zeros
     assert info["topics"]["/camera/color/compressed"] >= 5 and info["topics"]["/events"] >= 1  # the state
 

@@ -1,0 +1,255 @@
+"""Recording benchmark (issue 23 item 2): what an MCAP recording costs the station.
+
+1. CPU and size at 30 fps colour + 100 Hz joints: a replay station publishes the simulated camera's own frames
+   (rendered once, replayed at --fps with their depth) and an arm moving in a sine at 100 Hz readings (the RX200
+   model, so the transforms are real); the recorder records it for --seconds with the product's config
+   (recording: JPEG quality 80, depth 5 Hz, transforms 30 Hz). Figures: the recorder threads' CPU (psutil per-thread
+   times, % of one core; target <= 10 %), MB per minute, sustained write throughput, messages per second.
+2. Peak write throughput: the same messages logged back to back (no rate limit) on one thread: MB/s and colour
+   frames/s the encoder and writer keep up with.
+3. E-stop latency with and without a recording running: bench/estop.py's rig (a real-time simulated workcell, the
+   station, the REST server in this process) and its press(): the arm set moving, the e-stop pressed by
+   Station.estop(); answer and halt times (ms), p50 / p95 / max, --trials each.
+
+    PYTHONPATH=$PWD .venv/bin/python bench/recording.py [--seconds 30] [--trials 15]
+"""
+
+from __future__ import annotations
+
+import argparse
+import math
+import os
+import random
+import statistics
+import sys
+import tempfile
+import threading
+import time
+from pathlib import Path
+
+os.environ.setdefault("MUJOCO_GL", "egl")
+sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
+sys.path.insert(0, str(Path(__file__).resolve().parent))
+
+import numpy as np  # noqa: E402
+import psutil  # noqa: E402
+
+from armlab.devices.arm import JointState  # noqa: E402
+from armlab.recording import RecordingLibrary, summarize  # noqa: E402
+from armlab.station.config import RecordingConfig  # noqa: E402
+from armlab.station.slots import EventLog, NewestSlot  # noqa: E402
+from armlab.station.states import State  # noqa: E402
+
+
+class ReplayStation:
+    """What the recorder reads of a station: the RX200's model, an arm in a sine, frames replayed at `fps`."""
+
+    has_arm = True
+    backend = "bench"
+    calibration = None
+
+    class config:  # noqa: N801
+        workcell = "rx200_armlab"
+
+    class gripper:  # noqa: N801
+        class _State:
+            width_m, holding, command = 0.03, False, "release"
+
+        @classmethod
+        def read_state(cls):
+            return cls._State()
+
+    def __init__(self, frames: list, fps: float) -> None:
+        from armlab.kinematics import load_arm
+
+        self.model = load_arm("rx200")
+        self.events, self.frames, self.perception = EventLog(), NewestSlot(), NewestSlot()
+        self.state = State.IDLE
+        self.arm = self
+        self.intrinsics = self
+        self._frames, self._period_s = frames, 1.0 / fps
+        self._stop = threading.Event()
+        self._thread = threading.Thread(target=self._camera, name="replay-camera", daemon=True)
+        self._start_s = time.time()
+
+    def current(self):
+        return self._frames[0].intrinsics
+
+    def current_job(self):
+        return None
+
+    def commanded_joints_rad(self):
+        return self._q(time.time())
+
+    def _q(self, t_s: float) -> np.ndarray:
+        return np.asarray(self.model.home_rad) + 0.3 * math.sin(t_s - self._start_s)
+
+    def read_joint_state(self) -> JointState:
+        now = time.time()
+        return JointState(self._q(now), np.full(self.model.dof, 0.3 * math.cos(now - self._start_s)), now)
+
+    def _camera(self) -> None:
+        from dataclasses import replace
+
+        index, next_s = 0, time.monotonic()
+        while not self._stop.is_set():
+            frame = self._frames[index % len(self._frames)]
+            self.frames.publish(replace(frame, timestamp_s=time.time(), sequence=index))
+            index += 1
+            next_s += self._period_s
+            self._stop.wait(max(0.0, next_s - time.monotonic()))
+
+    def __enter__(self):
+        self._thread.start()
+        return self
+
+    def __exit__(self, *exc) -> None:
+        self._stop.set()
+        self._thread.join(5)
+
+
+def rendered_frames(count: int) -> list:
+    """`count` frames of the simulated camera (fast mode: the arm still, the pick_sort L2 scene)."""
+    from armlab.devices.sim import SimWorkcell, SimWorkcellConfig
+    from armlab.scene import generate_scene
+
+    with SimWorkcell(SimWorkcellConfig(realtime=False, seed=1), scene=generate_scene("pick_sort", level=2, seed=1)) as cell:
+        return [cell.capture_next_frame() for _ in range(count)]
+
+
+def thread_cpu_s(names: set[str]) -> float:
+    """CPU seconds (user + system) of this process's threads with those names."""
+    ids = {thread.native_id for thread in threading.enumerate() if thread.name in names}
+    return sum(t.user_time + t.system_time for t in psutil.Process().threads() if t.id in ids)
+
+
+def cpu_and_size(frames: list, seconds: float, fps: float, **config) -> dict:
+    with tempfile.TemporaryDirectory(prefix="armlab-bench-rec-") as tmp, ReplayStation(frames, fps) as station:
+        library = RecordingLibrary(tmp, RecordingConfig(**{"min_free_mb": 0, **config}))
+        names = {"recording-sampler", "recording-images"}
+        process = psutil.Process()
+        time.sleep(0.5)
+        before = process.cpu_times()
+        time.sleep(seconds)  # the replay station alone: the process's CPU without a recording
+        after = process.cpu_times()
+        idle_cpu_s = (after.user + after.system) - (before.user + before.system)
+        info = library.start(station)
+        time.sleep(0.5)  # the threads exist; measured from here
+        cpu0, wall0, size0, process0 = thread_cpu_s(names), time.monotonic(), library.active()["size_bytes"], process.cpu_times()
+        time.sleep(seconds)
+        cpu1, wall1, size1, process1 = thread_cpu_s(names), time.monotonic(), library.active()["size_bytes"], process.cpu_times()
+        ended = library.stop()
+        summary = summarize(Path(tmp) / f"{info['id']}.mcap")
+    wall = wall1 - wall0
+    return {
+        "cpu_percent_of_one_core": 100 * (cpu1 - cpu0) / wall,
+        "process_percent_added": 100 * ((process1.user + process1.system - process0.user - process0.system) / wall - idle_cpu_s / seconds),
+        "mb_per_minute": (size1 - size0) / 1e6 / wall * 60,
+        "write_mb_s": (size1 - size0) / 1e6 / wall, "messages_per_s": summary.message_count / summary.duration_s,
+        "colour_fps": summary.topics.get("/camera/color/compressed", {"count": 0})["count"] / summary.duration_s,
+        "joint_hz": summary.topics["/joint_states"]["count"] / summary.duration_s,
+        "depth_fps": summary.topics.get("/camera/depth", {"count": 0})["count"] / summary.duration_s, "file_mb": ended["size_bytes"] / 1e6,
+        "duration_s": summary.duration_s, "complete": summary.complete,
+    }
+
+
+def peak_throughput(frames: list, count: int) -> dict:
+    """Colour frames (JPEG-encoded) and depth images logged back to back on one thread."""
+    import cv2
+    import foxglove
+    from foxglove import Context
+    from foxglove.mcap import MCAPCompression, MCAPWriteOptions
+
+    from armlab.recording import StationChannels
+    from armlab.recording import channels as ch
+
+    with tempfile.TemporaryDirectory(prefix="armlab-bench-peak-") as tmp:
+        context = Context()
+        path = Path(tmp) / "peak.mcap"
+        writer = foxglove.open_mcap(path, context=context, writer_options=MCAPWriteOptions(
+            compression=MCAPCompression.Zstd, chunk_size=1024 * 1024, compression_threads=0))
+        channels = StationChannels.open(context)
+        start_cpu, start = time.process_time(), time.monotonic()
+        for index in range(count):
+            frame = frames[index % len(frames)]
+            now = time.time_ns()
+            ok, jpeg = cv2.imencode(".jpg", frame.color_bgr, [int(cv2.IMWRITE_JPEG_QUALITY), 80])
+            channels.color.log(ch.compressed_image(now, jpeg.tobytes()), log_time=now)
+            if index % 6 == 0:  # depth at a sixth of the colour rate, as 5 Hz to 30 fps
+                channels.depth.log(ch.depth_image(now, frame.depth_mm), log_time=now)
+        writer.close()
+        wall, cpu = time.monotonic() - start, time.process_time() - start_cpu
+        size = path.stat().st_size
+    return {"mb_s": size / 1e6 / wall, "colour_fps": count / wall, "cpu_s_per_frame": cpu / count}
+
+
+def estop_latency(trials: int, record: bool) -> tuple[list[float], list[float]]:
+    """bench/estop.py's rig and press (Station.estop()), the arm moving, with or without a recording running."""
+    from estop import Rig, load_idle
+
+    answers, halts = [], []
+    with tempfile.TemporaryDirectory(prefix="armlab-bench-estop-") as tmp:
+        rig = Rig(Path(tmp))
+        library = RecordingLibrary(Path(tmp) / "recordings", RecordingConfig(min_free_mb=0))
+        try:
+            if record:
+                library.start(rig.station)
+            for _ in range(trials):
+                rig.idle()
+                stop = load_idle(rig)
+                time.sleep(random.uniform(0.2, 0.6))
+                answer_ms, halt_ms, _ = rig.press(over_http=False)
+                stop()
+                answers.append(answer_ms)
+                halts.append(halt_ms)
+        finally:
+            library.close()
+            rig.close()
+    return answers, halts
+
+
+def figures(values: list[float]) -> str:
+    ordered = sorted(values)
+    p95 = ordered[min(len(ordered) - 1, round(0.95 * (len(ordered) - 1)))]
+    return f"p50 {statistics.median(ordered):6.2f}  p95 {p95:6.2f}  max {ordered[-1]:6.2f}"
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__.split("\n")[0])
+    parser.add_argument("--seconds", type=float, default=30.0, help="recording length for the CPU and size figures")
+    parser.add_argument("--fps", type=float, default=30.0, help="colour frames per second replayed")
+    parser.add_argument("--trials", type=int, default=15, help="e-stop presses with and without a recording")
+    parser.add_argument("--peak-frames", type=int, default=150)
+    args = parser.parse_args()
+    print(f"bench/recording.py on {os.cpu_count()} CPUs (load average {os.getloadavg()[0]:.2f})", flush=True)
+    frames = rendered_frames(12)
+    height, width = frames[0].color_bgr.shape[:2]
+    print(f"frames: {width}x{height} colour + depth from the simulated camera, replayed at {args.fps:g} fps; joints at 100 Hz")
+
+    default = RecordingConfig()
+    cases = [("the config's defaults", {}), ("colour and joints (no depth)", {"depth_rate_hz": 0.0}),
+             ("full size (camera_scale 1)", {"camera_scale": 1.0}),
+             ("joints, gripper, transforms only (no camera)", {"camera_rate_hz": 0.0, "depth_rate_hz": 0.0})]
+    for name, config in cases:
+        settings = {**default.model_dump(), **config}
+        result = cpu_and_size(frames, args.seconds, args.fps, **config)
+        print(f"{name}: camera {settings['camera_rate_hz']:g} fps x{settings['camera_scale']:g} JPEG q{settings['jpeg_quality']}, depth "
+              f"{settings['depth_rate_hz']:g} Hz, joints {settings['joint_rate_hz']:g} Hz; {result['duration_s']:.1f} s "
+              f"({'complete' if result['complete'] else 'NOT complete'}): recorder threads {result['cpu_percent_of_one_core']:.1f} % "
+              f"of one core (target <= 10 %), the process {result['process_percent_added']:+.1f} % against the same seconds without "
+              f"recording; {result['mb_per_minute']:.1f} MB/min; sustained write {result['write_mb_s']:.2f} MB/s; "
+              f"{result['messages_per_s']:.0f} messages/s (colour {result['colour_fps']:.1f} fps, depth {result['depth_fps']:.1f} fps, "
+              f"joints {result['joint_hz']:.1f} Hz)", flush=True)
+
+    peak = peak_throughput(frames, args.peak_frames)
+    print(f"peak (one thread, back to back): {peak['mb_s']:.1f} MB/s, {peak['colour_fps']:.0f} colour frames/s "
+          f"({1000 * peak['cpu_s_per_frame']:.1f} ms CPU per frame with its JPEG encode)", flush=True)
+
+    for record in (False, True):
+        answers, halts = estop_latency(args.trials, record)
+        label = "recording" if record else "no recording"
+        print(f"e-stop, {label:>12}, {args.trials} presses (ms): answer {figures(answers)} | halt {figures(halts)}", flush=True)
+
+
+if __name__ == "__main__":
+    main()
