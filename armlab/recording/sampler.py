@@ -32,6 +32,7 @@ from armlab.station.telemetry import block_to_dict
 log = logging.getLogger(__name__)
 
 CALIBRATION_PERIOD_S = 5.0
+HELD_COMMAND_PERIOD_NS = 1_000_000_000  # an unchanged commanded reference is logged this often
 EVENT_BACKLOG = 1000  # events waiting for the sample loop; older ones are dropped (and counted)
 
 
@@ -53,6 +54,8 @@ class StationSampler:
         self._job_id: str | None = None
         self._perception_version = 0
         self._reading_ns = 0  # the newest joint reading's own time, recorded
+        self._commanded: np.ndarray | None = None
+        self._commanded_ns = 0
         self._link_q: np.ndarray | None = None
         self._link_poses: dict[str, np.ndarray] | None = None  # the links' world poses at _link_q
         self._calibration_key: tuple | None = None
@@ -133,7 +136,9 @@ class StationSampler:
             self._log("/joint_states", self.channels.joint_states,
                       ch.joint_states(reading_ns, names, reading.position_rad, reading.velocity_rad_s), now_ns)
         commanded = station.commanded_joints_rad()
-        if commanded is not None:
+        if commanded is not None and (self._commanded is None or not np.array_equal(commanded, self._commanded)
+                                      or now_ns - self._commanded_ns >= HELD_COMMAND_PERIOD_NS):
+            self._commanded, self._commanded_ns = commanded, now_ns  # a held command: once a second, not at 100 Hz
             self._log("/joint_commands", self.channels.joint_commands, ch.joint_states(now_ns, names, commanded), now_ns)
         return np.asarray(reading.position_rad, dtype=float)
 
