@@ -8,8 +8,9 @@
 2. Peak write throughput: the same messages logged back to back (no rate limit) on one thread: MB/s and colour
    frames/s the encoder and writer keep up with.
 3. E-stop latency with and without a recording running: bench/estop.py's rig (a real-time simulated workcell, the
-   station, the REST server in this process) and its press(): the arm set moving, the e-stop pressed by
-   Station.estop(); answer and halt times (ms), p50 / p95 / max, --trials each.
+   station, the REST server in this process; here the camera watchdog at 10 s, so a loaded machine does not fault
+   the station) and its press(): the arm set moving, the e-stop pressed by Station.estop(); answer and halt times
+   (ms), p50 / p95 / max, --trials each.
 
     PYTHONPATH=$PWD .venv/bin/python bench/recording.py [--seconds 30] [--trials 15]
 """
@@ -183,14 +184,48 @@ def peak_throughput(frames: list, count: int) -> dict:
     return {"mb_s": size / 1e6 / wall, "colour_fps": count / wall, "cpu_s_per_frame": cpu / count}
 
 
-def estop_latency(trials: int, record: bool) -> tuple[list[float], list[float]]:
-    """bench/estop.py's rig and press (Station.estop()), the arm moving, with or without a recording running."""
-    from estop import Rig, load_idle
+def estop_rig(tmp: Path, camera_fps: float):
+    """bench/estop.py's Rig (cell, station, REST server; its idle() and press()), the camera at camera_fps and the camera
+    watchdog at 10 s: a 30 fps render on a loaded 2-core machine starves and faults the station (camera lost)."""
+    import uvicorn
+    from estop import Rig, free_port, wait_for
 
-    answers, halts = [], []
+    from armlab.devices.sim import SimWorkcell, SimWorkcellConfig
+    from armlab.kinematics import load_arm
+    from armlab.station import Station, StationConfig
+    from server.app import create_app
+
+    rig = Rig.__new__(Rig)
+    rig.db = tmp / "bench.sqlite3"
+    rig.cell = SimWorkcell(SimWorkcellConfig(realtime=True, seed=2, camera_fps=camera_fps))
+    rig.cell.start()
+
+    def factory():
+        rig.station = Station(rig.cell.arm, rig.cell.gripper, rig.cell.camera, model=load_arm("rx200"),
+                              config=StationConfig(database_path=str(rig.db), camera_timeout_s=10.0), sim=rig.cell)
+        rig.station.start()
+        return rig.station
+
+    rig.app = create_app(station_factory=factory, token="bench-recording", recordings_dir=tmp / "recordings")
+    port = free_port()
+    rig.server = uvicorn.Server(uvicorn.Config(rig.app, host="127.0.0.1", port=port, log_level="error", lifespan="on"))
+    rig.thread = threading.Thread(target=rig.server.run, daemon=True)
+    rig.thread.start()
+    wait_for(lambda: rig.server.started, 60, 0.05)
+    rig.http = None
+    rig.close = lambda: (setattr(rig.server, "should_exit", True), rig.thread.join(20), rig.cell.close())
+    return rig
+
+
+def estop_latency(trials: int, record: bool, camera_fps: float) -> tuple[list[float], list[float], int]:
+    """bench/estop.py's press (Station.estop()), the arm moving (its load_idle), with or without a recording running
+    (started through the app's library, as POST /api/recordings/start does). Returns answers, halts (ms), frames."""
+    from estop import load_idle
+
+    answers, halts, frames = [], [], 0
     with tempfile.TemporaryDirectory(prefix="armlab-bench-estop-") as tmp:
-        rig = Rig(Path(tmp))
-        library = RecordingLibrary(Path(tmp) / "recordings", RecordingConfig(min_free_mb=0))
+        rig = estop_rig(Path(tmp), camera_fps)
+        library = rig.app.state.recordings
         try:
             if record:
                 library.start(rig.station)
@@ -202,10 +237,11 @@ def estop_latency(trials: int, record: bool) -> tuple[list[float], list[float]]:
                 stop()
                 answers.append(answer_ms)
                 halts.append(halt_ms)
+            if record:
+                frames = library.stop()["topics"].get("/camera/color/compressed", 0)
         finally:
-            library.close()
             rig.close()
-    return answers, halts
+    return answers, halts, frames
 
 
 def figures(values: list[float]) -> str:
@@ -220,17 +256,20 @@ def main() -> None:
     parser.add_argument("--fps", type=float, default=30.0, help="colour frames per second replayed")
     parser.add_argument("--trials", type=int, default=15, help="e-stop presses with and without a recording")
     parser.add_argument("--peak-frames", type=int, default=150)
+    parser.add_argument("--estop-only", action="store_true", help="only the e-stop comparison")
+    parser.add_argument("--estop-camera-fps", type=float, default=30.0, help="the simulated camera's rate in the e-stop rig")
     args = parser.parse_args()
     print(f"bench/recording.py on {os.cpu_count()} CPUs (load average {os.getloadavg()[0]:.2f})", flush=True)
-    frames = rendered_frames(12)
-    height, width = frames[0].color_bgr.shape[:2]
-    print(f"frames: {width}x{height} colour + depth from the simulated camera, replayed at {args.fps:g} fps; joints at 100 Hz")
+    frames = [] if args.estop_only else rendered_frames(12)
+    if frames:
+        height, width = frames[0].color_bgr.shape[:2]
+        print(f"frames: {width}x{height} colour + depth from the simulated camera, replayed at {args.fps:g} fps; joints at 100 Hz")
 
     default = RecordingConfig()
     cases = [("the config's defaults", {}), ("colour and joints (no depth)", {"depth_rate_hz": 0.0}),
              ("full size (camera_scale 1)", {"camera_scale": 1.0}),
              ("joints, gripper, transforms only (no camera)", {"camera_rate_hz": 0.0, "depth_rate_hz": 0.0})]
-    for name, config in cases:
+    for name, config in [] if args.estop_only else cases:
         settings = {**default.model_dump(), **config}
         result = cpu_and_size(frames, args.seconds, args.fps, **config)
         print(f"{name}: camera {settings['camera_rate_hz']:g} fps x{settings['camera_scale']:g} JPEG q{settings['jpeg_quality']}, depth "
@@ -241,14 +280,16 @@ def main() -> None:
               f"{result['messages_per_s']:.0f} messages/s (colour {result['colour_fps']:.1f} fps, depth {result['depth_fps']:.1f} fps, "
               f"joints {result['joint_hz']:.1f} Hz)", flush=True)
 
-    peak = peak_throughput(frames, args.peak_frames)
-    print(f"peak (one thread, back to back): {peak['mb_s']:.1f} MB/s, {peak['colour_fps']:.0f} colour frames/s "
-          f"({1000 * peak['cpu_s_per_frame']:.1f} ms CPU per frame with its JPEG encode)", flush=True)
+    peak = peak_throughput(frames, args.peak_frames) if frames else None
+    if peak is not None:
+        print(f"peak (one thread, back to back): {peak['mb_s']:.1f} MB/s, {peak['colour_fps']:.0f} colour frames/s "
+              f"({1000 * peak['cpu_s_per_frame']:.1f} ms CPU per frame with its JPEG encode)", flush=True)
 
     for record in (False, True):
-        answers, halts = estop_latency(args.trials, record)
-        label = "recording" if record else "no recording"
-        print(f"e-stop, {label:>12}, {args.trials} presses (ms): answer {figures(answers)} | halt {figures(halts)}", flush=True)
+        answers, halts, recorded = estop_latency(args.trials, record, args.estop_camera_fps)
+        label = f"recording ({recorded} colour frames)" if record else "no recording"
+        print(f"e-stop, {label}, {args.trials} presses, camera {args.estop_camera_fps:g} fps (ms): answer {figures(answers)} | "
+              f"halt {figures(halts)}", flush=True)
 
 
 if __name__ == "__main__":

@@ -119,7 +119,7 @@ class Recording:
         if reason is None and self.over_budget is not None:
             reason = self.over_budget(self.size_bytes)
         if reason is not None:
-            self.stop(reason)
+            self.stop(reason, problem=True)
 
     def _disk_problem(self) -> str | None:
         try:
@@ -130,9 +130,10 @@ class Recording:
             return f"disk full: {free_mb:.0f} MB free, less than recording.min_free_mb {self.config.min_free_mb:g} MB"
         return None
 
-    def stop(self, reason: str = "stopped") -> dict:
+    def stop(self, reason: str = "stopped", problem: bool = False) -> dict:
         """End the recording (idempotent; from any thread, the sampler's own included): stop sampling, close the
-        file (summary written), write the sidecar. Returns info()."""
+        file (summary written), write the sidecar. Returns info(). problem: it stops on its own (disk, budget): an
+        error event, not an info."""
         with self._end_lock:
             stopping = self._ended.is_set()
             if not stopping and self._writer is not None:
@@ -158,7 +159,7 @@ class Recording:
             self._written = summarize(self.path)
         except DamagedRecording as error:
             log.warning("recording %s: cannot read it back: %s", self.id, error)
-        level = "info" if reason == "stopped" else "error"
+        level = "error" if problem or self.stop_reason != reason else "info"
         self.station.events.add(level, f"recording {self.id} ended ({self.stop_reason}): {self.duration_s:.1f} s, "
                                        f"{self.size_bytes / MB:.1f} MB")
         info = {**self.info(), "state": "finished", "complete": bool(self._written is not None and self._written.complete)}

@@ -208,9 +208,11 @@ class StationSampler:
         version -= 1  # the frame already there counts as new
         while not self._stop.is_set():
             frame, newer = self.station.frames.wait_newer(version, 0.2)
-            if frame is None or newer == version:
+            if newer == version:
                 continue
-            version = newer
+            version = newer  # even with no frame yet (version 0): the next wait then waits
+            if frame is None:
+                continue
             now_s, now_ns = time.monotonic(), time.time_ns()
             frame_ns = ch.seconds_to_ns(frame.timestamp_s)
             if color_period_s is not None and now_s >= next_color_s:

@@ -237,3 +237,26 @@ def test_the_running_recording_cannot_be_deleted(tmp_path):
         library.stop()
     library.delete(started["id"])
     assert list(tmp_path.iterdir()) == []
+
+
+class CountingSlot(NewestSlot):
+    def __init__(self) -> None:
+        super().__init__()
+        self.waits = 0
+
+    def wait_newer(self, version, timeout_s):
+        self.waits += 1
+        return super().wait_newer(version, timeout_s)
+
+
+def test_with_no_camera_frame_yet_the_image_thread_waits(tmp_path):
+    """Before the first frame the image loop waits on the slot (it spun at 100 % of a core: wait_newer(-1))."""
+    station = CameraOnlyStation()  # its camera thread not started: no frame ever
+    station.frames = CountingSlot()
+    ticks = []
+    station.current_job = lambda: ticks.append(1)  # the sample loop asks once per slow tick (30 Hz)
+    library = RecordingLibrary(tmp_path, config())
+    library.start(station)
+    wait_for(lambda: len(ticks) >= 20)  # ~0.7 s of sampling: ~4 waits of 0.2 s, not millions of returns
+    library.stop()
+    assert 1 <= station.frames.waits < 200, station.frames.waits
