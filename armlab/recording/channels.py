@@ -11,6 +11,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass, replace
+from typing import Any
 
 import numpy as np
 from foxglove import Channel, Context
@@ -160,35 +161,51 @@ def detections_scene(time_ns: int, blocks: list[dict]) -> SceneUpdate:
     return SceneUpdate(entities=entities)
 
 
+# attribute of StationChannels -> (topic, message class or JSON schema)
+CHANNELS = {
+    "joint_states": ("/joint_states", JointStates),
+    "joint_commands": ("/joint_commands", JointStates),
+    "gripper": ("/gripper", GRIPPER_SCHEMA),
+    "tf": ("/tf", FrameTransforms),
+    "color": ("/camera/color/compressed", CompressedImage),
+    "depth": ("/camera/depth", RawImage),
+    "calibration": ("/camera/calibration", CameraCalibration),
+    "detections": ("/detections", DETECTIONS_SCHEMA),
+    "detections_scene": ("/detections/scene", SceneUpdate),
+    "events": ("/events", Log),
+}
+_SDK_CHANNELS = {JointStates: JointStatesChannel, FrameTransforms: FrameTransformsChannel, CompressedImage: CompressedImageChannel,
+                 RawImage: RawImageChannel, CameraCalibration: CameraCalibrationChannel, SceneUpdate: SceneUpdateChannel, Log: LogChannel}
+
+
 @dataclass
 class StationChannels:
-    """The channels of TOPICS opened on one foxglove Context (each sink of the context gets every message)."""
+    """The channels of TOPICS, each with log(message, log_time=ns) and close(): on a foxglove Context (every sink of
+    the context, e.g. a live WebSocket server, gets every message) or on an MCAP file (mcap_file.McapFile)."""
 
-    joint_states: JointStatesChannel
-    joint_commands: JointStatesChannel
-    gripper: Channel
-    tf: FrameTransformsChannel
-    color: CompressedImageChannel
-    depth: RawImageChannel
-    calibration: CameraCalibrationChannel
-    detections: Channel
-    detections_scene: SceneUpdateChannel
-    events: LogChannel
+    joint_states: Any
+    joint_commands: Any
+    gripper: Any
+    tf: Any
+    color: Any
+    depth: Any
+    calibration: Any
+    detections: Any
+    detections_scene: Any
+    events: Any
 
     @classmethod
     def open(cls, context: Context) -> StationChannels:
-        return cls(
-            joint_states=JointStatesChannel("/joint_states", context=context),
-            joint_commands=JointStatesChannel("/joint_commands", context=context),
-            gripper=Channel("/gripper", schema=GRIPPER_SCHEMA, context=context),
-            tf=FrameTransformsChannel("/tf", context=context),
-            color=CompressedImageChannel("/camera/color/compressed", context=context),
-            depth=RawImageChannel("/camera/depth", context=context),
-            calibration=CameraCalibrationChannel("/camera/calibration", context=context),
-            detections=Channel("/detections", schema=DETECTIONS_SCHEMA, context=context),
-            detections_scene=SceneUpdateChannel("/detections/scene", context=context),
-            events=LogChannel("/events", context=context),
-        )
+        """The channels on a foxglove Context."""
+        return cls(**{
+            name: Channel(topic, schema=schema, context=context) if isinstance(schema, dict) else _SDK_CHANNELS[schema](topic, context=context)
+            for name, (topic, schema) in CHANNELS.items()
+        })
+
+    @classmethod
+    def on_file(cls, file: Any) -> StationChannels:
+        """The channels on an McapFile (its channel(topic, schema))."""
+        return cls(**{name: file.channel(topic, schema) for name, (topic, schema) in CHANNELS.items()})
 
     def close(self) -> None:
         for channel in vars(self).values():

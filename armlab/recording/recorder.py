@@ -1,6 +1,7 @@
-"""One MCAP recording of a station: a file written by foxglove-sdk's MCAP writer, fed by a StationSampler.
+"""One MCAP recording of a station: an McapFile (messages in foxglove-sdk's schemas; chunks compressed and written
+with the GIL released) fed by a StationSampler.
 
-The writer runs on the sampler's threads (encode and write there, never on the station's threads or under its lock).
+Encoding and writing run on the sampler's threads, never on the station's threads or under its lock.
 Chunks are zstd-compressed and closed at least every flush_interval_s, so a recording cut by SIGKILL is readable up
 to its last closed chunk. Every flush also checks the disk: below min_free_mb free, or over its share of the budget,
 the recording stops by itself and closes the file (what was recorded stays, readable to the end); its `stop_reason`
@@ -19,12 +20,9 @@ from collections.abc import Callable
 from pathlib import Path
 from typing import Any
 
-import foxglove
-from foxglove import Context
-from foxglove.mcap import MCAPCompression, MCAPWriteOptions
-
 import armlab
 from armlab.recording.channels import StationChannels
+from armlab.recording.mcap_file import McapFile
 from armlab.recording.reader import DamagedRecording, summarize
 from armlab.recording.sampler import StationSampler
 from armlab.station.config import RecordingConfig
@@ -61,8 +59,7 @@ class Recording:
         self._end_lock = threading.Lock()
         self._ended = threading.Event()  # stopping or stopped
         self._closed = threading.Event()  # stopped: the file closed and its sidecar written
-        self._writer: Any = None
-        self._context: Context | None = None
+        self._writer: McapFile | None = None
         self._channels: StationChannels | None = None
         self._sampler: StationSampler | None = None
         self._next_flush_s = 0.0
@@ -71,12 +68,9 @@ class Recording:
     def start(self) -> None:
         self.started_ns = time.time_ns()
         self.started_utc = time.strftime("%Y-%m-%dT%H:%M:%SZ", time.gmtime(self.started_ns / 1e9))
-        context = self._context = Context()  # kept: the channels stop logging once their context is collected
-        options = MCAPWriteOptions(compression=MCAPCompression.Zstd, chunk_size=self.config.chunk_size_kb * 1024,
-                                   compression_threads=0, profile="")
-        self._writer = foxglove.open_mcap(self.path, context=context, writer_options=options)
+        self._writer = McapFile(self.path, self.config.chunk_size_kb * 1024)
         try:
-            self._channels = StationChannels.open(context)
+            self._channels = StationChannels.on_file(self._writer)
             self._writer.write_metadata("armlab", {
                 "id": self.id, "label": self.label, "source": self.source or "", "started_utc": self.started_utc,
                 "backend": str(getattr(self.station, "backend", "")), "armlab_version": armlab.__version__,
