@@ -131,13 +131,15 @@ def cpu_and_size(frames: list, seconds: float, fps: float, **config) -> dict:
         process = psutil.Process()
         time.sleep(0.5)
         before = process.cpu_times()
-        time.sleep(seconds)  # the replay station alone: the process's CPU without a recording
+        with Ticker() as idle_ticker:
+            time.sleep(seconds)  # the replay station alone: the process's CPU without a recording
         after = process.cpu_times()
         idle_cpu_s = (after.user + after.system) - (before.user + before.system)
         info = library.start(station)
         time.sleep(0.5)  # the threads exist; measured from here
         cpu0, wall0, size0, process0 = thread_cpu_s(names), time.monotonic(), library.active()["size_bytes"], process.cpu_times()
-        time.sleep(seconds)
+        with Ticker() as ticker:
+            time.sleep(seconds)
         cpu1, wall1, size1, process1 = thread_cpu_s(names), time.monotonic(), library.active()["size_bytes"], process.cpu_times()
         ended = library.stop()
         summary = summarize(Path(tmp) / f"{info['id']}.mcap")
@@ -151,25 +153,22 @@ def cpu_and_size(frames: list, seconds: float, fps: float, **config) -> dict:
         "joint_hz": summary.topics["/joint_states"]["count"] / summary.duration_s,
         "depth_fps": summary.topics.get("/camera/depth", {"count": 0})["count"] / summary.duration_s, "file_mb": ended["size_bytes"] / 1e6,
         "duration_s": summary.duration_s, "complete": summary.complete,
+        "late_without": idle_ticker.figures(), "late_with": ticker.figures(),
     }
 
 
 def peak_throughput(frames: list, count: int) -> dict:
-    """Colour frames (JPEG-encoded) and depth images logged back to back on one thread."""
+    """Colour frames (JPEG-encoded) and depth images logged back to back on one thread, as the recorder writes them."""
     import cv2
-    import foxglove
-    from foxglove import Context
-    from foxglove.mcap import MCAPCompression, MCAPWriteOptions
 
     from armlab.recording import StationChannels
     from armlab.recording import channels as ch
+    from armlab.recording.mcap_file import McapFile
 
     with tempfile.TemporaryDirectory(prefix="armlab-bench-peak-") as tmp:
-        context = Context()
         path = Path(tmp) / "peak.mcap"
-        writer = foxglove.open_mcap(path, context=context, writer_options=MCAPWriteOptions(
-            compression=MCAPCompression.Zstd, chunk_size=1024 * 1024, compression_threads=0))
-        channels = StationChannels.open(context)
+        file = McapFile(path, 1024 * 1024)
+        channels = StationChannels.on_file(file)
         start_cpu, start = time.process_time(), time.monotonic()
         for index in range(count):
             frame = frames[index % len(frames)]
@@ -178,10 +177,40 @@ def peak_throughput(frames: list, count: int) -> dict:
             channels.color.log(ch.compressed_image(now, jpeg.tobytes()), log_time=now)
             if index % 6 == 0:  # depth at a sixth of the colour rate, as 5 Hz to 30 fps
                 channels.depth.log(ch.depth_image(now, frame.depth_mm), log_time=now)
-        writer.close()
+        file.close()
         wall, cpu = time.monotonic() - start, time.process_time() - start_cpu
         size = path.stat().st_size
     return {"mb_s": size / 1e6 / wall, "colour_fps": count / wall, "cpu_s_per_frame": cpu / count}
+
+
+class Ticker:
+    """A Python thread that sleeps 1 ms at a time, as the station's threads wait and wake: how late it wakes (ms)
+    says how long other threads (a recorder holding the GIL) kept it from running."""
+
+    def __init__(self) -> None:
+        self.late_ms: list[float] = []
+        self._stop = threading.Event()
+        self._thread = threading.Thread(target=self._run, daemon=True)
+
+    def _run(self) -> None:
+        last = time.perf_counter()
+        while not self._stop.is_set():
+            time.sleep(0.001)
+            now = time.perf_counter()
+            self.late_ms.append((now - last - 0.001) * 1000)
+            last = now
+
+    def __enter__(self):
+        self._thread.start()
+        return self
+
+    def __exit__(self, *exc) -> None:
+        self._stop.set()
+        self._thread.join(5)
+
+    def figures(self) -> str:
+        ordered = sorted(self.late_ms)
+        return f"p50 {ordered[len(ordered) // 2]:.2f} p99 {ordered[int(0.99 * (len(ordered) - 1))]:.2f} max {ordered[-1]:.2f} ms"
 
 
 def estop_rig(tmp: Path, camera_fps: float):
@@ -217,18 +246,25 @@ def estop_rig(tmp: Path, camera_fps: float):
     return rig
 
 
-def estop_latency(trials: int, record: bool, camera_fps: float) -> tuple[list[float], list[float], int]:
+def estop_latency(trials: int, record: bool, camera_fps: float, replay: list) -> tuple[list[float], list[float], int]:
     """bench/estop.py's press (Station.estop()), the arm moving (its load_idle), with or without a recording running
-    (started through the app's library, as POST /api/recordings/start does). Returns answers, halts (ms), frames."""
+    (started through the app's library, as POST /api/recordings/start does). The simulated camera of a loaded 2-core
+    machine renders a few frames a second, so with `replay` frames a second recorder records a replay station at
+    30 fps in the same process too: the recorder's full load. Returns answers, halts (ms), colour frames recorded."""
+    import contextlib
+
     from estop import load_idle
 
     answers, halts, frames = [], [], 0
-    with tempfile.TemporaryDirectory(prefix="armlab-bench-estop-") as tmp:
+    with tempfile.TemporaryDirectory(prefix="armlab-bench-estop-") as tmp, contextlib.ExitStack() as stack:
         rig = estop_rig(Path(tmp), camera_fps)
         library = rig.app.state.recordings
+        full = RecordingLibrary(Path(tmp) / "replay", RecordingConfig(min_free_mb=0))
         try:
             if record:
                 library.start(rig.station)
+                if replay:
+                    full.start(stack.enter_context(ReplayStation(replay, 30.0)))
             for _ in range(trials):
                 rig.idle()
                 stop = load_idle(rig)
@@ -239,7 +275,10 @@ def estop_latency(trials: int, record: bool, camera_fps: float) -> tuple[list[fl
                 halts.append(halt_ms)
             if record:
                 frames = library.stop()["topics"].get("/camera/color/compressed", 0)
+                if replay:
+                    frames += full.stop()["topics"].get("/camera/color/compressed", 0)
         finally:
+            full.close()
             rig.close()
     return answers, halts, frames
 
@@ -257,10 +296,11 @@ def main() -> None:
     parser.add_argument("--trials", type=int, default=15, help="e-stop presses with and without a recording")
     parser.add_argument("--peak-frames", type=int, default=150)
     parser.add_argument("--estop-only", action="store_true", help="only the e-stop comparison")
+    parser.add_argument("--no-estop", action="store_true", help="no e-stop comparison")
     parser.add_argument("--estop-camera-fps", type=float, default=30.0, help="the simulated camera's rate in the e-stop rig")
     args = parser.parse_args()
     print(f"bench/recording.py on {os.cpu_count()} CPUs (load average {os.getloadavg()[0]:.2f})", flush=True)
-    frames = [] if args.estop_only else rendered_frames(12)
+    frames = rendered_frames(12)
     if frames:
         height, width = frames[0].color_bgr.shape[:2]
         print(f"frames: {width}x{height} colour + depth from the simulated camera, replayed at {args.fps:g} fps; joints at 100 Hz")
@@ -278,15 +318,16 @@ def main() -> None:
               f"of one core (target <= 10 %), the process {result['process_percent_added']:+.1f} % against the same seconds without "
               f"recording; {result['mb_per_minute']:.1f} MB/min; sustained write {result['write_mb_s']:.2f} MB/s; "
               f"{result['messages_per_s']:.0f} messages/s (colour {result['colour_fps']:.1f} fps, depth {result['depth_fps']:.1f} fps, "
-              f"joints {result['joint_hz']:.1f} Hz)", flush=True)
+              f"joints {result['joint_hz']:.1f} Hz); a 1 ms Python ticker woke late by {result['late_with']} "
+              f"(without recording: {result['late_without']})", flush=True)
 
-    peak = peak_throughput(frames, args.peak_frames) if frames else None
+    peak = None if args.estop_only else peak_throughput(frames, args.peak_frames)
     if peak is not None:
         print(f"peak (one thread, back to back): {peak['mb_s']:.1f} MB/s, {peak['colour_fps']:.0f} colour frames/s "
               f"({1000 * peak['cpu_s_per_frame']:.1f} ms CPU per frame with its JPEG encode)", flush=True)
 
-    for record in (False, True):
-        answers, halts, recorded = estop_latency(args.trials, record, args.estop_camera_fps)
+    for record in () if args.no_estop else (False, True):
+        answers, halts, recorded = estop_latency(args.trials, record, args.estop_camera_fps, frames)
         label = f"recording ({recorded} colour frames)" if record else "no recording"
         print(f"e-stop, {label}, {args.trials} presses, camera {args.estop_camera_fps:g} fps (ms): answer {figures(answers)} | "
               f"halt {figures(halts)}", flush=True)

@@ -1,9 +1,10 @@
 """Recording the station to MCAP files in Foxglove's schemas (issue 23 item 2).
 
-channels.py: the topics and their messages (shared with any other Foxglove sink, e.g. a live server);
-sampler.py: the threads that sample the station into them; recorder.py: one recording file; library.py: the
-recordings folder (start/stop one at a time, list, delete, the disk budget); reader.py: reading them back,
-files cut short included.
+channels.py: the topics and their messages (StationChannels.open(context) for any foxglove-sdk sink, e.g. a live
+WebSocket server; StationChannels.on_file(McapFile) for a recording); sampler.py: the threads that sample the station
+into them; mcap_file.py: the MCAP file (the mcap library, the GIL released while compressing and writing);
+recorder.py: one recording; library.py: the recordings folder (start/stop one at a time, list, delete, the disk
+budget); reader.py: reading them back, files cut short included.
 """
 
 from armlab.recording.channels import TOPICS, StationChannels
