@@ -28,6 +28,7 @@ class RecordingInfo(Wire):
     truncated: bool = Field(description="cut short (the station was killed): readable up to its last complete chunk")
     topics: dict[str, int] = Field(description="messages per topic")
     jobs: list[str] = Field(description="the jobs that ran while it recorded")
+    states: list[str] = Field([], description="the station's states while it recorded (idle, teach, repeat, auto_sort, ...), in order")
     sampler_error: str | None = None
 
 

@@ -166,7 +166,7 @@ class RecordingLibrary:
             return {**self._blank(path, size), "state": "damaged", "stop_reason": str(error)}
         truncated = not summary.complete
         info = {
-            **self._blank(path, size), **{k: v for k, v in info.items() if k in ("label", "source", "jobs", "started_utc") and v},
+            **self._blank(path, size), **{k: v for k, v in info.items() if k in ("label", "source", "jobs", "states", "started_utc") and v},
             "duration_s": round(summary.duration_s, 3), "complete": summary.complete, "truncated": truncated,
             "stop_reason": info.get("stop_reason") or ("cut short (the station stopped while recording): readable up to its last "
                                                        "complete chunk" if truncated else None),
@@ -185,7 +185,7 @@ class RecordingLibrary:
         stem = path.stem
         started = f"{stem[0:4]}-{stem[4:6]}-{stem[6:8]}T{stem[9:11]}:{stem[11:13]}:{stem[13:15]}Z"
         return {"id": stem, "label": "", "source": None, "started_utc": started, "state": "finished", "stop_reason": None,
-                "duration_s": 0.0, "size_bytes": size, "complete": False, "truncated": False, "topics": {}, "jobs": [],
+                "duration_s": 0.0, "size_bytes": size, "complete": False, "truncated": False, "topics": {}, "jobs": [], "states": [],
                 "sampler_error": None}
 
     def _remove(self, path: Path) -> None:

@@ -181,6 +181,7 @@ class Recording:
             "duration_s": round(self.duration_s, 3), "size_bytes": self.size_bytes,
             "complete": bool(written is not None and written.complete),
             "truncated": False, "topics": counts, "jobs": list(sampler.jobs) if sampler else [],
+            "states": list(sampler.states) if sampler else [],
             "sampler_error": sampler.error if sampler else None,
         }
 

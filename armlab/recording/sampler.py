@@ -45,6 +45,7 @@ class StationSampler:
         self.housekeeping = housekeeping
         self.counts: dict[str, int] = dict.fromkeys(ch.TOPICS, 0)
         self.jobs: list[str] = []  # the names of the jobs seen running, in order
+        self.states: list[str] = []  # the station's states seen (idle, teach, repeat, ...), first time each, in order
         self.dropped_events = 0
         self.error: str | None = None  # the first sampling error (the loop goes on)
         self._events: deque[dict] = deque(maxlen=EVENT_BACKLOG)
@@ -180,6 +181,8 @@ class StationSampler:
         state = self.station.state.value
         if state != self._state:
             previous, self._state = self._state, state
+            if state not in self.states:
+                self.states.append(state)
             text = f"state: {state}" if previous is None else f"state: {previous} -> {state}"
             self._log("/events", self.channels.events, ch.log_message(now_ns, "info", text, "state"), now_ns)
         job = self.station.current_job()

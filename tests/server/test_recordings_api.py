@@ -44,11 +44,15 @@ def test_a_recording_has_every_channel_with_its_schema_and_times_in_order(http, 
     assert http.post("/api/arm/joints?wait=true", json={"q_rad": target, "moving_time_s": 1.0}).status_code == 200
     live.wait_for(lambda: all(active_topics(http).get(topic, 0) >= 2 for topic in TOPICS if topic != "/camera/calibration")
                   and active_topics(http)["/joint_states"] >= 60, 60)
-    assert http.post("/api/arm/joints", json={"q_rad": home, "moving_time_s": 1.0}).status_code == 200
+    assert http.post("/api/arm/joints?wait=true", json={"q_rad": home, "moving_time_s": 1.0}).status_code == 200
+    assert http.post("/api/teach/start", json={"discard_draft": True}).status_code == 200  # a teach session in it too
+    live.wait_for(lambda: "teach" in http.get("/api/recordings").json()["active"]["states"], 30)
+    assert http.post("/api/teach/exit").status_code == 200
     stopped = http.post("/api/recordings/stop")
     assert stopped.status_code == 200, stopped.text
     info = stopped.json()["recording"]
     assert info["id"] == recording_id and info["complete"] and info["label"] == "channels"
+    assert info["states"] == ["idle", "teach"]  # what the station did while it recorded
     download = http.get(f"/api/recordings/{recording_id}")
     assert download.status_code == 200 and download.content.startswith(MAGIC)
     assert len(download.content) == info["size_bytes"]
@@ -76,7 +80,7 @@ def test_a_recording_has_every_channel_with_its_schema_and_times_in_order(http, 
     image = next(m for _, _, _, m in iter_messages(path, {"/camera/color/compressed"}))
     assert image.format == "jpeg" and bytes(image.data[:2]) == b"\xff\xd8"
     logs = [m.message for _, _, _, m in iter_messages(path, {"/events"})]
-    assert any(f"recording {recording_id} started" in text for text in logs) and any(text.startswith("state:") for text in logs)
+    assert any(f"recording {recording_id} started" in text for text in logs) and "state: idle -> teach" in logs
 
 
 def test_recorded_joints_are_what_the_arm_reported(cell, tmp_path):

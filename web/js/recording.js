@@ -75,6 +75,8 @@ export class RecordingPanel {
       link.textContent = item.label || item.id;
       const note = item.truncated ? " (cut short)" : item.state === "damaged" ? " (damaged)" : "";
       li.append(link, ` ${fmtDuration(item.duration_s)} · ${fmtBytes(item.size_bytes)}${note}`);
+      li.title = [`states: ${(item.states || []).join(", ") || "—"}`, `jobs: ${item.jobs.join(", ") || "—"}`,
+        item.stop_reason ? `ended: ${item.stop_reason}` : ""].filter(Boolean).join("\n");
       return li;
     }));
     clearTimeout(this.timer);

@@ -496,6 +496,7 @@ export const EVENT_KINDS = Object.freeze(["general", "scene"]);
  * @property {boolean} truncated cut short (the station was killed): readable up to its last complete chunk
  * @property {Object<string, *>} topics messages per topic
  * @property {Array<string>} jobs the jobs that ran while it recorded
+ * @property {Array<string>} [states] the station's states while it recorded (idle, teach, repeat, auto_sort, ...), in order
  * @property {(string|null)} [sampler_error]
  */
 
