@@ -79,7 +79,8 @@ class Recording:
             })
             self._writer.flush()  # the header, the metadata and the channels are on disk before the first sample
             self._next_flush_s = time.monotonic() + self.config.flush_interval_s
-            self._sampler = StationSampler(self.station, self._channels, self.config, housekeeping=self._housekeeping)
+            self._sampler = StationSampler(self.station, self._channels, self.config, housekeeping=self._housekeeping,
+                                           on_failure=lambda reason: self.stop(reason, problem=True))
             self._sampler.start()
         except BaseException:
             self._writer.close()
@@ -180,7 +181,7 @@ class Recording:
             "state": "recording" if self.running else "finished", "stop_reason": self.stop_reason,
             "duration_s": round(self.duration_s, 3), "size_bytes": self.size_bytes,
             "complete": bool(written is not None and written.complete),
-            "truncated": False, "topics": counts, "jobs": list(sampler.jobs) if sampler else [],
+            "truncated": bool(written is not None and not written.complete), "topics": counts, "jobs": list(sampler.jobs) if sampler else [],
             "states": list(sampler.states) if sampler else [],
             "sampler_error": sampler.error if sampler else None,
         }

@@ -14,6 +14,7 @@ on the sample loop between ticks.
 
 from __future__ import annotations
 
+import errno
 import logging
 import threading
 import time
@@ -40,9 +41,10 @@ class StationSampler:
     """Samples `station` into `channels` (a StationChannels) until stop(). counts: messages logged per topic."""
 
     def __init__(self, station: Any, channels: ch.StationChannels, config: RecordingConfig,
-                 housekeeping: Callable[[], None] | None = None) -> None:
+                 housekeeping: Callable[[], None] | None = None, on_failure: Callable[[str], None] | None = None) -> None:
         self.station, self.channels, self.config = station, channels, config
         self.housekeeping = housekeeping
+        self.on_failure = on_failure  # on_failure(reason): a loop ended on an error (e.g. the disk is full)
         self.counts: dict[str, int] = dict.fromkeys(ch.TOPICS, 0)
         self.jobs: list[str] = []  # the names of the jobs seen running, in order
         self.states: list[str] = []  # the station's states seen (idle, teach, repeat, ...), first time each, in order
@@ -70,7 +72,8 @@ class StationSampler:
         if self.config.camera_rate_hz > 0 or self.config.depth_rate_hz > 0:
             self._threads.append(threading.Thread(target=self._guarded, args=(self._image_loop,), name="recording-images", daemon=True))
         for thread in self._threads:
-            thread.start()
+            if not self._stop.is_set():  # the sample loop may stop the recording at once (its first flush: disk, budget)
+                thread.start()
 
     def request_stop(self) -> None:
         self._stop.set()
@@ -82,7 +85,7 @@ class StationSampler:
         deadline = time.monotonic() + timeout_s
         ended = True
         for thread in self._threads:
-            if thread is not threading.current_thread():
+            if thread is not threading.current_thread() and thread.ident is not None:  # started
                 thread.join(max(0.0, deadline - time.monotonic()))
                 ended = ended and not thread.is_alive()
         return ended
@@ -93,6 +96,9 @@ class StationSampler:
         except Exception as error:  # noqa: BLE001 - a recording bug must never reach the station
             log.exception("recording loop %s failed", threading.current_thread().name)
             self.error = self.error or f"{type(error).__name__}: {error}"
+            if self.on_failure is not None and not self._stop.is_set():
+                self.on_failure(f"{'disk full' if isinstance(error, OSError) and error.errno == errno.ENOSPC else 'writing failed'}: "
+                                f"{type(error).__name__}: {error}")
 
     def _log(self, topic: str, channel: Any, message: Any, time_ns: int) -> None:
         channel.log(message, log_time=time_ns)

@@ -260,3 +260,41 @@ def test_with_no_camera_frame_yet_the_image_thread_waits(tmp_path):
     wait_for(lambda: len(ticks) >= 20)  # ~0.7 s of sampling: ~4 waits of 0.2 s, not millions of returns
     library.stop()
     assert 1 <= station.frames.waits < 200, station.frames.waits
+
+
+class FillingFile:
+    """A file object whose disk fills up: every write raises ENOSPC once `full` is set."""
+
+    def __init__(self, file) -> None:
+        self._file, self.full = file, False
+
+    def write(self, data):
+        if self.full:
+            raise OSError(28, "No space left on device")
+        return self._file.write(data)
+
+    def __getattr__(self, name):
+        return getattr(self._file, name)
+
+
+def test_a_write_refused_by_a_full_disk_stops_the_recording_and_keeps_what_was_written(tmp_path, monkeypatch):
+    from armlab.recording import mcap_file
+
+    files: list[FillingFile] = []
+
+    def filling_open(path, mode):
+        files.append(FillingFile(open(path, mode)))  # noqa: SIM115 - the recording closes it
+        return files[-1]
+
+    monkeypatch.setattr(mcap_file, "open", filling_open, raising=False)
+    library = RecordingLibrary(tmp_path, config())
+    with CameraOnlyStation() as station:
+        started = library.start(station)
+        wait_for(lambda: library.active()["topics"].get("/camera/color/compressed", 0) >= 5)
+        library._active._writer.flush()
+        files[0].full = True  # the disk fills up
+        wait_for(lambda: library.active() is None)
+    info = library.info(started["id"])
+    assert info["stop_reason"].startswith("disk full") and "No space left" in info["stop_reason"]
+    assert info["topics"]["/camera/color/compressed"] >= 5 and info["truncated"]  # readable up to the last chunk
+    assert any("disk full" in event["message"] and event["level"] == "error" for event in station.events.since(0))
