@@ -1,5 +1,6 @@
 """One perception pass per frame for the live stream: board tags tracked near where the calibration
-puts them (full search when uncalibrated), the robot self-filter's mask (given the measured arm
+puts them (uncalibrated: near where the last whole-image search found them, searched anew every
+UNCALIBRATED_FULL_SEARCH_EVERY frames or when one goes missing), the robot self-filter's mask (given the measured arm
 joints), blocks outside that mask, and the overlay. Holds its detectors so a per-frame call builds
 nothing."""
 
@@ -16,6 +17,11 @@ from armlab.vision.geometry import project_points
 from armlab.vision.overlay import OverlayLayers, draw_overlay, grid_pixels
 from armlab.vision.self_filter import RobotSelfFilter
 from armlab.vision.tags import Tag, detect_tags, detect_tags_near, make_detector
+
+# Uncalibrated, the tags are for the operator's view only (calibration searches its own frame): a whole-image search
+# costs ~80 ms of CPU at 1280x720 and tracking the tags it found ~5 ms, so the whole image is searched on this many
+# frames' first (1 s at the station's 5 Hz) and whenever a tracked tag is lost.
+UNCALIBRATED_FULL_SEARCH_EVERY = 5
 
 
 @dataclass(frozen=True)
@@ -53,6 +59,9 @@ class PerceptionPipeline:
         self._cal: Calibration | None = None
         self._tag_centres_px = np.empty((0, 2))
         self._grid_px: dict[tuple[int, int], np.ndarray] = {}
+        self._untracked: list[Tag] = []  # uncalibrated: the tags of the last whole-image search, tracked since
+        self._frames_since_full_search = 0
+        self.whole_image_searches = 0  # uncalibrated whole-image tag searches so far
         self._block_geometry: BlockGeometry | None = None
         self.color_model = None  # an armlab.vision.colors ColorModel (the station's colour calibration); None: the config's
 
@@ -66,7 +75,7 @@ class PerceptionPipeline:
     def find_tags(self, color_bgr: np.ndarray, cal: Calibration | None) -> list[Tag]:
         """Board tags: searched in windows around their calibrated image positions, else everywhere."""
         if cal is None:
-            return detect_tags(color_bgr, detector=self._board_detector)
+            return self._find_tags_uncalibrated(color_bgr)
         self._use_calibration(cal)
         centres = self._tag_centres_px
         tags = detect_tags_near(color_bgr, centres, 32, self._tracking_detector)
@@ -76,6 +85,22 @@ class PerceptionPipeline:
             extra = detect_tags_near(color_bgr, np.array(missing), 48, self._board_detector)
             tags = sorted(tags + [tag for tag in extra if tag.id not in found], key=lambda tag: tag.id)
         return tags
+
+    def _find_tags_uncalibrated(self, color_bgr: np.ndarray) -> list[Tag]:
+        """The tags the last whole-image search found, tracked in windows around where they were; the whole image
+        is searched again when one is lost, nothing was found, or UNCALIBRATED_FULL_SEARCH_EVERY frames passed."""
+        self._frames_since_full_search += 1
+        if self._untracked and self._frames_since_full_search < UNCALIBRATED_FULL_SEARCH_EVERY:
+            centres = np.array([tag.center_px for tag in self._untracked])
+            side_px = max(float(np.ptp(tag.corners_px, axis=0).max()) for tag in self._untracked)
+            tracked = detect_tags_near(color_bgr, centres, max(48, int(1.5 * side_px)), self._board_detector)
+            if len(tracked) >= len(self._untracked):
+                self._untracked = tracked
+                return tracked
+        self._untracked = detect_tags(color_bgr, detector=self._board_detector)
+        self._frames_since_full_search = 0
+        self.whole_image_searches += 1
+        return self._untracked
 
     def process(
         self, color_bgr: np.ndarray, depth_mm: np.ndarray | None, cal: Calibration | None,

@@ -51,3 +51,33 @@ def test_detect_blocks_refuses_bad_frames_and_finds_nothing_on_a_bare_board(even
     bare_color, bare_depth = board_frame  # synthetic board: tags and grid, nothing standing on it
     bare_cal = calibrate_extrinsics(bare_color, L515, cfg)
     assert detect_blocks(bare_color, bare_depth, bare_cal, cfg) == []
+
+
+def test_uncalibrated_tags_are_tracked_and_the_whole_image_searched_again_now_and_then(event_frame, cfg):
+    """Uncalibrated, a whole-image search (~80 ms at 1280x720) runs on one frame in UNCALIBRATED_FULL_SEARCH_EVERY and
+    the tags it found are tracked in between; a tag that appears is found within that many frames, and a tag that
+    moves out of its window is found where it went on the same frame (a lost tag starts a whole-image search)."""
+    from armlab.vision.pipeline import UNCALIBRATED_FULL_SEARCH_EVERY
+
+    frame, _ = event_frame
+    board = set(cfg.tags.board_tags)
+    pipeline = PerceptionPipeline(cfg)
+    full = [t for t in detect_tags(frame.color_bgr, cfg) if t.id in board]
+    covered = frame.color_bgr.copy()
+    u, v = np.round(full[1].center_px).astype(int)
+    covered[v - 25 : v + 25, u - 25 : u + 25] = 40  # tag 2 hidden at first
+    assert {t.id for t in pipeline.find_tags(covered, None)} & board == {1, 3, 4}
+    seen = [{t.id for t in pipeline.find_tags(frame.color_bgr, None)} & board for _ in range(UNCALIBRATED_FULL_SEARCH_EVERY)]
+    assert seen[-1] == {1, 2, 3, 4}, seen  # uncovered: found by the next whole-image search
+    searches = pipeline.whole_image_searches
+    for _ in range(3 * UNCALIBRATED_FULL_SEARCH_EVERY):
+        tracked = [t for t in pipeline.find_tags(frame.color_bgr, None) if t.id in board]
+        assert [t.id for t in tracked] == [1, 2, 3, 4]
+        for mine, truth in zip(tracked, full):
+            np.testing.assert_allclose(mine.corners_px, truth.corners_px, atol=0.05)
+    assert pipeline.whole_image_searches - searches == 3  # one frame in UNCALIBRATED_FULL_SEARCH_EVERY
+    shifted = np.roll(frame.color_bgr, (90, 140), axis=(0, 1))  # the camera looked elsewhere: every tag out of its window
+    moved = [t for t in pipeline.find_tags(shifted, None) if t.id in board]
+    assert [t.id for t in moved] == [1, 2, 3, 4]
+    for mine, truth in zip(moved, full):
+        np.testing.assert_allclose(mine.center_px, truth.center_px + [140, 90], atol=0.05)
