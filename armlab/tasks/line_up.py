@@ -14,7 +14,7 @@ import math
 import numpy as np
 
 from armlab.scene import COLORS
-from armlab.tasks.runner import Move, Plan, TaskRunner, cubes, near
+from armlab.tasks.runner import REACH_REGION_M, Move, NoFreeSpot, Plan, TaskRunner, cubes, near
 
 SPACING_M = 0.055  # centre to centre: 5 gaps = 275 mm < 300 mm
 LINE_GAP_M = 0.075  # between the large and the small line
@@ -147,13 +147,16 @@ def make_policy(level: int | None, params: dict, runner: TaskRunner):
             the lines by ASIDE_CLEARANCE_M); None, said once, when there is none (the lines are built
             around it: a job does not fail for want of a free spot)."""
             cube = obj.get("is_cube", True)
-            try:
-                x, y = runner.free_spot(objects, runner.edge_of(obj), allowed=None if cube else clear_of_lines)
-            except RuntimeError as error:
-                runner.note_once(f"left the {'block' if cube else 'distractor'} at ({obj['position_m'][0] * 1000:.0f}, "
-                                 f"{obj['position_m'][1] * 1000:.0f}) mm in the lines' way: {error}")
-                return None
-            return Move(obj, (x, y, 0.0), "out of the lines' way", yaw_rad=0.0 if cube else None)
+            for region in (None, REACH_REGION_M):  # free_spot's default region, else anywhere in reach
+                try:
+                    x, y = runner.free_spot(objects, runner.edge_of(obj), region=region, allowed=None if cube else clear_of_lines)
+                except NoFreeSpot as error:
+                    reason = str(error)
+                    continue
+                return Move(obj, (x, y, 0.0), "out of the lines' way", yaw_rad=0.0 if cube else None)
+            runner.note_once(f"left the {'block' if cube else 'distractor'} at ({obj['position_m'][0] * 1000:.0f}, "
+                             f"{obj['position_m'][1] * 1000:.0f}) mm in the lines' way: {reason}")
+            return None
 
         # First clear the lines' corridor (to the block's own slot when it is free), then fill the
         # slots (pile tops first: they uncover others), then put aside pile tops that hide blocks.
