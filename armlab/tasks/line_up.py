@@ -14,7 +14,16 @@ import math
 import numpy as np
 
 from armlab.scene import COLORS
-from armlab.tasks.runner import REACH_REGION_M, Move, NoFreeSpot, Plan, TaskRunner, cubes, near
+from armlab.tasks.runner import (
+    FINGER_REACH_M,
+    REACH_REGION_M,
+    Move,
+    NoFreeSpot,
+    Plan,
+    TaskRunner,
+    cubes,
+    near,
+)
 
 SPACING_M = 0.055  # centre to centre: 5 gaps = 275 mm < 300 mm
 LINE_GAP_M = 0.075  # between the large and the small line
@@ -160,8 +169,15 @@ def make_policy(level: int | None, params: dict, runner: TaskRunner):
 
         # First clear the lines' corridor (to the block's own slot when it is free), then fill the
         # slots (pile tops first: they uncover others), then put aside pile tops that hide blocks.
+        def clear_around(block) -> bool:
+            """Nothing but placed blocks within an opening finger's reach of block's slot, not even the rest of
+            its own pile (a release 47 mm from a two-high pile knocked it over: the blocks lay tipped)."""
+            xy = slot_of(block)
+            others = [o for o in objects if o not in done and (o is not block or o.get("stack_level", 1) > 1)]
+            return not any(near(o["position_m"], xy, FINGER_REACH_M) for o in others)
+
         for obj in sorted(in_way, key=lambda o: (o.get("is_cube", True), -(o.get("stack_level") or 1))):  # distractors first
-            wanted = obj in loose and slot_free(slot_of(obj))
+            wanted = obj in loose and slot_free(slot_of(obj)) and clear_around(obj)
             moves.append(to_slot(obj) if wanted else to_aside(obj))
         moves = [m for m in moves if m is not None]
         if not moves:

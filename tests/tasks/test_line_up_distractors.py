@@ -7,9 +7,11 @@ at y = 197 mm, a cylinder at (-52, 350) mm and one at (79, -116) mm) leaves no l
 from __future__ import annotations
 
 import numpy as np
+import pytest
 from test_stack_high_plan import fake_runner
 
 from armlab.scene import generate_scene
+from armlab.tasks import line_up
 from armlab.tasks.episode import run_episode
 from armlab.tasks.line_up import DISTRACTOR_CLEARANCE_M, choose_layout, segment_distance
 
@@ -65,3 +67,35 @@ def test_line_up_moves_the_distractors_aside_and_scores_full_points_by_the_judge
     assert not any("no place for the lines" in f for f in result["failures"]), result["failures"]
     assert result["points"] == result["max_points"] == 500, (result["breakdown"], result["failures"])
     assert result["within_limit"]
+
+
+# A layout chosen among distractors can lie near piles (seed 972: the fingers, opening across the line at
+# a slot 47 mm from a two-high pile, knocked it over; the blocks lay tipped and scored nothing).
+LINE_X_M = [-0.1375 + 0.055 * k for k in range(6)]
+LAYOUT = {"large": [(x, 0.20) for x in LINE_X_M], "small": [(x, 0.275) for x in LINE_X_M]}
+
+
+def policy_with(layout, monkeypatch):
+    runner = fake_runner()
+    runner.free_spot = lambda objects, edge_m, region=None, avoid_m=None, allowed=None: (-0.25, 0.10)
+    runner.edge_of = lambda block: runner.edges_m.get(block.get("size") or "large")
+    monkeypatch.setattr(line_up, "choose_layout", lambda runner, objects, sizes: (layout, 0.0, []))
+    return line_up.make_policy(3, {}, runner), runner
+
+
+def test_a_block_is_not_set_down_at_its_slot_beside_a_pile(monkeypatch):
+    policy, _ = policy_with(LAYOUT, monkeypatch)
+    top = {"position_m": [0.17, 0.31, 0.088], "is_cube": True, "color": "violet", "size": "small", "stack_level": 3,
+           "yaw_rad": 0.0}  # 48 mm from the small line's slot 6 (violet), on two large blocks
+    plan = policy([top], set())
+    assert plan.moves and plan.moves[0].block is top
+    assert plan.moves[0].to_m[:2] == (-0.25, 0.10), plan.moves[0]  # aside, not to slot 6 beside its own pile
+
+
+def test_a_block_goes_straight_to_its_slot_when_nothing_stands_near_it(monkeypatch):
+    policy, _ = policy_with(LAYOUT, monkeypatch)
+    alone = {"position_m": [0.17, 0.31, 0.025], "is_cube": True, "color": "violet", "size": "small", "stack_level": 1,
+             "yaw_rad": 0.0}
+    plan = policy([alone], set())
+    assert plan.moves[0].to_m[:2] == pytest.approx(LAYOUT["small"][5])
+
