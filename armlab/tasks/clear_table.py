@@ -31,15 +31,19 @@ def make_policy(level: int | None, params: dict, runner: TaskRunner):
             runner.note_once(f"left the {_kind(obj)} beyond the arm's reach")
         outside = [o for o in outside if math.hypot(*o["position_m"][:2]) <= reach_m]
         free = [s for s in spots if not any(near(o["position_m"], s, 0.035) for o in inside)]
+        bases = sorted((o for o in inside if o.get("is_cube", True)), key=lambda o: o["position_m"][2])
+        distractors_out = sum(not o.get("is_cube", True) for o in outside)
         moves = []
         for obj in sorted(outside, key=lambda o: (-o.get("stack_level", 1), not o.get("is_cube", True))):
-            if free:
+            cube = obj.get("is_cube", True)
+            # Nothing stacks on a distractor nor a distractor on anything: the floor is kept for them, and a
+            # block goes on the lowest block in the bin when the floor has no spot to spare.
+            if free and (not cube or len(free) > distractors_out or not bases):
                 target = (*free[0], 0.0)
-            else:  # the floor is full: a block goes on top of the lowest block in the bin
-                bases = sorted((o for o in inside if o.get("is_cube", True)), key=lambda o: o["position_m"][2])
-                if not bases or not obj.get("is_cube", True):
-                    continue
+            elif cube and bases:
                 target = tuple(bases[0]["position_m"])
+            else:
+                continue
             moves.append(Move(obj, target, f"{_kind(obj)} into the bin", yaw_rad=None))
         hidden = sum(o.get("stack_level", 1) - 1 for o in outside)
         return Plan(moves, done=len(inside), left=len(outside) + hidden, finished=not outside)
