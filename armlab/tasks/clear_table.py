@@ -32,12 +32,13 @@ def make_policy(level: int | None, params: dict, runner: TaskRunner):
         outside = [o for o in outside if math.hypot(*o["position_m"][:2]) <= reach_m]
         free = [s for s in spots if not any(near(o["position_m"], s, 0.035) for o in inside)]
         bases = sorted((o for o in inside if o.get("is_cube", True)), key=lambda o: o["position_m"][2])
-        distractors_out = sum(not o.get("is_cube", True) for o in outside)
+        distractors_out = sum(not o.get("is_cube", True) and Move(o, (0.0, 0.0, 0.0), "").key() not in given_up for o in outside)
         moves = []
-        for obj in sorted(outside, key=lambda o: (-o.get("stack_level", 1), not o.get("is_cube", True))):
+        # Nothing stacks on a distractor nor a distractor on anything: distractors go first, onto the floor, and a
+        # block goes on the lowest block in the bin only when the floor has no spot to spare (a column in the bin
+        # keeps the arm from the floor spots beside it). Then pile tops first: they uncover blocks.
+        for obj in sorted(outside, key=lambda o: (o.get("is_cube", True), -o.get("stack_level", 1))):
             cube = obj.get("is_cube", True)
-            # Nothing stacks on a distractor nor a distractor on anything: the floor is kept for them, and a
-            # block goes on the lowest block in the bin when the floor has no spot to spare.
             if free and (not cube or len(free) > distractors_out or not bases):
                 target = (*free[0], 0.0)
             elif cube and bases:
