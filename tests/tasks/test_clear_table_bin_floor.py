@@ -6,6 +6,8 @@ seeds 0-9 were distractors). Plan level: the policy's moves applied to a model o
 
 from __future__ import annotations
 
+import math
+
 from test_clear_table_reach import _runner
 
 from armlab.scene import as_workcell
@@ -57,3 +59,13 @@ def test_the_floor_is_full_before_a_column_grows_in_the_bin():
     table += [obj(kind, "large", x, 0.30, cube=False) for kind, x in zip(["cylinder", "arch", "triangle"], [-0.1, 0.0, 0.1])]
     _, floor_after_column = run_on_model(table)
     assert floor_after_column == []
+
+
+def test_a_floor_spot_where_something_stands_unseen_is_not_free():
+    """A spot the depth image measures something standing on is taken even when no detection is there (seed 9:
+    objects the job had put in the bin went unseen, the next was set down on them, and the bin's contents flew)."""
+    runner = _runner()
+    taken_m = (0.225, -0.145)  # the first floor spot
+    runner.height_at = lambda xy: 0.038 if math.dist(xy, taken_m) < 0.01 else 0.0
+    plan = clear_table.make_policy(3, {}, runner)([obj("arch", "large", 0.0, 0.25, cube=False)], set())
+    assert plan.moves and math.dist(plan.moves[0].to_m[:2], taken_m) > 0.03, plan.moves
