@@ -12,6 +12,7 @@ from armlab.scene import as_workcell
 from armlab.tasks.runner import Move, Plan, TaskRunner, near, seeing_look_pose
 
 SPOT_PITCH_M = 0.045
+SPOT_EMPTY_HEIGHT_M = 0.010  # a floor spot whose measured height is above this holds something
 BEYOND_REACH_MARGIN_M = 0.05  # past the workcell's scene reach by this much: nothing the arm can clear (a hand, tools at the board's edge)
 
 
@@ -30,16 +31,22 @@ def make_policy(level: int | None, params: dict, runner: TaskRunner):
         for obj in [o for o in outside if math.hypot(*o["position_m"][:2]) > reach_m]:
             runner.note_once(f"left the {_kind(obj)} beyond the arm's reach")
         outside = [o for o in outside if math.hypot(*o["position_m"][:2]) <= reach_m]
-        free = [s for s in spots if not any(near(o["position_m"], s, 0.035) for o in inside)]
+        # Free: no detection near and nothing measured standing there (what the job put in the bin can go unseen).
+        free = [s for s in spots if not any(near(o["position_m"], s, 0.035) for o in inside) and runner.height_at(s) <= SPOT_EMPTY_HEIGHT_M]
+        bases = sorted((o for o in inside if o.get("is_cube", True)), key=lambda o: o["position_m"][2])
+        distractors_out = sum(not o.get("is_cube", True) and Move(o, (0.0, 0.0, 0.0), "").key() not in given_up for o in outside)
         moves = []
-        for obj in sorted(outside, key=lambda o: (-o.get("stack_level", 1), not o.get("is_cube", True))):
-            if free:
+        # Nothing stacks on a distractor nor a distractor on anything: distractors go first, onto the floor, and a
+        # block goes on the lowest block in the bin only when the floor has no spot to spare (a column in the bin
+        # keeps the arm from the floor spots beside it). Then pile tops first: they uncover blocks.
+        for obj in sorted(outside, key=lambda o: (o.get("is_cube", True), -o.get("stack_level", 1))):
+            cube = obj.get("is_cube", True)
+            if free and (not cube or len(free) > distractors_out or not bases):
                 target = (*free[0], 0.0)
-            else:  # the floor is full: a block goes on top of the lowest block in the bin
-                bases = sorted((o for o in inside if o.get("is_cube", True)), key=lambda o: o["position_m"][2])
-                if not bases or not obj.get("is_cube", True):
-                    continue
+            elif cube and bases:
                 target = tuple(bases[0]["position_m"])
+            else:
+                continue
             moves.append(Move(obj, target, f"{_kind(obj)} into the bin", yaw_rad=None))
         hidden = sum(o.get("stack_level", 1) - 1 for o in outside)
         return Plan(moves, done=len(inside), left=len(outside) + hidden, finished=not outside)

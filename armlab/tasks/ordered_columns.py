@@ -15,7 +15,7 @@ from collections.abc import Callable
 
 from armlab.scene import COLORS
 from armlab.tasks.columns import Column
-from armlab.tasks.runner import Move, Plan, TaskRunner, cubes
+from armlab.tasks.runner import REACH_REGION_M, Move, NoFreeSpot, Plan, TaskRunner, cubes
 
 RANK = {color: rank for rank, color in enumerate(COLORS)}
 COLUMN_MAX_TILT_RAD = math.radians(20.0)  # the top of a tall column is reachable only slightly tilted
@@ -74,7 +74,8 @@ def make_ordered_policy(runner: TaskRunner, bases: dict[str, tuple[float, float]
             if lower:
                 move = aside(runner, column.top, objects, aside_region, "out of order: make room for the "
                              f"{lower[0]['color']} block", allowed)
-                moves.append(Move(move.block, move.to_m, move.why, on_placed=lambda edge, c=column: c.placed.pop() if c.placed else None))
+                if move is not None:
+                    moves.append(Move(move.block, move.to_m, move.why, on_placed=lambda edge, c=column: c.placed.pop() if c.placed else None))
         next_moves: dict[int, Move] = {}
         for block in sorted(loose, key=lambda b: (RANK[b["color"]], -b.get("stack_level", 1))):
             size = block["size"]
@@ -101,19 +102,24 @@ def make_ordered_policy(runner: TaskRunner, bases: dict[str, tuple[float, float]
         for block in sorted(loose, key=lambda b: -b.get("stack_level", 1)):
             if block.get("stack_level", 1) > 1:
                 moves.append(aside(runner, block, objects, aside_region, "uncover the pile under it", allowed))
-        return Plan(moves, done=done, left=left, finished=not loose)
+        return Plan([m for m in moves if m is not None], done=done, left=left, finished=not loose)
 
     return policy
 
 
 def aside(runner: TaskRunner, block: dict, objects: list[dict], region, why: str,
-          allowed: Callable[[tuple[float, float]], bool] | None = None) -> Move:
-    """Move `block` to a free spot on the board (in region, if given; where allowed(x, y), when one is)."""
+          allowed: Callable[[tuple[float, float]], bool] | None = None) -> Move | None:
+    """Move `block` to a free spot on the board: in region (None: free_spot's default), else anywhere in the
+    arm's reach (REACH_REGION_M), first where allowed(x, y) (when given), then anywhere; None, with the reason
+    said once, when the board has no free spot at all (the job goes on with its other moves)."""
     edge = runner.edge_of(block)
-    try:
-        x, y = runner.free_spot(objects, edge, region=region, allowed=allowed)
-    except RuntimeError:
-        if allowed is None:
-            raise
-        x, y = runner.free_spot(objects, edge, region=region)
-    return Move(block, (x, y, 0.0), why)
+    rules = [allowed, None] if allowed is not None else [None]
+    for rule, where in [(rule, where) for rule in rules for where in (region, REACH_REGION_M)]:
+        try:
+            x, y = runner.free_spot(objects, edge, region=where, allowed=rule)
+        except NoFreeSpot:
+            continue
+        return Move(block, (x, y, 0.0), why)
+    runner.note_once(f"left the {block.get('color')} {block.get('size')} block at ({block['position_m'][0] * 1000:.0f}, "
+                     f"{block['position_m'][1] * 1000:.0f}) mm where it is: no free spot on the board to put it aside")
+    return None

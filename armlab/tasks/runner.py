@@ -34,6 +34,11 @@ MAX_CONFIRM_LOOKS = 2  # looks again, at most this often a run, when it would fi
 PARK_CLEARANCE_M = 0.015  # the sleep pose is low beside the base: it passes blocks closer than transfers do
 PARK_RISE_Z_M = 0.32  # how high the gripper rises before parking when the straight way is blocked
 PARK_FRONT_VIA_M = (0.0, 0.16, 0.16)  # else through here, in front of the base, clear of it and of the board
+REACH_REGION_M = ((-0.34, 0.34), (-0.15, 0.34))  # every board spot free_spot can offer (its reach band cuts it)
+
+
+class NoFreeSpot(RuntimeError):
+    """free_spot found no spot: the policy leaves the object where it is, with this reason, and goes on."""
 
 
 @dataclass(frozen=True)
@@ -412,7 +417,7 @@ class TaskRunner:
         for _, x, y in scored:
             if not skills.arm_hides_block(self.station, self.look_pose_rad, (x, y), edge_m):
                 return (x, y)
-        raise RuntimeError("no free spot on the board to put a block aside" + (" that the parked arm leaves in view" if scored else ""))
+        raise NoFreeSpot("no free spot on the board to put a block aside" + (" that the parked arm leaves in view" if scored else ""))
 
     def height_at(self, xy_m) -> float:
         """Measured height of what stands at (x, y) in the newest look's depth image (0 = board)."""

@@ -92,6 +92,9 @@ def choose_bases(runner: TaskRunner, objects: list[dict], sizes: list[str]) -> d
         score = (crossed + sum(cost[s][c] for s, c in zip(sizes, combo)), -min([clearance(c) for c in combo] + [apart]))
         if best_score is None or score < best_score:
             best, best_score = combo, score
+    if best is None:  # depends on the arm and the camera only: nothing a move could free
+        raise RuntimeError(f"no place for the columns: no {len(sizes)} spot(s) {MIN_SEPARATION_M * 1000:.0f} mm apart on the "
+                           f"{COLUMN_RADIUS_M * 1000:.0f} mm circle that the camera sees whole and the parking arm passes")
     return dict(zip(sizes, best))
 
 

@@ -25,7 +25,7 @@ import numpy as np
 
 from armlab.skills import side_grasp
 from armlab.tasks.columns import Column
-from armlab.tasks.runner import Move, Plan, TaskRunner, cubes, near
+from armlab.tasks.runner import Move, NoFreeSpot, Plan, TaskRunner, cubes, near
 
 TOWER_RADIUS_M = (0.21, 0.25)  # distance of the tower from the arm's base axis
 MAX_TOWER_HEIGHT_M = 0.55
@@ -105,7 +105,11 @@ def turn_moves(runner: TaskRunner, loose: list[dict], objects: list[dict]) -> li
     for block in loose:
         if on_board(block, edge) and side_grasp.aligned(block):
             continue
-        spot = runner.free_spot([o for o in objects if o is not block], edge)
+        try:
+            spot = runner.free_spot([o for o in objects if o is not block], edge)
+        except NoFreeSpot as error:  # the job goes on with its other moves
+            runner.note_once(f"cannot turn the {block.get('color')} block to face the arm: {error}")
+            continue
         moves.append(Move(block, (spot[0], spot[1], 0.0), "turned to face the arm for a side grasp",
                           yaw_rad=side_grasp.bearing_rad(spot)))
     return moves
@@ -134,7 +138,7 @@ def aside_moves(runner: TaskRunner, blocking: list[dict], objects: list[dict]) -
     for block in blocking:
         try:
             spot = runner.free_spot([o for o in objects if o is not block], edge, region=ASIDE_REGION_M, avoid_m=taken)
-        except RuntimeError:
+        except NoFreeSpot:
             continue
         taken.append(spot)
         moves.append(Move(block, (spot[0], spot[1], 0.0), "moved out of the arm's way to the tower", yaw_rad=side_grasp.bearing_rad(spot)))

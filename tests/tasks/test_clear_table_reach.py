@@ -14,6 +14,7 @@ def _runner():
     runner.station.config = None  # the default workcell (rx200_armlab)
     runner.notes = []
     runner.note_once = lambda reason: reason in runner.notes or runner.notes.append(reason)
+    runner.height_at = lambda xy: 0.0  # the depth image measures the bare board everywhere
     return runner
 
 
