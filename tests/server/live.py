@@ -6,8 +6,11 @@ from __future__ import annotations
 import contextlib
 import os
 import socket
+import subprocess
+import sys
 import threading
 import time
+from pathlib import Path
 
 os.environ.setdefault("MUJOCO_GL", "egl")
 
@@ -16,6 +19,8 @@ import pytest
 import uvicorn
 
 from armlab.station import Station, StationConfig
+
+REPO = Path(__file__).resolve().parents[2]
 
 
 def free_port() -> int:
@@ -50,6 +55,35 @@ def serve_config(folder) -> str:
     path = Path(folder) / "station_test_fps.yaml"
     path.write_text(yaml.safe_dump(config))
     return str(path)
+
+
+def start_serve_process(token: str, db_path, config_path, *extra_args: str) -> tuple[subprocess.Popen, str]:
+    """A real `armlab serve` subprocess (this interpreter, the checkout as its folder, no ARMLAB_TOKEN inherited) on a
+    free port, waited for until healthy: (process, base URL). The caller ends it (the SIGKILL tests kill it)."""
+    port = free_port()
+    env = {key: value for key, value in os.environ.items() if key != "ARMLAB_TOKEN"}
+    env.setdefault("MUJOCO_GL", "egl")
+    process = subprocess.Popen(
+        [sys.executable, "-m", "armlab.cli", "serve", "--port", str(port), "--token", token, "--db", str(db_path),
+         "--config", str(config_path), *extra_args],
+        cwd=REPO, env=env, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL,
+    )
+    base = f"http://127.0.0.1:{port}"
+    with httpx.Client() as http:
+
+        def healthy() -> bool:
+            try:
+                return http.get(base + "/api/health", timeout=1).status_code == 200
+            except httpx.HTTPError:
+                return False
+
+        try:
+            wait_for(lambda: healthy() or process.poll() is not None, 90, 0.2)
+        except AssertionError:
+            process.kill()
+            raise
+    assert process.poll() is None, "armlab serve exited at start-up"
+    return process, base
 
 
 def start_cell(seed: int = 0, camera_fps: float = TEST_CAMERA_FPS):

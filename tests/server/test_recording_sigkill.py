@@ -4,10 +4,8 @@ flush before the kill; the next station lists it as truncated, cut short."""
 
 from __future__ import annotations
 
-import os
 import signal
 import subprocess
-import sys
 from pathlib import Path
 
 import httpx
@@ -19,7 +17,6 @@ from mcap.stream_reader import StreamReader
 import live
 from armlab.recording import RecordingLibrary
 
-REPO = Path(__file__).resolve().parents[2]
 TOKEN = "recording-sigkill-token"
 AUTH = {"Authorization": f"Bearer {TOKEN}"}
 FLUSH_INTERVAL_S = 0.2
@@ -30,29 +27,7 @@ def _start(folder: Path) -> tuple[subprocess.Popen, str]:
     config = yaml.safe_load(config_path.read_text())
     config["recording"] = {**config.get("recording", {}), "flush_interval_s": FLUSH_INTERVAL_S, "chunk_size_kb": 65536}  # only the flush closes chunks
     config_path.write_text(yaml.safe_dump(config))
-    port = live.free_port()
-    env = {key: value for key, value in os.environ.items() if key != "ARMLAB_TOKEN"}
-    env.setdefault("MUJOCO_GL", "egl")
-    process = subprocess.Popen(
-        [sys.executable, "-m", "armlab.cli", "serve", "--port", str(port), "--token", TOKEN, "--db", str(folder / "station.sqlite3"),
-         "--config", str(config_path), "--recordings", str(folder / "recordings")],
-        cwd=REPO, env=env, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL,
-    )
-    base = f"http://127.0.0.1:{port}"
-    try:
-        live.wait_for(lambda: _healthy(base) or process.poll() is not None, 90, 0.2)
-    except AssertionError:
-        process.kill()
-        raise
-    assert process.poll() is None, "armlab serve exited at start-up"
-    return process, base
-
-
-def _healthy(base: str) -> bool:
-    try:
-        return httpx.get(base + "/api/health", timeout=1).status_code == 200
-    except httpx.HTTPError:
-        return False
+    return live.start_serve_process(TOKEN, folder / "station.sqlite3", config_path, "--recordings", str(folder / "recordings"))
 
 
 def _read_with_mcap(path: Path) -> tuple[dict[str, int], dict[str, str], str | None]:

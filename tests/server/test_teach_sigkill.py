@@ -10,11 +10,9 @@ the two, never both, never partly. The waypoints are told apart by their dwell_s
 
 from __future__ import annotations
 
-import os
 import random
 import signal
 import subprocess
-import sys
 import threading
 import time
 from pathlib import Path
@@ -24,35 +22,12 @@ import pytest
 
 import live
 
-REPO = Path(__file__).resolve().parents[2]
 TOKEN = "sigkill-token"
 AUTH = {"Authorization": f"Bearer {TOKEN}"}
 
 
 def _start(db_path: Path) -> tuple[subprocess.Popen, str]:
-    port = live.free_port()
-    env = {key: value for key, value in os.environ.items() if key != "ARMLAB_TOKEN"}
-    env.setdefault("MUJOCO_GL", "egl")
-    process = subprocess.Popen(
-        [sys.executable, "-m", "armlab.cli", "serve", "--port", str(port), "--token", TOKEN, "--db", str(db_path),
-         "--config", live.serve_config(Path(db_path).parent)],
-        cwd=REPO, env=env, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL,
-    )
-    base = f"http://127.0.0.1:{port}"
-    try:
-        live.wait_for(lambda: _healthy(base) or process.poll() is not None, 90, 0.2)
-    except AssertionError:
-        process.kill()
-        raise
-    assert process.poll() is None, "armlab serve exited at start-up"
-    return process, base
-
-
-def _healthy(base: str) -> bool:
-    try:
-        return httpx.get(base + "/api/health", timeout=1).status_code == 200
-    except httpx.HTTPError:
-        return False
+    return live.start_serve_process(TOKEN, db_path, live.serve_config(Path(db_path).parent))
 
 
 def _kill(process: subprocess.Popen) -> None:
