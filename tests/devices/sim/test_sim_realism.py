@@ -161,6 +161,15 @@ def test_white_balance_and_exposure_drift_within_their_bounds(real_cell):
     assert np.ptp(gains[:, 1]) > REAL.exposure_drift  # exposure wanders
 
 
+def test_the_colour_gains_scale_each_channel_rounded_and_saturated(real_cell):
+    real = real_cell.camera._noise.real
+    rgb = np.random.default_rng(3).integers(0, 256, (40, 60, 3), dtype=np.uint8)
+    for t in (0.0, 0.37 * REAL.drift_period_s, 2.1 * REAL.drift_period_s):
+        gains = np.array(real.color_gains(t))
+        expected = np.clip(np.rint(rgb * gains), 0, 255).astype(np.uint8)  # R by the R gain, G by G, B by B
+        np.testing.assert_array_equal(real.color(rgb, t), expected)
+
+
 def test_real_frame_colour_cast_light_and_clutter(real_cell):
     import cv2
 
