@@ -195,9 +195,6 @@ class RecordingLibrary:
 
     # The budget -------------------------------------------------------------------------------------
 
-    def total_bytes(self) -> int:
-        return sum(path.stat().st_size for path in self.directory.glob("*.mcap")) if self.directory.is_dir() else 0
-
     def enforce_budget(self, running_bytes: int = 0) -> list[str]:
         """Delete the oldest ended recordings until every recording fits recording.budget_mb (the running one is
         counted, never deleted). Returns the ids deleted."""

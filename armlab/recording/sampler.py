@@ -75,9 +75,6 @@ class StationSampler:
             if not self._stop.is_set():  # the sample loop may stop the recording at once (its first flush: disk, budget)
                 thread.start()
 
-    def request_stop(self) -> None:
-        self._stop.set()
-
     def stop(self, timeout_s: float = 5.0) -> bool:
         """Stop both loops (from any thread, one of the loops included); True if every other loop ended."""
         self._stop.set()

@@ -17,7 +17,6 @@ from armlab import skills
 from armlab.scene import COLORS
 from armlab.tasks.runner import (
     FINGER_REACH_M,
-    REACH_REGION_M,
     Move,
     NoFreeSpot,
     Plan,
@@ -177,16 +176,13 @@ def make_policy(level: int | None, params: dict, runner: TaskRunner):
             the lines by ASIDE_CLEARANCE_M); None, said once, when there is none (the lines are built
             around it: a job does not fail for want of a free spot)."""
             cube = obj.get("is_cube", True)
-            for region in (None, REACH_REGION_M):  # free_spot's default region, else anywhere in reach
-                try:
-                    x, y = runner.free_spot(objects, runner.edge_of(obj), region=region, allowed=None if cube else clear_of_lines)
-                except NoFreeSpot as error:
-                    reason = str(error)
-                    continue
-                return Move(obj, (x, y, 0.0), "out of the lines' way", yaw_rad=0.0 if cube else None)
-            runner.note_once(f"left the {'block' if cube else 'distractor'} at ({obj['position_m'][0] * 1000:.0f}, "
-                             f"{obj['position_m'][1] * 1000:.0f}) mm in the lines' way: {reason}")
-            return None
+            try:
+                x, y = runner.free_spot_in_reach(objects, runner.edge_of(obj), rules=(None if cube else clear_of_lines,))
+            except NoFreeSpot as error:
+                runner.note_once(f"left the {'block' if cube else 'distractor'} at ({obj['position_m'][0] * 1000:.0f}, "
+                                 f"{obj['position_m'][1] * 1000:.0f}) mm in the lines' way: {error}")
+                return None
+            return Move(obj, (x, y, 0.0), "out of the lines' way", yaw_rad=0.0 if cube else None)
 
         # First clear the lines' corridor (to the block's own slot when it is free), then fill the
         # slots (pile tops first: they uncover others), then put aside pile tops that hide blocks.

@@ -15,7 +15,7 @@ from collections.abc import Callable
 
 from armlab.scene import COLORS
 from armlab.tasks.columns import Column
-from armlab.tasks.runner import REACH_REGION_M, Move, NoFreeSpot, Plan, TaskRunner, cubes
+from armlab.tasks.runner import Move, NoFreeSpot, Plan, TaskRunner, cubes
 
 RANK = {color: rank for rank, color in enumerate(COLORS)}
 COLUMN_MAX_TILT_RAD = math.radians(20.0)  # the top of a tall column is reachable only slightly tilted
@@ -112,14 +112,10 @@ def aside(runner: TaskRunner, block: dict, objects: list[dict], region, why: str
     """Move `block` to a free spot on the board: in region (None: free_spot's default), else anywhere in the
     arm's reach (REACH_REGION_M), first where allowed(x, y) (when given), then anywhere; None, with the reason
     said once, when the board has no free spot at all (the job goes on with its other moves)."""
-    edge = runner.edge_of(block)
-    rules = [allowed, None] if allowed is not None else [None]
-    for rule, where in [(rule, where) for rule in rules for where in (region, REACH_REGION_M)]:
-        try:
-            x, y = runner.free_spot(objects, edge, region=where, allowed=rule)
-        except NoFreeSpot:
-            continue
-        return Move(block, (x, y, 0.0), why)
-    runner.note_once(f"left the {block.get('color')} {block.get('size')} block at ({block['position_m'][0] * 1000:.0f}, "
-                     f"{block['position_m'][1] * 1000:.0f}) mm where it is: no free spot on the board to put it aside")
-    return None
+    try:
+        x, y = runner.free_spot_in_reach(objects, runner.edge_of(block), region, (allowed, None) if allowed is not None else (None,))
+    except NoFreeSpot:
+        runner.note_once(f"left the {block.get('color')} {block.get('size')} block at ({block['position_m'][0] * 1000:.0f}, "
+                         f"{block['position_m'][1] * 1000:.0f}) mm where it is: no free spot on the board to put it aside")
+        return None
+    return Move(block, (x, y, 0.0), why)

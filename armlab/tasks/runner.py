@@ -419,6 +419,19 @@ class TaskRunner:
                 return (x, y)
         raise NoFreeSpot("no free spot on the board to put a block aside" + (" that the parked arm leaves in view" if scored else ""))
 
+    def free_spot_in_reach(self, objects: list[dict], edge_m: float, region=None,
+                           rules: tuple[Callable[[tuple[float, float]], bool] | None, ...] = (None,)) -> tuple[float, float]:
+        """free_spot in `region`, else anywhere in the arm's reach (REACH_REGION_M), for each allowed-rule of `rules`
+        in turn (None: anywhere); NoFreeSpot with the last search's reason when none has a spot."""
+        error = NoFreeSpot("no free spot on the board to put a block aside")
+        for rule in rules:
+            for where in (region, REACH_REGION_M):
+                try:
+                    return self.free_spot(objects, edge_m, region=where, allowed=rule)
+                except NoFreeSpot as refused:
+                    error = refused
+        raise error
+
     def height_at(self, xy_m) -> float:
         """Measured height of what stands at (x, y) in the newest look's depth image (0 = board)."""
         return skills.surface_height_m(self.station, xy_m)

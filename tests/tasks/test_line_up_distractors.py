@@ -15,6 +15,7 @@ from armlab.scene import generate_scene
 from armlab.tasks import line_up
 from armlab.tasks.episode import run_episode
 from armlab.tasks.line_up import DISTRACTOR_CLEARANCE_M, choose_layout, segment_distance
+from armlab.tasks.runner import TaskRunner
 
 BLOCKED_SEED = 183  # line_up L3: no layout of the two lines is 65 mm clear of its distractors
 SIZES = ["large", "small"]
@@ -80,6 +81,7 @@ LAYOUT = {"large": [(x, 0.20) for x in LINE_X_M], "small": [(x, 0.275) for x in 
 def policy_with(layout, monkeypatch):
     runner = fake_runner()
     runner.free_spot = lambda objects, edge_m, region=None, avoid_m=None, allowed=None: (-0.25, 0.10)
+    runner.free_spot_in_reach = lambda *args, **options: TaskRunner.free_spot_in_reach(runner, *args, **options)
     runner.edge_of = lambda block: runner.edges_m.get(block.get("size") or "large")
     monkeypatch.setattr(line_up, "choose_layout", lambda runner, objects, sizes: (layout, 0.0, []))
     return line_up.make_policy(3, {}, runner), runner

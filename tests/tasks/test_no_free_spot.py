@@ -22,6 +22,7 @@ def runner_with_free_spot():
     runner = fake_runner()
     runner.failures = []
     runner.free_spot = lambda *a, **k: TaskRunner.free_spot(runner, *a, **k)
+    runner.free_spot_in_reach = lambda *a, **k: TaskRunner.free_spot_in_reach(runner, *a, **k)
     runner.edge_of = lambda block: runner.edges_m.get(block.get("size") or "large")
     runner.height_at = lambda xy: 0.0
     runner.note_once = lambda reason: runner.failures.append(reason) if reason not in runner.failures else None

@@ -140,6 +140,7 @@ def run_plan(seed: int, check_picks: bool = True) -> tuple[list[str], PlanWorld]
     runner.height_at = world.height_at
     runner.edge_of = lambda block: EDGES_M[block.get("size") or "large"]
     runner.free_spot = lambda objects, edge_m, **options: TaskRunner.free_spot(runner, objects, edge_m, **options)
+    runner.free_spot_in_reach = lambda *args, **options: TaskRunner.free_spot_in_reach(runner, *args, **options)
     policy = stack_high.make_policy(2, {}, runner)
     q_look = np.asarray(runner.look_pose_rad, float)
     runner.station.joints_rad = lambda: q_look

@@ -22,6 +22,7 @@ def test_stack_high_leaves_a_block_of_another_colour_out_of_its_columns(name):
     runner.height_at = world.height_at
     runner.edge_of = lambda block: EDGES_M[block.get("size") or "large"]
     runner.free_spot = lambda objects, edge_m, **options: TaskRunner.free_spot(runner, objects, edge_m, **options)
+    runner.free_spot_in_reach = lambda *args, **options: TaskRunner.free_spot_in_reach(runner, *args, **options)
     policy = stack_high.make_policy(2, {}, runner)
     for _ in range(60):
         plan = policy(world.looks(), set())
@@ -43,6 +44,7 @@ def test_line_up_puts_no_block_of_another_colour_in_a_slot():
     runner.height_at = world.height_at
     runner.edge_of = lambda block: EDGES_M[block.get("size") or "large"]
     runner.free_spot = lambda objects, edge_m, **options: TaskRunner.free_spot(runner, objects, edge_m, **options)
+    runner.free_spot_in_reach = lambda *args, **options: TaskRunner.free_spot_in_reach(runner, *args, **options)
     looks = world.looks()
     looks[0]["color"] = "unknown"
     plan = line_up.make_policy(2, {}, runner)(looks, set())
