@@ -10,6 +10,7 @@ first sample is where the arm is measured. Pure: no devices.
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 
 import numpy as np
@@ -50,7 +51,11 @@ class Handover:
     @property
     def segment_velocity_rad_s(self) -> np.ndarray:
         """The velocity of the prefix's last sample segment: where a plan whose velocity steps once per sample
-        (a jog) continues from."""
+        (a jog) continues from. At a trajectory's end the state is at rest but its last segment still moves
+        (a·h/2 after a braking ramp): the segment's own slope, so the jog's first step is one a·h from it."""
+        times, positions = self.prefix.times_s, self.prefix.positions_rad
+        if len(times) >= 2 and times[-1] > times[-2]:
+            return (positions[-1] - positions[-2]) / (times[-1] - times[-2])
         return self.velocity_rad_s - 0.5 * self.accel_rad_s2 * self.period_s
 
     @property
@@ -84,7 +89,7 @@ def take_over(running: JointTrajectory, running_start_s: float, now_s: float, le
     times, positions = running.times_s, running.positions_rad
     t_now = now_s - running_start_s
     if t_now >= running.duration_s:
-        return None
+        return _hold_after_end(running, running_start_s, t_now, lead_s, rate_hz, source_id)
     index = int(np.searchsorted(times, t_now + lead_s - 1e-9))
     at_end = index >= len(times) - 1 or len(times) < 3
     index = min(max(index, 2), len(times) - 1)
@@ -104,6 +109,23 @@ def take_over(running: JointTrajectory, running_start_s: float, now_s: float, le
     accel = (v_last - v_before) / (0.5 * (period + period_before))
     velocity = v_last + 0.5 * accel * period
     return Handover(planned_at_s, prefix, positions[index].copy(), velocity, accel, source_id, period)
+
+
+def _hold_after_end(running: JointTrajectory, running_start_s: float, t_now: float, lead_s: float, rate_hz: float,
+                    source_id: int) -> Handover | None:
+    """None once the running trajectory ended a sample period or more ago. Inside that period its last segment
+    still moved (a·h/2 after a braking ramp): a plan from rest starting now would step the command by its own
+    first step plus that, so the replacement takes over after holding the last sample whole periods, at rest."""
+    times, positions = running.times_s, running.positions_rad
+    period = float(times[-1] - times[-2]) if len(times) > 1 else 1.0 / rate_hz
+    since_end_s = t_now - running.duration_s
+    if since_end_s >= period or period <= 0.0:
+        return None
+    hold_s = period * max(1, math.ceil((since_end_s + lead_s) / period - 1e-9))
+    last = positions[-1]
+    prefix = JointTrajectory(np.array([0.0, hold_s]), np.vstack([last, last]))
+    zeros = np.zeros(positions.shape[1])
+    return Handover(running_start_s + float(times[-1]), prefix, last.copy(), zeros, zeros.copy(), source_id, period)
 
 
 def splice(handover: Handover, new: JointTrajectory) -> JointTrajectory:

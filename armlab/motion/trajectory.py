@@ -215,6 +215,20 @@ def check_joint_positions(name: str, q_rad, lower_rad: np.ndarray, upper_rad: np
     return q
 
 
+def on_sample_grid(timing: MoveTiming, delta_rad: np.ndarray, rate_hz: float) -> MoveTiming:
+    """A move at the limits (no duration asked, or one stretched to the shortest) lengthened to whole sample
+    periods, the ramps kept: the servos interpolate the samples linearly, and only on a grid of whole periods
+    does every window of two periods see at most the plan's acceleration (a 9.85 ms grid showed 1.005x)."""
+    at_limits = timing.requested_moving_time_s is None or timing.moving_time_s > timing.requested_moving_time_s
+    total = math.ceil(timing.moving_time_s * rate_hz - 1e-3) / rate_hz  # within 0.1 % of a period: on the grid
+    if not at_limits or timing.moving_time_s <= 0.0 or total <= timing.moving_time_s or timing.accel_time_s <= 0.0:
+        return timing
+    cruise = total - timing.accel_time_s
+    magnitude = np.abs(np.asarray(delta_rad, dtype=float))
+    return replace(timing, moving_time_s=total, peak_velocity_rad_s=magnitude / cruise,
+                   peak_accel_rad_s2=magnitude / (timing.accel_time_s * cruise))
+
+
 def plan_joint_move_timed(
     q_start_rad,
     q_goal_rad,
@@ -239,6 +253,7 @@ def plan_joint_move_timed(
         moving_time_s,
         accel_time_s,
     )
+    timing = on_sample_grid(timing, delta, rate_hz)
     times = sample_times(timing.moving_time_s, rate_hz)
     s = trapezoid_profile(times, timing.moving_time_s, timing.accel_time_s)
     positions = q_start[None, :] + s[:, None] * delta[None, :]

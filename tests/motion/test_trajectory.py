@@ -92,8 +92,9 @@ def test_fastest_move_touches_a_limit_and_the_shoulder_is_the_slow_joint():
 
 def test_too_short_moving_time_is_stretched_and_reported():
     trajectory, timing = plan_joint_move_timed(np.zeros(5), np.array([2.0, 0.0, 0.0, 0.0, 0.0]), ARM, moving_time_s=0.2)
-    # waist 2 rad at π rad/s and 5 rad/s²: triangle would peak above π, so trapezoid: 2/π + π/5 ≈ 1.2649 s
-    assert math.isclose(trajectory.duration_s, 2 / 3.14159 + 3.14159 / 5, rel_tol=1e-4)
+    # waist 2 rad at π rad/s and 5 rad/s²: triangle would peak above π, so trapezoid: 2/π + π/5 ≈ 1.2649 s,
+    # lengthened to whole 10 ms sample periods (a fastest move ends on the sample grid): 1.27 s
+    assert math.isclose(trajectory.duration_s, math.ceil((2 / 3.14159 + 3.14159 / 5) * 100) / 100, rel_tol=1e-4)
     assert len(timing.clamped) == 1 and "moving_time_s 0.200 →" in timing.clamped[0]
 
 
@@ -139,3 +140,25 @@ def test_a_measured_start_a_hair_outside_a_limit_is_moved_onto_it_and_reported()
     assert any("start moved onto the joint limits: shoulder" in note for note in timing.clamped)
     with pytest.raises(ValueError, match="q_start: shoulder"):
         plan_joint_move(np.array([0.0, ARM.lower_rad[1] - 0.02, 0.0, 0.0, 0.0]), np.zeros(5), ARM)
+
+
+def test_a_fastest_move_as_the_servos_follow_it_stays_within_the_acceleration_limit():
+    """The servos interpolate the samples linearly at their 4 ms tick; a move at the limits sampled on a grid
+    of 9.85 ms measured 1.005x the limit over 20 ms windows (bench/motion_continuity.py): fastest moves take
+    whole sample periods, so no window of the followed command passes the limit."""
+    from armlab.motion.measure import motion_figures
+
+    rng = np.random.default_rng(7)
+    lower, upper = np.asarray(ARM.lower_rad), np.asarray(ARM.upper_rad)
+    tick_s, worst = 0.004, 0.0
+    for _ in range(40):
+        q0, q1 = rng.uniform(lower * 0.8, upper * 0.8), rng.uniform(lower * 0.8, upper * 0.8)
+        trajectory = plan_joint_move(q0, q1, ARM)
+        for offset_s in (0.0, 0.001, 0.0025):
+            ticks = np.arange(-0.05 + offset_s, trajectory.duration_s + 0.05, tick_s)
+            reference = np.column_stack([np.interp(ticks, trajectory.times_s, trajectory.positions_rad[:, j])
+                                         for j in range(ARM.dof)])
+            trace = {"time_s": ticks, "reference_rad": reference, "velocity_rad_s": np.zeros_like(reference)}
+            command, _ = motion_figures(trace).ratio(ARM.accel_limit_rad_s2)
+            worst = max(worst, command)
+    assert worst <= 1.0 + 1e-9, f"the followed command reaches {worst:.4f}x the acceleration limit"
