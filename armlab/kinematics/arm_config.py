@@ -155,6 +155,10 @@ class ArmConfig(StrictModel):
     # Nominal mass of each joint's link (kg, the link joint i moves, its centre halfway to the next joint origin):
     # the gravity torques of the arm calibration's compliance (armlab.kinematics.arm_calibration). None: equal masses.
     link_masses_kg: list[Annotated[float, Field(ge=0.0)]] | None = None
+    # Radius (m) of the link each joint moves, a capsule from its joint origin to the next one's (the last joint's
+    # to the gripper point): the trajectory check keeps every link that far above the board, and the simulation
+    # builds its links with it. None: links as lines. The fingers and the suction cup have their own boxes.
+    link_radii_m: list[Annotated[float, Field(ge=0.0, le=0.2)]] | None = None
 
     @field_validator("T_world_base")
     @classmethod
@@ -178,6 +182,8 @@ class ArmConfig(StrictModel):
                 raise ValueError(f"limits.{field}: expected {dof} values (one per joint), got {len(values)}")
         if self.link_masses_kg is not None and len(self.link_masses_kg) != dof:
             raise ValueError(f"link_masses_kg: expected {dof} values (one per joint), got {len(self.link_masses_kg)}")
+        if self.link_radii_m is not None and len(self.link_radii_m) != dof:
+            raise ValueError(f"link_radii_m: expected {dof} values (one per joint), got {len(self.link_radii_m)}")
         lower = np.radians(self.limits.lower_deg)
         upper = np.radians(self.limits.upper_deg)
         for field in ("home_rad", "sleep_rad"):

@@ -72,6 +72,7 @@ class ArmModel:
         self.home_rad = _readonly(config.poses.home_rad)
         self.sleep_rad = _readonly(config.poses.sleep_rad)
         self.T_world_base = _readonly(config.T_world_base)
+        self.link_radii_m = _readonly(config.link_radii_m if config.link_radii_m is not None else np.zeros(self.dof))
         self._home_tuple = tuple(float(v) for v in self.home_rad)
         self._lower = tuple(float(v) for v in self.lower_rad)
         self._upper = tuple(float(v) for v in self.upper_rad)

@@ -132,14 +132,18 @@ def check_trajectory(
 
     floor_z = board_z_m + clearance_m
     points = _link_points(arm, positions)  # (N, points, 3)
-    heights = points[:, :, 2].copy()
+    radii = point_radii_m(arm, points.shape[1])
+    heights = points[:, :, 2] - radii[None, :]  # the links' undersides: a straight link is lowest at an end
     heights[:, 0] = np.inf  # the first joint's origin is fixed to the base (the UR3's stands on the board at z = 0)
     sample, point = np.unravel_index(int(np.argmin(heights)), heights.shape)
     if heights[sample, point] < floor_z:
         first = int(np.flatnonzero(np.min(heights, axis=1) < floor_z)[0])  # earliest offending sample
         point = int(np.argmin(heights[first]))
+        what = _point_name(arm, point, heights.shape[1])
+        if radii[point] > 0.0:
+            what = f"the link at the {what} ({radii[point] * 1000:.0f} mm thick around it)"
         raise UnsafeTrajectory(
-            f"{_point_name(arm, point, heights.shape[1])} at z = {heights[first, point] * 1000:.1f} mm at "
+            f"{what} at z = {heights[first, point] * 1000:.1f} mm at "
             f"t = {times[first]:.3f} s is below the board surface + clearance ({floor_z * 1000:.1f} mm)"
         )
     if workspace_m is not None:
@@ -152,6 +156,16 @@ def check_trajectory(
                 f"{_point_name(arm, point, points.shape[1])} at ({where}) at t = {times[sample]:.3f} s leaves the workspace box "
                 f"{np.round(low * 1000).astype(int).tolist()}..{np.round(high * 1000).astype(int).tolist()} mm"
             )
+
+
+def point_radii_m(arm, point_count: int) -> np.ndarray:
+    """How far each of _link_points' points must keep from the board: the radius of the thicker of the two links
+    meeting there (arm.link_radii_m: joint i's link runs from its origin to the next point), 0 without radii."""
+    links = np.asarray(getattr(arm, "link_radii_m", np.zeros(point_count - 1)), dtype=float)
+    radii = np.zeros(point_count)
+    radii[: len(links)] = links
+    radii[1 : len(links) + 1] = np.maximum(radii[1 : len(links) + 1], links)
+    return radii
 
 
 def _link_points(arm, positions: np.ndarray) -> np.ndarray:

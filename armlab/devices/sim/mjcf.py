@@ -55,6 +55,7 @@ class ArmGeometry:
     grasp_effort_n: float
     T_world_base: np.ndarray
     sleep_rad: np.ndarray
+    link_radii_m: tuple[float, ...] = ()  # the arm config's link_radii_m (the links' capsules)
     real: RealArm | None = None  # the real arm (armlab.devices.sim.arm_realism; origins and base already the rig's)
 
     @classmethod
@@ -72,6 +73,7 @@ class ArmGeometry:
             grasp_effort_n=float(gripper["grasp_effort_n"]),
             T_world_base=np.asarray(data["T_world_base"], dtype=float),
             sleep_rad=np.asarray(data["poses"]["sleep_rad"], dtype=float),
+            link_radii_m=tuple(float(v) for v in data.get("link_radii_m") or ()),
         )
 
 
@@ -89,6 +91,9 @@ def _arm_xml(arm: ArmGeometry, sim: SimConfig, gripper_extras: str = "") -> str:
     """The arm's kinematic tree. Joint axes: waist z; shoulder, elbow, wrist_angle +y (positive pitches the
     arm forward and down); wrist_rotate +x. Fingers slide along the gripper's +-y axis."""
     o = arm.origins_m
+    radii = arm.link_radii_m
+    if len(radii) != len(arm.joint_names):
+        raise ValueError(f"the arm config's link_radii_m (one per joint) is needed to build the simulated links, got {radii}")
     servo = sim.arm
     g = sim.gripper
     base_quat = quat_wxyz_from_matrix(arm.T_world_base[:3, :3])
@@ -146,15 +151,15 @@ def _arm_xml(arm: ArmGeometry, sim: SimConfig, gripper_extras: str = "") -> str:
         <body name="shoulder_link" pos="{_fmt(o['shoulder'])}" gravcomp="{gravcomp}">
           <inertial pos="0.025 0 0.1" mass="{m[1]}" diaginertia="1e-3 1e-3 1e-4"/>
           {joint(1, "0 1 0")}
-          <geom name="upper_arm" type="capsule" size="0.018" fromto="0 0 0 {_fmt(o['elbow'])}" material="arm" {arm_geom}/>
+          <geom name="upper_arm" type="capsule" size="{radii[1]:.9g}" fromto="0 0 0 {_fmt(o['elbow'])}" material="arm" {arm_geom}/>
           <body name="forearm_link" pos="{_fmt(o['elbow'])}" gravcomp="{gravcomp}">
             <inertial pos="0.1 0 0" mass="{m[2]}" diaginertia="1e-4 6e-4 6e-4"/>
             {joint(2, "0 1 0")}
-            <geom name="forearm" type="capsule" size="0.016" fromto="0.02 0 0 {_fmt(o['wrist_angle'])}" material="arm" {arm_geom}/>
+            <geom name="forearm" type="capsule" size="{radii[2]:.9g}" fromto="0.02 0 0 {_fmt(o['wrist_angle'])}" material="arm" {arm_geom}/>
             <body name="wrist_link" pos="{_fmt(o['wrist_angle'])}" gravcomp="{gravcomp}">
               <inertial pos="0.03 0 0" mass="{m[3]}" diaginertia="5e-5 5e-5 5e-5"/>
               {joint(3, "0 1 0")}
-              <geom name="wrist" type="capsule" size="0.016" fromto="0.01 0 0 {o['wrist_rotate'][0] - 0.01:.9g} 0 0" material="arm_dark" {arm_geom}/>
+              <geom name="wrist" type="capsule" size="{radii[3]:.9g}" fromto="0.01 0 0 {o['wrist_rotate'][0] - 0.01:.9g} 0 0" material="arm_dark" {arm_geom}/>
               <body name="gripper_link" pos="{_fmt(o['wrist_rotate'])}" gravcomp="{gravcomp}">
                 <inertial pos="0.03 0 0" mass="{m[4]}" diaginertia="1e-4 1e-4 1e-4"/>
                 {joint(4, "1 0 0")}

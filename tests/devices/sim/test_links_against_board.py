@@ -1,0 +1,72 @@
+"""The trajectory check and the simulation agree on the arm's links against the board (issue 18 item 6).
+
+bench/motion_continuity.py (seed 2) repeated a program whose waypoint the check passed while the simulated upper
+arm, forearm and wrist lay 14 mm into the board: the check kept only the joint origins above it. Both now take the
+links' thickness from the arm config (link_radii_m)."""
+
+from __future__ import annotations
+
+import mujoco
+import numpy as np
+import pytest
+
+from armlab.devices.arm import JointTrajectory
+from armlab.devices.sim import SimWorkcell, SimWorkcellConfig
+from armlab.kinematics import load_arm
+from armlab.motion.safety import UnsafeTrajectory, check_trajectory
+
+ARM = load_arm("rx200")
+LINK_GEOMS = ("upper_arm", "forearm", "wrist")
+INTO_THE_BOARD_Q = [-0.4172, 1.8365, -1.8452, -0.58, 1.7884]  # the bench's waypoint
+
+
+@pytest.fixture(scope="module")
+def cell():
+    with SimWorkcell(SimWorkcellConfig(realtime=False, realism="ideal")) as workcell:
+        yield workcell
+
+
+def deepest_link_contact_mm(cell, q) -> float:
+    """How far (mm, > 0 = into) the simulated links reach into the board or table standing at q."""
+    model, data = cell.model, mujoco.MjData(cell.model)
+    for name, value in zip(ARM.joint_names, q):
+        data.qpos[model.joint(name).qposadr[0]] = value
+    mujoco.mj_forward(model, data)
+    deepest = 0.0
+    for contact in data.contact[: data.ncon]:
+        names = {mujoco.mj_id2name(model, mujoco.mjtObj.mjOBJ_GEOM, g) for g in (contact.geom1, contact.geom2)}
+        if names & set(LINK_GEOMS) and names & {"board", "table"}:
+            deepest = max(deepest, -contact.dist * 1000.0)
+    return deepest
+
+
+def passes_the_check(q) -> bool:
+    try:
+        check_trajectory(ARM, JointTrajectory(np.array([0.0, 0.01]), np.vstack([q, q])), check_rates=False)
+        return True
+    except UnsafeTrajectory:
+        return False
+
+
+def test_the_benchs_waypoint_into_the_board_is_refused_naming_the_link(cell):
+    assert deepest_link_contact_mm(cell, INTO_THE_BOARD_Q) > 10.0  # the simulation: 14 mm into the board
+    with pytest.raises(UnsafeTrajectory, match="link at the .* thick .* below the board"):
+        check_trajectory(ARM, JointTrajectory(np.array([0.0, 0.01]), np.vstack([INTO_THE_BOARD_Q] * 2)), check_rates=False)
+
+
+def test_no_pose_the_check_passes_puts_a_simulated_link_into_the_board(cell):
+    rng = np.random.default_rng(3)
+    lower, upper = np.asarray(ARM.lower_rad), np.asarray(ARM.upper_rad)
+    passed = low_passed = 0
+    worst = 0.0
+    for _ in range(3000):
+        q = rng.uniform(lower, upper)
+        q[1] = rng.uniform(0.8, upper[1])  # leaning forward, where the links come down to the board
+        if not passes_the_check(q):
+            continue
+        passed += 1
+        depth = deepest_link_contact_mm(cell, q)
+        worst = max(worst, depth)
+        low_passed += ARM.joint_frames(q)[2][2, 3] < 0.06  # the elbow low over the board: the cases that matter
+    assert passed > 300 and low_passed > 30, (passed, low_passed)
+    assert worst <= 0.5, f"a pose the check passed has a simulated link {worst:.1f} mm into the board"
