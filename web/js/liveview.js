@@ -69,8 +69,11 @@ export class LiveView {
     return this.boardBounds;
   }
 
-  setDetections(detections) {
+  /** untrusted: seen through a camera the calibration no longer fits; each is marked so on the view. */
+  setDetections(detections, untrusted = false) {
     this.detections = Array.isArray(detections) ? detections : [];
+    this.detectionsUntrusted = Boolean(untrusted);
+    this.canvas.dataset.detections = untrusted ? "untrusted" : "trusted";
   }
 
   /** Draw one decoded frame and the client-side markers; resolves when drawn (then the frame is acked). */
@@ -99,6 +102,7 @@ export class LiveView {
       if (c) this.ring(c.u, c.v, 26 * Math.max(scale, 0.5), "#ffffff");
     }
     if (this.view() === "topdown") this.drawTopdownLayers();
+    else if (this.detectionsUntrusted && this.layers.includes("detections")) this.markUntrusted(Math.max(scale, 0.5));
     if (this.marker) {
       const p = this.markerFramePx(this.marker);
       if (p) this.cross(p.u, p.v, this.marker.color, this.marker.label, Math.max(scale, 0.5));
@@ -148,6 +152,27 @@ export class LiveView {
       return worldToTopdownPx(marker.positionM[0], marker.positionM[1], this.canvas.width, this.canvas.height, this.topdownBounds());
     }
     return marker.cameraPx ? this.cameraToFramePx(marker.cameraPx) : null;
+  }
+
+  /** A struck-through "not trusted" tag on each detection: the calibration no longer fits the camera. */
+  markUntrusted(s) {
+    const { ctx } = this;
+    ctx.save();
+    ctx.font = `bold ${Math.round(14 * s)}px sans-serif`;
+    for (const det of this.detections) {
+      const c = this.cameraToFramePx(det.center_px);
+      if (!c) continue;
+      this.ring(c.u, c.v, 22 * s, "#ff9f1a");
+      ctx.strokeStyle = "#ff9f1a";
+      ctx.lineWidth = 2 * s;
+      ctx.beginPath();
+      ctx.moveTo(c.u - 16 * s, c.v + 16 * s);
+      ctx.lineTo(c.u + 16 * s, c.v - 16 * s);
+      ctx.stroke();
+      ctx.fillStyle = "#ff9f1a";
+      ctx.fillText("not trusted", c.u - 36 * s, c.v + 38 * s);
+    }
+    ctx.restore();
   }
 
   ring(u, v, r, color) {

@@ -1,6 +1,7 @@
 // Page controller: connects the stream, the REST client and the panels; one dispatch on message type.
 
 import { Api, adoptToken, dropToken } from "./api.js";
+import { renderCalibrationState, untrustedReason } from "./calstate.js";
 import { ClickCalibration } from "./clickcal.js";
 import { ColorCalibration } from "./colors.js";
 import { CompetitionPanel } from "./competition.js";
@@ -217,6 +218,7 @@ class App {
     this.status = s;
     if (s.state === "estop") this.estopSeen = true;
     renderStatus(s);
+    renderCalibrationState(s);
     renderReadouts(s);
     this.clickcal.onStatus(s);
     this.torque.render(s);
@@ -255,12 +257,13 @@ class App {
 
   setDetections(detections) {
     this.detections = detections;
-    this.live.setDetections(detections);
+    const untrusted = Boolean(untrustedReason(this.status));
+    this.live.setDetections(detections, untrusted);
     const why = emptyDetectionsReason(this.status);
-    const key = why + JSON.stringify(detections.map((d) => [d.id, d.color, d.size, d.position_m?.map((v) => Math.round(v * 1000))]));
+    const key = why + untrusted + JSON.stringify(detections.map((d) => [d.id, d.color, d.size, d.position_m?.map((v) => Math.round(v * 1000))]));
     if (key === this.detectionsKey) return;
     this.detectionsKey = key;
-    renderDetections(detections, this.hoverDetection, (d) => this.detectionClicked(d), why);
+    renderDetections(detections, this.hoverDetection, (d) => this.detectionClicked(d), why, untrusted);
   }
 
   /** Report a job's end once, and move the click mode along grab → drop → grab. */
@@ -380,6 +383,7 @@ class App {
   }
 
   clickTargetNow(t) {
+    if (this.refusedUntrusted(t.mode)) return Promise.resolve(null);
     const body = t.positionM ? { position_m: t.positionM } : { u: t.u, v: t.v };
     const where = t.positionM ? t.positionM.map((v) => Math.round(v * 1000)).join(", ") + " mm" : `pixel (${t.u.toFixed(0)}, ${t.v.toFixed(0)})`;
     if (t.mode === "grab") return this.run(`grab at ${where}`, () => this.api.grab(body));
@@ -387,8 +391,15 @@ class App {
     return Promise.resolve(null);
   }
 
+  /** True (and the reason logged) when a grab or drop must not go: the calibration is not trusted. */
+  refusedUntrusted(mode) {
+    const reason = (mode === "grab" || mode === "drop") && untrustedReason(this.status);
+    if (reason) this.log.toast("error", `${mode} refused`, reason);
+    return Boolean(reason);
+  }
+
   detectionClicked(d) {
-    if (this.live.mode === "grab" && Array.isArray(d.position_m)) {
+    if (this.live.mode === "grab" && Array.isArray(d.position_m) && !this.refusedUntrusted("grab")) {
       this.run(`grab ${d.color || ""} block ${d.id ?? ""}`, () => this.api.grab({ position_m: d.position_m }));
     }
   }
