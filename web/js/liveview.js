@@ -229,6 +229,8 @@ export class LiveView {
     this.hoverPending = null;
     this.setHoverDetection(-1);
     this.hoverLabel.textContent = "x — y — z — mm";
+    this.hoverLabel.title = "World coordinates under the cursor";
+    this.hoverLabel.dataset.hidden = "false";
   }
 
   setHoverDetection(index) {
@@ -283,7 +285,13 @@ export class LiveView {
       .catch((e) => {
         if (seq !== this.hoverSeq) return;
         delete this.hoverLabel.dataset.positionM;
-        this.hoverLabel.textContent = e.code === "not_calibrated" ? "calibrate to read world mm" : e.message;
+        // pixel-to-world is read-only: its one 409 is a spot hidden by the arm that changed since it was seen (the
+        // station never shows a remembered depth older than the last change there). Say so, never an old number.
+        const hidden = e.status === 409 && e.code === "wrong_state";
+        this.hoverLabel.dataset.hidden = String(hidden);
+        this.hoverLabel.title = e.message;
+        this.hoverLabel.textContent = e.code === "not_calibrated" ? "calibrate to read world mm"
+          : hidden ? "x — y — z unknown: hidden by the arm, changed since seen (Sleep to look)" : e.message;
       })
       .finally(() => {
         this.hoverBusy = false;
@@ -307,6 +315,8 @@ export class LiveView {
       delete this.hoverLabel.dataset.pixel;
     }
     this.hoverLabel.textContent = `${text}x ${fmtMm(x)}  y ${fmtMm(y)}  z ${fmtMm(z)} mm${on ? ` (${on})` : ""}`;
+    this.hoverLabel.title = this.hoverLabel.textContent; // the full line where the fixed-width box cuts it
+    this.hoverLabel.dataset.hidden = "false";
     this.hoverLabel.dataset.positionM = JSON.stringify(positionM);
   }
 
