@@ -22,7 +22,7 @@ export class LiveView {
    * onTarget({mode, u, v, positionM}) is called for clicks in grab/drop mode;
    * onHoverDetection(index) highlights a row of the detections list.
    */
-  constructor({ canvas, wrap, placeholder, hoverLabel, api, onTarget, onHoverDetection }) {
+  constructor({ canvas, wrap, placeholder, hoverLabel, api, onTarget, onHoverDetection, onHoverTarget }) {
     this.canvas = canvas;
     this.ctx = canvas.getContext("2d");
     this.wrap = wrap;
@@ -31,6 +31,7 @@ export class LiveView {
     this.api = api;
     this.onTarget = onTarget;
     this.onHoverDetection = onHoverDetection || (() => {});
+    this.onHoverTarget = onHoverTarget || (() => {}); // (mode, target | null): the point the pointer reads now
     this.mode = "inspect";
     this.layers = [];
     this.calibrated = false;
@@ -225,6 +226,7 @@ export class LiveView {
   }
 
   onLeave() {
+    this.onHoverTarget(this.mode, null);
     this.hoverSeq += 1;
     this.hoverPending = null;
     this.setHoverDetection(-1);
@@ -281,10 +283,12 @@ export class LiveView {
         if (stale) return;
         const position = xyM ? [xyM[0], xyM[1], r.position_m[2]] : r.position_m;
         this.showWorld(position, r.on, { u, v, depthMm: r.depth_mm });
+        this.onHoverTarget(this.mode, xyM ? { position_m: position } : { u, v });
       })
       .catch((e) => {
         if (seq !== this.hoverSeq) return;
         delete this.hoverLabel.dataset.positionM;
+        this.onHoverTarget(this.mode, null);
         // pixel-to-world is read-only: its one 409 is a spot hidden by the arm that changed since it was seen (the
         // station never shows a remembered depth older than the last change there). Say so, never an old number.
         const hidden = e.status === 409 && e.code === "wrong_state";

@@ -25,6 +25,7 @@ import {
 import { ProgramPathOverlay } from "./path.js";
 import { JointPlot } from "./plot.js";
 import { RepeatPanel } from "./repeat.js";
+import { ReachState } from "./reachstate.js";
 import { RateMeter, Stream } from "./stream.js";
 import { TeachPanel } from "./teach.js";
 import { TorqueButton } from "./torque.js";
@@ -74,6 +75,7 @@ class App {
     this.intrinsics = new IntrinsicsPanel({ root: $("intrinsics-panel"), api: this.api, log: this.log });
     this.torque = new TorqueButton({ button: $("btn-torque"), run: (a, c) => this.run(a, c), api: this.api });
     this.recording = new RecordingPanel({ api: this.api, run: (a, c) => this.run(a, c), root: $("recording-panel") });
+    this.reach = new ReachState({ api: this.api, el: $("reach-state") });
     this.live = new LiveView({
       canvas: $("live"),
       wrap: $("view-wrap"),
@@ -81,6 +83,7 @@ class App {
       hoverLabel: $("hover-world"),
       api: this.api,
       onTarget: (t) => this.clickTarget(t),
+      onHoverTarget: (mode, target) => this.reach.show(mode, target),
       onHoverDetection: (i) => {
         this.hoverDetection = i;
         highlightDetectionRow(i);
@@ -357,6 +360,7 @@ class App {
 
   setMode(mode) {
     this.live.setMode(mode);
+    this.reach.show(mode, null); // checked again at the pointer's next reading
     this.clickcal.setActive(mode === "points");
     this.colors.setActive(mode === "color");
     document.querySelectorAll("#click-mode button").forEach((b) => b.classList.toggle("on", b.dataset.mode === mode));
