@@ -9,7 +9,7 @@ const TOP_TEXT = {
   trusted: "calib: trusted",
   untrusted: "calib: not trusted",
   checking: "calib: checking",
-  rejected: "calib: not trusted (camera moved)",
+  rejected: "calib: rejected",
 };
 
 /** The calibration state of a status: 'trusted' | 'untrusted' | 'checking' | 'rejected' | 'none'. */
