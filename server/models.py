@@ -53,6 +53,7 @@ from server.response_models import (
     PixelToWorldResponse,
     Status,
     TagInfo,
+    TargetCheckResponse,
 )
 from server.scene_models import CameraBumpRequest, SceneObjectRequest, SceneRequest
 from server.stream_models import (
@@ -150,6 +151,7 @@ WIRE_MODELS: tuple[type[BaseModel], ...] = (
     TagInfo,
     CalibrationInfo,
     PixelToWorldResponse,
+    TargetCheckResponse,
     JointsRequest,
     PoseRequest,
     PoseNameRequest,

@@ -137,6 +137,14 @@ class CalibrationInfo(Wire):
     points: dict | None = Field(None, description="clicked-point fit: homography, reprojection and per-point errors (px)")
 
 
+class TargetCheckResponse(Wire):
+    """A grab or drop target checked as the command would plan it, nothing moved (POST /api/grab/check,
+    /api/drop/check): what it would do. A refusal is the command's own error (422 unreachable/unsafe, 409)."""
+
+    ok: bool = True
+    detail: str = Field(description="what the command would do, e.g. 'grab large red block at (120, 250) mm'")
+
+
 class PixelToWorldResponse(Wire):
     """on: 'depth' (the newest frame, the robot's own readings left out), 'remembered' (under the arm: the
     depth last seen there without it) or 'board' (the viewing ray meets z = 0)."""

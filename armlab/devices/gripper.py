@@ -9,7 +9,8 @@ from dataclasses import dataclass
 @dataclass(frozen=True)
 class GripperState:
     """width_m: measured span between the pad faces; command: last command ('grasp'|'release');
-    holding: True when closed on an object (the fingers stopped before fully closing)."""
+    holding: the gripper's evidence of an object: fingers driven closed that something stops short of fully
+    closed (not fingers halted mid-stroke), or a suction cup's seal. The station's status and its jobs read it."""
 
     width_m: float
     command: str

@@ -14,6 +14,7 @@ import numpy as np
 
 from armlab.skills.clear_path import known_obstacles, plan_clear_pick, plan_clear_place
 from armlab.skills.manipulate import run_steps
+from armlab.skills.operator_advice import advised
 from armlab.skills.perceive import block_near, target_point
 from armlab.station.arm_info import station_gripper_type
 from armlab.station.calibration_trust import calibration_summary
@@ -82,9 +83,30 @@ def calibrate_points(station: Station, pixels_px: Sequence, world_m: Sequence, s
     return station.start_job("calibrate", "calibrate", run, detail="from clicked points", source=source)
 
 
-def grab(station: Station, position_m=None, pixel=None, source: str | None = None) -> Job:
-    """Pick the detected block under the click (its centre, top and yaw), else at the clicked world point."""
-    station.allowed_or_raise("grab")
+def base_xy_m(station: Station):
+    """The arm base's world x, y (for saying how far a spot is from it)."""
+    return np.asarray(station.model.T_world_base, dtype=float)[:2, 3]
+
+
+def with_advice(what: str, point_m, call, base_xy_m=None):
+    """call(); a refusal the operator can act on is re-raised saying what to do (operator_advice)."""
+    try:
+        return call()
+    except Exception as error:
+        better = advised(what, point_m, error, base_xy_m)
+        if better is None:
+            raise
+        raise better from error
+
+
+def grab(station: Station, position_m=None, pixel=None, source: str | None = None, check_only: bool = False) -> Job | str:
+    """Pick the detected block under the click (its centre, top and yaw), else at the clicked world point.
+    check_only: plan it as the grab would and return what it would do (the page's reach state before a click);
+    the same refusals (out of reach, hidden, unsafe, untrusted), nothing moves, any state."""
+    if check_only:
+        station.require_arm("grab")
+    else:
+        station.allowed_or_raise("grab")
     station.require_trusted_calibration("grab")
     point, on = target_point(station, position_m, pixel)
     block = block_near(station, point) if station.calibration is not None else None
@@ -100,10 +122,12 @@ def grab(station: Station, position_m=None, pixel=None, source: str | None = Non
     def plan() -> list:  # clear of every other block and stack the station sees (issue 21)
         return plan_clear_pick(station, top, yaw, edge, boxes)
 
-    steps = plan()
+    steps = with_advice("grab", top, plan, base_xy_m(station))
+    if check_only:
+        return f"grab {detail}"
 
     def run(ctx: JobContext) -> dict:
-        run_steps(station, ctx, steps, replan=plan)
+        with_advice("grab", top, lambda: run_steps(station, ctx, steps, replan=plan))
         holding = bool(station.gripper.read_state().holding)
         station.set_held_block({**(block or {}), "edge_m": edge, "yaw_rad": yaw} if holding else None)
         if not holding:
@@ -115,9 +139,13 @@ def grab(station: Station, position_m=None, pixel=None, source: str | None = Non
     return station.start_job("grab", "grab", run, detail=detail, source=source)
 
 
-def drop(station: Station, position_m=None, pixel=None, source: str | None = None) -> Job:
-    """Place the held block at the clicked spot, on whatever is there (board or the top of a stack)."""
-    station.allowed_or_raise("drop")
+def drop(station: Station, position_m=None, pixel=None, source: str | None = None, check_only: bool = False) -> Job | str:
+    """Place the held block at the clicked spot, on whatever is there (board or the top of a stack).
+    check_only: as grab's."""
+    if check_only:
+        station.require_arm("drop")
+    else:
+        station.allowed_or_raise("drop")
     station.require_trusted_calibration("drop")
     point, on = target_point(station, position_m, pixel)
     surface = point.copy()
@@ -135,14 +163,16 @@ def drop(station: Station, position_m=None, pixel=None, source: str | None = Non
     def plan() -> list:  # clear of every other block and stack the station sees (issue 21)
         return plan_clear_place(station, surface, yaw, edge, boxes)
 
-    steps = plan()
+    steps = with_advice("drop", surface, plan, base_xy_m(station))
     detail = f"onto {on} at ({surface[0] * 1000:.0f}, {surface[1] * 1000:.0f}, {surface[2] * 1000:.0f}) mm"
+    if check_only:
+        return f"drop {detail}"
 
     def run(ctx: JobContext) -> dict:
         if not station.gripper.read_state().holding:  # checked in the job: the page shows why it failed
             station.set_held_block(None)
             raise GripperEmpty("the gripper is empty: nothing to drop (grab a block first)")
-        run_steps(station, ctx, steps, replan=plan)
+        with_advice("drop", surface, lambda: run_steps(station, ctx, steps, replan=plan))
         station.set_held_block(None)
         return {"target_m": [float(x) for x in surface], "on": on}
 

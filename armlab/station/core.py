@@ -20,6 +20,7 @@ from __future__ import annotations
 import ctypes
 import ctypes.util
 import logging
+import math
 import threading
 import time
 from collections.abc import Callable
@@ -147,6 +148,7 @@ class Station(Latch, MotionGate, ManualCommands, TeachCommands, JobControls, Per
         self._last_joints: np.ndarray | None = None
         self._torque_enabled = True  # connect() leaves the arm holding; set_torque() changes it
         self._motions: list[tuple[float, np.ndarray]] = []  # (end time_s, [xmin, ymin, xmax, ymax, x, y, z of the gripper's sampled path...])
+        self._changed_everywhere_s = -math.inf  # the last change that may have changed any spot (note_change_everywhere)
         self._commanded: tuple | None = None  # the last trajectory sent: (trajectory, clock_s at its t = 0, count)
         self._command_count = 0
         self._pipeline: Any = None  # synchronous mode's perception pipeline
@@ -378,6 +380,7 @@ class Station(Latch, MotionGate, ManualCommands, TeachCommands, JobControls, Per
             self._transition("set_scene", source=source)
         _, version = self.frames.get()
         self.sim.set_scene(scene)
+        self.note_change_everywhere()  # what the arm hides now was seen in the old scene
         self.set_held_block(None)
         if not self.synchronous:  # once a frame of the new scene is drawn, the old model's memory is free
             self.frames.wait_newer(version, timeout_s=1.0)

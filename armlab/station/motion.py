@@ -375,16 +375,24 @@ class MotionGate:
 
     def changed_at_since(self, point_m, since_s: float, radius_m: float = 0.06, above_m: float = CHANGE_ABOVE_M) -> bool:
         """True if after `since_s` the gripper came down within above_m of point_m's height within radius_m of it
-        in x-y (a motion through the spot, a drop or a grab there, a gripper opened or closed over it): what was
-        seen there at since_s may have changed."""
+        in x-y (a motion through the spot, a drop or a grab there, a gripper opened or closed over it), or a change
+        everywhere was noted (note_change_everywhere): what was seen there at since_s may have changed."""
         spot = np.asarray(point_m[:3], float)
         with self._lock:
+            if self._changed_everywhere_s > since_s:
+                return True
             motions = list(self._motions)
         for end_s, box in motions:
             points = np.asarray(box[4:], float).reshape(-1, 3)  # the gripper's sampled path
             if end_s > since_s and np.any((np.linalg.norm(points[:, :2] - spot[:2], axis=1) <= radius_m) & (points[:, 2] < spot[2] + above_m)):
                 return True
         return False
+
+    def note_change_everywhere(self) -> None:
+        """A change that may have changed any spot (a new scene, a checkerboard held up or put away, the camera
+        knocked): for changed_at_since, what was seen before it and is hidden since is unknown everywhere."""
+        with self._lock:
+            self._changed_everywhere_s = time.time()
 
     def note_gripper_change(self) -> None:
         """A grasp or release where the gripper is: a change there for changed_at_since (no motion of the arm)."""

@@ -10,7 +10,7 @@ from starlette.concurrency import run_in_threadpool
 from armlab import skills
 from armlab.station.jobs import Job
 from server.deps import ControlAuth, StationDep
-from server.models import JobResponse, TargetRequest
+from server.models import JobResponse, TargetCheckResponse, TargetRequest
 from server.waiting import until_job_ended
 
 router = APIRouter(prefix="/api", tags=["jobs"])
@@ -48,6 +48,19 @@ async def post_drop(request: Request, body: TargetRequest, station: StationDep, 
     """Place the held block at the target, on the board or on top of the block/stack there."""
     job = await run_in_threadpool(lambda: skills.drop(station, **_target(body), source=controller))
     return await job_response(request, job, wait)
+
+
+@router.post("/grab/check", response_model=TargetCheckResponse)
+def post_grab_check(body: TargetRequest, station: StationDep) -> dict:
+    """What a grab at the target would do, planned as the grab plans it, nothing moved (read-only: the page's reach
+    state while the pointer rests in Click-grab mode). A refusal is the grab's own error, saying what to do."""
+    return {"ok": True, "detail": skills.grab(station, **_target(body), check_only=True)}
+
+
+@router.post("/drop/check", response_model=TargetCheckResponse)
+def post_drop_check(body: TargetRequest, station: StationDep) -> dict:
+    """As /api/grab/check, for a drop."""
+    return {"ok": True, "detail": skills.drop(station, **_target(body), check_only=True)}
 
 
 @router.get("/jobs/current", response_model=JobResponse)

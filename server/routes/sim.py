@@ -62,6 +62,7 @@ def post_camera_bump(body: CameraBumpRequest, station: StationDep, controller: C
     cell = _cell(station)
     station.allowed_or_raise("set_scene", controller)
     cell.knock_camera(body.translation_m, body.rotation_rad)
+    station.note_change_everywhere()  # the remembered depth of every hidden pixel was seen by the camera before the knock
     station.events.add("warn", f"simulated camera mount bumped by {controller}")
     return {"translation_m": body.translation_m, "rotation_rad": body.rotation_rad}
 
@@ -93,6 +94,7 @@ def post_checkerboard(body: CheckerboardRequest, station: StationDep, controller
     else:
         position, R = np.asarray(body.position_m, dtype=float), cv2.Rodrigues(np.asarray(body.rotation_rad, dtype=float))[0]
     cell.place_checkerboard(position, R)
+    station.note_change_everywhere()  # what the arm hides may be behind the board now: its remembered depth is unknown
     return {"position_m": [float(x) for x in position], "frame": "world"}
 
 
@@ -102,4 +104,5 @@ def delete_checkerboard(station: StationDep, controller: ControlAuth) -> dict:
     cell = _cell(station)
     station.allowed_or_raise("set_scene", controller)
     cell.place_checkerboard()
+    station.note_change_everywhere()  # the board is gone: depth remembered from when it stood there is stale
     return {"placed": False}

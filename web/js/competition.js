@@ -309,7 +309,16 @@ export class CompetitionPanel {
     $("comp-score-points").textContent = `${s.points} / ${s.max_points}`;
     const within = s.within_limit ? "within" : "over";
     const note = result.note ? ` · ${result.note}` : "";
-    $("comp-score-meta").textContent = `simulated ${result.sim_time_s.toFixed(1)} s, ${within} the ${s.time_limit_s} s limit${s.full ? " · full points" : ""}${note}`;
+    const ended = this.job && (this.job.state === "cancelled" || this.job.state === "failed") ? this.job.state : "";
+    if (ended) { // a job stopped early: say so and what it did, not 'within the limit'
+      const task = this.job.extra && this.job.extra.task;
+      const done = task ? `${task.done} of ${task.done + task.left} blocks done` : "";
+      $("comp-score-points").textContent = `${s.points} / ${s.max_points} · ${ended}`;
+      $("comp-score-meta").textContent = `${ended} after ${result.sim_time_s.toFixed(1)} s simulated${done ? `: ${done}` : ""}; `
+        + `the points are for what stands on the board now. Start it again to finish${note}`;
+    } else {
+      $("comp-score-meta").textContent = `simulated ${result.sim_time_s.toFixed(1)} s, ${within} the ${s.time_limit_s} s limit${s.full ? " · full points" : ""}${note}`;
+    }
     body.replaceChildren(
       ...s.breakdown.map((rule) => {
         const row = document.createElement("tr");

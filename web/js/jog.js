@@ -1,6 +1,8 @@
 // Cartesian jog of the gripper through POST /api/arm/step (the station keeps pitch and yaw and moves along
 // the asked axis, or refuses with the reason): the panel's buttons and the keyboard. Arrow keys move in x/y,
-// PageUp/PageDown in z, Shift+Up/Down pitch and Shift+Left/Right wrist roll; one step per key press.
+// PageUp/PageDown in z, Shift+Up/Down pitch and Shift+Left/Right wrist roll; one step per key press. While a
+// form field has the focus the keys are its own (a joint slider's arrows move that joint): the key hint says
+// which the keys do now.
 
 const $ = (id) => document.getElementById(id);
 const ROTATION_STEP_DEG = 5;
@@ -22,6 +24,19 @@ export function typingIn(target) {
   return tag === "INPUT" || tag === "TEXTAREA" || tag === "SELECT" || Boolean(target && target.isContentEditable);
 }
 
+export const JOG_KEYS_HINT = "keys: ← → ↑ ↓ x/y, PgUp/PgDn z, Shift+arrows pitch/roll";
+
+/** What the keys do with `target` focused: the jog's hint, or the field's own use of them. */
+export function keyHint(target) {
+  if (!typingIn(target)) return JOG_KEYS_HINT;
+  const slider = target.type === "range" && target.closest && target.closest("#joint-sliders");
+  if (slider) {
+    const joint = target.id.replace(/^slider-/, "");
+    return `keys: ← → ↑ ↓ move ${joint} (its slider has the focus); click the view to jog with them again`;
+  }
+  return "keys: the focused field takes them; click the view to jog with them again";
+}
+
 export class CartesianJog {
   /** api: Api; run(action, call): the page's REST runner; canJog(): whether the station allows a jog now. */
   constructor({ api, run, canJog }) {
@@ -32,6 +47,16 @@ export class CartesianJog {
     document.querySelectorAll("[data-jog]").forEach((b) =>
       b.addEventListener("click", () => this.step(b.dataset.jog.slice(0, -1), b.dataset.jog.endsWith("+") ? 1 : -1)));
     document.addEventListener("keydown", (e) => this.onKey(e));
+    const hint = () => this.showHint(document.activeElement);
+    document.addEventListener("focusin", hint);
+    document.addEventListener("focusout", () => setTimeout(hint, 0)); // activeElement is the next one only then
+  }
+
+  showHint(target) {
+    const el = $("jog-keys");
+    if (!el) return;
+    el.textContent = keyHint(target);
+    el.dataset.keys = typingIn(target) ? (target.type === "range" ? "slider" : "field") : "jog";
   }
 
   onKey(event) {

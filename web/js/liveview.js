@@ -22,7 +22,7 @@ export class LiveView {
    * onTarget({mode, u, v, positionM}) is called for clicks in grab/drop mode;
    * onHoverDetection(index) highlights a row of the detections list.
    */
-  constructor({ canvas, wrap, placeholder, hoverLabel, api, onTarget, onHoverDetection }) {
+  constructor({ canvas, wrap, placeholder, hoverLabel, api, onTarget, onHoverDetection, onHoverTarget }) {
     this.canvas = canvas;
     this.ctx = canvas.getContext("2d");
     this.wrap = wrap;
@@ -31,6 +31,7 @@ export class LiveView {
     this.api = api;
     this.onTarget = onTarget;
     this.onHoverDetection = onHoverDetection || (() => {});
+    this.onHoverTarget = onHoverTarget || (() => {}); // (mode, target | null): the point the pointer reads now
     this.mode = "inspect";
     this.layers = [];
     this.calibrated = false;
@@ -69,8 +70,11 @@ export class LiveView {
     return this.boardBounds;
   }
 
-  setDetections(detections) {
+  /** untrusted: seen through a camera the calibration no longer fits; each is marked so on the view. */
+  setDetections(detections, untrusted = false) {
     this.detections = Array.isArray(detections) ? detections : [];
+    this.detectionsUntrusted = Boolean(untrusted);
+    this.canvas.dataset.detections = untrusted ? "untrusted" : "trusted";
   }
 
   /** Draw one decoded frame and the client-side markers; resolves when drawn (then the frame is acked). */
@@ -99,6 +103,7 @@ export class LiveView {
       if (c) this.ring(c.u, c.v, 26 * Math.max(scale, 0.5), "#ffffff");
     }
     if (this.view() === "topdown") this.drawTopdownLayers();
+    else if (this.detectionsUntrusted && this.layers.includes("detections")) this.markUntrusted(Math.max(scale, 0.5));
     if (this.marker) {
       const p = this.markerFramePx(this.marker);
       if (p) this.cross(p.u, p.v, this.marker.color, this.marker.label, Math.max(scale, 0.5));
@@ -148,6 +153,27 @@ export class LiveView {
       return worldToTopdownPx(marker.positionM[0], marker.positionM[1], this.canvas.width, this.canvas.height, this.topdownBounds());
     }
     return marker.cameraPx ? this.cameraToFramePx(marker.cameraPx) : null;
+  }
+
+  /** A struck-through "not trusted" tag on each detection: the calibration no longer fits the camera. */
+  markUntrusted(s) {
+    const { ctx } = this;
+    ctx.save();
+    ctx.font = `bold ${Math.round(14 * s)}px sans-serif`;
+    for (const det of this.detections) {
+      const c = this.cameraToFramePx(det.center_px);
+      if (!c) continue;
+      this.ring(c.u, c.v, 22 * s, "#ff9f1a");
+      ctx.strokeStyle = "#ff9f1a";
+      ctx.lineWidth = 2 * s;
+      ctx.beginPath();
+      ctx.moveTo(c.u - 16 * s, c.v + 16 * s);
+      ctx.lineTo(c.u + 16 * s, c.v - 16 * s);
+      ctx.stroke();
+      ctx.fillStyle = "#ff9f1a";
+      ctx.fillText("not trusted", c.u - 36 * s, c.v + 38 * s);
+    }
+    ctx.restore();
   }
 
   ring(u, v, r, color) {
@@ -200,10 +226,13 @@ export class LiveView {
   }
 
   onLeave() {
+    this.onHoverTarget(this.mode, null);
     this.hoverSeq += 1;
     this.hoverPending = null;
     this.setHoverDetection(-1);
     this.hoverLabel.textContent = "x — y — z — mm";
+    this.hoverLabel.title = "World coordinates under the cursor";
+    this.hoverLabel.dataset.hidden = "false";
   }
 
   setHoverDetection(index) {
@@ -254,11 +283,19 @@ export class LiveView {
         if (stale) return;
         const position = xyM ? [xyM[0], xyM[1], r.position_m[2]] : r.position_m;
         this.showWorld(position, r.on, { u, v, depthMm: r.depth_mm });
+        this.onHoverTarget(this.mode, xyM ? { position_m: position } : { u, v });
       })
       .catch((e) => {
         if (seq !== this.hoverSeq) return;
         delete this.hoverLabel.dataset.positionM;
-        this.hoverLabel.textContent = e.code === "not_calibrated" ? "calibrate to read world mm" : e.message;
+        this.onHoverTarget(this.mode, null);
+        // pixel-to-world is read-only: its one 409 is a spot hidden by the arm that changed since it was seen (the
+        // station never shows a remembered depth older than the last change there). Say so, never an old number.
+        const hidden = e.status === 409 && e.code === "wrong_state";
+        this.hoverLabel.dataset.hidden = String(hidden);
+        this.hoverLabel.title = e.message;
+        this.hoverLabel.textContent = e.code === "not_calibrated" ? "calibrate to read world mm"
+          : hidden ? "x — y — z unknown: hidden by the arm, changed since seen (Sleep to look)" : e.message;
       })
       .finally(() => {
         this.hoverBusy = false;
@@ -282,6 +319,8 @@ export class LiveView {
       delete this.hoverLabel.dataset.pixel;
     }
     this.hoverLabel.textContent = `${text}x ${fmtMm(x)}  y ${fmtMm(y)}  z ${fmtMm(z)} mm${on ? ` (${on})` : ""}`;
+    this.hoverLabel.title = this.hoverLabel.textContent; // the full line where the fixed-width box cuts it
+    this.hoverLabel.dataset.hidden = "false";
     this.hoverLabel.dataset.positionM = JSON.stringify(positionM);
   }
 

@@ -1,6 +1,7 @@
 // Page controller: connects the stream, the REST client and the panels; one dispatch on message type.
 
 import { Api, adoptToken, dropToken } from "./api.js";
+import { renderCalibrationState, untrustedReason } from "./calstate.js";
 import { ClickCalibration } from "./clickcal.js";
 import { ColorCalibration } from "./colors.js";
 import { CompetitionPanel } from "./competition.js";
@@ -24,6 +25,7 @@ import {
 import { ProgramPathOverlay } from "./path.js";
 import { JointPlot } from "./plot.js";
 import { RepeatPanel } from "./repeat.js";
+import { ReachState } from "./reachstate.js";
 import { RateMeter, Stream } from "./stream.js";
 import { TeachPanel } from "./teach.js";
 import { TorqueButton } from "./torque.js";
@@ -73,6 +75,7 @@ class App {
     this.intrinsics = new IntrinsicsPanel({ root: $("intrinsics-panel"), api: this.api, log: this.log });
     this.torque = new TorqueButton({ button: $("btn-torque"), run: (a, c) => this.run(a, c), api: this.api });
     this.recording = new RecordingPanel({ api: this.api, run: (a, c) => this.run(a, c), root: $("recording-panel") });
+    this.reach = new ReachState({ api: this.api, el: $("reach-state") });
     this.live = new LiveView({
       canvas: $("live"),
       wrap: $("view-wrap"),
@@ -80,6 +83,7 @@ class App {
       hoverLabel: $("hover-world"),
       api: this.api,
       onTarget: (t) => this.clickTarget(t),
+      onHoverTarget: (mode, target) => this.reach.show(mode, target),
       onHoverDetection: (i) => {
         this.hoverDetection = i;
         highlightDetectionRow(i);
@@ -217,6 +221,7 @@ class App {
     this.status = s;
     if (s.state === "estop") this.estopSeen = true;
     renderStatus(s);
+    renderCalibrationState(s);
     renderReadouts(s);
     this.clickcal.onStatus(s);
     this.torque.render(s);
@@ -255,12 +260,13 @@ class App {
 
   setDetections(detections) {
     this.detections = detections;
-    this.live.setDetections(detections);
+    const untrusted = Boolean(untrustedReason(this.status));
+    this.live.setDetections(detections, untrusted);
     const why = emptyDetectionsReason(this.status);
-    const key = why + JSON.stringify(detections.map((d) => [d.id, d.color, d.size, d.position_m?.map((v) => Math.round(v * 1000))]));
+    const key = why + untrusted + JSON.stringify(detections.map((d) => [d.id, d.color, d.size, d.position_m?.map((v) => Math.round(v * 1000))]));
     if (key === this.detectionsKey) return;
     this.detectionsKey = key;
-    renderDetections(detections, this.hoverDetection, (d) => this.detectionClicked(d), why);
+    renderDetections(detections, this.hoverDetection, (d) => this.detectionClicked(d), why, untrusted);
   }
 
   /** Report a job's end once, and move the click mode along grab → drop → grab. */
@@ -354,6 +360,7 @@ class App {
 
   setMode(mode) {
     this.live.setMode(mode);
+    this.reach.show(mode, null); // checked again at the pointer's next reading
     this.clickcal.setActive(mode === "points");
     this.colors.setActive(mode === "color");
     document.querySelectorAll("#click-mode button").forEach((b) => b.classList.toggle("on", b.dataset.mode === mode));
@@ -380,6 +387,7 @@ class App {
   }
 
   clickTargetNow(t) {
+    if (this.refusedUntrusted(t.mode)) return Promise.resolve(null);
     const body = t.positionM ? { position_m: t.positionM } : { u: t.u, v: t.v };
     const where = t.positionM ? t.positionM.map((v) => Math.round(v * 1000)).join(", ") + " mm" : `pixel (${t.u.toFixed(0)}, ${t.v.toFixed(0)})`;
     if (t.mode === "grab") return this.run(`grab at ${where}`, () => this.api.grab(body));
@@ -387,8 +395,15 @@ class App {
     return Promise.resolve(null);
   }
 
+  /** True (and the reason logged) when a grab or drop must not go: the calibration is not trusted. */
+  refusedUntrusted(mode) {
+    const reason = (mode === "grab" || mode === "drop") && untrustedReason(this.status);
+    if (reason) this.log.toast("error", `${mode} refused`, reason);
+    return Boolean(reason);
+  }
+
   detectionClicked(d) {
-    if (this.live.mode === "grab" && Array.isArray(d.position_m)) {
+    if (this.live.mode === "grab" && Array.isArray(d.position_m) && !this.refusedUntrusted("grab")) {
       this.run(`grab ${d.color || ""} block ${d.id ?? ""}`, () => this.api.grab({ position_m: d.position_m }));
     }
   }

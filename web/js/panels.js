@@ -157,10 +157,11 @@ export function renderArm(arm) {
 }
 
 /** Detections table; rows carry data-index so hovering on the canvas can highlight one. */
-export function renderDetections(detections, hoverIndex, onRowClick, why = "") {
+export function renderDetections(detections, hoverIndex, onRowClick, why = "", untrusted = false) {
   const body = $("det-body");
   const list = Array.isArray(detections) ? detections : [];
-  $("det-count").textContent = String(list.length);
+  $("det-count").textContent = untrusted && list.length ? `${list.length} · not trusted` : String(list.length);
+  $("det-count").title = untrusted ? "seen through a camera the calibration no longer fits: positions may be wrong" : "";
   if (!list.length) {
     const tr = document.createElement("tr");
     tr.className = "det-empty";
@@ -173,7 +174,7 @@ export function renderDetections(detections, hoverIndex, onRowClick, why = "") {
   const rows = list.map((d, i) => {
     const tr = document.createElement("tr");
     tr.dataset.index = String(i);
-    if (i === hoverIndex) tr.className = "hover";
+    tr.className = [i === hoverIndex ? "hover" : "", untrusted ? "untrusted" : ""].join(" ").trim();
     const p = d.position_m || [];
     const sw = `<span class="swatch" style="background:${SWATCH[d.color] || labToCss(d.color_lab) || "#888"}"></span>`; // unknown: as measured
     const size = d.size || (d.is_cube === false ? "other" : "");
@@ -193,12 +194,9 @@ export function highlightDetectionRow(index) {
   });
 }
 
-/** Calibration badge and the key figures of the latest calibration. */
+/** The key figures of the latest calibration. */
 export function renderCalibration(c) {
-  const badge = $("calib-badge");
-  const ok = Boolean(c && c.calibrated);
-  badge.dataset.ok = String(ok);
-  badge.textContent = ok ? "calibrated" : "not calibrated";
+  const ok = Boolean(c && c.calibrated); // the badge says the status's state (calstate.js), with the trust
   const dl = $("calib-result");
   dl.replaceChildren();
   if (!ok) return;

@@ -626,6 +626,14 @@ export const EVENT_KINDS = Object.freeze(["general", "scene"]);
  */
 
 /**
+ * A grab or drop target checked as the command would plan it, nothing moved (POST /api/grab/check,
+ * /api/drop/check): what it would do. A refusal is the command's own error (422 unreachable/unsafe, 409).
+ * @typedef {Object} TargetCheckResponse
+ * @property {boolean} [ok]
+ * @property {string} detail what the command would do, e.g. 'grab large red block at (120, 250) mm'
+ */
+
+/**
  * A grab/drop target: a world point, or a pixel of the colour image (exactly one).
  * @typedef {Object} TargetRequest
  * @property {(Array<number>|null)} [position_m]

@@ -1,5 +1,6 @@
 """SimGripper: the Gripper interface over the two finger servos. The fingers close with a force capped
-at the configured grasp effort; "holding" means they stopped on something before closing fully. Like the
+at the configured grasp effort; "holding" means something resists them: driven closed, they stopped short of
+fully closed and short of where they are driven (fingers halted mid-stroke by stop() hold nothing). Like the
 arm's, stop() never waits for the workcell's lock: when it is busy the next control tick applies it."""
 
 from __future__ import annotations
@@ -16,6 +17,7 @@ if TYPE_CHECKING:
 
 MOTION_TIMEOUT_S = 2.0
 HOLDING_MARGIN_M = 0.001  # stopped at least this far from fully closed = holding something
+RESIST_MARGIN_M = 0.001  # ... and at least this far (per finger) short of their reference: something keeps them open
 
 
 class SimGripper(SimDevice, Gripper):
@@ -32,6 +34,7 @@ class SimGripper(SimDevice, Gripper):
         self._command = "release"
         self._command_s = 0.0
         self._still_since_s: float | None = None
+        self._reference_m = offset_max_m  # where the fingers are driven (per-finger offset)
         self._stop_requested = threading.Event()
 
     def __str__(self) -> str:
@@ -56,6 +59,7 @@ class SimGripper(SimDevice, Gripper):
             self._command = command
             self._command_s = self._cell.sim_time_s
             self._still_since_s = None
+            self._reference_m = offset_m
             self._cell.apply_finger_reference(offset_m)
             self._last_reading = self._measure()
 
@@ -94,7 +98,8 @@ class SimGripper(SimDevice, Gripper):
         if self._measure().holding:
             return
         left, right = self._cell.finger_positions()
-        self._cell.apply_finger_reference(0.5 * (left + right))
+        self._reference_m = 0.5 * (left + right)
+        self._cell.apply_finger_reference(self._reference_m)
 
     def _stopped(self) -> bool:
         """Both fingers slower than stop_speed for stop_time (call under the lock or from wait_for)."""
@@ -109,7 +114,8 @@ class SimGripper(SimDevice, Gripper):
         """The gripper's state now (under the lock)."""
         left, right = self._cell.finger_positions()
         width = left + right - 2.0 * self._pad_thickness_m
-        holding = self._command == "grasp" and self._stopped() and width > self.min_width_m + HOLDING_MARGIN_M
+        resisted = 0.5 * (left + right) - self._reference_m > RESIST_MARGIN_M  # driven closer than they are
+        holding = self._command == "grasp" and self._stopped() and width > self.min_width_m + HOLDING_MARGIN_M and resisted
         return GripperState(width_m=width, command=self._command, holding=holding, timestamp_s=time.time())
 
     def control(self, sim_time_s: float) -> None:

@@ -97,6 +97,21 @@ def test_closing_on_nothing_is_not_holding(cell):
     assert cell.gripper.read_state().width_m == pytest.approx(0.062, abs=0.001)
 
 
+def test_fingers_halted_mid_stroke_hold_nothing(cell):
+    """Issue 21: stop() while closing on nothing halts the fingers half way; they are driven closed, stopped
+    and far from fully closed, yet nothing resists them: not holding (was True: read from the finger width)."""
+    cell.set_scene(Scene())
+    cell.gripper.release()
+    cell.gripper.grasp(wait=False)
+    cell.step(0.05)
+    cell.gripper.stop()
+    cell.step(1.0)
+    state = cell.gripper.read_state()
+    assert state.command == "grasp" and state.width_m > cell.gripper.min_width_m + 0.01  # really halted mid-stroke
+    assert not state.holding and cell.truth()["gripper"]["holding_id"] is None
+    cell.gripper.release()
+
+
 def stack(n, x=0.0, y=0.25, offset_top_m=0.0):
     objects = []
     for i in range(n):
