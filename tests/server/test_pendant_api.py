@@ -161,7 +161,7 @@ def _cell_centre(reach: dict, letter: str, near_m) -> tuple[float, float]:
 def test_a_top_down_cell_is_grabbed_top_down_and_an_out_of_reach_one_is_refused(calibrated, cell):
     reach = calibrated.get("/api/reach").json()
     assert reach["nx"] * reach["ny"] == sum(len(r) for r in reach["rows"]) and set("".join(reach["rows"])) <= {"T", "t", "."}
-    x, y = _cell_centre(reach, "T", (0.15, 0.22))
+    x, y = _cell_centre(reach, "T", (0.25, 0.6))  # the far edge of the top-down region: the strictest case
     cell.set_scene(Scene.from_dict({"objects": [
         {"id": "cube", "type": "block", "color": "red", "size": "large", "position_m": [x, y, EDGE_M / 2], "yaw_rad": 0.0}]}))
     live.wait_for(lambda: any(math.dist(d["position_m"][:2], (x, y)) < 0.01 for d in calibrated.get("/api/detections").json()["data"]), 20, 0.1)
