@@ -7,6 +7,7 @@ A suction cup only works top-down, so its map has no tilted cells."""
 
 from __future__ import annotations
 
+import math
 import threading
 import time
 from typing import Any
@@ -44,6 +45,18 @@ def classify(model: Any, motion_config: Any, gripper_type: str, point_m, q_seed_
     return (TOP_DOWN if pitch >= motion_config.top_down_pitch_rad - 1e-9 else TILTED), q_point
 
 
+def horizontal_reach_m(model: Any, samples: int = 20000, seed: int = 0) -> float:
+    """An upper bound of how far from the base axis (horizontally) the gripper point gets: the farthest of many joint
+    samples within the limits, plus 5 %. A cell beyond it is out of reach without an IK attempt (a failing numeric IK
+    is the slow part of the map)."""
+    rng = np.random.default_rng(seed)
+    lower, upper = np.asarray(model.lower_rad, float), np.asarray(model.upper_rad, float)
+    q = rng.uniform(lower, upper, size=(samples, len(lower)))
+    points = np.asarray(model.fk(q))[:, :3, 3]
+    base = np.asarray(model.T_world_base, float)[:3, 3]
+    return float(np.max(np.linalg.norm(points[:, :2] - base[:2], axis=1))) * 1.05
+
+
 def reach_map(model: Any, motion_config: Any, gripper_type: str, workcell: Any, step_m: float = REACH_STEP_M) -> dict:
     """The wire dict: {x0_m, y0_m, step_m, nx, ny, z_m, rows (ny strings of nx letters, row j at y0 + j·step), legend}."""
     (x_lo, x_hi), (y_lo, y_hi) = workcell.board.x_range_m, workcell.board.y_range_m
@@ -53,13 +66,18 @@ def reach_map(model: Any, motion_config: Any, gripper_type: str, workcell: Any, 
     z = grasp_height_m(workcell, motion_config, gripper_type)
     home = np.asarray(model.home_rad, float)
     started = time.monotonic()
+    farthest = horizontal_reach_m(model)
+    base = np.asarray(model.T_world_base, float)[:3, 3]
     rows = []
     for j in range(ny):
         row, seed = [], home
         for i in range(nx):  # each cell seeded by its neighbour's solution: a numeric IK converges in a few steps
-            letter, q = classify(model, motion_config, gripper_type, (x0 + i * step_m, y0 + j * step_m, z), seed)
-            if letter == OUT_OF_REACH and seed is not home:
-                letter, q = classify(model, motion_config, gripper_type, (x0 + i * step_m, y0 + j * step_m, z), home)
+            x, y = x0 + i * step_m, y0 + j * step_m
+            if math.hypot(x - base[0], y - base[1]) > farthest:
+                row.append(OUT_OF_REACH)
+                seed = home
+                continue
+            letter, q = classify(model, motion_config, gripper_type, (x, y, z), seed)
             row.append(letter)
             seed = q if q is not None else home
         rows.append("".join(row))

@@ -37,7 +37,10 @@ def _answer(rows: list[dict], columns: tuple[str, ...], format: str, download: b
     return Response(json.dumps({"data": rows, "count": len(rows)}), media_type="application/json", headers=headers)
 
 
-@router.get("/events")
+DOWNLOAD = {200: {"content": {"application/json": {}, "text/csv": {}}, "description": "the rows (JSON), or a CSV download"}}
+
+
+@router.get("/events", responses=DOWNLOAD)
 async def read_events(station: StationDep, text: Text = None, level: Literal["info", "warn", "error"] | None = None,
                       from_s: Time = None, to_s: Time = None, limit: Limit = 200, format: Format = "json",
                       download: bool = False) -> Response:
@@ -47,7 +50,7 @@ async def read_events(station: StationDep, text: Text = None, level: Literal["in
     return _answer(rows, EVENT_COLUMNS, format, download, "armlab-events")
 
 
-@router.get("/jobs")
+@router.get("/jobs", responses=DOWNLOAD)
 async def read_jobs(station: StationDep, text: Text = None,
                     state: Literal["running", "succeeded", "failed", "cancelled", "interrupted"] | None = None,
                     from_s: Time = None, to_s: Time = None, limit: Limit = 200, format: Format = "json",
