@@ -112,3 +112,37 @@ def test_bad_values_are_refused_and_change_nothing(fast, bad):
     with pytest.raises(InvalidInput):
         station.set_speed(bad)
     assert station.speed_percent == 70.0
+
+
+def _moving_time_s(trace: dict) -> float:
+    """Simulated seconds during which the commanded reference moves (the gripper's waits left out)."""
+    reference = np.asarray(trace["reference_rad"])
+    moving = np.abs(np.diff(reference, axis=0)).max(axis=1) > 1e-7
+    return float(np.sum(np.diff(np.asarray(trace["time_s"]))[moving]))
+
+
+def test_a_grab_job_at_50_percent_moves_twice_as_long(fast):
+    """A real job (click-grab of a detected block): its arm motion takes twice the simulated time at 50 %."""
+    from armlab import skills
+    from armlab.scene import Scene
+
+    station, cell = fast
+    block = {"id": "cube", "type": "block", "color": "red", "size": "large", "position_m": [0.1, 0.22, 0.019], "yaw_rad": 0.2}
+    _at_home(station)
+    job = skills.calibrate(station)
+    assert job.wait(60) and job.state == "succeeded", job.message
+    moving = {}
+    for speed in (100, 50):
+        _at_home(station)
+        cell.set_scene(Scene.from_dict({"objects": [block]}))
+        station.fresh_perception()
+        station.set_speed(speed)
+        cell.start_joint_recording()
+        job = skills.grab(station, position_m=[0.1, 0.22, 0.038])
+        assert job.wait(120) and job.state == "succeeded", job.message
+        moving[speed] = _moving_time_s(cell.stop_joint_recording())
+        assert cell.truth()["gripper"]["holding_id"] == "cube"
+        station.set_speed(100)
+        station.gripper_command("release")
+        station.set_held_block(None)
+    assert moving[50] / moving[100] == pytest.approx(2.0, abs=0.08), moving
