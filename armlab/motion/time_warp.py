@@ -4,8 +4,8 @@ was planned for. Pure: no devices.
 A trajectory q(u) planned for u in [0, D] is run as q(u(t)) with du/dt = r(t): velocity q'(u)·r, acceleration
 q''(u)·r² + q'(u)·dr/dt. A constant r = s ≤ 1 (a motion from rest at s of full speed) keeps the planned path and
 scales velocity by s and acceleration by s², so it stays within the limits it was planned in. A change of speed
-while the path runs ramps r linearly from r_start to r_end over ramp_s (continuous position and velocity; the
-ramp adds q'·dr/dt to the acceleration, which `ramp_for` keeps to a share of the limit).
+while the path runs (`retimed`) moves r from its old to its new value as fast as the acceleration limits allow at
+each point of the path (continuous position and velocity; the change adds q'·dr/dt to the acceleration).
 """
 
 from __future__ import annotations
@@ -17,8 +17,6 @@ import numpy as np
 from armlab.devices.arm import JointTrajectory
 from armlab.errors import InvalidInput
 
-RAMP_MIN_S = 0.1  # the shortest speed ramp
-RAMP_ACCEL_SHARE = 0.3  # the share of a joint's acceleration limit a speed ramp may add
 RAMP_ACCEL_SHARE_TOTAL = 0.9  # the share of a joint's acceleration limit a re-timed path may use, ramp included
 
 
@@ -122,24 +120,6 @@ def retimed(trajectory: JointTrajectory, start_s: float, rate_start: float, rate
     positions = np.stack([np.interp(u_arr, trajectory.times_s, column) for column in trajectory.positions_rad.T], axis=1)
     positions[0] = trajectory.sample(min(max(float(start_s), 0.0), duration))
     return JointTrajectory(np.arange(len(u_arr)) * dt, positions)
-
-
-def peak_velocity_rad_s(trajectory: JointTrajectory, start_s: float = 0.0) -> np.ndarray:
-    """The largest |velocity| of each joint from start_s on (rad/s)."""
-    times, positions = trajectory.times_s, trajectory.positions_rad
-    if len(times) < 2:
-        return np.zeros(positions.shape[1])
-    velocity = np.abs(np.diff(positions, axis=0) / np.diff(times)[:, None])
-    keep = times[1:] > start_s
-    return velocity[keep].max(axis=0) if keep.any() else np.zeros(positions.shape[1])
-
-
-def ramp_for(peak_velocity_rad_s, accel_limit_rad_s2, rate_start: float, rate_end: float) -> float:
-    """A ramp long enough that q'·dr/dt stays within RAMP_ACCEL_SHARE of every joint's acceleration limit."""
-    peak = np.asarray(peak_velocity_rad_s, float)
-    limit = np.asarray(accel_limit_rad_s2, float) * RAMP_ACCEL_SHARE
-    change = abs(float(rate_end) - float(rate_start))
-    return max(RAMP_MIN_S, float(np.max(peak * change / limit)) if peak.size else 0.0)
 
 
 def paced(trajectory: JointTrajectory, fraction: float, accel_limit_rad_s2, from_rest: bool, rate_hz: float = 100.0) -> JointTrajectory:
