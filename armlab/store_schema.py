@@ -83,6 +83,20 @@ MIGRATIONS: tuple[str, ...] = (
     ALTER TABLE teach_draft ADD COLUMN arm TEXT;
     ALTER TABLE teach_draft ADD COLUMN workcell TEXT;
     """,
+    # 7: the station's event log, kept (searchable and exportable from the page's History panel, issue 21); the
+    # jobs' history is searched by start time and keeps a simulated run's score with its breakdown (NULL: none).
+    """
+    CREATE TABLE IF NOT EXISTS events (
+        id INTEGER PRIMARY KEY AUTOINCREMENT,
+        time_s REAL NOT NULL,
+        level TEXT NOT NULL,
+        kind TEXT NOT NULL,
+        message TEXT NOT NULL
+    );
+    CREATE INDEX IF NOT EXISTS events_by_time ON events (time_s);
+    CREATE INDEX IF NOT EXISTS job_results_by_start ON job_results (started_s);
+    ALTER TABLE job_results ADD COLUMN score_json TEXT;
+    """,
 )
 
 SCHEMA_VERSION = len(MIGRATIONS)

@@ -26,16 +26,19 @@ from server.guard import HostOriginGuard
 from server.routes import (
     arm,
     auto,
+    board,
     calibration,
     calibration_settings,
     colors,
     detections,
+    history,
     intrinsics,
     jobs,
     programs,
     recordings,
     repeat,
     sim,
+    speed,
     station,
     stream,
 )
@@ -126,7 +129,8 @@ def create_app(
         """Liveness check."""
         return {"status": "ok", "version": armlab.__version__}
 
-    for module in (station, arm, calibration, calibration_settings, colors, intrinsics, detections, jobs, auto, programs, recordings, repeat, sim, stream):
+    for module in (station, arm, board, calibration, calibration_settings, colors, intrinsics, detections, history, jobs, auto, programs, recordings,
+                   repeat, sim, speed, stream):
         app.include_router(module.router)
     if web_dir is not None and Path(web_dir, "index.html").exists():
         app.mount("/", StaticFiles(directory=str(web_dir), html=True), name="web")

@@ -41,7 +41,7 @@ class AutoRun:
     score: dict | None = None
     note: str = ""
     scored: threading.Event = field(default_factory=threading.Event)
-
+    store: Any = None  # the station's Store: the score is kept with the job's row (History)
 
     def start(self) -> AutoRun:
         threading.Thread(target=self._watch, name=f"auto-score-{self.job.id}", daemon=True).start()
@@ -59,6 +59,9 @@ class AutoRun:
             self.sim_end_s = float(self.cell.sim_time_s)
             self._sample()
             self.score, self.note = self._judge()
+            if self.store is not None and self.score is not None:
+                self.job.wait(SCORE_WAIT_S)
+                self.store.record_job_score(self.job.id, self.score)
         except Exception as error:  # noqa: BLE001 - reported to whoever asks for the score
             log.exception("scoring the %s run failed", self.name)
             self.note = f"could not score the run: {type(error).__name__}: {error}"
@@ -102,7 +105,7 @@ def is_scored(name: str) -> bool:
 
 
 def watch_run(job: Job, name: str, level: int | None, params: dict | None, cell: Any, sim_start_s: float,
-              workcell: str | None = None) -> AutoRun:
+              workcell: str | None = None, store: Any = None) -> AutoRun:
     """Start watching `job` (begun at simulated time sim_start_s on `cell`, the station's `workcell`) to score
     it when it ends."""
-    return AutoRun(job, name, level, dict(params or {}), cell, sim_start_s, workcell=workcell).start()
+    return AutoRun(job, name, level, dict(params or {}), cell, sim_start_s, workcell=workcell, store=store).start()

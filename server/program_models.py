@@ -96,13 +96,20 @@ class ImportRequest(Request):
 
 class RepeatRequest(Request):
     cycles: int | None = Field(1, ge=1, le=CYCLES_LIMIT, description="how many cycles; None = until stopped (cancel)")
-    speed_percent: Speed = 100.0
+    speed_percent: Speed | None = Field(None, description="speed override (10-100 %); None = the station's (GET /api/speed); a "
+                                        "number becomes the station's override")
 
 
 class SpeedRequest(Request):
-    """PATCH /api/jobs/current: the running repeat's speed override (takes effect at once, smoothly)."""
+    """PUT /api/speed, PATCH /api/jobs/current: the station's speed override (takes effect at once, smoothly)."""
 
     speed_percent: Speed
+
+
+class SpeedResponse(Wire):
+    """GET/PUT /api/speed: the speed override in force."""
+
+    speed_percent: float = Field(description="% of full speed (10-100), applied to every motion the station plans")
 
 
 # Responses ----------------------------------------------------------------------------------------

@@ -78,6 +78,7 @@ class Status(Wire):
     controller: str | None = Field(description="who holds the control lease (None: free); only it may command")
     controller_since_s: float | None = Field(None, description="when it took control (time.time())")
     devices_lost: dict[str, str] = Field(default_factory=dict, description="devices not answering, with the reason")
+    speed_percent: float = Field(100.0, description="the speed override (PUT /api/speed), % of full speed, of every motion")
     job: JobInfo | None
     allowed_commands: list[str]
     time_s: float

@@ -360,16 +360,17 @@ class _Runner:
         }
 
 
-def repeat(station: Station, program_id: int, cycles: int | None = 1, speed_percent: float = 100.0,
+def repeat(station: Station, program_id: int, cycles: int | None = 1, speed_percent: float | None = None,
            source: str | None = None, settings: RepeatSettings = RepeatSettings()) -> Job:
-    """Start repeating program `program_id` `cycles` times (None: until cancelled) at `speed_percent`.
+    """Start repeating program `program_id` `cycles` times (None: until cancelled) at `speed_percent`: the station's
+    speed override (None: as it is; a number becomes the override once the job has started, station/speed.py).
 
     Refused before anything moves (ValueError, UnsafeTrajectory, NotFound, CommandRefused) when the state
     does not allow it, the numbers are out of range, or a waypoint or segment fails the motion check."""
     station.allowed_or_raise("repeat", source)
     if cycles is not None and (isinstance(cycles, bool) or not isinstance(cycles, int) or not 1 <= cycles <= MAX_CYCLES):
         raise InvalidInput(f"cycles must be an integer from 1 to {MAX_CYCLES} (or none: until stopped), got {cycles!r}")
-    speed_percent = checked_speed_percent(speed_percent)
+    speed_percent = checked_speed_percent(station.speed_percent if speed_percent is None else speed_percent)
     program = station.store.get_program(program_id, station.program_owner)  # another arm's program: WrongArm
     plan = plan_cycle(station, program, speed_percent, settings)
     plan_ease_in(station, station.joints_rad(), program.waypoints[0].joints_rad, speed_percent, settings)
@@ -390,8 +391,10 @@ def repeat(station: Station, program_id: int, cycles: int | None = 1, speed_perc
         return _Runner(station, ctx, program, cycles, control, settings, control.trace, plans).run()
 
     times = f"× {cycles}" if cycles is not None else "until stopped"
-    return station.start_job("repeat", "repeat", run, detail=f"program '{program.name}' {times} at {speed_percent:g} %",
-                             source=source, control=control)
+    job = station.start_job("repeat", "repeat", run, detail=f"program '{program.name}' {times} at {speed_percent:g} %",
+                            source=source, control=control)
+    station.set_speed(speed_percent, source=source)  # the one override: the top bar shows the repeat's speed
+    return job
 
 
 __all__ = ["CycleTrace", "repeat"]

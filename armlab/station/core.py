@@ -38,6 +38,7 @@ from armlab.station.calibration_trust import CalibrationTrust
 from armlab.station.checks import checked_joints
 from armlab.station.colors import StationColors
 from armlab.station.config import StationConfig
+from armlab.station.event_history import EventHistory
 from armlab.station.intrinsics import CameraIntrinsics
 from armlab.station.job_control import JobControls
 from armlab.station.jobs import Job, JobContext, start_job_thread
@@ -47,7 +48,9 @@ from armlab.station.manual import ManualCommands
 from armlab.station.motion import MOTION_MEMORY, WAIT_CHUNK_S, MotionGate
 from armlab.station.perceiving import Perceiving
 from armlab.station.perception import DEVICE_ERRORS, FrameSource, Perception, PerceptionLoop
+from armlab.station.reach import ReachCache
 from armlab.station.slots import EventLog, NewestSlot
+from armlab.station.speed import SpeedOverride
 from armlab.station.states import ARM_COMMANDS, JOB_STATES, State, after_event, allowed_commands, next_state
 from armlab.station.teach import TeachCommands
 from armlab.station.telemetry import TelemetryPublisher, gripper_pose_from_matrix
@@ -84,7 +87,8 @@ class NotCalibrated(RefusedByCheck, RuntimeError):
 _UNLATCHED = ("estop",)  # the only command the latch and the lease never refuse
 
 
-class Station(Latch, MotionGate, ManualCommands, TeachCommands, JobControls, Perceiving, CalibrationTrust, ArmCalibrationKeeper):
+class Station(Latch, MotionGate, ManualCommands, TeachCommands, JobControls, SpeedOverride, Perceiving, CalibrationTrust,
+              ArmCalibrationKeeper):
     """The control station's gate (its parts: latch.py, motion.py, manual.py, teach.py, job_control.py, perceiving.py).
     Backends are injected; `sim` is the SimWorkcell when simulated (else None).
 
@@ -151,8 +155,11 @@ class Station(Latch, MotionGate, ManualCommands, TeachCommands, JobControls, Per
         self._changed_everywhere_s = -math.inf  # the last change that may have changed any spot (note_change_everywhere)
         self._commanded: tuple | None = None  # the last trajectory sent: (trajectory, clock_s at its t = 0, count)
         self._command_count = 0
+        self._speed_lock = threading.Lock()  # one override change at a time (speed.py)
         self._pipeline: Any = None  # synchronous mode's perception pipeline
         self.events = EventLog()
+        self.event_history = EventHistory(self.events, self.store)  # kept in the database (History panel)
+        self.reach = ReachCache()  # where the gripper reaches on the board (the page's reach overlay)
         self.intrinsics = CameraIntrinsics(camera, self.store, self.events)  # in use: measured here, else the camera's own
         self.colors = StationColors(self.store, self.events, lambda: self.perception_config, lambda: self.calibration)  # defaults + samples
         self.frames: NewestSlot[Frame] = NewestSlot()
@@ -230,6 +237,7 @@ class Station(Latch, MotionGate, ManualCommands, TeachCommands, JobControls, Per
             (joined if ended else alive).append(worker.name)
         self._workers = []
         self._started = False
+        self.event_history.flush()
         report = {"joined": joined, "alive": alive}
         if alive:
             log.warning("station closed; threads still running: %s (joined: %s)", ", ".join(alive), ", ".join(joined) or "none")
@@ -454,6 +462,7 @@ class Station(Latch, MotionGate, ManualCommands, TeachCommands, JobControls, Per
             "controller": lease["controller"],
             "controller_since_s": lease["since_s"],
             "devices_lost": lost,
+            "speed_percent": self.speed_percent,
             "job": job.to_dict() if job is not None else None,
             "allowed_commands": allowed_commands(state, self.has_arm),
             "time_s": time.time(),

@@ -16,9 +16,15 @@ SPEED_MIN_PERCENT = 10.0
 SPEED_MAX_PERCENT = 100.0
 
 
+SPEED_WAIT_FACTOR = SPEED_MAX_PERCENT / SPEED_MIN_PERCENT  # a paced motion takes at most this many times its full-speed duration
+
+
 def checked_speed_percent(speed_percent: float) -> float:
-    """A speed override in [10, 100] %, else ValueError."""
-    value = float(speed_percent)
+    """A speed override: a finite number in [10, 100] %, else InvalidInput (a ValueError)."""
+    try:
+        value = float(speed_percent)
+    except (TypeError, ValueError):
+        raise InvalidInput(f"speed_percent must be a number from {SPEED_MIN_PERCENT:g} to {SPEED_MAX_PERCENT:g} %, got {speed_percent!r}") from None
     if not SPEED_MIN_PERCENT <= value <= SPEED_MAX_PERCENT:
         raise InvalidInput(f"speed_percent must be from {SPEED_MIN_PERCENT:g} to {SPEED_MAX_PERCENT:g} %, got {speed_percent!r}")
     return value
@@ -122,7 +128,9 @@ class JobControls:
         return self.current_job()
 
     def set_job_speed(self, speed_percent: float, source: str | None = None):
+        """The running repeat's speed: the station's one speed override (speed.py set_speed), refused (CommandRefused)
+        when no job with controls runs."""
         speed = checked_speed_percent(speed_percent)
-        self._run_control("set_speed", source).set_speed(speed)
-        self.events.add("info", f"job speed set to {speed:g} %")
+        self._run_control("set_speed", source)
+        self.set_speed(speed, source=source)
         return self.current_job()

@@ -19,6 +19,7 @@ from armlab.motion.gripper_step import LINEAR_AXES, ORIENTATION_TOL_RAD, StepSpe
 from armlab.motion.jog import checked_jog_velocity, plan_jog
 from armlab.motion.pose_path import holds_full_pose, solve_pose_move
 from armlab.station.checks import checked_moving_time, checked_position
+from armlab.station.job_control import SPEED_WAIT_FACTOR
 from armlab.station.states import State, allowed_commands
 
 STEP_ANCHOR_TOL_RAD = 0.01  # a step starts from the previous step's commanded end when the arm is this close to it
@@ -58,18 +59,22 @@ class ManualCommands:
         self.allowed_or_raise(command, source)  # refuse before planning
         self.checked_joints(q_goal_rad)
 
+        pace = {}  # the speed override it is planned at (speed.py)
+
         def plan(handover) -> JointTrajectory:
+            pace["speed"] = self.speed_percent
             if handover is None:
-                return self.plan_move(q_goal_rad, moving_time_s)
-            return self.plan_move_from(handover, q_goal_rad, moving_time_s)
+                return self._paced(self.plan_move(q_goal_rad, moving_time_s), pace["speed"], from_rest=True)
+            return self._paced(self.plan_move_from(handover, q_goal_rad, moving_time_s), pace["speed"], from_rest=handover.at_rest)
 
         def under_lock() -> None:
+            self._pace_next_send(pace["speed"])  # the override changed meanwhile: planned again
             self._transition(command, source=source)  # state unchanged: idle/teach stay
             self._jog = None
 
         trajectory, _ = self._send_replacing(plan, under_lock, command, replaceable=True)
         if wait:
-            self.wait_motion(trajectory.duration_s + 5.0)
+            self.wait_motion(trajectory.duration_s * SPEED_WAIT_FACTOR + 5.0)
 
     def move_joints(self, q_rad, moving_time_s: float | None = None, wait: bool = False, source: str | None = None) -> None:
         self._manual_move("move_joints", q_rad, moving_time_s, wait, source)
@@ -99,7 +104,7 @@ class ManualCommands:
         q_goal = self.solve_pose(position_m, pitch_rad, yaw_rad)
         self._manual_move("move_to", q_goal, moving_time_s, wait=False, source=source)
         if wait:
-            self.wait_motion(self.config.max_moving_time_s + 5.0)
+            self.wait_motion(self.config.max_moving_time_s * SPEED_WAIT_FACTOR + 5.0)
         return q_goal
 
     def jog(self, velocity_rad_s, source: str | None = None, speed_percent: float = 100.0) -> JointTrajectory:

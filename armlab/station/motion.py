@@ -25,6 +25,7 @@ from armlab.motion.gripper_step import FingerBox
 from armlab.motion.handover import Handover, continuity_problem, reference_velocity, splice, take_over, trimmed
 from armlab.motion.safety import UnsafeTrajectory, check_start
 from armlab.station.arm_info import station_gripper_type
+from armlab.station.job_control import SPEED_WAIT_FACTOR
 from armlab.station.jobs import JobCancelled, JobContext
 from armlab.station.states import JOB_STATES, allowed_commands
 
@@ -220,6 +221,7 @@ class MotionGate:
             check_start(trimmed(trajectory, read_s - now), measured, self.motion_config.start_tolerance_rad, self.model.joint_names)
         self._command_count += 1
         record = self._commanded = (planned, planned_t0, self._command_count)
+        self._paced_motion, self._pace_next = (planned, self._pace_next), None  # speed.py: what a change re-times
         if handover is not None:  # the arm samples the splice at its own clock minus this: a late send continues it
             start_s = handover.planned_at_s + elapsed
             self._send_later(lambda: self.arm.command_trajectory(trajectory, start_time_s=start_s))
@@ -407,14 +409,24 @@ class MotionGate:
             self._motions.append((time.time(), np.array([point[0], point[1], point[0], point[1], point[0], point[1], -np.inf])))
             del self._motions[:-MOTION_MEMORY]
 
-    def start_trajectory(self, ctx: JobContext, trajectory: JointTrajectory) -> None:
+    def start_trajectory(self, ctx: JobContext, trajectory: JointTrajectory) -> JointTrajectory:
         """Inside a job: check the trajectory (check_motion) and command it (only while this job owns the
-        arm), without waiting; while a motion runs it must continue it (replace_trajectory plans one that does)."""
-        self.check_motion(trajectory)
-        swept_box = self._swept_box(trajectory)
-        with self._sending():
-            self._owns_arm(ctx)
-            self._command_arm(trajectory, swept_box)
+        arm), without waiting; while a motion runs it must continue it (replace_trajectory plans one that does).
+        Paced at the speed override (speed.py) unless the job paces itself (a repeat's RunControl). Returns
+        what was sent."""
+        paces = getattr(ctx.job, "control", None) is None
+        with self._speed_lock:  # a change of the override waits for this send, then re-times it
+            speed = self.speed_percent
+            if paces:
+                trajectory = self._paced(trajectory, speed)
+            self.check_motion(trajectory)
+            swept_box = self._swept_box(trajectory)
+            with self._sending():
+                self._owns_arm(ctx)
+                if paces:
+                    self._pace_next_send(speed)
+                self._command_arm(trajectory, swept_box)
+        return trajectory
 
     def replace_trajectory(self, ctx: JobContext, plan: Callable) -> tuple[JointTrajectory, float, float]:
         """Inside a job: replace the motion in progress by plan(handover) (see _send_replacing), continuously.
@@ -435,9 +447,10 @@ class MotionGate:
     def run_trajectory(self, ctx: JobContext, trajectory: JointTrajectory) -> None:
         """Inside a job: check the trajectory (check_motion), command it (only while this job owns the arm)
         and wait for it."""
-        self.start_trajectory(ctx, trajectory)
+        trajectory = self.start_trajectory(ctx, trajectory)
         checked = ctx if not ctx.in_cleanup else None
-        if not self._wait_until(lambda: not self.arm.is_moving(), trajectory.duration_s + 5.0, checked):
+        # a lower speed override set while it runs stretches it (speed.py): wait as long as the slowest speed takes
+        if not self._wait_until(lambda: not self.arm.is_moving(), trajectory.duration_s * SPEED_WAIT_FACTOR + 5.0, checked):
             self._halt_devices(gripper=False)
             if self._halt.is_set():
                 raise JobCancelled("the station was e-stopped")

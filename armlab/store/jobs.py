@@ -13,8 +13,9 @@ class JobTables(Database):
     def record_job(self, job: dict) -> None:
         """Insert or update a job's outcome (the dict of Job.to_dict())."""
         self._run(
-            "INSERT OR REPLACE INTO job_results (id, name, state, message, started_s, finished_s, result_json) "
-            "VALUES (?, ?, ?, ?, ?, ?, ?)",
+            "INSERT INTO job_results (id, name, state, message, started_s, finished_s, result_json) VALUES (?, ?, ?, ?, ?, ?, ?) "
+            "ON CONFLICT(id) DO UPDATE SET name = excluded.name, state = excluded.state, message = excluded.message, "
+            "started_s = excluded.started_s, finished_s = excluded.finished_s, result_json = excluded.result_json",  # keeps a score
             (
                 job["id"],
                 job["name"],

@@ -33,7 +33,8 @@ def get_arm(station: StationDep) -> dict:
 async def _answer(request: Request, station, wait: bool) -> dict:
     """The status, once the arm has stopped when the client asked to wait."""
     if wait:
-        await until_arm_still(request, station, station.config.max_moving_time_s + 5.0)
+        # a move is at most max_moving_time_s at full speed; the speed override stretches it
+        await until_arm_still(request, station, station.config.max_moving_time_s * 100.0 / station.speed_percent + 5.0)
     return await run_in_threadpool(station.status)
 
 

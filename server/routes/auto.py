@@ -90,7 +90,7 @@ async def post_auto(body: AutoRequest, request: Request, station: StationDep, co
         job = start_auto(station, body.job, level, params, source=controller)
         run = None
         if station.sim is not None:
-            run = request.app.state.auto_run = watch_run(job, body.job, level, params, station.sim, sim_start_s,
+            run = request.app.state.auto_run = watch_run(job, body.job, level, params, station.sim, sim_start_s, store=station.store,
                                                          workcell=station.config.workcell)
         return job, run
 

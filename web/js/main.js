@@ -12,6 +12,10 @@ import { CartesianJog } from "./jog.js";
 import { LiveView } from "./liveview.js";
 import { applyNoArm } from "./noarm.js";
 import { EventLog } from "./log.js";
+import { HistoryPanel } from "./history.js";
+import { ReachOverlay } from "./reach.js";
+import { SpeedOverride } from "./speed.js";
+import { TagListPanel } from "./taglist.js";
 import {
   JointSliders,
   applyAllowed,
@@ -109,6 +113,10 @@ class App {
       log: this.log,
       serverNowS: () => this.stream.serverNowS(),
     });
+    this.speed = new SpeedOverride({ api: this.api, run: (a, c) => this.run(a, c) });
+    this.history = new HistoryPanel({ api: this.api, log: this.log });
+    this.tags = new TagListPanel({ api: this.api });
+    this.reach = new ReachOverlay({ live: this.live, api: this.api, log: this.log });
     this.unknownWireNames = App.unknownWireNames;
     window.armlab = this; // handle for operators' devtools and the browser tests
   }
@@ -227,6 +235,7 @@ class App {
     this.torque.render(s);
     this.lease.render(s);
     this.repeat.onStatus(s);
+    this.speed.show(s.speed_percent);
     if (previous && previous.state !== s.state && s.state === "teach") this.teach.refreshDraft();
     if (!previous || (previous.joint_names || []).join() !== (s.joint_names || []).join()) {
       if (s.joint_names) this.sliders.build(s.joint_names, s.joint_limits_rad);
@@ -256,6 +265,7 @@ class App {
     renderCalibration(calibration);
     this.live.setCalibration(calibration);
     this.competition.setCalibration(calibration);
+    this.tags.onCalibration();
   }
 
   setDetections(detections) {
@@ -298,6 +308,7 @@ class App {
     const control = this.connected && this.api.canControl && (this.helloSeen ? this.canControl : true) && this.lease.mine;
     applyAllowed(document, allowed, control);
     this.sliders.setDisabled(!control || !(allowed || []).includes("move_joints"));
+    this.speed.setDisabled(!(this.connected && this.api.canControl));
     // E-stop is never disabled: without a connection it goes over REST.
     $("btn-estop").disabled = false;
   }

@@ -44,13 +44,19 @@ export class RepeatPanel {
     return this.run(`repeat ${program.name}`, () => this.api.repeat(program.id, cycles, this.speedPercent));
   }
 
+  /** The slider sets the station's one speed override (the top bar's): the running repeat re-plans at it. */
   speedChanged() {
-    if (!this.jobId) return;
-    this.run(`speed ${this.speedPercent} %`, () => this.api.setJobSpeed(this.speedPercent));
+    if (this.jobId) this.run(`speed ${this.speedPercent} %`, () => this.api.setJobSpeed(this.speedPercent));
+    else this.run(`speed override ${this.speedPercent} %`, () => this.api.request("PUT", "/api/speed", { speed_percent: this.speedPercent }));
   }
 
   /** Follow the status: progress line, and the cycle plot whenever a cycle completed or the repeat ended. */
   onStatus(s) {
+    const speed = $("repeat-speed");
+    if (Number.isFinite(s.speed_percent) && document.activeElement !== speed) {
+      speed.value = String(s.speed_percent);
+      $("repeat-speed-out").textContent = `${Math.round(s.speed_percent)} %`;
+    }
     const job = s.job;
     const repeat = job && job.name === "repeat" ? job.extra?.repeat : null;
     const running = Boolean(job && job.name === "repeat" && job.state === "running");

@@ -542,7 +542,7 @@ export const EVENT_KINDS = Object.freeze(["general", "scene"]);
 /**
  * @typedef {Object} RepeatRequest
  * @property {(number|null)} [cycles] how many cycles; None = until stopped (cancel)
- * @property {number} [speed_percent] speed override, % of full speed (10-100)
+ * @property {(number|null)} [speed_percent] speed override (10-100 %); None = the station's (GET /api/speed); a number becomes the station's override
  */
 
 /**
@@ -576,7 +576,7 @@ export const EVENT_KINDS = Object.freeze(["general", "scene"]);
  */
 
 /**
- * PATCH /api/jobs/current: the running repeat's speed override (takes effect at once, smoothly).
+ * PUT /api/speed, PATCH /api/jobs/current: the station's speed override (takes effect at once, smoothly).
  * @typedef {Object} SpeedRequest
  * @property {number} speed_percent speed override, % of full speed (10-100)
  */
@@ -601,6 +601,7 @@ export const EVENT_KINDS = Object.freeze(["general", "scene"]);
  * @property {(string|null)} controller who holds the control lease (None: free); only it may command
  * @property {(number|null)} [controller_since_s] when it took control (time.time())
  * @property {Object<string, *>} [devices_lost] devices not answering, with the reason
+ * @property {number} [speed_percent] the speed override (PUT /api/speed), % of full speed, of every motion
  * @property {(JobInfo|null)} job
  * @property {Array<string>} allowed_commands
  * @property {number} time_s
@@ -717,6 +718,7 @@ export const EVENT_KINDS = Object.freeze(["general", "scene"]);
  * @property {(string|null)} controller who holds the control lease (None: free); only it may command
  * @property {(number|null)} [controller_since_s] when it took control (time.time())
  * @property {Object<string, *>} [devices_lost] devices not answering, with the reason
+ * @property {number} [speed_percent] the speed override (PUT /api/speed), % of full speed, of every motion
  * @property {(JobInfo|null)} job
  * @property {Array<string>} allowed_commands
  * @property {number} time_s
