@@ -38,6 +38,7 @@ from server.routes import (
     sim,
     station,
     stream,
+    view3d,
 )
 from server.stream import StreamHub
 from server.waiting import Waiter
@@ -126,7 +127,8 @@ def create_app(
         """Liveness check."""
         return {"status": "ok", "version": armlab.__version__}
 
-    for module in (station, arm, calibration, calibration_settings, colors, intrinsics, detections, jobs, auto, programs, recordings, repeat, sim, stream):
+    for module in (station, arm, calibration, calibration_settings, colors, intrinsics, detections, jobs, auto, programs, recordings, repeat, sim,
+                   stream, view3d):
         app.include_router(module.router)
     if web_dir is not None and Path(web_dir, "index.html").exists():
         app.mount("/", StaticFiles(directory=str(web_dir), html=True), name="web")
