@@ -2,7 +2,7 @@
 // joints from telemetry, the board with its grid, tags and places, detected blocks (and, in the simulation,
 // ground truth), the calibrated camera's frustum and the gripper's recent path. Orbit / pan / zoom with the
 // mouse, preset views Top, Front, Camera. Geometry comes from GET /api/view3d/scene and the calibration.
-// It renders only when something changed (telemetry, the view, a layer), so an idle panel costs no frames.
+// It renders only when something changed (the arm, the blocks, the view, a layer), so an idle panel costs no frames.
 
 import * as THREE from "three";
 import { OrbitControls } from "three/addons/controls/OrbitControls.js";
@@ -191,34 +191,44 @@ export class View3D {
   /** Telemetry (main.js calls this on every message): applied at the next animation frame, newest wins. */
   onTelemetry(status) {
     this.pendingTelemetry = { status, arrivedMs: performance.now() };
-    this.dirty = true;
   }
 
+  /** Pose the arm, move the path and the blocks to a telemetry message; true if anything drawn changed. */
   applyTelemetry({ status }) {
+    let changed = false;
     if (this.arm && Array.isArray(status.joints_rad)) {
-      this.arm.setJoints(status.joints_rad, status.gripper?.width_m);
-      const tool = this.arm.toolPosition();
-      this.trail.push(tool);
-      this.lastDrawn = { time_s: status.time_s, joints_rad: status.joints_rad, tool_m: tool };
+      const width = status.gripper?.width_m;
+      const last = this.lastDrawn;
+      const same = last && last.width_m === width && last.joints_rad.length === status.joints_rad.length
+        && last.joints_rad.every((v, i) => Math.abs(v - status.joints_rad[i]) < 1e-6);
+      if (!same) {
+        this.arm.setJoints(status.joints_rad, width);
+        const tool = this.arm.toolPosition();
+        this.trail.push(tool);
+        this.lastDrawn = { time_s: status.time_s, joints_rad: status.joints_rad, width_m: width, tool_m: tool };
+        changed = true;
+      }
     }
     if (Array.isArray(status.detections) && this.workcell) {
-      this.detections.set(detectionBoxes(status.detections, this.workcell));
+      changed = this.detections.set(detectionBoxes(status.detections, this.workcell)) || changed;
     }
+    return changed;
   }
 
   frame() {
-    if (!this.dirty || this.root.hidden) return;
+    if (this.root.hidden) return;
     const started = performance.now();
     const pending = this.pendingTelemetry;
     this.pendingTelemetry = null;
-    if (pending) this.applyTelemetry(pending);
+    const moved = pending ? this.applyTelemetry(pending) : false;
+    if (!moved && !this.dirty) return; // nothing new: no frame (telemetry repeats itself while the arm is still)
     this.renderer.render(this.scene, this.camera);
     this.dirty = false;
     const doneMs = performance.now();
     this.stats.frames += 1;
     this.stats.renderMs.push(doneMs - started);
     if (this.stats.armFirstFrameMs === null && this.arm?.loaded) this.stats.armFirstFrameMs = doneMs;
-    if (pending && Number.isFinite(pending.status.time_s)) {
+    if (moved && Number.isFinite(pending.status.time_s)) {
       this.stats.telemetryDelayMs.push((this.serverNowS() - pending.status.time_s) * 1000);
       this.stats.arrivalDelayMs.push(doneMs - pending.arrivedMs);
     }

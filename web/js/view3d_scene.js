@@ -140,7 +140,7 @@ export class BoxSet {
   }
 
   set(boxes) {
-    const key = JSON.stringify(boxes.map((b) => [b.color, ...b.position_m.map((v) => v.toFixed(4)), b.yaw_rad.toFixed(3)]));
+    const key = JSON.stringify(boxes.map((b) => [b.color, ...b.position_m.map((v) => v.toFixed(3)), b.yaw_rad.toFixed(2)])); // mm, ~0.6 deg
     if (key === this.key) return false;
     this.key = key;
     for (const child of [...this.group.children]) {
