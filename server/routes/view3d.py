@@ -1,15 +1,17 @@
 """The 3-D panel's geometry (web/js/view3d.js), all from configuration: the arm as a URDF generated from its
 config file with the vendor's meshes (armlab.station.arm_urdf), and the workcell (board, grid, tags, places).
-Read-only, no token: a view-only page draws the same scene."""
+And the depth image as a decimated, coloured point cloud in the world frame. Read-only, no token: a view-only
+page draws the same scene."""
 
 from __future__ import annotations
 
 import numpy as np
-from fastapi import APIRouter
+from fastapi import APIRouter, Query
 from fastapi.responses import Response
 
 from armlab.station.arm_info import station_workcell_name
 from armlab.station.arm_urdf import FINGER_JOINTS, TOOL_LINK, MeshSet, arm_urdf
+from armlab.vision.pixel_world import depth_point_cloud
 from armlab.workcell import load_workcell
 from server.deps import StationDep
 from server.errors import ApiError
@@ -53,3 +55,21 @@ def get_scene(station: StationDep) -> dict:
         "mesh_urls": sorted({meshes.url + visual["file"] for visual in meshes.visuals}) if meshes else [],
     }
     return {"arm": arm, "workcell": workcell}
+
+
+@router.get("/points", response_class=Response, responses={200: {"content": {"application/octet-stream": {}}}})
+def get_points(station: StationDep, step_px: int = Query(8, ge=2, le=64, description="every step_px-th pixel in u and v")) -> Response:
+    """The newest depth image as world points through the calibration, every step_px-th pixel: little-endian
+    float32 x, y, z (metres) for the N points, then uint8 r, g, b for each; N in X-Points. 409 without a
+    calibration or a depth image."""
+    calibration = station.calibration
+    if calibration is None:
+        raise ApiError(409, "not_calibrated", "the point cloud needs the camera's calibration")
+    frame, _ = station.frames.get()
+    depth = getattr(frame, "depth_mm", None)
+    if depth is None:
+        raise ApiError(409, "no_depth", "the camera gives no depth image")
+    points, colors = depth_point_cloud(calibration, depth, frame.color_bgr, step_px)
+    return Response(points.astype("<f4").tobytes() + colors.tobytes(), media_type="application/octet-stream",
+                    headers={"X-Points": str(len(points)), "X-Capture-Time-S": f"{frame.timestamp_s:.6f}",
+                             "Cache-Control": "no-store"})

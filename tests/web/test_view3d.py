@@ -6,6 +6,7 @@ the 3-D arm's joints are the telemetry's; its tool point (the URDF's `tool_point
 the simulation's ground-truth gripper point within 2 mm; projected through the station's calibration (the
 calibrated camera: K and T_world_camera from GET /api/calibration) it lands within 10 px of where the video
 shows the gripper (the ground-truth gripper point through the simulated camera's true pose and intrinsics).
+Detected blocks are boxes, the simulation's ground truth outlines once toggled, the depth points lie on the board.
 The UR3 workcell's page draws the UR3 (its six joints, Universal Robots' meshes) with the cup where the
 simulation has it. The page without the panel opened fetches none of three.js."""
 
@@ -86,6 +87,36 @@ def test_the_3d_arm_follows_telemetry_and_agrees_with_the_camera(server, browser
             assert np.linalg.norm(in_scene_px - in_video_px) < VIDEO_TOLERANCE_PX, (q, in_scene_px, in_video_px)
         # The calibrated camera's frustum is in the scene and the Camera preset is offered.
         assert page.evaluate("Boolean(armlab.view3d.frustum) && !document.querySelector(\"[data-view3d-preset='camera']\").disabled")
+        assert page.errors == []
+    finally:
+        page.close()
+
+
+def test_blocks_ground_truth_and_depth_points(server, browser):
+    """Detected blocks as boxes (one per detection), the simulation's ground truth as outlines (one per object) once
+    its toggle is on, and the depth points once theirs is: most of them on the board plane (the calibration's)."""
+    ready_idle(server)
+    if not server.get("/api/status")["calibrated"]:
+        server.post("/api/calibrate?wait=true", timeout_s=120)
+    page = _panel_page(browser, server)
+    try:
+        truth_objects = len(server.get("/api/sim/truth")["objects"])
+        assert truth_objects >= 3
+        page.wait_for_function("armlab.view3d.detections.group.children.length === (armlab.status?.detections || []).length"
+                               " && armlab.view3d.detections.group.children.length > 0", timeout=30_000)
+        assert page.is_visible("[data-view3d-layer='truth']")
+        page.check("[data-view3d-layer='truth']")
+        page.wait_for_function(f"armlab.view3d.truth.group.children.length === {truth_objects}", timeout=30_000)
+        page.check("[data-view3d-layer='points']")
+        page.wait_for_function("armlab.view3d.cloud.count > 1000 && armlab.view3d.cloud.points.visible", timeout=30_000)
+        response = server.request("GET", "/api/view3d/points?step_px=8")
+        count = int(response.headers["X-Points"])
+        xyz = np.frombuffer(response.content, dtype="<f4", count=count * 3).reshape(-1, 3)
+        workcell = server.get("/api/view3d/scene")["workcell"]["board"]
+        on_board = xyz[(np.abs(xyz[:, 0]) < 0.3) & (xyz[:, 1] > workcell["y_range_m"][0] + 0.05) & (xyz[:, 1] < 0.1)]
+        assert len(on_board) > 100 and abs(float(np.median(on_board[:, 2]))) < 0.005
+        page.uncheck("[data-view3d-layer='points']")
+        assert not page.evaluate("armlab.view3d.cloud.points.visible")
         assert page.errors == []
     finally:
         page.close()

@@ -9,6 +9,7 @@ import { OrbitControls } from "three/addons/controls/OrbitControls.js";
 import {
   ArmFigure,
   BoxSet,
+  PointCloud,
   Trail,
   buildFrustum,
   buildWorkcell,
@@ -18,6 +19,7 @@ import {
 } from "./view3d_scene.js";
 
 const TRUTH_POLL_MS = 500;
+const POINTS_POLL_MS = 1000;
 
 export class View3D {
   /** root: the panel element (holds a .view3d-canvas-wrap and the controls); serverNowS: the server clock. */
@@ -64,7 +66,8 @@ export class View3D {
     this.detections = new BoxSet("detections");
     this.truth = new BoxSet("truth", { wire: true });
     this.trail = new Trail();
-    scene.add(this.detections.group, this.truth.group, this.trail.line);
+    this.cloud = new PointCloud();
+    scene.add(this.detections.group, this.truth.group, this.trail.line, this.cloud.points);
     this.setPreset("front");
     if (description.arm) {
       this.armDescription = description.arm;
@@ -102,16 +105,25 @@ export class View3D {
     this.detections.group.visible = this.layerOn("blocks");
     this.trail.line.visible = this.layerOn("path");
     if (this.frustum) this.frustum.visible = this.layerOn("frustum");
-    const truthOn = this.layerOn("truth");
-    this.truth.group.visible = truthOn;
-    if (truthOn && !this.truthTimer) {
-      this.pollTruth();
-      this.truthTimer = setInterval(() => this.pollTruth(), TRUTH_POLL_MS);
-    } else if (!truthOn && this.truthTimer) {
-      clearInterval(this.truthTimer);
-      this.truthTimer = null;
-    }
+    this.cloud.points.visible = this.layerOn("points");
+    this.truthTimer = this.poll(this.truthTimer, this.layerOn("truth"), () => this.pollTruth(), TRUTH_POLL_MS);
+    this.pointsTimer = this.poll(this.pointsTimer, this.cloud.points.visible, () => this.pollPoints(), POINTS_POLL_MS);
+    this.truth.group.visible = this.layerOn("truth");
     this.invalidate();
+  }
+
+  /** A timer calling fn every periodMs while on (and once at once), cleared when off; returns the timer. */
+  poll(timer, on, fn, periodMs) {
+    if (on && !timer) {
+      fn();
+      return setInterval(fn, periodMs);
+    }
+    if (!on && timer) clearInterval(timer);
+    return on ? timer : null;
+  }
+
+  async pollPoints() {
+    if (!this.root.hidden && (await this.cloud.refresh())) this.invalidate();
   }
 
   async pollTruth() {

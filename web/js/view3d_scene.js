@@ -255,3 +255,37 @@ export class Trail {
     return true;
   }
 }
+
+/** The depth image as coloured points (GET /api/view3d/points: float32 xyz × N, then uint8 rgb × N). */
+export class PointCloud {
+  constructor() {
+    this.geometry = new THREE.BufferGeometry();
+    this.points = new THREE.Points(this.geometry, new THREE.PointsMaterial({ size: 4, sizeAttenuation: false, vertexColors: true }));
+    this.points.name = "points";
+    this.points.frustumCulled = false;
+    this.inFlight = false;
+  }
+
+  /** Fetch the newest cloud (one request at a time); resolves true once drawn anew. */
+  async refresh(stepPx = 8) {
+    if (this.inFlight) return false;
+    this.inFlight = true;
+    try {
+      const response = await fetch(`/api/view3d/points?step_px=${stepPx}`, { cache: "no-store" });
+      if (!response.ok) return false;
+      const count = Number(response.headers.get("X-Points"));
+      const data = await response.arrayBuffer();
+      if (!Number.isFinite(count) || data.byteLength !== count * 15) return false;
+      const xyz = new Float32Array(data, 0, count * 3);
+      const rgb = new Uint8Array(data, count * 12, count * 3);
+      this.geometry.setAttribute("position", new THREE.BufferAttribute(xyz, 3));
+      this.geometry.setAttribute("color", new THREE.BufferAttribute(rgb, 3, true));
+      this.count = count;
+      return true;
+    } catch {
+      return false;
+    } finally {
+      this.inFlight = false;
+    }
+  }
+}
