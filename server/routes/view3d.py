@@ -11,6 +11,7 @@ from fastapi.responses import Response
 
 from armlab.station.arm_info import station_workcell_name
 from armlab.station.arm_urdf import FINGER_JOINTS, TOOL_LINK, MeshSet, arm_urdf
+from armlab.tasks.judge import GRIPPER_BOX_M
 from armlab.vision.pixel_world import depth_point_cloud
 from armlab.workcell import load_workcell
 from server.deps import StationDep
@@ -38,8 +39,11 @@ def get_scene(station: StationDep) -> dict:
     """Everything the 3-D panel draws that does not move: the arm (its URDF inline, the joints telemetry's
     joints_rad sets, the tool link, the finger joints with the pad thickness that turns the gripper's
     width_m into each finger's offset, the meshes' source and licence; None without an arm) and the
-    workcell (as the websocket hello's)."""
-    workcell = load_workcell(station_workcell_name(station)).to_wire()
+    workcell (as the websocket hello's, with pick_stack's gripper box: the judge's box the gripper point must
+    stay inside, min_m / max_m corners)."""
+    box = GRIPPER_BOX_M
+    workcell = load_workcell(station_workcell_name(station)).to_wire() | {"gripper_box_m": {
+        "task": "pick_stack", "min_m": [-box["x_abs_max"], box["y_min"], 0.0], "max_m": [box["x_abs_max"], box["y_max"], box["z_max"]]}}
     if station.model is None:
         return {"arm": None, "workcell": workcell}
     urdf, meshes = _urdf(station)

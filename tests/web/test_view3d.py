@@ -14,6 +14,8 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
+
+from armlab.tasks.judge import GRIPPER_BOX_M
 from browser_helpers import open_page, ready_idle
 
 pytestmark = pytest.mark.browser
@@ -94,7 +96,8 @@ def test_the_3d_arm_follows_telemetry_and_agrees_with_the_camera(server, browser
 
 def test_blocks_ground_truth_and_depth_points(server, browser):
     """Detected blocks as boxes (one per detection), the simulation's ground truth as outlines (one per object) once
-    its toggle is on, and the depth points once theirs is: most of them on the board plane (the calibration's)."""
+    its toggle is on, the depth points once theirs is (most of them on the board plane: the calibration's), and
+    pick_stack's gripper box."""
     ready_idle(server)
     if not server.get("/api/status")["calibrated"]:
         server.post("/api/calibrate?wait=true", timeout_s=120)
@@ -117,6 +120,13 @@ def test_blocks_ground_truth_and_depth_points(server, browser):
         assert len(on_board) > 100 and abs(float(np.median(on_board[:, 2]))) < 0.005
         page.uncheck("[data-view3d-layer='points']")
         assert not page.evaluate("armlab.view3d.cloud.points.visible")
+        # pick_stack's gripper box, from the judge's numbers the server sends, once its toggle is on.
+        box = server.get("/api/view3d/scene")["workcell"]["gripper_box_m"]
+        assert box["max_m"] == [GRIPPER_BOX_M["x_abs_max"], GRIPPER_BOX_M["y_max"], GRIPPER_BOX_M["z_max"]]
+        assert not page.evaluate("armlab.view3d.gripperBox.visible")
+        page.check("[data-view3d-layer='box']")
+        centre = page.evaluate("armlab.view3d.gripperBox.visible && armlab.view3d.gripperBox.position.toArray()")
+        assert np.allclose(centre, (np.asarray(box["min_m"]) + box["max_m"]) / 2, atol=1e-6)
         assert page.errors == []
     finally:
         page.close()

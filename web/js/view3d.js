@@ -62,7 +62,10 @@ export class View3D {
     const description = await (this.prefetched?.scene ?? this.api.get("/api/view3d/scene"));
     const meshBuffers = this.prefetched ? await this.prefetched.meshes : new Map();
     this.workcell = description.workcell;
-    scene.add(buildWorkcell(this.workcell));
+    const workcell = buildWorkcell(this.workcell);
+    this.board = workcell.getObjectByName("board");
+    this.gripperBox = workcell.getObjectByName("gripper box");
+    scene.add(workcell);
     this.detections = new BoxSet("detections");
     this.truth = new BoxSet("truth", { wire: true });
     this.trail = new Trail();
@@ -104,8 +107,10 @@ export class View3D {
   applyLayers() {
     this.detections.group.visible = this.layerOn("blocks");
     this.trail.line.visible = this.layerOn("path");
+    if (this.gripperBox) this.gripperBox.visible = this.layerOn("box");
     if (this.frustum) this.frustum.visible = this.layerOn("frustum");
     this.cloud.points.visible = this.layerOn("points");
+    this.board.visible = !this.cloud.points.visible; // the points show the board; both would fight for the same pixels
     this.truthTimer = this.poll(this.truthTimer, this.layerOn("truth"), () => this.pollTruth(), TRUTH_POLL_MS);
     this.pointsTimer = this.poll(this.pointsTimer, this.cloud.points.visible, () => this.pollPoints(), POINTS_POLL_MS);
     this.truth.group.visible = this.layerOn("truth");

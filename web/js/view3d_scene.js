@@ -127,6 +127,17 @@ export function buildWorkcell(workcell) {
     ring.name = `place ${name}`;
     group.add(ring);
   }
+  const box = workcell.gripper_box_m;
+  if (box) {
+    const size = [0, 1, 2].map((i) => box.max_m[i] - box.min_m[i]);
+    const edges = new THREE.LineSegments(
+      new THREE.EdgesGeometry(new THREE.BoxGeometry(...size)),
+      new THREE.LineBasicMaterial({ color: 0xba68c8, transparent: true, opacity: 0.7 }),
+    );
+    edges.position.set(...[0, 1, 2].map((i) => (box.max_m[i] + box.min_m[i]) / 2));
+    edges.name = "gripper box";
+    group.add(edges);
+  }
   return group;
 }
 
