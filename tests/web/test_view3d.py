@@ -75,8 +75,10 @@ def test_the_3d_arm_follows_telemetry_and_agrees_with_the_camera(server, browser
     assert calibration["calibrated"]
     page = _panel_page(browser, server)
     try:
+        tools = []
         for q in POSES_RAD:
             drawn = _drawn_at(page, server, q)
+            tools.append(drawn["tool"])
             assert np.allclose(drawn["joints"], drawn["telemetry"], atol=1e-9), "the 3-D joints are the telemetry's"
             assert np.allclose(drawn["telemetry"], q, atol=0.02), f"the arm went to {q}"
             truth = drawn["truth"]
@@ -87,6 +89,15 @@ def test_the_3d_arm_follows_telemetry_and_agrees_with_the_camera(server, browser
             in_video_px = _project(truth["camera"]["K"], truth["camera"]["T_world_camera"], truth_m)
             assert 0 <= in_video_px[0] < truth["camera"]["width"] and 0 <= in_video_px[1] < truth["camera"]["height"]
             assert np.linalg.norm(in_scene_px - in_video_px) < VIDEO_TOLERANCE_PX, (q, in_scene_px, in_video_px)
+        # A second arm (the goal arm of a plan, later) from the same description: see-through, posed on its own.
+        goal = page.evaluate("""async (q) => { const v = armlab.view3d; const goal = v.addArm({ opacity: 0.35 });
+            await new Promise((done) => { const wait = () => goal.loaded ? done() : setTimeout(wait, 20); wait(); });
+            goal.setJoints(q); v.invalidate();
+            const materials = []; goal.robot.traverse((n) => { if (n.isMesh) materials.push(n.material.opacity); });
+            return { tool: goal.toolPosition(), opacities: materials, measured: v.arm.toolPosition() }; }""", POSES_RAD[1])
+        assert goal["opacities"] and all(o == 0.35 for o in goal["opacities"])
+        assert np.linalg.norm(np.asarray(goal["tool"]) - goal["measured"]) > 0.05  # posed apart from the measured arm
+        assert np.linalg.norm(np.asarray(goal["tool"]) - tools[1]) < 0.01  # where the measured arm was at that pose
         # The calibrated camera's frustum is in the scene and the Camera preset is offered.
         assert page.evaluate("Boolean(armlab.view3d.frustum) && !document.querySelector(\"[data-view3d-preset='camera']\").disabled")
         assert page.errors == []

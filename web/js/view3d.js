@@ -89,6 +89,19 @@ export class View3D {
     this.raf = requestAnimationFrame(this.loop);
   }
 
+  /** Another arm from the same URDF (a goal arm, a plan's waypoint): see-through, in its own colour, sharing the
+   * measured arm's parsed meshes; pose it with figure.setJoints(q) then invalidate(); removeArm(figure) drops it. */
+  addArm({ opacity = 0.35, color = 0xff9800 } = {}) {
+    const figure = new ArmFigure(this.armDescription, { opacity, color, onLoad: () => this.invalidate() });
+    this.scene.add(figure.robot);
+    return figure;
+  }
+
+  removeArm(figure) {
+    this.scene.remove(figure.robot);
+    this.invalidate();
+  }
+
   bindControls() {
     for (const button of this.root.querySelectorAll("[data-view3d-preset]")) {
       button.addEventListener("click", () => this.setPreset(button.dataset.view3dPreset));
