@@ -126,6 +126,10 @@ def run(browser, base: str, token: str, seconds: float, rounds: int) -> None:
         return info ? gl.getParameter(info.UNMASKED_RENDERER_WEBGL) : gl.getParameter(gl.RENDERER); }""")
     page.wait_for_function("Number(document.getElementById('live').dataset.frames || 0) > 5", timeout=60_000)
     page_bytes, panel_bytes = resource_bytes(page)
+    page.reload()  # again, as an operator reloading the page: the browser's caches warm
+    page.wait_for_function("window.armlab?.view3d?.stats.armFirstFrameMs != null", timeout=60_000)
+    warm_ms = page.evaluate("armlab.view3d.stats.armFirstFrameMs - performance.getEntriesByType('navigation')[0].domContentLoadedEventEnd")
+    page.wait_for_function("Number(document.getElementById('live').dataset.frames || 0) > 5", timeout=60_000)
 
     # The rates, A/B in rounds (closed, open and idle, open and orbiting) so that the machine's load drifts alike on all.
     closed, idle, orbit = [], [], []
@@ -171,7 +175,7 @@ def run(browser, base: str, token: str, seconds: float, rounds: int) -> None:
           f"over {len(stats['a'])} messages drawn (one frame = {frame_ms:.1f} ms at the orbit rate)")
     print(f"telemetry time_s (server) -> 3-D:     p50 {percentile(stats['t'], 50):.1f} ms, p95 {percentile(stats['t'], 95):.1f} ms")
     print(f"first paint of the arm:               {first_ms:.0f} ms after navigation start, {first_ms - dcl_ms:.0f} ms after "
-          f"DOMContentLoaded ({dcl_ms:.0f} ms)   (target <= 1000 ms)")
+          f"DOMContentLoaded ({dcl_ms:.0f} ms); reloaded: {warm_ms:.0f} ms after DOMContentLoaded   (target <= 1000 ms)")
     print(f"bytes loaded:                         page {page_bytes / 1e3:.0f} kB, the 3-D panel adds {panel_bytes / 1e3:.0f} kB")
     print(f"load average (1, 5, 15 min):          {' '.join(f'{v:.1f}' for v in os.getloadavg())} on {os.cpu_count()} CPUs")
 
