@@ -41,6 +41,7 @@ from server.routes import (
     speed,
     station,
     stream,
+    view3d,
 )
 from server.stream import StreamHub
 from server.waiting import Waiter
@@ -130,7 +131,7 @@ def create_app(
         return {"status": "ok", "version": armlab.__version__}
 
     for module in (station, arm, board, calibration, calibration_settings, colors, intrinsics, detections, history, jobs, auto, programs, recordings,
-                   repeat, sim, speed, stream):
+                   repeat, sim, speed, stream, view3d):
         app.include_router(module.router)
     if web_dir is not None and Path(web_dir, "index.html").exists():
         app.mount("/", StaticFiles(directory=str(web_dir), html=True), name="web")

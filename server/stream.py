@@ -31,11 +31,11 @@ from pydantic import Field, TypeAdapter, ValidationError
 from starlette.websockets import WebSocket, WebSocketDisconnect
 
 from armlab.errors import is_internal
-from armlab.station.arm_info import arm_info
+from armlab.station.arm_info import arm_info, station_workcell_name
 from armlab.station.core import Station
 from armlab.station.lease import checked_controller
 from armlab.station.perception import _Worker
-from armlab.workcell import DEFAULT_WORKCELL, load_workcell
+from armlab.workcell import load_workcell
 from server.models import AckMessage, CommandMessage, HeartbeatMessage, ViewMessage
 from server.stream_models import CLIENT_MESSAGES, message_type
 from server.views import ViewKey, compose_view, encode_jpeg
@@ -237,9 +237,7 @@ class StreamHub:
 
     def _workcell_info(self) -> dict:
         """The geometry of the station's workcell (HelloMessage.workcell): its config's, else perception's."""
-        name = (getattr(self.station.config, "workcell", None) or getattr(self.station.perception_config, "workcell", None)
-                or DEFAULT_WORKCELL)
-        return load_workcell(name).to_wire()
+        return load_workcell(station_workcell_name(self.station)).to_wire()
 
     @staticmethod
     def session_controller(requested: str | None) -> str:

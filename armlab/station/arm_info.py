@@ -5,9 +5,15 @@ guesses from the number of joints or the arm's name."""
 from __future__ import annotations
 
 from armlab.motion.pose_path import holds_full_pose
-from armlab.workcell import load_workcell
+from armlab.workcell import DEFAULT_WORKCELL, load_workcell
 
 NO_ARM_REASON = "this station has no arm (perception only: calibrate, detections, click → world)"
+
+
+def station_workcell_name(station) -> str:
+    """The station's workcell (config/workcells/<name>.yaml): its config's, else perception's, else the default."""
+    return (getattr(getattr(station, "config", None), "workcell", None)
+            or getattr(getattr(station, "perception_config", None), "workcell", None) or DEFAULT_WORKCELL)
 
 
 def station_gripper_type(station) -> str:

@@ -93,3 +93,23 @@ def pixel_to_world_off_robot(
 def world_to_pixel(cal: Calibration, points_m: np.ndarray) -> np.ndarray:
     """Pixels (N, 2) of world points (N, 3) (a single (3,) point gives (1, 2))."""
     return project_points(cal.T_world_camera, cal.K, cal.dist, points_m)
+
+
+def depth_point_cloud(cal: Calibration, depth_mm: np.ndarray, color_bgr: np.ndarray, step_px: int) -> tuple[np.ndarray, np.ndarray]:
+    """The depth image as world points, every step_px-th pixel in u and v with a valid reading: (points (N, 3)
+    metres, float32; colours (N, 3) RGB uint8 from the colour image at the same pixels). The depth image must be
+    the calibration's size (the colour image is sampled at the same pixels, scaled if its size differs)."""
+    if step_px < 1:
+        raise InvalidInput(f"step_px must be at least 1, got {step_px}")
+    if depth_mm.shape != (cal.height, cal.width):
+        raise InvalidInput(f"depth image is {depth_mm.shape[::-1]} but the calibration is for {cal.width}x{cal.height}")
+    v, u = np.mgrid[step_px // 2:cal.height:step_px, step_px // 2:cal.width:step_px]
+    depth = depth_mm[v, u].astype(np.float64)
+    valid = np.isfinite(depth) & (depth > 0)
+    u, v, depth = u[valid], v[valid], depth[valid]
+    pixels = np.column_stack([u, v]).astype(np.float64)
+    points = transform_points(cal.T_world_depth, backproject(pixels, depth / 1000.0, cal.K, cal.dist))
+    cu = np.clip((u * color_bgr.shape[1]) // cal.width, 0, color_bgr.shape[1] - 1)
+    cv = np.clip((v * color_bgr.shape[0]) // cal.height, 0, color_bgr.shape[0] - 1)
+    colors = color_bgr[cv, cu][:, ::-1]
+    return points.astype(np.float32), np.ascontiguousarray(colors, dtype=np.uint8)

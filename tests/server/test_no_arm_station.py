@@ -99,6 +99,16 @@ def test_status_and_the_perception_routes_work_without_joints(station_url):
     assert renamed.status_code == 200 and renamed.json()["name"] == "renamed"  # a rename needs no arm
 
 
+def test_the_3d_scene_is_the_workcell_without_an_arm(station_url):
+    _station, url, _program_id = station_url
+    scene = httpx.get(url + "/api/view3d/scene", timeout=10).json()
+    assert scene["arm"] is None and scene["workcell"]["board"]["x_range_m"] and scene["workcell"]["board_tags"]["centres_m"]
+    urdf = httpx.get(url + "/api/view3d/arm.urdf", timeout=10)
+    assert urdf.status_code == 404 and "no arm" in urdf.json()["error"]["message"]
+    points = httpx.get(url + "/api/view3d/points", timeout=10)
+    assert points.status_code == 409 and points.json()["error"]["code"] == "not_calibrated"
+
+
 def test_the_stream_says_there_is_no_arm_and_estop_and_reset_work(station_url):
     station, url, _ = station_url
     ws_url = url.replace("http://", "ws://") + f"/ws?token={TOKEN}&controller=operator"

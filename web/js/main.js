@@ -34,6 +34,7 @@ import { RateMeter, Stream } from "./stream.js";
 import { TeachPanel } from "./teach.js";
 import { TorqueButton } from "./torque.js";
 import { RecordingPanel } from "./recording.js";
+import { prefetchView3d } from "./view3d_prefetch.js";
 import { COMMANDS, LAYERS, VIEWS } from "./wire_types.js";
 
 const $ = (id) => document.getElementById(id);
@@ -190,6 +191,8 @@ class App {
         this.clickcal.setWorkcell(msg.workcell);
         this.setArm(msg.arm);
         this.competition.setBackend(msg.backend);
+        this.backend = msg.backend;
+        this.view3d?.setBackend(msg.backend);
         this.canControl = Boolean(msg.can_control) && this.api.canControl;
         $("control-mode").textContent = this.canControl ? "control" : "view only";
         $("sim-panel").hidden = msg.backend !== "sim";
@@ -257,11 +260,36 @@ class App {
     $("view-select").querySelector("[data-view='topdown']").disabled = !s.calibrated;
     if (Array.isArray(s.detections)) this.setDetections(s.detections);
     this.watchJob(s.job);
+    this.view3d?.onTelemetry(s);
     this.competition.onStatus(s);
     this.refreshAllowed();
   }
 
+  /** The 3-D panel: its module (and three.js) loads on first open; later clicks show or hide it. */
+  async toggleView3d() {
+    const button = $("btn-view3d");
+    const open = button.getAttribute("aria-pressed") !== "true";
+    button.setAttribute("aria-pressed", String(open));
+    button.classList.toggle("on", open);
+    if (!this.view3dLoading) {
+      const prefetched = prefetchView3d(this.api);
+      this.view3dLoading = import("./view3d.js").then(async ({ View3D }) => {
+        const view = new View3D({ root: $("view3d-panel"), api: this.api, prefetched, serverNowS: () => this.stream.serverNowS() });
+        if (this.calibrationShown) view.setCalibration(this.calibrationShown);
+        $("view3d-panel").hidden = false;
+        await view.start();
+        if (this.backend) view.setBackend(this.backend);
+        if (this.status) view.onTelemetry(this.status);
+        this.view3d = view;
+      }).catch((e) => this.log.add("error", `3-D view: ${e.message}`));
+    }
+    await this.view3dLoading;
+    this.view3d?.show(button.getAttribute("aria-pressed") === "true");
+  }
+
   showCalibration(calibration) {
+    this.calibrationShown = calibration;
+    this.view3d?.setCalibration(calibration);
     renderCalibration(calibration);
     this.live.setCalibration(calibration);
     this.competition.setCalibration(calibration);
@@ -444,6 +472,8 @@ class App {
   bindControls() {
     const on = (id, fn) => $(id).addEventListener("click", fn);
     on("btn-estop", () => this.estop());
+    on("btn-view3d", () => this.toggleView3d());
+    if (new URLSearchParams(location.search).get("view3d") === "1") this.toggleView3d();
     document.addEventListener("keydown", (e) => {
       if (e.key === "Escape") {
         e.preventDefault();

@@ -1,0 +1,208 @@
+"""The arm as a URDF for the browser's 3-D panel (urdf-loader), generated from the arm's own config (one
+fact, one place): joint origins and axes from config/arms/<name>.yaml (`urdf_origins` with the PoX screw axes'
+directions, else the DH table, body frames as the simulation builds them: armlab.devices.sim.mjcf_dh), its base
+pose on the board (the station model's T_world_base), the tool point, the fingers or the suction cup; and the
+vendor's meshes on the links from config/arm_meshes/<name>.yaml when there is one (else the links are drawn
+as cylinders between the joints, as the simulation's shapes).
+
+Robot root: link "world" (the board frame); the tool point: link "tool_point" (x = approach axis); the
+fingers (an arm with a `gripper:`): prismatic joints "left_finger" / "right_finger" whose value is each
+finger's offset from the centre line (metres, the arm file's finger_offset range)."""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+from pathlib import Path
+from xml.sax.saxutils import quoteattr
+
+import numpy as np
+
+from armlab.config import config_dir, read_config_file
+from armlab.kinematics.arm_config import ArmConfig
+
+TOOL_LINK = "tool_point"
+FINGER_JOINTS = ("left_finger", "right_finger")
+LINK_RADIUS_M = 0.02  # the cylinders of an arm without meshes
+
+
+def rpy_from_matrix(R: np.ndarray) -> tuple[float, float, float]:
+    """URDF roll, pitch, yaw (R = Rz(yaw) Ry(pitch) Rx(roll))."""
+    pitch = math.asin(max(-1.0, min(1.0, -R[2, 0])))
+    if abs(math.cos(pitch)) > 1e-9:
+        return math.atan2(R[2, 1], R[2, 2]), pitch, math.atan2(R[1, 0], R[0, 0])
+    return math.atan2(-R[1, 2], R[1, 1]), pitch, 0.0
+
+
+def matrix_from_rpy(rpy) -> np.ndarray:
+    r, p, y = rpy
+    cr, sr, cp, sp, cy, sy = math.cos(r), math.sin(r), math.cos(p), math.sin(p), math.cos(y), math.sin(y)
+    Rx = np.array([[1, 0, 0], [0, cr, -sr], [0, sr, cr]])
+    Ry = np.array([[cp, 0, sp], [0, 1, 0], [-sp, 0, cp]])
+    Rz = np.array([[cy, -sy, 0], [sy, cy, 0], [0, 0, 1]])
+    return Rz @ Ry @ Rx
+
+
+def transform(xyz=(0.0, 0.0, 0.0), R=None) -> np.ndarray:
+    T = np.eye(4)
+    T[:3, 3] = xyz
+    if R is not None:
+        T[:3, :3] = R
+    return T
+
+
+def _origin(T: np.ndarray) -> str:
+    xyz = " ".join(f"{v:.9g}" for v in T[:3, 3])
+    rpy = " ".join(f"{v:.9g}" for v in rpy_from_matrix(T[:3, :3]))
+    return f'<origin xyz="{xyz}" rpy="{rpy}"/>'
+
+
+@dataclass(frozen=True)
+class MeshSet:
+    """config/arm_meshes/<arm>.yaml: the vendor's meshes per link."""
+
+    url: str
+    scale: float
+    color: tuple[float, float, float]
+    visuals: list[dict]
+    source: str
+    licence: str
+    link_frames: str = "config"  # "dh_after_d": the vendor's link frames sit d_i along the joint axis
+    fingers_origin_m: tuple[float, float, float] | None = None
+
+    @classmethod
+    def load(cls, arm_name: str, folder: Path | None = None) -> MeshSet | None:
+        """config/arm_meshes/<arm_name>.yaml, None when the arm has none."""
+        path = (folder or config_dir() / "arm_meshes") / f"{arm_name}.yaml"
+        if not path.exists():
+            return None
+        data = read_config_file(path)
+        return cls(url=data["url"], scale=float(data.get("scale", 1.0)), color=tuple(data.get("color", (0.6, 0.6, 0.6))),
+                   visuals=list(data["visuals"]), source=data["source"], licence=data["licence"],
+                   link_frames=data.get("link_frames", "config"),
+                   fingers_origin_m=tuple(data["fingers_origin_m"]) if "fingers_origin_m" in data else None)
+
+
+@dataclass
+class _Chain:
+    """Links (name -> visuals xml) and joints (xml) being assembled."""
+
+    links: dict[str, list[str]] = field(default_factory=dict)
+    joints: list[str] = field(default_factory=list)
+
+    def link(self, name: str) -> None:
+        self.links.setdefault(name, [])
+
+    def joint(self, name: str, kind: str, parent: str, child: str, T: np.ndarray, axis=None, limits=None) -> None:
+        self.link(child)
+        extra = f'<axis xyz="{" ".join(f"{v:.9g}" for v in axis)}"/>' if axis is not None else ""
+        if limits is not None:
+            extra += f'<limit lower="{limits[0]:.9g}" upper="{limits[1]:.9g}" effort="1" velocity="1"/>'
+        self.joints.append(f'<joint name={quoteattr(name)} type="{kind}"><parent link={quoteattr(parent)}/>'
+                           f'<child link={quoteattr(child)}/>{_origin(T)}{extra}</joint>')
+
+    def visual(self, link: str, T: np.ndarray, geometry: str, material: str) -> None:
+        self.links[link].append(f'<visual>{_origin(T)}<geometry>{geometry}</geometry>'
+                                f'<material name="{material}"/></visual>')
+
+    def xml(self, name: str, materials: str) -> str:
+        links = "".join(f'<link name={quoteattr(n)}>{"".join(v)}</link>' for n, v in self.links.items())
+        return f'<?xml version="1.0"?><robot name={quoteattr(name)}>{materials}{links}{"".join(self.joints)}</robot>'
+
+
+def _cylinder(chain: _Chain, link: str, start, end, radius: float, material: str) -> None:
+    """A cylinder from `start` to `end` (link frame), the simulation's shape for a link without a mesh."""
+    start, end = np.asarray(start, float), np.asarray(end, float)
+    length = float(np.linalg.norm(end - start))
+    if length < 1e-6:
+        return
+    z = (end - start) / length
+    helper = np.array([1.0, 0.0, 0.0]) if abs(z[0]) < 0.9 else np.array([0.0, 1.0, 0.0])
+    x = np.cross(helper, z)
+    x /= np.linalg.norm(x)
+    R = np.column_stack([x, np.cross(z, x), z])
+    chain.visual(link, transform(0.5 * (start + end), R), f'<cylinder radius="{radius:.9g}" length="{length:.9g}"/>', material)
+
+
+def arm_urdf(config: ArmConfig, T_world_base: np.ndarray, meshes: MeshSet | None) -> str:
+    """The arm's URDF (see the module doc). Link names: world, base, <joint>_link per joint, tool_point."""
+    chain = _Chain()
+    chain.link("world")
+    chain.joint("base_mount", "fixed", "world", "base", np.asarray(T_world_base, float))
+    lower, upper = np.radians(config.limits.lower_deg), np.radians(config.limits.upper_deg)
+    names = list(config.joint_names)
+    link_T = {}  # joint name -> (parent link, T parent->link at q = 0, axis, vendor frame in the link frame)
+    if config.urdf_origins is not None:
+        parent = "base"
+        for i, name in enumerate(names):
+            axis = np.asarray(config.pox.screw_axes[i][:3], float)
+            link_T[name] = (parent, transform(config.urdf_origins[name]), axis, np.eye(4))
+            parent = f"{name}_link"
+        tool_T = transform(config.urdf_origins["gripper_point"])
+    else:
+        rows = np.asarray(config.dh.rows, float)
+        parent = "base"
+        for i, name in enumerate(names):
+            offset, d, _a, _alpha, sign = rows[i]
+            if i == 0:
+                T = transform(R=matrix_from_rpy((0.0, 0.0, offset)))
+            else:
+                _o, pd, pa, palpha, _s = rows[i - 1]
+                T = transform((pa, 0.0, pd), matrix_from_rpy((palpha, 0.0, 0.0)) @ matrix_from_rpy((0.0, 0.0, offset)))
+            vendor = transform((0.0, 0.0, d)) if meshes is not None and meshes.link_frames == "dh_after_d" else np.eye(4)
+            link_T[name] = (parent, T, np.array([0.0, 0.0, sign]), vendor)
+            parent = f"{name}_link"
+        _o, d, a, alpha, _s = rows[-1]
+        tool_T = transform((a, 0.0, d), matrix_from_rpy((alpha, 0.0, 0.0))) @ np.asarray(config.dh.tool, float)
+    for i, name in enumerate(names):
+        parent, T, axis, _vendor = link_T[name]
+        chain.joint(name, "revolute", parent, f"{name}_link", T, axis=axis, limits=(lower[i], upper[i]))
+    last = f"{names[-1]}_link"
+    chain.joint("tool_point", "fixed", last, TOOL_LINK, tool_T)
+    frames = {"base": ("base", np.eye(4))} | {name: (f"{name}_link", link_T[name][3]) for name in names}
+    fingers = config.gripper is not None and meshes is not None and meshes.fingers_origin_m is not None
+    if config.gripper is not None:
+        # The fingers slide along the tool frame's +-y by the finger offset; with the vendor's meshes their frame is
+        # the vendor's fingers link, else the tool point.
+        origin = transform(meshes.fingers_origin_m) if fingers else tool_T
+        g = config.gripper
+        for joint, sign in zip(FINGER_JOINTS, (1.0, -1.0)):
+            chain.joint(joint, "prismatic", last, f"{joint}_link", origin, axis=(0.0, sign, 0.0),
+                        limits=(g.finger_offset_min_m, g.finger_offset_max_m))
+            frames[joint] = (f"{joint}_link", np.eye(4))
+    if meshes is not None:
+        scale = f"{meshes.scale:g} {meshes.scale:g} {meshes.scale:g}"
+        for visual in meshes.visuals:
+            link, vendor = frames[visual["link"]]
+            T = vendor @ transform(visual.get("xyz", (0.0, 0.0, 0.0)), matrix_from_rpy(visual.get("rpy", (0.0, 0.0, 0.0))))
+            chain.visual(link, T, f'<mesh filename={quoteattr(meshes.url + visual["file"])} scale="{scale}"/>', "arm")
+    else:
+        _skeleton(chain, names, link_T, tool_T, config)
+    if config.suction_cup is not None:
+        cup = config.suction_cup
+        chain.link(TOOL_LINK)
+        _cylinder(chain, TOOL_LINK, (-cup.body_length_m, 0, 0), (0, 0, 0), cup.body_radius_m, "tool")
+        _cylinder(chain, TOOL_LINK, (-0.004, 0, 0), (0, 0, 0), cup.lip_radius_m + 0.002, "tool")
+    elif config.gripper is not None and not fingers:
+        g = config.gripper
+        for joint in FINGER_JOINTS:
+            _cylinder(chain, f"{joint}_link", (-0.04, 0, 0), (0, 0, 0), g.pad_thickness_m, "tool")
+    color = meshes.color if meshes is not None else (0.15, 0.15, 0.17)
+    materials = (f'<material name="arm"><color rgba="{color[0]:g} {color[1]:g} {color[2]:g} 1"/></material>'
+                 '<material name="tool"><color rgba="0.25 0.25 0.27 1"/></material>')
+    return chain.xml(config.name, materials)
+
+
+def _skeleton(chain: _Chain, names: list[str], link_T: dict, tool_T: np.ndarray, config: ArmConfig) -> None:
+    """Cylinders from each joint to the next (and the last to the tool point): the arm without meshes."""
+    chain.link("base")
+    _cylinder(chain, "base", (0, 0, 0), (0, 0, 0.04), 1.6 * LINK_RADIUS_M, "arm")
+    for i, name in enumerate(names):
+        nxt = link_T[names[i + 1]][1] if i + 1 < len(names) else tool_T
+        link = f"{name}_link"
+        if config.dh is not None and config.urdf_origins is None:  # DH: d along z, then a along x
+            _o, d, a, _alpha, _s = config.dh.rows[i]
+            _cylinder(chain, link, (0, 0, 0), (0, 0, d), LINK_RADIUS_M, "arm")
+            _cylinder(chain, link, (0, 0, d), (a, 0, d), LINK_RADIUS_M, "arm")
+        else:
+            _cylinder(chain, link, (0, 0, 0), nxt[:3, 3], LINK_RADIUS_M, "arm")

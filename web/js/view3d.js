@@ -1,0 +1,277 @@
+// The 3-D panel (loaded on first open, so the page without it never fetches three.js): the arm at its measured
+// joints from telemetry, the board with its grid, tags and places, detected blocks (and, in the simulation,
+// ground truth), the calibrated camera's frustum and the gripper's recent path. Orbit / pan / zoom with the
+// mouse, preset views Top, Front, Camera. Geometry comes from GET /api/view3d/scene and the calibration.
+// It renders only when something changed (the arm, the blocks, the view, a layer), so an idle panel costs no frames.
+
+import * as THREE from "three";
+import { OrbitControls } from "three/addons/controls/OrbitControls.js";
+import {
+  ArmFigure,
+  BoxSet,
+  PointCloud,
+  Trail,
+  buildFrustum,
+  buildWorkcell,
+  cameraPreset,
+  detectionBoxes,
+  truthBoxes,
+} from "./view3d_scene.js";
+
+const TRUTH_POLL_MS = 500;
+const POINTS_POLL_MS = 1000;
+
+export class View3D {
+  /** root: the panel element (holds a .view3d-canvas-wrap and the controls); serverNowS: the server clock. */
+  constructor({ root, api, prefetched = null, serverNowS = () => Date.now() / 1000 }) {
+    this.root = root;
+    this.api = api;
+    this.prefetched = prefetched; // view3d_prefetch.js: the scene and mesh files, already on their way
+    this.serverNowS = serverNowS;
+    this.wrap = root.querySelector(".view3d-canvas-wrap");
+    this.dirty = true;
+    this.arm = null; // ArmFigure of the measured arm
+    this.workcell = null;
+    this.calibration = null;
+    this.pendingTelemetry = null; // newest telemetry not yet drawn
+    this.truthTimer = null;
+    // Figures the bench and the tests read: frames drawn, time of the first frame with the arm,
+    // per-frame telemetry delays (ms from the server's time_s, and from the message's arrival).
+    this.stats = { frames: 0, armFirstFrameMs: null, telemetryDelayMs: [], arrivalDelayMs: [], renderMs: [] };
+    this.lastDrawn = null; // {time_s, joints_rad, tool_m} of the telemetry in the last frame
+  }
+
+  async start() {
+    const scene = new THREE.Scene();
+    scene.background = new THREE.Color(0x1d2126);
+    scene.add(new THREE.HemisphereLight(0xffffff, 0x404040, 1.6));
+    const sun = new THREE.DirectionalLight(0xffffff, 1.6);
+    sun.position.set(0.4, -0.6, 1.5);
+    scene.add(sun);
+    this.scene = scene;
+    this.renderer = new THREE.WebGLRenderer({ antialias: false, powerPreference: "low-power" });
+    this.renderer.setPixelRatio(1);
+    this.wrap.appendChild(this.renderer.domElement);
+    this.camera = new THREE.PerspectiveCamera(45, 1, 0.01, 20);
+    this.camera.up.set(0, 0, 1);
+    this.controls = new OrbitControls(this.camera, this.renderer.domElement);
+    this.controls.addEventListener("change", () => this.invalidate());
+    this.resize();
+    new ResizeObserver(() => this.resize()).observe(this.wrap);
+
+    const description = await (this.prefetched?.scene ?? this.api.get("/api/view3d/scene"));
+    const meshBuffers = this.prefetched ? await this.prefetched.meshes : new Map();
+    this.workcell = description.workcell;
+    const workcell = buildWorkcell(this.workcell);
+    this.board = workcell.getObjectByName("board");
+    this.gripperBox = workcell.getObjectByName("gripper box");
+    scene.add(workcell);
+    this.detections = new BoxSet("detections");
+    this.truth = new BoxSet("truth", { wire: true });
+    this.trail = new Trail();
+    this.cloud = new PointCloud();
+    scene.add(this.detections.group, this.truth.group, this.trail.line, this.cloud.points);
+    this.setPreset("front");
+    if (description.arm) {
+      this.armDescription = description.arm;
+      this.arm = new ArmFigure(description.arm, { meshBuffers, onLoad: () => this.invalidate() });
+      scene.add(this.arm.robot);
+      this.root.querySelector("[data-view3d-credit]").textContent = description.arm.meshes
+        ? `${description.arm.name}: meshes ${description.arm.meshes.source} (${description.arm.meshes.licence})`
+        : `${description.arm.name}: the simulation's shapes`;
+    }
+    this.bindControls();
+    if (this.calibration) this.setCalibration(this.calibration);
+    this.loop = () => {
+      this.frame();
+      this.raf = requestAnimationFrame(this.loop);
+    };
+    this.raf = requestAnimationFrame(this.loop);
+  }
+
+  /** Another arm from the same URDF (a goal arm, a plan's waypoint): see-through, in its own colour, sharing the
+   * measured arm's parsed meshes; pose it with figure.setJoints(q) then invalidate(); removeArm(figure) drops it. */
+  addArm({ opacity = 0.35, color = 0xff9800 } = {}) {
+    const figure = new ArmFigure(this.armDescription, { opacity, color, onLoad: () => this.invalidate() });
+    this.scene.add(figure.robot);
+    return figure;
+  }
+
+  removeArm(figure) {
+    this.scene.remove(figure.robot);
+    this.invalidate();
+  }
+
+  bindControls() {
+    for (const button of this.root.querySelectorAll("[data-view3d-preset]")) {
+      button.addEventListener("click", () => this.setPreset(button.dataset.view3dPreset));
+    }
+    for (const box of this.root.querySelectorAll("[data-view3d-layer]")) {
+      box.addEventListener("change", () => this.applyLayers());
+    }
+    this.applyLayers();
+  }
+
+  layerOn(name) {
+    const box = this.root.querySelector(`[data-view3d-layer='${name}']`);
+    return box ? box.checked && !box.disabled : false;
+  }
+
+  applyLayers() {
+    this.detections.group.visible = this.layerOn("blocks");
+    this.trail.line.visible = this.layerOn("path");
+    if (this.gripperBox) this.gripperBox.visible = this.layerOn("box");
+    if (this.frustum) this.frustum.visible = this.layerOn("frustum");
+    this.cloud.points.visible = this.layerOn("points");
+    this.board.visible = !this.cloud.points.visible; // the points show the board; both would fight for the same pixels
+    this.truthTimer = this.poll(this.truthTimer, this.layerOn("truth"), () => this.pollTruth(), TRUTH_POLL_MS);
+    this.pointsTimer = this.poll(this.pointsTimer, this.cloud.points.visible, () => this.pollPoints(), POINTS_POLL_MS);
+    this.truth.group.visible = this.layerOn("truth");
+    this.invalidate();
+  }
+
+  /** A timer calling fn every periodMs while on (and once at once), cleared when off; returns the timer. */
+  poll(timer, on, fn, periodMs) {
+    if (on && !timer) {
+      fn();
+      return setInterval(fn, periodMs);
+    }
+    if (!on && timer) clearInterval(timer);
+    return on ? timer : null;
+  }
+
+  async pollPoints() {
+    if (!this.root.hidden && (await this.cloud.refresh())) this.invalidate();
+  }
+
+  async pollTruth() {
+    try {
+      const truth = await this.api.get("/api/sim/truth");
+      if (this.truth.set(truthBoxes(truth.objects || [], this.workcell))) this.invalidate();
+    } catch {
+      // not a simulation, or the server is away: nothing to draw
+    }
+  }
+
+  /** The backend ("sim" or "real"): the ground-truth toggle exists only in the simulation. */
+  setBackend(backend) {
+    const box = this.root.querySelector("[data-view3d-layer='truth']");
+    if (!box) return;
+    box.disabled = backend !== "sim";
+    box.closest("label").hidden = backend !== "sim";
+    if (this.detections) this.applyLayers();
+  }
+
+  setCalibration(calibration) {
+    this.calibration = calibration;
+    if (!this.scene) return;
+    if (this.frustum) this.scene.remove(this.frustum);
+    this.frustum = null;
+    const ok = calibration?.calibrated && calibration.T_world_camera && calibration.K;
+    this.root.querySelector("[data-view3d-preset='camera']").disabled = !ok;
+    if (ok) {
+      this.frustum = buildFrustum(calibration);
+      this.frustum.visible = this.layerOn("frustum");
+      this.scene.add(this.frustum);
+    }
+    this.invalidate();
+  }
+
+  setPreset(name) {
+    const cell = this.workcell;
+    const [x0, x1] = cell.board.x_range_m;
+    const [y0, y1] = cell.board.y_range_m;
+    const centre = new THREE.Vector3((x0 + x1) / 2, (y0 + y1) / 2, 0);
+    const span = Math.max(x1 - x0, y1 - y0);
+    this.camera.up.set(0, 0, 1);
+    this.camera.fov = 45;
+    if (name === "top") {
+      this.camera.position.set(centre.x, centre.y - 0.001, 1.25 * span);
+      this.camera.up.set(0, 1, 0);
+    } else if (name === "camera" && this.calibration?.T_world_camera) {
+      const preset = cameraPreset(this.calibration);
+      this.camera.position.copy(preset.position);
+      this.camera.up.copy(preset.up);
+      this.camera.fov = preset.fovDeg;
+      centre.copy(preset.target);
+    } else {
+      this.camera.position.set(centre.x, y0 - 0.9 * span, 0.55 * span);
+      centre.z = 0.1;
+    }
+    this.camera.updateProjectionMatrix();
+    this.controls.target.copy(centre);
+    this.controls.update();
+    this.preset = name;
+    this.invalidate();
+  }
+
+  resize() {
+    const width = Math.max(1, this.wrap.clientWidth);
+    const height = Math.max(1, this.wrap.clientHeight);
+    this.renderer.setSize(width, height, false);
+    this.camera.aspect = width / height;
+    this.camera.updateProjectionMatrix();
+    this.invalidate();
+  }
+
+  invalidate() {
+    this.dirty = true;
+  }
+
+  /** Telemetry (main.js calls this on every message): applied at the next animation frame, newest wins. */
+  onTelemetry(status) {
+    this.pendingTelemetry = { status, arrivedMs: performance.now() };
+  }
+
+  /** Pose the arm, move the path and the blocks to a telemetry message; true if anything drawn changed. */
+  applyTelemetry({ status }) {
+    let changed = false;
+    if (this.arm && Array.isArray(status.joints_rad)) {
+      const width = status.gripper?.width_m;
+      const last = this.lastDrawn;
+      const same = last && last.width_m === width && last.joints_rad.length === status.joints_rad.length
+        && last.joints_rad.every((v, i) => Math.abs(v - status.joints_rad[i]) < 1e-6);
+      if (!same) {
+        this.arm.setJoints(status.joints_rad, width);
+        const tool = this.arm.toolPosition();
+        this.trail.push(tool);
+        this.lastDrawn = { time_s: status.time_s, joints_rad: status.joints_rad, width_m: width, tool_m: tool };
+        changed = true;
+      }
+    }
+    if (Array.isArray(status.detections) && this.workcell) {
+      changed = this.detections.set(detectionBoxes(status.detections, this.workcell)) || changed;
+    }
+    return changed;
+  }
+
+  frame() {
+    if (this.root.hidden) return;
+    const started = performance.now();
+    const pending = this.pendingTelemetry;
+    this.pendingTelemetry = null;
+    const moved = pending ? this.applyTelemetry(pending) : false;
+    if (!moved && !this.dirty) return; // nothing new: no frame (telemetry repeats itself while the arm is still)
+    this.renderer.render(this.scene, this.camera);
+    this.dirty = false;
+    const doneMs = performance.now();
+    this.stats.frames += 1;
+    this.stats.renderMs.push(doneMs - started);
+    if (this.stats.armFirstFrameMs === null && this.arm?.loaded) this.stats.armFirstFrameMs = doneMs;
+    if (moved && Number.isFinite(pending.status.time_s)) {
+      this.stats.telemetryDelayMs.push((this.serverNowS() - pending.status.time_s) * 1000);
+      this.stats.arrivalDelayMs.push(doneMs - pending.arrivedMs);
+    }
+    for (const list of [this.stats.telemetryDelayMs, this.stats.arrivalDelayMs, this.stats.renderMs]) {
+      if (list.length > 600) list.splice(0, list.length - 600);
+    }
+  }
+
+  show(visible) {
+    this.root.hidden = !visible;
+    if (visible) {
+      this.resize();
+      this.invalidate();
+    }
+  }
+}
