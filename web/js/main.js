@@ -7,7 +7,8 @@ import { CompetitionPanel } from "./competition.js";
 import { ControlLease } from "./control.js";
 import { applyMovingTimeLimits, emptyDetectionsReason, readMovingTimeS } from "./inputs.js";
 import { IntrinsicsPanel } from "./intrinsics.js";
-import { CartesianJog } from "./jog.js";
+import { HoldJog } from "./holdjog.js";
+import { CartesianJog, typingIn } from "./jog.js";
 import { LiveView } from "./liveview.js";
 import { applyNoArm } from "./noarm.js";
 import { EventLog } from "./log.js";
@@ -25,6 +26,7 @@ import { ProgramPathOverlay } from "./path.js";
 import { JointPlot } from "./plot.js";
 import { RepeatPanel } from "./repeat.js";
 import { RateMeter, Stream } from "./stream.js";
+import { TargetPanel } from "./target.js";
 import { TeachPanel } from "./teach.js";
 import { TorqueButton } from "./torque.js";
 import { RecordingPanel } from "./recording.js";
@@ -99,6 +101,16 @@ class App {
         onTokenRejected: (reason) => this.tokenRejected(reason),
       },
     });
+    this.holdJog = new HoldJog({
+      api: this.api,
+      stream: this.stream,
+      log: this.log,
+      root: $("hold-jog"),
+      speed: $("hold-speed"),
+      typing: typingIn,
+      canJog: () => this.connected && (this.status?.allowed_commands || []).includes("jog") && !$("btn-send-joints").disabled,
+    });
+    this.target = new TargetPanel({ api: this.api, run: (a, c) => this.run(a, c), status: () => this.status });
     this.competition = new CompetitionPanel({
       api: this.api,
       live: this.live,
@@ -122,6 +134,9 @@ class App {
 
   start() {
     this.live.layers = this.layers;
+    // The top bar's height, for the single-column layout's sticky video (it sits right under the bar).
+    const topbar = document.querySelector(".topbar");
+    new ResizeObserver(() => document.documentElement.style.setProperty("--topbar-h", `${topbar.offsetHeight}px`)).observe(topbar);
     const unknown = App.unknownWireNames();
     if (unknown.length) this.log.add("error", `page out of date with the server protocol: ${unknown.join(", ")}`);
     this.bindControls();
@@ -153,6 +168,7 @@ class App {
   }
 
   onClose() {
+    this.holdJog.stop("connection lost");
     if (this.connected) this.log.add("warn", "connection lost; reconnecting…");
     this.connected = false;
     this.updateIndicators();
@@ -174,6 +190,8 @@ class App {
       case "hello":
         this.helloSeen = true;
         applyMovingTimeLimits($("jog-time"), msg.limits);
+        this.holdJog.setLimits(msg.limits);
+        this.holdLimits = msg.limits || null;
         this.live.setWorkcell(msg.workcell);
         this.clickcal.setWorkcell(msg.workcell);
         this.setArm(msg.arm);
@@ -209,6 +227,8 @@ class App {
     this.sliders.build(arm.joint_names, arm.joint_limits_rad);
     this.plot.setJoints(arm.joint_names, arm.joint_limits_rad);
     this.teach.setJointNames(arm.joint_names);
+    this.holdJog.build(arm.joint_names, arm.velocity_limits_rad_s);
+    this.target.setJointNames(arm.joint_names);
     if (this.status) this.sliders.follow(this.status.joints_rad, true);
   }
 
@@ -216,6 +236,8 @@ class App {
     const previous = this.status;
     this.status = s;
     if (s.state === "estop") this.estopSeen = true;
+    if (s.state === "estop" || s.state === "fault") this.holdJog.stop(`state ${s.state}`);
+    else this.holdJog.onStatus(s);
     renderStatus(s);
     renderReadouts(s);
     this.clickcal.onStatus(s);
