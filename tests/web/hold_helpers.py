@@ -125,3 +125,18 @@ def mouse_down_on(page, selector: str) -> None:
     box = button.bounding_box()
     page.mouse.move(box["x"] + box["width"] / 2, box["y"] + box["height"] / 2)
     page.mouse.down()
+
+
+def report(what: str, v: float, before, after_event, stopped, bound: float) -> str:
+    travel = stopped.q_rad[0] - before.q_rad[0]
+    return (f"{what}: {v:.2f} rad/s, event window {after_event.time_s - before.time_s:.3f} s sim, travelled {travel:.3f} rad "
+            f"after the last read before it, at rest {stopped.time_s - before.time_s:.3f} s sim after it; bound {bound:.3f} rad")
+
+
+def assert_stopped(what, limits, v, before, after_event, stopped, later):
+    """The waist's travel after the last truth read before an event is within the deadman's bound, and it stays still."""
+    bound = limits.stop_bound_rad(v, after_event.time_s - before.time_s)
+    message = report(what, v, before, after_event, stopped, bound)
+    print(message)
+    assert stopped.q_rad[0] - before.q_rad[0] <= bound, message
+    assert abs(later.q_rad - stopped.q_rad).max() < 2e-3, f"{what}: the arm moved again after it stopped: {later.q_rad - stopped.q_rad}"

@@ -12,6 +12,7 @@ import pytest
 from browser_helpers import open_page, wait_frames
 from hold_helpers import (
     CRUISE_TRAVEL_RAD,
+    assert_stopped,
     held_until_cruising,
     hold_button_ready,
     mouse_down_on,
@@ -31,20 +32,6 @@ def _page(browser, server):
     return page
 
 
-def _report(what: str, v: float, before, after_event, stopped, bound: float) -> str:
-    travel = stopped.q_rad[0] - before.q_rad[0]
-    return (f"{what}: {v:.2f} rad/s, event window {after_event.time_s - before.time_s:.3f} s sim, travelled {travel:.3f} rad "
-            f"after the last read before it, at rest {stopped.time_s - before.time_s:.3f} s sim after it; bound {bound:.3f} rad")
-
-
-def _assert_stopped(what, limits, v, before, after_event, stopped, later):
-    bound = limits.stop_bound_rad(v, after_event.time_s - before.time_s)
-    message = _report(what, v, before, after_event, stopped, bound)
-    print(message)
-    assert stopped.q_rad[0] - before.q_rad[0] <= bound, message
-    assert abs(later.q_rad - stopped.q_rad).max() < 2e-3, f"{what}: the arm moved again after it stopped: {later.q_rad - stopped.q_rad}"
-
-
 @pytest.mark.parametrize("percent", [25, 100])
 def test_a_held_button_moves_at_the_chosen_speed_and_release_stops_it(browser, server, percent):
     start = to_start(server)
@@ -59,7 +46,7 @@ def test_a_held_button_moves_at_the_chosen_speed_and_release_stops_it(browser, s
         page.mouse.up()
         after_event = truth(server)
         stopped, later = stopped_after(server, before)
-        _assert_stopped(f"release at {percent} %", limits, v, before, after_event, stopped, later)
+        assert_stopped(f"release at {percent} %", limits, v, before, after_event, stopped, later)
         assert page.errors == []
     finally:
         page.close()
@@ -84,7 +71,7 @@ def test_losing_focus_stops_a_held_key(browser, server):
         page.evaluate("window.dispatchEvent(new FocusEvent('blur'))")  # the operator switched to another window
         after_event = truth(server)
         stopped, later = stopped_after(server, before)
-        _assert_stopped("blur", limits, limits.top_rad_s, before, after_event, stopped, later)
+        assert_stopped("blur", limits, limits.top_rad_s, before, after_event, stopped, later)
         page.keyboard.up("Digit1")
         assert page.errors == []
     finally:
@@ -123,7 +110,7 @@ def test_a_dropped_connection_stops_a_held_jog(browser, server, how):
             link["forward"] = False
         after_event = truth(server)
         stopped, later = stopped_after(server, before)
-        _assert_stopped(how, limits, limits.top_rad_s, before, after_event, stopped, later)
+        assert_stopped(how, limits, limits.top_rad_s, before, after_event, stopped, later)
         assert stopped.q_rad[0] - start.q_rad[0] >= CRUISE_TRAVEL_RAD
         if how == "network gone":
             assert page.evaluate("window.armlab.holdJog.active !== null"), "the page noticed: this case is the station's deadman"

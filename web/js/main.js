@@ -34,6 +34,7 @@ import { COMMANDS, LAYERS, VIEWS } from "./wire_types.js";
 
 const $ = (id) => document.getElementById(id);
 const ESTOP_REST_FALLBACK_MS = 300;
+const ESTOP_PRESS_CLICK_MS = 2000; // the click ending an e-stop press (it stopped on the press) sends nothing more
 const TERMINAL_JOB_STATES = new Set(["succeeded", "failed", "cancelled"]);
 
 class App {
@@ -439,7 +440,16 @@ class App {
 
   bindControls() {
     const on = (id, fn) => $(id).addEventListener("click", fn);
-    on("btn-estop", () => this.estop());
+    // E-stop on the press itself (a finger or the mouse going down), not on the release a click waits for: a tap
+    // by a second finger while another holds a jog makes no click at all. A click with no press just before it
+    // (the keyboard's Enter/Space) stops too.
+    $("btn-estop").addEventListener("pointerdown", () => {
+      this.estopPressedMs = performance.now();
+      this.estop();
+    });
+    on("btn-estop", () => {
+      if (!(performance.now() - (this.estopPressedMs ?? -Infinity) < ESTOP_PRESS_CLICK_MS)) this.estop();
+    });
     document.addEventListener("keydown", (e) => {
       if (e.key === "Escape") {
         e.preventDefault();
