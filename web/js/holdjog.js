@@ -5,14 +5,13 @@
 // an e-stop: the page stops sending heartbeats and asks the station to ramp down at once (a zero jog).
 // Keys: hold 1–6 for joint +, Shift+1–6 for joint −; a focused hold button also runs while Space/Enter is held.
 // Key auto-repeat is ignored (one jog per press, held until the key is released). A jog that ran out while still
-// held (the page or the station too busy to beat in time: the deadman tripped) is sent again.
+// held (the page or the station too busy to beat in time: the deadman tripped; telemetry says at rest) is sent
+// again.
 
 const HEARTBEAT_MS = 50; // 4 heartbeats per 0.2 s hold: one lost or late heartbeat does not stop a held jog
 const FALLBACK_TOP_RAD_S = 0.5; // a station that does not serve jog_max_speed_rad_s
 const FALLBACK_HOLD_S = 0.2;
-// A beat this late (a fraction of the station's hold) may have let the jog run out: the page, busy, could not
-// beat in time. While the button is still held the jog is sent again (it ramps up from where the arm is).
-const LATE_FRACTION = 0.75;
+const RESEND_AFTER_MS = 150; // at rest this long past the hold after the last send, while held: sent again
 
 /** The jog a key asks for: {joint, sign} (joint index from 0) or null; digits 1–9 by their physical key. */
 export function keyToHold(event, jointCount) {
@@ -45,7 +44,8 @@ export class HoldJog {
     this.topRadS = [];
     this.maxRadS = null;
     this.holdS = FALLBACK_HOLD_S;
-    this.resent = 0; // jogs sent again after a late beat (a busy page), for the operator's log and the tests
+    this.resent = 0; // jogs sent again after one ran out while held (for the tests)
+    this.inFlight = 0; // jog requests sent and not answered yet
     this.active = null; // {joint, sign, how, button, key}
     this.timer = null;
     this.queue = Promise.resolve(); // jog requests one after another: a stop is never overtaken by its start
@@ -149,7 +149,6 @@ export class HoldJog {
       if (this.active !== active) return; // released before it was sent: nothing to stop either
       active.sent = true;
       if (!(await this.sendJog(active))) return;
-      this.lastBeatMs = performance.now();
       active.started = true;
       this.timer = setInterval(() => this.beat(), HEARTBEAT_MS);
     });
@@ -158,34 +157,28 @@ export class HoldJog {
   /** POST the held jog; false (and the hold ended) when the station refuses it. */
   async sendJog(active) {
     active.sentMs = performance.now();
+    this.inFlight += 1;
     try {
       await this.api.jog(active.velocity, active.speedPercent);
     } catch (e) {
       this.log.error(active.label, e);
       if (this.active === active) this.finish();
       return false;
+    } finally {
+      this.inFlight -= 1;
     }
     return this.active === active; // released while it was on its way: the queued stop follows
   }
 
   beat() {
-    const active = this.active;
-    if (!active) return;
-    const nowMs = performance.now();
-    const late = nowMs - this.lastBeatMs > LATE_FRACTION * this.holdS * 1000;
-    this.lastBeatMs = nowMs;
-    if (!this.stream.send({ type: "heartbeat" })) {
-      this.stop("connection lost");
-    } else if (late) {
-      this.resend(active);
-    }
+    if (this.active && !this.stream.send({ type: "heartbeat" })) this.stop("connection lost");
   }
 
   /** Telemetry: a held jog the station reports at rest well after it was sent ran out (its heartbeats reached a
    * busy station too late): sent again while the button is still held. */
   onStatus(status) {
     const active = this.active;
-    if (!active || !active.started || status.moving || performance.now() - active.sentMs < this.holdS * 1000 + 150) return;
+    if (!active || !active.started || status.moving || performance.now() - active.sentMs < this.holdS * 1000 + RESEND_AFTER_MS) return;
     this.resend(active);
   }
 
@@ -202,11 +195,11 @@ export class HoldJog {
     this.finish();
     this.lastStop = reason;
     if (!active.sent) return;
-    // At once, not behind a jog still on its way (a busy station answers late); and again after it, in case it
-    // lands after this one.
+    // At once when no jog is on its way; else right after it (sent at once, a busy station could apply it before
+    // the jog still on its way, which would then move the arm again).
     const zeroJog = () => this.api.jog(new Array(this.names.length).fill(0), 100).catch(() => null);
-    zeroJog();
-    this.enqueue(zeroJog);
+    if (this.inFlight === 0) zeroJog();
+    else this.enqueue(zeroJog);
   }
 
   finish() {
