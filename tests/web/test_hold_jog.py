@@ -106,8 +106,8 @@ def test_a_dropped_connection_stops_a_held_jog(browser, server, how):
         if how == "page closed":
             page.close(run_before_unload=False)
         else:
+            link["forward"] = False  # first: Playwright calls (the route below) run the proxy's handlers
             page.route("**/api/**", lambda route: route.abort())
-            link["forward"] = False
         after_event = truth(server)
         stopped, later = stopped_after(server, before)
         assert_stopped(how, limits, limits.top_rad_s, before, after_event, stopped, later)
