@@ -7,7 +7,8 @@ from typing import Literal
 
 from pydantic import Field, model_validator
 
-from server.wire_base import Angle, MovingTime, Position, Request, SpeedPercent, Velocity
+from server.response_models import GripperPose
+from server.wire_base import Angle, MovingTime, Position, Request, SpeedPercent, Velocity, Wire
 
 
 class JointsRequest(Request):
@@ -20,6 +21,14 @@ class PoseRequest(Request):
     pitch_rad: Angle | None = Field(None, description="approach angle below horizontal; +π/2 = straight down; None = steepest")
     yaw_rad: Angle | None = Field(None, description="block yaw in the world frame the fingers align with")
     moving_time_s: MovingTime | None = None
+
+
+class MoveCheck(Wire):
+    """What a joint or pose move would do, checked like the move itself; nothing moved (POST /api/arm/pose/check, /api/arm/joints/check)."""
+
+    q_rad: list[float] = Field(description="the goal joints, radians, joint_names order")
+    duration_s: float = Field(description="the planned move's duration from where the arm is now")
+    gripper_pose: GripperPose = Field(description="the gripper at the goal (commanded kinematics)")
 
 
 class PoseNameRequest(Request):

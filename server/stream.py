@@ -156,6 +156,7 @@ class ClientSession:
     event_seq: int = 0
     frames_sent: int = 0
     calls: asyncio.Queue = field(default_factory=lambda: asyncio.Queue(MAX_QUEUED_CALLS))  # commands, heartbeats
+    queued_heartbeats: int = 0  # heartbeats in `calls`: one waiting behind another is superseded by it
 
 
 class StreamHub:
@@ -166,6 +167,7 @@ class StreamHub:
         self.safety_pool = safety_pool  # None: the loop's default executor
         self._workcell: dict | None = None
         self._arm: dict | None = None  # arm_info(station), read once off the loop (it loads the workcell file)
+        self._limits_info: dict | None = None  # _limits(), read once off the loop (the motion config file)
         self.loop: asyncio.AbstractEventLoop | None = None
         self.clients: set[ClientSession] = set()
         self.frames: dict[ViewKey, EncodedFrame] = {}
@@ -239,6 +241,14 @@ class StreamHub:
         """The geometry of the station's workcell (HelloMessage.workcell): its config's, else perception's."""
         return load_workcell(station_workcell_name(self.station)).to_wire()
 
+    def _limits(self) -> dict:
+        """Limits of operator inputs (HelloMessage.limits): the longest manual move and the hold-to-run jog's top speed and hold."""
+        limits = {"max_moving_time_s": float(self.station.config.max_moving_time_s)}
+        motion = getattr(self.station, "motion_config", None)
+        if motion is not None:
+            limits.update(jog_max_speed_rad_s=float(motion.jog_max_speed_rad_s), jog_hold_s=float(motion.jog_hold_s))
+        return limits
+
     @staticmethod
     def session_controller(requested: str | None) -> str:
         """The controller name of a new session: the one it asked for (validated), else its own 'ws-<n>'."""
@@ -251,9 +261,11 @@ class StreamHub:
             self._workcell = await self._off_loop(self._workcell_info)
         if self._arm is None:  # likewise: the gripper type comes from the workcell file
             self._arm = await self._off_loop(arm_info, self.station)
+        if self._limits_info is None:  # the motion config may be read from its file
+            self._limits_info = await self._off_loop(self._limits)
         hello = {"type": "hello", "server_time_s": time.time(), "can_control": can_control,
                  "controller": client.controller if can_control else None, "backend": self.station.backend,
-                 "workcell": self._workcell, "arm": self._arm, "limits": {"max_moving_time_s": float(self.station.config.max_moving_time_s)}}
+                 "workcell": self._workcell, "arm": self._arm, "limits": self._limits_info}
         await websocket.send_text(json.dumps(hello))
         calibration = await self._off_loop(lambda: self.station.calibration_info)
         await websocket.send_text(json.dumps({"type": "calibration", **calibration}))
@@ -325,15 +337,19 @@ class StreamHub:
             else:
                 try:
                     client.calls.put_nowait(parsed)
+                    client.queued_heartbeats += isinstance(parsed, HeartbeatMessage)
                 except asyncio.QueueFull:
                     await self._reply_error(client, f"too many messages waiting ({MAX_QUEUED_CALLS}): {text[:80]!r} dropped")
 
     async def _call_loop(self, client: ClientSession) -> None:
-        """The session's commands (but e-stop) and heartbeats, one at a time in the order they came."""
+        """The session's commands (but e-stop) and heartbeats, one at a time in the order they came. A heartbeat with
+        another one queued behind it is skipped: the later one says the same, later; a backlog of heartbeats behind a
+        slow call would otherwise keep a hold-to-run jog going after the page stopped beating."""
         while True:
             parsed = await client.calls.get()
             if isinstance(parsed, HeartbeatMessage):
-                if client.can_control:
+                client.queued_heartbeats -= 1
+                if client.can_control and client.queued_heartbeats == 0:
                     try:
                         await self._off_loop(self.station.heartbeat, client.controller)
                     except Exception as error:  # noqa: BLE001 - reported; the session goes on

@@ -96,6 +96,8 @@ class LimitsInfo(Wire):
     """Limits of operator inputs, from the station's config (the page checks inputs against these)."""
 
     max_moving_time_s: float = Field(description="longest manual move accepted (moving_time_s is in (0, this])")
+    jog_max_speed_rad_s: float | None = Field(None, description="fastest hold-to-run joint jog at 100 % (each joint's own limit caps it)")
+    jog_hold_s: float | None = Field(None, description="a hold-to-run jog brakes this long after the controller's last heartbeat")
 
 
 class HelloMessage(Wire):

@@ -21,6 +21,7 @@ from armlab.motion.pose_path import holds_full_pose, solve_pose_move
 from armlab.station.checks import checked_moving_time, checked_position
 from armlab.station.job_control import SPEED_WAIT_FACTOR
 from armlab.station.states import State, allowed_commands
+from armlab.station.telemetry import gripper_pose_from_matrix
 
 STEP_ANCHOR_TOL_RAD = 0.01  # a step starts from the previous step's commanded end when the arm is this close to it
 
@@ -106,6 +107,19 @@ class ManualCommands:
         if wait:
             self.wait_motion(self.config.max_moving_time_s * SPEED_WAIT_FACTOR + 5.0)
         return q_goal
+
+    def check_move(self, q_goal_rad=None, moving_time_s: float | None = None, pose: tuple | None = None) -> dict:
+        """What move_joints (q_goal_rad) or move_to (pose: (position_m, pitch_rad, yaw_rad)) would send, moving
+        nothing: {q_rad, duration_s, gripper_pose} of the checked move from where the arm is now. The same refusals
+        as the move (InvalidInput, Unreachable, UnsafeTrajectory with the reason); no state, latch or lease needed."""
+        self.require_arm("move_to" if pose is not None else "move_joints")
+        if pose is not None:
+            q_goal_rad = self.solve_pose(*pose)
+        trajectory = self.plan_move(q_goal_rad, moving_time_s)
+        q_goal = trajectory.positions_rad[-1]
+        base = np.asarray(self.model.T_world_base)[:3, 3]
+        return {"q_rad": [float(v) for v in q_goal], "duration_s": float(trajectory.duration_s),
+                "gripper_pose": gripper_pose_from_matrix(self.model.fk(q_goal), base)}
 
     def jog(self, velocity_rad_s, source: str | None = None, speed_percent: float = 100.0) -> JointTrajectory:
         """Hold-to-run: move at these joint velocities (rad/s, scaled by speed_percent) for motion jog_hold_s,

@@ -13,6 +13,7 @@ from server.models import (
     GripperRequest,
     JogRequest,
     JointsRequest,
+    MoveCheck,
     PoseNameRequest,
     PoseRequest,
     Status,
@@ -64,6 +65,20 @@ async def post_pose(request: Request, body: PoseRequest, station: StationDep, co
     """Move the gripper point to a world position; unreachable → 422 'unreachable' and nothing moves."""
     await run_in_threadpool(station.move_to, body.position_m, body.pitch_rad, body.yaw_rad, body.moving_time_s, wait=False, source=controller)
     return await _answer(request, station, wait)
+
+
+@router.post("/arm/joints/check", response_model=MoveCheck)
+def post_joints_check(body: JointsRequest, station: StationDep) -> dict:
+    """The joint move POST /arm/joints would make, checked the same way (limits, board, workspace, the arm against
+    itself), moving nothing: the goal and its duration, or 422 with the reason."""
+    return station.check_move(body.q_rad, body.moving_time_s)
+
+
+@router.post("/arm/pose/check", response_model=MoveCheck)
+def post_pose_check(body: PoseRequest, station: StationDep) -> dict:
+    """The move POST /arm/pose would make (IK, then the joint move's checks), moving nothing: the goal joints and
+    the move's duration, or 422 'unreachable' / the check's reason."""
+    return station.check_move(moving_time_s=body.moving_time_s, pose=(body.position_m, body.pitch_rad, body.yaw_rad))
 
 
 @router.post("/arm/torque", response_model=Status)

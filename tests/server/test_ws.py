@@ -211,3 +211,34 @@ def test_a_websocket_estop_latches_while_a_slow_message_of_the_same_session_is_i
                 assert station.controller is None  # the slow message is indeed still in flight
             live.wait_for(lambda: station.state is State.ESTOP, 10.0)
             live.wait_for(lambda: station.controller == "slow", 10.0)  # and it still ran, in order, after
+
+
+def test_heartbeats_queued_behind_a_slow_call_count_once(cell, tmp_path):
+    """Heartbeats that pile up behind a slow call of their session (a take_control waiting for the station's lock)
+    reach the station once, not once each: a backlog of them would keep a hold-to-run jog going after the page
+    stopped beating (issue 21, hold-to-run). Counted by the station's heartbeat calls, not by time."""
+    from server.app import create_app
+
+    made, calls = [], []
+
+    def factory():
+        made.append(live.StationOnCell(cell, tmp_path / "station.sqlite3"))
+        return made[-1]
+
+    app = create_app(station_factory=factory, token=TOKEN)
+    with live.serve(app) as url:
+        station = made[0].station
+        heartbeat = station.heartbeat
+        station.heartbeat = lambda source=None: calls.append(source) or heartbeat(source=source)
+        with connect(url.replace("http://", "ws://") + f"/ws?token={TOKEN}&controller=pad", open_timeout=10) as ws:
+            assert json.loads(ws.recv(timeout=5))["type"] == "hello"
+            _next(ws, "calibration")
+            with station._lock:  # take_control waits for the lock on its worker thread; the heartbeats queue behind it
+                ws.send(json.dumps({"type": "command", "name": "take_control"}))
+                for _ in range(10):
+                    ws.send(json.dumps({"type": "heartbeat"}))
+                live.wait_for(lambda: sum(c.queued_heartbeats for c in app.state.hub.clients) == 10, 10.0)
+            live.wait_for(lambda: station.controller == "pad", 10.0)
+            ws.send(json.dumps({"type": "command", "name": "release_control"}))  # after the heartbeats: they were handled
+            live.wait_for(lambda: station.controller is None, 10.0)
+    assert calls == ["pad"], calls

@@ -115,15 +115,18 @@ export class Api {
   releaseControl() { return this.post("/api/control/release"); }
   heartbeat() { return this.post("/api/heartbeat"); }
   step(body) { return this.post("/api/arm/step", body); }
-  jog(velocityRadS) { return this.post("/api/arm/jog", { velocity_rad_s: velocityRadS }); }
+  jog(velocityRadS, speedPercent = 100) { return this.post("/api/arm/jog", { velocity_rad_s: velocityRadS, speed_percent: speedPercent }); }
+  checkPose(body) { return this.post("/api/arm/pose/check", body); }
+  checkJoints(body) { return this.post("/api/arm/joints/check", body); }
   reset() { return this.post("/api/reset"); }
   home() { return this.post("/api/arm/home"); }
   sleep() { return this.post("/api/arm/sleep"); }
   joints(qRad, movingTimeS) { return this.post("/api/arm/joints", { q_rad: qRad, moving_time_s: movingTimeS }); }
-  pose(positionM, pitchRad, yawRad) {
+  pose(positionM, pitchRad, yawRad, movingTimeS) {
     const body = { position_m: positionM };
     if (Number.isFinite(pitchRad)) body.pitch_rad = pitchRad;
     if (Number.isFinite(yawRad)) body.yaw_rad = yawRad;
+    if (Number.isFinite(movingTimeS)) body.moving_time_s = movingTimeS;
     return this.post("/api/arm/pose", body);
   }
   torque(enabled, confirm = false) { return this.post("/api/arm/torque", confirm ? { enabled, confirm } : { enabled }); }

@@ -8,7 +8,8 @@ import { CompetitionPanel } from "./competition.js";
 import { ControlLease } from "./control.js";
 import { applyMovingTimeLimits, emptyDetectionsReason, readMovingTimeS } from "./inputs.js";
 import { IntrinsicsPanel } from "./intrinsics.js";
-import { CartesianJog } from "./jog.js";
+import { HoldJog } from "./holdjog.js";
+import { CartesianJog, typingIn } from "./jog.js";
 import { LiveView } from "./liveview.js";
 import { applyNoArm } from "./noarm.js";
 import { EventLog } from "./log.js";
@@ -31,6 +32,7 @@ import { JointPlot } from "./plot.js";
 import { RepeatPanel } from "./repeat.js";
 import { ReachState } from "./reachstate.js";
 import { RateMeter, Stream } from "./stream.js";
+import { TargetPanel } from "./target.js";
 import { TeachPanel } from "./teach.js";
 import { TorqueButton } from "./torque.js";
 import { RecordingPanel } from "./recording.js";
@@ -39,6 +41,7 @@ import { COMMANDS, LAYERS, VIEWS } from "./wire_types.js";
 
 const $ = (id) => document.getElementById(id);
 const ESTOP_REST_FALLBACK_MS = 300;
+const ESTOP_PRESS_CLICK_MS = 2000; // the click ending an e-stop press (it stopped on the press) sends nothing more
 const TERMINAL_JOB_STATES = new Set(["succeeded", "failed", "cancelled"]);
 
 class App {
@@ -108,6 +111,16 @@ class App {
         onTokenRejected: (reason) => this.tokenRejected(reason),
       },
     });
+    this.holdJog = new HoldJog({
+      api: this.api,
+      stream: this.stream,
+      log: this.log,
+      root: $("hold-jog"),
+      speed: $("hold-speed"),
+      typing: typingIn,
+      canJog: () => this.connected && (this.status?.allowed_commands || []).includes("jog") && !$("btn-send-joints").disabled,
+    });
+    this.target = new TargetPanel({ api: this.api, run: (a, c) => this.run(a, c), status: () => this.status });
     this.competition = new CompetitionPanel({
       api: this.api,
       live: this.live,
@@ -135,6 +148,9 @@ class App {
 
   start() {
     this.live.layers = this.layers;
+    // The top bar's height, for the single-column layout's sticky video (it sits right under the bar).
+    const topbar = document.querySelector(".topbar");
+    new ResizeObserver(() => document.documentElement.style.setProperty("--topbar-h", `${topbar.offsetHeight}px`)).observe(topbar);
     const unknown = App.unknownWireNames();
     if (unknown.length) this.log.add("error", `page out of date with the server protocol: ${unknown.join(", ")}`);
     this.bindControls();
@@ -166,6 +182,7 @@ class App {
   }
 
   onClose() {
+    this.holdJog.stop("connection lost");
     if (this.connected) this.log.add("warn", "connection lost; reconnecting…");
     this.connected = false;
     this.updateIndicators();
@@ -187,6 +204,8 @@ class App {
       case "hello":
         this.helloSeen = true;
         applyMovingTimeLimits($("jog-time"), msg.limits);
+        this.holdJog.setLimits(msg.limits);
+        this.holdLimits = msg.limits || null;
         this.live.setWorkcell(msg.workcell);
         this.clickcal.setWorkcell(msg.workcell);
         this.setArm(msg.arm);
@@ -224,6 +243,8 @@ class App {
     this.sliders.build(arm.joint_names, arm.joint_limits_rad);
     this.plot.setJoints(arm.joint_names, arm.joint_limits_rad);
     this.teach.setJointNames(arm.joint_names);
+    this.holdJog.build(arm.joint_names, arm.velocity_limits_rad_s);
+    this.target.setJointNames(arm.joint_names);
     if (this.status) this.sliders.follow(this.status.joints_rad, true);
   }
 
@@ -231,6 +252,8 @@ class App {
     const previous = this.status;
     this.status = s;
     if (s.state === "estop") this.estopSeen = true;
+    if (s.state === "estop" || s.state === "fault") this.holdJog.stop(`state ${s.state}`);
+    else this.holdJog.onStatus(s);
     renderStatus(s);
     renderCalibrationState(s);
     renderReadouts(s);
@@ -471,7 +494,16 @@ class App {
 
   bindControls() {
     const on = (id, fn) => $(id).addEventListener("click", fn);
-    on("btn-estop", () => this.estop());
+    // E-stop on the press itself (a finger or the mouse going down), not on the release a click waits for: a tap
+    // by a second finger while another holds a jog makes no click at all. A click with no press just before it
+    // (the keyboard's Enter/Space) stops too.
+    $("btn-estop").addEventListener("pointerdown", () => {
+      this.estopPressedMs = performance.now();
+      this.estop();
+    });
+    on("btn-estop", () => {
+      if (!(performance.now() - (this.estopPressedMs ?? -Infinity) < ESTOP_PRESS_CLICK_MS)) this.estop();
+    });
     on("btn-view3d", () => this.toggleView3d());
     if (new URLSearchParams(location.search).get("view3d") === "1") this.toggleView3d();
     document.addEventListener("keydown", (e) => {

@@ -412,6 +412,16 @@ export const EVENT_KINDS = Object.freeze(["general", "scene"]);
  * Limits of operator inputs, from the station's config (the page checks inputs against these).
  * @typedef {Object} LimitsInfo
  * @property {number} max_moving_time_s longest manual move accepted (moving_time_s is in (0, this])
+ * @property {(number|null)} [jog_max_speed_rad_s] fastest hold-to-run joint jog at 100 % (each joint's own limit caps it)
+ * @property {(number|null)} [jog_hold_s] a hold-to-run jog brakes this long after the controller's last heartbeat
+ */
+
+/**
+ * What a joint or pose move would do, checked like the move itself; nothing moved (POST /api/arm/pose/check, /api/arm/joints/check).
+ * @typedef {Object} MoveCheck
+ * @property {Array<number>} q_rad the goal joints, radians, joint_names order
+ * @property {number} duration_s the planned move's duration from where the arm is now
+ * @property {GripperPose} gripper_pose the gripper at the goal (commanded kinematics)
  */
 
 /**
