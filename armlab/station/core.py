@@ -237,7 +237,7 @@ class Station(Latch, MotionGate, ManualCommands, TeachCommands, JobControls, Spe
             (joined if ended else alive).append(worker.name)
         self._workers = []
         self._started = False
-        self.event_history.flush()
+        (joined if self.event_history.close() else alive).append("event-history")
         report = {"joined": joined, "alive": alive}
         if alive:
             log.warning("station closed; threads still running: %s (joined: %s)", ", ".join(alive), ", ".join(joined) or "none")

@@ -96,8 +96,11 @@ def start_cell(seed: int = 0, camera_fps: float = TEST_CAMERA_FPS):
 
 
 def make_station(cell, db_path, **config_overrides) -> Station:
-    """A started Station on the shared cell, with its own database file."""
+    """A started Station on the shared cell, with its own database file (the tests' camera watchdog unless given:
+    a CPU-starved camera thread of a loaded machine must not read as a lost camera)."""
     from armlab.kinematics import load_arm
+
+    config_overrides.setdefault("camera_timeout_s", TEST_CAMERA_TIMEOUT_S)
 
     config = StationConfig(database_path=str(db_path), **config_overrides)
     station = Station(cell.arm, cell.gripper, cell.camera, model=load_arm("rx200"), config=config, sim=cell, backend="sim")

@@ -96,9 +96,12 @@ class DatabaseLock:
 
 
 def make_station(cell, db_path, store=None, **config):
-    """A started Station on `cell` (store: a Store instance, default the real one on db_path)."""
+    """A started Station on `cell` (store: a Store instance, default the real one on db_path), with the tests' camera
+    watchdog unless given (live.TEST_CAMERA_TIMEOUT_S: at load 20 a starved camera thread read as lost after 2 s)."""
     from armlab.kinematics import load_arm
     from armlab.station import Station, StationConfig
+
+    config.setdefault("camera_timeout_s", live.TEST_CAMERA_TIMEOUT_S)
 
     station = Station(
         cell.arm, cell.gripper, cell.camera, model=load_arm("rx200"),

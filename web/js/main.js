@@ -130,7 +130,7 @@ class App {
     this.speed = new SpeedOverride({ api: this.api, run: (a, c) => this.run(a, c) });
     this.history = new HistoryPanel({ api: this.api, log: this.log });
     this.tags = new TagListPanel({ api: this.api });
-    this.reach = new ReachOverlay({ live: this.live, api: this.api, log: this.log });
+    this.reachOverlay = new ReachOverlay({ live: this.live, api: this.api, log: this.log });
     this.unknownWireNames = App.unknownWireNames;
     window.armlab = this; // handle for operators' devtools and the browser tests
   }
