@@ -93,3 +93,11 @@ def ready_idle(server, timeout_s: float = 60.0) -> dict:
             server.request("POST", "/api/reset")
         time.sleep(0.1)
     raise AssertionError(f"not idle after {timeout_s} s; last status: {status}")
+
+
+def enter_click_mode(page, mode: str = "grab", timeout_ms: int = 15_000) -> None:
+    """Click the Click-grab/drop mode button once the page has the camera model and the button is enabled."""
+    button = f"#click-mode [data-mode='{mode}']"
+    page.wait_for_function(f"window.armlab.live.cameraModel !== null && !document.querySelector(\"{button}\").disabled",
+                           timeout=timeout_ms)
+    page.click(button)

@@ -8,7 +8,7 @@ from __future__ import annotations
 
 import pytest
 
-from browser_helpers import canvas_point, open_page, ready_idle, wait_frames
+from browser_helpers import canvas_point, enter_click_mode, open_page, ready_idle, wait_frames
 
 pytestmark = pytest.mark.browser
 
@@ -26,9 +26,7 @@ def test_the_reach_state_shows_before_a_click_on_the_ur3(browser, ur3_server):
     page = open_page(browser, f"{server.base_url}/?token={server.token}")
     try:
         wait_frames(page, 2)
-        page.wait_for_function("window.armlab.live.cameraModel !== null && "
-                               "!document.querySelector(\"#click-mode [data-mode='grab']\").disabled", timeout=15_000)
-        page.click("#click-mode [data-mode='grab']")
+        enter_click_mode(page, "grab")
         before = server.get("/api/sim/truth")["gripper"]
         u, v = page.evaluate(
             """async (p) => { const { worldToCameraPx } = await import('/js/projection.js');
