@@ -103,7 +103,11 @@ def test_teach_edit_repeat_pause_plot_and_csv(browser, server, tmp_path):
 
         # Repeat 2 cycles at 50 %; pause (the arm holds), resume; the cycle plot and its CSV.
         page.fill("#repeat-cycles", "2")
-        page.eval_on_selector("#repeat-speed", "el => { el.value = '50'; el.dispatchEvent(new Event('input')); }")
+        # a drag of the slider ends in a change: it sets the station's one speed override (the top bar's), which the
+        # slider then follows
+        page.eval_on_selector("#repeat-speed", "el => { el.value = '50'; el.dispatchEvent(new Event('input')); "
+                                               "el.dispatchEvent(new Event('change')); }")
+        server.wait_status(lambda s: s["speed_percent"] == 50, 10.0, "the speed override at 50 %")
         page.locator("#program-list li", has_text="panel-wave-2").locator("button[data-command='repeat']").click()
         server.wait_status(lambda s: s["state"] == "repeat" and s["moving"], 10.0, "the repeat to move the arm")
         page.wait_for_function("!document.getElementById('btn-repeat-pause').disabled", timeout=5_000)
@@ -116,6 +120,9 @@ def test_teach_edit_repeat_pause_plot_and_csv(browser, server, tmp_path):
         server.wait_status(lambda s: s["state"] == "repeat" and s["moving"], 10.0, "resumed")
         final = server.wait_status(lambda s: s["state"] == "idle", 120.0, "the repeat to end")
         assert final["job"]["state"] == "succeeded", final["job"]
+        page.eval_on_selector("#repeat-speed", "el => { el.value = '100'; el.dispatchEvent(new Event('input')); "
+                                               "el.dispatchEvent(new Event('change')); }")
+        server.wait_status(lambda s: s["speed_percent"] == 100, 10.0, "the speed override back at 100 % (shared server)")
         page.wait_for_function("Number(document.getElementById('cycle-plot').dataset.samples || 0) > 10", timeout=10_000)
 
         png = page.get_attribute("#btn-cycle-png", "href")
