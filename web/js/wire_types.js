@@ -433,19 +433,19 @@ export const EVENT_KINDS = Object.freeze(["general", "scene"]);
  */
 
 /**
- * What a joint or pose move would do, checked like the move itself; nothing moved (POST /api/arm/pose/check, /api/arm/joints/check).
- * @typedef {Object} MoveCheck
- * @property {Array<number>} q_rad the goal joints, radians, joint_names order
- * @property {number} duration_s the planned move's duration from where the arm is now
- * @property {GripperPose} gripper_pose the gripper at the goal (commanded kinematics)
- */
-
-/**
  * Run `body` `count` times (1-1000).
  * @typedef {Object} LoopStepRequest
  * @property {"loop"} kind
  * @property {number} count how many times the body runs (1-1000)
  * @property {Array<(WaypointStepRequest|WaitStepRequest|GripperStepRequest|LoopStepRequest|GroupStepRequest)>} body
+ */
+
+/**
+ * What a joint or pose move would do, checked like the move itself; nothing moved (POST /api/arm/pose/check, /api/arm/joints/check).
+ * @typedef {Object} MoveCheck
+ * @property {Array<number>} q_rad the goal joints, radians, joint_names order
+ * @property {number} duration_s the planned move's duration from where the arm is now
+ * @property {GripperPose} gripper_pose the gripper at the goal (commanded kinematics)
  */
 
 /**
