@@ -1,5 +1,10 @@
 """Taught programs as files: JSON (everything) and CSV (`t_s, q1..qn, gripper`, radians), both ways.
 
+JSON keeps everything, a program's step tree (waits, gripper steps, loops, groups: armlab.store.program_tree) too:
+"steps" holds the tree (format version 2) and "waypoints" its expanded sequence, so a reader that knows only
+waypoints imports the same motion. CSV (and the ROS 2 bag export) is flat: it holds the expanded sequence
+(loops unrolled, waits as dwells, gripper steps as rows); importing it gives a flat program.
+
 CSV rows are the timed path: t_s is when the waypoint is reached (the first row at 0), q1..qn its joints
 in radians, gripper `grasp` or `release`. A row whose joints and gripper equal the previous row's is a
 dwell there (its t_s gap); a row with the previous row's joints and the other gripper command is a gripper
@@ -17,10 +22,10 @@ import math
 from collections.abc import Sequence
 
 from armlab.errors import InvalidInput
-from armlab.store import MAX_PROGRAM_NAME_CHARS, Waypoint
+from armlab.store import MAX_PROGRAM_NAME_CHARS, Waypoint, program_tree
 
 FORMAT_NAME = "armlab-program"
-FORMAT_VERSION = 1
+FORMAT_VERSION = 1  # a flat program; 2: with "steps" (the step tree)
 MAX_WAYPOINTS = 1000
 SAME_JOINTS_RAD = 1e-9  # rows this close are "the same joints" (a dwell or a gripper step)
 
@@ -40,18 +45,19 @@ class ProgramFileError(InvalidInput):
     """A program file that cannot be imported; the message names the line (CSV) or the item (JSON) and why."""
 
 
-def to_json(name: str, waypoints: Sequence[Waypoint], joint_names: Sequence[str]) -> str:
-    """The program as a JSON document (round-trips through parse_json)."""
-    return json.dumps(
-        {
-            "format": FORMAT_NAME,
-            "version": FORMAT_VERSION,
-            "name": name,
-            "joint_names": list(joint_names),
-            "waypoints": [waypoint.to_dict() for waypoint in waypoints],
-        },
-        indent=1,
-    )
+def to_json(name: str, waypoints: Sequence[Waypoint], joint_names: Sequence[str], steps: Sequence | None = None) -> str:
+    """The program as a JSON document (round-trips through parse_json); steps: its step tree, if it has one
+    (waypoints is then the tree expanded)."""
+    document = {
+        "format": FORMAT_NAME,
+        "version": FORMAT_VERSION if steps is None else 2,
+        "name": name,
+        "joint_names": list(joint_names),
+        "waypoints": [waypoint.to_dict() for waypoint in waypoints],
+    }
+    if steps is not None:
+        document["steps"] = program_tree.to_list(steps)
+    return json.dumps(document, indent=1)
 
 
 def to_csv(waypoints: Sequence[Waypoint], move_times_s: Sequence[float]) -> str:
@@ -81,8 +87,9 @@ def timed_rows(waypoints: Sequence[Waypoint], move_times_s: Sequence[float]) -> 
     return rows
 
 
-def parse_json(text: str, dof: int) -> tuple[str | None, list[Waypoint]]:
-    """(name or None, waypoints) from a JSON document of to_json's form (or a bare list of waypoints)."""
+def parse_json(text: str, dof: int) -> tuple[str | None, list]:
+    """(name or None, waypoints) from a JSON document of to_json's form (or a bare list of waypoints); a
+    document with "steps" gives its step tree instead (checked: limits, joint counts; expand it to plan)."""
     try:
         document = json.loads(text)
     except json.JSONDecodeError as error:
@@ -98,6 +105,8 @@ def parse_json(text: str, dof: int) -> tuple[str | None, list[Waypoint]]:
             raise ProgramFileError("'name' must be a string")
         if name is not None and len(name.strip()) > MAX_PROGRAM_NAME_CHARS:
             raise ProgramFileError(f"'name' has {len(name.strip())} characters; at most {MAX_PROGRAM_NAME_CHARS}")
+        if document.get("steps") is not None:
+            return name, _parse_steps(document["steps"], dof)
         items = document.get("waypoints")
     else:
         items = document
@@ -174,6 +183,19 @@ def parse_csv(text: str, dof: int) -> list[Waypoint]:
     if not waypoints:
         raise ProgramFileError("the file has a header but no waypoints")
     return waypoints
+
+
+def _parse_steps(items, dof: int) -> list:
+    """A document's step tree, checked (ProgramFileError naming the step: steps[2].body[0].count ...)."""
+    try:
+        steps = program_tree.steps_from_list(items)
+        waypoints = program_tree.expand(steps)
+    except InvalidInput as error:
+        raise ProgramFileError(str(error)) from None
+    for index, waypoint in enumerate(waypoints):
+        if len(waypoint.joints_rad) != dof:
+            raise ProgramFileError(f"steps: expanded waypoint {index + 1} has {len(waypoint.joints_rad)} joint values, the arm has {dof}")
+    return list(steps)
 
 
 def _check_count(count: int) -> None:

@@ -30,8 +30,9 @@ def _js_type(schema: dict) -> str:
         return json.dumps(schema["const"])
     if "enum" in schema:
         return "(" + "|".join(json.dumps(value) for value in schema["enum"]) + ")"
-    if "anyOf" in schema:
-        return "(" + "|".join(_js_type(option) for option in schema["anyOf"]) + ")"
+    for union in ("anyOf", "oneOf"):
+        if union in schema:
+            return "(" + "|".join(_js_type(option) for option in schema[union]) + ")"
     kind = schema.get("type")
     if kind in ("number", "integer"):
         return "number"
@@ -70,6 +71,8 @@ def render() -> str:
         schema = model.model_json_schema(ref_template="#/$defs/{model}")
         for name, sub in schema.pop("$defs", {}).items():
             definitions.setdefault(name, sub)
+        if "$ref" in schema and "properties" not in schema:  # a recursive model (a loop's body of steps): its own definition
+            schema = definitions[model.__name__]
         definitions[model.__name__] = schema
     lines = [
         "// generated, do not edit: made by `python -m server.gen_wire_types` from server/models.py and server/program_models.py.",

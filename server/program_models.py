@@ -3,11 +3,12 @@ responses documenting what the routes return. Generated into web/js/wire_types.j
 
 from __future__ import annotations
 
-from typing import Annotated, Literal
+from typing import Annotated, Any, Literal
 
-from pydantic import Field, model_validator
+from pydantic import Discriminator, Field, Tag, field_validator, model_validator
 
 from armlab.store import MAX_PROGRAM_NAME_CHARS
+from armlab.store.program_tree import MAX_DEPTH, MAX_LABEL_CHARS, MAX_LOOP_COUNT
 from server.models import Angle, MovingTime, Request, Wire
 
 DWELL_LIMIT_S = 3600.0
@@ -67,18 +68,96 @@ class WaypointRequest(Request):
     )
 
 
+class WaypointStepRequest(WaypointRequest):
+    """A waypoint in a step tree ('kind' may be left out: an item without it is a waypoint)."""
+
+    kind: Literal["waypoint"] = "waypoint"
+
+
+class WaitStepRequest(Request):
+    """Hold still at the waypoint before it for `seconds` (added to its dwell)."""
+
+    kind: Literal["wait"]
+    seconds: Annotated[float, Field(gt=0.0, le=DWELL_LIMIT_S, description="seconds to wait (above 0, at most 3600)")]
+
+
+class GripperStepRequest(Request):
+    """Open or close the gripper at the pose of the waypoint before it."""
+
+    kind: Literal["gripper"]
+    action: Literal["open", "close"]
+
+
+class LoopStepRequest(Request):
+    """Run `body` `count` times (1-1000)."""
+
+    kind: Literal["loop"]
+    count: int = Field(ge=1, le=MAX_LOOP_COUNT, description=f"how many times the body runs (1-{MAX_LOOP_COUNT})")
+    body: list[StepRequest] = Field(min_length=1, max_length=WAYPOINTS_LIMIT)
+
+
+class GroupStepRequest(Request):
+    """A labelled group of steps (run once)."""
+
+    kind: Literal["group"]
+    label: str = Field(min_length=1, max_length=MAX_LABEL_CHARS)
+    body: list[StepRequest] = Field(min_length=1, max_length=WAYPOINTS_LIMIT)
+
+
+def _step_kind(value: Any) -> str:
+    kind = value.get("kind", "waypoint") if isinstance(value, dict) else getattr(value, "kind", "waypoint")
+    return kind if isinstance(kind, str) else "invalid"
+
+
+StepRequest = Annotated[
+    (Annotated[WaypointStepRequest, Tag("waypoint")] | Annotated[WaitStepRequest, Tag("wait")]
+     | Annotated[GripperStepRequest, Tag("gripper")] | Annotated[LoopStepRequest, Tag("loop")]
+     | Annotated[GroupStepRequest, Tag("group")]),
+    Discriminator(_step_kind),
+]
+LoopStepRequest.model_rebuild()
+GroupStepRequest.model_rebuild()
+
+
+def too_deep(steps: list, path: str = "steps", level: int = 1) -> str | None:
+    """The path of the first loop or group nested deeper than MAX_DEPTH, or None."""
+    for index, step in enumerate(steps):
+        body = getattr(step, "body", None)
+        if body is None:
+            continue
+        if level > MAX_DEPTH:
+            return f"{path}[{index}]"
+        found = too_deep(body, f"{path}[{index}].body", level + 1)
+        if found:
+            return found
+    return None
+
+
 class ProgramUpdateRequest(Request):
     """PATCH /api/programs/{id}: a new name and/or the whole new waypoint list (reorder, edit a value,
-    insert or delete a waypoint or a gripper step: send the list as it should be). Checked against the
-    joint limits and the table before anything is stored."""
+    insert or delete a waypoint or a gripper step: send the list as it should be), or the whole step tree
+    (waypoints, waits, gripper steps, loops, labelled groups; at most 4 deep, at most 1000 waypoints once
+    expanded). Checked against the joint limits and the table before anything is stored."""
 
     name: ProgramName | None = None
     waypoints: list[WaypointRequest] | None = Field(None, min_length=1, max_length=WAYPOINTS_LIMIT)
+    steps: list[StepRequest] | None = Field(None, min_length=1, max_length=WAYPOINTS_LIMIT,
+                                            description="the program's step tree (replaces waypoints; a tree of waypoints only is a flat program)")
+
+    @field_validator("steps")
+    @classmethod
+    def _not_too_deep(cls, steps: list | None) -> list | None:
+        where = too_deep(steps or [])
+        if where:
+            raise ValueError(f"{where}: loops and groups are nested more than {MAX_DEPTH} deep")
+        return steps
 
     @model_validator(mode="after")
     def _something(self) -> ProgramUpdateRequest:
-        if self.name is None and self.waypoints is None:
-            raise ValueError("give name and/or waypoints")
+        if self.name is None and self.waypoints is None and self.steps is None:
+            raise ValueError("give name and/or waypoints or steps")
+        if self.waypoints is not None and self.steps is not None:
+            raise ValueError("give waypoints or steps, not both")
         return self
 
 
@@ -132,7 +211,8 @@ class ProgramInfo(Wire):
     updated_s: float | None = None
     arm: str | None = Field(None, description="the arm it was taught on (None: saved before programs had an arm)")
     workcell: str | None = Field(None, description="the workcell it was taught in (None: saved before programs had one)")
-    waypoints: list[WaypointInfo]
+    waypoints: list[WaypointInfo] = Field(description="the flat sequence repeat runs (a step tree expanded)")
+    steps: list[dict[str, Any]] | None = Field(None, description="the step tree (waypoints, wait, gripper, loop, group); None: waypoints only")
 
 
 class ImportFileResponse(ProgramInfo):
@@ -218,6 +298,11 @@ PROGRAM_WIRE_MODELS = (
     ContinuousRequest,
     ContinuousResponse,
     WaypointRequest,
+    WaypointStepRequest,
+    WaitStepRequest,
+    GripperStepRequest,
+    LoopStepRequest,
+    GroupStepRequest,
     ProgramUpdateRequest,
     DuplicateRequest,
     ImportRequest,

@@ -16,7 +16,7 @@ from armlab import program_io
 from armlab.errors import InvalidInput
 from armlab.skills.repeat_plan import RepeatSettings, check_waypoints, plan_transfer, same_pose
 from armlab.station.core import Station
-from armlab.store import MAX_PROGRAM_NAME_CHARS, DamagedRecord, OwnedPrograms, Program, Waypoint
+from armlab.store import MAX_PROGRAM_NAME_CHARS, DamagedRecord, OwnedPrograms, Program, Waypoint, program_tree
 
 
 def station_programs(station: Station) -> OwnedPrograms:
@@ -38,12 +38,13 @@ def delete_program(station: Station, program_id: int) -> None:
     station.store.delete_program(program_id)
 
 
-def update_program(station: Station, program_id: int, name: str | None = None, waypoints: Sequence[Waypoint] | None = None) -> Program:
-    """Rename and/or replace the waypoints (checked); NotFound, ValueError, UnsafeTrajectory, WrongArm."""
+def update_program(station: Station, program_id: int, name: str | None = None, waypoints: Sequence | None = None) -> Program:
+    """Rename and/or replace the waypoints (a flat list or a step tree; every waypoint of the expanded sequence
+    checked); NotFound, ValueError, UnsafeTrajectory, WrongArm."""
     get_program(station, program_id)
     if waypoints is not None:
         station.require_arm("editing a program's waypoints")
-        check_waypoints(station, list(waypoints))
+        check_waypoints(station, list(program_tree.expand(waypoints)))
     return station.store.update_program(program_id, name=name, waypoints=waypoints)
 
 
@@ -51,7 +52,7 @@ def duplicate_program(station: Station, program_id: int, name: str | None = None
     program = get_program(station, program_id)
     suffix = " (copy)"
     name = name or program.name[: MAX_PROGRAM_NAME_CHARS - len(suffix)] + suffix
-    return station.store.save_program(name, program.waypoints, owner=station.program_owner)
+    return station.store.save_program(name, program.steps or program.waypoints, owner=station.program_owner)
 
 
 def move_times_s(station: Station, waypoints: Sequence[Waypoint]) -> list[float]:
@@ -74,8 +75,8 @@ def export_program(station: Station, program_id: int, file_format: str) -> tuple
     program = get_program(station, program_id)
     stem = "".join(c if c.isalnum() or c in "-_" else "_" for c in program.name)[:60] or f"program-{program.id}"
     if file_format == "json":
-        return program_io.to_json(program.name, program.waypoints, station.model.joint_names), f"{stem}.json"
-    if file_format == "csv":
+        return program_io.to_json(program.name, program.waypoints, station.model.joint_names, program.steps), f"{stem}.json"
+    if file_format == "csv":  # flat: the step tree expanded (loops unrolled, waits as dwells)
         return program_io.to_csv(program.waypoints, move_times_s(station, program.waypoints)), f"{stem}.csv"
     raise InvalidInput(f"format must be 'json' or 'csv', not {file_format!r}")
 
@@ -90,5 +91,5 @@ def import_program(station: Station, file_format: str, content: str, name: str |
         file_name, waypoints = None, program_io.parse_csv(content, dof)
     else:
         raise InvalidInput(f"format must be 'json' or 'csv', not {file_format!r}")
-    check_waypoints(station, waypoints)
+    check_waypoints(station, list(program_tree.expand(waypoints)))  # a step tree's expanded sequence
     return station.store.save_program(name or (file_name or "").strip() or "imported", waypoints, owner=station.program_owner)

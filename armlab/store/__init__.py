@@ -11,14 +11,13 @@ from armlab.store.database import DEFAULT_DB_PATH, DamagedDatabase, DamagedRecor
 from armlab.store.events import EventTables
 from armlab.store.jobs import JobTables
 from armlab.store.programs import (
-    MAX_DWELL_S,
     MAX_PROGRAM_NAME_CHARS,
     OwnedPrograms,
     Owner,
     Program,
     ProgramTables,
-    Waypoint,
 )
+from armlab.store.waypoint import MAX_DWELL_S, Waypoint
 
 
 class Store(ProgramTables, CalibrationTables, JobTables, EventTables):

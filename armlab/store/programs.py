@@ -12,16 +12,16 @@ to an arm with as many joints). Passing no owner reads and writes every row, as 
 from __future__ import annotations
 
 import json
-import math
 import time
 from collections.abc import Sequence
 from dataclasses import dataclass
 
 from armlab.errors import InvalidInput, WrongArm
+from armlab.store import program_tree
 from armlab.store.database import ROW_ERRORS, DamagedRecord, Database, NotFound
+from armlab.store.waypoint import Waypoint
 
 MAX_PROGRAM_NAME_CHARS = 100  # a program's name (the API's limit too)
-MAX_DWELL_S = 3600.0  # the longest dwell or moving time of one waypoint
 
 
 @dataclass(frozen=True)
@@ -44,46 +44,10 @@ class Owner:
 
 
 @dataclass(frozen=True)
-class Waypoint:
-    """A taught pose: joint positions (rad), the gripper command at that pose ('grasp'|'release'),
-    how long to hold still there (dwell_s) and, optionally, how long the move to it should take
-    (moving_time_s; None = as fast as the speed override and the joint limits allow)."""
-
-    joints_rad: tuple[float, ...]
-    gripper: str
-    dwell_s: float = 0.0
-    moving_time_s: float | None = None
-
-    def __post_init__(self) -> None:
-        if not self.joints_rad or not all(math.isfinite(float(value)) for value in self.joints_rad):
-            raise InvalidInput("Waypoint.joints_rad must be a non-empty list of finite numbers")
-        if self.gripper not in ("grasp", "release"):
-            raise InvalidInput(f"Waypoint.gripper must be 'grasp' or 'release', not {self.gripper!r}")
-        dwell = float(self.dwell_s)
-        if not math.isfinite(dwell) or not 0.0 <= dwell <= MAX_DWELL_S:
-            raise InvalidInput(f"Waypoint.dwell_s must be from 0 to {MAX_DWELL_S:g} s, not {self.dwell_s!r}")
-        if self.moving_time_s is not None:
-            moving = float(self.moving_time_s)
-            if not math.isfinite(moving) or not 0.0 < moving <= MAX_DWELL_S:
-                raise InvalidInput(f"Waypoint.moving_time_s must be above 0 and at most {MAX_DWELL_S:g} s, not {self.moving_time_s!r}")
-            object.__setattr__(self, "moving_time_s", moving)
-        object.__setattr__(self, "joints_rad", tuple(float(value) for value in self.joints_rad))
-        object.__setattr__(self, "dwell_s", dwell)
-
-    def to_dict(self) -> dict:
-        return {"joints_rad": list(self.joints_rad), "gripper": self.gripper, "dwell_s": self.dwell_s, "moving_time_s": self.moving_time_s}
-
-    @classmethod
-    def from_dict(cls, item: dict) -> Waypoint:
-        """From to_dict()'s form (dwell_s and moving_time_s optional); KeyError/TypeError/ValueError if invalid."""
-        if not isinstance(item, dict):
-            raise TypeError("a waypoint must be a JSON object")
-        return cls(tuple(item["joints_rad"]), item["gripper"], item.get("dwell_s") or 0.0, item.get("moving_time_s"))
-
-
-@dataclass(frozen=True)
 class Program:
-    """A named, saved list of waypoints; updated_s: when it was last saved or edited (time.time())."""
+    """A named, saved program; updated_s: when it was last saved or edited (time.time()). waypoints: the flat
+    sequence repeat plans; steps: the step tree it expands from (program_tree: waits, gripper steps, loops,
+    groups), None for a program of waypoints only (as taught: stored as the flat list it always was)."""
 
     id: int
     name: str
@@ -92,6 +56,7 @@ class Program:
     updated_s: float | None = None
     arm: str | None = None  # None: saved before programs had an owner
     workcell: str | None = None
+    steps: tuple | None = None
 
     def to_dict(self) -> dict:
         return {
@@ -102,6 +67,7 @@ class Program:
             "arm": self.arm,
             "workcell": self.workcell,
             "waypoints": [waypoint.to_dict() for waypoint in self.waypoints],
+            "steps": program_tree.to_list(self.steps) if self.steps is not None else None,
         }
 
 
@@ -118,11 +84,13 @@ class OwnedPrograms:
 class ProgramTables(Database):
     """The programs table and the teach draft of the station's database."""
 
-    def save_program(self, name: str, waypoints: Sequence[Waypoint], clear_draft: bool = False, owner: Owner | None = None) -> Program:
+    def save_program(self, name: str, waypoints: Sequence, clear_draft: bool = False, owner: Owner | None = None) -> Program:
         """Save a new program (of `owner`'s arm and workcell); ValueError for an empty name or no waypoints.
+        waypoints: a flat list or a step tree (program_tree; checked and expanded here).
         clear_draft: empty the (owner's) teach draft in the same transaction (teach/stop: the program and the
         draft never both or neither exist)."""
-        name, payload = _checked_program(name, waypoints)
+        steps, waypoints = _tree_and_waypoints(waypoints)
+        name, payload = _checked_program(name, waypoints, steps)
         if owner is not None and any(len(waypoint.joints_rad) != owner.dof for waypoint in waypoints):
             raise InvalidInput(f"a program of {owner.arm} has {owner.dof} joints in every waypoint")
         created_s = time.time()
@@ -139,14 +107,18 @@ class ProgramTables(Database):
                     connection.executemany("DELETE FROM teach_draft WHERE seq = ?", [(seq,) for seq in _draft_seqs(connection, owner)])
         finally:
             connection.close()
-        return Program(program_id, name, created_s, tuple(waypoints), created_s, arm, workcell)
+        return Program(program_id, name, created_s, tuple(waypoints), created_s, arm, workcell, steps)
 
-    def update_program(self, program_id: int, name: str | None = None, waypoints: Sequence[Waypoint] | None = None) -> Program:
-        """Rename and/or replace the waypoints of a program, in one transaction; NotFound, ValueError."""
+    def update_program(self, program_id: int, name: str | None = None, waypoints: Sequence | None = None) -> Program:
+        """Rename and/or replace the waypoints (a flat list or a step tree) of a program, in one transaction;
+        NotFound, ValueError."""
         current = self.get_program(program_id)
         new_name = current.name if name is None else name
-        new_waypoints = current.waypoints if waypoints is None else tuple(waypoints)
-        new_name, payload = _checked_program(new_name, new_waypoints)
+        if waypoints is None:
+            steps, new_waypoints = current.steps, current.waypoints
+        else:
+            steps, new_waypoints = _tree_and_waypoints(waypoints)
+        new_name, payload = _checked_program(new_name, new_waypoints, steps)
         updated_s = time.time()
         rows = self._run(
             "UPDATE programs SET name = ?, waypoints_json = ?, updated_s = ? WHERE id = ? RETURNING id",
@@ -154,7 +126,7 @@ class ProgramTables(Database):
         )
         if not rows:
             raise NotFound(f"no program with id {program_id}")
-        return Program(current.id, new_name, current.created_s, new_waypoints, updated_s, current.arm, current.workcell)
+        return Program(current.id, new_name, current.created_s, new_waypoints, updated_s, current.arm, current.workcell, steps)
 
     def read_programs(self) -> tuple[list[Program], list[str]]:
         """(programs that read back, one entry per skipped damaged row), by id: every owner's."""
@@ -305,9 +277,17 @@ def _wrong_arm(program_id: int, arm: str, workcell: str | None, owner: Owner) ->
                     f"nothing here (open it on a station of that arm, or teach it again here)")
 
 
-def _checked_program(name: str, waypoints: Sequence[Waypoint]) -> tuple[str, str]:
-    """(stripped name, waypoints JSON) of a program to write; ValueError for an empty or too long name or
-    no waypoints."""
+def _tree_and_waypoints(items: Sequence) -> tuple[tuple | None, tuple[Waypoint, ...]]:
+    """(the step tree or None when every item is a waypoint, the flat waypoint sequence); InvalidInput."""
+    items = tuple(items)
+    if program_tree.is_flat(items):
+        return None, items
+    return items, program_tree.expand(items)
+
+
+def _checked_program(name: str, waypoints: Sequence[Waypoint], steps: tuple | None = None) -> tuple[str, str]:
+    """(stripped name, waypoints JSON: the flat list, or the step tree when there is one) of a program to
+    write; ValueError for an empty or too long name or no waypoints."""
     name = str(name).strip()
     if not name:
         raise InvalidInput("a program needs a name")
@@ -315,6 +295,8 @@ def _checked_program(name: str, waypoints: Sequence[Waypoint]) -> tuple[str, str
         raise InvalidInput(f"a program name has at most {MAX_PROGRAM_NAME_CHARS} characters, this one {len(name)}")
     if not waypoints:
         raise InvalidInput("a program needs at least one waypoint: record one before saving")
+    if steps is not None:
+        return name, json.dumps(program_tree.to_list(steps))
     return name, json.dumps([waypoint.to_dict() for waypoint in waypoints])
 
 
@@ -324,10 +306,10 @@ def _program_from_row(row: tuple) -> Program:
     name, items = row[1].decode("utf-8"), json.loads(row[3].decode("utf-8"))
     if not isinstance(items, list) or not items:
         raise InvalidInput("waypoints_json is not a non-empty list")
-    waypoints = tuple(Waypoint.from_dict(item) for item in items)
+    steps, waypoints = _tree_and_waypoints(program_tree.steps_from_list(items))
     if len({len(waypoint.joints_rad) for waypoint in waypoints}) != 1:
         raise InvalidInput("the waypoints do not all have the same number of joints")
     updated_s = float(row[4]) if len(row) > 4 and row[4] is not None else None
     arm, workcell = (_text(row[5]), _text(row[6])) if len(row) > 6 else (None, None)
-    return Program(int(row[0]), name, float(row[2]), waypoints, updated_s, arm, workcell)
+    return Program(int(row[0]), name, float(row[2]), waypoints, updated_s, arm, workcell, steps)
 

@@ -15,7 +15,7 @@ from armlab.errors import ArmlabError
 from armlab.program_formats import ImportOptions
 from armlab.skills import program_files
 from armlab.skills import programs as program_edits
-from armlab.store import MAX_PROGRAM_NAME_CHARS, Waypoint
+from armlab.store import MAX_PROGRAM_NAME_CHARS, Waypoint, program_tree
 from server.deps import ControlAuth, StationDep
 from server.errors import ApiError
 from server.models import ProgramId, Status
@@ -133,11 +133,14 @@ def read_program(program_id: ProgramId, station: StationDep) -> dict:
 
 @router.patch("/programs/{program_id}", response_model=ProgramInfo)
 def update_program(program_id: ProgramId, body: ProgramUpdateRequest, station: StationDep, controller: ControlAuth) -> dict:
-    """Rename and/or replace the whole waypoint list (every waypoint checked first; nothing changes if one fails)."""
+    """Rename and/or replace the whole waypoint list or step tree (every waypoint of the expanded sequence checked
+    first; nothing changes if one fails)."""
     station.require_control("edit_program", controller)
     waypoints = None
     if body.waypoints is not None:
         waypoints = [Waypoint(tuple(w.joints_rad), w.gripper, w.dwell_s, w.moving_time_s) for w in body.waypoints]
+    if body.steps is not None:
+        waypoints = program_tree.steps_from_list([step.model_dump(exclude_none=True) for step in body.steps])
     return program_out(station, program_edits.update_program(station, program_id, name=body.name, waypoints=waypoints))
 
 

@@ -4,6 +4,7 @@
 // (the server checks it against the limits and the table before storing anything).
 
 import { typingIn } from "./jog.js";
+import { StepTree } from "./steps.js";
 
 const $ = (id) => document.getElementById(id);
 const DEG = 180 / Math.PI;
@@ -44,6 +45,7 @@ export class TeachPanel {
     this.selectedId = null;
     this.jointNames = [];
     this.bind();
+    this.stepTree = new StepTree({ patch: (p, body, action) => this.patch(p, body, action), log, selected: () => this.selected });
   }
 
   bind() {
@@ -216,7 +218,10 @@ export class TeachPanel {
     $("program-export-csv").href = `/api/programs/${p.id}/export?format=csv`;
     $("program-export-json").href = `/api/programs/${p.id}/export?format=json`;
     $("program-export-bag").href = `/api/programs/${p.id}/export?format=rosbag2`;
-    this.renderTable($("program-table"), p.waypoints, p);
+    this.stepTree.render(p);
+    // a program with steps: the table is its expanded sequence, read-only (edit the steps above)
+    this.renderTable($("program-table"), p.waypoints, p.steps ? null : p);
+    $("program-expanded-note").hidden = !p.steps;
   }
 
   /** Hand the program's gripper points (the server's gripper_position_m of each waypoint) to the live view. */
@@ -338,6 +343,7 @@ export class TeachPanel {
   /** A gripper step after the last waypoint: the same pose with the gripper toggled. */
   insertGripperStep() {
     const p = this.selected;
+    if (p.steps) return this.stepTree.addAfter({ kind: "gripper", action: p.waypoints.at(-1).gripper === "grasp" ? "open" : "close" }, "add a gripper step");
     const last = p.waypoints[p.waypoints.length - 1];
     const step = { ...last, joints_rad: [...last.joints_rad], gripper: last.gripper === "grasp" ? "release" : "grasp", dwell_s: 0 };
     this.patch(p, { waypoints: [...p.waypoints, step].map(toRequest) }, "insert a gripper step");

@@ -334,6 +334,21 @@ export const EVENT_KINDS = Object.freeze(["general", "scene"]);
  */
 
 /**
+ * Open or close the gripper at the pose of the waypoint before it.
+ * @typedef {Object} GripperStepRequest
+ * @property {"gripper"} kind
+ * @property {("open"|"close")} action
+ */
+
+/**
+ * A labelled group of steps (run once).
+ * @typedef {Object} GroupStepRequest
+ * @property {"group"} kind
+ * @property {string} label
+ * @property {Array<(WaypointStepRequest|WaitStepRequest|GripperStepRequest|LoopStepRequest|GroupStepRequest)>} body
+ */
+
+/**
  * The controlling page is still there: keeps its hold-to-run jog going for another jog_hold_s.
  * @typedef {Object} HeartbeatMessage
  * @property {"heartbeat"} type
@@ -360,7 +375,8 @@ export const EVENT_KINDS = Object.freeze(["general", "scene"]);
  * @property {(number|null)} [updated_s]
  * @property {(string|null)} [arm] the arm it was taught on (None: saved before programs had an arm)
  * @property {(string|null)} [workcell] the workcell it was taught in (None: saved before programs had one)
- * @property {Array<WaypointInfo>} waypoints
+ * @property {Array<WaypointInfo>} waypoints the flat sequence repeat runs (a step tree expanded)
+ * @property {(Array<Object<string, *>>|null)} [steps] the step tree (waypoints, wait, gripper, loop, group); None: waypoints only
  * @property {Array<string>} [notes] what the import read and did, one line each (topic, gripper source, thinning)
  * @property {Object<string, *>} [clamped_rad] joints clamped into their limits: the largest correction, rad
  * @property {number} [clamped_samples] samples clamped (only with clamp_rad)
@@ -417,6 +433,14 @@ export const EVENT_KINDS = Object.freeze(["general", "scene"]);
  */
 
 /**
+ * Run `body` `count` times (1-1000).
+ * @typedef {Object} LoopStepRequest
+ * @property {"loop"} kind
+ * @property {number} count how many times the body runs (1-1000)
+ * @property {Array<(WaypointStepRequest|WaitStepRequest|GripperStepRequest|LoopStepRequest|GroupStepRequest)>} body
+ */
+
+/**
  * What a joint or pose move would do, checked like the move itself; nothing moved (POST /api/arm/pose/check, /api/arm/joints/check).
  * @typedef {Object} MoveCheck
  * @property {Array<number>} q_rad the goal joints, radians, joint_names order
@@ -469,16 +493,19 @@ export const EVENT_KINDS = Object.freeze(["general", "scene"]);
  * @property {(number|null)} [updated_s]
  * @property {(string|null)} [arm] the arm it was taught on (None: saved before programs had an arm)
  * @property {(string|null)} [workcell] the workcell it was taught in (None: saved before programs had one)
- * @property {Array<WaypointInfo>} waypoints
+ * @property {Array<WaypointInfo>} waypoints the flat sequence repeat runs (a step tree expanded)
+ * @property {(Array<Object<string, *>>|null)} [steps] the step tree (waypoints, wait, gripper, loop, group); None: waypoints only
  */
 
 /**
  * PATCH /api/programs/{id}: a new name and/or the whole new waypoint list (reorder, edit a value,
- * insert or delete a waypoint or a gripper step: send the list as it should be). Checked against the
- * joint limits and the table before anything is stored.
+ * insert or delete a waypoint or a gripper step: send the list as it should be), or the whole step tree
+ * (waypoints, waits, gripper steps, loops, labelled groups; at most 4 deep, at most 1000 waypoints once
+ * expanded). Checked against the joint limits and the table before anything is stored.
  * @typedef {Object} ProgramUpdateRequest
  * @property {(string|null)} [name]
  * @property {(Array<WaypointRequest>|null)} [waypoints]
+ * @property {(Array<(WaypointStepRequest|WaitStepRequest|GripperStepRequest|LoopStepRequest|GroupStepRequest)>|null)} [steps] the program's step tree (replaces waypoints; a tree of waypoints only is a flat program)
  */
 
 /**
@@ -763,6 +790,13 @@ export const EVENT_KINDS = Object.freeze(["general", "scene"]);
  */
 
 /**
+ * Hold still at the waypoint before it for `seconds` (added to its dwell).
+ * @typedef {Object} WaitStepRequest
+ * @property {"wait"} kind
+ * @property {number} seconds seconds to wait (above 0, at most 3600)
+ */
+
+/**
  * @typedef {Object} WaypointInfo
  * @property {Array<number>} joints_rad
  * @property {("grasp"|"release")} gripper
@@ -779,6 +813,17 @@ export const EVENT_KINDS = Object.freeze(["general", "scene"]);
  * @property {number} [dwell_s] seconds to hold still at the waypoint
  * @property {(number|null)} [moving_time_s]
  * @property {(Array<number>|null)} [gripper_position_m] read-only (computed from joints_rad): accepted so a waypoint read can be sent back, ignored
+ */
+
+/**
+ * A waypoint in a step tree ('kind' may be left out: an item without it is a waypoint).
+ * @typedef {Object} WaypointStepRequest
+ * @property {Array<number>} joints_rad
+ * @property {("grasp"|"release")} gripper
+ * @property {number} [dwell_s] seconds to hold still at the waypoint
+ * @property {(number|null)} [moving_time_s]
+ * @property {(Array<number>|null)} [gripper_position_m] read-only (computed from joints_rad): accepted so a waypoint read can be sent back, ignored
+ * @property {"waypoint"} [kind]
  */
 
 /**
