@@ -70,3 +70,16 @@ def test_no_pose_the_check_passes_puts_a_simulated_link_into_the_board(cell):
         low_passed += ARM.joint_frames(q)[2][2, 3] < 0.06  # the elbow low over the board: the cases that matter
     assert passed > 300 and low_passed > 30, (passed, low_passed)
     assert worst <= 0.5, f"a pose the check passed has a simulated link {worst:.1f} mm into the board"
+
+
+def test_an_arm_let_down_onto_the_board_may_move_out_but_not_stay_or_go_further_in():
+    """A limp arm lies on the board (the page's arm panel test: home from there was refused at 'z = -0.0 mm'): a
+    motion out of it passes, standing there or going deeper does not."""
+    from armlab.motion.trajectory import plan_joint_move
+
+    into = np.asarray(INTO_THE_BOARD_Q)
+    out = plan_joint_move(into, ARM.home_rad, ARM)
+    check_trajectory(ARM, out, check_rates=False)
+    deeper = into + np.array([0.0, 0.05, 0.0, 0.0, 0.0])
+    with pytest.raises(UnsafeTrajectory, match="below the board"):
+        check_trajectory(ARM, plan_joint_move(into, deeper, ARM), check_rates=False)
