@@ -166,11 +166,16 @@ def time_joint_move(
                 f"accel_time_s {requested_accel:.3f} → {ramp:.3f} s (feasible range {low:.3f}…{high:.3f} s "
                 f"for moving_time_s {total:.3f})"
             )
-    cruise = total - ramp
-    magnitude = np.abs(delta_rad)
-    peak_velocity = magnitude / cruise
-    peak_accel = magnitude / (ramp * cruise) if ramp > 0 else np.where(magnitude > 0, np.inf, 0.0)
+    peak_velocity, peak_accel = _trapezoid_peaks(delta_rad, total, ramp)
     return MoveTiming(total, ramp, requested_moving, requested_accel, tuple(notes), peak_velocity, peak_accel)
+
+
+def _trapezoid_peaks(delta_rad, moving_time_s: float, accel_time_s: float) -> tuple[np.ndarray, np.ndarray]:
+    """Per-joint (peak velocity, peak acceleration) of a synchronised trapezoid of delta_rad."""
+    cruise = moving_time_s - accel_time_s
+    magnitude = np.abs(np.asarray(delta_rad, dtype=float))
+    peak_accel = magnitude / (accel_time_s * cruise) if accel_time_s > 0 else np.where(magnitude > 0, np.inf, 0.0)
+    return magnitude / cruise, peak_accel
 
 
 def trapezoid_profile(t_s: np.ndarray, moving_time_s: float, accel_time_s: float) -> np.ndarray:
@@ -223,10 +228,8 @@ def on_sample_grid(timing: MoveTiming, delta_rad: np.ndarray, rate_hz: float) ->
     total = math.ceil(timing.moving_time_s * rate_hz - 1e-3) / rate_hz  # within 0.1 % of a period: on the grid
     if not at_limits or timing.moving_time_s <= 0.0 or total <= timing.moving_time_s or timing.accel_time_s <= 0.0:
         return timing
-    cruise = total - timing.accel_time_s
-    magnitude = np.abs(np.asarray(delta_rad, dtype=float))
-    return replace(timing, moving_time_s=total, peak_velocity_rad_s=magnitude / cruise,
-                   peak_accel_rad_s2=magnitude / (timing.accel_time_s * cruise))
+    peak_velocity, peak_accel = _trapezoid_peaks(delta_rad, total, timing.accel_time_s)
+    return replace(timing, moving_time_s=total, peak_velocity_rad_s=peak_velocity, peak_accel_rad_s2=peak_accel)
 
 
 def plan_joint_move_timed(
