@@ -82,7 +82,8 @@ def in_view_and_on_top(page, selector: str) -> str:
 
 def ready_idle(server, timeout_s: float = 60.0) -> dict:
     """Wait for idle with the arm still, resetting estop, and a fault whose devices are back (a loaded machine
-    can starve the simulated camera past its watchdog); fails naming the last status."""
+    can starve the simulated camera past its watchdog), and leaving a teach session a failed test left open (its
+    draft discarded: one failure in teach mode once failed the 13 page tests after it); fails naming the last status."""
     deadline = time.monotonic() + timeout_s
     status = {}
     while time.monotonic() < deadline:
@@ -91,6 +92,8 @@ def ready_idle(server, timeout_s: float = 60.0) -> dict:
             return status
         if status["state"] in ("estop", "fault") and not status.get("devices_lost"):
             server.request("POST", "/api/reset")
+        if status["state"] == "teach" and not status["moving"]:
+            server.request("POST", "/api/teach/exit")
         time.sleep(0.1)
     raise AssertionError(f"not idle after {timeout_s} s; last status: {status}")
 

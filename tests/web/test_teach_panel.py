@@ -41,7 +41,7 @@ def test_teach_edit_repeat_pause_plot_and_csv(browser, server, tmp_path):
         wait_frames(page, 2)
         page.wait_for_function("!document.getElementById('btn-teach-start').disabled", timeout=10_000)
         page.click("#btn-teach-start")
-        page.wait_for_function("!document.getElementById('btn-teach-record').disabled", timeout=5_000)
+        page.wait_for_function("!document.getElementById('btn-teach-record').disabled", timeout=15_000)
         gripper_at_m = []
         for i, q in enumerate(POSES_RAD):
             move_to(server, q)
@@ -51,20 +51,20 @@ def test_teach_edit_repeat_pause_plot_and_csv(browser, server, tmp_path):
                 page.keyboard.press("r")
             else:
                 page.click("#btn-teach-record")
-            page.wait_for_function(f"document.querySelectorAll('#draft-table tbody tr').length === {i + 1}", timeout=5_000)
+            page.wait_for_function(f"document.querySelectorAll('#draft-table tbody tr').length === {i + 1}", timeout=15_000)
         page.click("#btn-teach-undo")
-        page.wait_for_function("document.querySelectorAll('#draft-table tbody tr').length === 2", timeout=5_000)
+        page.wait_for_function("document.querySelectorAll('#draft-table tbody tr').length === 2", timeout=15_000)
         page.click("#btn-teach-record")
-        page.wait_for_function("document.querySelectorAll('#draft-table tbody tr').length === 3", timeout=5_000)
+        page.wait_for_function("document.querySelectorAll('#draft-table tbody tr').length === 3", timeout=15_000)
         page.fill("#teach-name", "panel-wave")
         page.click("#btn-teach-stop")
-        page.wait_for_function("document.getElementById('state-badge').textContent === 'idle'", timeout=5_000)
+        page.wait_for_function("document.getElementById('state-badge').textContent === 'idle'", timeout=15_000)
         page.locator("#program-list li", has_text="panel-wave").locator("button", has_text="Edit").click()
-        page.wait_for_function("document.querySelectorAll('#program-table tbody tr').length === 3", timeout=5_000)
+        page.wait_for_function("document.querySelectorAll('#program-table tbody tr').length === 3", timeout=15_000)
         program = stored(server, "panel-wave")
         assert np.allclose([w["joints_rad"] for w in program["waypoints"]], POSES_RAD, atol=0.02)
         # The program's path is drawn on the live view: one point per waypoint, where the gripper was.
-        page.wait_for_function("document.getElementById('live').dataset.pathPoints === '3'", timeout=5_000)
+        page.wait_for_function("document.getElementById('live').dataset.pathPoints === '3'", timeout=15_000)
         shown = page.evaluate("window.armlab.programPath.path.points_m")
         assert np.allclose(shown, gripper_at_m, atol=0.003)
 
@@ -72,17 +72,17 @@ def test_teach_edit_repeat_pause_plot_and_csv(browser, server, tmp_path):
         page.fill("#program-table tbody tr[data-index='1'] input[data-field='dwell']", "0.5")
         page.press("#program-table tbody tr[data-index='1'] input[data-field='dwell']", "Enter")
         page.wait_for_function(
-            "window.armlab.teach.selected && window.armlab.teach.selected.waypoints[1].dwell_s === 0.5", timeout=5_000)
+            "window.armlab.teach.selected && window.armlab.teach.selected.waypoints[1].dwell_s === 0.5", timeout=15_000)
         page.fill("#program-table tbody tr[data-index='0'] input[data-field='q0']", "10")
         page.press("#program-table tbody tr[data-index='0'] input[data-field='q0']", "Enter")
         page.wait_for_function(
-            "Math.abs(window.armlab.teach.selected.waypoints[0].joints_rad[0] - Math.PI / 18) < 1e-6", timeout=5_000)
+            "Math.abs(window.armlab.teach.selected.waypoints[0].joints_rad[0] - Math.PI / 18) < 1e-6", timeout=15_000)
         program = stored(server, "panel-wave")
         assert program["waypoints"][1]["dwell_s"] == 0.5
         assert program["waypoints"][0]["joints_rad"][0] == pytest.approx(math.radians(10), abs=1e-6)
         page.fill("#program-table tbody tr[data-index='2'] input[data-field='q1']", "abc")  # refused, nothing stored
         page.press("#program-table tbody tr[data-index='2'] input[data-field='q1']", "Enter")
-        page.locator(".toast", has_text="not a number").first.wait_for(timeout=5_000)
+        page.locator(".toast", has_text="not a number").first.wait_for(timeout=15_000)
         assert stored(server, "panel-wave")["waypoints"] == program["waypoints"]
         with page.expect_download() as info:  # the program as a ROS 2 bag: one MCAP file
             page.click("#program-export-bag")
@@ -93,12 +93,12 @@ def test_teach_edit_repeat_pause_plot_and_csv(browser, server, tmp_path):
         # Rename, duplicate, delete the copy.
         page.fill("#program-name", "panel-wave-2")
         page.click("#btn-program-rename")
-        page.wait_for_function("window.armlab.teach.selected && window.armlab.teach.selected.name === 'panel-wave-2'", timeout=5_000)
+        page.wait_for_function("window.armlab.teach.selected && window.armlab.teach.selected.name === 'panel-wave-2'", timeout=15_000)
         count = server.get("/api/programs")["count"]
         page.click("#btn-program-duplicate")
-        page.wait_for_function(f"window.armlab.teach.programs.length === {count + 1}", timeout=5_000)
+        page.wait_for_function(f"window.armlab.teach.programs.length === {count + 1}", timeout=15_000)
         page.click("#btn-program-delete")  # the copy is selected
-        page.wait_for_function(f"window.armlab.teach.programs.length === {count}", timeout=5_000)
+        page.wait_for_function(f"window.armlab.teach.programs.length === {count}", timeout=15_000)
         program = stored(server, "panel-wave-2")
 
         # Repeat 2 cycles at 50 %; pause (the arm holds), resume; the cycle plot and its CSV.
@@ -110,12 +110,12 @@ def test_teach_edit_repeat_pause_plot_and_csv(browser, server, tmp_path):
         server.wait_status(lambda s: s["speed_percent"] == 50, 10.0, "the speed override at 50 %")
         page.locator("#program-list li", has_text="panel-wave-2").locator("button[data-command='repeat']").click()
         server.wait_status(lambda s: s["state"] == "repeat" and s["moving"], 10.0, "the repeat to move the arm")
-        page.wait_for_function("!document.getElementById('btn-repeat-pause').disabled", timeout=5_000)
+        page.wait_for_function("!document.getElementById('btn-repeat-pause').disabled", timeout=15_000)
         page.click("#btn-repeat-pause")
         paused = server.wait_status(
             lambda s: (s["job"].get("extra") or {}).get("repeat", {}).get("paused") and not s["moving"], 10.0, "paused and still")
         assert paused["job"]["extra"]["repeat"]["speed_percent"] == 50
-        page.wait_for_function("document.getElementById('repeat-progress').textContent.includes('paused')", timeout=5_000)
+        page.wait_for_function("document.getElementById('repeat-progress').textContent.includes('paused')", timeout=15_000)
         page.click("#btn-repeat-resume")
         server.wait_status(lambda s: s["state"] == "repeat" and s["moving"], 10.0, "resumed")
         final = server.wait_status(lambda s: s["state"] == "idle", 120.0, "the repeat to end")
@@ -146,7 +146,7 @@ def test_record_continuously_at_a_rate(browser, server):
         wait_frames(page, 2)
         page.wait_for_function("!document.getElementById('btn-teach-start').disabled", timeout=10_000)
         page.click("#btn-teach-start")
-        page.wait_for_function("!document.getElementById('btn-teach-continuous').disabled", timeout=5_000)
+        page.wait_for_function("!document.getElementById('btn-teach-continuous').disabled", timeout=15_000)
         if rows(page, "draft-table"):  # a draft left over: start from none
             server.post("/api/teach/stop", {"name": "leftover"})
             page.click("#btn-teach-start")
@@ -157,13 +157,13 @@ def test_record_continuously_at_a_rate(browser, server):
             server.post("/api/arm/joints?wait=true", {"q_rad": q, "moving_time_s": 1.5})
         page.click("#btn-teach-continuous")
         page.wait_for_function("document.getElementById('btn-teach-continuous').dataset.recording === 'false'")
-        page.wait_for_function("document.querySelectorAll('#draft-table tbody tr').length >= 5", timeout=5_000)
+        page.wait_for_function("document.querySelectorAll('#draft-table tbody tr').length >= 5", timeout=15_000)
         draft = server.get("/api/teach/draft")
         assert draft["count"] == rows(page, "draft-table") and draft["count"] >= 5
         assert np.allclose(draft["waypoints"][-1]["joints_rad"], POSES_RAD[1], atol=0.03)
         page.fill("#teach-name", "continuous-wave")
         page.click("#btn-teach-stop")
-        page.wait_for_function("document.getElementById('state-badge').textContent === 'idle'", timeout=5_000)
+        page.wait_for_function("document.getElementById('state-badge').textContent === 'idle'", timeout=15_000)
         assert page.errors == []
     finally:
         page.close()
