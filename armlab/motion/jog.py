@@ -43,7 +43,8 @@ def plan_jog(
     accel_limit_rad_s2,
     rate_hz: float = 100.0,
 ) -> JointTrajectory:
-    """A trajectory from q0 moving at v0 that reaches v_target, keeps it until hold_s, then stops.
+    """A trajectory from q0 moving at v0 that reaches v_target, keeps it until hold_s (rounded down to the
+    sample grid), then stops.
 
     Per joint: the velocity moves toward its target (v_target before hold_s, 0 after, 0 sooner when the
     braking distance would carry the joint past limit - LIMIT_MARGIN_RAD) by at most accel·dt per sample.
@@ -65,7 +66,9 @@ def plan_jog(
     positions, t = [q.copy()], 0.0
     max_steps = int((hold_s + float(np.max(np.abs(v) / accel)) + float(np.max(np.abs(target) / accel))) * rate_hz) + 10
     for _ in range(max_steps):
-        goal = target if t < hold_s else np.zeros_like(target)
+        # A step runs at the target only if it ends by hold_s: braking starts at the last sample inside the hold,
+        # never up to a sample after it (which overran the deadman's bound by a sample's travel).
+        goal = target if t + dt <= hold_s + 1e-9 else np.zeros_like(target)
         # Take the step toward the goal unless, after it, braking at the limit could no longer stop the joint
         # before its limit; then brake now. This keeps q + v|v|/2a inside the limits at every sample (true
         # at the start for a jog that replaces another one), so the joint never passes them.

@@ -17,11 +17,15 @@ OPERATOR_STOP_RAD = 0.25  # ~14 deg of waist, 0.1 m at the arm's reach: what a r
 
 
 
+@pytest.mark.parametrize("phase_s", [0.0, 0.003, 0.006, 0.009])
 @pytest.mark.parametrize("speed_percent", [25, 50, 100])
-def test_a_released_jog_brakes_within_the_timeout_and_stops_at_the_acceleration_limit(fast, speed_percent):
+def test_a_released_jog_brakes_within_the_timeout_and_stops_at_the_acceleration_limit(fast, speed_percent, phase_s):
+    """phase_s: where between two 10 ms samples the jog and its heartbeats arrive (the bound held at one phase
+    and not at another)."""
     station, cell = fast
     station.move_joints([-1.5, 0.0, 0.0, 0.0, 0.0], wait=True)
     station.wait_motion(5.0)
+    cell.step(0.01 - (cell.sim_time_s % 0.01) + phase_s)
     config = station.motion_config
     top_rad_s = min(getattr(config, "jog_max_speed_rad_s", np.inf), float(ARM.velocity_limit_rad_s[0]))  # the fastest jog allowed
     hold_s = config.jog_hold_s
@@ -44,9 +48,12 @@ def test_a_released_jog_brakes_within_the_timeout_and_stops_at_the_acceleration_
     command_rad = reference[stopped] - q_released
     measured_rad = float(np.max(trace["position_rad"][:, 0])) - q_released
     bound_rad = speed * hold_s + speed**2 / (2 * ACCEL)
-    assert braking_s <= hold_s + 0.011, f"braking began {braking_s:.3f} s after the last heartbeat"
+    # The command brakes within the timeout and travels no more than the bound (bench/motion_continuity once
+    # showed braking 8 ms late and 0.229 rad commanded against a 0.224 rad bound at 100 %); the measured joint
+    # follows the servos, which lag the command by a few ms.
+    assert braking_s <= hold_s + 1e-6, f"braking began {braking_s:.3f} s after the last heartbeat"
     assert stopped_s <= hold_s + speed / ACCEL + 0.02, f"stopped {stopped_s:.3f} s after the last heartbeat"
-    assert command_rad <= bound_rad + 0.005 and measured_rad <= bound_rad + 0.01, (command_rad, measured_rad, bound_rad)
+    assert command_rad <= bound_rad and measured_rad <= bound_rad + 0.01, (command_rad, measured_rad, bound_rad)
     assert measured_rad <= OPERATOR_STOP_RAD, f"a jog at {speed:.2f} rad/s released travels {measured_rad:.2f} rad"
     assert motion_figures(trace).ratio([ACCEL] * 5)[0] <= 1.01  # braking at the acceleration limit, not beyond
 
