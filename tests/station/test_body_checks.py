@@ -9,6 +9,7 @@ import numpy as np
 import pytest
 
 from armlab import skills
+from armlab.devices.arm import JointTrajectory
 from armlab.kinematics import load_arm
 from armlab.motion.safety import UnsafeTrajectory
 from armlab.skills.programs import import_program
@@ -107,3 +108,58 @@ def test_a_draft_waypoint_into_the_arm_itself_is_refused_when_saved_and_edited(f
     with pytest.raises(UnsafeTrajectory, match="waypoint 2"):
         update_program(station, program.id, waypoints=[Waypoint((0.0, 0.0, 0.0, 0.0, 0.0), "release"), Waypoint(at_base, "release")])
     assert len(station.store.get_program(program.id).waypoints) == 1
+
+
+# bench/motion_continuity (seed 0) measured a 4.77x acceleration spike where the simulated palm met the board: the
+# check's box around the fingers leaves out the palm, which is wider and taller (config/sim.yaml gripper).
+PALM_INTO_THE_BOARD_Q = [-1.623, 1.541, -1.093, -1.261, -1.33]  # finger box 6 mm clear, palm 14 mm in
+GRIPPER_GEOMS = {"palm", "left_finger_link", "right_finger_link", "left_pad", "right_pad"}
+
+
+def deepest_gripper_contact_mm(cell, q) -> float:
+    """How far (mm, > 0 = into) the simulated palm and open fingers reach into the board or table standing at q."""
+    import mujoco
+
+    model, data = cell.model, mujoco.MjData(cell.model)
+    for name, value in zip(ARM.joint_names, q):
+        data.qpos[model.joint(name).qposadr[0]] = value
+    mujoco.mj_forward(model, data)
+    deepest = 0.0
+    for contact in data.contact[: data.ncon]:
+        names = {mujoco.mj_id2name(model, mujoco.mjtObj.mjOBJ_GEOM, g) for g in (contact.geom1, contact.geom2)}
+        if names & GRIPPER_GEOMS and names & {"board", "table"}:
+            deepest = max(deepest, -contact.dist * 1000.0)
+    return deepest
+
+
+def _standing(q) -> JointTrajectory:
+    return JointTrajectory(np.array([0.0, 0.01]), np.vstack([q, q]))
+
+
+def test_a_pose_with_the_palm_in_the_board_is_refused(fast):
+    station, cell = fast
+    assert deepest_gripper_contact_mm(cell, PALM_INTO_THE_BOARD_Q) > 10.0  # the simulation: the palm 14 mm in
+    with pytest.raises(UnsafeTrajectory, match="palm would go 1\\d\\.\\d mm into the board"):
+        station.check_body(_standing(PALM_INTO_THE_BOARD_Q))
+
+
+def test_no_pose_the_body_check_passes_puts_the_simulated_gripper_into_the_board(fast):
+    station, cell = fast
+    rng = np.random.default_rng(5)
+    lower, upper = np.asarray(ARM.lower_rad), np.asarray(ARM.upper_rad)
+    passed = low_passed = 0
+    worst = 0.0
+    for _ in range(4000):
+        q = rng.uniform(lower, upper)
+        gripper_z_m = float(ARM.fk(q)[2, 3])
+        if gripper_z_m > 0.12:  # far above the board: nothing to learn
+            continue
+        try:
+            station.check_body(_standing(q))
+        except UnsafeTrajectory:
+            continue
+        passed += 1
+        low_passed += gripper_z_m < 0.06
+        worst = max(worst, deepest_gripper_contact_mm(cell, q))
+    assert passed > 200 and low_passed > 50, (passed, low_passed)
+    assert worst <= 0.5, f"a pose the check passed has the simulated gripper {worst:.1f} mm into the board"
