@@ -95,15 +95,16 @@ def start_cell(seed: int = 0, camera_fps: float = TEST_CAMERA_FPS):
     return cell
 
 
-def make_station(cell, db_path, **config_overrides) -> Station:
-    """A started Station on the shared cell, with its own database file (the tests' camera watchdog unless given:
-    a CPU-starved camera thread of a loaded machine must not read as a lost camera)."""
+def make_station(cell, db_path, store=None, perception_config=None, **config_overrides) -> Station:
+    """A started Station on `cell` with its own database file (store: a Store instance, default the real one on
+    db_path; perception_config: default the shipped one), with the tests' camera watchdog unless given (at load 20 a
+    CPU-starved camera thread read as lost after 2 s). The one test station builder of tests/server and tests/station."""
     from armlab.kinematics import load_arm
 
     config_overrides.setdefault("camera_timeout_s", TEST_CAMERA_TIMEOUT_S)
-
     config = StationConfig(database_path=str(db_path), **config_overrides)
-    station = Station(cell.arm, cell.gripper, cell.camera, model=load_arm("rx200"), config=config, sim=cell, backend="sim")
+    station = Station(cell.arm, cell.gripper, cell.camera, model=load_arm("rx200"), config=config, store=store, sim=cell,
+                      backend="sim", perception_config=perception_config)
     station.start()
     return station
 

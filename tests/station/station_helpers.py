@@ -12,6 +12,8 @@ sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "server"))
 import live  # noqa: E402
 from armlab.station import State  # noqa: E402
 
+make_station = live.make_station  # the one test station builder (tests/server/live.py)
+
 # A halted arm settles by a few mrad under gravity; a move that kept going would travel ~0.1 rad or more.
 HALT_TOL_RAD = 5e-3
 FAR_Q = np.array([0.8, 0.3, 0.2, 0.4, 0.5])
@@ -95,17 +97,3 @@ class DatabaseLock:
         self._connection.close()
 
 
-def make_station(cell, db_path, store=None, **config):
-    """A started Station on `cell` (store: a Store instance, default the real one on db_path), with the tests' camera
-    watchdog unless given (live.TEST_CAMERA_TIMEOUT_S: at load 20 a starved camera thread read as lost after 2 s)."""
-    from armlab.kinematics import load_arm
-    from armlab.station import Station, StationConfig
-
-    config.setdefault("camera_timeout_s", live.TEST_CAMERA_TIMEOUT_S)
-
-    station = Station(
-        cell.arm, cell.gripper, cell.camera, model=load_arm("rx200"),
-        config=StationConfig(database_path=str(db_path), **config), store=store, sim=cell, backend="sim",
-    )
-    station.start()
-    return station

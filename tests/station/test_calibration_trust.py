@@ -27,13 +27,10 @@ ROTATION_TOLERANCE_DEG = 0.1
 
 
 def make_station(cell, db_path, **config) -> Station:
+    """The tests' station (live.make_station) with the camera-moved check every CHECK_PERIOD_S."""
     cfg = load_perception_config()
     limits = cfg.calibration.model_copy(update={"drift_check_period_s": CHECK_PERIOD_S})
-    station = Station(cell.arm, cell.gripper, cell.camera, model=load_arm("rx200"), sim=cell, backend="sim",
-                      config=StationConfig(database_path=str(db_path), **config),
-                      perception_config=cfg.model_copy(update={"calibration": limits}))
-    station.start()
-    return station
+    return live.make_station(cell, db_path, perception_config=cfg.model_copy(update={"calibration": limits}), **config)
 
 
 def calibrate(station) -> None:
