@@ -17,13 +17,10 @@ gate waits for the devices.
 
 from __future__ import annotations
 
-import ctypes
-import ctypes.util
 import logging
 import math
 import threading
 import time
-from collections.abc import Callable
 from typing import Any
 
 import numpy as np
@@ -41,19 +38,20 @@ from armlab.station.config import StationConfig
 from armlab.station.event_history import EventHistory
 from armlab.station.intrinsics import CameraIntrinsics
 from armlab.station.job_control import JobControls
-from armlab.station.jobs import Job, JobContext, start_job_thread
+from armlab.station.jobs import Job
 from armlab.station.latch import Latch
 from armlab.station.lease import ControlLease
 from armlab.station.manual import ManualCommands
+from armlab.station.memory import return_freed_memory
 from armlab.station.motion import MOTION_MEMORY, WAIT_CHUNK_S, MotionGate
 from armlab.station.perceiving import Perceiving
 from armlab.station.perception import DEVICE_ERRORS, FrameSource, Perception, PerceptionLoop
 from armlab.station.reach import ReachCache
 from armlab.station.slots import EventLog, NewestSlot
 from armlab.station.speed import SpeedOverride
-from armlab.station.states import ARM_COMMANDS, JOB_STATES, State, after_event, allowed_commands, next_state
+from armlab.station.states import ARM_COMMANDS, State, after_event, allowed_commands, next_state
 from armlab.station.teach import TeachCommands
-from armlab.station.telemetry import TelemetryPublisher, gripper_pose_from_matrix
+from armlab.station.telemetry import TelemetryPublisher
 from armlab.station.watch import DeviceWatch
 from armlab.store import Store
 from armlab.vision import load_perception_config
@@ -62,19 +60,6 @@ from armlab.workcell.loading import load_workcell_motion_config
 log = logging.getLogger(__name__)
 
 __all__ = ["DEVICE_ERRORS", "MOTION_MEMORY", "WAIT_CHUNK_S", "NotCalibrated", "Station"]
-
-
-def return_freed_memory() -> None:
-    """Hand freed heap memory back to the OS (glibc's malloc_trim; nothing elsewhere). A scene change frees a
-    whole MuJoCo model and its GL upload; without this the process keeps the freed pages and its resident
-    size ratchets up by ~5-25 MB per scene change (bench/soak.py)."""
-    name = ctypes.util.find_library("c")
-    try:
-        trim = ctypes.CDLL(name).malloc_trim if name else None
-    except (OSError, AttributeError):
-        trim = None
-    if trim is not None:
-        trim(0)
 
 
 class NotCalibrated(RefusedByCheck, RuntimeError):
@@ -89,7 +74,8 @@ _UNLATCHED = ("estop",)  # the only command the latch and the lease never refuse
 
 class Station(Latch, MotionGate, ManualCommands, TeachCommands, JobControls, SpeedOverride, Perceiving, CalibrationTrust,
               ArmCalibrationKeeper):
-    """The control station's gate (its parts: latch.py, motion.py, manual.py, teach.py, job_control.py, perceiving.py).
+    """The control station's gate (its parts: latch.py, motion.py, manual.py, teach.py, job_control.py: start,
+    cancel and control jobs, perceiving.py: status, detections, fresh frames).
     Backends are injected; `sim` is the SimWorkcell when simulated (else None).
 
     model: the armlab.kinematics ArmModel of the arm; perception_config: armlab.vision's config.
@@ -413,134 +399,3 @@ class Station(Latch, MotionGate, ManualCommands, TeachCommands, JobControls, Spe
     def clock_s(self) -> float:
         """The motion clock: simulated time on the simulation, else monotonic wall time."""
         return self.sim.sim_time_s if self.sim is not None else time.monotonic()
-
-    def _gripper_pose_matrix(self, q_read: np.ndarray) -> np.ndarray:
-        """The gripper's pose from joint readings: the calibrated arm's (fk_measured) when there is one."""
-        fk_measured = getattr(self.model, "fk_measured", None)
-        return fk_measured(q_read) if fk_measured is not None else self.model.fk(q_read)
-
-    def status(self) -> dict:
-        """GET /api/status: the wire dict (SI units). Works with a device lost (its last reading is shown)."""
-        moving_measured, gripper_dict = False, {"width_m": 0.0, "holding": False, "command": "release"}
-        try:
-            joint_state = self.arm.read_joint_state()
-            q = np.asarray(joint_state.position_rad, dtype=float)
-            self._last_joints = q
-            speed = np.abs(np.asarray(joint_state.velocity_rad_s, dtype=float))
-            moving_measured = bool(self.arm.is_moving()) or bool(speed.size and speed.max() > self.config.moving_speed_rad_s)
-        except DEVICE_ERRORS:
-            q = self._last_joints if self._last_joints is not None else np.asarray(self.model.home_rad if self.has_arm else [], dtype=float)
-        try:
-            gripper = self.gripper.read_state()
-            gripper_dict = {"width_m": float(gripper.width_m), "holding": bool(gripper.holding), "command": gripper.command}
-        except DEVICE_ERRORS:
-            pass
-        with self._lock:
-            job = self._job or self._last_job
-            state, detail, lease = self._effective_state(), self._detail, self._lease.to_dict()
-            calibrated = self._calibration is not None
-            checked = calibrated or self._restored is not None
-            lost = dict(self._lost)
-        perception, _ = self.perception.get()
-        camera_warning = perception.camera_warning if checked and perception is not None else None
-        return {
-            "state": state.value,
-            "detail": detail,
-            "joints_rad": [float(v) for v in q],
-            "joint_names": list(self.model.joint_names) if self.has_arm else [],
-            "joint_limits_rad": [[float(lo), float(hi)] for lo, hi in zip(self.model.lower_rad, self.model.upper_rad)] if self.has_arm else [],
-            "gripper": gripper_dict,
-            "gripper_pose": gripper_pose_from_matrix(self._gripper_pose_matrix(q), np.asarray(self.model.T_world_base)[:3, 3]) if self.has_arm else None,
-            "moving": moving_measured,
-            "torque_enabled": self._torque_enabled,
-            "calibrated": calibrated,
-            "camera_warning": camera_warning,
-            "calibration_state": self.calibration_state,
-            "arm_calibration": self.arm_calibration_status if self.has_arm else None,
-            "self_recalibrate": self.self_recalibrate,
-            "backend": self.backend,
-            "controller": lease["controller"],
-            "controller_since_s": lease["since_s"],
-            "devices_lost": lost,
-            "speed_percent": self.speed_percent,
-            "job": job.to_dict() if job is not None else None,
-            "allowed_commands": allowed_commands(state, self.has_arm),
-            "time_s": time.time(),
-        }
-
-    def cancel_job(self, source: str | None = None) -> Job:
-        """Cancel the running job: the arm halts where it is, the station returns to idle.
-
-        A job that registered a cleanup (e.g. put a held block down) runs it on its own thread after the
-        cancel; the station stays in the job's state until that ends."""
-        with self._lock:
-            self._check("cancel", source)
-            job = self._job
-            assert job is not None, "a job state without a job"
-            job.cancel()  # under the lock: any command the job is sending has finished or will see it
-            if not job.has_cleanup:
-                self._transition("cancel", source=source, detail="")
-        self._halt_devices(gripper=False)
-        return job  # the job's end logs "job '<name>' cancelled: ..." once
-
-    # Jobs -----------------------------------------------------------------------------------------
-
-    def current_job(self) -> Job | None:
-        with self._lock:
-            return self._job or self._last_job
-
-    def start_job(
-        self,
-        command: str,
-        name: str,
-        function: Callable[[JobContext], Any],
-        detail: str = "",
-        source=None,
-        cleanup: Callable[[JobContext], Any] | None = None,
-        control: Any = None,
-    ) -> Job:
-        """Enter the job's state and run function(ctx) on a job thread (CommandRefused if not allowed).
-        control: the job's RunControl (pause, resume, step, speed; job_control.py), if it has one.
-
-        cleanup(ctx), if given, runs after a cancel (not after an e-stop) with the arm still the job's,
-        e.g. to put a held block down; the station returns to idle when it ends."""
-        with self._lock:
-            self._check(command, source)
-            if command not in ("calibrate", "grab", "drop", "repeat", "auto"):
-                raise InvalidInput(f"'{command}' does not start a job")
-            job = Job(name=name, detail=detail, has_cleanup=cleanup is not None, control=control)
-            self._transition(command, source=source, detail=detail or name)
-            self._job = job
-            self._jog = None
-            start_job_thread(job, self._after_rest(function), self._on_job_end, cleanup=cleanup)
-        try:  # on disk while it runs: a station killed mid-job shows it 'interrupted' after the restart
-            self.store.record_job_start(job.to_dict())
-        except Exception as store_error:  # noqa: BLE001 - the job matters more than its record
-            log.warning("could not record the start of job %s: %s", job.id, store_error)
-        self.events.add("info", f"job '{name}' started" + (f": {detail}" if detail else ""))
-        return job
-
-    def _after_rest(self, function: Callable[[JobContext], Any]) -> Callable[[JobContext], Any]:
-        """The job's function, run once a motion still in progress (a manual move, a jog running out) has been
-        braked to rest: every job plans from the arm at rest."""
-
-        def run(ctx: JobContext) -> Any:
-            self.brake_to_rest(ctx)
-            return function(ctx)
-
-        return run
-
-    def _on_job_end(self, job: Job, error: BaseException | None) -> None:
-        if isinstance(error, DEVICE_ERRORS) and self._job is job:
-            self.device_failed(f"a device in job '{job.name}'", f"{type(error).__name__}: {error}")
-        with self._lock:
-            if self._job is job:
-                self._job, self._last_job = None, job
-                if self._state in JOB_STATES:
-                    self._transition("job_ended", event=True)
-        try:
-            self.store.record_job(job.to_dict())
-        except Exception as store_error:  # noqa: BLE001 - the job's outcome matters more than its record
-            log.warning("could not record job %s: %s", job.id, store_error)
-        level = {"succeeded": "info", "cancelled": "warn"}.get(job.state, "error")
-        self.events.add(level, f"job '{job.name}' {job.state}: {job.message}")

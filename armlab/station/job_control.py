@@ -1,16 +1,26 @@
-"""Controls of a running job beyond cancel: pause, resume, step, speed override (the repeat job has them).
+"""The station's job commands: start a job, cancel it, and the controls beyond cancel: pause, resume, step,
+speed override (the repeat job has them).
 
-`JobControls` is a mixin of core.Station: each control is an operator command of the transition table
-(allowed only in `repeat`, from the controller holding the lease), forwarded to the job's `RunControl`.
+`JobControls` is a mixin of core.Station. start_job enters the job's state and runs it on its own thread
+(jobs.py); its end returns the station to idle and records it. Each control is an operator command of the
+transition table (allowed only in `repeat`, from the controller holding the lease), forwarded to the job's `RunControl`.
 `RunControl` is the thread-safe mailbox between the request threads and the job's thread: the job
 reads it at its waits and reacts (brake to rest on pause, re-plan on a speed change).
 """
 
 from __future__ import annotations
 
+import logging
 import threading
+from collections.abc import Callable
+from typing import Any
 
 from armlab.errors import CommandRefused, InvalidInput
+from armlab.station.jobs import Job, JobContext, start_job_thread
+from armlab.station.perception import DEVICE_ERRORS
+from armlab.station.states import JOB_STATES
+
+log = logging.getLogger(__name__)
 
 SPEED_MIN_PERCENT = 10.0
 SPEED_MAX_PERCENT = 100.0
@@ -100,7 +110,8 @@ class RunControl:
 
 
 class JobControls:
-    """pause_job, resume_job, step_job, set_job_speed: table-checked, forwarded to the job's RunControl."""
+    """start_job, cancel_job, current_job; pause_job, resume_job, step_job, set_job_speed: table-checked, the
+    controls forwarded to the job's RunControl."""
 
     def _run_control(self, command: str, source: str | None) -> RunControl:
         with self._lock:
@@ -134,3 +145,80 @@ class JobControls:
         self._run_control("set_speed", source)
         self.set_speed(speed, source=source)
         return self.current_job()
+
+    # Start and cancel ------------------------------------------------------------------------------
+
+    def cancel_job(self, source: str | None = None) -> Job:
+        """Cancel the running job: the arm halts where it is, the station returns to idle.
+
+        A job that registered a cleanup (e.g. put a held block down) runs it on its own thread after the
+        cancel; the station stays in the job's state until that ends."""
+        with self._lock:
+            self._check("cancel", source)
+            job = self._job
+            assert job is not None, "a job state without a job"
+            job.cancel()  # under the lock: any command the job is sending has finished or will see it
+            if not job.has_cleanup:
+                self._transition("cancel", source=source, detail="")
+        self._halt_devices(gripper=False)
+        return job  # the job's end logs "job '<name>' cancelled: ..." once
+
+    def current_job(self) -> Job | None:
+        with self._lock:
+            return self._job or self._last_job
+
+    def start_job(
+        self,
+        command: str,
+        name: str,
+        function: Callable[[JobContext], Any],
+        detail: str = "",
+        source=None,
+        cleanup: Callable[[JobContext], Any] | None = None,
+        control: Any = None,
+    ) -> Job:
+        """Enter the job's state and run function(ctx) on a job thread (CommandRefused if not allowed).
+        control: the job's RunControl (pause, resume, step, speed; job_control.py), if it has one.
+
+        cleanup(ctx), if given, runs after a cancel (not after an e-stop) with the arm still the job's,
+        e.g. to put a held block down; the station returns to idle when it ends."""
+        with self._lock:
+            self._check(command, source)
+            if command not in ("calibrate", "grab", "drop", "repeat", "auto"):
+                raise InvalidInput(f"'{command}' does not start a job")
+            job = Job(name=name, detail=detail, has_cleanup=cleanup is not None, control=control)
+            self._transition(command, source=source, detail=detail or name)
+            self._job = job
+            self._jog = None
+            start_job_thread(job, self._after_rest(function), self._on_job_end, cleanup=cleanup)
+        try:  # on disk while it runs: a station killed mid-job shows it 'interrupted' after the restart
+            self.store.record_job_start(job.to_dict())
+        except Exception as store_error:  # noqa: BLE001 - the job matters more than its record
+            log.warning("could not record the start of job %s: %s", job.id, store_error)
+        self.events.add("info", f"job '{name}' started" + (f": {detail}" if detail else ""))
+        return job
+
+    def _after_rest(self, function: Callable[[JobContext], Any]) -> Callable[[JobContext], Any]:
+        """The job's function, run once a motion still in progress (a manual move, a jog running out) has been
+        braked to rest: every job plans from the arm at rest."""
+
+        def run(ctx: JobContext) -> Any:
+            self.brake_to_rest(ctx)
+            return function(ctx)
+
+        return run
+
+    def _on_job_end(self, job: Job, error: BaseException | None) -> None:
+        if isinstance(error, DEVICE_ERRORS) and self._job is job:
+            self.device_failed(f"a device in job '{job.name}'", f"{type(error).__name__}: {error}")
+        with self._lock:
+            if self._job is job:
+                self._job, self._last_job = None, job
+                if self._state in JOB_STATES:
+                    self._transition("job_ended", event=True)
+        try:
+            self.store.record_job(job.to_dict())
+        except Exception as store_error:  # noqa: BLE001 - the job's outcome matters more than its record
+            log.warning("could not record job %s: %s", job.id, store_error)
+        level = {"succeeded": "info", "cancelled": "warn"}.get(job.state, "error")
+        self.events.add(level, f"job '{job.name}' {job.state}: {job.message}")

@@ -1,5 +1,5 @@
-"""What the gate sees: detections (marked stale while the camera is lost), telemetry snapshots and
-fresh frames and perception for skills.
+"""What the gate sees and reports: its status (GET /api/status), detections (marked stale while the camera is
+lost), telemetry snapshots and fresh frames and perception for skills.
 
 A mixin of core.Station.
 """
@@ -8,15 +8,18 @@ from __future__ import annotations
 
 import time
 
+import numpy as np
+
 from armlab.devices.camera import Frame
 from armlab.station.jobs import JobContext
-from armlab.station.perception import Perception, analyse_frame
-from armlab.station.telemetry import block_to_dict
+from armlab.station.perception import DEVICE_ERRORS, Perception, analyse_frame
+from armlab.station.states import allowed_commands
+from armlab.station.telemetry import block_to_dict, gripper_pose_from_matrix
 from armlab.vision.pipeline import PerceptionPipeline
 
 
 class Perceiving:
-    """Detections, telemetry snapshots, fresh frames and perception."""
+    """Status, detections, telemetry snapshots, fresh frames and perception."""
 
     def detections(self) -> dict:
         """GET /api/detections: the newest detected blocks as wire dicts; none, with stale: true and the
@@ -42,6 +45,60 @@ class Perceiving:
         if not self.synchronous and age_s > self.config.camera_timeout_s:
             return f"the newest perception is {age_s:.1f} s old"
         return None
+
+    def _gripper_pose_matrix(self, q_read: np.ndarray) -> np.ndarray:
+        """The gripper's pose from joint readings: the calibrated arm's (fk_measured) when there is one."""
+        fk_measured = getattr(self.model, "fk_measured", None)
+        return fk_measured(q_read) if fk_measured is not None else self.model.fk(q_read)
+
+    def status(self) -> dict:
+        """GET /api/status: the wire dict (SI units). Works with a device lost (its last reading is shown)."""
+        moving_measured, gripper_dict = False, {"width_m": 0.0, "holding": False, "command": "release"}
+        try:
+            joint_state = self.arm.read_joint_state()
+            q = np.asarray(joint_state.position_rad, dtype=float)
+            self._last_joints = q
+            speed = np.abs(np.asarray(joint_state.velocity_rad_s, dtype=float))
+            moving_measured = bool(self.arm.is_moving()) or bool(speed.size and speed.max() > self.config.moving_speed_rad_s)
+        except DEVICE_ERRORS:
+            q = self._last_joints if self._last_joints is not None else np.asarray(self.model.home_rad if self.has_arm else [], dtype=float)
+        try:
+            gripper = self.gripper.read_state()
+            gripper_dict = {"width_m": float(gripper.width_m), "holding": bool(gripper.holding), "command": gripper.command}
+        except DEVICE_ERRORS:
+            pass
+        with self._lock:
+            job = self._job or self._last_job
+            state, detail, lease = self._effective_state(), self._detail, self._lease.to_dict()
+            calibrated = self._calibration is not None
+            checked = calibrated or self._restored is not None
+            lost = dict(self._lost)
+        perception, _ = self.perception.get()
+        camera_warning = perception.camera_warning if checked and perception is not None else None
+        return {
+            "state": state.value,
+            "detail": detail,
+            "joints_rad": [float(v) for v in q],
+            "joint_names": list(self.model.joint_names) if self.has_arm else [],
+            "joint_limits_rad": [[float(lo), float(hi)] for lo, hi in zip(self.model.lower_rad, self.model.upper_rad)] if self.has_arm else [],
+            "gripper": gripper_dict,
+            "gripper_pose": gripper_pose_from_matrix(self._gripper_pose_matrix(q), np.asarray(self.model.T_world_base)[:3, 3]) if self.has_arm else None,
+            "moving": moving_measured,
+            "torque_enabled": self._torque_enabled,
+            "calibrated": calibrated,
+            "camera_warning": camera_warning,
+            "calibration_state": self.calibration_state,
+            "arm_calibration": self.arm_calibration_status if self.has_arm else None,
+            "self_recalibrate": self.self_recalibrate,
+            "backend": self.backend,
+            "controller": lease["controller"],
+            "controller_since_s": lease["since_s"],
+            "devices_lost": lost,
+            "speed_percent": self.speed_percent,
+            "job": job.to_dict() if job is not None else None,
+            "allowed_commands": allowed_commands(state, self.has_arm),
+            "time_s": time.time(),
+        }
 
     def telemetry_snapshot(self) -> dict:
         """Status + detections: one telemetry message (the TelemetryPublisher calls this)."""

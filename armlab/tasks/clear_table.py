@@ -9,7 +9,9 @@ import math
 import numpy as np
 
 from armlab.scene import as_workcell
-from armlab.tasks.runner import Move, Plan, TaskRunner, near, seeing_look_pose
+from armlab.tasks.look_poses import seeing_look_pose
+from armlab.tasks.policy import Move, Plan, near
+from armlab.tasks.runner import TaskRunner
 
 SPOT_PITCH_M = 0.045
 SPOT_EMPTY_HEIGHT_M = 0.010  # a floor spot whose measured height is above this holds something

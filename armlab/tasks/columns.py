@@ -12,7 +12,7 @@ from collections.abc import Callable
 from dataclasses import dataclass, field
 
 from armlab import skills
-from armlab.tasks.runner import near
+from armlab.tasks.policy import near
 
 COLUMN_RADIUS_M = 0.03  # a detection this close to the base (x-y) is the column's top (a tall column leans a little)
 HEIGHT_TOLERANCE_M = 0.012

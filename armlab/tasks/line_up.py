@@ -15,15 +15,8 @@ import numpy as np
 
 from armlab import skills
 from armlab.scene import COLORS
-from armlab.tasks.runner import (
-    FINGER_REACH_M,
-    Move,
-    NoFreeSpot,
-    Plan,
-    TaskRunner,
-    cubes,
-    near,
-)
+from armlab.tasks.policy import FINGER_REACH_M, Move, NoFreeSpot, Plan, cubes, near
+from armlab.tasks.runner import TaskRunner
 
 SPACING_M = 0.055  # centre to centre: 5 gaps = 275 mm < 300 mm
 LINE_GAP_M = 0.075  # between the large and the small line

@@ -15,7 +15,8 @@ from collections.abc import Callable
 
 from armlab.scene import COLORS
 from armlab.tasks.columns import Column
-from armlab.tasks.runner import Move, NoFreeSpot, Plan, TaskRunner, cubes
+from armlab.tasks.policy import Move, NoFreeSpot, Plan, cubes
+from armlab.tasks.runner import TaskRunner
 
 RANK = {color: rank for rank, color in enumerate(COLORS)}
 COLUMN_MAX_TILT_RAD = math.radians(20.0)  # the top of a tall column is reachable only slightly tilted

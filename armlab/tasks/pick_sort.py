@@ -9,7 +9,9 @@ from __future__ import annotations
 
 from collections.abc import Callable
 
-from armlab.tasks.runner import Move, Plan, TaskRunner, cubes, near, seeing_look_pose
+from armlab.tasks.look_poses import seeing_look_pose
+from armlab.tasks.policy import Move, Plan, cubes, near
+from armlab.tasks.runner import TaskRunner
 
 # The innermost slots 100 mm from x = 0: at 90 mm a large block was partly hidden by the arm at the look
 # pose once the arm sagged 0.03 rad (then neither detected nor counted done).

@@ -16,7 +16,9 @@ import math
 from armlab.motion.gripper_box import GripperBox
 from armlab.tasks.columns import Column
 from armlab.tasks.judge import GRIPPER_BOX_M, TAG_RADIUS_M
-from armlab.tasks.runner import Move, Plan, TaskRunner, cubes, seeing_look_pose
+from armlab.tasks.look_poses import seeing_look_pose
+from armlab.tasks.policy import Move, Plan, cubes
+from armlab.tasks.runner import TaskRunner
 
 MIN_COLUMN = 3
 BOX_MARGIN_M = 0.010  # planned gripper paths keep this far inside the judge's box (tracking error)

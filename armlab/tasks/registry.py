@@ -24,7 +24,8 @@ from armlab.tasks import (
 )
 from armlab.tasks.judge import EVENT_LIMITS_S
 from armlab.tasks.judge import GRIPPER_BOX_M as box
-from armlab.tasks.runner import Plan, TaskRunner
+from armlab.tasks.policy import Plan
+from armlab.tasks.runner import TaskRunner
 from armlab.workcell import Workcell
 
 

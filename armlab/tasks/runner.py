@@ -3,7 +3,8 @@ policy for the next move → plan (checked against limits, table and known objec
 look again. A failed move is retried up to a bound, then given up with a reason; the job goes on.
 
 A job is a policy: a function from what is seen (a Scene view of detections) to candidate moves in
-order of preference. The runner owns the arm through the gate (armlab.station) via armlab.skills.
+order of preference (policy.py: Move, Plan, Policy and the helpers policies share). The runner owns the arm
+through the gate (armlab.station) via armlab.skills; where it parks the arm to look: look_poses.py.
 """
 
 from __future__ import annotations
@@ -15,17 +16,18 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from armlab import skills
-from armlab.errors import PLAN_REFUSALS, InvalidInput
+from armlab.errors import PLAN_REFUSALS
 from armlab.motion import TrajectoryStep, plan_joint_move
 from armlab.motion.cartesian import plan_vertical_segment
 from armlab.motion.clearance import OBJECT_BOX_RADIUS_M, box_around, first_collision
 from armlab.motion.gripper_box import joint_moves_inside
 from armlab.motion.safety import UnsafeTrajectory
-from armlab.scene import as_workcell
 from armlab.skills import side_grasp
 from armlab.skills.manipulate import plan_pick, plan_place, plan_side_place, run_steps
 from armlab.station.core import Station
 from armlab.station.jobs import JobContext
+from armlab.tasks.look_poses import look_pose, park_pose
+from armlab.tasks.policy import Move, NoFreeSpot, Policy, blocks_seen, confirm_finish, finger_axis_away, near
 from armlab.vision.geometry import project_points
 
 MAX_ATTEMPTS_PER_MOVE = 3
@@ -35,41 +37,6 @@ PARK_CLEARANCE_M = 0.015  # the sleep pose is low beside the base: it passes blo
 PARK_RISE_Z_M = 0.32  # how high the gripper rises before parking when the straight way is blocked
 PARK_FRONT_VIA_M = (0.0, 0.16, 0.16)  # else through here, in front of the base, clear of it and of the board
 REACH_REGION_M = ((-0.34, 0.34), (-0.15, 0.34))  # every board spot free_spot can offer (its reach band cuts it)
-
-
-class NoFreeSpot(RuntimeError):
-    """free_spot found no spot: the policy leaves the object where it is, with this reason, and goes on."""
-
-
-@dataclass(frozen=True)
-class Move:
-    """Pick `block` (a detection wire dict) and set it down with its bottom centre at `to_m`
-    (x, y, surface z) with yaw `yaw_rad` (None: keep the block's own yaw). `why` is shown to the operator."""
-
-    block: dict
-    to_m: tuple[float, float, float]
-    why: str
-    yaw_rad: float | None = 0.0
-    finger_axis_rad: float | None = None  # world direction the fingers open along when releasing
-    side_ok: bool = False  # may be set down with the gripper horizontal when too high for top-down
-    max_tilt_rad: float = math.radians(5.0)  # how far from top-down the gripper may be when it releases
-    grasp_pitches_rad: tuple[float, ...] = ()  # pick and place at the first that plans, fingers horizontal (skills.side_grasp)
-    on_placed: Callable[[float], None] | None = field(default=None, compare=False)  # called with the edge once placed
-
-    def key(self) -> tuple:
-        """Identifies "the same move" across looks (attempt counting): the block, by its kind and where it is."""
-        b = self.block
-        return (b.get("color"), b.get("size"), b.get("is_cube", True), round(b["position_m"][0], 2), round(b["position_m"][1], 2))
-
-
-@dataclass(frozen=True)
-class Plan:
-    """A policy's answer: candidate moves (best first), and how many target blocks are done / left."""
-
-    moves: list[Move]
-    done: int
-    left: int
-    finished: bool = False
 
 
 @dataclass
@@ -89,87 +56,9 @@ class Progress:
                 "next_target_m": self.next_target_m}
 
 
-Policy = Callable[[list[dict], set], Plan]
-
-
-def cubes(objects: list[dict]) -> list[dict]:
-    """The detections that are blocks (not distractors)."""
-    return [o for o in objects if o.get("is_cube", True)]
-
-
-def blocks_seen(objects: list[dict]) -> int:
-    """How many blocks a look accounts for: every cube detection with the blocks under it (stack_level)."""
-    return sum(max(1, int(o.get("stack_level", 1) or 1)) for o in cubes(objects))
-
-
-def confirm_finish(plan: Plan, seen_now: int, seen_before: int | None) -> bool:
-    """Whether a look that would end the job must be repeated first: it sees fewer blocks than the look
-    before it. Blocks do not vanish; a detection that misses one (a frame caught mid-exposure, a busy
-    machine) would otherwise end the job counting it neither done nor left (CI: pick_sort done 2 of 3)."""
-    return plan.finished and seen_before is not None and seen_now < seen_before
-
-
-def near(a, b, radius_m: float) -> bool:
-    return math.dist(a[:2], b[:2]) <= radius_m
-
-
-FINGER_REACH_M = 0.075  # neighbours closer than this (centre to centre) can meet an opening finger
-
-
-def park_pose(model) -> np.ndarray:
-    """Where the arm waits while the camera looks: the sleep pose (folded beside the base, low)."""
-    return np.asarray(model.sleep_rad, float)
-
-
-def look_pose(station: Station) -> np.ndarray:
-    """Where a job parks the arm while the camera looks: the station's workcell's look_pose_rad (one that
-    hides nothing from that workcell's camera), else the arm's sleep pose (park_pose)."""
-    q = as_workcell(getattr(station.config, "workcell", None)).look_pose_rad
-    if q is None:
-        return park_pose(station.model)
-    if len(q) != station.model.dof:
-        raise InvalidInput(f"workcell look_pose_rad has {len(q)} joints; the arm has {station.model.dof}")
-    return np.asarray(q, float)
-
-
-OVERHEAD_LOOK_POINT_M = (0.0, 0.09, 0.22)  # gripper point, pointing down, elbow up over the base
-
-
-def overhead_look_pose(model) -> np.ndarray:
-    """A look pose that hides no block: the arm upright over its base, the gripper pointing down high
-    in front of it. Everything stays within ~0.1 m of the base axis and high above the blocks, so
-    the camera (above the board's far side) sees the arm only over the board strip behind the base,
-    and the self-filter's inflated volume holds no block; the sleep pose's low gripper masks blocks
-    beside it. The wrist is turned a quarter turn so the gripper's wide side (the fingers' travel)
-    lies along the arm: crosswise it hid a block at (90, -65) mm, pick_sort's first large slot."""
-    q = model.ik(OVERHEAD_LOOK_POINT_M, pitch=math.pi / 2, yaw=0.0, q_seed=np.zeros(model.dof))
-    q[-1] = math.pi / 2
-    return q
-
-
-def seeing_look_pose(station: Station) -> np.ndarray:
-    """The look pose of a job that must see every block (pick_sort, pick_stack): the station's workcell's
-    look_pose_rad when it defines one (chosen for that workcell's camera), else overhead_look_pose, which
-    is the RX200's (its IK point is out of other arms' reach at pitch 90 deg, e.g. the UR3's)."""
-    if as_workcell(getattr(station.config, "workcell", None)).look_pose_rad is not None:
-        return look_pose(station)
-    return overhead_look_pose(station.model)
-
-
 def pick_end_joints(steps: list) -> np.ndarray:
     """The joints a plan's last trajectory ends at."""
     return [step for step in steps if isinstance(step, TrajectoryStep)][-1].q_end_rad
-
-
-def finger_axis_away(point_m, yaw_rad: float, objects: list[dict], exclude: dict | None = None) -> float | None:
-    """Of the two finger directions that close on a block of yaw yaw_rad, the one more across the
-    direction to the nearest neighbour within FINGER_REACH_M (None when nobody is that close)."""
-    others = [o for o in objects if o is not exclude and 1e-3 < math.dist(o["position_m"][:2], point_m[:2]) < FINGER_REACH_M]
-    if not others:
-        return None
-    nearest = min(others, key=lambda o: math.dist(o["position_m"][:2], point_m[:2]))
-    toward = math.atan2(nearest["position_m"][1] - point_m[1], nearest["position_m"][0] - point_m[0])
-    return max((yaw_rad, yaw_rad + math.pi / 2), key=lambda axis: abs(math.sin(axis - toward)))
 
 
 class TaskRunner:

@@ -9,7 +9,9 @@ from __future__ import annotations
 from armlab.errors import InvalidInput
 from armlab.scene import as_workcell
 from armlab.tasks.columns import Column, unseen_as_none
-from armlab.tasks.runner import Move, Plan, TaskRunner, cubes, seeing_look_pose
+from armlab.tasks.look_poses import seeing_look_pose
+from armlab.tasks.policy import Move, Plan, cubes
+from armlab.tasks.runner import TaskRunner
 
 
 class UnknownTagDestination(InvalidInput):

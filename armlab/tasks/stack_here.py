@@ -5,7 +5,9 @@ from __future__ import annotations
 
 from armlab.scene import as_workcell
 from armlab.tasks.columns import Column, unseen_as_none
-from armlab.tasks.runner import Move, Plan, TaskRunner, cubes, seeing_look_pose
+from armlab.tasks.look_poses import seeing_look_pose
+from armlab.tasks.policy import Move, Plan, cubes
+from armlab.tasks.runner import TaskRunner
 
 
 def make_policy(level: int | None, params: dict, runner: TaskRunner):

@@ -25,7 +25,8 @@ import numpy as np
 
 from armlab.skills import side_grasp
 from armlab.tasks.columns import Column
-from armlab.tasks.runner import Move, NoFreeSpot, Plan, TaskRunner, cubes, near
+from armlab.tasks.policy import Move, NoFreeSpot, Plan, cubes, near
+from armlab.tasks.runner import TaskRunner
 
 TOWER_RADIUS_M = (0.21, 0.25)  # distance of the tower from the arm's base axis
 MAX_TOWER_HEIGHT_M = 0.55

@@ -9,7 +9,8 @@ from types import SimpleNamespace
 
 from armlab.station.slots import EventLog
 from armlab.tasks.pick_sort import policy
-from armlab.tasks.runner import MAX_CONFIRM_LOOKS, Plan, Progress, TaskRunner, blocks_seen, confirm_finish
+from armlab.tasks.policy import Plan, blocks_seen, confirm_finish
+from armlab.tasks.runner import MAX_CONFIRM_LOOKS, Progress, TaskRunner
 
 
 def cube(x: float, y: float, size: str = "large", level: int = 1) -> dict:

@@ -13,7 +13,7 @@ from armlab.motion.clearance import box_around, first_collision
 from armlab.tasks import pick_sort
 from armlab.tasks.columns import Column
 from armlab.tasks.line_up import segment_distance
-from armlab.tasks.runner import finger_axis_away
+from armlab.tasks.policy import finger_axis_away
 
 ARM = load_arm("rx200")
 

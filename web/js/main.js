@@ -3,12 +3,15 @@
 import { Api, adoptToken, dropToken } from "./api.js";
 import { renderCalibrationState, untrustedReason } from "./calstate.js";
 import { ClickCalibration } from "./clickcal.js";
+import { GrabDropClicks } from "./clicktargets.js";
 import { ColorCalibration } from "./colors.js";
 import { CompetitionPanel } from "./competition.js";
 import { ControlLease } from "./control.js";
+import { EstopButton } from "./estop.js";
 import { applyMovingTimeLimits, emptyDetectionsReason, readMovingTimeS } from "./inputs.js";
 import { IntrinsicsPanel } from "./intrinsics.js";
 import { HoldJog } from "./holdjog.js";
+import { LinkIndicators } from "./indicators.js";
 import { CartesianJog, typingIn } from "./jog.js";
 import { LiveView } from "./liveview.js";
 import { applyNoArm } from "./noarm.js";
@@ -31,7 +34,8 @@ import { ProgramPathOverlay } from "./path.js";
 import { JointPlot } from "./plot.js";
 import { RepeatPanel } from "./repeat.js";
 import { ReachState } from "./reachstate.js";
-import { RateMeter, Stream } from "./stream.js";
+import { ScenePicker } from "./simscene.js";
+import { Stream } from "./stream.js";
 import { TargetPanel } from "./target.js";
 import { TeachPanel } from "./teach.js";
 import { TorqueButton } from "./torque.js";
@@ -40,8 +44,6 @@ import { prefetchView3d } from "./view3d_prefetch.js";
 import { COMMANDS, LAYERS, VIEWS } from "./wire_types.js";
 
 const $ = (id) => document.getElementById(id);
-const ESTOP_REST_FALLBACK_MS = 300;
-const ESTOP_PRESS_CLICK_MS = 2000; // the click ending an e-stop press (it stopped on the press) sends nothing more
 const TERMINAL_JOB_STATES = new Set(["succeeded", "failed", "cancelled"]);
 
 class App {
@@ -54,10 +56,7 @@ class App {
     this.helloSeen = false;
     this.view = "color";
     this.layers = ["tags", "detections"];
-    this.fps = new RateMeter(2.0);
-    this.latencyMs = [];
     this.reportedJobs = new Set();
-    this.estopSeen = false; // telemetry showed estop since the last E-STOP press
     this.trackedJob = null;
     this.detections = [];
     this.hoverDetection = -1;
@@ -90,7 +89,7 @@ class App {
       placeholder: $("view-placeholder"),
       hoverLabel: $("hover-world"),
       api: this.api,
-      onTarget: (t) => this.clickTarget(t),
+      onTarget: (t) => this.clicks.clickTarget(t),
       onHoverTarget: (mode, target) => this.reach.show(mode, target),
       onHoverDetection: (i) => {
         this.hoverDetection = i;
@@ -98,6 +97,7 @@ class App {
       },
     });
     this.programPath = new ProgramPathOverlay(this.live);
+    this.clicks = new GrabDropClicks({ api: this.api, run: (a, c) => this.run(a, c), log: this.log, live: this.live, status: () => this.status });
     this.clickcal = new ClickCalibration({ api: this.api, live: this.live, log: this.log, afterChange: () => this.refreshAllowed() });
     this.colors = new ColorCalibration({ root: $("colors-panel"), api: this.api, live: this.live, log: this.log });
     this.stream = new Stream({
@@ -111,6 +111,9 @@ class App {
         onTokenRejected: (reason) => this.tokenRejected(reason),
       },
     });
+    this.link = new LinkIndicators({ serverNowS: () => this.stream.serverNowS() });
+    this.estopButton = new EstopButton({ api: this.api, stream: this.stream, log: this.log });
+    this.simScene = new ScenePicker({ api: this.api, run: (a, c) => this.run(a, c) });
     this.holdJog = new HoldJog({
       api: this.api,
       stream: this.stream,
@@ -191,12 +194,7 @@ class App {
 
   onFrame(header, bitmap) {
     this.live.drawFrame(header, bitmap);
-    const nowS = performance.now() / 1000;
-    this.fps.tick(nowS);
-    if (Number.isFinite(header.capture_time_s)) {
-      this.latencyMs.push((this.stream.serverNowS() - header.capture_time_s) * 1000);
-      if (this.latencyMs.length > 30) this.latencyMs.shift();
-    }
+    this.link.onFrame(header);
   }
 
   onMessage(msg) {
@@ -215,7 +213,7 @@ class App {
         this.canControl = Boolean(msg.can_control) && this.api.canControl;
         $("control-mode").textContent = this.canControl ? "control" : "view only";
         $("sim-panel").hidden = msg.backend !== "sim";
-        if (msg.backend === "sim") this.refreshScene();
+        if (msg.backend === "sim") this.simScene.refresh();
         this.refreshAllowed();
         break;
       case "telemetry":
@@ -223,7 +221,7 @@ class App {
         break;
       case "event":
         this.log.add(msg.level || "info", msg.message || "", msg.time_s);
-        if (msg.kind === "scene") this.refreshScene();
+        if (msg.kind === "scene") this.simScene.refresh();
         break;
       case "calibration":
         this.showCalibration(msg);
@@ -251,7 +249,7 @@ class App {
   onTelemetry(s) {
     const previous = this.status;
     this.status = s;
-    if (s.state === "estop") this.estopSeen = true;
+    this.estopButton.onStatus(s);
     if (s.state === "estop" || s.state === "fault") this.holdJog.stop(`state ${s.state}`);
     else this.holdJog.onStatus(s);
     renderStatus(s);
@@ -327,7 +325,7 @@ class App {
     const key = why + untrusted + JSON.stringify(detections.map((d) => [d.id, d.color, d.size, d.position_m?.map((v) => Math.round(v * 1000))]));
     if (key === this.detectionsKey) return;
     this.detectionsKey = key;
-    renderDetections(detections, this.hoverDetection, (d) => this.detectionClicked(d), why, untrusted);
+    renderDetections(detections, this.hoverDetection, (d) => this.clicks.detectionClicked(d), why, untrusted);
   }
 
   /** Report a job's end once, and move the click mode along grab → drop → grab. */
@@ -365,16 +363,7 @@ class App {
   }
 
   updateIndicators() {
-    $("ind-conn").dataset.ok = String(this.connected);
-    $("conn-text").textContent = this.connected ? "connected" : "reconnecting";
-    const fps = this.fps.rate(performance.now() / 1000);
-    $("fps").textContent = fps.toFixed(1);
-    if (this.latencyMs.length) {
-      const sorted = [...this.latencyMs].sort((a, b) => a - b);
-      $("latency").textContent = Math.max(0, sorted[Math.floor(sorted.length / 2)]).toFixed(0);
-    } else {
-      $("latency").textContent = "—";
-    }
+    this.link.render(this.connected);
   }
 
   // ---- commands ----------------------------------------------------------------------------
@@ -394,21 +383,6 @@ class App {
       this.log.error(action, e);
       return null;
     }
-  }
-
-  estop() {
-    const sentOverWs = this.stream.send({ type: "command", name: "estop" });
-    this.log.add("error", `E-STOP pressed (${sentOverWs ? "websocket" : "REST"})`);
-    const viaRest = () => this.api.estop().catch((e) => this.log.error("e-stop", e));
-    if (!sentOverWs) {
-      viaRest();
-      return;
-    }
-    // Fall back to REST unless the station reported estop since the press (a quick Reset must not re-stop it).
-    this.estopSeen = false;
-    setTimeout(() => {
-      if (!this.estopSeen) viaRest();
-    }, ESTOP_REST_FALLBACK_MS);
   }
 
   sendJoints(qRad) {
@@ -441,77 +415,16 @@ class App {
     this.stream.setView(this.view, this.layers);
   }
 
-  /** One grab/drop per target: a double-click's second click, or a click while the last is pending, sends nothing. */
-  clickTarget(t) {
-    if (this.targetPending) return;
-    this.targetPending = true;
-    this.clickTargetNow(t).finally(() => { this.targetPending = false; });
-  }
-
-  clickTargetNow(t) {
-    if (this.refusedUntrusted(t.mode)) return Promise.resolve(null);
-    const body = t.positionM ? { position_m: t.positionM } : { u: t.u, v: t.v };
-    const where = t.positionM ? t.positionM.map((v) => Math.round(v * 1000)).join(", ") + " mm" : `pixel (${t.u.toFixed(0)}, ${t.v.toFixed(0)})`;
-    if (t.mode === "grab") return this.run(`grab at ${where}`, () => this.api.grab(body));
-    if (t.mode === "drop") return this.run(`drop at ${where}`, () => this.api.drop(body));
-    return Promise.resolve(null);
-  }
-
-  /** True (and the reason logged) when a grab or drop must not go: the calibration is not trusted. */
-  refusedUntrusted(mode) {
-    const reason = (mode === "grab" || mode === "drop") && untrustedReason(this.status);
-    if (reason) this.log.toast("error", `${mode} refused`, reason);
-    return Boolean(reason);
-  }
-
-  detectionClicked(d) {
-    if (this.live.mode === "grab" && Array.isArray(d.position_m) && !this.refusedUntrusted("grab")) {
-      this.run(`grab ${d.color || ""} block ${d.id ?? ""}`, () => this.api.grab({ position_m: d.position_m }));
-    }
-  }
-
-  /** The scene picker shows the scene loaded now (GET /api/sim/scene): event, level, seed. */
-  async refreshScene() {
-    let scene;
-    try {
-      scene = await this.api.get("/api/sim/scene");
-    } catch {
-      return;
-    }
-    const known = scene.event && [...$("sim-event").options].some((o) => o.value === scene.event);
-    if (known) {
-      $("sim-event").value = scene.event;
-      $("sim-level").value = String(scene.level);
-      $("sim-seed").value = String(scene.seed);
-    }
-    $("sim-current").textContent = scene.event ? `now: ${scene.event} L${scene.level} seed ${scene.seed}` : `now: custom (${scene.objects} objects)`;
-    $("sim-current").dataset.scene = scene.event ? `${scene.event}/${scene.level}/${scene.seed}` : "custom";
-  }
-
   refreshPrograms() {
     return this.teach.refresh();
   }
 
   bindControls() {
     const on = (id, fn) => $(id).addEventListener("click", fn);
-    // E-stop on the press itself (a finger or the mouse going down), not on the release a click waits for: a tap
-    // by a second finger while another holds a jog makes no click at all. A click with no press just before it
-    // (the keyboard's Enter/Space) stops too.
-    $("btn-estop").addEventListener("pointerdown", () => {
-      this.estopPressedMs = performance.now();
-      this.estop();
-    });
-    on("btn-estop", () => {
-      if (!(performance.now() - (this.estopPressedMs ?? -Infinity) < ESTOP_PRESS_CLICK_MS)) this.estop();
-    });
+    this.estopButton.bindButton();
     on("btn-view3d", () => this.toggleView3d());
     if (new URLSearchParams(location.search).get("view3d") === "1") this.toggleView3d();
-    document.addEventListener("keydown", (e) => {
-      if (e.key === "Escape") {
-        e.preventDefault();
-        this.estop();
-      }
-    });
+    this.estopButton.bindKey();
     on("btn-home", () => this.run("home", () => this.api.home()));
     on("btn-sleep", () => this.run("sleep", () => this.api.sleep()));
     on("btn-open", () => this.run("gripper open", () => this.api.gripper("release")));
@@ -525,12 +438,7 @@ class App {
     document.querySelectorAll("#click-mode button").forEach((b) => b.addEventListener("click", () => this.setMode(b.dataset.mode)));
     document.querySelectorAll("#view-select button").forEach((b) => b.addEventListener("click", () => this.setView(b.dataset.view)));
     document.querySelectorAll("[data-layer]").forEach((c) => c.addEventListener("change", () => this.setLayers()));
-    on("btn-sim-scene", () => {
-      const event = $("sim-event").value;
-      const level = Number($("sim-level").value);
-      const seed = Math.round(Number($("sim-seed").value) || 0);
-      this.run(`scene ${event} L${level} seed ${seed}`, () => this.api.simScene(event, level, seed));
-    });
+    this.simScene.bind();
     on("btn-clear-log", () => this.log.clear());
   }
 }
