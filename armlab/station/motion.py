@@ -13,20 +13,19 @@ from __future__ import annotations
 import time
 from collections.abc import Callable, Iterator
 from contextlib import contextmanager
-from functools import lru_cache
 
 import numpy as np
 
 from armlab.devices.arm import JointTrajectory
-from armlab.devices.finger_gripper import load_finger_gripper_outline
-from armlab.errors import PLAN_REFUSALS, ArmMoving, CommandRefused, ConfigError, InvalidInput
+from armlab.errors import PLAN_REFUSALS, ArmMoving, CommandRefused, InvalidInput
 from armlab.motion import check_trajectory
 from armlab.motion.blend import arm_limits, plan_stop
-from armlab.motion.clearance import lowest_corner_m, self_collision
+from armlab.motion.clearance import self_collision
 from armlab.motion.gripper_step import FingerBox
 from armlab.motion.handover import Handover, continuity_problem, reference_velocity, splice, take_over, trimmed
 from armlab.motion.safety import UnsafeTrajectory, check_start
 from armlab.station.arm_info import station_gripper_type
+from armlab.station.body_check import check_parts_above_board, palm_corners_m
 from armlab.station.job_control import SPEED_WAIT_FACTOR
 from armlab.station.jobs import JobCancelled, JobContext
 from armlab.station.states import JOB_STATES, allowed_commands
@@ -34,21 +33,6 @@ from armlab.station.states import JOB_STATES, allowed_commands
 WAIT_CHUNK_S = 0.05  # waits on the devices check cancel/e-stop this often (simulated time in fast mode)
 CHANGE_ABOVE_M = 0.06  # the gripper point this close above a spot's surface can have changed it (fingers, a held block)
 MOTION_MEMORY = 256  # how many recent arm motions the gate remembers for stale-perception checks
-
-
-@lru_cache(maxsize=8)
-def palm_corners_m(arm_name: str) -> np.ndarray | None:
-    """(8, 3) corners of `arm_name`'s finger-gripper palm in the gripper frame, the box the simulation builds from
-    config/sim.yaml `gripper:` (wider and taller than the fingers' box: the check left it out and the simulated palm
-    met the board); None when the arm has no finger gripper outline. Read from the config files once per arm."""
-    try:
-        o = load_finger_gripper_outline(arm_name)
-    except ConfigError:
-        return None
-    corners = np.array([[x, y, z] for x in (-o.palm_back_behind_m, -o.palm_front_behind_m)
-                        for y in (-o.open_outer_m, o.open_outer_m) for z in (-o.palm_half_height_m, o.palm_half_height_m)])
-    corners.setflags(write=False)
-    return corners
 
 
 class HandoverLate(RuntimeError):
@@ -163,16 +147,10 @@ class MotionGate:
         body) go into the board, or the gripper end of the arm (gripper point, finger tips, the held block) into
         the arm's own base or upper arm, at any sample (armlab.motion.clearance). No lock needed (pure)."""
         config, positions, times = self.motion_config, trajectory.positions_rad, trajectory.times_s
-        parts = [("fingers", self.finger_box().corners_m())]
+        parts = {"fingers": self.finger_box().corners_m()}
         if (palm := self.palm_corners_m()) is not None:
-            parts.append(("palm", palm))
-        for part, corners_m in parts:
-            sample, lowest_m, gripper_z_m = lowest_corner_m(self.model, positions, corners_m)
-            if lowest_m < -1e-6:
-                raise UnsafeTrajectory(
-                    f"the {part} would go {-lowest_m * 1000:.1f} mm into the board (gripper point at z = {gripper_z_m * 1000:.1f} mm) "
-                    f"at t = {times[sample]:.3f} s"
-                )
+            parts["palm"] = palm
+        check_parts_above_board(self.model, positions, times, parts)
         held = self.held_block
         held_edge_m = float(held["edge_m"]) if held and held.get("edge_m") else None
         hit = self_collision(self.model, positions, base_radius_m=config.base_radius_m, reach_m=config.self_clearance_m,

@@ -1,0 +1,41 @@
+"""The gripper's parts against the board: the boxes the station keeps above it at every sample of a motion (the open
+fingers, a finger gripper's palm), as corners in the gripper frame. Pure functions; the palm is the box the
+simulation builds from config/sim.yaml `gripper:` (armlab.devices.finger_gripper), so the check and the physics agree."""
+
+from __future__ import annotations
+
+from functools import lru_cache
+
+import numpy as np
+
+from armlab.devices.finger_gripper import load_finger_gripper_outline
+from armlab.errors import ConfigError
+from armlab.motion.clearance import lowest_corner_m
+from armlab.motion.safety import UnsafeTrajectory
+
+
+@lru_cache(maxsize=8)
+def palm_corners_m(arm_name: str) -> np.ndarray | None:
+    """(8, 3) corners of `arm_name`'s finger-gripper palm in the gripper frame, the box the simulation builds from
+    config/sim.yaml `gripper:` (wider and taller than the fingers' box: the check left it out and the simulated palm
+    met the board); None when the arm has no finger gripper outline. Read from the config files once per arm."""
+    try:
+        o = load_finger_gripper_outline(arm_name)
+    except ConfigError:
+        return None
+    corners = np.array([[x, y, z] for x in (-o.palm_back_behind_m, -o.palm_front_behind_m)
+                        for y in (-o.open_outer_m, o.open_outer_m) for z in (-o.palm_half_height_m, o.palm_half_height_m)])
+    corners.setflags(write=False)
+    return corners
+
+
+def check_parts_above_board(model, positions_rad: np.ndarray, times_s: np.ndarray, parts_corners_m: dict[str, np.ndarray]) -> None:
+    """UnsafeTrajectory naming the part, how deep and when, if any corner of a part (name -> (K, 3) corners in the
+    gripper frame) goes below the board (z = 0) at any sample."""
+    for part, corners_m in parts_corners_m.items():
+        sample, lowest_m, gripper_z_m = lowest_corner_m(model, positions_rad, corners_m)
+        if lowest_m < -1e-6:
+            raise UnsafeTrajectory(
+                f"the {part} would go {-lowest_m * 1000:.1f} mm into the board (gripper point at z = {gripper_z_m * 1000:.1f} mm) "
+                f"at t = {times_s[sample]:.3f} s"
+            )
