@@ -23,7 +23,8 @@ MESSAGE_DATA, FETCH_ASSET_RESPONSE = 0x01, 0x04
 
 class FoxgloveClient:
     def __init__(self, url: str, timeout_s: float = 10.0) -> None:
-        self.ws = connect(url, subprotocols=SUBPROTOCOLS, open_timeout=timeout_s, close_timeout=2, max_size=None)
+        self._connection = connect(url, subprotocols=SUBPROTOCOLS, open_timeout=timeout_s, close_timeout=2, max_size=None)
+        self.ws = self._connection.__enter__()
         self.timeout_s = timeout_s
         self.channels: dict[int, dict] = {}  # id -> advertised channel
         self.subscriptions: dict[int, int] = {}  # subscription id -> channel id
@@ -34,7 +35,7 @@ class FoxgloveClient:
         assert self.info["op"] == "serverInfo", self.info
 
     def close(self) -> None:
-        self.ws.close()
+        self._connection.__exit__(None, None, None)
 
     def __enter__(self) -> FoxgloveClient:
         return self
@@ -109,9 +110,19 @@ class FoxgloveClient:
             return json.loads(payload)
         cls = self._classes.get(channel_id)
         if cls is None:
-            files = descriptor_pb2.FileDescriptorSet.FromString(base64.b64decode(channel["schema"]))
-            pool = descriptor_pool.DescriptorPool()
-            for file in files.file:
-                pool.Add(file)
-            cls = self._classes[channel_id] = message_factory.GetMessageClass(pool.FindMessageTypeByName(channel["schemaName"]))
+            cls = self._classes[channel_id] = message_class(channel["schemaName"], base64.b64decode(channel["schema"]))
         return cls.FromString(payload)
+
+
+def message_class(schema_name: str, file_descriptor_set: bytes) -> type:
+    """The protobuf message class of `schema_name` from its FileDescriptorSet (the schema a server advertises)."""
+    pool = descriptor_pool.DescriptorPool()
+    for file in descriptor_pb2.FileDescriptorSet.FromString(file_descriptor_set).file:
+        pool.Add(file)
+    return message_factory.GetMessageClass(pool.FindMessageTypeByName(schema_name))
+
+
+def decoded(message):
+    """A foxglove-sdk message (foxglove.messages.*, opaque from Python) as its protobuf message, to read its fields."""
+    schema = message.get_schema()
+    return message_class(schema.name, bytes(schema.data)).FromString(message.encode())
