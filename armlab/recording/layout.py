@@ -20,6 +20,7 @@ from pathlib import Path
 import foxglove.layouts as fl
 
 from armlab.config import config_dir
+from armlab.kinematics import load_arm
 from armlab.recording.channels import TOPICS
 from armlab.recording.live import URDF_URI
 
@@ -96,8 +97,6 @@ def layout_text(joint_names: list[str]) -> str:
 
 
 def main() -> None:
-    from armlab.kinematics import load_arm
-
     parser = argparse.ArgumentParser(description="write the station's Foxglove layout")
     parser.add_argument("--arm", default="rx200", help="the arm whose joints the plot shows (default rx200, the default workcell's)")
     parser.add_argument("--output", default=str(LAYOUT_FILE))
