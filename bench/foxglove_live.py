@@ -124,10 +124,11 @@ def free_port() -> int:
         return sock.getsockname()[1]
 
 
-def estop_latency(trials: int, with_live: bool, camera_fps: float) -> tuple[list[float], list[float], int]:
+def estop_latency(trials: int, with_live: bool, camera_fps: float) -> tuple[list[float], list[float], list[float], int]:
+    """(answers, halts (wall), halts on the simulation's clock (request to the control tick that applied it), messages)."""
     from estop import load_idle
 
-    answers, halts, messages = [], [], 0
+    answers, halts, halts_sim, messages = [], [], [], 0
     with tempfile.TemporaryDirectory(prefix="armlab-bench-fox-") as tmp:
         rig = estop_rig(Path(tmp), camera_fps)
         server = client = None
@@ -141,10 +142,11 @@ def estop_latency(trials: int, with_live: bool, camera_fps: float) -> tuple[list
                 rig.idle()
                 stop = load_idle(rig)
                 time.sleep(random.uniform(0.2, 0.6))
-                answer_ms, halt_ms, _ = rig.press(over_http=False)
+                answer_ms, halt_ms, halt_sim_ms = rig.press(over_http=False)
                 stop()
                 answers.append(answer_ms)
                 halts.append(halt_ms)
+                halts_sim.append(halt_sim_ms)
             if server is not None:
                 messages = sum(server.sampler.counts.values())
         finally:
@@ -153,7 +155,7 @@ def estop_latency(trials: int, with_live: bool, camera_fps: float) -> tuple[list
             if server is not None:
                 server.stop()
             rig.close()
-    return answers, halts, messages
+    return answers, halts, halts_sim, messages
 
 
 def latency_text(entry: dict) -> str:
@@ -171,6 +173,8 @@ def main() -> None:
     parser.add_argument("--trials", type=int, default=10, help="e-stop presses without and with a live client")
     parser.add_argument("--estop-camera-fps", type=float, default=30.0)
     parser.add_argument("--no-estop", action="store_true")
+    parser.add_argument("--estop-only", action="store_true")
+    parser.add_argument("--live-first", action="store_true", help="the e-stop presses with the live server first")
     parser.add_argument("--client", default=None, help=argparse.SUPPRESS)  # the client process
     args = parser.parse_args()
     if args.client:
@@ -182,7 +186,7 @@ def main() -> None:
     print(f"replay: {frames[0].color_bgr.shape[1]}x{frames[0].color_bgr.shape[0]} colour + depth at {args.fps:g} fps, joints 100 Hz; "
           f"foxglove: camera {config.camera_rate_hz:g} fps x{config.camera_scale:g} q{config.jpeg_quality}, depth {config.depth_rate_hz:g} Hz, "
           f"joints {config.joint_rate_hz:g} Hz, transforms {config.transforms_rate_hz:g} Hz", flush=True)
-    for with_client in (False, True):
+    for with_client in () if args.estop_only else (False, True):
         result = cpu_case(frames, args.seconds, args.fps, with_client)
         label = "one client subscribed to every channel" if with_client else "no client"
         print(f"live server, {label}: sampler threads {result['sampler_percent']:.1f} % of one core; the process "
@@ -193,10 +197,12 @@ def main() -> None:
         for topic, entry in sorted(result["received"].get("topics", {}).items()):
             print(f"    {topic}: {entry['count'] / span_s:.1f} msg/s, {entry['bytes'] / span_s / 1e6:.2f} MB/s, "
                   f"latency {latency_text(entry)}", flush=True)
-    for with_live in () if args.no_estop else (False, True):
-        answers, halts, messages = estop_latency(args.trials, with_live, args.estop_camera_fps)
+    order = (True, False) if args.live_first else (False, True)
+    for with_live in () if args.no_estop else order:
+        answers, halts, halts_sim, messages = estop_latency(args.trials, with_live, args.estop_camera_fps)
         label = f"live server + 1 client ({messages} messages)" if with_live else "no live server"
-        print(f"e-stop, {label}, {args.trials} presses (ms): answer {figures(answers)} | halt {figures(halts)}", flush=True)
+        print(f"e-stop, {label}, {args.trials} presses (ms): answer {figures(answers)} | halt {figures(halts)} | "
+              f"halt on the sim clock {figures(halts_sim)} (load average {os.getloadavg()[0]:.1f})", flush=True)
 
 
 if __name__ == "__main__":

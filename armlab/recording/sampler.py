@@ -14,12 +14,15 @@ on the sample loop between ticks.
 
 A channel that says no sink wants it (a foxglove channel's has_sinks(): the live server's channels before a client
 subscribes) is neither sampled nor encoded: an idle live server costs the station a wake-up per tick and per frame.
+A config with sampler_niceness (the live server's) runs both threads that much nicer than the station's own (Linux's
+per-thread nice): on a busy machine the simulation's and the devices' threads get the CPU first.
 """
 
 from __future__ import annotations
 
 import errno
 import logging
+import os
 import threading
 import time
 from collections import deque
@@ -101,6 +104,13 @@ class StationSampler:
         return ended
 
     def _guarded(self, loop: Callable[[], None]) -> None:
+        niceness = int(getattr(self.config, "sampler_niceness", 0))
+        if niceness > 0 and hasattr(os, "setpriority"):  # Linux: a thread's own nice value (its native id)
+            try:
+                tid = threading.get_native_id()
+                os.setpriority(os.PRIO_PROCESS, tid, min(19, os.getpriority(os.PRIO_PROCESS, tid) + niceness))
+            except OSError as error:
+                log.warning("%s: cannot lower its priority: %s", threading.current_thread().name, error)
         try:
             loop()
         except Exception as error:  # noqa: BLE001 - a recording bug must never reach the station

@@ -47,7 +47,13 @@ class RecordingConfig(SamplingConfig):
 
 class FoxgloveConfig(SamplingConfig):
     """The live Foxglove server (`armlab serve --foxglove [PORT]`, armlab.recording.live): what it streams how
-    often. A channel no client subscribes to costs nothing (not sampled, not encoded)."""
+    often. A channel no client subscribes to costs nothing (not sampled, not encoded). Lower rates than a recording's
+    by default (a person watching; bench/foxglove_live.py: the CPU it takes from the station)."""
+
+    camera_rate_hz: float = Field(15.0, ge=0.0, le=120.0)
+    depth_rate_hz: float = Field(2.0, ge=0.0, le=120.0)
+    joint_rate_hz: float = Field(50.0, gt=0.0, le=1000.0)
+    sampler_niceness: int = Field(5, ge=0, le=19)  # the live sampler's threads run this much below the station's (Linux)
 
 
 class StationConfig(StrictModel):
