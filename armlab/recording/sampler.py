@@ -1,7 +1,7 @@
 """Sampling the station into StationChannels, on two threads of the recorder's own (never the station's).
 
 - the sample loop (joint_rate_hz): measured and commanded joints every tick; every 1/transforms_rate_hz the frame
-  transforms (the URDF's links included), the gripper, the state and the job (their changes as log lines), new
+  transforms (the URDF's links included), the gripper, the state (its changes as log lines) and the job, new
   detections, the task's plan and the event log's new entries (the log's listener only appends to a bounded deque;
   nothing waits on the station's lock beyond its own short reads);
 - the image loop: the newest camera frame (NewestSlot: newest value wins, a slow encoder skips frames, nothing
@@ -75,7 +75,6 @@ class StationSampler:
         self._link_poses: dict[str, np.ndarray] | None = None  # the links' world poses at _link_q
         self._calibration_key: tuple | None = None
         self._calibration_s = -float("inf")
-        self._job_state: tuple[str, str] | None = None  # (id, state) of the job last logged
         self._plan: Any = False  # the plan last logged (False: none yet)
         self._plan_ns = 0
         self._urdf: UrdfFrames | None = None
@@ -232,32 +231,20 @@ class StationSampler:
             self._log("/events", self.channels.events, ch.log_message(event_ns, event["level"], event["message"]), max(now_ns, event_ns))
 
     def _state_and_job(self, now_ns: int) -> Any:
-        """The state's changes and the jobs' starts and ends as log lines (name "state", "job"); returns the job."""
-        wanted = self._wanted(self.channels.events)
+        """The state's changes as log lines (name "state"; the jobs' starts and ends are in the event log); returns
+        the current job."""
         state = self.station.state.value
         if state != self._state:
             previous, self._state = self._state, state
             if state not in self.states:
                 self.states.append(state)
             text = f"state: {state}" if previous is None else f"state: {previous} -> {state}"
-            if wanted:
+            if self._wanted(self.channels.events):
                 self._log("/events", self.channels.events, ch.log_message(now_ns, "info", text, "state"), now_ns)
         job = self.station.current_job()
-        if job is None:
-            return None
-        if job.id != self._job_id and job.state == "running":
+        if job is not None and job.id != self._job_id and job.state == "running":
             self._job_id = job.id
             self.jobs.append(job.name)
-        key = (job.id, job.state)
-        if key == self._job_state:
-            return job
-        first, self._job_state = self._job_state is None, key
-        if first and job.state != "running":
-            return job  # a job that ended before sampling began
-        level = {"failed": "error", "cancelled": "warn"}.get(job.state, "info")
-        text = f"job {job.name}: {job.state}" + (f" ({job.message})" if job.message and job.state != "running" else "")
-        if wanted:
-            self._log("/events", self.channels.events, ch.log_message(now_ns, level, text, "job"), now_ns)
         return job
 
     def _log_plan(self, job: Any, now_ns: int) -> None:

@@ -2,7 +2,7 @@
 WebSocket client speaking Foxglove's protocol (foxglove_ws.py): the server is view-only and advertises every channel
 of the recording with its Foxglove schema; joint states match GET /api/status; /tf carries the URDF's links, which
 compose to the arm's own gripper frame; the colour (JPEG), depth and calibration agree; detections arrive as scene
-entities once calibrated; state changes arrive as logs; the URDF asset names the arm's joints and the meshes it names
+entities once calibrated; state changes and jobs arrive as logs; the URDF asset names the arm's joints and the meshes it names
 are served (nothing else is); it listens on loopback only. And `armlab serve` refuses a bad port, a port in use and
 a non-loopback host without --foxglove-allow-remote, in one line each."""
 
@@ -131,9 +131,17 @@ def test_state_changes_arrive_as_logs(client, http):
     assert http.post("/api/reset", headers=AUTH).json()["state"] == "idle"
 
 
-def test_detections_arrive_as_scene_entities_once_calibrated(client, http):
+def test_detections_arrive_as_scene_entities_once_calibrated_and_jobs_as_logs(client, http):
+    client.subscribe(["/events"])
+    events_id = client.topics(["/events"])["/events"]["id"]
     calibrated = http.post("/api/calibrate", params={"wait": "true"}, headers=AUTH)
     assert calibrated.status_code == 200 and calibrated.json()["job"]["state"] == "succeeded", calibrated.text
+
+    def job_logs() -> list[str]:
+        return [text for text in (client.decode(m[0], m[2]).message for m in client.messages if m[0] == events_id) if text.startswith("job 'calibrate'")]
+
+    client._until(lambda: len(job_logs()) >= 2, 20)  # its start and its end, from the station's event log
+    assert job_logs()[0].startswith("job 'calibrate' started") and job_logs()[1].startswith("job 'calibrate' succeeded")
     client.subscribe(["/detections/scene", "/tf"])
     found = []
 
