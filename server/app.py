@@ -74,6 +74,7 @@ def create_app(
     allowed_hosts: Iterable[str] = (),
     on_close: Callable[[dict], None] | None = None,
     recordings_dir: str | Path | None = None,
+    live: Any = None,
 ) -> FastAPI:
     """The app. token: the control token (default: $ARMLAB_TOKEN, else generated: read app.state.token).
 
@@ -82,6 +83,8 @@ def create_app(
     on_close(report): called at shutdown with the station's close report ({"joined", "alive"} thread names).
     recordings_dir: where MCAP recordings go (default: the config's recording.directory, else recordings/ next to
     the station's database).
+    live: a started armlab.recording.live.LiveServer (`armlab serve --foxglove`): each station the app opens is
+    streamed to it while the app runs (the caller stops it).
     """
     factory = station_factory or default_station_factory
 
@@ -97,11 +100,16 @@ def create_app(
         app.state.waiter.start()
         store_path = getattr(station_obj.store, "path", None)
         app.state.recordings = RecordingLibrary(recordings_dir or station_obj.config.recordings_dir(store_path), station_obj.config.recording)
+        app.state.live = live
+        if live is not None:
+            live.attach(station_obj)
         try:
             yield
         finally:
             station_obj.begin_shutdown()  # halt and end the job first: waiting requests return at once
             app.state.recordings.close()  # the halt is in it; the file closed complete
+            if live is not None:
+                live.detach()
             app.state.waiter.stop()
             app.state.hub.stop()
             app.state.station = None

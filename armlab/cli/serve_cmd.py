@@ -39,6 +39,13 @@ def register(subparsers: argparse._SubParsersAction) -> None:
                         help="real backend: the board's tags: a config/boards/ name (rob550: tagStandard41h12) or 'auto' (the known "
                              "board whose tags the first frame shows; the default with a recorded camera); default the workcell's")
     parser.add_argument("--frame", default=None, help="recorded camera (folder): hold the pair image_<FRAME>.png + depth_<FRAME>.png")
+    parser.add_argument("--foxglove", type=int, nargs="?", const=8765, default=None, metavar="PORT",
+                        help="also stream live to Foxglove: its WebSocket server on PORT (default 8765; view-only, no token: "
+                             "see the README)")
+    parser.add_argument("--foxglove-host", default="127.0.0.1",
+                        help="the Foxglove server's address (default 127.0.0.1; another one needs --foxglove-allow-remote)")
+    parser.add_argument("--foxglove-allow-remote", action="store_true",
+                        help="let --foxglove-host be a non-loopback address: anyone who can reach it sees the camera and the arm")
     parser.add_argument("--log-level", default="warning", choices=("debug", "info", "warning", "error"))
     parser.set_defaults(func=run_serve)
 
@@ -117,6 +124,7 @@ def run_serve(args: argparse.Namespace) -> int:
     try:
         config = build_station_config(args)  # the workcell decides the arm: unknown or contradicting names stop here
         backend, arm, gripper, camera, board = device_choice(args)
+        check_foxglove(args)
     except ConfigError as error:
         print(f"armlab serve: {error}", file=sys.stderr, flush=True)
         return 2
@@ -143,14 +151,31 @@ def run_serve(args: argparse.Namespace) -> int:
         def factory():
             return make_sim_station(config, db_path=args.db)
     recordings_dir = args.recordings or config.recordings_dir(args.db)
+    live = None
+    if args.foxglove is not None:
+        from armlab.recording.live import LiveServer
+
+        try:  # bound before the web server starts: a port in use stops start-up in one line
+            live = LiveServer(args.foxglove_host, args.foxglove, config.foxglove, allow_remote=args.foxglove_allow_remote,
+                              name=f"ArmLab {config.workcell}").start()
+        except ConfigError as error:
+            print(f"armlab serve: {error}", file=sys.stderr, flush=True)
+            if made is not None:
+                made.close()
+            return 2
     app = create_app(
         station_factory=factory, token=token, allowed_hosts=[args.host, *config.allowed_hosts], on_close=print_close_report,
-        recordings_dir=recordings_dir,
+        recordings_dir=recordings_dir, live=live,
     )
     url = open_url(args.host, args.port, token)
     origin = "generated" if generated else "given"
     print(f"ArmLab control station ({origin} control token). Open:\n    {url}\n", flush=True)
     print(f"recordings go to {recordings_dir}", flush=True)
+    if live is not None:
+        print(f"Foxglove: open connection > Foxglove WebSocket > {live.url} (layout: config/foxglove/armlab_layout.json)", flush=True)
+        if not is_loopback(args.foxglove_host):
+            print(f"warning: Foxglove on {args.foxglove_host}: no token; anyone who can reach port {live.port} sees the camera and "
+                  "the arm (view-only: nothing it sends reaches the station)", flush=True)
     if args.host not in ("127.0.0.1", "localhost", "::1"):
         print(f"warning: listening on {args.host}: anyone who can reach it can watch; the token guards control", flush=True)
     try:
@@ -158,7 +183,27 @@ def run_serve(args: argparse.Namespace) -> int:
     finally:
         if made is not None and made.station.is_running:  # the server never started (e.g. the port is taken)
             made.close()
+        if live is not None:
+            live.stop()
     return 0
+
+
+def is_loopback(host: str) -> bool:
+    from armlab.recording.live import is_loopback as loopback
+
+    return loopback(host)
+
+
+def check_foxglove(args: argparse.Namespace) -> None:
+    """The --foxglove options, checked before anything starts (ConfigError naming the option)."""
+    from armlab.errors import ConfigError
+    from armlab.recording.live import check_address
+
+    if args.foxglove is None:
+        if args.foxglove_host != "127.0.0.1" or args.foxglove_allow_remote:
+            raise ConfigError("--foxglove-host / --foxglove-allow-remote: only with --foxglove [PORT]")
+        return
+    check_address(args.foxglove_host, args.foxglove, args.foxglove_allow_remote)
 
 
 def print_close_report(report: dict) -> None:

@@ -1,10 +1,12 @@
 """The station's channels in Foxglove's schemas: topic names, and pure builders of each message from station data.
 
-One definition for every sink: an MCAP recording (recorder.py) and, later, the live Foxglove server open the same
-channels on a foxglove Context (`StationChannels(context)`) and log the same messages. Units: SI; times in
+One definition for every sink: an MCAP recording (recorder.py) and the live Foxglove server (live.py) log the same
+messages on the same channels (`StationChannels.on_file(file)`, `StationChannels.open(context)`). Units: SI; times in
 nanoseconds since the Unix epoch; frame ids: "world", "base", one per joint ("<joint>" at its origin, as the arm
-model's joint_frames), "gripper" (the gripper point) and "camera" (the colour camera's optical frame: +z along
-the view, +x right, +y down, as OpenCV's and Foxglove's).
+model's joint_frames), "gripper" (the gripper point), "camera" (the colour camera's optical frame: +z along
+the view, +x right, +y down, as OpenCV's and Foxglove's), and the links of the arm's URDF (armlab.station.arm_urdf:
+"<joint>_link", "tool_point", the fingers' links), each from its parent link as robot_state_publisher gives them, so
+Foxglove's 3-D panel moves the URDF served by the live server.
 """
 
 from __future__ import annotations
@@ -33,13 +35,19 @@ from foxglove.messages import (
     FrameTransforms,
     JointState,
     JointStates,
+    LinePrimitive,
     Log,
     LogLevel,
+    Point3,
     Pose,
     Quaternion,
     RawImage,
     SceneEntity,
+    SceneEntityDeletion,
+    SceneEntityDeletionType,
     SceneUpdate,
+    SpherePrimitive,
+    TextPrimitive,
     Timestamp,
     Vector3,
 )
@@ -55,6 +63,7 @@ TOPICS = {
     "/camera/calibration": "foxglove.CameraCalibration",
     "/detections": "armlab.Detections",  # JSON: the blocks of GET /api/detections
     "/detections/scene": "foxglove.SceneUpdate",  # the same blocks as cubes in the world frame
+    "/plan": "foxglove.SceneUpdate",  # the running task's next move: its block, a line to where it goes, a label
     "/events": "foxglove.Log",  # the station's event log, its state changes and its jobs
 }
 
@@ -104,9 +113,11 @@ def frame_transform(time_ns: int, parent: str, child: str, T_parent_child: np.nd
                           translation=Vector3(x=float(T[0, 3]), y=float(T[1, 3]), z=float(T[2, 3])), rotation=quaternion(T))
 
 
-def frame_transforms(time_ns: int, poses_in_world: dict[str, np.ndarray]) -> FrameTransforms:
-    """{child frame: its 4x4 pose in the world frame} as transforms from "world"."""
-    return FrameTransforms(transforms=[frame_transform(time_ns, "world", child, T) for child, T in poses_in_world.items()])
+def frame_transforms(time_ns: int, poses_in_world: dict[str, np.ndarray], links=()) -> FrameTransforms:
+    """{child frame: its 4x4 pose in the world frame} as transforms from "world", then `links`: (parent, child, 4x4
+    pose of the child in the parent) each (the URDF's links)."""
+    return FrameTransforms(transforms=[frame_transform(time_ns, "world", child, T) for child, T in poses_in_world.items()]
+                           + [frame_transform(time_ns, parent, child, T) for parent, child, T in links])
 
 
 def compressed_image(time_ns: int, jpeg: bytes, frame_id: str = "camera") -> CompressedImage:
@@ -145,7 +156,8 @@ def log_message(time_ns: int, level: str, message: str, name: str = "station") -
 
 def detections_scene(time_ns: int, blocks: list[dict]) -> SceneUpdate:
     """Detected blocks (wire dicts of GET /api/detections) as cubes in the world frame: a cube of the block's
-    height standing on the board at its position, turned by its yaw."""
+    height standing on the board at its position, turned by its yaw. The blocks of earlier updates are deleted first
+    (a block no longer seen disappears)."""
     entities = []
     for block in blocks:
         edge_m = float(block.get("height_m") or 0.0) or 0.02
@@ -158,7 +170,43 @@ def detections_scene(time_ns: int, blocks: list[dict]) -> SceneUpdate:
             size=Vector3(x=edge_m, y=edge_m, z=edge_m), color=Color(r=r, g=g, b=b, a=0.8))
         entities.append(SceneEntity(timestamp=stamp(time_ns), frame_id="world", id=f"block-{block.get('id')}",
                                     frame_locked=False, cubes=[cube]))
-    return SceneUpdate(entities=entities)
+    return SceneUpdate(deletions=[SceneEntityDeletion(timestamp=stamp(time_ns), type=SceneEntityDeletionType.All)], entities=entities)
+
+
+PLAN_ENTITY = "plan"
+PLAN_LIFT_M = 0.05  # the line from the block to its destination is drawn this high above both
+
+
+def plan_scene(time_ns: int, plan: dict | None) -> SceneUpdate:
+    """The running task's next move (its progress's next_block, a wire block dict, and next_target_m) as one entity:
+    a sphere on the block, a line up, across and down to the destination, a sphere there and a label; None or no
+    block: the entity deleted (no move planned)."""
+    block = (plan or {}).get("next_block")
+    deletion = [SceneEntityDeletion(timestamp=stamp(time_ns), type=SceneEntityDeletionType.MatchingId, id=PLAN_ENTITY)]
+    if not block or block.get("position_m") is None:
+        return SceneUpdate(deletions=deletion)
+    start = [float(v) for v in block["position_m"]]
+    target = plan.get("next_target_m")
+    color = Color(r=1.0, g=0.85, b=0.0, a=1.0)
+    points = [start, [start[0], start[1], start[2] + PLAN_LIFT_M]]
+    spheres = [SpherePrimitive(pose=Pose(position=Vector3(x=start[0], y=start[1], z=start[2]), orientation=Quaternion(w=1.0)),
+                               size=Vector3(x=0.03, y=0.03, z=0.03), color=Color(r=1.0, g=0.85, b=0.0, a=0.5))]
+    if target is not None:
+        end = [float(v) for v in target]
+        top = max(start[2], end[2]) + PLAN_LIFT_M
+        points = [start, [start[0], start[1], top], [end[0], end[1], top], end]
+        spheres.append(SpherePrimitive(pose=Pose(position=Vector3(x=end[0], y=end[1], z=end[2]), orientation=Quaternion(w=1.0)),
+                                       size=Vector3(x=0.02, y=0.02, z=0.02), color=color))
+    label = f"next: {block.get('color') or ''} {block.get('size') or ''}".rstrip()
+    entity = SceneEntity(
+        timestamp=stamp(time_ns), frame_id="world", id=PLAN_ENTITY, frame_locked=False, spheres=spheres,
+        lines=[LinePrimitive(pose=Pose(position=Vector3(x=0.0, y=0.0, z=0.0), orientation=Quaternion(w=1.0)), thickness=0.004,
+                             points=[Point3(x=x, y=y, z=z) for x, y, z in points], color=color)],
+        texts=[TextPrimitive(pose=Pose(position=Vector3(x=start[0], y=start[1], z=points[1][2] + 0.02), orientation=Quaternion(w=1.0)),
+                             billboard=True, font_size=14.0, scale_invariant=True, color=color, text=label)])
+    return SceneUpdate(deletions=deletion, entities=[entity])
+
+
 
 
 # attribute of StationChannels -> (topic, message class or JSON schema)
@@ -172,6 +220,7 @@ CHANNELS = {
     "calibration": ("/camera/calibration", CameraCalibration),
     "detections": ("/detections", DETECTIONS_SCHEMA),
     "detections_scene": ("/detections/scene", SceneUpdate),
+    "plan": ("/plan", SceneUpdate),
     "events": ("/events", Log),
 }
 _SDK_CHANNELS = {JointStates: JointStatesChannel, FrameTransforms: FrameTransformsChannel, CompressedImage: CompressedImageChannel,
@@ -192,6 +241,7 @@ class StationChannels:
     calibration: Any
     detections: Any
     detections_scene: Any
+    plan: Any
     events: Any
 
     @classmethod

@@ -24,20 +24,36 @@ class SimStartConfig(StrictModel):
     realism: Literal["real", "camera", "ideal"] | None = None  # None: config/sim.yaml `realism` (`armlab serve --realism`)
 
 
-class RecordingConfig(StrictModel):
-    """MCAP recordings (armlab.recording): where they go, their disk budget and what is sampled how often."""
+class SamplingConfig(StrictModel):
+    """What the station's sampler (armlab.recording.sampler) logs how often: to a recording or to live Foxglove."""
 
-    directory: str | None = None  # None: `recordings/` next to the station's database (`armlab serve --recordings DIR`)
-    budget_mb: float = Field(2000.0, gt=0.0)  # all recordings together; the oldest finished ones are deleted first
-    min_free_mb: float = Field(200.0, ge=0.0)  # a recording stops (kept, readable) when the disk has less free than this
     camera_rate_hz: float = Field(30.0, ge=0.0, le=120.0)  # colour frames as JPEG (0: none)
     jpeg_quality: int = Field(80, ge=10, le=100)
     camera_scale: float = Field(0.5, ge=0.1, le=1.0)  # colour and depth resized by this before encoding (0.5: a quarter of the pixels)
     depth_rate_hz: float = Field(5.0, ge=0.0, le=120.0)  # depth frames as 16UC1 raw images (0: none)
     joint_rate_hz: float = Field(100.0, gt=0.0, le=1000.0)  # measured and commanded joints
     transforms_rate_hz: float = Field(30.0, gt=0.0, le=200.0)  # frame transforms and the gripper
+
+
+class RecordingConfig(SamplingConfig):
+    """MCAP recordings (armlab.recording): where they go, their disk budget and what is sampled how often."""
+
+    directory: str | None = None  # None: `recordings/` next to the station's database (`armlab serve --recordings DIR`)
+    budget_mb: float = Field(2000.0, gt=0.0)  # all recordings together; the oldest finished ones are deleted first
+    min_free_mb: float = Field(200.0, ge=0.0)  # a recording stops (kept, readable) when the disk has less free than this
     chunk_size_kb: int = Field(1024, ge=16, le=65536)  # MCAP chunk (zstd): the most a SIGKILL loses, with flush_interval_s
     flush_interval_s: float = Field(1.0, gt=0.0, le=60.0)  # a chunk is closed at least this often
+
+
+class FoxgloveConfig(SamplingConfig):
+    """The live Foxglove server (`armlab serve --foxglove [PORT]`, armlab.recording.live): what it streams how
+    often. A channel no client subscribes to costs nothing (not sampled, not encoded). Lower rates than a recording's
+    by default (a person watching; bench/foxglove_live.py: the CPU it takes from the station)."""
+
+    camera_rate_hz: float = Field(15.0, ge=0.0, le=120.0)
+    depth_rate_hz: float = Field(2.0, ge=0.0, le=120.0)
+    joint_rate_hz: float = Field(50.0, gt=0.0, le=1000.0)
+    sampler_niceness: int = Field(5, ge=0, le=19)  # the live sampler's threads run this much below the station's (Linux)
 
 
 class StationConfig(StrictModel):
@@ -65,6 +81,7 @@ class StationConfig(StrictModel):
     close_timeout_s: float = Field(2.0, gt=0.0, le=30.0)
     sim: SimStartConfig = SimStartConfig()
     recording: RecordingConfig = RecordingConfig()
+    foxglove: FoxgloveConfig = FoxgloveConfig()
 
     @field_validator("allowed_hosts")
     @classmethod

@@ -1,0 +1,92 @@
+"""The arm's URDF for Foxglove and its links' transforms: what robot_state_publisher does for ROS, for the station.
+
+station_urdf(station, mesh_url): the URDF the web page's 3-D panel draws (armlab.station.arm_urdf, one generator),
+its meshes named under `mesh_url` (the live server's package://armlab/meshes/<arm>/: Foxglove fetches them from it).
+UrdfFrames(urdf).transforms(positions): (parent link, child link, 4x4 pose of the child in the parent) for every
+joint of the URDF at the given joint positions (radians; prismatic: metres), the fixed ones included: Foxglove's 3-D
+panel places each link of the URDF by these frames (it moves a URDF by its frames only, not by joint states).
+"""
+
+from __future__ import annotations
+
+import math
+import xml.etree.ElementTree as ET
+from dataclasses import dataclass, replace
+from typing import Any
+
+import numpy as np
+
+from armlab.station.arm_urdf import FINGER_JOINTS, MeshSet, arm_urdf, matrix_from_rpy, transform
+
+
+def station_urdf(station: Any, mesh_url: str | None = None) -> str | None:
+    """The station's arm as a URDF (None without an arm); mesh_url: where its meshes are named (default: the web
+    page's /meshes/<arm>/)."""
+    model = station.model
+    if model is None:
+        return None
+    meshes = MeshSet.load(model.name)
+    if meshes is not None and mesh_url is not None:
+        meshes = replace(meshes, url=mesh_url)
+    return arm_urdf(model.config, np.asarray(model.T_world_base), meshes)
+
+
+def finger_offset_m(station: Any, width_m: float) -> float:
+    """Each finger's offset from the centre line at the gripper's pad span width_m (as the web page's 3-D panel)."""
+    gripper = station.model.config.gripper
+    return width_m / 2.0 + (gripper.pad_thickness_m if gripper is not None else 0.0)
+
+
+@dataclass(frozen=True)
+class UrdfJoint:
+    name: str
+    kind: str  # revolute | continuous | prismatic | fixed
+    parent: str
+    child: str
+    origin: np.ndarray  # 4x4, the child at position 0 in the parent
+    axis: np.ndarray  # unit vector in the child frame
+
+
+def _axis_motion(kind: str, axis: np.ndarray, position: float) -> np.ndarray:
+    if kind in ("revolute", "continuous"):
+        x, y, z = axis
+        c, s, t = math.cos(position), math.sin(position), 1.0 - math.cos(position)
+        return transform(R=np.array([[t * x * x + c, t * x * y - s * z, t * x * z + s * y],
+                                     [t * x * y + s * z, t * y * y + c, t * y * z - s * x],
+                                     [t * x * z - s * y, t * y * z + s * x, t * z * z + c]]))
+    if kind == "prismatic":
+        return transform(axis * position)
+    return np.eye(4)
+
+
+class UrdfFrames:
+    """The joints of a URDF (its text) and their transforms at given positions."""
+
+    def __init__(self, urdf: str) -> None:
+        self.joints: list[UrdfJoint] = []
+        for element in ET.fromstring(urdf).iter("joint"):
+            origin = element.find("origin")
+            xyz = [float(v) for v in origin.get("xyz", "0 0 0").split()] if origin is not None else [0.0, 0.0, 0.0]
+            rpy = [float(v) for v in origin.get("rpy", "0 0 0").split()] if origin is not None else [0.0, 0.0, 0.0]
+            axis = element.find("axis")
+            direction = np.array([float(v) for v in axis.get("xyz").split()]) if axis is not None else np.array([1.0, 0.0, 0.0])
+            self.joints.append(UrdfJoint(element.get("name"), element.get("type"), element.find("parent").get("link"),
+                                         element.find("child").get("link"), transform(xyz, matrix_from_rpy(rpy)),
+                                         direction / np.linalg.norm(direction)))
+
+    @property
+    def links(self) -> list[str]:
+        return [joint.child for joint in self.joints]
+
+    def transforms(self, positions: dict[str, float]) -> list[tuple[str, str, np.ndarray]]:
+        """(parent, child, T_parent_child) per joint; a moving joint not in `positions` at 0."""
+        return [(joint.parent, joint.child, joint.origin @ _axis_motion(joint.kind, joint.axis, float(positions.get(joint.name, 0.0))))
+                for joint in self.joints]
+
+
+def joint_positions(names, q_rad, finger_m: float | None) -> dict[str, float]:
+    """{joint name: position} for UrdfFrames.transforms: the arm's joints, and the fingers' offset when known."""
+    positions = {str(name): float(q) for name, q in zip(names, q_rad)}
+    if finger_m is not None:
+        positions.update(dict.fromkeys(FINGER_JOINTS, float(finger_m)))
+    return positions
