@@ -76,3 +76,84 @@ def newest_at_or_before(times_ns: list[int], t_ns: int) -> int:
         if time_ns <= t_ns:
             found = index
     return found
+
+
+class SineArmStation:
+    """What the recorder samples of a station, with an arm: the RX200's model (kinematics only, no simulation), joints
+    in a sine read at time.time(), the commanded reference a little ahead of them, a gripper, and 64x48 colour frames
+    published at about 30 fps (frame i a flat grey of level(i)). Start it with `with`."""
+
+    has_arm = True
+    backend = "test"
+    calibration = None
+
+    class config:  # noqa: N801 - stands in for StationConfig
+        workcell = "rx200_armlab"
+
+    def __init__(self) -> None:
+        import threading
+        import time
+
+        from armlab.devices.camera import Intrinsics
+        from armlab.kinematics import load_arm
+        from armlab.station.slots import EventLog, NewestSlot
+        from armlab.station.states import State
+
+        self.model = load_arm("rx200")
+        self.events, self.frames, self.perception = EventLog(), NewestSlot(), NewestSlot()
+        self.state = State.IDLE
+        self.arm = self.gripper = self.intrinsics = self
+        self._intrinsics = Intrinsics(64, 48, 50.0, 50.0, 32.0, 24.0)
+        self._start_s = time.time()
+        self._stop = threading.Event()
+        self._thread = threading.Thread(target=self._camera, name="test-camera", daemon=True)
+
+    def current(self):
+        return self._intrinsics
+
+    def current_job(self):
+        return None
+
+    def _q(self, t_s: float) -> np.ndarray:
+        return np.asarray(self.model.home_rad) + 0.3 * math.sin(2.0 * (t_s - self._start_s))
+
+    def read_joint_state(self):
+        import time
+
+        from armlab.devices.arm import JointState
+
+        now = time.time()
+        return JointState(self._q(now), np.zeros(self.model.dof), now)
+
+    def commanded_joints_rad(self) -> np.ndarray:
+        import time
+
+        return self._q(time.time() + 0.05)
+
+    def read_state(self):
+        import time
+
+        from armlab.devices.gripper import GripperState
+
+        now = time.time()
+        return GripperState(width_m=0.02 + 0.01 * math.sin(now - self._start_s), command="grasp" if int(now * 2) % 2 else "release",
+                            holding=False, timestamp_s=now)
+
+    def _camera(self) -> None:
+        import time
+
+        from armlab.devices.camera import Frame
+
+        sequence = 0
+        while not self._stop.wait(1 / 30):
+            color = np.full((48, 64, 3), level(sequence), np.uint8)
+            self.frames.publish(Frame(color, np.full((48, 64), 500, np.uint16), time.time(), sequence, self._intrinsics))
+            sequence += 1
+
+    def __enter__(self):
+        self._thread.start()
+        return self
+
+    def __exit__(self, *exc) -> None:
+        self._stop.set()
+        self._thread.join(5)

@@ -9,6 +9,7 @@ video has one frame per row, of the camera's size, each the colour frame capture
 from __future__ import annotations
 
 import json
+import time
 
 import av
 import numpy as np
@@ -19,8 +20,18 @@ import pytest
 
 from armlab.cli import main as cli_main
 from armlab.recording import DamagedRecording, RecordingLibrary, iter_messages
-from armlab.recording.lerobot import CAMERA_KEY, ExportRefused, export_lerobot
-from lerobot_helpers import NAMES, RECORDING_ID, START_NS, command_at, level, newest_at_or_before, write_recording
+from armlab.recording.lerobot import CAMERA_KEY, ExportRefused, export_lerobot, export_library_recordings
+from armlab.station.config import RecordingConfig
+from lerobot_helpers import (
+    NAMES,
+    RECORDING_ID,
+    START_NS,
+    SineArmStation,
+    command_at,
+    level,
+    newest_at_or_before,
+    write_recording,
+)
 
 FPS = 30
 DATA = "data/chunk-000/file-000.parquet"
@@ -36,6 +47,13 @@ def exported(tmp_path_factory):
     path = write_recording(root / f"{RECORDING_ID}.mcap")
     result = export_lerobot([path], root / "dataset", fps=FPS)
     return path, root / "dataset", result
+
+
+def wait_for(predicate, timeout_s: float = 60.0) -> None:
+    deadline = time.monotonic() + timeout_s
+    while not predicate():
+        assert time.monotonic() < deadline, "condition not met in time"
+        time.sleep(0.01)
 
 
 def recorded(path, topic):
@@ -93,8 +111,10 @@ def test_the_files_are_lerobots_v3_layout(exported):
     assert np.asarray(stats[CAMERA_KEY]["mean"]).shape == (3, 1, 1) and 0.0 <= stats[CAMERA_KEY]["min"][0][0][0] <= 1.0
 
 
-def test_the_rows_are_the_recorded_joints_and_gripper_at_the_frame_times(exported):
-    path, out, result = exported
+def expected_rows(path, frames: int, fps: int) -> tuple[np.ndarray, np.ndarray, int]:
+    """The recording's own values at the frame times t0 + k / fps (t0: every channel has one), by plain scans of the
+    MCAP: state (measured joints, gripper width) and action (the command held within 1.5 s, else the measured joints
+    at the next frame; the gripper's command), float32; and how many frames had a held command."""
     joints = recorded(path, "/joint_states")
     grippers = recorded(path, "/gripper")
     colours = recorded(path, "/camera/color/compressed")
@@ -103,29 +123,57 @@ def test_the_rows_are_the_recorded_joints_and_gripper_at_the_frame_times(exporte
     gripper_ns = [round(m["time_s"] * 1e9) for _, _, _, m in grippers]
     command_ns = [stamp(m) for _, _, _, m in commands]
     t0 = max(joint_ns[0], gripper_ns[0], stamp(colours[0][3]))
+    states, actions, by_command = [], [], 0
+    for k in range(frames):
+        t_ns = t0 + k * 10**9 // fps
+        q = [joint.position for joint in joints[newest_at_or_before(joint_ns, t_ns)][3].joints]
+        gripper = grippers[newest_at_or_before(gripper_ns, t_ns)][3]
+        states.append([*q, gripper["width_m"]])
+        c = newest_at_or_before(command_ns, t_ns)
+        if c >= 0 and t_ns - command_ns[c] <= 1_500_000_000:  # a command held within the last 1.5 s
+            commanded = [joint.position for joint in commands[c][3].joints]
+            by_command += 1
+        else:  # none (moved by hand): where the arm went, the measured joints at the next frame
+            next_ns = t0 + min(k + 1, frames - 1) * 10**9 // fps
+            commanded = [joint.position for joint in joints[newest_at_or_before(joint_ns, next_ns)][3].joints]
+        actions.append([*commanded, 1.0 if gripper["command"] == "grasp" else 0.0])
+    return np.float32(states), np.float32(actions), by_command
+
+
+def test_the_rows_are_the_recorded_joints_and_gripper_at_the_frame_times(exported):
+    path, out, result = exported
     data = pq.read_table(out / DATA).to_pydict()
     assert data["frame_index"] == list(range(result.frames)) and data["index"] == list(range(result.frames))
     assert set(data["episode_index"]) == {0} and set(data["task_index"]) == {0}
     assert np.array_equal(np.asarray(data["timestamp"], np.float32), (np.arange(result.frames) / FPS).astype(np.float32))
-    states = np.asarray(data["observation.state"])
-    actions = np.asarray(data["action"])
-    by_command = 0
-    for k in range(result.frames):
-        t_ns = t0 + k * 10**9 // FPS
-        q = [joint.position for joint in joints[newest_at_or_before(joint_ns, t_ns)][3].joints]
-        width = grippers[newest_at_or_before(gripper_ns, t_ns)][3]["width_m"]
-        assert states[k].tolist() == np.float32([*q, width]).tolist(), f"frame {k}"
-        c = newest_at_or_before(command_ns, t_ns)
-        if c >= 0 and t_ns - command_ns[c] <= 1_500_000_000:  # a command held within the last 1.5 s
-            expected = command_at((command_ns[c] - START_NS) / 1e9)
-            by_command += 1
-        else:  # none (moved by hand): where the arm went, the measured joints at the next frame
-            next_ns = t0 + min(k + 1, result.frames - 1) * 10**9 // FPS
-            expected = [joint.position for joint in joints[newest_at_or_before(joint_ns, next_ns)][3].joints]
-        assert actions[k, :5] == pytest.approx(np.float32(expected), abs=1e-6), f"frame {k}"
-        assert actions[k, 5] == (1.0 if grippers[newest_at_or_before(gripper_ns, t_ns)][3]["command"] == "grasp" else 0.0)
+    states, actions = np.asarray(data["observation.state"]), np.asarray(data["action"])
+    expected_states, expected_actions, by_command = expected_rows(path, result.frames, FPS)
+    assert np.array_equal(states, expected_states)  # exactly the recorded float32 values, frame by frame
+    assert np.array_equal(actions, expected_actions)
     assert 0 < by_command < result.frames and result.action_from_measured_frames == result.frames - by_command
+    assert actions[0, :5].tolist() == np.float32(command_at(0.05)).tolist()  # the first frame: the camera's first, at 0.05 s
+    held = [k for k in range(result.frames) if 1.0 < 0.05 + k / FPS < 2.49]  # commands end at 0.99 s: held 1.5 s more
+    assert held and all(actions[k, :5].tolist() == np.float32(command_at(0.99)).tolist() for k in held)
     assert states[:, 5].min() < states[:, 5].max() and set(actions[:, 5]) == {0.0, 1.0}  # the gripper closes in it
+
+
+def test_a_recording_made_by_the_recorder_exports_its_own_readings(tmp_path):
+    """The recorder's own sampler (joints and commands at 100 Hz, gripper at 30 Hz, the camera) on a stand-in station
+    with the RX200's model: every row is the recorded reading at its time, every action the recorded command."""
+    library = RecordingLibrary(tmp_path / "recordings", RecordingConfig(flush_interval_s=0.05, min_free_mb=0.0, depth_rate_hz=0.0))
+    with SineArmStation() as station:
+        library.start(station, label="sine")
+        wait_for(lambda: library.active()["topics"].get("/camera/color/compressed", 0) >= 30
+                 and library.active()["topics"].get("/joint_states", 0) >= 100)
+        info = library.stop()
+    result = export_library_recordings(library, [info["id"]], tmp_path / "dataset", fps=10)
+    data = pq.read_table(tmp_path / "dataset" / DATA).to_pydict()
+    states, actions, by_command = expected_rows(library.path(info["id"]), result.frames, 10)
+    assert result.frames >= 5 and result.tasks == ["sine"]
+    assert np.array_equal(np.asarray(data["observation.state"]), states)
+    assert np.array_equal(np.asarray(data["action"]), actions) and by_command == result.frames  # commanded throughout
+    with av.open(str(tmp_path / "dataset" / VIDEO)) as container:
+        assert [(f.width, f.height) for f in container.decode(video=0)] == [(32, 24)] * result.frames  # camera_scale 0.5
 
 
 def test_the_video_has_a_frame_per_row_each_the_colour_frame_shown_then(exported):
