@@ -83,6 +83,14 @@ def main() -> int:
     last = dataset[frames - 1]
     check(int(last["episode_index"]) == dataset.num_episodes - 1 and isinstance(last["task"], str),
           f"the last item: episode {int(last['episode_index'])}, task {last['task']!r}")
+    chunk = [k / dataset.fps for k in range(10)]  # as a policy trains on it: an action chunk, the frame before and now
+    windowed = LeRobotDataset("armlab/export", root=args.dataset, video_backend=args.backend,
+                              delta_timestamps={"action": chunk, camera: [-1 / dataset.fps, 0.0]})
+    item = windowed[frames // 2]
+    check(tuple(item["action"].shape) == (10, expected["action"].shape[1]) and tuple(item[camera].shape[:1]) == (2,)
+          and np.array_equal(item["action"].numpy(), expected["action"][frames // 2: frames // 2 + 10]),
+          f"with delta_timestamps (an action chunk of 10, the camera at -1/fps and 0): item {frames // 2} has actions "
+          f"{tuple(item['action'].shape)} equal to the recorded, camera {tuple(item[camera].shape)}")
     print("LeRobot load check: " + ("passed" if not failures else f"{len(failures)} FAILED"), flush=True)
     return 1 if failures else 0
 
