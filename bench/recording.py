@@ -7,12 +7,19 @@
    times, % of one core; target <= 10 %), MB per minute, sustained write throughput, messages per second.
 2. Peak write throughput: the same messages logged back to back (no rate limit) on one thread: MB/s and colour
    frames/s the encoder and writer keep up with.
+4. LeRobot export (--lerobot; --lerobot-only skips 1-3): a --lerobot-seconds recording of the replay station (its
+   real sampler: joints and commands at 100 Hz, camera at --fps) exported as a LeRobot v3.0 dataset at 30 fps, timed
+   (--lerobot-runs exports, each a new folder); then, with --lerobot-python (a Python with LeRobot and torch, e.g.
+   /work/lerobot-venv/bin/python), bench/lerobot_load_check.py loads it with LeRobot's LeRobotDataset and compares every
+   frame with the recording (read here by armlab's reader: the joints, gripper and commands newest at or before each
+   frame time; the colour frame shown then, as 8x8-px block means).
 3. E-stop latency with and without a recording running: bench/estop.py's rig (a real-time simulated workcell, the
    station, the REST server in this process; here the camera watchdog at 10 s, so a loaded machine does not fault
    the station) and its press(): the arm set moving, the e-stop pressed by Station.estop(); answer and halt times
    (ms), p50 / p95 / max, --trials each.
 
     PYTHONPATH=$PWD .venv/bin/python bench/recording.py [--seconds 30] [--trials 15]
+    PYTHONPATH=$PWD .venv/bin/python bench/recording.py --lerobot-only [--lerobot-python /work/lerobot-venv/bin/python]
 """
 
 from __future__ import annotations
@@ -283,6 +290,89 @@ def estop_latency(trials: int, record: bool, camera_fps: float, replay: list) ->
     return answers, halts, frames
 
 
+def lerobot_expected(path: Path, fps: int, block: int = 8) -> dict:
+    """What a LeRobot export of `path` must hold, from the MCAP by armlab's reader (not the exporter's resampling): per
+    frame time t0 + k / fps (t0: every channel has a value) the newest joints, gripper, command at or before it (a
+    command older than 1.5 s: the measured joints at the next frame) and the colour frame shown, as block means."""
+    import cv2
+
+    from armlab.recording import iter_messages
+
+    def ns(message) -> int:
+        return message.timestamp.seconds * 10**9 + message.timestamp.nanos
+
+    joints, grippers, commands, colours = [], [], [], []
+    for topic, _, _, message in iter_messages(path, {"/joint_states", "/gripper", "/joint_commands", "/camera/color/compressed"}):
+        if topic == "/joint_states":
+            joints.append((ns(message), [joint.position for joint in message.joints]))
+        elif topic == "/gripper":
+            grippers.append((round(message["time_s"] * 1e9), message["width_m"], 1.0 if message["command"] == "grasp" else 0.0))
+        elif topic == "/joint_commands":
+            commands.append((ns(message), [joint.position for joint in message.joints]))
+        else:
+            colours.append((ns(message), bytes(message.data)))
+    t0 = max(joints[0][0], grippers[0][0], colours[0][0])
+    end = min(joints[-1][0], grippers[-1][0], colours[-1][0])
+    count = (end - t0) * fps // 10**9 + 1
+    times = [t0 + k * 10**9 // fps for k in range(count)]
+
+    joint_ns, command_ns, gripper_ns, colour_ns = ([s[0] for s in x] for x in (joints, commands, grippers, colours))
+    state, action, grids = [], [], []
+    for k, t in enumerate(times):
+        q = joints[int(np.searchsorted(joint_ns, t, side="right")) - 1][1]
+        g = grippers[int(np.searchsorted(gripper_ns, t, side="right")) - 1]
+        state.append([*q, g[1]])
+        c = int(np.searchsorted(command_ns, t, side="right")) - 1 if commands else -1
+        if c >= 0 and t - command_ns[c] <= 1_500_000_000:
+            commanded = commands[c][1]
+        else:
+            commanded = joints[int(np.searchsorted(joint_ns, times[min(k + 1, count - 1)], side="right")) - 1][1]
+        action.append([*commanded, g[2]])
+        jpeg = colours[int(np.searchsorted(colour_ns, t, side="right")) - 1][1]
+        rgb = cv2.cvtColor(cv2.imdecode(np.frombuffer(jpeg, np.uint8), cv2.IMREAD_COLOR), cv2.COLOR_BGR2RGB)
+        h, w = rgb.shape[0] - rgb.shape[0] % 2, rgb.shape[1] - rgb.shape[1] % 2
+        image = rgb[: h - h % block, : w - w % block].transpose(2, 0, 1).astype(np.float32) / 255.0
+        grids.append(image.reshape(3, image.shape[1] // block, block, image.shape[2] // block, block).mean(axis=(2, 4)))
+    return {"state": np.float32(state), "action": np.float32(action), "image_grid": np.stack(grids), "block": np.int64(block)}
+
+
+def lerobot_export(frames: list, seconds: float, fps: float, runs: int, python: str | None) -> None:
+    """Part 4 of the module docstring."""
+    import subprocess
+
+    from armlab.recording.lerobot import export_lerobot
+
+    with tempfile.TemporaryDirectory(prefix="armlab-bench-lerobot-") as tmp, ReplayStation(frames, fps) as station:
+        library = RecordingLibrary(Path(tmp) / "recordings", RecordingConfig(min_free_mb=0))
+        info = library.start(station, label="bench: the replay station's sine")
+        time.sleep(seconds)
+        info = library.stop()
+        path = library.path(info["id"])
+        print(f"lerobot: recorded {info['duration_s']:.1f} s ({info['size_bytes'] / 1e6:.1f} MB; colour "
+              f"{info['topics'].get('/camera/color/compressed', 0)}, joints {info['topics'].get('/joint_states', 0)}, "
+              f"commands {info['topics'].get('/joint_commands', 0)} messages)", flush=True)
+        times = []
+        for run in range(runs):
+            result = export_lerobot([path], Path(tmp) / f"dataset-{run}", fps=30)
+            times.append(result.seconds)
+            sizes = {part: sum(f.stat().st_size for f in (result.out / part).rglob("*") if f.is_file()) / 1e6
+                     for part in ("data", "videos", "meta")}
+            print(f"lerobot: export {run + 1}/{runs} of the {info['duration_s']:.1f} s episode: {result.seconds:.2f} s "
+                  f"({result.frames} frames at {result.fps} fps, camera {result.video_size_px[0]}x{result.video_size_px[1]} "
+                  f"{result.video_codec}; data {sizes['data']:.2f} MB, video {sizes['videos']:.2f} MB, meta {sizes['meta']:.2f} MB; "
+                  f"{result.action_from_measured_frames} frames' action from the measured joints)", flush=True)
+        print(f"lerobot: export time for a {info['duration_s']:.0f} s episode: median {statistics.median(times):.2f} s "
+              f"(min {min(times):.2f}, max {max(times):.2f}) over {runs} run(s)", flush=True)
+        if python:
+            expected = Path(tmp) / "expected.npz"
+            np.savez(expected, **lerobot_expected(path, 30))
+            check = subprocess.run([python, str(Path(__file__).with_name("lerobot_load_check.py")), str(Path(tmp) / "dataset-0"),
+                                    str(expected)], capture_output=True, text=True, timeout=1800)
+            print("\n".join("lerobot load check: " + line for line in check.stdout.splitlines()), flush=True)
+            if check.returncode != 0:
+                print(f"lerobot load check exited {check.returncode}:\n{check.stderr[-3000:]}", flush=True)
+
+
 def figures(values: list[float]) -> str:
     ordered = sorted(values)
     p95 = ordered[min(len(ordered) - 1, round(0.95 * (len(ordered) - 1)))]
@@ -298,6 +388,11 @@ def main() -> None:
     parser.add_argument("--estop-only", action="store_true", help="only the e-stop comparison")
     parser.add_argument("--no-estop", action="store_true", help="no e-stop comparison")
     parser.add_argument("--estop-camera-fps", type=float, default=30.0, help="the simulated camera's rate in the e-stop rig")
+    parser.add_argument("--lerobot", action="store_true", help="also the LeRobot export (part 4)")
+    parser.add_argument("--lerobot-only", action="store_true", help="only the LeRobot export (part 4)")
+    parser.add_argument("--lerobot-seconds", type=float, default=60.0, help="the exported recording's length")
+    parser.add_argument("--lerobot-runs", type=int, default=3, help="exports timed")
+    parser.add_argument("--lerobot-python", default=None, help="a Python with LeRobot: load the export with LeRobotDataset")
     args = parser.parse_args()
     print(f"bench/recording.py on {os.cpu_count()} CPUs (load average {os.getloadavg()[0]:.2f})", flush=True)
     frames = rendered_frames(12)
@@ -305,6 +400,10 @@ def main() -> None:
         height, width = frames[0].color_bgr.shape[:2]
         print(f"frames: {width}x{height} colour + depth from the simulated camera, replayed at {args.fps:g} fps; joints at 100 Hz")
 
+    if args.lerobot or args.lerobot_only:
+        lerobot_export(frames, args.lerobot_seconds, args.fps, args.lerobot_runs, args.lerobot_python)
+        if args.lerobot_only:
+            return
     default = RecordingConfig()
     cases = [("the config's defaults", {}), ("colour and joints (no depth)", {"depth_rate_hz": 0.0}),
              ("full size (camera_scale 1)", {"camera_scale": 1.0}),

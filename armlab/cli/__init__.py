@@ -15,6 +15,7 @@ COMMAND_MODULES = (
     "armlab.cli.vision_cmd",
     "armlab.cli.eval_cmd",
     "armlab.cli.programs_cmd",
+    "armlab.cli.recordings_cmd",
 )
 
 

@@ -1,15 +1,21 @@
 """Recordings: MCAP files of the station's channels (armlab.recording). Start and stop (one at a time), list,
-download, delete. Starting, stopping and deleting need the control token and the lease, like program edits;
-listing and downloading do not."""
+download, export (a LeRobot dataset as a zip), delete. Starting, stopping and deleting need the control token and the
+lease, like program edits; listing, downloading and exporting do not."""
 
 from __future__ import annotations
 
-from typing import Annotated
+import shutil
+import tempfile
+import zipfile
+from pathlib import Path as FilePath
+from typing import Annotated, Literal
 
-from fastapi import APIRouter, Path, Request
+from fastapi import APIRouter, Path, Query, Request
 from fastapi.responses import FileResponse
+from starlette.background import BackgroundTask
 
 from armlab.recording import RecordingBusy, RecordingLibrary
+from armlab.recording.lerobot import export_library_recordings
 from armlab.recording.recorder import MB
 from server.deps import ControlAuth, StationDep
 from server.errors import ApiError
@@ -61,6 +67,33 @@ def read_recording(request: Request, recording_id: RecordingId) -> FileResponse:
     if recordings.active() is not None and recordings.active()["id"] == recording_id:
         raise RecordingBusy(f"recording {recording_id} is still being written: stop it first")
     return FileResponse(path, media_type="application/octet-stream", filename=f"{recording_id}.mcap")
+
+
+@router.get("/recordings/{recording_id}/export", response_class=FileResponse,
+            responses={200: {"content": {"application/zip": {}}, "description": "the dataset's folder as a zip"}})
+def read_recording_export(
+    request: Request, recording_id: RecordingId, format: Literal["lerobot"] = "lerobot",
+    fps: Annotated[int, Query(ge=1, le=240, description="frames per second of the dataset")] = 30,
+    task: Annotated[str | None, Query(max_length=200, description="the episode's task (default: the label, else its jobs)")] = None,
+    allow_truncated: Annotated[bool, Query(description="export a recording cut short up to its last complete chunk")] = False,
+) -> FileResponse:
+    """A recording as a LeRobot v3.0 dataset (one episode: observation.state, action, the camera as AV1 video), zipped:
+    <id>-lerobot/meta/info.json, ...; 409 while it is being written, 422 when it cannot be exported (empty, no camera,
+    cut short without allow_truncated)."""
+    work = FilePath(tempfile.mkdtemp(prefix="armlab-lerobot-"))
+    try:
+        name = f"{recording_id}-lerobot"
+        export_library_recordings(library(request), [recording_id], work / name, fps=fps, tasks=[task], allow_truncated=allow_truncated)
+        archive = work / f"{name}.zip"
+        with zipfile.ZipFile(archive, "w", zipfile.ZIP_STORED) as zipped:  # parquet and AV1 are compressed already
+            for file in sorted((work / name).rglob("*")):
+                if file.is_file():
+                    zipped.write(file, file.relative_to(work).as_posix())
+    except BaseException:
+        shutil.rmtree(work, ignore_errors=True)
+        raise
+    return FileResponse(archive, media_type="application/zip", filename=archive.name,
+                        background=BackgroundTask(shutil.rmtree, work, ignore_errors=True))
 
 
 @router.delete("/recordings/{recording_id}")
