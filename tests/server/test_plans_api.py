@@ -168,7 +168,7 @@ def test_bad_plan_ids_and_callers_are_refused_and_nothing_moves(http, cell):
     _still(cell, before)
 
 
-def test_a_plan_goes_stale_when_the_arm_or_the_speed_changed(http, cell):
+def test_a_plan_goes_stale_when_the_arm_the_speed_or_the_scene_changed(http, cell):
     plan = _plan(http, "/api/arm/joints", {"q_rad": [0.5, 0.0, 0.2, 0.8, 0.0]})
     moved = http.post("/api/arm/joints", json={"q_rad": [0.1, 0.0, 0.3, 0.9, 0.0]}, params={"wait": "true"}, headers=PAD)
     assert moved.status_code == 200
@@ -192,6 +192,14 @@ def test_a_plan_goes_stale_when_the_arm_or_the_speed_changed(http, cell):
     assert http.put("/api/speed", json={"speed_percent": 50.0}, headers=PAD).status_code == 200
     stale = _error(http.post(f"/api/plans/{plan['plan_id']}/execute", headers=PAD), 409, "stale_plan")
     assert stale["reason"] == "speed_changed" and "50 %" in stale["message"], stale
+    _still(cell, before)
+    assert http.put("/api/speed", json={"speed_percent": 100.0}, headers=PAD).status_code == 200
+
+    # a new scene
+    plan = _plan(http, "/api/arm/joints", {"q_rad": [0.5, 0.0, 0.2, 0.8, 0.0]})
+    assert http.post("/api/sim/scene", json={"objects": []}, headers=PAD).status_code == 200
+    stale = _error(http.post(f"/api/plans/{plan['plan_id']}/execute", headers=PAD), 409, "stale_plan")
+    assert stale["reason"] == "scene_changed" and "scene" in stale["message"], stale
     _still(cell, before)
 
 
