@@ -153,6 +153,27 @@ class NoArmError(CommandRefused):
                      "start it with an arm to move",)
 
 
+
+class PlanNotFound(RefusedByCheck):
+    """A motion plan id the station does not know (never made, discarded, or pushed out by newer plans): HTTP 404."""
+
+
+class PlanStale(RefusedByCheck):
+    """A motion plan that may no longer be executed (HTTP 409 `stale_plan`): it was executed already, expired, or the
+    arm or its world changed since it was made. `reason` is the short word (executed, expired, arm_moved,
+    arm_commanded, halted, scene_changed, calibration_changed, gripper_changed, speed_changed, arm_moving); the
+    message says what changed. Nothing moved: plan again."""
+
+    def __init__(self, message: str, reason: str) -> None:
+        super().__init__(message)
+        self.reason = reason
+
+
+class PlanNotYours(RefusedByCheck):
+    """A motion plan made by another controller (HTTP 409 `not_controller`): each controller executes only the plans it
+    made (the operator who saw the plan). Nothing moved."""
+
+
 # What a planner raises when it declines a target (a job catches these and tries another move; anything
 # else, a bare ValueError from a numpy bug included, fails the job as an internal error).
 PLAN_REFUSALS: tuple[type[ArmlabError], ...] = (InvalidInput, Unreachable, PlanRefused)

@@ -34,6 +34,7 @@ from server.routes import (
     history,
     intrinsics,
     jobs,
+    plans,
     programs,
     recordings,
     repeat,
@@ -138,7 +139,7 @@ def create_app(
         """Liveness check."""
         return {"status": "ok", "version": armlab.__version__}
 
-    for module in (station, arm, board, calibration, calibration_settings, colors, intrinsics, detections, history, jobs, auto, programs, recordings,
+    for module in (station, arm, board, calibration, calibration_settings, colors, intrinsics, detections, history, jobs, auto, plans, programs, recordings,
                    repeat, sim, speed, stream, view3d):
         app.include_router(module.router)
     if web_dir is not None and Path(web_dir, "index.html").exists():

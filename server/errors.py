@@ -19,7 +19,10 @@ from armlab.errors import (
     NeedsConfirmation,
     NoArmError,
     NotController,
+    PlanNotFound,
+    PlanNotYours,
     PlanRefused,
+    PlanStale,
     RefusedByCheck,
     ShuttingDown,
 )
@@ -43,10 +46,12 @@ class ApiError(Exception):
         self.status_code, self.code, self.message, self.allowed = status_code, code, message, allowed
 
 
-def error_response(status_code: int, code: str, message: str, allowed: list[str] | None = None, headers=None) -> JSONResponse:
+def error_response(status_code: int, code: str, message: str, allowed: list[str] | None = None, headers=None,
+                   **named: str | None) -> JSONResponse:
     body: dict = {"code": code, "message": message}
     if allowed is not None:
         body["allowed"] = allowed
+    body.update({key: value for key, value in named.items() if value is not None})
     return JSONResponse({"error": body}, status_code=status_code, headers=headers)
 
 
@@ -79,6 +84,9 @@ ERROR_STATUS: tuple[tuple[type[BaseException], int, str], ...] = (
     (NotCalibrated, 409, "not_calibrated"),
     (CalibrationUntrusted, 409, "not_calibrated"),
     (NotFound, 404, "not_found"),
+    (PlanNotFound, 404, "not_found"),
+    (PlanStale, 409, "stale_plan"),
+    (PlanNotYours, 409, "not_controller"),
     (DiskFull, 507, "disk_full"),  # a recording cannot start: too little free disk
     (Unreachable, 422, "unreachable"),
     (UnsafeTrajectory, 422, "unsafe"),
@@ -101,9 +109,9 @@ _DOCUMENTED_ERRORS = {
     "403": "refused: a Host this station does not serve, or a foreign Origin",
     "404": "no such item (or a damaged one, left out)",
     "409": "not allowed in the current state (allowed commands listed), not calibrated or the calibration not trusted "
-    "(the reason), another client controls the station (named), needs confirm: true, or needs an arm the station "
-    "does not have (no_arm)",
-    "422": "invalid input, or an unreachable or unsafe target; nothing moved",
+    "(the reason), another client controls the station (named), needs confirm: true, needs an arm the station "
+    "does not have (no_arm), or a motion plan that is stale or another controller's (stale_plan with its reason)",
+    "422": "invalid input, or an unreachable or unsafe target (the part named); nothing moved",
     "503": "a device is not connected, timed out or is still lost, or the station is shutting down",
 }
 
@@ -159,7 +167,9 @@ def install_error_handlers(app: FastAPI) -> None:
             log.error("internal error in %s %s", request.method, request.url.path, exc_info=error)
             return error_response(500, code, f"internal error ({type(error).__name__}); the server log has the traceback")
         allowed = error.allowed if isinstance(error, CommandRefused) else None
-        return error_response(status_code, code, str(error), allowed)
+        reason = error.reason if isinstance(error, PlanStale) else None
+        part = getattr(error, "part", None) if isinstance(error, UnsafeTrajectory) else None
+        return error_response(status_code, code, str(error), allowed, reason=reason, part=part)
 
     # Registered per base class so they are handled inside the app (a bare Exception handler runs in
     # Starlette's outermost middleware, which logs and re-raises).

@@ -40,6 +40,7 @@ from server.auto_models import (
     TaskProgress,
 )
 from server.colors_models import COLOR_WIRE_MODELS
+from server.plan_models import PLAN_WIRE_MODELS
 from server.recording_models import RECORDING_WIRE_MODELS
 from server.response_models import (
     CalibrationInfo,
@@ -186,6 +187,7 @@ WIRE_MODELS = (
     *WIRE_MODELS,
     *COLOR_WIRE_MODELS,
     *RECORDING_WIRE_MODELS,
+    *PLAN_WIRE_MODELS,
     AutoRequest,
     AutoParam,
     AutoJobInfo,

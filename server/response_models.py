@@ -13,6 +13,8 @@ class ErrorBody(Wire):
     code: str
     message: str
     allowed: list[str] | None = None
+    reason: str | None = Field(None, description="why a plan is stale (stale_plan): executed, expired, arm_moved, arm_commanded, ...")
+    part: str | None = Field(None, description="the joint or part of the arm a refused motion names (unsafe)")
 
 
 class ErrorResponse(Wire):

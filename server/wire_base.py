@@ -29,6 +29,7 @@ ERROR_CODES = (
     "no_arm",
     "device",
     "disk_full",
+    "stale_plan",
     "internal",
 )
 

@@ -23,7 +23,12 @@ POSITION_TOL_RAD = 1e-9
 
 
 class UnsafeTrajectory(PlanRefused):
-    """A trajectory violates a joint limit or goes below the board; the message names joint/point and time."""
+    """A trajectory violates a joint limit or goes below the board; the message names joint/point and time, and
+    `part` the joint or part of the arm alone (None when the check names none)."""
+
+    def __init__(self, message: str, part: str | None = None) -> None:
+        super().__init__(message)
+        self.part = part
 
 
 def _joint_name(arm, index: int) -> str:
@@ -60,7 +65,7 @@ def check_start(trajectory: JointTrajectory, q_measured_rad, tolerance_rad: floa
         name = names[joint] if names is not None and joint < len(names) else f"joint {joint}"
         raise UnsafeTrajectory(
             f"the trajectory starts {error[joint]:.3f} rad from where {name} is (more than {tolerance_rad:.3f} rad): "
-            "the arm would jump; plan from the measured position"
+            "the arm would jump; plan from the measured position", part=name
         )
 
 
@@ -98,7 +103,7 @@ def check_trajectory(
         sample, joint = (int(v) for v in bad[0])
         raise UnsafeTrajectory(
             f"{_joint_name(arm, joint)} = {positions[sample, joint]:.4f} rad at t = {times[sample]:.3f} s is outside "
-            f"its limits [{lower[joint]:.4f}, {upper[joint]:.4f}]"
+            f"its limits [{lower[joint]:.4f}, {upper[joint]:.4f}]", part=_joint_name(arm, joint)
         )
 
     if max_step_rad is not None and positions.shape[0] > 1:
@@ -108,7 +113,7 @@ def check_trajectory(
             sample, joint = (int(v) for v in jumps[0])
             raise UnsafeTrajectory(
                 f"{_joint_name(arm, joint)} jumps {steps[sample, joint]:.3f} rad between samples at t = {times[sample]:.3f} s "
-                f"(at most {max_step_rad:.3f} rad per step)"
+                f"(at most {max_step_rad:.3f} rad per step)", part=_joint_name(arm, joint)
             )
 
     if check_rates:
@@ -120,14 +125,15 @@ def check_trajectory(
             sample, joint = (int(v) for v in too_fast[0])
             raise UnsafeTrajectory(
                 f"{_joint_name(arm, joint)} moves at {abs(velocity[sample, joint]):.3f} rad/s at t = {times[sample]:.3f} s, "
-                f"above its velocity limit {velocity_limit[joint]:.3f} rad/s"
+                f"above its velocity limit {velocity_limit[joint]:.3f} rad/s", part=_joint_name(arm, joint)
             )
         too_sharp = np.argwhere(np.abs(accel) > accel_limit[None, :] * (1.0 + LIMIT_RTOL))
         if too_sharp.size:
             sample, joint = (int(v) for v in too_sharp[0])
             raise UnsafeTrajectory(
                 f"{_joint_name(arm, joint)} accelerates at {abs(accel[sample, joint]):.3f} rad/s² at "
-                f"t = {times[sample + 1]:.3f} s, above its acceleration limit {accel_limit[joint]:.3f} rad/s²"
+                f"t = {times[sample + 1]:.3f} s, above its acceleration limit {accel_limit[joint]:.3f} rad/s²",
+                part=_joint_name(arm, joint),
             )
 
     floor_z = board_z_m + clearance_m
@@ -149,7 +155,8 @@ def check_trajectory(
             what = f"the link at the {what} ({radii[point] * 1000:.0f} mm thick around it)"
         raise UnsafeTrajectory(
             f"{what} at z = {heights[first, point] * 1000:.1f} mm at "
-            f"t = {times[first]:.3f} s is below the board surface + clearance ({floor_z * 1000:.1f} mm)"
+            f"t = {times[first]:.3f} s is below the board surface + clearance ({floor_z * 1000:.1f} mm)",
+            part=_point_name(arm, point, heights.shape[1]),
         )
     if workspace_m is not None:
         low, high = (np.asarray(corner, dtype=float) for corner in workspace_m)

@@ -37,5 +37,5 @@ def check_parts_above_board(model, positions_rad: np.ndarray, times_s: np.ndarra
         if lowest_m < -1e-6:
             raise UnsafeTrajectory(
                 f"the {part} would go {-lowest_m * 1000:.1f} mm into the board (gripper point at z = {gripper_z_m * 1000:.1f} mm) "
-                f"at t = {times_s[sample]:.3f} s"
+                f"at t = {times_s[sample]:.3f} s", part=part
             )

@@ -46,6 +46,8 @@ from armlab.station.memory import return_freed_memory
 from armlab.station.motion import MOTION_MEMORY, WAIT_CHUNK_S, MotionGate
 from armlab.station.perceiving import Perceiving
 from armlab.station.perception import DEVICE_ERRORS, FrameSource, Perception, PerceptionLoop
+from armlab.station.planned_moves import PlannedMoves
+from armlab.station.plans import PlanStore
 from armlab.station.reach import ReachCache
 from armlab.station.slots import EventLog, NewestSlot
 from armlab.station.speed import SpeedOverride
@@ -72,10 +74,10 @@ class NotCalibrated(RefusedByCheck, RuntimeError):
 _UNLATCHED = ("estop",)  # the only command the latch and the lease never refuse
 
 
-class Station(Latch, MotionGate, ManualCommands, TeachCommands, JobControls, SpeedOverride, Perceiving, CalibrationTrust,
-              ArmCalibrationKeeper):
-    """The control station's gate (its parts: latch.py, motion.py, manual.py, teach.py, job_control.py: start,
-    cancel and control jobs, perceiving.py: status, detections, fresh frames).
+class Station(Latch, MotionGate, ManualCommands, PlannedMoves, TeachCommands, JobControls, SpeedOverride, Perceiving,
+              CalibrationTrust, ArmCalibrationKeeper):
+    """The control station's gate (its parts: latch.py, motion.py, manual.py, planned_moves.py, teach.py,
+    job_control.py: start, cancel and control jobs, perceiving.py: status, detections, fresh frames).
     Backends are injected; `sim` is the SimWorkcell when simulated (else None).
 
     model: the armlab.kinematics ArmModel of the arm; perception_config: armlab.vision's config.
@@ -141,6 +143,7 @@ class Station(Latch, MotionGate, ManualCommands, TeachCommands, JobControls, Spe
         self._changed_everywhere_s = -math.inf  # the last change that may have changed any spot (note_change_everywhere)
         self._commanded: tuple | None = None  # the last trajectory sent: (trajectory, clock_s at its t = 0, count)
         self._command_count = 0
+        self.plans = PlanStore()  # plan, then execute (planned_moves.py)
         self._speed_lock = threading.Lock()  # one override change at a time (speed.py)
         self._pipeline: Any = None  # synchronous mode's perception pipeline
         self.events = EventLog()

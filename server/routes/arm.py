@@ -3,7 +3,7 @@ thread (server/waiting.py) and ends when the client hangs up."""
 
 from __future__ import annotations
 
-from fastapi import APIRouter, Request
+from fastapi import APIRouter, Query, Request
 from starlette.concurrency import run_in_threadpool
 
 from armlab.station.arm_info import arm_info
@@ -20,6 +20,7 @@ from server.models import (
     StepRequest,
     TorqueRequest,
 )
+from server.plan_models import MovePlan
 from server.waiting import until_arm_still, until_fingers_still
 
 router = APIRouter(prefix="/api", tags=["arm"])
@@ -53,16 +54,28 @@ async def post_sleep(request: Request, station: StationDep, controller: ControlA
     return await _answer(request, station, wait)
 
 
-@router.post("/arm/joints", response_model=Status)
-async def post_joints(request: Request, body: JointsRequest, station: StationDep, controller: ControlAuth, wait: bool = False) -> dict:
-    """Joint move (radians); out-of-limit or malformed → 422 and nothing moves."""
+PLAN_ONLY = Query(False, description="plan and check the move as it would be made, move nothing: answers the plan "
+                  "(MovePlan) with its id for POST /api/plans/{plan_id}/execute")
+
+
+@router.post("/arm/joints", response_model=Status | MovePlan)
+async def post_joints(request: Request, body: JointsRequest, station: StationDep, controller: ControlAuth, wait: bool = False,
+                      plan_only: bool = PLAN_ONLY) -> dict:
+    """Joint move (radians); out-of-limit or malformed → 422 and nothing moves. ?plan_only=true: the plan, nothing moves."""
+    if plan_only:
+        return await run_in_threadpool(station.plan_only, "move_joints", body.q_rad, body.moving_time_s, source=controller)
     await run_in_threadpool(station.move_joints, body.q_rad, body.moving_time_s, wait=False, source=controller)
     return await _answer(request, station, wait)
 
 
-@router.post("/arm/pose", response_model=Status)
-async def post_pose(request: Request, body: PoseRequest, station: StationDep, controller: ControlAuth, wait: bool = False) -> dict:
-    """Move the gripper point to a world position; unreachable → 422 'unreachable' and nothing moves."""
+@router.post("/arm/pose", response_model=Status | MovePlan)
+async def post_pose(request: Request, body: PoseRequest, station: StationDep, controller: ControlAuth, wait: bool = False,
+                    plan_only: bool = PLAN_ONLY) -> dict:
+    """Move the gripper point to a world position; unreachable → 422 'unreachable' and nothing moves. ?plan_only=true:
+    the plan, nothing moves."""
+    if plan_only:
+        pose = (body.position_m, body.pitch_rad, body.yaw_rad)
+        return await run_in_threadpool(station.plan_only, "move_to", None, body.moving_time_s, pose=pose, source=controller)
     await run_in_threadpool(station.move_to, body.position_m, body.pitch_rad, body.yaw_rad, body.moving_time_s, wait=False, source=controller)
     return await _answer(request, station, wait)
 

@@ -7,7 +7,7 @@ export const COMMANDS = Object.freeze(["estop", "reset", "home", "sleep", "move_
 export const ARM_COMMANDS = Object.freeze(["home", "sleep", "move_joints", "move_to", "jog", "torque", "gripper", "grab", "drop", "teach_start", "teach_record", "teach_stop", "teach_undo", "repeat", "auto", "pause", "resume", "step", "set_speed"]);
 export const VIEWS = Object.freeze(["color", "depth", "topdown"]);
 export const LAYERS = Object.freeze(["tags", "detections", "grid"]);
-export const ERROR_CODES = Object.freeze(["wrong_state", "unreachable", "unsafe", "invalid", "not_found", "not_calibrated", "unauthorized", "forbidden", "not_controller", "needs_confirmation", "no_arm", "device", "disk_full", "internal"]);
+export const ERROR_CODES = Object.freeze(["wrong_state", "unreachable", "unsafe", "invalid", "not_found", "not_calibrated", "unauthorized", "forbidden", "not_controller", "needs_confirmation", "no_arm", "device", "disk_full", "stale_plan", "internal"]);
 export const SERVER_MESSAGE_TYPES = Object.freeze(["frame", "telemetry", "event", "calibration", "hello"]);
 export const CLIENT_MESSAGE_TYPES = Object.freeze(["ack", "view", "command", "heartbeat"]);
 export const EVENT_KINDS = Object.freeze(["general", "scene"]);
@@ -279,6 +279,8 @@ export const EVENT_KINDS = Object.freeze(["general", "scene"]);
  * @property {string} code
  * @property {string} message
  * @property {(Array<string>|null)} [allowed]
+ * @property {(string|null)} [reason] why a plan is stale (stale_plan): executed, expired, arm_moved, arm_commanded, ...
+ * @property {(string|null)} [part] the joint or part of the arm a refused motion names (unsafe)
  */
 
 /**
@@ -449,6 +451,26 @@ export const EVENT_KINDS = Object.freeze(["general", "scene"]);
  */
 
 /**
+ * A motion planned and checked as the move itself would be, moving nothing (POST /api/arm/pose or /api/arm/joints
+ * with ?plan_only=true). POST /api/plans/{plan_id}/execute sends exactly this trajectory; it is refused once the plan
+ * is stale (stale_when).
+ * @typedef {Object} MovePlan
+ * @property {string} plan_id the plan's id, for POST /api/plans/{plan_id}/execute and DELETE /api/plans/{plan_id}
+ * @property {string} command the station command it executes as (move_joints, move_to)
+ * @property {(string|null)} controller the controller that made it: only it may execute it
+ * @property {Array<number>} goal_q_rad the goal joints, radians, joint_names order
+ * @property {number} duration_s the trajectory's duration at the speed override it was planned at
+ * @property {Array<number>} times_s sample times of the trajectory (decimated for showing; first and last kept)
+ * @property {Array<Array<number>>} q_rad the joints at times_s, radians
+ * @property {Array<Array<number>>} gripper_path_m the gripper point at times_s, world frame, metres
+ * @property {GripperPose} gripper_pose the gripper at the goal (commanded kinematics)
+ * @property {number} speed_percent the speed override it was planned at
+ * @property {number} created_s when it was made (Unix seconds)
+ * @property {number} expires_s when it expires (Unix seconds)
+ * @property {Array<string>} stale_when what makes the station refuse it
+ */
+
+/**
  * Programs in the same database that belong to another arm or workcell (not listed: their joints mean nothing here).
  * @typedef {Object} OtherPrograms
  * @property {(string|null)} arm None: saved before programs had an arm, with another number of joints
@@ -469,6 +491,13 @@ export const EVENT_KINDS = Object.freeze(["general", "scene"]);
  * @property {Array<number>} position_m
  * @property {("board"|"depth"|"remembered")} on
  * @property {(number|null)} [depth_mm] the raw depth reading at the pixel, mm (0: no reading; None: no depth image)
+ */
+
+/**
+ * DELETE /api/plans/{plan_id}: the plan is gone; executing it is then refused (404).
+ * @typedef {Object} PlanDiscarded
+ * @property {string} plan_id
+ * @property {boolean} [discarded]
  */
 
 /**

@@ -1,0 +1,184 @@
+"""Plan, then execute (issue 22 item 2): a manual move planned and checked exactly as the real one would be, kept
+(plans.PlanStore) and shown, moving nothing; Execute sends exactly that trajectory through the gate, or refuses.
+
+A mixin of core.Station. plan_only() refuses what the move would refuse (state, latch, lease, limits, the board,
+the body and self-collision checks, reach, the start at the measured joints) and also a plan while the arm moves
+(a plan starts from the arm at rest). execute_plan() refuses an unknown id (PlanNotFound), a plan executed already,
+expired, or made before the arm or its world changed (PlanStale naming what changed), a plan another controller
+made (PlanNotYours), and whatever the gate refuses any motion (state, latch, lease, the start): nothing moves then.
+"""
+
+from __future__ import annotations
+
+import time
+
+import numpy as np
+
+from armlab.devices.arm import JointTrajectory
+from armlab.errors import ArmMoving, PlanNotYours, PlanStale
+from armlab.motion.safety import check_start
+from armlab.station.perception import DEVICE_ERRORS
+from armlab.station.plans import PLAN_LIFETIME_S, MovePlan, new_plan_id
+from armlab.station.states import allowed_commands
+from armlab.station.telemetry import gripper_pose_from_matrix
+
+PLAN_SHOWN_SAMPLES = 60  # at most this many samples of a plan's trajectory go on the wire (its ends included)
+STALE_WHEN = (
+    "executed once: a second execute is refused",
+    f"expired {PLAN_LIFETIME_S:.0f} s after it was made",
+    "the arm was commanded, halted or moved (by hand, by another client) since",
+    "the scene, the camera calibration or the arm calibration changed since",
+    "the gripper was opened or closed, or what it holds changed, since",
+    "the speed override changed since",
+)
+
+# The world snapshot's entries, in order: (reason, what changed).
+_WORLD = (
+    ("arm_commanded", "the arm was commanded since the plan was made"),
+    ("halted", "the arm was halted (e-stop, cancel or fault) since the plan was made"),
+    ("scene_changed", "the scene changed since the plan was made (new objects, the camera or the board moved)"),
+    ("calibration_changed", "the camera calibration changed since the plan was made"),
+    ("calibration_changed", "the arm calibration changed since the plan was made"),
+    ("gripper_changed", "what the gripper holds changed since the plan was made"),
+    ("speed_changed", "the speed override changed since the plan was made"),
+)
+
+
+def world_change(before: tuple, now: tuple) -> tuple[str, str] | None:
+    """(message, reason) of the first entry of two world snapshots that differs, else None."""
+    for (reason, what), old, new in zip(_WORLD, before, now):
+        if old is new or _equal(old, new):
+            continue
+        if reason == "speed_changed":
+            what = f"the speed override changed from {old:g} % to {new:g} % since the plan was made"
+        return f"the plan is stale: {what}; plan again", reason
+    return None
+
+
+def _equal(old, new) -> bool:
+    try:
+        return type(old) is type(new) and bool(old == new)
+    except (TypeError, ValueError):  # values holding arrays: only the same object is the same
+        return False
+
+
+def decimated_indices(count: int, most: int = PLAN_SHOWN_SAMPLES) -> np.ndarray:
+    """At most `most` evenly spread sample indices of `count`, the first and last included."""
+    if count <= most:
+        return np.arange(count)
+    return np.unique(np.round(np.linspace(0, count - 1, most)).astype(int))
+
+
+class PlannedMoves:
+    """plan_only, execute_plan, discard_plan and the plans' wire form."""
+
+    def _world_snapshot(self) -> tuple:
+        """What a plan depends on besides the arm's joints (in _WORLD's order), read under the lock."""
+        with self._lock:
+            held = self._held_block
+            return (self._command_count, self._halts, self._changed_everywhere_s, self._calibration,
+                    self._arm_calibration_info, None if held is None else dict(held), self.speed_percent)
+
+    def _gripper_command(self) -> str | None:
+        try:
+            return self.gripper.read_state().command
+        except DEVICE_ERRORS:
+            return None
+
+    def plan_only(self, command: str, q_goal_rad=None, moving_time_s: float | None = None, pose: tuple | None = None,
+                  source: str | None = None) -> dict:
+        """The move `command` (move_joints: q_goal_rad; move_to: pose = (position_m, pitch_rad, yaw_rad)) would make,
+        planned and checked as the move itself, kept as a plan and returned in its wire form; nothing moves."""
+        self.require_arm(command)
+        self.allowed_or_raise(command, source)  # state, latch, lease: as the move would be refused
+        if pose is not None:
+            q_goal_rad = self.solve_pose(*pose)
+        self.checked_joints(q_goal_rad)
+        if self.arm.is_moving() or self.motion_handover() is not None:
+            state = self.state
+            raise ArmMoving(command, state.value, allowed_commands(state),
+                            "a plan starts from the arm at rest: plan again once it has stopped")
+        world, gripper_command, speed = self._world_snapshot(), self._gripper_command(), self.speed_percent
+        trajectory = self._paced(self.plan_move(q_goal_rad, moving_time_s), speed, from_rest=True)
+        self.check_motion(trajectory)
+        measured = self.joints_rad()
+        check_start(trajectory, measured, self.motion_config.start_tolerance_rad, self.model.joint_names)
+        plan = self.plans.add(MovePlan(new_plan_id(), command, source, trajectory, measured, gripper_command, world, speed))
+        return self.plan_wire(plan)
+
+    def _refuse_if_stale(self, plan: MovePlan) -> None:
+        """PlanStale when the plan expired, the arm is not where it was planned from, or the gripper changed
+        (the world snapshot is compared under the lock, just before the send)."""
+        if time.time() > plan.expires_s:
+            raise PlanStale(f"the plan expired {time.time() - plan.expires_s:.0f} s ago (plans last "
+                            f"{plan.lifetime_s:.0f} s): plan again", "expired")
+        measured = self.joints_rad()
+        error = np.abs(measured - plan.measured_rad)
+        joint = int(np.argmax(error))
+        if error[joint] > self.motion_config.start_tolerance_rad:
+            raise PlanStale(f"the plan is stale: the arm moved since it was made ({self.model.joint_names[joint]} is "
+                            f"{error[joint]:.3f} rad from where it was); plan again", "arm_moved")
+        if self._gripper_command() != plan.gripper_command:
+            raise PlanStale("the plan is stale: the gripper was opened or closed since the plan was made; plan again",
+                            "gripper_changed")
+
+    def execute_plan(self, plan_id: str, source: str | None = None) -> JointTrajectory:
+        """Send exactly the plan's trajectory through the gate (state, lease, latch, start at the measured joints),
+        or refuse with nothing moved. Returns what was sent."""
+        plan = self.plans.get(plan_id)
+        if plan.executed:
+            raise PlanStale(f"plan {plan_id!r} was executed already: plan again to move again", "executed")
+        if source is not None and plan.controller != source:
+            raise PlanNotYours(f"plan {plan_id!r} was made by {plan.controller or 'the station itself'!r}, not by "
+                               f"{source!r}: each controller executes only its own plans; plan it again")
+        self.allowed_or_raise(plan.command, source)
+        self._refuse_if_stale(plan)
+        claimed: list[bool] = []
+
+        def send_as_planned(handover) -> JointTrajectory:
+            if handover is not None and not handover.at_rest:
+                raise PlanStale("the plan is stale: the arm is moving; plan again once it has stopped", "arm_moving")
+            return plan.trajectory
+
+        def under_lock() -> None:
+            change = world_change(plan.world, self._world_snapshot())
+            if change is not None:
+                raise PlanStale(*change)
+            if not claimed:
+                self.plans.claim(plan.plan_id)  # PlanStale 'executed' when another request just sent it
+                claimed.append(True)
+            self._pace_next_send(plan.speed_percent)
+            self._transition(plan.command, source=source)
+            self._jog = None
+
+        try:
+            trajectory, _ = self._send_replacing(send_as_planned, under_lock, plan.command, replaceable=True)
+        except BaseException:
+            if claimed:
+                self.plans.unclaim(plan.plan_id)
+            raise
+        return trajectory
+
+    def discard_plan(self, plan_id: str, source: str | None = None) -> MovePlan:
+        """Forget a plan (Cancel): PlanNotFound if unknown, PlanNotYours if another controller made it."""
+        plan = self.plans.get(plan_id)
+        if source is not None and plan.controller != source:
+            raise PlanNotYours(f"plan {plan_id!r} was made by {plan.controller or 'the station itself'!r}, not by {source!r}")
+        return self.plans.discard(plan_id)
+
+    def plan_wire(self, plan: MovePlan) -> dict:
+        """The plan as shown: its id, the trajectory (decimated), the gripper's path, the goal and when it goes stale."""
+        trajectory = plan.trajectory
+        index = decimated_indices(len(trajectory.times_s))
+        q = trajectory.positions_rad[index]
+        goal = trajectory.positions_rad[-1]
+        path = np.asarray(self.model.fk(q), float)[:, :3, 3]
+        base = np.asarray(self.model.T_world_base)[:3, 3]
+        return {
+            "plan_id": plan.plan_id, "command": plan.command, "controller": plan.controller,
+            "goal_q_rad": [float(v) for v in goal], "duration_s": float(trajectory.duration_s),
+            "times_s": [float(t) for t in trajectory.times_s[index]], "q_rad": q.tolist(),
+            "gripper_path_m": path.tolist(), "gripper_pose": gripper_pose_from_matrix(self.model.fk(goal), base),
+            "speed_percent": float(plan.speed_percent), "created_s": plan.created_s, "expires_s": plan.expires_s,
+            "stale_when": list(STALE_WHEN),
+        }
