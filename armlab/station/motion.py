@@ -260,12 +260,17 @@ class MotionGate:
 
     def start_position(self) -> np.ndarray:
         """Where a motion from rest starts: the position the servos were last commanded to hold (the end of the
-        last trajectory sent) while the arm is measured within half the start tolerance of it, so the command
-        does not step by the servos' residual error; else (halted, limp, pushed away) the measured joints."""
+        last trajectory sent, also in its last two samples) while the arm is measured within half the start tolerance
+        of it, so the command does not step by the servos' residual error; else (moving, halted, limp, pushed away)
+        the measured joints."""
         measured = self.joints_rad()
         with self._lock:
             running = self._commanded
-        if running is None or self.clock_s() - running[1] < running[0].duration_s:
+        if running is None:
+            return measured
+        # A motion in its last two samples is as good as at rest there: the measured joints trail the command by the
+        # servos' lag, and a run planned from them stepped the command by that lag (1.9 mrad in one 4 ms tick).
+        if running[0].duration_s - (self.clock_s() - running[1]) > 2.0 / self.motion_config.sample_rate_hz:
             return measured
         held = running[0].positions_rad[-1]
         if float(np.max(np.abs(held - measured))) > 0.5 * self.motion_config.start_tolerance_rad:
