@@ -26,6 +26,7 @@ from armlab.skills import side_grasp
 from armlab.skills.manipulate import plan_pick, plan_place, plan_side_place, run_steps
 from armlab.station.core import Station
 from armlab.station.jobs import JobContext
+from armlab.tasks.place_check import PlaceCheck
 from armlab.vision.geometry import project_points
 
 MAX_ATTEMPTS_PER_MOVE = 3
@@ -190,6 +191,9 @@ class TaskRunner:
         self.keep_occluded = False  # a job that must find every block acts also on those the parked arm partly hides
         self.gripper_box = None  # a GripperBox every planned motion keeps the gripper point inside (pick_stack)
         self.time_limit_s: float | None = None  # the event's limit (station clock): no new move starts after it
+        config = station.config
+        self.place_check = PlaceCheck(config.place_check, config.place_corrections, config.place_correction_max_m,
+                                      lambda level, words: station.events.add(level, f"{name}: {words}"))
 
     # Reporting -------------------------------------------------------------------------------------
 
@@ -297,7 +301,8 @@ class TaskRunner:
         where the pick ends, so a block is never picked up that cannot be put where it should go."""
         block = move.block
         edge = self.edge_of(block)
-        to = np.asarray(move.to_m, float)
+        intended = np.asarray(move.to_m, float)
+        to = self.place_check.target_for(intended)  # shifted by what the last looks saw remain there
         name = f"{block.get('color')} {block.get('size')} block"
         below = [o for o in objects if o is not block and near(o["position_m"], to, 0.02) and abs(o["position_m"][2] - to[2]) < 0.01]
         place_boxes = self.boxes(objects, block, *below)
@@ -335,7 +340,15 @@ class TaskRunner:
             self.fail(f"cannot pick the {name} at ({block['position_m'][0] * 1000:.0f}, {block['position_m'][1] * 1000:.0f}) mm: {error}")
             return False
         try:
-            plan_the_place(pick_end_joints(pick))
+            try:
+                plan_the_place(pick_end_joints(pick))
+            except PLAN_REFUSALS as error:
+                if np.array_equal(to, intended):
+                    raise
+                self.fail(f"the corrected place target ({to[0] * 1000:.1f}, {to[1] * 1000:.1f}) mm is refused ({error}): "
+                          "placing at the uncorrected target")
+                to = intended
+                plan_the_place(pick_end_joints(pick))
         except PLAN_REFUSALS as error:
             self.fail(f"cannot place the {name} at ({to[0] * 1000:.0f}, {to[1] * 1000:.0f}, {to[2] * 1000:.0f}) mm: {error}")
             return False
@@ -356,6 +369,7 @@ class TaskRunner:
         if not self.run_or_fail(place, f"placing the {name}"):
             return False
         self.station.set_held_block(None)
+        self.place_check.placed(intended, to, edge, name)
         self.progress.moves += 1
         placed = {**block, "position_m": [float(to[0]), float(to[1]), float(to[2] + edge)]}
         self.last_objects = [o for o in self.last_objects if o is not block] + [placed]
@@ -486,6 +500,7 @@ class TaskRunner:
             if self.out_of_time(started_s):
                 break
             objects = self.look()
+            self.place_check.check(objects)
             plan = policy(objects, self._given_up)
             self.progress.done, self.progress.left = plan.done, plan.left
             seen_now = blocks_seen(objects)
@@ -507,6 +522,8 @@ class TaskRunner:
                 self._given_up.add(key)
                 self.fail(f"gave up on the {move.block.get('color')} {move.block.get('size')} block after "
                           f"{MAX_ATTEMPTS_PER_MOVE} attempts")
+        if self.place_check.pending:  # the last place's check: one more look
+            self.place_check.check(self.look())
         self.park()
         self.report("finished")
-        return self.progress.to_dict()
+        return {**self.progress.to_dict(), "place_check": self.place_check.summary()}
