@@ -52,6 +52,7 @@ def rig(seed: int, spots: list, realism: str, loop: bool, folder: str) -> list[t
 
         def run(ctx):
             runner = TaskRunner(station, ctx, "place loop")
+            runner.place_check.enabled = True  # the first round measures (whatever the station's config says)
 
             def policy(objects, _given_up) -> Plan:
                 blocks = [o for o in objects if o.get("is_cube", True)]

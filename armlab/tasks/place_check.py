@@ -22,6 +22,8 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from armlab.errors import PLAN_REFUSALS
+
 SAME_SPOT_M = 0.015  # a target this close (x-y) to an earlier one is the same spot
 FIND_RADIUS_M = 0.03  # the placed block is the cube detection nearest its target within this (x-y)...
 TOP_TOLERANCE_M = 0.012  # ...whose top is this close to where the block's top should be
@@ -146,3 +148,20 @@ def _placed_block(objects: list[dict], target_m: np.ndarray, top_z_m: float) -> 
     near = [o for o in objects if o.get("is_cube", True) and not o.get("unseen")
             and math.dist(o["position_m"][:2], target_m[:2]) <= FIND_RADIUS_M and abs(o["position_m"][2] - top_z_m) <= TOP_TOLERANCE_M]
     return min(near, key=lambda o: math.dist(o["position_m"][:2], target_m[:2]), default=None)
+
+
+def first_passing_target(plan: Callable[[np.ndarray], object], corrected_m, intended_m, say: Callable[[str], None]) -> np.ndarray:
+    """The target to place at: the corrected one when plan(corrected) passes (planned and checked; nothing moves), else,
+    saying why, the intended one; the intended one's refusal (PLAN_REFUSALS) propagates. Leaves plan's last call on the
+    returned target."""
+    corrected, intended = np.asarray(corrected_m, float), np.asarray(intended_m, float)
+    try:
+        plan(corrected)
+        return corrected
+    except PLAN_REFUSALS as error:
+        if np.array_equal(corrected, intended):
+            raise
+        say(f"the corrected place target ({corrected[0] * 1000:.1f}, {corrected[1] * 1000:.1f}) mm is refused ({error}): "
+            "placing at the uncorrected target")
+    plan(intended)
+    return intended

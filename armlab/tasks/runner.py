@@ -26,7 +26,7 @@ from armlab.skills import side_grasp
 from armlab.skills.manipulate import plan_pick, plan_place, plan_side_place, run_steps
 from armlab.station.core import Station
 from armlab.station.jobs import JobContext
-from armlab.tasks.place_check import PlaceCheck
+from armlab.tasks.place_check import PlaceCheck, first_passing_target
 from armlab.vision.geometry import project_points
 
 MAX_ATTEMPTS_PER_MOVE = 3
@@ -339,16 +339,14 @@ class TaskRunner:
         except PLAN_REFUSALS as error:
             self.fail(f"cannot pick the {name} at ({block['position_m'][0] * 1000:.0f}, {block['position_m'][1] * 1000:.0f}) mm: {error}")
             return False
+
+        def plan_at(target) -> list:  # plan_the_place from the pick's end, for this target
+            nonlocal to
+            to = target
+            return plan_the_place(pick_end_joints(pick))
+
         try:
-            try:
-                plan_the_place(pick_end_joints(pick))
-            except PLAN_REFUSALS as error:
-                if np.array_equal(to, intended):
-                    raise
-                self.fail(f"the corrected place target ({to[0] * 1000:.1f}, {to[1] * 1000:.1f}) mm is refused ({error}): "
-                          "placing at the uncorrected target")
-                to = intended
-                plan_the_place(pick_end_joints(pick))
+            to = first_passing_target(plan_at, to, intended, self.fail)
         except PLAN_REFUSALS as error:
             self.fail(f"cannot place the {name} at ({to[0] * 1000:.0f}, {to[1] * 1000:.0f}, {to[2] * 1000:.0f}) mm: {error}")
             return False

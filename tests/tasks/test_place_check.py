@@ -87,3 +87,25 @@ def test_switched_off_nothing_changes(log):
     check.placed((0.10, 0.20, 0.0), (0.10, 0.20, 0.0), EDGE_M, "red large block")
     assert check.check([detection(0.103, 0.196)]) == [] and log == []
     np.testing.assert_allclose(check.target_for((0.10, 0.20, 0.0)), [0.10, 0.20, 0.0])
+
+
+def test_a_refused_corrected_target_falls_back_to_the_intended_one_saying_why():
+    from armlab.motion.safety import UnsafeTrajectory
+    from armlab.tasks.place_check import first_passing_target
+
+    planned, said = [], []
+
+    def plan(target):  # the planner: refuses the corrected target (before anything moves)
+        planned.append(np.round(np.asarray(target) * 1000, 1).tolist())
+        if target[0] > 0.1:
+            raise UnsafeTrajectory("the held block would meet the neighbour")
+        return ["steps"]
+
+    chosen = first_passing_target(plan, (0.105, 0.2, 0.0), (0.1, 0.2, 0.0), said.append)
+    np.testing.assert_allclose(chosen, [0.1, 0.2, 0.0])
+    assert planned == [[105.0, 200.0, 0.0], [100.0, 200.0, 0.0]]
+    assert len(said) == 1 and "corrected place target (105.0, 200.0) mm is refused" in said[0] and "neighbour" in said[0]
+    # a passing corrected target is used; a refused intended one is refused (nothing to fall back to)
+    np.testing.assert_allclose(first_passing_target(plan, (0.095, 0.2, 0.0), (0.1, 0.2, 0.0), said.append), [0.095, 0.2, 0.0])
+    with pytest.raises(UnsafeTrajectory):
+        first_passing_target(plan, (0.11, 0.2, 0.0), (0.11, 0.2, 0.0), said.append)
