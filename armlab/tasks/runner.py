@@ -27,6 +27,7 @@ from armlab.skills.manipulate import plan_pick, plan_place, plan_side_place, run
 from armlab.station.core import Station
 from armlab.station.jobs import JobContext
 from armlab.tasks.look_poses import look_pose, park_pose
+from armlab.tasks.place_check import PlaceCheck, first_passing_target
 from armlab.tasks.policy import Move, NoFreeSpot, Policy, blocks_seen, confirm_finish, finger_axis_away, near
 from armlab.vision.geometry import project_points
 
@@ -79,6 +80,9 @@ class TaskRunner:
         self.keep_occluded = False  # a job that must find every block acts also on those the parked arm partly hides
         self.gripper_box = None  # a GripperBox every planned motion keeps the gripper point inside (pick_stack)
         self.time_limit_s: float | None = None  # the event's limit (station clock): no new move starts after it
+        config = station.config
+        self.place_check = PlaceCheck(config.place_check, config.place_corrections, config.place_correction_max_m,
+                                      lambda level, words: station.events.add(level, f"{name}: {words}"))
 
     # Reporting -------------------------------------------------------------------------------------
 
@@ -186,7 +190,8 @@ class TaskRunner:
         where the pick ends, so a block is never picked up that cannot be put where it should go."""
         block = move.block
         edge = self.edge_of(block)
-        to = np.asarray(move.to_m, float)
+        intended = np.asarray(move.to_m, float)
+        to = self.place_check.target_for(intended)  # shifted by what the last looks saw remain there
         name = f"{block.get('color')} {block.get('size')} block"
         below = [o for o in objects if o is not block and near(o["position_m"], to, 0.02) and abs(o["position_m"][2] - to[2]) < 0.01]
         place_boxes = self.boxes(objects, block, *below)
@@ -223,8 +228,14 @@ class TaskRunner:
         except PLAN_REFUSALS as error:
             self.fail(f"cannot pick the {name} at ({block['position_m'][0] * 1000:.0f}, {block['position_m'][1] * 1000:.0f}) mm: {error}")
             return False
+
+        def plan_at(target) -> list:  # plan_the_place from the pick's end, for this target
+            nonlocal to
+            to = target
+            return plan_the_place(pick_end_joints(pick))
+
         try:
-            plan_the_place(pick_end_joints(pick))
+            to = first_passing_target(plan_at, to, intended, self.fail)
         except PLAN_REFUSALS as error:
             self.fail(f"cannot place the {name} at ({to[0] * 1000:.0f}, {to[1] * 1000:.0f}, {to[2] * 1000:.0f}) mm: {error}")
             return False
@@ -245,6 +256,7 @@ class TaskRunner:
         if not self.run_or_fail(place, f"placing the {name}"):
             return False
         self.station.set_held_block(None)
+        self.place_check.placed(intended, to, edge, name)
         self.progress.moves += 1
         placed = {**block, "position_m": [float(to[0]), float(to[1]), float(to[2] + edge)]}
         self.last_objects = [o for o in self.last_objects if o is not block] + [placed]
@@ -375,6 +387,7 @@ class TaskRunner:
             if self.out_of_time(started_s):
                 break
             objects = self.look()
+            self.place_check.check(objects)
             plan = policy(objects, self._given_up)
             self.progress.done, self.progress.left = plan.done, plan.left
             seen_now = blocks_seen(objects)
@@ -396,6 +409,8 @@ class TaskRunner:
                 self._given_up.add(key)
                 self.fail(f"gave up on the {move.block.get('color')} {move.block.get('size')} block after "
                           f"{MAX_ATTEMPTS_PER_MOVE} attempts")
+        if self.place_check.pending:  # the last place's check: one more look
+            self.place_check.check(self.look())
         self.park()
         self.report("finished")
-        return self.progress.to_dict()
+        return {**self.progress.to_dict(), "place_check": self.place_check.summary()}
