@@ -20,7 +20,7 @@ from armlab.vision.block import Block
 from armlab.vision.block_geometry import STEP, BlockGeometry, frame_geometry, roi_heights
 from armlab.vision.block_tags import face_looks_tagged, with_tag
 from armlab.vision.calibration import Calibration
-from armlab.vision.colors import BoardGrey, ColorModel, frame_clip_levels_rgb
+from armlab.vision.colors import MAX_FACE_SAMPLES, BoardGrey, ColorModel, frame_clip_levels_rgb
 from armlab.vision.config import PerceptionConfig
 from armlab.vision.distractors import (
     dark_and_colourless,
@@ -368,9 +368,12 @@ def _blocks_from_region(color_bgr, geo: BlockGeometry, cfg, region: _Region, top
     def block_of(f: Face, classified: ClassifiedFace | None = None, out_of_view: bool = False) -> Block:
         if colour_of is None or f.pixels_px is None:
             return _make_block(f, names[face_colour(f.classes, ci) - 1], geo.camera, cfg, z_small, step, z, classified, out_of_view)
-        px = f.pixels_px.astype(np.intp)
+        px = f.pixels_px
         if f.classes is not None and np.count_nonzero(f.classes) >= 10:
             px = px[f.classes > 0]
+        if len(px) > MAX_FACE_SAMPLES:  # the pixels face_median_rgb would keep, before gathering them
+            px = px[:: len(px) // MAX_FACE_SAMPLES]
+        px = px.astype(np.intp)
         reading = colour_of(color_bgr[px[:, 1], px[:, 0]], f.center_px)
         return _make_block(f, reading.name, geo.camera, cfg, z_small, step, z, classified, out_of_view, reading.measured_lab)
 

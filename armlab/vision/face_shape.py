@@ -175,7 +175,9 @@ def split_touching_classified(face: Face, cfg: PerceptionConfig) -> list[tuple[F
             whole_fills.append(measure_rect(face_hull_xy(face), pitch, face.pixel_count)[4] >= SPLIT_MIN_FILL)
         return whole_fills[0]
 
-    rank = np.argsort(np.argsort(along))
+    order = np.argsort(along)
+    rank = np.empty_like(order)
+    rank[order] = np.arange(len(order))  # each point's place along the axis (argsort's inverse permutation)
     sample = max(1, -(-len(pts) // SPLIT_SAMPLE_POINTS))
     large, small = cfg.blocks.large_size_m, cfg.blocks.small_size_m
 
