@@ -302,7 +302,7 @@ class ColorModel:
         face_lin, board_lin = linear[:3], np.maximum(linear[3:], 1e-4)
         clip_from = np.full(3, float(CLIPPED)) if clip_from_rgb is None else np.asarray(clip_from_rgb, dtype=float).reshape(3)
         if np.any(face_rgb >= clip_from):
-            # The face's CIELAB and the references as clipped (_as_clipped's two tables) in one conversion.
+            # The face's CIELAB and the references as clipped (both of _clipped_rgb's tables) in one conversion.
             labs = lab_from_relative_rgb(np.concatenate([(face_lin / board_lin)[None], *self._clipped_rgb(board_lin, face_rgb, face_lin, clip_from)]),
                                          self.board_reflectance)
             m = (len(labs) - 1) // 2
@@ -311,21 +311,13 @@ class ColorModel:
             return self.classify_lab(labs[0], seen=seen)
         return self.classify_lab(lab_from_relative_rgb(face_lin / board_lin, self.board_reflectance))
 
-    def _as_clipped(self, board_bgr, face_rgb: np.ndarray, clip_from: np.ndarray) -> np.ndarray:
-        """The references (M, 3) as this camera shows them on a face whose channels at or above clip_from
-        (3,) are clipped at the face's value, the others at 255 (CIELAB against the board): hue and chroma
-        of each reference scaled to the face's unclipped channels (least squares in linear light, within
-        MAX_FACE_GAIN) and clipped; lightness of the reference at the board's exposure, clipped."""
-        board_lin = np.maximum(srgb_to_linear(np.asarray(board_bgr, dtype=float)[::-1]), 1e-4)
-        at_board, scaled = self._clipped_rgb(board_lin, face_rgb, srgb_to_linear(face_rgb), clip_from)
-        seen = lab_from_relative_rgb(scaled, self.board_reflectance)
-        seen[:, 0] = lab_from_relative_rgb(at_board, self.board_reflectance)[:, 0]
-        return seen
-
     def _clipped_rgb(self, board_lin: np.ndarray, face_rgb: np.ndarray, face_lin: np.ndarray,
                      clip_from: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        """_as_clipped's references before CIELAB, relative to the board (M, 3) each: at the board's exposure,
-        and scaled to the face's. board_lin: the board's linear RGB (floored at 1e-4); face_lin: the face's."""
+        """The references (M, 3) as this camera shows them on a face whose channels at or above clip_from (3,)
+        are clipped at the face's value, the others at 255, before CIELAB (linear RGB relative to the board):
+        at the board's exposure (classify takes their lightness), and with hue and chroma scaled to the face's
+        unclipped channels (least squares in linear light, within MAX_FACE_GAIN). board_lin: the board's
+        linear RGB (floored at 1e-4); face_lin: the face's."""
         free = face_rgb < clip_from
         ceiling = np.where(free, 1.0, face_lin)  # 255 is 1.0 in linear light
         ref_lin = self._table[2] * board_lin  # (M, 3)
