@@ -12,6 +12,7 @@ import numpy as np
 
 from armlab.vision.board_plane import BoardPlane, BoardPlaneError, BoardPlaneFitter
 from armlab.vision.calibration import Calibration
+from armlab.vision.colors import board_region_mask
 from armlab.vision.config import PerceptionConfig
 from armlab.vision.geometry import PlaneCamera, height_coefficients
 
@@ -37,6 +38,18 @@ class BlockGeometry:
                                            cfg.board.x_range_m, cfg.board.y_range_m, step=2 * STEP)
         self._set_heights(cal.T_world_depth[2])
         self.plane: BoardPlane | None = None  # the frame's board plane, when with_heights made this
+        self._board_regions: dict = {}  # board_region's masks, shared with with_heights' copies (same calibration)
+
+    def board_region(self, x_range_m, y_range_m) -> np.ndarray:
+        """colors.board_region_mask at STEP for this calibration, computed once per board rectangle (read-only)."""
+        key = (tuple(x_range_m), tuple(y_range_m))
+        mask = self._board_regions.get(key)
+        if mask is None:
+            cal = self.calibration
+            mask = board_region_mask(self.small_shape, cal.T_world_camera, cal.K, cal.dist, x_range_m, y_range_m, STEP)
+            mask.flags.writeable = False
+            self._board_regions[key] = mask
+        return mask
 
     def _set_heights(self, row: np.ndarray) -> None:
         K, cal = self.calibration.K, self.calibration

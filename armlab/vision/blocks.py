@@ -11,7 +11,6 @@ face is then measured on a full-resolution region of interest.
 from __future__ import annotations
 
 import math
-from dataclasses import replace
 from functools import lru_cache
 
 import cv2
@@ -21,7 +20,7 @@ from armlab.vision.block import Block
 from armlab.vision.block_geometry import STEP, BlockGeometry, frame_geometry, roi_heights
 from armlab.vision.block_tags import face_looks_tagged, with_tag
 from armlab.vision.calibration import Calibration
-from armlab.vision.colors import BoardGrey, ColorModel, board_region_mask, frame_clip_levels_rgb
+from armlab.vision.colors import MAX_FACE_SAMPLES, BoardGrey, ColorModel, frame_clip_levels_rgb
 from armlab.vision.config import PerceptionConfig
 from armlab.vision.distractors import (
     dark_and_colourless,
@@ -133,7 +132,8 @@ def _top_face_in_roi(
     cv2.drawContours(filled, [contour], -1, 1, thickness=cv2.FILLED)
     ys, xs = np.nonzero(filled)
     zs = z[ys, xs]
-    return ys, xs, contour, quantile(zs[np.isfinite(zs)], 0.5) if np.isfinite(zs).any() else face_m
+    zs = zs[np.isfinite(zs)]
+    return ys, xs, contour, quantile(zs, 0.5) if zs.size else face_m
 
 
 def _face_from_pixels(ys: np.ndarray, xs: np.ndarray, roi, contour: np.ndarray, top_m: float, camera: PlaneCamera) -> Face:
@@ -217,7 +217,7 @@ def detect_blocks(
         z_cover = z_small.copy()
         z_cover[ignored_small] = np.inf
     board_small = (z_small < bc.min_height_m) & (z_small > -0.03)  # at the board (or its depth offset): the colour model's grey
-    board_small &= board_region_mask(z_small.shape, cal.T_world_camera, cal.K, cal.dist, cfg.board.x_range_m, cfg.board.y_range_m, step)
+    board_small &= geo.board_region(cfg.board.x_range_m, cfg.board.y_range_m)
     if ignore_mask is not None:
         board_small &= ~ignore_mask[::step, ::step]
     colour_of = _face_colour(color_model or ColorModel.from_config(cfg), BoardGrey(small_bgr, board_small, scale=step),
@@ -304,8 +304,8 @@ class _Region:
         self.classes = _color_classes(self.hsv, cfg, table)
         self.colourless = self.classes == 0
         self.z = roi_heights(depth_mm, geo, roi)
-        if ignore_mask is not None:  # the robot: no height, so it neither forms a face nor covers one
-            ignored = ignore_mask[y0:y1, x0:x1]
+        ignored = None if ignore_mask is None else ignore_mask[y0:y1, x0:x1]
+        if ignored is not None and ignored.any():  # the robot: no height, so it neither forms a face nor covers one
             self.classes[ignored] = 0
             self.colourless[ignored] = False
             self.z[ignored] = np.nan
@@ -368,12 +368,14 @@ def _blocks_from_region(color_bgr, geo: BlockGeometry, cfg, region: _Region, top
     def block_of(f: Face, classified: ClassifiedFace | None = None, out_of_view: bool = False) -> Block:
         if colour_of is None or f.pixels_px is None:
             return _make_block(f, names[face_colour(f.classes, ci) - 1], geo.camera, cfg, z_small, step, z, classified, out_of_view)
-        px = f.pixels_px.astype(np.intp)
+        px = f.pixels_px
         if f.classes is not None and np.count_nonzero(f.classes) >= 10:
             px = px[f.classes > 0]
+        if len(px) > MAX_FACE_SAMPLES:  # the pixels face_median_rgb would keep, before gathering them
+            px = px[:: len(px) // MAX_FACE_SAMPLES]
+        px = px.astype(np.intp)
         reading = colour_of(color_bgr[px[:, 1], px[:, 0]], f.center_px)
-        block = _make_block(f, reading.name, geo.camera, cfg, z_small, step, z, classified, out_of_view)
-        return replace(block, color_lab=reading.measured_lab)
+        return _make_block(f, reading.name, geo.camera, cfg, z_small, step, z, classified, out_of_view, reading.measured_lab)
 
     if runs_off_image(ys, xs, roi, geo.calibration):
         # A tall stack's top partly out of view: the square from the edges that show, else flagged.
@@ -393,9 +395,10 @@ def _blocks_from_region(color_bgr, geo: BlockGeometry, cfg, region: _Region, top
 
 
 def _make_block(face: Face, color: str, camera: PlaneCamera, cfg, z_small, step, z_roi=None, classified: ClassifiedFace | None = None,
-                out_of_view: bool = False) -> Block:
+                out_of_view: bool = False, color_lab: tuple[float, float, float] | None = None) -> Block:
     """The block of a face (classified: its classify_face or classify_clipped, if at hand).
-    out_of_view: part of the face is outside the image and its square is not known: flagged occluded."""
+    out_of_view: part of the face is outside the image and its square is not known: flagged occluded.
+    color_lab: the face's measured colour, if the colour model read it."""
     c = classified or classify_face(face, cfg)
     size, side, yaw, is_cube, centre_xy = c.size, c.side_m, c.yaw, c.is_cube, c.centre_xy
     ring_m2 = cfg.blocks.large_size_m**2 - cfg.blocks.small_size_m**2
@@ -418,6 +421,7 @@ def _make_block(face: Face, color: str, camera: PlaneCamera, cfg, z_small, step,
         occluded=bool(occluded),
         side_m=float(side),
         stack_sizes=sizes,
+        color_lab=color_lab,
     )
 
 

@@ -80,12 +80,13 @@ def fit_inverse_depth_plane(
         coefs = list(np.linalg.solve(A[samples], w[samples][..., None])[..., 0])
     except np.linalg.LinAlgError:
         coefs = [_solve_or_none(A[idx], w[idx]) for idx in samples]
-    for coef in coefs:
-        if coef is None or not np.all(np.isfinite(coef)) or coef[2] <= 0:
-            continue  # the plane must face the camera
-        count = int(np.count_nonzero(np.abs(heights(coef)) < inlier_m))
-        if count > best_count:
-            best, best_count = coef, count
+    # The plane must face the camera; every valid sample's inliers counted in one pass over the points.
+    valid = [coef for coef in coefs if coef is not None and np.all(np.isfinite(coef)) and coef[2] > 0]
+    if valid:
+        C = np.stack(valid, axis=1)  # (3, k)
+        counts = np.count_nonzero(np.abs((1.0 - d[:, None] * (A @ C)) / np.sqrt(np.einsum("ij,ij->j", C, C))) < inlier_m, axis=0)
+        first_best = int(np.argmax(counts))  # the first of equals, as one by one
+        best, best_count = valid[first_best], int(counts[first_best])
     if best is None or best_count < min_fraction * n:
         raise BoardPlaneError(f"no dominant board plane in the depth: the best holds {max(best_count, 0)} of {n} board pixels")
     inliers = np.abs(heights(best)) < inlier_m

@@ -64,7 +64,11 @@ def lab_from_relative_rgb(relative_rgb: np.ndarray, board_reflectance: float) ->
     xyz = (np.asarray(relative_rgb, dtype=float) * board_reflectance) @ _RGB_TO_XYZ.T
     f = _lab_f(np.maximum(xyz, 0.0) / _WHITE_XYZ)
     fx, fy, fz = f[..., 0], f[..., 1], f[..., 2]
-    return np.stack([116.0 * fy - 16.0, 500.0 * (fx - fy), 200.0 * (fy - fz)], axis=-1)
+    lab = np.empty_like(f)
+    lab[..., 0] = 116.0 * fy - 16.0
+    lab[..., 1] = 500.0 * (fx - fy)
+    lab[..., 2] = 200.0 * (fy - fz)
+    return lab
 
 
 _XYZ_TO_RGB = np.linalg.inv(_RGB_TO_XYZ)
@@ -90,16 +94,34 @@ def face_median_rgb(face_bgr: np.ndarray) -> np.ndarray:
         raise InvalidInput("the face has no pixels")
     if face.shape[0] > MAX_FACE_SAMPLES:
         face = face[:: face.shape[0] // MAX_FACE_SAMPLES]
-    return np.median(face, axis=0)[::-1]
+    return channel_medians(face)[::-1]
+
+
+def channel_medians(pixels: np.ndarray) -> np.ndarray:
+    """np.median(pixels, axis=0) of (N, 3) pixels (N >= 1), the same values (the mean of the two middle ones
+    for an even N) by one partial sort of the channels as rows: a third of np.median's time on a face."""
+    rows = pixels.T.copy()  # (3, N) contiguous: each channel's partition runs along memory
+    n = rows.shape[1]
+    k = n // 2
+    if n % 2:
+        return np.partition(rows, k, axis=1)[:, k].astype(np.float64)
+    middle = np.partition(rows, (k - 1, k), axis=1)[:, k - 1 : k + 1].astype(np.float64)
+    return (middle[:, 0] + middle[:, 1]) / 2.0
+
+
+def _board_grey(board_bgr) -> np.ndarray:
+    """board_bgr as (3,) floats; ValueError unless 3 finite positive values."""
+    board = np.asarray(board_bgr, dtype=float).reshape(3)
+    if not (math.isfinite(board[0] + board[1] + board[2]) and board.min() > 0):
+        raise InvalidInput(f"normalised_rgb: board grey must be 3 positive values (BGR), got {board.tolist()}")
+    return board
 
 
 def normalised_rgb(face_bgr: np.ndarray, board_bgr: np.ndarray, face_rgb: np.ndarray | None = None) -> np.ndarray:
     """The face's linear RGB relative to the board's (per channel; 1 = as bright as the board): the
     median of the face's pixels (N, 3) BGR uint8 (or face_rgb, that median if at hand), divided channel
     by channel by the board's."""
-    board = np.asarray(board_bgr, dtype=float).reshape(3)
-    if not np.all(np.isfinite(board)) or np.any(board <= 0):
-        raise InvalidInput(f"normalised_rgb: board grey must be 3 positive values (BGR), got {board.tolist()}")
+    board = _board_grey(board_bgr)
     face_rgb = face_median_rgb(face_bgr) if face_rgb is None else face_rgb
     return srgb_to_linear(face_rgb) / np.maximum(srgb_to_linear(board[::-1]), 1e-4)
 
@@ -124,15 +146,17 @@ def board_reference_bgr(color_bgr: np.ndarray, board_mask: np.ndarray) -> np.nda
     pixels = color_bgr[board_mask.astype(bool)]
     if len(pixels) < MIN_BOARD_PIXELS:
         raise InvalidInput(f"board_reference_bgr: only {len(pixels)} board pixels (needs {MIN_BOARD_PIXELS})")
-    hi = pixels.max(axis=1).astype(np.int32)
-    lo = pixels.min(axis=1).astype(np.int32)
-    grey = pixels[(hi - lo) * 255 <= BOARD_MAX_SATURATION * np.maximum(hi, 1)]
-    if len(grey) < MIN_BOARD_PIXELS:
-        raise InvalidInput(f"board_reference_bgr: only {len(grey)} grey board pixels (needs {MIN_BOARD_PIXELS})")
-    values = grey.astype(np.float32)
-    total = values.sum(axis=1)
-    blue, red = values[:, 0] / np.maximum(total, 1.0), values[:, 2] / np.maximum(total, 1.0)  # chromaticity
-    keep = np.ones(len(grey), bool)
+    # Channel by channel (a reduction over a row of 3 costs numpy far more than 3 whole-column operations).
+    b, g, r = (pixels[:, channel].astype(np.int32) for channel in range(3))
+    hi = np.maximum(np.maximum(b, g), r)
+    lo = np.minimum(np.minimum(b, g), r)
+    is_grey = (hi - lo) * 255 <= BOARD_MAX_SATURATION * np.maximum(hi, 1)
+    if np.count_nonzero(is_grey) < MIN_BOARD_PIXELS:
+        raise InvalidInput(f"board_reference_bgr: only {np.count_nonzero(is_grey)} grey board pixels (needs {MIN_BOARD_PIXELS})")
+    grey = np.stack([b[is_grey], g[is_grey], r[is_grey]]).astype(np.float32)  # (3, N)
+    total = grey[0] + grey[1] + grey[2]  # whole numbers: exact in float32
+    blue, red = grey[0] / np.maximum(total, 1.0), grey[2] / np.maximum(total, 1.0)  # chromaticity
+    keep = np.ones(total.size, bool)
     for _ in range(2):
         median = _median(total[keep])
         keep = ((np.abs(total - median) <= BOARD_LUMINANCE_BAND * max(median, 3.0))
@@ -140,8 +164,7 @@ def board_reference_bgr(color_bgr: np.ndarray, board_mask: np.ndarray) -> np.nda
                 & (np.abs(red - _median(red[keep])) <= BOARD_CHROMATICITY_BAND))
         if np.count_nonzero(keep) < MIN_BOARD_PIXELS:
             raise InvalidInput("board_reference_bgr: the board pixels have no dominant grey")
-    board = values[keep]
-    reference = np.array([_median(board[:, channel]) for channel in range(3)], dtype=float)
+    reference = np.array([_median(grey[channel][keep]) for channel in range(3)], dtype=float)
     if np.any(reference <= 0):
         raise InvalidInput("board_reference_bgr: the board reads black (no light?)")
     return reference
@@ -231,8 +254,14 @@ class ColorModel:
     @classmethod
     def from_config(cls, cfg) -> ColorModel:
         """The defaults of a PerceptionConfig (its color_model section) or of a ColorModelConfig."""
+        global _LAST_MODEL
         section = getattr(cfg, "color_model", cfg)
-        return _model_from_section(section)
+        last_section, last_model = _LAST_MODEL
+        if last_section is section:  # config sections are frozen: the same section, the same model (and its tables)
+            return last_model
+        model = _model_from_section(section)
+        _LAST_MODEL = (section, model)
+        return model
 
     @property
     def classes(self) -> tuple[str, ...]:
@@ -268,30 +297,38 @@ class ColorModel:
         a bright orange). clip_from_rgb (3,): the level from which each channel is clipped in this frame
         (frame_clip_levels_rgb; default CLIPPED)."""
         face_rgb = face_median_rgb(face_bgr)
-        lab = self.measure(face_bgr, board_bgr, face_rgb)
+        board = _board_grey(board_bgr)
+        linear = srgb_to_linear(np.concatenate([face_rgb, board[::-1]]))  # the face's and the board's RGB in one call
+        face_lin, board_lin = linear[:3], np.maximum(linear[3:], 1e-4)
         clip_from = np.full(3, float(CLIPPED)) if clip_from_rgb is None else np.asarray(clip_from_rgb, dtype=float).reshape(3)
         if np.any(face_rgb >= clip_from):
-            return self.classify_lab(lab, seen=self._as_clipped(board_bgr, face_rgb, clip_from))
-        return self.classify_lab(lab)
+            # The face's CIELAB and the references as clipped (both of _clipped_rgb's tables) in one conversion.
+            labs = lab_from_relative_rgb(np.concatenate([(face_lin / board_lin)[None], *self._clipped_rgb(board_lin, face_rgb, face_lin, clip_from)]),
+                                         self.board_reflectance)
+            m = (len(labs) - 1) // 2
+            seen = labs[1 + m :]
+            seen[:, 0] = labs[1 : 1 + m, 0]  # hue and chroma at the face's exposure, lightness at the board's
+            return self.classify_lab(labs[0], seen=seen)
+        return self.classify_lab(lab_from_relative_rgb(face_lin / board_lin, self.board_reflectance))
 
-    def _as_clipped(self, board_bgr, face_rgb: np.ndarray, clip_from: np.ndarray) -> np.ndarray:
-        """The references (M, 3) as this camera shows them on a face whose channels at or above clip_from
-        (3,) are clipped at the face's value, the others at 255 (CIELAB against the board): hue and chroma
-        of each reference scaled to the face's unclipped channels (least squares in linear light, within
-        MAX_FACE_GAIN) and clipped; lightness of the reference at the board's exposure, clipped."""
-        board_lin = np.maximum(srgb_to_linear(np.asarray(board_bgr, dtype=float)[::-1]), 1e-4)
+    def _clipped_rgb(self, board_lin: np.ndarray, face_rgb: np.ndarray, face_lin: np.ndarray,
+                     clip_from: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """The references (M, 3) as this camera shows them on a face whose channels at or above clip_from (3,)
+        are clipped at the face's value, the others at 255, before CIELAB (linear RGB relative to the board):
+        at the board's exposure (classify takes their lightness), and with hue and chroma scaled to the face's
+        unclipped channels (least squares in linear light, within MAX_FACE_GAIN). board_lin: the board's
+        linear RGB (floored at 1e-4); face_lin: the face's."""
         free = face_rgb < clip_from
-        ceiling = srgb_to_linear(np.where(free, 255.0, face_rgb))
+        ceiling = np.where(free, 1.0, face_lin)  # 255 is 1.0 in linear light
         ref_lin = self._table[2] * board_lin  # (M, 3)
-        at_board = lab_from_relative_rgb(np.minimum(ref_lin, ceiling) / board_lin, self.board_reflectance)
+        at_board = np.minimum(ref_lin, ceiling) / board_lin
         if np.count_nonzero(free) >= 2:
-            norm = np.einsum("ij,ij->i", ref_lin[:, free], ref_lin[:, free])
-            fit = ref_lin[:, free] @ srgb_to_linear(face_rgb[free])
+            free_refs = ref_lin[:, free]
+            norm = np.einsum("ij,ij->i", free_refs, free_refs)
+            fit = free_refs @ face_lin[free]
             gain = np.clip(np.where(norm > 1e-12, fit / np.maximum(norm, 1e-12), 1.0), 1.0 / MAX_FACE_GAIN, MAX_FACE_GAIN)
             ref_lin = ref_lin * gain[:, None]
-        seen = lab_from_relative_rgb(np.minimum(ref_lin, ceiling) / board_lin, self.board_reflectance)
-        seen[:, 0] = at_board[:, 0]  # hue and chroma at the face's exposure, lightness at the board's
-        return seen
+        return at_board, np.minimum(ref_lin, ceiling) / board_lin
 
     def classify_lab(self, lab, seen: np.ndarray | None = None) -> ColorReading:
         """The class of a board-normalised CIELAB colour (nearest reference; UNKNOWN when too far, or
@@ -327,6 +364,9 @@ class ColorModel:
             labs.append(sample.lab)
         lab_array = np.asarray(labs, dtype=float).reshape(-1, 3)
         return names, lab_array, relative_rgb_from_lab(lab_array, self.board_reflectance)
+
+
+_LAST_MODEL: tuple[object, ColorModel | None] = (None, None)  # from_config's last (section, model), swapped whole
 
 
 def _model_from_section(section) -> ColorModel:
@@ -395,8 +435,9 @@ def frame_clip_levels_rgb(color_bgr: np.ndarray) -> np.ndarray:
     """(3,) RGB: the level from which each channel counts as clipped in this BGR frame (the CLIP_TOP_PIXELS-th
     brightest value less CLIP_MARGIN, never above CLIPPED; CLIPPED where that is below MIN_CLIP_LEVEL)."""
     levels = []
+    image = np.ascontiguousarray(color_bgr)
     for channel in (2, 1, 0):
-        counts = np.bincount(np.asarray(color_bgr)[..., channel].ravel(), minlength=256)
+        counts = cv2.calcHist([image], [channel], None, [256], [0, 256]).ravel().astype(np.int64)  # a bincount without the channel's copy
         top = int(np.searchsorted(np.cumsum(counts[::-1]), CLIP_TOP_PIXELS))  # levels down from 255
         level = 255 - top - CLIP_MARGIN
         levels.append(float(min(CLIPPED, level)) if level >= MIN_CLIP_LEVEL else float(CLIPPED))

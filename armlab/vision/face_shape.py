@@ -14,6 +14,7 @@ from armlab.vision.block_geometry import BlockGeometry
 from armlab.vision.calibration import Calibration
 from armlab.vision.clipped_face import fit_clipped_square, on_image_border
 from armlab.vision.config import PerceptionConfig
+from armlab.vision.geometry import inverse_homography
 from armlab.vision.stacks import stack_candidates
 
 # Shape of a top face, from ideal shapes with room for real edges: area / minimum-area rectangle
@@ -79,7 +80,7 @@ def face_hull_xy(face: Face) -> np.ndarray:
     if face.plane_H is None or face.pixels_px is None or len(face.contour_px) < 3:
         return face.points_xy
     hull_px = cv2.convexHull(face.contour_px.astype(np.float32)).reshape(-1, 2).astype(np.float64)
-    H_inv = np.linalg.inv(face.plane_H)
+    H_inv = inverse_homography(face.plane_H)
     xyw = hull_px @ H_inv[:, :2].T + H_inv[:, 2]
     return xyw[:, :2] / xyw[:, 2:3]
 
@@ -174,7 +175,9 @@ def split_touching_classified(face: Face, cfg: PerceptionConfig) -> list[tuple[F
             whole_fills.append(measure_rect(face_hull_xy(face), pitch, face.pixel_count)[4] >= SPLIT_MIN_FILL)
         return whole_fills[0]
 
-    rank = np.argsort(np.argsort(along))
+    order = np.argsort(along)
+    rank = np.empty_like(order)
+    rank[order] = np.arange(len(order))  # each point's place along the axis (argsort's inverse permutation)
     sample = max(1, -(-len(pts) // SPLIT_SAMPLE_POINTS))
     large, small = cfg.blocks.large_size_m, cfg.blocks.small_size_m
 

@@ -149,9 +149,25 @@ class PlaneCamera:
         the lens has no distortion, else undistorted rays meeting the plane. H: as for project."""
         if self.distorted:
             return intersect_rays_with_plane(self.T_world_camera, normalized_rays(pixels, self.K, self.dist), plane_z_m)[:, :2]
-        H_inv = np.linalg.inv(self.homography(plane_z_m) if H is None else H)
+        H_inv = np.linalg.inv(self.homography(plane_z_m)) if H is None else inverse_homography(H)
         xyw = pixels @ H_inv[:, :2].T + H_inv[:, 2]
         return xyw[:, :2] / xyw[:, 2:3]
+
+
+_LAST_INVERSE: tuple[np.ndarray | None, np.ndarray | None] = (None, None)
+
+
+def inverse_homography(H: np.ndarray) -> np.ndarray:
+    """np.linalg.inv(H), remembered for the last H object given: a face's plane homography is inverted
+    for its points, then again for its outline's hull and its parts' (the same array object: treat it as
+    read-only). One (H, inverse) tuple, swapped whole, so concurrent callers never mix two entries."""
+    global _LAST_INVERSE
+    last_H, last_inverse = _LAST_INVERSE
+    if last_H is H:
+        return last_inverse
+    inverse = np.linalg.inv(H)
+    _LAST_INVERSE = (H, inverse)
+    return inverse
 
 
 def height_coefficients(shape: tuple[int, int], K: np.ndarray, T_world_camera: np.ndarray, step: int = 1) -> np.ndarray:
