@@ -116,29 +116,13 @@ PALM_INTO_THE_BOARD_Q = [-1.623, 1.541, -1.093, -1.261, -1.33]  # finger box 6 m
 GRIPPER_GEOMS = {"palm", "left_finger_link", "right_finger_link", "left_pad", "right_pad"}
 
 
-def deepest_gripper_contact_mm(cell, q) -> float:
-    """How far (mm, > 0 = into) the simulated palm and open fingers reach into the board or table standing at q."""
-    import mujoco
-
-    model, data = cell.model, mujoco.MjData(cell.model)
-    for name, value in zip(ARM.joint_names, q):
-        data.qpos[model.joint(name).qposadr[0]] = value
-    mujoco.mj_forward(model, data)
-    deepest = 0.0
-    for contact in data.contact[: data.ncon]:
-        names = {mujoco.mj_id2name(model, mujoco.mjtObj.mjOBJ_GEOM, g) for g in (contact.geom1, contact.geom2)}
-        if names & GRIPPER_GEOMS and names & {"board", "table"}:
-            deepest = max(deepest, -contact.dist * 1000.0)
-    return deepest
-
-
 def _standing(q) -> JointTrajectory:
     return JointTrajectory(np.array([0.0, 0.01]), np.vstack([q, q]))
 
 
 def test_a_pose_with_the_palm_in_the_board_is_refused(fast):
     station, cell = fast
-    assert deepest_gripper_contact_mm(cell, PALM_INTO_THE_BOARD_Q) > 10.0  # the simulation: the palm 14 mm in
+    assert cell.contact_depth_at_mm(PALM_INTO_THE_BOARD_Q, GRIPPER_GEOMS) > 10.0  # the simulation: the palm 14 mm in
     with pytest.raises(UnsafeTrajectory, match="palm would go 1\\d\\.\\d mm into the board"):
         station.check_body(_standing(PALM_INTO_THE_BOARD_Q))
 
@@ -160,6 +144,6 @@ def test_no_pose_the_body_check_passes_puts_the_simulated_gripper_into_the_board
             continue
         passed += 1
         low_passed += gripper_z_m < 0.06
-        worst = max(worst, deepest_gripper_contact_mm(cell, q))
+        worst = max(worst, cell.contact_depth_at_mm(q, GRIPPER_GEOMS))
     assert passed > 200 and low_passed > 50, (passed, low_passed)
     assert worst <= 0.5, f"a pose the check passed has the simulated gripper {worst:.1f} mm into the board"

@@ -5,6 +5,7 @@ devices never see any of it."""
 
 from __future__ import annotations
 
+import mujoco
 import numpy as np
 
 from armlab.devices.sim.path import MAX_DURATION_S, PathRecorder
@@ -44,6 +45,22 @@ class SimTruth:
             if geom < 0:
                 raise ValueError("this workcell has no gripper marker")
             return self._data.geom_xpos[geom] + self._data.geom_xmat[geom].reshape(3, 3)[:, 2] * self._model.geom_size[geom][2]
+
+    def contact_depth_at_mm(self, q_rad, geoms, against=("board", "table")) -> float:
+        """How far (mm, > 0 = into) the named geoms of the arm would reach into the `against` geoms with the arm
+        standing at joint vector q_rad (the model's other joints at their defaults, a scratch MjData: the running
+        simulation is not touched). Ground truth for checks that keep the arm out of the board."""
+        geoms, against = set(geoms), set(against)
+        data = mujoco.MjData(self._model)
+        for name, value in zip(self._geometry.joint_names, np.asarray(q_rad, float)):
+            data.qpos[self._model.joint(name).qposadr[0]] = value
+        mujoco.mj_forward(self._model, data)
+        deepest = 0.0
+        for contact in data.contact[: data.ncon]:
+            names = {mujoco.mj_id2name(self._model, mujoco.mjtObj.mjOBJ_GEOM, g) for g in (contact.geom1, contact.geom2)}
+            if names & geoms and names & against:
+                deepest = max(deepest, -float(contact.dist) * 1000.0)
+        return deepest
 
     def start_path_recording(self, period_s: float = 0.05, max_duration_s: float = MAX_DURATION_S) -> None:
         """Record the gripper point every period_s of simulated time from now on (inside the physics

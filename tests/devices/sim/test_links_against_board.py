@@ -6,7 +6,6 @@ links' thickness from the arm config (link_radii_m)."""
 
 from __future__ import annotations
 
-import mujoco
 import numpy as np
 import pytest
 
@@ -26,20 +25,6 @@ def cell():
         yield workcell
 
 
-def deepest_link_contact_mm(cell, q) -> float:
-    """How far (mm, > 0 = into) the simulated links reach into the board or table standing at q."""
-    model, data = cell.model, mujoco.MjData(cell.model)
-    for name, value in zip(ARM.joint_names, q):
-        data.qpos[model.joint(name).qposadr[0]] = value
-    mujoco.mj_forward(model, data)
-    deepest = 0.0
-    for contact in data.contact[: data.ncon]:
-        names = {mujoco.mj_id2name(model, mujoco.mjtObj.mjOBJ_GEOM, g) for g in (contact.geom1, contact.geom2)}
-        if names & set(LINK_GEOMS) and names & {"board", "table"}:
-            deepest = max(deepest, -contact.dist * 1000.0)
-    return deepest
-
-
 def passes_the_check(q) -> bool:
     try:
         check_trajectory(ARM, JointTrajectory(np.array([0.0, 0.01]), np.vstack([q, q])), check_rates=False)
@@ -49,7 +34,7 @@ def passes_the_check(q) -> bool:
 
 
 def test_the_benchs_waypoint_into_the_board_is_refused_naming_the_link(cell):
-    assert deepest_link_contact_mm(cell, INTO_THE_BOARD_Q) > 10.0  # the simulation: 14 mm into the board
+    assert cell.contact_depth_at_mm(INTO_THE_BOARD_Q, LINK_GEOMS) > 10.0  # the simulation: 14 mm into the board
     with pytest.raises(UnsafeTrajectory, match="link at the .* thick .* below the board"):
         check_trajectory(ARM, JointTrajectory(np.array([0.0, 0.01]), np.vstack([INTO_THE_BOARD_Q] * 2)), check_rates=False)
 
@@ -65,7 +50,7 @@ def test_no_pose_the_check_passes_puts_a_simulated_link_into_the_board(cell):
         if not passes_the_check(q):
             continue
         passed += 1
-        depth = deepest_link_contact_mm(cell, q)
+        depth = cell.contact_depth_at_mm(q, LINK_GEOMS)
         worst = max(worst, depth)
         low_passed += ARM.joint_frames(q)[2][2, 3] < 0.06  # the elbow low over the board: the cases that matter
     assert passed > 300 and low_passed > 30, (passed, low_passed)
