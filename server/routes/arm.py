@@ -40,22 +40,32 @@ async def _answer(request: Request, station, wait: bool) -> dict:
     return await run_in_threadpool(station.status)
 
 
-@router.post("/arm/home", response_model=Status)
-async def post_home(request: Request, station: StationDep, controller: ControlAuth, body: PoseNameRequest | None = None, wait: bool = False) -> dict:
-    """All joints to zero (body optional: {moving_time_s})."""
-    await run_in_threadpool(station.home, body.moving_time_s if body else None, wait=False, source=controller)
-    return await _answer(request, station, wait)
-
-
-@router.post("/arm/sleep", response_model=Status)
-async def post_sleep(request: Request, station: StationDep, controller: ControlAuth, body: PoseNameRequest | None = None, wait: bool = False) -> dict:
-    """The folded rest pose (body optional: {moving_time_s})."""
-    await run_in_threadpool(station.sleep, body.moving_time_s if body else None, wait=False, source=controller)
-    return await _answer(request, station, wait)
-
-
 PLAN_ONLY = Query(False, description="plan and check the move as it would be made, move nothing: answers the plan "
                   "(MovePlan) with its id for POST /api/plans/{plan_id}/execute")
+
+
+@router.post("/arm/home", response_model=Status | MovePlan)
+async def post_home(request: Request, station: StationDep, controller: ControlAuth, body: PoseNameRequest | None = None,
+                    wait: bool = False, plan_only: bool = PLAN_ONLY) -> dict:
+    """The home pose (body optional: {moving_time_s}). ?plan_only=true: the plan, nothing moves."""
+    moving_time_s = body.moving_time_s if body else None
+    if plan_only:
+        await run_in_threadpool(station.require_arm, "home")
+        return await run_in_threadpool(station.plan_only, "home", station.model.home_rad, moving_time_s, source=controller)
+    await run_in_threadpool(station.home, moving_time_s, wait=False, source=controller)
+    return await _answer(request, station, wait)
+
+
+@router.post("/arm/sleep", response_model=Status | MovePlan)
+async def post_sleep(request: Request, station: StationDep, controller: ControlAuth, body: PoseNameRequest | None = None,
+                     wait: bool = False, plan_only: bool = PLAN_ONLY) -> dict:
+    """The folded rest pose (body optional: {moving_time_s}). ?plan_only=true: the plan, nothing moves."""
+    moving_time_s = body.moving_time_s if body else None
+    if plan_only:
+        await run_in_threadpool(station.require_arm, "sleep")
+        return await run_in_threadpool(station.plan_only, "sleep", station.model.sleep_rad, moving_time_s, source=controller)
+    await run_in_threadpool(station.sleep, moving_time_s, wait=False, source=controller)
+    return await _answer(request, station, wait)
 
 
 @router.post("/arm/joints", response_model=Status | MovePlan)

@@ -133,6 +133,25 @@ def test_a_joint_plan_executes_at_its_own_duration(http, cell):
     assert np.abs(_truth(cell)[0] - np.asarray(goal)).max() < 0.02
 
 
+@pytest.mark.parametrize("pose", ["home", "sleep"])
+def test_home_and_sleep_plan_without_moving_then_execute(http, cell, pose):
+    """The named poses plan as the buttons would move (the arm's own home and sleep joints) and move nothing."""
+    goal = np.asarray(ARM.home_rad if pose == "home" else ARM.sleep_rad, dtype=float)
+    before = _truth(cell)
+    plan = _plan(http, f"/api/arm/{pose}", {"moving_time_s": 2.0})
+    assert plan["command"] == pose and np.allclose(plan["goal_q_rad"], goal) and plan["duration_s"] >= 2.0
+    _still(cell, before, sim_s=0.4)
+    cell.start_joint_recording()
+    try:
+        done = http.post(f"/api/plans/{plan['plan_id']}/execute", params={"wait": "true"}, headers=PAD)
+    finally:
+        trace = cell.stop_joint_recording()
+    assert done.status_code == 200, done.text
+    assert _max_gap_from_plan_rad(trace, plan) < 2e-3
+    live.wait_for(lambda: not cell.arm.is_moving(), 15, 0.01)
+    assert np.abs(_truth(cell)[0] - goal).max() < 0.02
+
+
 def test_bad_plan_ids_and_callers_are_refused_and_nothing_moves(http, cell):
     plan = _plan(http, "/api/arm/joints", {"q_rad": [0.0, 0.1, 0.2, 0.7, 0.0]})
     execute = f"/api/plans/{plan['plan_id']}/execute"
