@@ -123,7 +123,8 @@ class App {
       typing: typingIn,
       canJog: () => this.connected && (this.status?.allowed_commands || []).includes("jog") && !$("btn-send-joints").disabled,
     });
-    this.target = new TargetPanel({ api: this.api, run: (a, c) => this.run(a, c), status: () => this.status });
+    this.target = new TargetPanel({ api: this.api, run: (a, c) => this.run(a, c), status: () => this.status,
+                                    openView3d: () => this.openView3d(), view3d: () => this.view3d });
     this.competition = new CompetitionPanel({
       api: this.api,
       live: this.live,
@@ -284,6 +285,13 @@ class App {
     this.view3d?.onTelemetry(s);
     this.competition.onStatus(s);
     this.refreshAllowed();
+  }
+
+  /** The 3-D panel open (a plan to show): resolves to the View3D, or null when it could not load. */
+  async openView3d() {
+    if ($("btn-view3d").getAttribute("aria-pressed") !== "true") await this.toggleView3d();
+    else await this.view3dLoading;
+    return this.view3d ?? null;
   }
 
   /** The 3-D panel: its module (and three.js) loads on first open; later clicks show or hide it. */

@@ -4,6 +4,7 @@
 // checks, nothing moves) and only then sent; a refusal is shown next to the form with its reason.
 
 import { readMovingTimeS } from "./inputs.js";
+import { PlanPreview } from "./plan_preview.js";
 
 const $ = (id) => document.getElementById(id);
 const NUMBER = /^[+-]?(\d+\.?\d*|\.\d+)$/;
@@ -34,14 +35,18 @@ export function readPoseForm(values) {
 }
 
 export class TargetPanel {
-  /** api: Api; run(action, call): the page's REST runner (logs, toasts); status(): the last telemetry. */
-  constructor({ api, run, status }) {
+  /** api: Api; run(action, call): the page's REST runner (logs, toasts); status(): the last telemetry;
+   * openView3d() / view3d(): the 3-D panel (opened / if loaded) where a plan is drawn (plan_preview.js). */
+  constructor({ api, run, status, openView3d = async () => null, view3d = () => null }) {
     this.api = api;
     this.run = run;
     this.status = status;
     this.names = [];
+    this.preview = new PlanPreview({ api, run, show: (state, text) => this.show(state, text), openView3d, view3d });
     $("btn-target-go").addEventListener("click", () => this.goPose());
     $("btn-joints-go").addEventListener("click", () => this.goJoints());
+    $("btn-target-plan").addEventListener("click", () => this.goPose(true));
+    $("btn-joints-plan").addEventListener("click", () => this.goJoints(true));
     $("btn-target-here").addEventListener("click", () => this.fillFromArm());
     $("target-form").addEventListener("submit", (e) => e.preventDefault());
   }
@@ -91,7 +96,8 @@ export class TargetPanel {
     return time;
   }
 
-  goPose() {
+  /** Go (or, with planOnly, plan without moving: plan_preview.js) to the typed pose. */
+  goPose(planOnly = false) {
     const read = readPoseForm({
       x: $("target-x").value, y: $("target-y").value, z: $("target-z").value,
       pitch: $("target-pitch").value, yaw: $("target-yaw").value,
@@ -102,10 +108,11 @@ export class TargetPanel {
     const body = { ...read.body };
     if (time.valueS !== undefined) body.moving_time_s = time.valueS;
     const where = read.body.position_m.map((v) => (v * 1000).toFixed(0)).join(", ");
+    if (planOnly) return this.preview.make(`plan ${where} mm`, "/api/arm/pose", body);
     return this.checkedGo(`go to ${where} mm`, () => this.api.checkPose(body), () => this.api.post("/api/arm/pose", body));
   }
 
-  goJoints() {
+  goJoints(planOnly = false) {
     const q = [];
     for (let i = 0; i < this.names.length; i += 1) {
       const read = readNumber($(`target-joint-${i}`).value, `${this.names[i]} (°)`);
@@ -116,6 +123,7 @@ export class TargetPanel {
     if (!time.ok) return Promise.resolve();
     const body = { q_rad: q };
     if (time.valueS !== undefined) body.moving_time_s = time.valueS;
+    if (planOnly) return this.preview.make("plan joints", "/api/arm/joints", body);
     return this.checkedGo("go to joints", () => this.api.checkJoints(body), () => this.api.post("/api/arm/joints", body));
   }
 

@@ -39,6 +39,7 @@ export class View3D {
     // per-frame telemetry delays (ms from the server's time_s, and from the message's arrival).
     this.stats = { frames: 0, armFirstFrameMs: null, telemetryDelayMs: [], arrivalDelayMs: [], renderMs: [] };
     this.lastDrawn = null; // {time_s, joints_rad, tool_m} of the telemetry in the last frame
+    this.planShown = null; // {id, goal: ArmFigure, path: THREE.Line} of the plan drawn (showPlan)
   }
 
   async start() {
@@ -99,6 +100,29 @@ export class View3D {
 
   removeArm(figure) {
     this.scene.remove(figure.robot);
+    this.invalidate();
+  }
+
+  /** A plan (plan_preview.js): the goal arm, see-through, and the gripper's path; replaces the one shown. */
+  showPlan(plan) {
+    this.clearPlan();
+    if (!this.armDescription) return;
+    const goal = this.addArm();
+    goal.setJoints(plan.goal_q_rad, null);
+    const points = plan.gripper_path_m.map(([x, y, z]) => new THREE.Vector3(x, y, z));
+    const path = new THREE.Line(new THREE.BufferGeometry().setFromPoints(points),
+      new THREE.LineBasicMaterial({ color: 0xff9800 }));
+    this.scene.add(path);
+    this.planShown = { id: plan.plan_id, goal, path };
+    this.invalidate();
+  }
+
+  clearPlan() {
+    if (!this.planShown) return;
+    this.removeArm(this.planShown.goal);
+    this.scene.remove(this.planShown.path);
+    this.planShown.path.geometry.dispose();
+    this.planShown = null;
     this.invalidate();
   }
 

@@ -1,0 +1,134 @@
+"""Plan, then execute from the page (issue 22 item 2): a typed target's Plan asks the station for the plan without
+moving (?plan_only=true), draws the see-through goal arm and the gripper's path in the 3-D panel, and waits; the arm
+does not move (ground truth over sim time); Execute runs that plan to the goal (ground truth); Discard drops it
+(the station no longer has it); a plan into the board is refused with the station's reason in place, and a plan gone
+stale because the arm moved is refused at Execute with its reason. Real server, real Chromium."""
+
+from __future__ import annotations
+
+import time
+
+import numpy as np
+import pytest
+
+from browser_helpers import open_page, ready_idle, wait_frames
+
+pytestmark = pytest.mark.browser
+
+START_RAD = [0.3, 0.0, 0.3, 0.9, 0.0]
+TARGET_MM = (230.0, 60.0, 90.0)
+
+
+@pytest.fixture
+def page(browser, server):
+    ready_idle(server)
+    server.post("/api/arm/joints?wait=true", {"q_rad": START_RAD, "moving_time_s": 1.0})
+    ready_idle(server)
+    page = open_page(browser, f"{server.base_url}/?token={server.token}")
+    wait_frames(page, 2)
+    page.wait_for_function("!document.getElementById('btn-target-plan').disabled", timeout=15_000)
+    yield page
+    page.close()
+
+
+def _truth(server) -> tuple[np.ndarray, np.ndarray, float]:
+    t = server.get("/api/sim/truth")
+    return np.asarray(t["arm"]["position_rad"]), np.asarray(t["gripper"]["position_m"]), float(t["time_s"])
+
+
+def _after_sim_time(server, sim_time_s: float, timeout_s: float = 30.0):
+    """The truth once the simulation's clock has passed sim_time_s (a condition, not a sleep)."""
+    deadline = time.monotonic() + timeout_s
+    while time.monotonic() < deadline:
+        truth = _truth(server)
+        if truth[2] >= sim_time_s:
+            return truth
+        time.sleep(0.05)
+    raise AssertionError(f"the simulation did not reach t = {sim_time_s:.2f} s")
+
+
+def _result(page, state: str) -> str:
+    try:
+        page.wait_for_function(f"document.getElementById('target-result').dataset.state === '{state}'", timeout=30_000)
+    except Exception as error:  # noqa: BLE001 - say what the page shows instead
+        shown = page.evaluate("[document.getElementById('target-result').dataset.state, "
+                              "document.getElementById('target-result').textContent]")
+        raise AssertionError(f"the result never read {state!r}; it reads {shown}; page errors {page.errors}") from error
+    return page.text_content("#target-result")
+
+
+def _plan_pose(page, x, y, z, pitch="90"):
+    for field, value in (("x", x), ("y", y), ("z", z), ("pitch", pitch), ("yaw", "")):
+        page.fill(f"#target-{field}", str(value))
+    page.click("#btn-target-plan")
+
+
+def _shown_plan(page) -> dict:
+    """The plan the 3-D panel draws once it has loaded: its id, the goal arm's joints, the path's point count."""
+    page.wait_for_function("window.armlab?.view3d?.planShown && armlab.view3d.planShown.goal.loaded", timeout=60_000)
+    return page.evaluate("""(() => { const p = armlab.view3d.planShown;
+        const names = armlab.view3d.armDescription.joint_names;
+        return { id: p.id, joints: names.map((n) => p.goal.robot.joints[n].angle),
+                 points: p.path.geometry.attributes.position.count }; })()""")
+
+
+def test_the_buttons_stay_put_when_the_focus_leaves_a_field(page):
+    """The key hint under the jog changes its text with the focus; it grew a line when a field lost the focus and
+    moved the Plan and Go buttons 13 px between a click's press and release (the click went to their row)."""
+    page.locator("#btn-target-plan").scroll_into_view_if_needed()
+    page.focus("#target-yaw")
+    focused = page.evaluate("document.getElementById('btn-target-plan').getBoundingClientRect().y")
+    page.evaluate("document.activeElement.blur()")
+    page.wait_for_function("document.getElementById('jog-keys').dataset.keys === 'jog'")
+    assert page.evaluate("document.getElementById('btn-target-plan').getBoundingClientRect().y") == focused
+
+
+def test_plan_shows_the_goal_arm_and_moves_nothing_then_execute_reaches_it(page, server):
+    q0, point0, t0 = _truth(server)
+    _plan_pose(page, *TARGET_MM)
+    assert "nothing moves until Execute" in _result(page, "planned")
+    shown = _shown_plan(page)
+    plan_id = shown["id"]
+    q1, point1, t1 = _after_sim_time(server, t0 + 1.0)
+    assert t1 > t0 and np.abs(q1 - q0).max() < 2e-3 and np.linalg.norm(point1 - point0) < 0.002, "the arm moved on Plan"
+    goal_q = np.asarray(shown["joints"])
+    assert shown["points"] >= 2
+    page.click("#btn-plan-execute")
+    assert "executing the plan" in _result(page, "sent")
+    server.wait_status(lambda s: not s["moving"] and s["state"] == "idle", 30.0, "the arm to arrive")
+    q2, point2, _ = _truth(server)
+    assert np.linalg.norm(point2 - np.asarray(TARGET_MM) / 1000.0) < 0.006, point2
+    assert np.abs(q2 - goal_q).max() < 0.02, (q2, goal_q)  # the goal arm drawn was where the arm went
+    assert page.evaluate("armlab.view3d.planShown") is None
+    again = server.request("POST", f"/api/plans/{plan_id}/execute")
+    assert again.status_code == 409 and again.json()["error"]["reason"] == "executed"
+    assert page.errors == []
+
+
+def test_discard_drops_the_plan_and_a_stale_plan_is_refused_at_execute(page, server):
+    _plan_pose(page, *TARGET_MM)
+    plan_id = _shown_plan(page)["id"]
+    page.click("#btn-plan-discard")
+    assert "discarded" in _result(page, "sent")
+    assert page.is_hidden("#plan-box") and page.evaluate("armlab.view3d.planShown") is None
+    assert server.request("POST", f"/api/plans/{plan_id}/execute").status_code == 404
+
+    _plan_pose(page, *TARGET_MM)
+    _shown_plan(page)
+    server.post("/api/arm/joints?wait=true", {"q_rad": [0.0, 0.0, 0.3, 0.9, 0.0], "moving_time_s": 1.0})
+    ready_idle(server)
+    q_before, _, _ = _truth(server)
+    page.click("#btn-plan-execute")
+    text = _result(page, "refused")
+    assert "stale" in text and "moved" in text, text
+    ready_idle(server)
+    assert np.abs(_truth(server)[0] - q_before).max() < 2e-3  # nothing moved
+
+
+def test_a_plan_into_the_board_is_refused_with_the_reason_and_nothing_moves(page, server):
+    q0, _, _ = _truth(server)
+    _plan_pose(page, 250, 0, -40)
+    text = _result(page, "refused")
+    assert "no plan" in text and ("below the table" in text or "board" in text), text
+    assert page.is_hidden("#plan-box")
+    assert np.abs(_truth(server)[0] - q0).max() < 2e-3
