@@ -92,32 +92,57 @@ def seconds_to_ns(time_s: float) -> int:
 
 
 def joint_states(time_ns: int, names, positions_rad, velocities_rad_s=None) -> JointStates:
-    velocities = [math.nan] * len(names) if velocities_rad_s is None else [float(v) for v in velocities_rad_s]
+    positions = np.asarray(positions_rad, dtype=float).tolist()  # Python floats once, not a numpy scalar each
+    velocities = [math.nan] * len(names) if velocities_rad_s is None else np.asarray(velocities_rad_s, dtype=float).tolist()
     return JointStates(timestamp=stamp(time_ns), joints=[
-        JointState(name=str(name), position=float(q), velocity=float(v)) for name, q, v in zip(names, positions_rad, velocities)])
+        JointState(name=str(name), position=q, velocity=v) for name, q, v in zip(names, positions, velocities)])
+
+
+def _quaternion_xyzw(R) -> tuple[float, float, float, float]:
+    """R: a rotation matrix's rows as Python floats (3 rows of at least 3)."""
+    w = math.sqrt(max(0.0, 1.0 + R[0][0] + R[1][1] + R[2][2])) / 2.0
+    x = math.copysign(math.sqrt(max(0.0, 1.0 + R[0][0] - R[1][1] - R[2][2])) / 2.0, R[2][1] - R[1][2])
+    y = math.copysign(math.sqrt(max(0.0, 1.0 - R[0][0] + R[1][1] - R[2][2])) / 2.0, R[0][2] - R[2][0])
+    z = math.copysign(math.sqrt(max(0.0, 1.0 - R[0][0] - R[1][1] + R[2][2])) / 2.0, R[1][0] - R[0][1])
+    return x, y, z, w
 
 
 def quaternion(rotation: np.ndarray) -> Quaternion:
     """A rotation matrix as a unit quaternion (x, y, z, w)."""
-    R = np.asarray(rotation, dtype=float)[:3, :3]
-    w = math.sqrt(max(0.0, 1.0 + R[0, 0] + R[1, 1] + R[2, 2])) / 2.0
-    x = math.copysign(math.sqrt(max(0.0, 1.0 + R[0, 0] - R[1, 1] - R[2, 2])) / 2.0, R[2, 1] - R[1, 2])
-    y = math.copysign(math.sqrt(max(0.0, 1.0 - R[0, 0] + R[1, 1] - R[2, 2])) / 2.0, R[0, 2] - R[2, 0])
-    z = math.copysign(math.sqrt(max(0.0, 1.0 - R[0, 0] - R[1, 1] + R[2, 2])) / 2.0, R[1, 0] - R[0, 1])
+    x, y, z, w = _quaternion_xyzw(np.asarray(rotation, dtype=float)[:3, :3].tolist())
     return Quaternion(x=x, y=y, z=z, w=w)
 
 
-def frame_transform(time_ns: int, parent: str, child: str, T_parent_child: np.ndarray) -> FrameTransform:
-    T = np.asarray(T_parent_child, dtype=float)
-    return FrameTransform(timestamp=stamp(time_ns), parent_frame_id=parent, child_frame_id=child,
-                          translation=Vector3(x=float(T[0, 3]), y=float(T[1, 3]), z=float(T[2, 3])), rotation=quaternion(T))
+def _pose_parts(T_parent_child: np.ndarray) -> tuple[Vector3, Quaternion]:
+    T = np.asarray(T_parent_child, dtype=float).tolist()  # Python floats once (the same values as T[i, j])
+    x, y, z, w = _quaternion_xyzw(T)
+    return Vector3(x=T[0][3], y=T[1][3], z=T[2][3]), Quaternion(x=x, y=y, z=z, w=w)
 
 
-def frame_transforms(time_ns: int, poses_in_world: dict[str, np.ndarray], links=()) -> FrameTransforms:
+def frame_transform(time_ns: int, parent: str, child: str, T_parent_child: np.ndarray, *, timestamp: Timestamp | None = None,
+                    parts: dict | None = None) -> FrameTransform:
+    """parts: a cache {(parent, child): (the 4x4's bytes, translation, rotation)}: a transform that has not changed
+    (a fixed frame) reuses its translation and rotation instead of computing them again."""
+    if parts is None:
+        translation, rotation = _pose_parts(T_parent_child)
+    else:
+        T = np.asarray(T_parent_child, dtype=float)
+        key, matrix = (parent, child), T.tobytes()
+        cached = parts.get(key)
+        if cached is None or cached[0] != matrix:
+            cached = parts[key] = (matrix, *_pose_parts(T))
+        translation, rotation = cached[1], cached[2]
+    return FrameTransform(timestamp=timestamp if timestamp is not None else stamp(time_ns), parent_frame_id=parent,
+                          child_frame_id=child, translation=translation, rotation=rotation)
+
+
+def frame_transforms(time_ns: int, poses_in_world: dict[str, np.ndarray], links=(), parts: dict | None = None) -> FrameTransforms:
     """{child frame: its 4x4 pose in the world frame} as transforms from "world", then `links`: (parent, child, 4x4
-    pose of the child in the parent) each (the URDF's links)."""
-    return FrameTransforms(transforms=[frame_transform(time_ns, "world", child, T) for child, T in poses_in_world.items()]
-                           + [frame_transform(time_ns, parent, child, T) for parent, child, T in links])
+    pose of the child in the parent) each (the URDF's links). parts: frame_transform's cache, kept by the caller."""
+    timestamp = stamp(time_ns)
+    return FrameTransforms(transforms=[frame_transform(time_ns, "world", child, T, timestamp=timestamp, parts=parts)
+                                       for child, T in poses_in_world.items()]
+                           + [frame_transform(time_ns, parent, child, T, timestamp=timestamp, parts=parts) for parent, child, T in links])
 
 
 def compressed_image(time_ns: int, jpeg: bytes, frame_id: str = "camera") -> CompressedImage:

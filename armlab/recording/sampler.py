@@ -78,6 +78,9 @@ class StationSampler:
         self._plan: Any = False  # the plan last logged (False: none yet)
         self._plan_ns = 0
         self._urdf: UrdfFrames | None = None
+        self._links_key: tuple | None = None  # (q, finger offset) of _links
+        self._links: list = []  # the URDF's link transforms at _links_key
+        self._tf_parts: dict = {}  # channels.frame_transform's cache: unchanged transforms are not converted again
 
     # Lifecycle ------------------------------------------------------------------------------------
 
@@ -212,13 +215,17 @@ class StationSampler:
                 if self._urdf is None:
                     self._urdf = UrdfFrames(station_urdf(station))
                 finger = finger_offset_m(station, float(gripper.width_m)) if gripper is not None else None
-                links = [link for link in self._urdf.transforms(joint_positions(station.model.joint_names, q, finger))
-                         if not (link[0] == "world" and link[1] in poses)]  # world -> base: once
+                key = (q.tobytes(), finger)
+                if key != self._links_key:  # the arm and the gripper at rest: computed once
+                    self._links_key = key
+                    self._links = [link for link in self._urdf.transforms(joint_positions(station.model.joint_names, q, finger))
+                                   if not (link[0] == "world" and link[1] in poses)]  # world -> base: once
+                links = self._links
         calibration = station.calibration
         if calibration is not None:
             poses["camera"] = np.asarray(calibration.T_world_camera)
         if poses or links:
-            self._log("/tf", self.channels.tf, ch.frame_transforms(now_ns, poses, links), now_ns)
+            self._log("/tf", self.channels.tf, ch.frame_transforms(now_ns, poses, links, self._tf_parts), now_ns)
 
     def log_events(self, now_ns: int) -> None:
         """The event log's new entries (also called once more after the loops stop: the last ones are kept)."""

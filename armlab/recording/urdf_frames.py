@@ -74,14 +74,18 @@ class UrdfFrames:
                                          element.find("child").get("link"), transform(xyz, matrix_from_rpy(rpy)),
                                          direction / np.linalg.norm(direction)))
 
+        # a fixed joint's transform never changes: computed once (the same product as a moving joint's)
+        self._fixed = [joint.origin @ np.eye(4) if joint.kind == "fixed" else None for joint in self.joints]
+
     @property
     def links(self) -> list[str]:
         return [joint.child for joint in self.joints]
 
     def transforms(self, positions: dict[str, float]) -> list[tuple[str, str, np.ndarray]]:
         """(parent, child, T_parent_child) per joint; a moving joint not in `positions` at 0."""
-        return [(joint.parent, joint.child, joint.origin @ _axis_motion(joint.kind, joint.axis, float(positions.get(joint.name, 0.0))))
-                for joint in self.joints]
+        return [(joint.parent, joint.child, self._fixed[index] if self._fixed[index] is not None
+                 else joint.origin @ _axis_motion(joint.kind, joint.axis, float(positions.get(joint.name, 0.0))))
+                for index, joint in enumerate(self.joints)]
 
 
 def joint_positions(names, q_rad, finger_m: float | None) -> dict[str, float]:
