@@ -9,6 +9,7 @@ from types import SimpleNamespace
 
 from armlab.station.slots import EventLog
 from armlab.tasks.pick_sort import policy
+from armlab.tasks.place_check import PlaceCheck
 from armlab.tasks.policy import Plan, blocks_seen, confirm_finish
 from armlab.tasks.runner import MAX_CONFIRM_LOOKS, Progress, TaskRunner
 
@@ -35,6 +36,7 @@ class ScriptedRunner(TaskRunner):
         self.move_s = 50.0  # each move takes this long on the station clock
         self.station = SimpleNamespace(events=EventLog(), clock_s=lambda: self.clock_s)
         self.ctx = SimpleNamespace(progress=lambda *a, **k: None, job=SimpleNamespace(update_extra=lambda **k: None))
+        self.place_check = PlaceCheck(False, 2, 0.006, lambda level, words: None)  # the station's default: off
 
     def look(self) -> list[dict]:
         self.looked += 1
