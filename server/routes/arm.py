@@ -44,28 +44,30 @@ PLAN_ONLY = Query(False, description="plan and check the move as it would be mad
                   "(MovePlan) with its id for POST /api/plans/{plan_id}/execute")
 
 
+async def _named_pose(request: Request, station, controller, pose: str, body: PoseNameRequest | None, wait: bool,
+                      plan_only: bool) -> dict:
+    """home or sleep: moved to (the status), or with plan_only planned to (the plan, nothing moves)."""
+    moving_time_s = body.moving_time_s if body else None
+    if plan_only:
+        await run_in_threadpool(station.require_arm, pose)
+        goal_rad = station.model.home_rad if pose == "home" else station.model.sleep_rad
+        return await run_in_threadpool(station.plan_only, pose, goal_rad, moving_time_s, source=controller)
+    await run_in_threadpool(getattr(station, pose), moving_time_s, wait=False, source=controller)
+    return await _answer(request, station, wait)
+
+
 @router.post("/arm/home", response_model=Status | MovePlan)
 async def post_home(request: Request, station: StationDep, controller: ControlAuth, body: PoseNameRequest | None = None,
                     wait: bool = False, plan_only: bool = PLAN_ONLY) -> dict:
     """The home pose (body optional: {moving_time_s}). ?plan_only=true: the plan, nothing moves."""
-    moving_time_s = body.moving_time_s if body else None
-    if plan_only:
-        await run_in_threadpool(station.require_arm, "home")
-        return await run_in_threadpool(station.plan_only, "home", station.model.home_rad, moving_time_s, source=controller)
-    await run_in_threadpool(station.home, moving_time_s, wait=False, source=controller)
-    return await _answer(request, station, wait)
+    return await _named_pose(request, station, controller, "home", body, wait, plan_only)
 
 
 @router.post("/arm/sleep", response_model=Status | MovePlan)
 async def post_sleep(request: Request, station: StationDep, controller: ControlAuth, body: PoseNameRequest | None = None,
                      wait: bool = False, plan_only: bool = PLAN_ONLY) -> dict:
     """The folded rest pose (body optional: {moving_time_s}). ?plan_only=true: the plan, nothing moves."""
-    moving_time_s = body.moving_time_s if body else None
-    if plan_only:
-        await run_in_threadpool(station.require_arm, "sleep")
-        return await run_in_threadpool(station.plan_only, "sleep", station.model.sleep_rad, moving_time_s, source=controller)
-    await run_in_threadpool(station.sleep, moving_time_s, wait=False, source=controller)
-    return await _answer(request, station, wait)
+    return await _named_pose(request, station, controller, "sleep", body, wait, plan_only)
 
 
 @router.post("/arm/joints", response_model=Status | MovePlan)

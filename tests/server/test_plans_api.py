@@ -90,6 +90,17 @@ def _max_gap_from_plan_rad(trace: dict, plan: dict) -> float:
     return best
 
 
+def _execute_recorded(http, cell, plan: dict) -> dict:
+    """Execute the plan (waiting for the arm) with the servos' reference recorded at every tick: the trace."""
+    cell.start_joint_recording()
+    try:
+        done = http.post(f"/api/plans/{plan['plan_id']}/execute", params={"wait": "true"}, headers=PAD)
+    finally:
+        trace = cell.stop_joint_recording()
+    assert done.status_code == 200, done.text
+    return trace
+
+
 def test_plan_only_moves_nothing_and_execute_runs_exactly_the_plan(http, cell):
     target = [0.22, -0.08, 0.12]
     before = _truth(cell)
@@ -102,12 +113,7 @@ def test_plan_only_moves_nothing_and_execute_runs_exactly_the_plan(http, cell):
     assert http.get("/api/status").json()["state"] == "idle"
     _still(cell, before, sim_s=0.5)
 
-    cell.start_joint_recording()
-    try:
-        done = http.post(f"/api/plans/{plan['plan_id']}/execute", params={"wait": "true"}, headers=PAD)
-    finally:
-        trace = cell.stop_joint_recording()
-    assert done.status_code == 200, done.text
+    trace = _execute_recorded(http, cell, plan)
     live.wait_for(lambda: not cell.arm.is_moving(), 15, 0.01)
     joints, point = _truth(cell)
     assert np.abs(joints - np.asarray(plan["goal_q_rad"])).max() < 0.02, joints
@@ -123,12 +129,7 @@ def test_a_joint_plan_executes_at_its_own_duration(http, cell):
     goal = [-0.2, 0.1, 0.2, 0.6, 0.3]
     plan = _plan(http, "/api/arm/joints", {"q_rad": goal, "moving_time_s": 3.0})
     assert plan["command"] == "move_joints" and plan["duration_s"] >= 3.0
-    cell.start_joint_recording()
-    try:
-        done = http.post(f"/api/plans/{plan['plan_id']}/execute", params={"wait": "true"}, headers=PAD)
-    finally:
-        trace = cell.stop_joint_recording()
-    assert done.status_code == 200, done.text
+    trace = _execute_recorded(http, cell, plan)
     assert _max_gap_from_plan_rad(trace, plan) < 2e-3
     assert np.abs(_truth(cell)[0] - np.asarray(goal)).max() < 0.02
 
@@ -141,12 +142,7 @@ def test_home_and_sleep_plan_without_moving_then_execute(http, cell, pose):
     plan = _plan(http, f"/api/arm/{pose}", {"moving_time_s": 2.0})
     assert plan["command"] == pose and np.allclose(plan["goal_q_rad"], goal) and plan["duration_s"] >= 2.0
     _still(cell, before, sim_s=0.4)
-    cell.start_joint_recording()
-    try:
-        done = http.post(f"/api/plans/{plan['plan_id']}/execute", params={"wait": "true"}, headers=PAD)
-    finally:
-        trace = cell.stop_joint_recording()
-    assert done.status_code == 200, done.text
+    trace = _execute_recorded(http, cell, plan)
     assert _max_gap_from_plan_rad(trace, plan) < 2e-3
     live.wait_for(lambda: not cell.arm.is_moving(), 15, 0.01)
     assert np.abs(_truth(cell)[0] - goal).max() < 0.02
