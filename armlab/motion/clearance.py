@@ -102,20 +102,21 @@ def self_collision(
     reach_m: float = 0.03,
     finger_length_m: float = 0.03,
     held_edge_m: float | None = None,
-) -> tuple[int, str] | None:
+) -> tuple[int, str, str] | None:
     """The first sample at which the gripper end of the arm (the gripper point, the finger tips, a held block's
     bottom: arm_points_m's last points, each reaching reach_m around it) meets the arm's own base (a cylinder
     of base_radius_m around the first joint's axis, up to the second joint's origin) or its first long link
-    (the segment from the second joint's origin to the third's), as (sample, what); None when it never does."""
+    (the segment from the second joint's origin to the third's), as (sample, the part, what); None when it never
+    does."""
     positions = np.atleast_2d(np.asarray(positions_rad, float))
     points = arm_points_m(model, positions, finger_length_m, held_edge_m)  # (N, P, 3)
     dof = int(model.dof)
     origins = points[:, : dof + 1]
     distal = [points[:, dof], points[:, -1 if held_edge_m is None else -2]]
-    distal_names = ["the gripper point", "the finger tips"]
+    distal_names = ["gripper point", "finger tips"]
     if held_edge_m is not None:
         distal.append(points[:, -1])
-        distal_names.append("the held block")
+        distal_names.append("held block")
     axis_xy, base_top = origins[:, 0, :2], origins[:, 1, 2]
     a, b = origins[:, 1], origins[:, 2]
     d = np.stack(distal, axis=1)  # (N, K, 3)
@@ -130,10 +131,10 @@ def self_collision(
         sample, k = (int(v) for v in hits[0])
         name, point = distal_names[k], d[sample, k]
         if in_base[sample, k]:
-            return sample, (f"{name} would reach the arm's own base ({radial[sample, k] * 1000:.0f} mm from its axis at "
-                            f"z = {point[2] * 1000:.0f} mm; the base is {base_radius_m * 1000:.0f} mm wide up to "
-                            f"{base_top[sample] * 1000:.0f} mm)")
-        return sample, f"{name} would come within {gap[sample, k] * 1000:.0f} mm of the arm's upper arm"
+            return sample, name, (f"the {name} would reach the arm's own base ({radial[sample, k] * 1000:.0f} mm from its "
+                                  f"axis at z = {point[2] * 1000:.0f} mm; the base is {base_radius_m * 1000:.0f} mm wide up "
+                                  f"to {base_top[sample] * 1000:.0f} mm)")
+        return sample, name, f"the {name} would come within {gap[sample, k] * 1000:.0f} mm of the arm's upper arm"
     return None
 
 

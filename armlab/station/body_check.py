@@ -11,6 +11,7 @@ import numpy as np
 from armlab.devices.finger_gripper import load_finger_gripper_outline
 from armlab.errors import ConfigError
 from armlab.motion.clearance import lowest_corner_m
+from armlab.motion.gripper_step import FingerBox
 from armlab.motion.safety import UnsafeTrajectory
 
 
@@ -23,8 +24,9 @@ def palm_corners_m(arm_name: str) -> np.ndarray | None:
         o = load_finger_gripper_outline(arm_name)
     except ConfigError:
         return None
-    corners = np.array([[x, y, z] for x in (-o.palm_back_behind_m, -o.palm_front_behind_m)
-                        for y in (-o.open_outer_m, o.open_outer_m) for z in (-o.palm_half_height_m, o.palm_half_height_m)])
+    # The palm as a FingerBox: from palm_back_behind_m behind the gripper point to its front face, palm_front_behind_m
+    # behind it (a negative reach).
+    corners = FingerBox(o.palm_back_behind_m, -o.palm_front_behind_m, o.open_outer_m, o.palm_half_height_m).corners_m()
     corners.setflags(write=False)
     return corners
 

@@ -156,8 +156,8 @@ class MotionGate:
         hit = self_collision(self.model, positions, base_radius_m=config.base_radius_m, reach_m=config.self_clearance_m,
                              held_edge_m=held_edge_m)
         if hit is not None:
-            raise UnsafeTrajectory(f"{hit[1]} at t = {times[hit[0]]:.3f} s: the arm would hit itself",
-                                   part=hit[1].split(" would")[0].removeprefix("the "))
+            sample, part, what = hit
+            raise UnsafeTrajectory(f"{what} at t = {times[sample]:.3f} s: the arm would hit itself", part=part)
 
     def palm_corners_m(self) -> np.ndarray | None:
         """(8, 3) corners of a finger gripper's palm in the gripper frame; None for a suction cup."""

@@ -147,3 +147,16 @@ def test_no_pose_the_body_check_passes_puts_the_simulated_gripper_into_the_board
         worst = max(worst, cell.contact_depth_at_mm(q, GRIPPER_GEOMS))
     assert passed > 200 and low_passed > 50, (passed, low_passed)
     assert worst <= 0.5, f"a pose the check passed has the simulated gripper {worst:.1f} mm into the board"
+
+
+def test_a_refusal_names_the_part(fast):
+    """The refusal carries the part that would hit (the 3-D view and the plan API show it): the gripper point into the
+    arm's own base, the palm into the board."""
+    station, _ = fast
+    at_base = ARM.ik(np.array([0.0, 0.05, 0.12]))
+    with pytest.raises(UnsafeTrajectory) as refused:
+        station.check_body(_standing(at_base))
+    assert refused.value.part == "gripper point"
+    with pytest.raises(UnsafeTrajectory) as refused:
+        station.check_body(_standing(PALM_INTO_THE_BOARD_Q))
+    assert refused.value.part == "palm"
