@@ -46,13 +46,10 @@ def _pose(rng, model, near_limits: bool) -> np.ndarray:
 
 def _safe_pose(station, rng, near_limits: bool) -> np.ndarray:
     """A random pose that passes the station's check (limits, board, box, the arm against itself)."""
-    from armlab.devices.arm import JointTrajectory
-
     while True:
         q = _pose(rng, station.model, near_limits)
         try:
-            station.check_motion(JointTrajectory(np.array([0.0, 0.01]), np.vstack([q, q])))
-            return q
+            return station.check_pose(q)
         except ValueError:
             continue
 

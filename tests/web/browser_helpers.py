@@ -23,6 +23,18 @@ def open_page(browser, url: str):
     return page
 
 
+def page_with_the_arm_at(browser, server, q_rad, ready_js: str):
+    """The operator's page, opened once the idle arm stands at q_rad and showing frames, when ready_js holds (its
+    controls enabled); the caller closes it."""
+    ready_idle(server)
+    server.post("/api/arm/joints?wait=true", {"q_rad": list(q_rad), "moving_time_s": 1.0})
+    ready_idle(server)
+    page = open_page(browser, f"{server.base_url}/?token={server.token}")
+    wait_frames(page, 2)
+    page.wait_for_function(ready_js, timeout=15_000)
+    return page
+
+
 def wait_frames(page, at_least: int, timeout_s: float = 30.0) -> int:
     """Wait until the canvas has drawn at least `at_least` frames; returns the count."""
     page.wait_for_function(

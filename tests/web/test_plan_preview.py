@@ -11,7 +11,7 @@ import time
 import numpy as np
 import pytest
 
-from browser_helpers import open_page, ready_idle, wait_frames
+from browser_helpers import page_with_the_arm_at, ready_idle
 
 pytestmark = pytest.mark.browser
 
@@ -21,12 +21,7 @@ TARGET_MM = (230.0, 60.0, 90.0)
 
 @pytest.fixture
 def page(browser, server):
-    ready_idle(server)
-    server.post("/api/arm/joints?wait=true", {"q_rad": START_RAD, "moving_time_s": 1.0})
-    ready_idle(server)
-    page = open_page(browser, f"{server.base_url}/?token={server.token}")
-    wait_frames(page, 2)
-    page.wait_for_function("!document.getElementById('btn-target-plan').disabled", timeout=15_000)
+    page = page_with_the_arm_at(browser, server, START_RAD, "!document.getElementById('btn-target-plan').disabled")
     yield page
     page.close()
 

@@ -122,6 +122,7 @@ export class View3D {
     this.removeArm(this.planShown.goal);
     this.scene.remove(this.planShown.path);
     this.planShown.path.geometry.dispose();
+    this.planShown.path.material.dispose();
     this.planShown = null;
     this.invalidate();
   }
