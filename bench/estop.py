@@ -138,6 +138,22 @@ def load_idle(rig: Rig):
     return lambda: None
 
 
+def moving_presses(rig: Rig, trials: int) -> tuple[list[float], list[float], list[float]]:
+    """`trials` e-stop presses (Station.estop(), not over HTTP), each while the arm moves (load_idle) at a random
+    moment: (answers, halts on the wall clock, halts on the simulation's clock), ms each."""
+    answers, halts, halts_sim = [], [], []
+    for _ in range(trials):
+        rig.idle()
+        stop = load_idle(rig)
+        time.sleep(random.uniform(0.2, 0.6))
+        answer_ms, halt_ms, halt_sim_ms = rig.press(over_http=False)
+        stop()
+        answers.append(answer_ms)
+        halts.append(halt_ms)
+        halts_sim.append(halt_sim_ms)
+    return answers, halts, halts_sim
+
+
 def load_scene_change(rig: Rig):
     from armlab.scene import Scene, SceneObject
 

@@ -19,7 +19,6 @@ import argparse
 import json
 import math
 import os
-import random
 import subprocess
 import sys
 import tempfile
@@ -126,7 +125,7 @@ def free_port() -> int:
 
 def estop_latency(trials: int, with_live: bool, camera_fps: float) -> tuple[list[float], list[float], list[float], int]:
     """(answers, halts (wall), halts on the simulation's clock (request to the control tick that applied it), messages)."""
-    from estop import load_idle
+    from estop import moving_presses
 
     answers, halts, halts_sim, messages = [], [], [], 0
     with tempfile.TemporaryDirectory(prefix="armlab-bench-fox-") as tmp:
@@ -138,15 +137,7 @@ def estop_latency(trials: int, with_live: bool, camera_fps: float) -> tuple[list
                 server.attach(rig.station)
                 client = start_client(server.url, 3600)
                 wait_subscribed(server)
-            for _ in range(trials):
-                rig.idle()
-                stop = load_idle(rig)
-                time.sleep(random.uniform(0.2, 0.6))
-                answer_ms, halt_ms, halt_sim_ms = rig.press(over_http=False)
-                stop()
-                answers.append(answer_ms)
-                halts.append(halt_ms)
-                halts_sim.append(halt_sim_ms)
+            answers, halts, halts_sim = moving_presses(rig, trials)
             if server is not None:
                 messages = sum(server.sampler.counts.values())
         finally:

@@ -27,7 +27,6 @@ from __future__ import annotations
 import argparse
 import math
 import os
-import random
 import statistics
 import sys
 import tempfile
@@ -260,7 +259,7 @@ def estop_latency(trials: int, record: bool, camera_fps: float, replay: list) ->
     30 fps in the same process too: the recorder's full load. Returns answers, halts (ms), colour frames recorded."""
     import contextlib
 
-    from estop import load_idle
+    from estop import moving_presses
 
     answers, halts, frames = [], [], 0
     with tempfile.TemporaryDirectory(prefix="armlab-bench-estop-") as tmp, contextlib.ExitStack() as stack:
@@ -272,14 +271,7 @@ def estop_latency(trials: int, record: bool, camera_fps: float, replay: list) ->
                 library.start(rig.station)
                 if replay:
                     full.start(stack.enter_context(ReplayStation(replay, 30.0)))
-            for _ in range(trials):
-                rig.idle()
-                stop = load_idle(rig)
-                time.sleep(random.uniform(0.2, 0.6))
-                answer_ms, halt_ms, _ = rig.press(over_http=False)
-                stop()
-                answers.append(answer_ms)
-                halts.append(halt_ms)
+            answers, halts, _ = moving_presses(rig, trials)
             if record:
                 frames = library.stop()["topics"].get("/camera/color/compressed", 0)
                 if replay:
