@@ -85,13 +85,12 @@ def first_collision(
     return None
 
 
-def lowest_corner_m(model, positions_rad: np.ndarray, corners_m: np.ndarray) -> tuple[int, float, float]:
-    """(sample, world z of the lowest of `corners_m` (K, 3) in the gripper frame, the gripper point's z at that
-    sample) over joint vectors (N, dof): how low the fingers (a box around them) come."""
+def lowest_corners_m(model, positions_rad: np.ndarray, corners_m: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """((N,) world z of the lowest of `corners_m` (K, 3) in the gripper frame, (N,) the gripper point's z) over joint
+    vectors (N, dof): how low the fingers (a box around them) come at each sample."""
     T = np.asarray(model.fk(np.asarray(positions_rad, float)), float).reshape(-1, 4, 4)
     lowest = np.einsum("nj,kj->nk", T[:, 2, :3], np.asarray(corners_m, float)) + T[:, 2, 3][:, None]
-    sample = int(np.argmin(lowest.min(axis=1)))
-    return sample, float(lowest[sample].min()), float(T[sample, 2, 3])
+    return lowest.min(axis=1), T[:, 2, 3]
 
 
 def self_collision(

@@ -10,7 +10,7 @@ import numpy as np
 
 from armlab.devices.finger_gripper import load_finger_gripper_outline
 from armlab.errors import ConfigError
-from armlab.motion.clearance import lowest_corner_m
+from armlab.motion.clearance import lowest_corners_m
 from armlab.motion.gripper_step import FingerBox
 from armlab.motion.safety import UnsafeTrajectory
 
@@ -31,13 +31,23 @@ def palm_corners_m(arm_name: str) -> np.ndarray | None:
     return corners
 
 
+# A part resting on the board sits this far into it in the simulation's contact (and a real board's give).
+RESTING_CONTACT_M = 1e-6
+
+
 def check_parts_above_board(model, positions_rad: np.ndarray, times_s: np.ndarray, parts_corners_m: dict[str, np.ndarray]) -> None:
     """UnsafeTrajectory naming the part, how deep and when, if any corner of a part (name -> (K, 3) corners in the
-    gripper frame) goes below the board (z = 0) at any sample."""
+    gripper frame) goes below the board (z = 0) at any sample. A motion that starts with a part already on or in
+    the board (an arm slumped onto it with its torque off) may leave it: it is refused only for going deeper than
+    where it starts, or for ending in the board."""
     for part, corners_m in parts_corners_m.items():
-        sample, lowest_m, gripper_z_m = lowest_corner_m(model, positions_rad, corners_m)
-        if lowest_m < -1e-6:
+        lowest_m, gripper_z_m = lowest_corners_m(model, positions_rad, corners_m)
+        floor_m = np.full(len(lowest_m), -RESTING_CONTACT_M)
+        floor_m[:-1] = min(-RESTING_CONTACT_M, float(lowest_m[0]) - RESTING_CONTACT_M)
+        below = np.flatnonzero(lowest_m < floor_m)
+        if below.size:
+            sample = int(below[np.argmin(lowest_m[below])])
             raise UnsafeTrajectory(
-                f"the {part} would go {-lowest_m * 1000:.1f} mm into the board (gripper point at z = {gripper_z_m * 1000:.1f} mm) "
-                f"at t = {times_s[sample]:.3f} s", part=part
+                f"the {part} would go {-lowest_m[sample] * 1000:.1f} mm into the board (gripper point at z = "
+                f"{gripper_z_m[sample] * 1000:.1f} mm) at t = {times_s[sample]:.3f} s", part=part
             )

@@ -160,3 +160,41 @@ def test_a_refusal_names_the_part(fast):
     with pytest.raises(UnsafeTrajectory) as refused:
         station.check_body(_standing(PALM_INTO_THE_BOARD_Q))
     assert refused.value.part == "palm"
+
+
+def _lift(q_from, q_to, samples: int = 50) -> JointTrajectory:
+    s = np.linspace(0.0, 1.0, samples)[:, None]
+    return JointTrajectory(np.linspace(0.0, 2.0, samples), (1 - s) * np.asarray(q_from) + s * np.asarray(q_to))
+
+
+def _resting_palm_q(depth_m: float) -> np.ndarray:
+    """A pose with the palm's lowest corner `depth_m` below the board (a slumped arm at rest on it), found by moving
+    the shoulder of PALM_INTO_THE_BOARD_Q until the check's own corners sit there."""
+    from armlab.motion.clearance import lowest_corners_m
+    from armlab.station.body_check import palm_corners_m
+
+    corners = palm_corners_m("rx200")
+    lo, hi = -0.6, float(PALM_INTO_THE_BOARD_Q[1])  # shoulder back (palm high) .. forward (palm 14 mm in)
+    for _ in range(60):
+        mid = 0.5 * (lo + hi)
+        q = np.array(PALM_INTO_THE_BOARD_Q, float)
+        q[1] = mid
+        lowest_m = float(lowest_corners_m(ARM, q[None], corners)[0][0])
+        lo, hi = (mid, hi) if lowest_m > -depth_m else (lo, mid)
+    return q
+
+
+def test_an_arm_resting_on_the_board_may_lift_off_it_but_not_press_deeper(fast):
+    """CI, session 6: with torque off the arm slumps until the palm rests on the board (MuJoCo's contact: a few
+    hundredths of a millimetre in); POST /api/arm/home then came back 422 "the palm would go 0.0 mm into the board
+    ... at t = 0.000 s" and the arm could never be moved again. A motion may start where the arm rests; it may
+    not go deeper than its start, nor end in the board."""
+    station, _ = fast
+    resting = _resting_palm_q(0.0003)
+    home = np.zeros(5)
+    station.check_body(_lift(resting, home))  # lifting off: allowed
+    deeper = _resting_palm_q(0.004)
+    with pytest.raises(UnsafeTrajectory, match="palm would go [34]\\.\\d mm into the board"):
+        station.check_body(_lift(resting, deeper))
+    with pytest.raises(UnsafeTrajectory, match="palm"):
+        station.check_body(_standing(resting))  # ends in the board

@@ -4,6 +4,8 @@ page's gripper readout says empty, as the simulation's truth (holding_id None) a
 
 from __future__ import annotations
 
+import time
+
 import pytest
 
 from browser_helpers import open_page, ready_idle, wait_frames
@@ -20,6 +22,11 @@ def halt_fingers_mid_stroke(server, tries: int = 3) -> dict:
         ready_idle(server)
         server.post("/api/gripper?wait=true", {"action": "release"})
         server.post("/api/gripper?wait=false", {"action": "grasp"})
+        # E-STOP once the fingers are on their way (a press right after the command could beat their first step on
+        # a quiet machine, or the closed fingers on a busy one): the truth's width leaving the open band.
+        deadline = time.monotonic() + 10.0
+        while server.get("/api/sim/truth")["gripper"]["width_m"] > OPEN_WIDTH_M - 0.010 and time.monotonic() < deadline:
+            time.sleep(0.005)
         server.post("/api/estop")
         server.wait_status(lambda s: s["state"] == "estop", 10.0, "estop")
         gripper = server.get("/api/sim/truth")["gripper"]
@@ -35,10 +42,15 @@ def test_fingers_halted_on_nothing_read_empty_in_the_page(browser, server):
         truth = halt_fingers_mid_stroke(server)
         assert truth["holding_id"] is None
         status = server.wait_status(lambda s: s["state"] == "estop" and not s["moving"], 10.0, "the e-stopped station")
-        page.wait_for_function("document.getElementById('pose-readout').textContent.includes('width')", timeout=10_000)
+        truth = server.get("/api/sim/truth")["gripper"]  # the fingers at rest (the first read may be mid-halt)
+        assert CLOSED_WIDTH_M + 0.005 < truth["width_m"] < OPEN_WIDTH_M - 0.005, truth
+        # The page shows the halted fingers (its readout follows the telemetry: wait for the newest value).
+        shown = page.wait_for_function(
+            """(width_mm) => { const m = /width ([\\d.]+) mm/.exec(document.getElementById('pose-readout').textContent);
+                              return m && Math.abs(parseFloat(m[1]) - width_mm) < 3 ? m[1] : null; }""",
+            arg=1000 * truth["width_m"], timeout=10_000)
+        assert shown.json_value()
         readout = page.text_content("#pose-readout")
-        width_mm = float(readout.split("width ")[1].split(" mm")[0])
-        assert abs(width_mm - 1000 * truth["width_m"]) < 3, (readout, truth)  # the page shows the halted fingers
         assert status["gripper"]["holding"] is False, status["gripper"]
         assert page.get_attribute("#pose-readout", "data-holding") == "false", readout
         assert "empty" in readout and "holding" not in readout, readout
