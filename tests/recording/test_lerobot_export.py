@@ -9,6 +9,8 @@ video has one frame per row, of the camera's size, each the colour frame capture
 from __future__ import annotations
 
 import json
+import os
+import threading
 import time
 
 import av
@@ -21,6 +23,7 @@ import pytest
 from armlab.cli import main as cli_main
 from armlab.recording import DamagedRecording, RecordingLibrary, iter_messages
 from armlab.recording.lerobot import CAMERA_KEY, ExportRefused, export_lerobot, export_library_recordings
+from armlab.recording.lerobot.fair_threads import realtime_thread_ids
 from armlab.station.config import RecordingConfig
 from lerobot_helpers import (
     NAMES,
@@ -298,3 +301,21 @@ def test_the_rest_route_sends_the_dataset_as_a_zip(tmp_path):
     assert refused.status_code == 422 and "no colour camera frames" in refused.json()["error"]["message"]
     assert client.get("/api/recordings/20270115T080000Z-ffffff/export").status_code == 404
     assert client.get(f"/api/recordings/{RECORDING_ID}/export", params={"format": "csv"}).status_code == 422
+
+
+@pytest.mark.skipif(not hasattr(os, "sched_getscheduler") or os.geteuid() != 0,
+                    reason="an encoder can raise a thread to real-time scheduling only with root's CAP_SYS_NICE")
+def test_encoding_leaves_no_thread_in_real_time_scheduling(tmp_path):
+    """SVT-AV1 run as root put the exporting thread and its ~40 workers into SCHED_FIFO 99, and everything they
+    started later inherited it: the suite's worker took its Playwright driver and Chromium down with it and starved
+    the machine (a CI run did not finish in 90 minutes). After an export no thread of the process is real-time, and a
+    thread started afterwards is not either."""
+    path = write_recording(tmp_path / f"{RECORDING_ID}.mcap")
+    export_lerobot([path], tmp_path / "dataset", fps=FPS)
+    assert os.sched_getscheduler(0) == os.SCHED_OTHER
+    assert realtime_thread_ids() == set()
+    policy = []
+    later = threading.Thread(target=lambda: policy.append(os.sched_getscheduler(0)))
+    later.start()
+    later.join()
+    assert policy == [os.SCHED_OTHER]

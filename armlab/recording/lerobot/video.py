@@ -17,6 +17,7 @@ import numpy as np
 
 from armlab.errors import RefusedByCheck
 from armlab.recording.lerobot.episode import ExportRefused
+from armlab.recording.lerobot.fair_threads import FairThreads
 
 CODECS = ("libsvtav1", "libx264")  # preferred first; LeRobot decodes both (torchcodec or PyAV)
 PIX_FMT = "yuv420p"
@@ -82,7 +83,8 @@ def encode(path: Path, episodes: Iterable[tuple[Sequence[bytes], np.ndarray]], f
         options["preset"] = "12"
     samples: list[np.ndarray] = []
     written = 0
-    with av.open(str(path), "w", format="mp4") as container:
+    # SVT-AV1 as root makes the feeding thread and its workers SCHED_FIFO 99 (fair_threads): undone after each call.
+    with FairThreads() as fair, av.open(str(path), "w", format="mp4") as container:
         stream = container.add_stream(codec, rate=fps, options=options)
         stream.pix_fmt, stream.width, stream.height = PIX_FMT, width, height
         for jpegs, shown in episodes:
@@ -99,6 +101,7 @@ def encode(path: Path, episodes: Iterable[tuple[Sequence[bytes], np.ndarray]], f
                 frame.pts = written
                 for packet in stream.encode(frame):
                     container.mux(packet)
+                fair.restore()
                 written += 1
                 if k in picks:
                     sampled.append(_shrunk(pixels))
