@@ -98,6 +98,11 @@ def session():
 
 
 @schema.parametrize()
+# Schemathesis's own generator now and then gives up on the programs' recursive step tree (oneOf of waypoint, wait,
+# gripper, loop and group steps, loops and groups holding steps): "InvalidSchema: Cannot generate an array with 1
+# demanded elements" (PATCH /api/programs/{id}, once in a fresh-clone run, not reproduced in 4 runs since). That case
+# runs again; any other failure (a 5xx, a schema violation, a refused call that moved the arm) fails at once.
+@pytest.mark.flaky(reruns=2, only_rerun=["InvalidSchema: Cannot generate"])
 @hypothesis.settings(deadline=None, database=None, derandomize=True, suppress_health_check=list(hypothesis.HealthCheck))
 def test_api_conforms_and_refused_calls_move_nothing(case, base_url, session):
     if _waits(case):
