@@ -29,12 +29,21 @@ def pytest_collection_modifyitems(items):
                 return  # another pytest: ids stay as it makes them (only parallel runs need them unique)
 
 
+REALTIME_POLICIES = {getattr(os, name) for name in ("SCHED_FIFO", "SCHED_RR") if hasattr(os, name)}
+STARTED_WITH_POLICY = os.sched_getscheduler(0) if hasattr(os, "sched_getscheduler") else None  # as the suite was started
+
+
 @pytest.fixture(autouse=True)
 def _the_test_process_stays_fairly_scheduled():
-    """Fail the test after which the suite's own thread is in a real-time policy (and put it back): SVT-AV1 run as
-    root once left it SCHED_FIFO 99, and the Playwright driver and Chromium it started later inherited it and starved
-    the machine for the rest of the run (armlab/recording/lerobot/fair_threads.py). One system call a test."""
+    """Fail the test after which the suite's own thread has become real-time (and put it back): SVT-AV1 run as root
+    once left it SCHED_FIFO 99, and the Playwright driver and Chromium it started later inherited it and starved the
+    machine for the rest of the run (armlab/recording/lerobot/fair_threads.py). Only a change from the policy the suite
+    was started with counts (a suite started under batch, idle or real-time scheduling runs as it was started). One
+    system call a test."""
     yield
-    if hasattr(os, "sched_getscheduler") and os.sched_getscheduler(0) != os.SCHED_OTHER:
-        os.sched_setscheduler(0, os.SCHED_OTHER, os.sched_param(0))
-        pytest.fail("this test left the test process's thread in real-time scheduling (SCHED_FIFO/RR)")
+    if STARTED_WITH_POLICY is None:
+        return
+    now = os.sched_getscheduler(0)
+    if now != STARTED_WITH_POLICY and now in REALTIME_POLICIES:
+        os.sched_setscheduler(0, STARTED_WITH_POLICY, os.sched_param(0))
+        pytest.fail("the test process's thread is in real-time scheduling (SCHED_FIFO/RR) after this test or its fixtures")
