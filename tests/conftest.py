@@ -4,6 +4,8 @@ import os
 
 import pytest
 
+from armlab.recording.lerobot.fair_threads import REALTIME_POLICIES
+
 os.environ.setdefault("MUJOCO_GL", "egl")
 # The simulation's default is config/sim.yaml's `realism` (camera: the camera shows a real L515's offset,
 # noise, holes and drifting colour; real: the arm droops too). The suite's tests assert exact perception, so they run the ideal
@@ -29,7 +31,6 @@ def pytest_collection_modifyitems(items):
                 return  # another pytest: ids stay as it makes them (only parallel runs need them unique)
 
 
-REALTIME_POLICIES = {getattr(os, name) for name in ("SCHED_FIFO", "SCHED_RR") if hasattr(os, name)}
 STARTED_WITH_POLICY = os.sched_getscheduler(0) if hasattr(os, "sched_getscheduler") else None  # as the suite was started
 
 

@@ -142,9 +142,7 @@ def check_trajectory(
     # The links' undersides (a straight link is lowest at an end); a link may rest on the board (the sleep pose lays
     # the wrist on it, 0.0 mm), not press into it.
     heights = points[:, :, 2] - radii[None, :] + np.where(radii > 0.0, LINK_REST_TOLERANCE_M, 0.0)[None, :]
-    # A link that starts lower (an arm let down limp onto the board) may move out, never further in; where it ends
-    # (a target, a waypoint: a standing pose is [q, q]) must be clear.
-    heights[:-1] -= np.where(radii > 0.0, np.minimum(heights[0] - floor_z, 0.0), 0.0)[None, :]
+    heights = excuse_a_resting_start(heights, floor_z, applies=radii > 0.0)
     heights[:, 0] = np.inf  # the first joint's origin is fixed to the base (the UR3's stands on the board at z = 0)
     sample, point = np.unravel_index(int(np.argmin(heights)), heights.shape)
     if heights[sample, point] < floor_z:
@@ -168,6 +166,15 @@ def check_trajectory(
                 f"{_point_name(arm, point, points.shape[1])} at ({where}) at t = {times[sample]:.3f} s leaves the workspace box "
                 f"{np.round(low * 1000).astype(int).tolist()}..{np.round(high * 1000).astype(int).tolist()} mm"
             )
+
+
+def excuse_a_resting_start(heights_m: np.ndarray, floor_m: float, applies=True) -> np.ndarray:
+    """Heights (N, ...) of a part per sample of a motion, every sample but the last raised by how far below floor_m
+    the first one is (where `applies`): a part that starts on or in the board (an arm let down limp onto it) may move
+    out, never further in; where the motion ends (a target, a waypoint: a standing pose is [q, q]) must be clear."""
+    heights = np.array(heights_m, dtype=float)
+    heights[:-1] -= np.where(applies, np.minimum(heights[0] - floor_m, 0.0), 0.0)
+    return heights
 
 
 LINK_REST_TOLERANCE_M = 0.0005  # how far a link's underside may read below the board and still rest on it

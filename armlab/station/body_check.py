@@ -12,7 +12,7 @@ from armlab.devices.finger_gripper import load_finger_gripper_outline
 from armlab.errors import ConfigError
 from armlab.motion.clearance import lowest_corners_m
 from armlab.motion.gripper_step import FingerBox
-from armlab.motion.safety import UnsafeTrajectory
+from armlab.motion.safety import UnsafeTrajectory, excuse_a_resting_start
 
 
 @lru_cache(maxsize=8)
@@ -39,12 +39,10 @@ def check_parts_above_board(model, positions_rad: np.ndarray, times_s: np.ndarra
     """UnsafeTrajectory naming the part, how deep and when, if any corner of a part (name -> (K, 3) corners in the
     gripper frame) goes below the board (z = 0) at any sample. A motion that starts with a part already on or in
     the board (an arm slumped onto it with its torque off) may leave it: it is refused only for going deeper than
-    where it starts, or for ending in the board."""
+    where it starts, or for ending in the board (the rule the links' check keeps: excuse_a_resting_start)."""
     for part, corners_m in parts_corners_m.items():
         lowest_m, gripper_z_m = lowest_corners_m(model, positions_rad, corners_m)
-        floor_m = np.full(len(lowest_m), -RESTING_CONTACT_M)
-        floor_m[:-1] = min(-RESTING_CONTACT_M, float(lowest_m[0]) - RESTING_CONTACT_M)
-        below = np.flatnonzero(lowest_m < floor_m)
+        below = np.flatnonzero(excuse_a_resting_start(lowest_m + RESTING_CONTACT_M, 0.0) < 0.0)
         if below.size:
             sample = int(below[np.argmin(lowest_m[below])])
             raise UnsafeTrajectory(

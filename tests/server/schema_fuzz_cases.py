@@ -64,10 +64,6 @@ def _load_schema():
         deterministic=True,  # a fixed seed: the same cases on every run
         with_security_parameters=False,  # the token is sent by the test, not fuzzed (401 is tested elsewhere)
     )
-    # The same cases on every run: no steering by the server's answers (error feedback, values taken from responses).
-    loaded.config.phases.fuzzing.error_feedback.is_enabled = False
-    for phase in (loaded.config.phases.fuzzing, loaded.config.phases.examples, loaded.config.phases.coverage):
-        phase.extra_data_sources.responses = False
     return loaded
 
 
