@@ -277,6 +277,12 @@ class MotionGate:
             return measured
         return held.copy()
 
+    def commanded_motion_running(self) -> bool:
+        """Whether the last trajectory sent has yet to reach its end on the station's clock (a motion sent but not yet
+        taken by the arm counts; one that ended counts no more, though a handover still holds its last sample period)."""
+        running = self._commanded  # one attribute read: atomic
+        return running is not None and self.clock_s() - running[1] < running[0].duration_s
+
     def motion_handover(self, lead_s: float | None = None) -> Handover | None:
         """Where a motion replacing the commanded one takes over (lead_s, default handover_lead_s, from now),
         or None when no commanded motion is running (plan from the measured joints, at rest)."""

@@ -94,7 +94,7 @@ class PlannedMoves:
         if pose is not None:
             q_goal_rad = self.solve_pose(*pose)
         self.checked_joints(q_goal_rad)
-        if self.arm.is_moving() or self.motion_handover() is not None:
+        if self.arm.is_moving() or self.commanded_motion_running():
             state = self.state
             raise ArmMoving(command, state.value, allowed_commands(state),
                             "a plan starts from the arm at rest: plan again once it has stopped")
