@@ -47,7 +47,7 @@ class ApiError(Exception):
 
 
 def error_response(status_code: int, code: str, message: str, allowed: list[str] | None = None, headers=None,
-                   **named: str | None) -> JSONResponse:
+                   **named: str | list[float] | None) -> JSONResponse:
     body: dict = {"code": code, "message": message}
     if allowed is not None:
         body["allowed"] = allowed
@@ -168,8 +168,9 @@ def install_error_handlers(app: FastAPI) -> None:
             return error_response(500, code, f"internal error ({type(error).__name__}); the server log has the traceback")
         allowed = error.allowed if isinstance(error, CommandRefused) else None
         reason = error.reason if isinstance(error, PlanStale) else None
-        part = getattr(error, "part", None) if isinstance(error, UnsafeTrajectory) else None
-        return error_response(status_code, code, str(error), allowed, reason=reason, part=part)
+        unsafe = error if isinstance(error, UnsafeTrajectory) else None
+        return error_response(status_code, code, str(error), allowed, reason=reason, part=getattr(unsafe, "part", None),
+                              at_q_rad=getattr(unsafe, "at_q_rad", None))
 
     # Registered per base class so they are handled inside the app (a bare Exception handler runs in
     # Starlette's outermost middleware, which logs and re-raises).

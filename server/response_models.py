@@ -14,7 +14,9 @@ class ErrorBody(Wire):
     message: str
     allowed: list[str] | None = None
     reason: str | None = Field(None, description="why a plan is stale (stale_plan): executed, expired, arm_moved, arm_commanded, ...")
-    part: str | None = Field(None, description="the joint or part of the arm a refused motion names (unsafe)")
+    part: str | None = Field(None, description="the joint or part of the arm a refused motion names (unsafe); "
+                             "GET /api/view3d/scene's arm.part_links names its links")
+    at_q_rad: list[float] | None = Field(None, description="the joints (rad) at the refused motion's first offending sample (unsafe)")
 
 
 class ErrorResponse(Wire):

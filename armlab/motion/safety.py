@@ -23,12 +23,14 @@ POSITION_TOL_RAD = 1e-9
 
 
 class UnsafeTrajectory(PlanRefused):
-    """A trajectory violates a joint limit or goes below the board; the message names joint/point and time, and
-    `part` the joint or part of the arm alone (None when the check names none)."""
+    """A trajectory violates a joint limit or goes below the board; the message names joint/point and time,
+    `part` the joint or part of the arm alone (None when the check names none) and `at_q_rad` the joints at the
+    offending sample (None when the check has none), so a 3-D view can draw the arm there with the part in red."""
 
-    def __init__(self, message: str, part: str | None = None) -> None:
+    def __init__(self, message: str, part: str | None = None, at_q_rad=None) -> None:
         super().__init__(message)
         self.part = part
+        self.at_q_rad = None if at_q_rad is None else [float(v) for v in np.asarray(at_q_rad, dtype=float).ravel()]
 
 
 def _joint_name(arm, index: int) -> str:
@@ -103,7 +105,7 @@ def check_trajectory(
         sample, joint = (int(v) for v in bad[0])
         raise UnsafeTrajectory(
             f"{_joint_name(arm, joint)} = {positions[sample, joint]:.4f} rad at t = {times[sample]:.3f} s is outside "
-            f"its limits [{lower[joint]:.4f}, {upper[joint]:.4f}]", part=_joint_name(arm, joint)
+            f"its limits [{lower[joint]:.4f}, {upper[joint]:.4f}]", part=_joint_name(arm, joint), at_q_rad=positions[sample]
         )
 
     if max_step_rad is not None and positions.shape[0] > 1:
@@ -154,7 +156,7 @@ def check_trajectory(
         raise UnsafeTrajectory(
             f"{what} at z = {heights[first, point] * 1000:.1f} mm at "
             f"t = {times[first]:.3f} s is below the board surface + clearance ({floor_z * 1000:.1f} mm)",
-            part=_point_name(arm, point, heights.shape[1]),
+            part=_point_name(arm, point, heights.shape[1]), at_q_rad=positions[first],
         )
     if workspace_m is not None:
         low, high = (np.asarray(corner, dtype=float) for corner in workspace_m)

@@ -124,6 +124,20 @@ def _cylinder(chain: _Chain, link: str, start, end, radius: float, material: str
     chain.visual(link, transform(0.5 * (start + end), R), f'<cylinder radius="{radius:.9g}" length="{length:.9g}"/>', material)
 
 
+def part_links(config: ArmConfig) -> dict[str, list[str]]:
+    """The URDF links (arm_urdf's names) of every part a refused motion can name (UnsafeTrajectory.part): a joint
+    (at its limit, too fast) its moving link; a joint's origin (the link around it in the board check) the links
+    that meet there; the gripper's parts the fingers (or the suction cup's tool link) and the link carrying them."""
+    names = list(config.joint_names)
+    carrier = f"{names[-1]}_link"
+    tool = [f"{joint}_link" for joint in FINGER_JOINTS] if config.gripper is not None else [TOOL_LINK]
+    links = {name: [f"{name}_link"] for name in names}
+    for i, name in enumerate(names):
+        links[f"{name} origin"] = [f"{names[i - 1]}_link" if i else "base", f"{name}_link"]
+    links |= {"gripper point": [carrier, *tool], "finger tips": tool, "fingers": tool, "held block": tool, "palm": [carrier]}
+    return links
+
+
 def arm_urdf(config: ArmConfig, T_world_base: np.ndarray, meshes: MeshSet | None) -> str:
     """The arm's URDF (see the module doc). Link names: world, base, <joint>_link per joint, tool_point."""
     chain = _Chain()

@@ -47,5 +47,6 @@ def check_parts_above_board(model, positions_rad: np.ndarray, times_s: np.ndarra
             sample = int(below[np.argmin(lowest_m[below])])
             raise UnsafeTrajectory(
                 f"the {part} would go {-lowest_m[sample] * 1000:.1f} mm into the board (gripper point at z = "
-                f"{gripper_z_m[sample] * 1000:.1f} mm) at t = {times_s[sample]:.3f} s", part=part
+                f"{gripper_z_m[sample] * 1000:.1f} mm) at t = {times_s[sample]:.3f} s", part=part,
+                at_q_rad=positions_rad[sample],
             )

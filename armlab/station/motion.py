@@ -157,7 +157,8 @@ class MotionGate:
                              held_edge_m=held_edge_m)
         if hit is not None:
             sample, part, what = hit
-            raise UnsafeTrajectory(f"{what} at t = {times[sample]:.3f} s: the arm would hit itself", part=part)
+            raise UnsafeTrajectory(f"{what} at t = {times[sample]:.3f} s: the arm would hit itself", part=part,
+                                   at_q_rad=positions[sample])
 
     def palm_corners_m(self) -> np.ndarray | None:
         """(8, 3) corners of a finger gripper's palm in the gripper frame; None for a suction cup."""

@@ -10,7 +10,7 @@ from fastapi import APIRouter, Query
 from fastapi.responses import Response
 
 from armlab.station.arm_info import station_workcell_name
-from armlab.station.arm_urdf import FINGER_JOINTS, TOOL_LINK, MeshSet, arm_urdf
+from armlab.station.arm_urdf import FINGER_JOINTS, TOOL_LINK, MeshSet, arm_urdf, part_links
 from armlab.tasks.judge import GRIPPER_BOX_M
 from armlab.vision.pixel_world import depth_point_cloud
 from armlab.workcell import load_workcell
@@ -38,7 +38,8 @@ def get_arm_urdf(station: StationDep) -> Response:
 def get_scene(station: StationDep) -> dict:
     """Everything the 3-D panel draws that does not move: the arm (its URDF inline, the joints telemetry's
     joints_rad sets, the tool link, the finger joints with the pad thickness that turns the gripper's
-    width_m into each finger's offset, the meshes' source and licence; None without an arm) and the
+    width_m into each finger's offset, the meshes' source and licence, part_links: the links of each part a refused
+    motion's error names, to draw in red; None without an arm) and the
     workcell (as the websocket hello's, with pick_stack's gripper box: the judge's box the gripper point must
     stay inside, min_m / max_m corners)."""
     box = GRIPPER_BOX_M
@@ -54,6 +55,7 @@ def get_scene(station: StationDep) -> dict:
         "urdf": urdf,
         "joint_names": list(station.model.joint_names),
         "tool_link": TOOL_LINK,
+        "part_links": part_links(config),
         "fingers": {"joints": list(FINGER_JOINTS), "pad_thickness_m": gripper.pad_thickness_m} if gripper else None,
         "meshes": {"source": meshes.source, "licence": meshes.licence} if meshes else None,
         "mesh_urls": sorted({meshes.url + visual["file"] for visual in meshes.visuals}) if meshes else [],

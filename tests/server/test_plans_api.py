@@ -22,6 +22,7 @@ PAD = {**AUTH, "X-Armlab-Controller": "pad"}
 OTHER = {**AUTH, "X-Armlab-Controller": "other"}
 START_RAD = [0.3, 0.0, 0.3, 0.9, 0.0]
 ARM = load_arm("rx200")
+GRIPPER_GEOMS = {"fingers": {"left_finger_link", "right_finger_link", "left_pad", "right_pad"}, "palm": {"palm"}}
 
 cell, url = live.module_fixtures(seed=29, token=TOKEN)
 
@@ -231,6 +232,13 @@ def test_a_plan_into_the_board_is_refused_naming_the_part(http, cell):
     refused = http.post("/api/arm/joints", json={"q_rad": [float(v) for v in low]}, params={"plan_only": "true"}, headers=PAD)
     body = _error(refused, 422, "unsafe")
     assert "board" in body["message"] and body["part"] in ("fingers", "palm"), body
+    # Where it happens, to draw: the simulation's truth puts that part of the gripper into the board at at_q_rad,
+    # and the 3-D scene names the part's links, links of the arm's URDF.
+    assert len(body["at_q_rad"]) == 5 and cell.contact_depth_at_mm(body["at_q_rad"], GRIPPER_GEOMS[body["part"]]) > 0.5, body
+    scene = http.get("/api/view3d/scene").json()["arm"]
+    links = scene["part_links"][body["part"]]
+    assert links and all(f'<link name="{link}">' in scene["urdf"] for link in links), links
+    assert set(links) <= {"left_finger_link", "right_finger_link", "wrist_rotate_link"}, links
     below = http.post("/api/arm/pose", json={"position_m": [0.25, 0.0, -0.05]}, params={"plan_only": "true"}, headers=PAD)
     assert "below the table" in _error(below, 422, "unreachable")["message"]
     limit = http.post("/api/arm/joints", json={"q_rad": [0.0, 3.0, 0.0, 0.0, 0.0]}, params={"plan_only": "true"}, headers=PAD)

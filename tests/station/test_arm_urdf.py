@@ -11,7 +11,7 @@ import xml.etree.ElementTree as ET
 import numpy as np
 import pytest
 
-from armlab.station.arm_urdf import TOOL_LINK, MeshSet, arm_urdf, matrix_from_rpy, transform
+from armlab.station.arm_urdf import TOOL_LINK, MeshSet, arm_urdf, matrix_from_rpy, part_links, transform
 from armlab.workcell import load_workcell_arm
 
 REPO_WEB = __import__("pathlib").Path(__file__).resolve().parents[2] / "web"
@@ -83,3 +83,23 @@ def test_the_fingers_slide_by_the_finger_offset():
     opened = urdf_link_poses(urdf, q | {"left_finger": 0.037, "right_finger": 0.037})
     span = lambda p: np.linalg.norm(p["left_finger_link"][:3, 3] - p["right_finger_link"][:3, 3])  # noqa: E731
     assert span(closed) == pytest.approx(0.030, abs=1e-9) and span(opened) == pytest.approx(0.074, abs=1e-9)
+
+
+@pytest.mark.parametrize("workcell", ["rx200_armlab", "ur3_suction"])
+@pytest.mark.parametrize("with_meshes", [True, False])
+def test_every_part_a_refusal_names_is_drawn_by_links_of_the_urdf(workcell, with_meshes):
+    """A refused plan's part (UnsafeTrajectory.part: a joint, a joint's origin, the gripper's parts) is shown red
+    in the 3-D panel through part_links: each names links of this URDF that carry something to draw, and the
+    gripper's parts name the links that carry the fingers or the cup."""
+    model = load_workcell_arm(workcell)
+    urdf = arm_urdf(model.config, np.asarray(model.T_world_base), MeshSet.load(model.name) if with_meshes else None)
+    drawn = {link.get("name") for link in ET.fromstring(urdf).iter("link") if link.find("visual") is not None}
+    links = part_links(model.config)
+    names = list(model.joint_names)
+    parts = names + [f"{name} origin" for name in names] + ["gripper point", "finger tips", "fingers", "palm", "held block"]
+    assert set(parts) <= set(links)
+    for part in parts:
+        assert links[part] and set(links[part]) <= drawn, (part, links[part], drawn)
+    tool = {"left_finger_link", "right_finger_link"} if model.config.gripper is not None else {TOOL_LINK}
+    assert set(links["fingers"]) == tool and tool <= set(links["gripper point"])
+    assert links[names[1]] == [f"{names[1]}_link"]  # a joint at its limit: the link it turns

@@ -1,8 +1,9 @@
 """Plan, then execute from the page (issue 22 item 2): a typed target's Plan asks the station for the plan without
 moving (?plan_only=true), draws the see-through goal arm and the gripper's path in the 3-D panel, and waits; the arm
 does not move (ground truth over sim time); Execute runs that plan to the goal (ground truth); Discard drops it
-(the station no longer has it); a plan into the board is refused with the station's reason in place, and a plan gone
-stale because the arm moved is refused at Execute with its reason. Real server, real Chromium."""
+(the station no longer has it); a plan into the board is refused with the station's reason in place, the arm drawn
+where it would fail with the offending part's links in red, and a plan gone stale because the arm moved is refused at
+Execute with its reason. Real server, real Chromium."""
 
 from __future__ import annotations
 
@@ -127,3 +128,36 @@ def test_a_plan_into_the_board_is_refused_with_the_reason_and_nothing_moves(page
     assert "no plan" in text and ("below the table" in text or "board" in text), text
     assert page.is_hidden("#plan-box")
     assert np.abs(_truth(server)[0] - q0).max() < 2e-3
+
+
+RED_LINKS_JS = """(() => { const r = armlab.view3d?.refusalShown; if (!r || !r.figure.loaded) return null;
+    const rgb = (mesh) => [mesh.material.color.r, mesh.material.color.g, mesh.material.color.b, mesh.material.opacity];
+    const names = armlab.view3d.armDescription.joint_names;
+    return { part: r.part, links: r.links, joints: names.map((n) => r.figure.robot.joints[n].angle),
+             offending: r.links.flatMap((l) => r.figure.linkMeshes(l).map(rgb)),
+             others: Object.keys(r.figure.robot.links).filter((l) => !r.links.includes(l))
+                       .flatMap((l) => r.figure.linkMeshes(l).map(rgb)) }; })()"""
+
+
+def test_a_plan_into_the_board_draws_the_offending_part_in_red_and_moves_nothing(page, server):
+    """Fingers 4 mm above the board: the IK reaches it, the body check refuses it; the page draws the arm at the
+    joints the station names (the same answer over REST) with the part's links red, the rest see-through grey."""
+    q0, _, _ = _truth(server)
+    _plan_pose(page, 250, 0, 4)
+    text = _result(page, "refused")
+    assert "board" in text and "in red in the 3-D view" in text, text
+    page.wait_for_function(f"({RED_LINKS_JS}) !== null", timeout=60_000)
+    shown = page.evaluate(RED_LINKS_JS)
+    answer = server.request("POST", "/api/arm/pose?plan_only=true", json={"position_m": [0.25, 0.0, 0.004], "pitch_rad": 1.5707963})
+    error = answer.json()["error"]
+    assert answer.status_code == 422 and error["part"] == shown["part"] in ("fingers", "palm"), error
+    assert np.abs(np.asarray(shown["joints"]) - np.asarray(error["at_q_rad"])).max() < 1e-6
+    red = lambda r, g, b: r > 0.5 and g < 0.15 and b < 0.15  # noqa: E731 - three.js keeps colours in linear RGB
+    assert shown["offending"] and all(red(r, g, b) and a == 1.0 for r, g, b, a in shown["offending"]), shown
+    assert shown["others"] and all(not red(r, g, b) and a < 1.0 for r, g, b, a in shown["others"]), shown
+    assert np.abs(_truth(server)[0] - q0).max() < 2e-3  # nothing moved
+    _plan_pose(page, *TARGET_MM)  # a plan that goes: the red arm gives way to the goal arm
+    _shown_plan(page)
+    assert page.evaluate("armlab.view3d.refusalShown") is None
+    page.click("#btn-plan-discard")
+    assert page.errors == []

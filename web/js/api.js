@@ -7,14 +7,17 @@ const TOKEN_KEY = "armlab.token";
 const CONTROLLER_KEY = "armlab.controller";
 const CONTROLLER_NAME = /^[A-Za-z0-9_.:-]{1,64}$/;
 
-/** An HTTP error with the server's code and human message (see the wire protocol's error body). */
+/** An HTTP error with the server's code and human message (see the wire protocol's error body); an unsafe
+ * motion's refusal also names the part (`part`) and the joints where it happens (`atQRad`, or null). */
 export class ApiError extends Error {
-  constructor(status, code, message, allowed) {
+  constructor(status, code, message, allowed, { part = null, atQRad = null } = {}) {
     super(message);
     this.name = "ApiError";
     this.status = status;
     this.code = code;
     this.allowed = allowed || [];
+    this.part = typeof part === "string" ? part : null;
+    this.atQRad = Array.isArray(atQRad) && atQRad.every(Number.isFinite) ? atQRad : null;
   }
 }
 
@@ -64,7 +67,8 @@ async function toApiError(response) {
     message = err.detail.map((d) => `${(d.loc || []).join(".")}: ${d.msg}`).join("; ");
   }
   if (!message) message = `${response.status} ${response.statusText}`;
-  return new ApiError(response.status, err.code || String(response.status), message, err.allowed);
+  return new ApiError(response.status, err.code || String(response.status), message, err.allowed,
+    { part: err.part, atQRad: err.at_q_rad });
 }
 
 /** Forget a token the server refused, so a reload does not reuse it. */

@@ -1,7 +1,8 @@
 // Plan, then execute (issue 22): a typed target planned without moving (?plan_only=true: the station's own checks
 // and timing), shown as a see-through goal arm and the gripper's path in the 3-D panel. Execute sends exactly that
 // plan (POST /api/plans/{id}/execute); Discard drops it (DELETE). A refused plan, or one gone stale because the arm
-// or the scene changed under it, shows the station's reason in place, and nothing moves.
+// or the scene changed under it, shows the station's reason in place, and nothing moves; a plan refused as unsafe
+// draws the arm where it would fail with the offending link or finger in red.
 
 const $ = (id) => document.getElementById(id);
 
@@ -23,11 +24,17 @@ export class PlanPreview {
   /** Plan `body` on `path` (a move route) without moving; the plan is drawn and waits for Execute. */
   async make(action, path, body) {
     await this.discard(true);
+    this.view3d()?.clearPlan(); // a refusal drawn before
     let plan;
     try {
       plan = await this.api.request("POST", `${path}?plan_only=true`, body);
     } catch (e) {
-      this.show("refused", `${action}: no plan: ${e.message}`);
+      const drawn = e.part && e.atQRad ? " (in red in the 3-D view)" : "";
+      this.show("refused", `${action}: no plan: ${e.message}${drawn}`);
+      if (drawn) {
+        const view = await this.openView3d();
+        if (view && !this.plan) view.showRefusal({ part: e.part, atQRad: e.atQRad });
+      }
       return null;
     }
     this.plan = plan;

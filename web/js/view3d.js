@@ -20,6 +20,7 @@ import {
 
 const TRUTH_POLL_MS = 500;
 const POINTS_POLL_MS = 1000;
+const REFUSED_COLOR = 0xe53935; // the part of the arm a refused plan would crash
 
 export class View3D {
   /** root: the panel element (holds a .view3d-canvas-wrap and the controls); serverNowS: the server clock. */
@@ -40,6 +41,7 @@ export class View3D {
     this.stats = { frames: 0, armFirstFrameMs: null, telemetryDelayMs: [], arrivalDelayMs: [], renderMs: [] };
     this.lastDrawn = null; // {time_s, joints_rad, tool_m} of the telemetry in the last frame
     this.planShown = null; // {id, goal: ArmFigure, path: THREE.Line} of the plan drawn (showPlan)
+    this.refusalShown = null; // {part, links, atQRad, figure: ArmFigure} of a refused plan drawn (showRefusal)
   }
 
   async start() {
@@ -92,8 +94,8 @@ export class View3D {
 
   /** Another arm from the same URDF (a goal arm, a plan's waypoint): see-through, in its own colour, sharing the
    * measured arm's parsed meshes; pose it with figure.setJoints(q) then invalidate(); removeArm(figure) drops it. */
-  addArm({ opacity = 0.35, color = 0xff9800 } = {}) {
-    const figure = new ArmFigure(this.armDescription, { opacity, color, onLoad: () => this.invalidate() });
+  addArm({ opacity = 0.35, color = 0xff9800, highlight = null } = {}) {
+    const figure = new ArmFigure(this.armDescription, { opacity, color, highlight, onLoad: () => this.invalidate() });
     this.scene.add(figure.robot);
     return figure;
   }
@@ -117,7 +119,23 @@ export class View3D {
     this.invalidate();
   }
 
+  /** A plan refused as unsafe: the arm, see-through, at the joints where it would fail (atQRad), the part's links
+   * (the server's part_links: a link, the fingers, the palm) in red; replaces any plan or refusal shown. */
+  showRefusal({ part, atQRad }) {
+    this.clearPlan();
+    const links = this.armDescription?.part_links?.[part];
+    if (!links || !Array.isArray(atQRad)) return;
+    const figure = this.addArm({ opacity: 0.3, color: 0x9e9e9e, highlight: { links, color: REFUSED_COLOR } });
+    figure.setJoints(atQRad, null);
+    this.refusalShown = { part, links, atQRad, figure };
+    this.invalidate();
+  }
+
   clearPlan() {
+    if (this.refusalShown) {
+      this.removeArm(this.refusalShown.figure);
+      this.refusalShown = null;
+    }
     if (!this.planShown) return;
     this.removeArm(this.planShown.goal);
     this.scene.remove(this.planShown.path);

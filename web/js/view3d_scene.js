@@ -23,11 +23,13 @@ function stlGeometry(url, buffers) {
 
 /** One arm drawn from the server's URDF: the measured arm now, a goal arm later (a second instance, ghosted). */
 export class ArmFigure {
-  constructor(arm, { opacity = 1.0, color = null, onLoad = null, meshBuffers = null } = {}) {
+  /** highlight: {links, color}: those links (their own visuals, not the links after them) drawn opaque in color. */
+  constructor(arm, { opacity = 1.0, color = null, onLoad = null, meshBuffers = null, highlight = null } = {}) {
     this.arm = arm;
     const manager = new THREE.LoadingManager();
     manager.onLoad = () => {
       this.styleMaterials(opacity, color);
+      if (highlight) for (const link of highlight.links) this.paintLink(link, highlight.color);
       this.loaded = true;
       onLoad?.(this);
     };
@@ -57,6 +59,32 @@ export class ArmFigure {
       material.depthWrite = opacity >= 1.0;
       node.material = material;
     });
+  }
+
+  /** The meshes of one link, not those of the links after it (a child joint ends the walk). */
+  linkMeshes(name) {
+    const meshes = [];
+    const walk = (node) => {
+      for (const child of node.children) {
+        if (child.isURDFJoint) continue;
+        if (child.isMesh) meshes.push(child);
+        walk(child);
+      }
+    };
+    const link = this.robot.links[name];
+    if (link) walk(link);
+    return meshes;
+  }
+
+  paintLink(name, color) {
+    for (const mesh of this.linkMeshes(name)) {
+      const material = mesh.material.clone();
+      material.color = new THREE.Color(color);
+      material.transparent = false;
+      material.opacity = 1.0;
+      material.depthWrite = true;
+      mesh.material = material;
+    }
   }
 
   /** Joint angles (radians, the arm's joint order) and, for fingers, the gripper's pad span width_m. */

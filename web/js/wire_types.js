@@ -280,7 +280,8 @@ export const EVENT_KINDS = Object.freeze(["general", "scene"]);
  * @property {string} message
  * @property {(Array<string>|null)} [allowed]
  * @property {(string|null)} [reason] why a plan is stale (stale_plan): executed, expired, arm_moved, arm_commanded, ...
- * @property {(string|null)} [part] the joint or part of the arm a refused motion names (unsafe)
+ * @property {(string|null)} [part] the joint or part of the arm a refused motion names (unsafe); GET /api/view3d/scene's arm.part_links names its links
+ * @property {(Array<number>|null)} [at_q_rad] the joints (rad) at the refused motion's first offending sample (unsafe)
  */
 
 /**
