@@ -15,9 +15,11 @@ class MovePlan(Wire):
     is stale (stale_when)."""
 
     plan_id: str = Field(description="the plan's id, for POST /api/plans/{plan_id}/execute and DELETE /api/plans/{plan_id}")
-    command: str = Field(description="the station command it executes as (move_joints, move_to)")
+    command: str = Field(description="the station command it executes as (move_joints, move_to, home, sleep; grab, drop: "
+                         "a job of several motions and gripper steps)")
     controller: str | None = Field(description="the controller that made it: only it may execute it")
-    goal_q_rad: list[float] = Field(description="the goal joints, radians, joint_names order")
+    goal_q_rad: list[float] = Field(description="the goal joints, radians, joint_names order (grab, drop: where the gripper "
+                                    "grasps or releases)")
     duration_s: float = Field(description="the trajectory's duration at the speed override it was planned at")
     times_s: list[float] = Field(description="sample times of the trajectory (decimated for showing; first and last kept)")
     q_rad: list[list[float]] = Field(description="the joints at times_s, radians")
@@ -27,6 +29,8 @@ class MovePlan(Wire):
     created_s: float = Field(description="when it was made (Unix seconds)")
     expires_s: float = Field(description="when it expires (Unix seconds)")
     stale_when: list[str] = Field(description="what makes the station refuse it")
+    steps: list[str] = Field(default_factory=list, description="grab, drop: the job's steps in order (motions and gripper "
+                             "actions; the trajectory joins the motions); empty for a single move")
 
 
 class PlanDiscarded(Wire):

@@ -99,10 +99,12 @@ def with_advice(what: str, point_m, call, base_xy_m=None):
         raise better from error
 
 
-def grab(station: Station, position_m=None, pixel=None, source: str | None = None, check_only: bool = False) -> Job | str:
+def grab(station: Station, position_m=None, pixel=None, source: str | None = None, check_only: bool = False,
+         plan_only: bool = False) -> Job | str | dict:
     """Pick the detected block under the click (its centre, top and yaw), else at the clicked world point.
     check_only: plan it as the grab would and return what it would do (the page's reach state before a click);
-    the same refusals (out of reach, hidden, unsafe, untrusted), nothing moves, any state."""
+    the same refusals (out of reach, hidden, unsafe, untrusted), nothing moves, any state. plan_only: keep the
+    plan (Station.plan_steps: its wire form is returned, nothing moves); Execute runs exactly its steps."""
     if check_only:
         station.require_arm("grab")
     else:
@@ -126,8 +128,8 @@ def grab(station: Station, position_m=None, pixel=None, source: str | None = Non
     if check_only:
         return f"grab {detail}"
 
-    def run(ctx: JobContext) -> dict:
-        with_advice("grab", top, lambda: run_steps(station, ctx, steps, replan=plan))
+    def run(ctx: JobContext, replan=plan) -> dict:
+        with_advice("grab", top, lambda: run_steps(station, ctx, steps, replan=replan))
         holding = bool(station.gripper.read_state().holding)
         station.set_held_block({**(block or {}), "edge_m": edge, "yaw_rad": yaw} if holding else None)
         if not holding:
@@ -136,12 +138,24 @@ def grab(station: Station, position_m=None, pixel=None, source: str | None = Non
         ctx.job.update(message="holding the block")
         return {"target_m": [float(x) for x in top], "yaw_rad": yaw, "block": block, "holding": holding}
 
-    return station.start_job("grab", "grab", run, detail=detail, source=source)
+    return _started_or_planned(station, "grab", steps, run, detail, source, plan_only)
 
 
-def drop(station: Station, position_m=None, pixel=None, source: str | None = None, check_only: bool = False) -> Job | str:
+def _started_or_planned(station: Station, command: str, steps: list, run, detail: str, source: str | None,
+                        plan_only: bool) -> Job | dict:
+    """The skill's job started (run(ctx) may plan again if the arm moved), or with plan_only its plan kept: Execute
+    starts the job running exactly `steps` (no replanning: a plan gone stale is refused instead)."""
+    if not plan_only:
+        return station.start_job(command, command, run, detail=detail, source=source)
+    exactly = lambda ctx: run(ctx, replan=None)  # noqa: E731
+    return station.plan_steps(command, steps, lambda: station.start_job(command, command, exactly, detail=detail, source=source),
+                              source=source)
+
+
+def drop(station: Station, position_m=None, pixel=None, source: str | None = None, check_only: bool = False,
+         plan_only: bool = False) -> Job | str | dict:
     """Place the held block at the clicked spot, on whatever is there (board or the top of a stack).
-    check_only: as grab's."""
+    check_only, plan_only: as grab's."""
     if check_only:
         station.require_arm("drop")
     else:
@@ -168,12 +182,12 @@ def drop(station: Station, position_m=None, pixel=None, source: str | None = Non
     if check_only:
         return f"drop {detail}"
 
-    def run(ctx: JobContext) -> dict:
+    def run(ctx: JobContext, replan=plan) -> dict:
         if not station.gripper.read_state().holding:  # checked in the job: the page shows why it failed
             station.set_held_block(None)
             raise GripperEmpty("the gripper is empty: nothing to drop (grab a block first)")
-        with_advice("drop", surface, lambda: run_steps(station, ctx, steps, replan=plan))
+        with_advice("drop", surface, lambda: run_steps(station, ctx, steps, replan=replan))
         station.set_held_block(None)
         return {"target_m": [float(x) for x in surface], "on": on}
 
-    return station.start_job("drop", "drop", run, detail=detail, source=source)
+    return _started_or_planned(station, "drop", steps, run, detail, source, plan_only)

@@ -11,11 +11,13 @@ made (PlanNotYours), and whatever the gate refuses any motion (state, latch, lea
 from __future__ import annotations
 
 import time
+from collections.abc import Callable, Sequence
 
 import numpy as np
 
 from armlab.devices.arm import JointTrajectory
 from armlab.errors import ArmMoving, PlanNotYours, PlanStale
+from armlab.motion.pick_place import TrajectoryStep
 from armlab.motion.safety import check_start
 from armlab.station.perception import DEVICE_ERRORS
 from armlab.station.plans import PLAN_LIFETIME_S, MovePlan, new_plan_id
@@ -62,6 +64,16 @@ def _equal(old, new) -> bool:
         return False
 
 
+def joined(trajectories: Sequence[JointTrajectory]) -> JointTrajectory:
+    """Trajectories run one after another as one (each starting where the one before ends; the shared sample once)."""
+    times, positions, offset_s = [trajectories[0].times_s], [trajectories[0].positions_rad], trajectories[0].duration_s
+    for trajectory in trajectories[1:]:
+        times.append(offset_s + trajectory.times_s[1:])
+        positions.append(trajectory.positions_rad[1:])
+        offset_s += trajectory.duration_s
+    return JointTrajectory(np.concatenate(times), np.vstack(positions))
+
+
 def decimated_indices(count: int, most: int = PLAN_SHOWN_SAMPLES) -> np.ndarray:
     """At most `most` evenly spread sample indices of `count`, the first and last included."""
     if count <= most:
@@ -94,10 +106,7 @@ class PlannedMoves:
         if pose is not None:
             q_goal_rad = self.solve_pose(*pose)
         self.checked_joints(q_goal_rad)
-        if self.arm.is_moving() or self.commanded_motion_running():
-            state = self.state
-            raise ArmMoving(command, state.value, allowed_commands(state),
-                            "a plan starts from the arm at rest: plan again once it has stopped")
+        self._refuse_while_moving(command)
         world, gripper_command, speed = self._world_snapshot(), self._gripper_command(), self.speed_percent
         trajectory = self._paced(self.plan_move(q_goal_rad, moving_time_s), speed, from_rest=True)
         self.check_motion(trajectory)
@@ -105,6 +114,36 @@ class PlannedMoves:
         check_start(trajectory, measured, self.motion_config.start_tolerance_rad, self.model.joint_names)
         plan = self.plans.add(MovePlan(new_plan_id(), command, source, trajectory, measured, gripper_command, world, speed))
         return self.plan_wire(plan)
+
+    def plan_steps(self, command: str, steps: Sequence, start: Callable[[], object], source: str | None = None) -> dict:
+        """A skill's motion (grab, drop: its TrajectoryStep / GripperStep as it would run them) kept as a plan and
+        returned in its wire form; nothing moves. Each motion gets the full check the gate gives it (paced at the
+        speed override, as the job would send it). Execute calls start(): the skill's job with exactly these steps."""
+        self.require_arm(command)
+        self.allowed_or_raise(command, source)
+        self._refuse_while_moving(command)
+        world, gripper_command, speed = self._world_snapshot(), self._gripper_command(), self.speed_percent
+        shown, goal = [], None
+        for step in steps:
+            if isinstance(step, TrajectoryStep):
+                shown.append(self._paced(step.trajectory, speed, from_rest=True))
+                self.check_motion(shown[-1])
+            elif goal is None and shown:  # the gripper acts where the motion before it ends
+                goal = shown[-1].positions_rad[-1].copy()
+        if not shown:
+            raise ValueError(f"{command}: the plan has no motion")
+        measured = self.joints_rad()
+        check_start(shown[0], measured, self.motion_config.start_tolerance_rad, self.model.joint_names)
+        plan = self.plans.add(MovePlan(new_plan_id(), command, source, joined(shown), measured, gripper_command, world,
+                                       speed, start=start, goal_rad=goal, steps=tuple(step.name for step in steps)))
+        return self.plan_wire(plan)
+
+    def _refuse_while_moving(self, command: str) -> None:
+        """ArmMoving: a plan starts from the arm at rest."""
+        if self.arm.is_moving() or self.commanded_motion_running():
+            state = self.state
+            raise ArmMoving(command, state.value, allowed_commands(state),
+                            "a plan starts from the arm at rest: plan again once it has stopped")
 
     def _refuse_if_stale(self, plan: MovePlan) -> None:
         """PlanStale when the plan expired, the arm is not where it was planned from, or the gripper changed
@@ -122,9 +161,9 @@ class PlannedMoves:
             raise PlanStale("the plan is stale: the gripper was opened or closed since the plan was made; plan again",
                             "gripper_changed")
 
-    def execute_plan(self, plan_id: str, source: str | None = None) -> JointTrajectory:
+    def execute_plan(self, plan_id: str, source: str | None = None):
         """Send exactly the plan's trajectory through the gate (state, lease, latch, start at the measured joints),
-        or refuse with nothing moved. Returns what was sent."""
+        or refuse with nothing moved. Returns what was sent; a skill's plan: the job started with its steps."""
         plan = self.plans.get(plan_id)
         if plan.executed:
             raise PlanStale(f"plan {plan_id!r} was executed already: plan again to move again", "executed")
@@ -133,6 +172,8 @@ class PlannedMoves:
                                f"{source!r}: each controller executes only its own plans; plan it again")
         self.allowed_or_raise(plan.command, source)
         self._refuse_if_stale(plan)
+        if plan.start is not None:
+            return self._start_planned_job(plan)
         claimed: list[bool] = []
 
         def send_as_planned(handover) -> JointTrajectory:
@@ -159,6 +200,20 @@ class PlannedMoves:
             raise
         return trajectory
 
+    def _start_planned_job(self, plan: MovePlan):
+        """A skill's plan: refused stale as a motion's is (the world, the arm moving), else claimed and its job started."""
+        change = world_change(plan.world, self._world_snapshot())
+        if change is not None:
+            raise PlanStale(*change)
+        if self.arm.is_moving() or self.commanded_motion_running():
+            raise PlanStale("the plan is stale: the arm is moving; plan again once it has stopped", "arm_moving")
+        self.plans.claim(plan.plan_id)  # PlanStale 'executed' when another request just started it
+        try:
+            return plan.start()
+        except BaseException:
+            self.plans.unclaim(plan.plan_id)
+            raise
+
     def discard_plan(self, plan_id: str, source: str | None = None) -> MovePlan:
         """Forget a plan (Cancel): PlanNotFound if unknown, PlanNotYours if another controller made it."""
         plan = self.plans.get(plan_id)
@@ -171,7 +226,7 @@ class PlannedMoves:
         trajectory = plan.trajectory
         index = decimated_indices(len(trajectory.times_s))
         q = trajectory.positions_rad[index]
-        goal = trajectory.positions_rad[-1]
+        goal = trajectory.positions_rad[-1] if plan.goal_rad is None else plan.goal_rad
         path = np.asarray(self.model.fk(q), float)[:, :3, 3]
         base = np.asarray(self.model.T_world_base)[:3, 3]
         return {
@@ -180,5 +235,5 @@ class PlannedMoves:
             "times_s": [float(t) for t in trajectory.times_s[index]], "q_rad": q.tolist(),
             "gripper_path_m": path.tolist(), "gripper_pose": gripper_pose_from_matrix(self.model.fk(goal), base),
             "speed_percent": float(plan.speed_percent), "created_s": plan.created_s, "expires_s": plan.expires_s,
-            "stale_when": list(STALE_WHEN),
+            "stale_when": list(STALE_WHEN), "steps": list(plan.steps),
         }

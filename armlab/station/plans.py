@@ -13,6 +13,7 @@ import secrets
 import threading
 import time
 from collections import OrderedDict
+from collections.abc import Callable
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -26,7 +27,8 @@ PLAN_LIFETIME_S = 300.0  # wall seconds a plan may be executed after it was made
 
 @dataclass
 class MovePlan:
-    """One planned motion: the exact trajectory Execute sends (already paced at speed_percent)."""
+    """One planned motion: the exact trajectory Execute sends (already paced at speed_percent); or a skill's steps
+    (grab, drop), `trajectory` then their motions joined for showing and `start()` the job that runs exactly them."""
 
     plan_id: str
     command: str  # the station command it executes as (move_joints, move_to, home, sleep)
@@ -39,6 +41,9 @@ class MovePlan:
     created_s: float = field(default_factory=time.time)
     lifetime_s: float = PLAN_LIFETIME_S
     executed: bool = False
+    start: Callable[[], object] | None = None  # a skill's plan: starts its job with the planned steps (returns the Job)
+    goal_rad: np.ndarray | None = None  # where the gripper acts (a skill's grasp or release); None: the trajectory's end
+    steps: tuple[str, ...] = ()  # a skill's plan: its steps' names, in order
 
     @property
     def expires_s(self) -> float:

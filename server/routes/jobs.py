@@ -3,7 +3,7 @@ worker thread, server/waiting.py), current job, cancel."""
 
 from __future__ import annotations
 
-from fastapi import APIRouter, Request
+from fastapi import APIRouter, Query, Request
 from fastapi.responses import JSONResponse
 from starlette.concurrency import run_in_threadpool
 
@@ -11,6 +11,7 @@ from armlab import skills
 from armlab.station.jobs import Job
 from server.deps import ControlAuth, StationDep
 from server.models import JobResponse, TargetCheckResponse, TargetRequest
+from server.plan_models import MovePlan
 from server.waiting import until_job_ended
 
 router = APIRouter(prefix="/api", tags=["jobs"])
@@ -20,6 +21,11 @@ JOB_WAIT_TIMEOUT_S = 300.0
 
 # What a job-starting route documents: 202 at once, or 200 with ?wait=true once the job has ended.
 WAITED_JOB = {200: {"model": JobResponse, "description": "?wait=true: the job once it has ended (or as it stands after the wait's timeout)"}}
+# grab and drop also plan without moving: 200 with the plan.
+WAITED_JOB_OR_PLAN = {200: {"model": JobResponse | MovePlan, "description": "?wait=true: the job once it has ended (or as it "
+                            "stands after the wait's timeout); ?plan_only=true: the plan (MovePlan), nothing moves"}}
+PLAN_ONLY = Query(False, description="plan the job's motions and check them as it would, move nothing: answers the plan "
+                  "(MovePlan) with its id for POST /api/plans/{plan_id}/execute, which runs exactly those steps")
 
 
 async def job_response(request: Request, job: Job, wait: bool) -> JSONResponse:
@@ -36,18 +42,27 @@ def _target(body: TargetRequest) -> dict:
     return {"pixel": (body.u, body.v)}
 
 
-@router.post("/grab", response_model=JobResponse, status_code=202, responses=WAITED_JOB)
-async def post_grab(request: Request, body: TargetRequest, station: StationDep, controller: ControlAuth, wait: bool = False) -> JSONResponse:
+async def _job_or_plan(request: Request, started, wait: bool) -> JSONResponse:
+    """A job started (job_response), or a plan kept (200 with the plan)."""
+    if isinstance(started, Job):
+        return await job_response(request, started, wait)
+    return JSONResponse(started, status_code=200)
+
+
+@router.post("/grab", response_model=JobResponse, status_code=202, responses=WAITED_JOB_OR_PLAN)
+async def post_grab(request: Request, body: TargetRequest, station: StationDep, controller: ControlAuth, wait: bool = False,
+                    plan_only: bool = PLAN_ONLY) -> JSONResponse:
     """Grab the detected block under the target (centre, top, yaw), else at the target point."""
-    job = await run_in_threadpool(lambda: skills.grab(station, **_target(body), source=controller))
-    return await job_response(request, job, wait)
+    started = await run_in_threadpool(lambda: skills.grab(station, **_target(body), source=controller, plan_only=plan_only))
+    return await _job_or_plan(request, started, wait)
 
 
-@router.post("/drop", response_model=JobResponse, status_code=202, responses=WAITED_JOB)
-async def post_drop(request: Request, body: TargetRequest, station: StationDep, controller: ControlAuth, wait: bool = False) -> JSONResponse:
+@router.post("/drop", response_model=JobResponse, status_code=202, responses=WAITED_JOB_OR_PLAN)
+async def post_drop(request: Request, body: TargetRequest, station: StationDep, controller: ControlAuth, wait: bool = False,
+                    plan_only: bool = PLAN_ONLY) -> JSONResponse:
     """Place the held block at the target, on the board or on top of the block/stack there."""
-    job = await run_in_threadpool(lambda: skills.drop(station, **_target(body), source=controller))
-    return await job_response(request, job, wait)
+    started = await run_in_threadpool(lambda: skills.drop(station, **_target(body), source=controller, plan_only=plan_only))
+    return await _job_or_plan(request, started, wait)
 
 
 @router.post("/grab/check", response_model=TargetCheckResponse)

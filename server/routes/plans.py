@@ -8,10 +8,12 @@ from fastapi import APIRouter, Path, Request
 from starlette.concurrency import run_in_threadpool
 
 from armlab.station.job_control import SPEED_WAIT_FACTOR
+from armlab.station.jobs import Job
 from server.deps import ControlAuth, StationDep
 from server.models import Status
 from server.plan_models import PlanDiscarded
-from server.waiting import until_arm_still
+from server.routes.jobs import JOB_WAIT_TIMEOUT_S
+from server.waiting import until_arm_still, until_job_ended
 
 router = APIRouter(prefix="/api", tags=["arm"])
 
@@ -22,10 +24,13 @@ PlanId = Path(min_length=1, max_length=64, pattern=r"^[A-Za-z0-9_.:-]+$", descri
 async def post_execute_plan(request: Request, station: StationDep, controller: ControlAuth, plan_id: str = PlanId,
                             wait: bool = False) -> dict:
     """Send exactly the plan's trajectory (the gate's checks as any motion: state, lease, latch, the start at the
-    measured joints); ?wait=true answers once the arm has stopped."""
-    trajectory = await run_in_threadpool(station.execute_plan, plan_id, controller)
-    if wait:
-        await until_arm_still(request, station, trajectory.duration_s * SPEED_WAIT_FACTOR + 5.0)
+    measured joints), or for a grab's or drop's plan start its job with exactly its steps; ?wait=true answers once
+    the arm has stopped (the job has ended)."""
+    sent = await run_in_threadpool(station.execute_plan, plan_id, controller)
+    if wait and isinstance(sent, Job):
+        await until_job_ended(request, sent, JOB_WAIT_TIMEOUT_S)
+    elif wait:
+        await until_arm_still(request, station, sent.duration_s * SPEED_WAIT_FACTOR + 5.0)
     return await run_in_threadpool(station.status)
 
 

@@ -457,9 +457,9 @@ export const EVENT_KINDS = Object.freeze(["general", "scene"]);
  * is stale (stale_when).
  * @typedef {Object} MovePlan
  * @property {string} plan_id the plan's id, for POST /api/plans/{plan_id}/execute and DELETE /api/plans/{plan_id}
- * @property {string} command the station command it executes as (move_joints, move_to)
+ * @property {string} command the station command it executes as (move_joints, move_to, home, sleep; grab, drop: a job of several motions and gripper steps)
  * @property {(string|null)} controller the controller that made it: only it may execute it
- * @property {Array<number>} goal_q_rad the goal joints, radians, joint_names order
+ * @property {Array<number>} goal_q_rad the goal joints, radians, joint_names order (grab, drop: where the gripper grasps or releases)
  * @property {number} duration_s the trajectory's duration at the speed override it was planned at
  * @property {Array<number>} times_s sample times of the trajectory (decimated for showing; first and last kept)
  * @property {Array<Array<number>>} q_rad the joints at times_s, radians
@@ -469,6 +469,7 @@ export const EVENT_KINDS = Object.freeze(["general", "scene"]);
  * @property {number} created_s when it was made (Unix seconds)
  * @property {number} expires_s when it expires (Unix seconds)
  * @property {Array<string>} stale_when what makes the station refuse it
+ * @property {Array<string>} [steps] grab, drop: the job's steps in order (motions and gripper actions; the trajectory joins the motions); empty for a single move
  */
 
 /**
