@@ -12,7 +12,7 @@ import time
 import numpy as np
 import pytest
 
-from browser_helpers import page_with_the_arm_at, ready_idle
+from browser_helpers import canvas_point, enter_click_mode, page_with_the_arm_at, ready_idle
 
 pytestmark = pytest.mark.browser
 
@@ -160,4 +160,40 @@ def test_a_plan_into_the_board_draws_the_offending_part_in_red_and_moves_nothing
     _shown_plan(page)
     assert page.evaluate("armlab.view3d.refusalShown") is None
     page.click("#btn-plan-discard")
+    assert page.errors == []
+
+
+def test_with_preview_on_a_click_grab_waits_for_execute_then_runs_that_plan(page, server):
+    """The page setting 'preview before moving': a click on a block in Click-grab mode plans the grab (the goal arm
+    at the grasp, the path) and nothing moves (ground truth: joints, the blocks, over sim time); Execute runs that
+    very plan (the station then refuses it as executed) and the block is in the gripper (ground truth)."""
+    if not server.get("/api/calibration").get("calibrated"):
+        server.post("/api/calibrate?wait=true", timeout_s=120)
+    page.check("#preview-moves")
+    page.wait_for_function("window.armlab.detections.some(d => d.is_cube && !d.occluded)", timeout=20_000)
+    cubes = [d for d in page.evaluate("window.armlab.detections") if d["is_cube"] and not d.get("occluded")]
+    cube = min(cubes, key=lambda d: abs(float(np.hypot(*d["position_m"][:2])) - 0.25))
+    objects = server.get("/api/sim/truth")["objects"]
+    block = min(objects, key=lambda o: float(np.linalg.norm(np.asarray(o["position_m"][:2]) - cube["position_m"][:2])))
+    q0, _, t0 = _truth(server)
+    enter_click_mode(page, "grab")
+    page.mouse.click(*canvas_point(page, *cube["center_px"]))
+    assert "nothing moves until Execute" in _result(page, "planned")
+    shown = _shown_plan(page)
+    q1, _, _ = _after_sim_time(server, t0 + 1.0)
+    still = {o["id"]: o["position_m"] for o in server.get("/api/sim/truth")["objects"]}
+    assert np.abs(q1 - q0).max() < 2e-3, "the arm moved before Execute"
+    assert all(np.allclose(still[o["id"]], o["position_m"], atol=1e-3) for o in objects), "a block moved before Execute"
+    assert server.get("/api/status")["state"] == "idle"
+    page.click("#btn-plan-execute")
+    status = server.wait_status(lambda s: (s.get("job") or {}).get("name") == "grab" and s["job"]["state"] != "running"
+                                and s["state"] == "idle", 90.0, "the planned grab to end")
+    assert status["job"]["state"] == "succeeded", status["job"]
+    truth = server.get("/api/sim/truth")
+    assert truth["gripper"]["holding_id"] == block["id"], truth["gripper"]
+    again = server.request("POST", f"/api/plans/{shown['id']}/execute")
+    assert again.status_code == 409 and again.json()["error"]["reason"] == "executed", again.text
+    page.uncheck("#preview-moves")
+    server.post("/api/drop?wait=true", {"position_m": block["position_m"][:2] + [0.0]}, timeout_s=120)  # as it was
+    assert server.get("/api/sim/truth")["gripper"]["holding_id"] is None
     assert page.errors == []

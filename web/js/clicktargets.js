@@ -1,11 +1,13 @@
-// Grab and drop from the live view: a click on the video (or on a detection's row) sends one grab or drop,
-// refused on the page while the calibration is not trusted.
+// Grab and drop from the live view: a click on the video (or on a detection's row) sends one grab or drop (or, with
+// "preview before moving" on, plans it and waits for Execute), refused on the page while the calibration is not trusted.
 
 import { untrustedReason } from "./calstate.js";
 
 export class GrabDropClicks {
-  /** api: Api; run(action, call): the page's REST runner; log: EventLog; live: LiveView; status(): the newest status. */
-  constructor({ api, run, log, live, status }) {
+  /** api: Api; run(action, call): the page's REST runner; log: EventLog; live: LiveView; status(): the newest status;
+   * moveOrPlan(action, path, body, send): send() now, or the plan of it with the preview setting on. */
+  constructor({ api, run, log, live, status, moveOrPlan = (action, path, body, send) => send() }) {
+    this.moveOrPlan = moveOrPlan;
     this.api = api;
     this.run = run;
     this.log = log;
@@ -25,8 +27,10 @@ export class GrabDropClicks {
     if (this.refusedUntrusted(t.mode)) return Promise.resolve(null);
     const body = t.positionM ? { position_m: t.positionM } : { u: t.u, v: t.v };
     const where = t.positionM ? t.positionM.map((v) => Math.round(v * 1000)).join(", ") + " mm" : `pixel (${t.u.toFixed(0)}, ${t.v.toFixed(0)})`;
-    if (t.mode === "grab") return this.run(`grab at ${where}`, () => this.api.grab(body));
-    if (t.mode === "drop") return this.run(`drop at ${where}`, () => this.api.drop(body));
+    if (t.mode === "grab" || t.mode === "drop") {
+      const send = () => this.run(`${t.mode} at ${where}`, () => this.api[t.mode](body));
+      return this.moveOrPlan(`${t.mode} at ${where}`, `/api/${t.mode}`, body, send);
+    }
     return Promise.resolve(null);
   }
 
@@ -39,7 +43,9 @@ export class GrabDropClicks {
 
   detectionClicked(d) {
     if (this.live.mode === "grab" && Array.isArray(d.position_m) && !this.refusedUntrusted("grab")) {
-      this.run(`grab ${d.color || ""} block ${d.id ?? ""}`, () => this.api.grab({ position_m: d.position_m }));
+      const action = `grab ${d.color || ""} block ${d.id ?? ""}`;
+      const body = { position_m: d.position_m };
+      this.moveOrPlan(action, "/api/grab", body, () => this.run(action, () => this.api.grab(body)));
     }
   }
 }

@@ -37,6 +37,7 @@ import { ReachState } from "./reachstate.js";
 import { ScenePicker } from "./simscene.js";
 import { Stream } from "./stream.js";
 import { TargetPanel } from "./target.js";
+import { PreviewSetting } from "./preview_setting.js";
 import { TeachPanel } from "./teach.js";
 import { TorqueButton } from "./torque.js";
 import { RecordingPanel } from "./recording.js";
@@ -97,7 +98,9 @@ class App {
       },
     });
     this.programPath = new ProgramPathOverlay(this.live);
-    this.clicks = new GrabDropClicks({ api: this.api, run: (a, c) => this.run(a, c), log: this.log, live: this.live, status: () => this.status });
+    this.previewSetting = new PreviewSetting({ box: $("preview-moves"), preview: () => this.target.preview });
+    this.clicks = new GrabDropClicks({ api: this.api, run: (a, c) => this.run(a, c), log: this.log, live: this.live, status: () => this.status,
+                                       moveOrPlan: (...args) => this.previewSetting.moveOrPlan(...args) });
     this.clickcal = new ClickCalibration({ api: this.api, live: this.live, log: this.log, afterChange: () => this.refreshAllowed() });
     this.colors = new ColorCalibration({ root: $("colors-panel"), api: this.api, live: this.live, log: this.log });
     this.stream = new Stream({
@@ -124,7 +127,8 @@ class App {
       canJog: () => this.connected && (this.status?.allowed_commands || []).includes("jog") && !$("btn-send-joints").disabled,
     });
     this.target = new TargetPanel({ api: this.api, run: (a, c) => this.run(a, c), status: () => this.status,
-                                    openView3d: () => this.openView3d(), view3d: () => this.view3d });
+                                    openView3d: () => this.openView3d(), view3d: () => this.view3d,
+                                    previewOn: () => this.previewSetting.on });
     this.competition = new CompetitionPanel({
       api: this.api,
       live: this.live,
@@ -399,7 +403,9 @@ class App {
       this.log.toast("error", "move time", time.message);
       return Promise.resolve(null);
     }
-    return this.run("move joints", () => this.api.joints(qRad, time.valueS));
+    const body = { q_rad: qRad, ...(time.valueS !== undefined ? { moving_time_s: time.valueS } : {}) };
+    return this.previewSetting.moveOrPlan("plan joints", "/api/arm/joints", body,
+      () => this.run("move joints", () => this.api.joints(qRad, time.valueS)));
   }
 
   setMode(mode) {
@@ -433,8 +439,8 @@ class App {
     on("btn-view3d", () => this.toggleView3d());
     if (new URLSearchParams(location.search).get("view3d") === "1") this.toggleView3d();
     this.estopButton.bindKey();
-    on("btn-home", () => this.run("home", () => this.api.home()));
-    on("btn-sleep", () => this.run("sleep", () => this.api.sleep()));
+    on("btn-home", () => this.previewSetting.moveOrPlan("plan home", "/api/arm/home", {}, () => this.run("home", () => this.api.home())));
+    on("btn-sleep", () => this.previewSetting.moveOrPlan("plan sleep", "/api/arm/sleep", {}, () => this.run("sleep", () => this.api.sleep())));
     on("btn-open", () => this.run("gripper open", () => this.api.gripper("release")));
     on("btn-close", () => this.run("gripper close", () => this.api.gripper("grasp")));
     on("btn-reset", () => this.run("reset", () => this.api.reset()));

@@ -36,15 +36,16 @@ export function readPoseForm(values) {
 
 export class TargetPanel {
   /** api: Api; run(action, call): the page's REST runner (logs, toasts); status(): the last telemetry;
-   * openView3d() / view3d(): the 3-D panel (opened / if loaded) where a plan is drawn (plan_preview.js). */
-  constructor({ api, run, status, openView3d = async () => null, view3d = () => null }) {
+   * openView3d() / view3d(): the 3-D panel (opened / if loaded) where a plan is drawn (plan_preview.js); previewOn():
+   * the "preview before moving" setting (Go then plans, as Plan does). */
+  constructor({ api, run, status, openView3d = async () => null, view3d = () => null, previewOn = () => false }) {
     this.api = api;
     this.run = run;
     this.status = status;
     this.names = [];
     this.preview = new PlanPreview({ api, run, show: (state, text) => this.show(state, text), openView3d, view3d });
-    $("btn-target-go").addEventListener("click", () => this.goPose());
-    $("btn-joints-go").addEventListener("click", () => this.goJoints());
+    $("btn-target-go").addEventListener("click", () => this.goPose(previewOn()));
+    $("btn-joints-go").addEventListener("click", () => this.goJoints(previewOn()));
     $("btn-target-plan").addEventListener("click", () => this.goPose(true));
     $("btn-joints-plan").addEventListener("click", () => this.goJoints(true));
     $("btn-target-here").addEventListener("click", () => this.fillFromArm());
