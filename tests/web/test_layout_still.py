@@ -21,7 +21,8 @@ def hover_and_wait(page, u: float, v: float) -> str:
     """Move the pointer over camera pixel (u, v) and wait for the readout's answer there; returns its text."""
     page.evaluate("delete document.getElementById('hover-world').dataset.pixel")
     page.mouse.move(*canvas_point(page, u, v))
-    page.wait_for_function("document.getElementById('hover-world').dataset.pixel !== undefined", timeout=10_000)
+    # the readout asks the server (pixel-to-world): a loaded machine (the suite in parallel) takes seconds
+    page.wait_for_function("document.getElementById('hover-world').dataset.pixel !== undefined", timeout=30_000)
     return page.text_content("#hover-world")
 
 
