@@ -15,9 +15,12 @@ os.environ["ARMLAB_REALISM"] = "ideal"
 
 
 def pytest_collection_modifyitems(items):
-    """Give every test a node id of its own. Schemathesis's per-operation tests (tests/server/test_schema_fuzz.py)
-    come out of pytest 9 all with the one id of their function, the operation only in their name; pytest-xdist
-    hands out work by node id, so all but one of them would never run on a worker."""
+    """Tests marked `long_first` go first (the suite runs on two workers, scripts/test: a test minutes long that
+    started last would be the run's tail alone). And every test gets a node id of its own: schemathesis's
+    per-operation tests (tests/server/schema_fuzz_cases.py) come out of pytest 9 all with the one id of their
+    function, the operation only in their name; pytest-xdist hands out work by node id, so all but one of them would
+    never run on a worker."""
+    items.sort(key=lambda item: item.get_closest_marker("long_first") is None)  # stable: the rest keep their order
     for item in items:
         module_part, _, last = item.nodeid.rpartition("::")
         if item.name != last and item.name.startswith(last + "["):

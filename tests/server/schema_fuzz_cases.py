@@ -55,6 +55,24 @@ SKIPPED_WAITS: list[str] = []
 cell, base_url = live.module_fixtures(seed=11, token=TOKEN)
 
 
+def _decline_negations_that_cannot_be_drawn() -> None:
+    """schemathesis 4.32.5 builds a negative case's mutated schema and declines a mutation it cannot draw from
+    only when the builder says UnsupportedSchema; on the programs' recursive step tree (PATCH /api/programs/{id})
+    some mutations end in InvalidSchema ('Cannot generate an array with 1 demanded elements'), which then fails the
+    whole operation (in every whole-suite run since 2026-12-03, and alone once the seed's draws reached it). The
+    positive path next to it already declines InvalidSchema (the asymmetry of upstream issue #4753): the mutated
+    path is made to do the same, so that mutation is skipped and the others of the operation still run."""
+    from schemathesis.core.errors import InvalidSchema
+    from schemathesis.specs.openapi import negative
+
+    declined = getattr(negative, "DECLINED", None)
+    if isinstance(declined, tuple) and InvalidSchema not in declined:
+        negative.DECLINED = (*declined, InvalidSchema)
+
+
+_decline_negations_that_cannot_be_drawn()
+
+
 def _load_schema():
     """The app's OpenAPI document (built without starting a station; the calls go to the live server)."""
     loaded = schemathesis.openapi.from_dict(create_app(station_factory=lambda: None, token=TOKEN).openapi())

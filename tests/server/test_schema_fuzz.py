@@ -19,6 +19,7 @@ CASES = Path(__file__).with_name("schema_fuzz_cases.py")
 REPO = Path(__file__).resolve().parents[2]
 
 
+@pytest.mark.long_first
 @pytest.mark.timeout(1800)  # ~4.5 min quiet; over 1,000 calls, each waiting for the station at rest
 def test_the_whole_schema_fuzz_passes_in_a_process_of_its_own():
     result = subprocess.run(
