@@ -192,3 +192,14 @@ def wait_sim(cell, duration_s: float, timeout_s: float = 30.0) -> None:
     (e.g. "the arm stayed still for 0.3 s"), not a fixed sleep of wall time."""
     start = cell.sim_time_s
     wait_for(lambda: cell.sim_time_s >= start + duration_s, timeout_s, 0.005)
+
+
+def execute_plan_recorded(http: httpx.Client, cell, plan_id: str, headers: dict) -> tuple[httpx.Response, dict]:
+    """POST /api/plans/{plan_id}/execute?wait=true with the simulated servos' reference recorded at every control
+    tick meanwhile: (the answer, the trace: cell.stop_joint_recording())."""
+    cell.start_joint_recording()
+    try:
+        done = http.post(f"/api/plans/{plan_id}/execute", params={"wait": "true"}, headers=headers)
+    finally:
+        trace = cell.stop_joint_recording()
+    return done, trace

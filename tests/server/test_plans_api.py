@@ -93,11 +93,7 @@ def _max_gap_from_plan_rad(trace: dict, plan: dict) -> float:
 
 def _execute_recorded(http, cell, plan: dict) -> dict:
     """Execute the plan (waiting for the arm) with the servos' reference recorded at every tick: the trace."""
-    cell.start_joint_recording()
-    try:
-        done = http.post(f"/api/plans/{plan['plan_id']}/execute", params={"wait": "true"}, headers=PAD)
-    finally:
-        trace = cell.stop_joint_recording()
+    done, trace = live.execute_plan_recorded(http, cell, plan["plan_id"], PAD)
     assert done.status_code == 200, done.text
     return trace
 

@@ -60,11 +60,7 @@ def _plan(http, path: str, xyz) -> dict:
 
 
 def _execute(http, cell, plan: dict) -> tuple[dict, dict]:
-    cell.start_joint_recording()
-    try:
-        done = http.post(f"/api/plans/{plan['plan_id']}/execute", params={"wait": "true"}, headers=AUTH)
-    finally:
-        trace = cell.stop_joint_recording()
+    done, trace = live.execute_plan_recorded(http, cell, plan["plan_id"], AUTH)
     assert done.status_code == 200, done.text
     return done.json(), trace
 
@@ -78,12 +74,21 @@ def _held_reference_rad(trace: dict) -> np.ndarray:
     return reference[longest[0]]
 
 
+def _one_block(xy_m, yaw_rad: float, color: str = "red") -> dict:
+    return {"objects": [{"id": "b1", "type": "block", "color": color, "size": "large", "position_m": [*xy_m, EDGE_M / 2],
+                         "yaw_rad": yaw_rad}]}
+
+
+def _in_control(url: str) -> httpx.Client:
+    http = httpx.Client(base_url=url, timeout=120)
+    assert http.post("/api/control/take", headers=AUTH).status_code == 200
+    return http
+
+
 def test_grab_and_drop_plan_without_moving_then_execute_exactly_that(station_url):
     cell, url = station_url
-    cell.set_scene(Scene.from_dict({"objects": [{"id": "b1", "type": "block", "color": "red", "size": "large",
-                                                 "position_m": [*BLOCK_XY_M, EDGE_M / 2], "yaw_rad": 0.0}]}))
-    with httpx.Client(base_url=url, timeout=120) as http:
-        assert http.post("/api/control/take", headers=AUTH).status_code == 200
+    cell.set_scene(Scene.from_dict(_one_block(BLOCK_XY_M, 0.0)))
+    with _in_control(url) as http:
         assert http.post("/api/arm/home", params={"wait": "true"}, headers=AUTH).status_code == 200
         live.wait_for(lambda: not cell.arm.is_moving(), 15, 0.01)
         before = _truth(cell)
@@ -120,15 +125,11 @@ def test_grab_and_drop_plan_without_moving_then_execute_exactly_that(station_url
 
 def test_a_grab_plan_goes_stale_when_the_scene_changes_and_moves_nothing(station_url):
     cell, url = station_url
-    cell.set_scene(Scene.from_dict({"objects": [{"id": "b1", "type": "block", "color": "blue", "size": "large",
-                                                 "position_m": [*BLOCK_XY_M, EDGE_M / 2], "yaw_rad": 0.3}]}))
-    with httpx.Client(base_url=url, timeout=120) as http:
-        assert http.post("/api/control/take", headers=AUTH).status_code == 200
+    cell.set_scene(Scene.from_dict(_one_block(BLOCK_XY_M, 0.3, "blue")))
+    with _in_control(url) as http:
         live.wait_for(lambda: not cell.arm.is_moving(), 15, 0.01)
         plan = _plan(http, "/api/grab", (*BLOCK_XY_M, EDGE_M))
-        moved = {"objects": [{"id": "b1", "type": "block", "color": "blue", "size": "large",
-                              "position_m": [0.1, 0.2, EDGE_M / 2], "yaw_rad": 0.3}]}
-        assert http.post("/api/sim/scene", json=moved, headers=AUTH).status_code == 200
+        assert http.post("/api/sim/scene", json=_one_block((0.1, 0.2), 0.3, "blue"), headers=AUTH).status_code == 200
         before = _truth(cell)
         stale = http.post(f"/api/plans/{plan['plan_id']}/execute", headers=AUTH)
         assert stale.status_code == 409 and stale.json()["error"]["reason"] == "scene_changed", stale.text
