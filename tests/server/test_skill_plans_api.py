@@ -6,6 +6,8 @@ acts) and picks / places the block (ground truth); a plan made before the scene 
 
 from __future__ import annotations
 
+import contextlib
+
 import httpx
 import numpy as np
 import pytest
@@ -79,10 +81,12 @@ def _one_block(xy_m, yaw_rad: float, color: str = "red") -> dict:
                          "yaw_rad": yaw_rad}]}
 
 
-def _in_control(url: str) -> httpx.Client:
-    http = httpx.Client(base_url=url, timeout=120)
-    assert http.post("/api/control/take", headers=AUTH).status_code == 200
-    return http
+@contextlib.contextmanager
+def _in_control(url: str):
+    """A client holding the control lease (as the pad)."""
+    with httpx.Client(base_url=url, timeout=120) as http:
+        assert http.post("/api/control/take", headers=AUTH).status_code == 200
+        yield http
 
 
 def test_grab_and_drop_plan_without_moving_then_execute_exactly_that(station_url):
