@@ -138,9 +138,13 @@ class PlannedMoves:
                                        speed, start=start, goal_rad=goal, steps=tuple(step.name for step in steps)))
         return self.plan_wire(plan)
 
+    def _arm_busy(self) -> bool:
+        """The arm moves, or a motion sent to it has yet to end on the station's clock."""
+        return self.arm.is_moving() or self.commanded_motion_running()
+
     def _refuse_while_moving(self, command: str) -> None:
         """ArmMoving: a plan starts from the arm at rest."""
-        if self.arm.is_moving() or self.commanded_motion_running():
+        if self._arm_busy():
             state = self.state
             raise ArmMoving(command, state.value, allowed_commands(state),
                             "a plan starts from the arm at rest: plan again once it has stopped")
@@ -205,7 +209,7 @@ class PlannedMoves:
         change = world_change(plan.world, self._world_snapshot())
         if change is not None:
             raise PlanStale(*change)
-        if self.arm.is_moving() or self.commanded_motion_running():
+        if self._arm_busy():
             raise PlanStale("the plan is stale: the arm is moving; plan again once it has stopped", "arm_moving")
         self.plans.claim(plan.plan_id)  # PlanStale 'executed' when another request just started it
         try:
