@@ -5,6 +5,7 @@ toolbar's) is the same before and while the pointer reads world points over it, 
 from __future__ import annotations
 
 import pytest
+from playwright.sync_api import TimeoutError as PlaywrightTimeout
 
 from browser_helpers import canvas_point, ready_idle, wait_frames
 
@@ -19,11 +20,26 @@ BOXES = """() => Object.fromEntries(['live', 'view-wrap', 'hover-world'].map(id 
 
 def hover_and_wait(page, u: float, v: float) -> str:
     """Move the pointer over camera pixel (u, v) and wait for the readout's answer there; returns its text."""
-    page.evaluate("delete document.getElementById('hover-world').dataset.pixel")
-    page.mouse.move(*canvas_point(page, u, v))
-    # the readout asks the server (pixel-to-world): a loaded machine (the suite in parallel) takes seconds
-    page.wait_for_function("document.getElementById('hover-world').dataset.pixel !== undefined", timeout=30_000)
-    return page.text_content("#hover-world")
+    page.evaluate("(() => { const e = document.getElementById('hover-world'); delete e.dataset.pixel;"
+                  " e.dataset.hidden = 'false'; e.textContent = 'x waiting'; })()")
+    x, y = canvas_point(page, u, v)
+    page.mouse.move(x, y)
+    # the readout asks the server (pixel-to-world): a loaded machine (the suite in parallel) takes seconds. It
+    # answers with a reading (a pixel set) or says why not (its title is the server's message): either ends the wait.
+    answered = True
+    try:
+        page.wait_for_function("(() => { const e = document.getElementById('hover-world');"
+                               " return e.dataset.pixel !== undefined || e.dataset.hidden === 'true'"
+                               " || !e.textContent.startsWith('x'); })()", timeout=30_000)
+    except PlaywrightTimeout:
+        answered = False
+    readout = page.evaluate("([x, y]) => { const e = document.getElementById('hover-world'); const top ="
+                            " document.elementFromPoint(x, y); return [e.dataset.pixel, e.textContent, e.title,"
+                            " top ? `${top.tagName}#${top.id}.${top.className}` : null]; }", [x, y])
+    assert answered and readout[0] is not None, (
+        f"no reading at ({u:.0f}, {v:.0f}) px, page point ({x:.0f}, {y:.0f}) under {readout[3]}: "
+        f"{readout[1]!r} ({readout[2]!r}){'' if answered else ', no answer in 30 s'}")
+    return readout[1]
 
 
 def test_the_video_does_not_move_when_the_pointer_reads_it(browser, server):

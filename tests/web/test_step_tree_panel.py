@@ -16,17 +16,16 @@ POSES_RAD = [[0.4, -0.2, 0.3, 0.6, 0.0], [0.0, 0.1, 0.2, 0.8, 0.3], [-0.4, -0.1,
 
 
 def tick(page, index: int) -> None:
-    """Tick top-level step `index` (1-based) (the element's own click, see press); wait until it shows ticked."""
-    box = page.locator(f"#program-steps > li:nth-child({index}) > label > input")
-    box.scroll_into_view_if_needed()
-    box.dispatch_event("click")
+    """Tick top-level step `index` (1-based) (the element's own click, see press); wait until it shows ticked. No
+    scrolling first: the list may be drawn again between a scroll and a click (a late programs event under load)
+    and the scrolled element is then detached; dispatch_event finds the element and clicks it in one step."""
+    page.locator(f"#program-steps > li:nth-child({index}) > label > input").dispatch_event("click")
     page.wait_for_function(f"document.querySelector('#program-steps > li:nth-child({index}) input').checked", timeout=5_000)
 
 
 def press(page, button: str) -> None:
     """Click a step-tree button (its element's own click: the panel column's layout can shift under a
     pointer click while the live view updates)."""
-    page.locator(button).scroll_into_view_if_needed()
     page.locator(button).dispatch_event("click")
 
 

@@ -14,6 +14,7 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
+from playwright.sync_api import TimeoutError as PlaywrightTimeout
 
 from armlab.tasks.judge import GRIPPER_BOX_M
 from browser_helpers import open_page, ready_idle
@@ -56,10 +57,15 @@ def _drawn_at(page, server, q_rad) -> dict:
     joints (three.js), tool point and the truth read after it."""
     server.post("/api/arm/joints?wait=true", {"q_rad": q_rad, "moving_time_s": 1.5})
     status = server.wait_status(lambda s: s["state"] == "idle" and not s["moving"], 20.0, "the arm settled")
-    page.wait_for_function(
-        """(q) => { const d = armlab.view3d.lastDrawn; return d && d.joints_rad.length === q.length
-               && d.joints_rad.every((v, i) => Math.abs(v - q[i]) < 1e-3); }""",
-        arg=status["joints_rad"], timeout=20_000)
+    try:
+        page.wait_for_function(
+            """(q) => { const d = armlab.view3d.lastDrawn; return d && d.joints_rad.length === q.length
+                   && d.joints_rad.every((v, i) => Math.abs(v - q[i]) < 1e-3); }""",
+            arg=status["joints_rad"], timeout=20_000)
+    except PlaywrightTimeout:
+        drawn = page.evaluate("() => armlab.view3d.lastDrawn && armlab.view3d.lastDrawn.joints_rad")
+        raise AssertionError(f"the panel never drew the settled arm {status['joints_rad']} in 20 s: it drew "
+                             f"{drawn}; the station now {server.get('/api/status')['joints_rad']}") from None
     drawn = page.evaluate("""() => { const v = armlab.view3d; const names = v.armDescription.joint_names;
         return { joints: names.map((n) => v.arm.robot.joints[n].angle), telemetry: v.lastDrawn.joints_rad,
                  tool: v.arm.toolPosition(), urdfJoints: Object.keys(v.arm.robot.joints) }; }""")

@@ -18,6 +18,14 @@ from armlab.devices.sim.config import CameraRealismConfig, SimCameraConfig
 BANK_SIZE = 3
 
 
+def _tiled(image: np.ndarray) -> np.ndarray:
+    """An (H, W) image tiled two by two, read-only: its (H, W) window at (top, left) is the image rolled by
+    (H - top, W - left) rows and columns."""
+    tiled = np.tile(image, (2, 2))
+    tiled.flags.writeable = False
+    return tiled
+
+
 class RealCamera:
     """Applies CameraRealismConfig to renders of one camera (its true intrinsics, no distortion)."""
 
@@ -33,9 +41,10 @@ class RealCamera:
         self._slope = math.tan(math.radians(realism.depth_tilt_deg))
         self._depth_gain = None  # depth change = Z * gain + shift (maps), set by set_board()
         self._depth_shift = None
-        self._gauss = ([rng.standard_normal((height, width)).astype(np.float32) for _ in range(BANK_SIZE)]
+        self._gauss = ([_tiled(rng.standard_normal((height, width)).astype(np.float32)) for _ in range(BANK_SIZE)]
                        if depth_noise and realism.noise_std_at_1m_mm > 0 else [])
-        self._uniform = [rng.random((height, width), dtype=np.float32) for _ in range(BANK_SIZE)]
+        self._uniform = [_tiled(rng.random((height, width), dtype=np.float32)) for _ in range(BANK_SIZE)]
+        self._shape = (height, width)
         self._phases = rng.uniform(0.0, 2.0 * math.pi, size=4)
         self._band_kernel = np.ones((2 * realism.edge_band_px + 1,) * 2, np.uint8)
         left, right = realism.no_depth_columns
@@ -68,9 +77,13 @@ class RealCamera:
             self._slope = math.tan(math.radians(self.config.depth_tilt_deg))
 
     def _bank(self, bank: list[np.ndarray]) -> np.ndarray:
-        """A bank image rolled by a random number of rows and columns (a view-free copy)."""
+        """A bank image rolled by a random number of rows and columns (np.roll's values), as a read-only window of
+        its tiled copy: no image-sized copy per draw."""
+        height, width = self._shape
         image = bank[int(self._rng.integers(len(bank)))]
-        return np.roll(image, (int(self._rng.integers(image.shape[0])), int(self._rng.integers(image.shape[1]))), axis=(0, 1))
+        rows, columns = int(self._rng.integers(height)), int(self._rng.integers(width))
+        top, left = (height - rows) % height, (width - columns) % width
+        return image[top:top + height, left:left + width]
 
     def color_gains(self, sim_time_s: float) -> tuple[float, float, float]:
         """The (R, G, B) gains at a simulated time: white balance and exposure, each drifting slowly."""

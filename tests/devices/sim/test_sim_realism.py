@@ -252,3 +252,21 @@ def test_bad_realism_config_is_refused_naming_the_field():
     data["realism"].update(edge_hole_fraction=0.8, edge_flying_fraction=0.5)
     with pytest.raises(ValidationError, match="edge_hole_fraction"):
         SimCameraConfig.model_validate(data)
+
+
+def test_noise_draws_are_the_bank_images_rolled_by_the_drawn_rows_and_columns():
+    # The realistic depth's per-frame noise is a bank image rolled by random rows and columns; it is read as a window
+    # of the image tiled two by two instead of np.roll's copy. Each draw is np.roll's image for the same draws, at
+    # the edges too (a window one row or column off would shift a whole image of noise).
+    from armlab.devices.sim.realism import RealCamera
+
+    camera = RealCamera(CAMERA, REAL, np.random.default_rng(5), depth_noise=True)
+    height, width = CAMERA.height, CAMERA.width
+    for seed in range(6):
+        camera._rng = np.random.default_rng(seed)
+        drawn = camera._bank(camera._uniform)
+        twin = np.random.default_rng(seed)  # the same draws: which image, then rows, then columns
+        image = camera._uniform[int(twin.integers(len(camera._uniform)))][:height, :width]
+        rolled = np.roll(image, (int(twin.integers(height)), int(twin.integers(width))), axis=(0, 1))
+        assert drawn.shape == (height, width)
+        np.testing.assert_array_equal(drawn, rolled)
