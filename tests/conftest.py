@@ -14,13 +14,48 @@ os.environ.setdefault("MUJOCO_GL", "egl")
 os.environ["ARMLAB_REALISM"] = "ideal"
 
 
-def pytest_collection_modifyitems(items):
-    """Tests marked `long_first` go first (the suite runs on two workers, scripts/test: a test minutes long that
-    started last would be the run's tail alone). And every test gets a node id of its own: schemathesis's
-    per-operation tests (tests/server/schema_fuzz_cases.py) come out of pytest 9 all with the one id of their
-    function, the operation only in their name; pytest-xdist hands out work by node id, so all but one of them would
-    never run on a worker."""
-    items.sort(key=lambda item: item.get_closest_marker("long_first") is None)  # stable: the rest keep their order
+BROWSER_TESTS = "tests/web/"
+# Files whose tests are each a work unit of their own (minutes each: the schema fuzz's shards).
+ONE_UNIT_PER_TEST = ("tests/server/test_schema_fuzz.py",)
+
+
+def _work_unit(nodeid: str) -> str:
+    """What one pytest-xdist worker runs together (see pytest_xdist_make_scheduler): every browser test (one shared
+    server and browser, in the order a single process runs them), each test of ONE_UNIT_PER_TEST alone, else a test
+    file (its module-scoped fixtures set up once)."""
+    path = nodeid.split("::", 1)[0]
+    if path.startswith(BROWSER_TESTS):
+        return BROWSER_TESTS
+    return nodeid if path in ONE_UNIT_PER_TEST else path
+
+
+def pytest_xdist_make_scheduler(config, log):
+    """With `--dist loadfile` (scripts/test): loadfile's scheduling, in collection order, over _work_unit's units."""
+    if config.getoption("dist", None) != "loadfile":
+        return None
+    from xdist.scheduler import LoadFileScheduling
+
+    class WorkUnitScheduling(LoadFileScheduling):
+        def _split_scope(self, nodeid: str) -> str:
+            return _work_unit(nodeid)
+
+    return WorkUnitScheduling(config, log)
+
+
+def pytest_collection_modifyitems(config, items):
+    """Tests marked `long_first` go first, then (on pytest-xdist workers) the browser tests, one work unit minutes
+    long: a long unit that started last would be the run's tail alone. And every test gets a node id of its own:
+    schemathesis's per-operation tests (tests/server/schema_fuzz_cases.py) come out of pytest 9 all with the one id
+    of their function, the operation only in their name; pytest-xdist hands out work by node id, so all but one of
+    them would never run on a worker."""
+    on_worker = os.environ.get("PYTEST_XDIST_WORKER") is not None
+
+    def rank(item) -> int:
+        if item.get_closest_marker("long_first") is not None:
+            return 0
+        return 1 if on_worker and item.nodeid.startswith(BROWSER_TESTS) else 2
+
+    items.sort(key=rank)  # stable: the rest keep their order
     for item in items:
         module_part, _, last = item.nodeid.rpartition("::")
         if item.name != last and item.name.startswith(last + "["):

@@ -136,10 +136,60 @@ def running_server(folder: Path, args: tuple[str, ...] = tuple(SCENE_ARGS)) -> I
             process.wait(timeout=5)
 
 
+class SharedServer:
+    """The browser tests' one `armlab serve` (SCENE_ARGS), started when a test module first asks for it and stopped
+    after the last browser test the process runs (pytest_runtest_teardown below): a simulated station keeps about
+    half a core busy while it runs, and a process that runs other tests after the browser tests (a pytest-xdist
+    worker) would otherwise carry it to the end. A later browser test starts a new one."""
+
+    def __init__(self, tmp_path_factory) -> None:
+        self._tmp_path_factory = tmp_path_factory
+        self._stack: contextlib.ExitStack | None = None
+        self._server: Server | None = None
+
+    def get(self) -> Server:
+        if self._server is None:
+            stack = contextlib.ExitStack()
+            self._server = stack.enter_context(running_server(self._tmp_path_factory.mktemp("server")))
+            self._stack = stack
+        return self._server
+
+    def stop(self) -> None:
+        stack, self._stack, self._server = self._stack, None, None
+        if stack is not None:
+            stack.close()
+
+
+SHARED_SERVER = pytest.StashKey[SharedServer]()
+WEB_TESTS = Path(__file__).resolve().parent
+
+
 @pytest.fixture(scope="session")
-def server(tmp_path_factory) -> Iterator[Server]:
-    with running_server(tmp_path_factory.mktemp("server")) as srv:
-        yield srv
+def _shared_server(request, tmp_path_factory) -> Iterator[SharedServer]:
+    shared = request.config.stash[SHARED_SERVER] = SharedServer(tmp_path_factory)
+    try:
+        yield shared
+    finally:
+        shared.stop()
+        del request.config.stash[SHARED_SERVER]
+
+
+@pytest.fixture(scope="module")
+def server(_shared_server) -> Server:
+    """The shared `armlab serve` (state carries over from module to module: each test brings it to what it needs)."""
+    return _shared_server.get()
+
+
+@pytest.hookimpl(wrapper=True)
+def pytest_runtest_teardown(item, nextitem):
+    """After the last browser test in a row (the next test is elsewhere, or none) and its fixtures' teardown: stop
+    the shared server (see SharedServer)."""
+    result = yield
+    if nextitem is None or WEB_TESTS not in Path(nextitem.path).resolve().parents:
+        shared = item.config.stash.get(SHARED_SERVER, None)
+        if shared is not None:
+            shared.stop()
+    return result
 
 
 @pytest.fixture(scope="module")

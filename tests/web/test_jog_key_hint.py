@@ -8,6 +8,7 @@ from __future__ import annotations
 import math
 
 import pytest
+from playwright.sync_api import TimeoutError as PlaywrightTimeout
 
 from browser_helpers import open_page, ready_idle, wait_frames
 
@@ -16,8 +17,14 @@ pytestmark = pytest.mark.browser
 HINT = "#jog-keys"
 
 
-def hint(page) -> tuple[str, str]:
-    return page.text_content(HINT), page.get_attribute(HINT, "data-keys")
+def hint(page, keys: str) -> tuple[str, str]:
+    """The hint's text and what it says the keys do, read together once it says `keys` (the page updates it just after
+    the focus moves: a focusout's next element is known only then), or as it stands after 5 s."""
+    try:
+        page.wait_for_function(f"document.querySelector('{HINT}').dataset.keys === '{keys}'", timeout=5_000)
+    except PlaywrightTimeout:
+        pass  # the assertion after says what it showed
+    return tuple(page.eval_on_selector(HINT, "el => [el.textContent, el.dataset.keys]"))
 
 
 def test_the_key_hint_follows_the_focus_and_says_what_the_arrows_move(browser, server):
@@ -29,11 +36,11 @@ def test_the_key_hint_follows_the_focus_and_says_what_the_arrows_move(browser, s
         page.wait_for_function("document.getElementById('slider-waist') && !document.getElementById('slider-waist').disabled",
                                timeout=10_000)
         page.click("#live")
-        text, keys = hint(page)
+        text, keys = hint(page, "jog")
         assert keys == "jog" and "x/y" in text, text
 
         page.focus("#slider-waist")
-        text, keys = hint(page)
+        text, keys = hint(page, "slider")
         assert keys == "slider" and "waist" in text and "x/y" not in text, text
         before = ready_idle(server)["joints_rad"]
         page.evaluate("window.armlab.log.clear()")
@@ -46,7 +53,7 @@ def test_the_key_hint_follows_the_focus_and_says_what_the_arrows_move(browser, s
         assert not any("jog" in line for line in lines), lines
 
         page.click("#live")  # the focus leaves the slider: the arrows jog again, and the hint says so
-        text, keys = hint(page)
+        text, keys = hint(page, "jog")
         assert keys == "jog" and "x/y" in text and "waist" not in text, text
         page.evaluate("window.armlab.log.clear()")
         page.keyboard.press("ArrowRight")
