@@ -15,7 +15,7 @@ class MovePlan(Wire):
     is stale (stale_when)."""
 
     plan_id: str = Field(description="the plan's id, for POST /api/plans/{plan_id}/execute and DELETE /api/plans/{plan_id}")
-    command: str = Field(description="the station command it executes as (move_joints, move_to, home, sleep; grab, drop: "
+    command: str = Field(description="the station command it executes as (move_joints, move_to, home, sleep, jog: a jog step; grab, drop: "
                          "a job of several motions and gripper steps)")
     controller: str | None = Field(description="the controller that made it: only it may execute it")
     goal_q_rad: list[float] = Field(description="the goal joints, radians, joint_names order (grab, drop: where the gripper "

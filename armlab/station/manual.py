@@ -147,15 +147,19 @@ class ManualCommands:
         return trajectory
 
     def step_gripper(
-        self, axis: str, amount: float, speed_percent: float = 100.0, wait: bool = False, source: str | None = None
-    ) -> JointTrajectory:
+        self, axis: str, amount: float, speed_percent: float = 100.0, wait: bool = False, source: str | None = None,
+        plan_only: bool = False,
+    ) -> JointTrajectory | dict:
         """A jog step of the gripper: `amount` m along world x|y|z keeping its pitch and yaw, or rad of
         pitch|roll (armlab.motion.gripper_step), at speed_percent of the configured step speeds.
 
         Refused before anything moves: ArmMoving while the arm still moves, StepRefused/Unreachable (the
         reason) when the step cannot keep the gripper's orientation and line. A step that follows this
-        station's previous step starts from that step's commanded end (the servos' sag does not add up)."""
+        station's previous step starts from that step's commanded end (the servos' sag does not add up).
+        plan_only: the step planned from the measured joints and kept as a plan (its wire form); nothing moves."""
         scale = checked_speed_percent(speed_percent) / 100.0
+        if plan_only:
+            return self.plan_motion("jog", lambda: self._gripper_step(axis, amount, scale, self.joints_rad()), source)
         self.allowed_or_raise("jog", source)
         if self.arm.is_moving():
             raise ArmMoving("jog", self.state.value, allowed_commands(self.state))
@@ -165,13 +169,7 @@ class ManualCommands:
             last_motion = self._motions[-1] if self._motions else None
         if anchor is not None and anchor[1] is last_motion and np.max(np.abs(anchor[0] - q_start)) <= STEP_ANCHOR_TOL_RAD:
             q_start = anchor[0]
-        config = self.motion_config
-        speeds = StepSpeeds(
-            config.step_speed_m_s * scale, config.step_accel_m_s2 * scale,
-            config.step_rotation_speed_rad_s * scale, config.step_rotation_accel_rad_s2 * scale,
-        )
-        fingers = self.finger_box()
-        trajectory = plan_gripper_step(self.model, q_start, axis, amount, speeds, fingers, config.board_clearance_m, config.sample_rate_hz)
+        trajectory = self._gripper_step(axis, amount, scale, q_start)
         self.check_motion(trajectory)
         swept_box = self._swept_box(trajectory)
         with self._sending():
@@ -185,6 +183,16 @@ class ManualCommands:
         if wait:
             self.wait_motion(trajectory.duration_s + 5.0)
         return trajectory
+
+    def _gripper_step(self, axis: str, amount: float, scale: float, q_start: np.ndarray) -> JointTrajectory:
+        """The step's trajectory from q_start at `scale` of the configured step speeds (StepRefused/Unreachable)."""
+        config = self.motion_config
+        speeds = StepSpeeds(
+            config.step_speed_m_s * scale, config.step_accel_m_s2 * scale,
+            config.step_rotation_speed_rad_s * scale, config.step_rotation_accel_rad_s2 * scale,
+        )
+        return plan_gripper_step(self.model, q_start, axis, amount, speeds, self.finger_box(), config.board_clearance_m,
+                                 config.sample_rate_hz)
 
     def heartbeat(self, source: str | None = None) -> bool:
         """The controlling client is still there: extend its running jog by jog_hold_s. False (nothing

@@ -110,6 +110,22 @@ class PlannedMoves:
         world, gripper_command, speed = self._world_snapshot(), self._gripper_command(), self.speed_percent
         trajectory = self._paced(self.plan_move(q_goal_rad, moving_time_s), speed, from_rest=True)
         self.check_motion(trajectory)
+        return self._kept_plan(command, source, trajectory, world, gripper_command, speed)
+
+    def plan_motion(self, command: str, make: Callable[[], JointTrajectory], source: str | None = None) -> dict:
+        """A motion made by make() (planned and checked as the command makes it, e.g. a jog step) kept as a plan and
+        returned in its wire form; nothing moves. The same refusals as plan_only before make() runs."""
+        self.require_arm(command)
+        self.allowed_or_raise(command, source)
+        self._refuse_while_moving(command)
+        world, gripper_command, speed = self._world_snapshot(), self._gripper_command(), self.speed_percent
+        trajectory = make()
+        self.check_motion(trajectory)
+        return self._kept_plan(command, source, trajectory, world, gripper_command, speed)
+
+    def _kept_plan(self, command: str, source: str | None, trajectory: JointTrajectory, world: tuple,
+                   gripper_command: str | None, speed: float) -> dict:
+        """The checked trajectory kept as a plan from the measured joints (it must start there); its wire form."""
         measured = self.joints_rad()
         check_start(trajectory, measured, self.motion_config.start_tolerance_rad, self.model.joint_names)
         plan = self.plans.add(MovePlan(new_plan_id(), command, source, trajectory, measured, gripper_command, world, speed))

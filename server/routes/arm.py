@@ -121,11 +121,16 @@ def post_jog(body: JogRequest, station: StationDep, controller: ControlAuth) -> 
     return station.status()
 
 
-@router.post("/arm/step", response_model=Status)
-async def post_step(request: Request, body: StepRequest, station: StationDep, controller: ControlAuth, wait: bool = False) -> dict:
+@router.post("/arm/step", response_model=Status | MovePlan)
+async def post_step(request: Request, body: StepRequest, station: StationDep, controller: ControlAuth, wait: bool = False,
+                    plan_only: bool = PLAN_ONLY) -> dict:
     """Jog step of the gripper: along world x/y/z keeping its pitch and yaw, or a pitch/roll rotation; a step
-    that cannot keep them → 422 with the reason, a step while the arm moves → 409; nothing moves then."""
+    that cannot keep them → 422 with the reason, a step while the arm moves → 409; nothing moves then.
+    ?plan_only=true: the step planned from the measured joints (the plan), nothing moves."""
     amount = body.distance_m if body.axis in ("x", "y", "z") else body.angle_rad
+    if plan_only:
+        return await run_in_threadpool(station.step_gripper, body.axis, amount, body.speed_percent, source=controller,
+                                       plan_only=True)
     await run_in_threadpool(station.step_gripper, body.axis, amount, body.speed_percent, wait=False, source=controller)
     return await _answer(request, station, wait)
 

@@ -197,3 +197,27 @@ def test_with_preview_on_a_click_grab_waits_for_execute_then_runs_that_plan(page
     server.post("/api/drop?wait=true", {"position_m": block["position_m"][:2] + [0.0]}, timeout_s=120)  # as it was
     assert server.get("/api/sim/truth")["gripper"]["holding_id"] is None
     assert page.errors == []
+
+
+def test_with_preview_on_a_jog_step_waits_for_execute_then_steps(page, server):
+    """The same setting on the jog pad: +Z plans the step (the goal arm, the path) and nothing moves (ground truth over
+    sim time); Execute raises the gripper by the chosen step (ground truth)."""
+    page.check("#preview-moves")
+    try:
+        page.select_option("#jog-step", "0.025")
+        q0, point0, t0 = _truth(server)
+        page.click("[data-jog='z+']")
+        assert "nothing moves until Execute" in _result(page, "planned")
+        shown = _shown_plan(page)
+        q1, point1, _ = _after_sim_time(server, t0 + 1.0)
+        assert np.abs(q1 - q0).max() < 2e-3 and np.linalg.norm(point1 - point0) < 0.002, "the arm moved on +Z"
+        page.click("#btn-plan-execute")
+        assert "executing the plan" in _result(page, "sent")
+        server.wait_status(lambda s: not s["moving"] and s["state"] == "idle", 30.0, "the step to end")
+        q2, point2, _ = _truth(server)
+        assert point2[2] - point0[2] == pytest.approx(0.025, abs=0.004), (point0, point2)
+        assert np.linalg.norm(point2[:2] - point0[:2]) < 0.004, (point0, point2)
+        assert np.abs(q2 - np.asarray(shown["joints"])).max() < 0.02, (q2, shown["joints"])
+        assert page.errors == []
+    finally:
+        page.uncheck("#preview-moves")

@@ -38,11 +38,13 @@ export function keyHint(target) {
 }
 
 export class CartesianJog {
-  /** api: Api; run(action, call): the page's REST runner; canJog(): whether the station allows a jog now. */
-  constructor({ api, run, canJog }) {
+  /** api: Api; run(action, call): the page's REST runner; canJog(): whether the station allows a jog now;
+   * moveOrPlan(action, path, body, send): send() now, or with "preview before moving" on the step's plan. */
+  constructor({ api, run, canJog, moveOrPlan = (action, path, body, send) => send() }) {
     this.api = api;
     this.run = run;
     this.canJog = canJog;
+    this.moveOrPlan = moveOrPlan;
     this.busy = false;
     document.querySelectorAll("[data-jog]").forEach((b) =>
       b.addEventListener("click", () => this.step(b.dataset.jog.slice(0, -1), b.dataset.jog.endsWith("+") ? 1 : -1)));
@@ -76,8 +78,9 @@ export class CartesianJog {
     const body = { axis, speed_percent: speed };
     if ("xyz".includes(axis)) body.distance_m = sign * Number($("jog-step").value);
     else body.angle_rad = (sign * ROTATION_STEP_DEG * Math.PI) / 180;
+    const action = `jog ${axis}${sign > 0 ? "+" : "−"}`;
     try {
-      return await this.run(`jog ${axis}${sign > 0 ? "+" : "−"}`, () => this.api.step(body));
+      return await this.moveOrPlan(`plan ${action}`, "/api/arm/step", body, () => this.run(action, () => this.api.step(body)));
     } finally {
       this.busy = false;
     }

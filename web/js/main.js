@@ -68,6 +68,7 @@ class App {
       api: this.api,
       run: (a, c) => this.run(a, c),
       canJog: () => !$("btn-send-joints").disabled && (this.status?.allowed_commands || []).includes("jog"),
+      moveOrPlan: (...args) => this.previewSetting.moveOrPlan(...args),
     });
     this.repeat = new RepeatPanel({ api: this.api, run: (a, c) => this.run(a, c), log: this.log });
     this.teach = new TeachPanel({

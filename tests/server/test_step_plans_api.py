@@ -1,0 +1,104 @@
+"""Plan, then execute for a jog step (issue 22 item 2) over real HTTP on the real-time simulation: `?plan_only=true`
+on POST /api/arm/step answers the step's plan (command jog, the gripper's path up 30 mm) and moves nothing (ground
+truth: the joints over sim time); executing it moves the arm to the plan's goal (ground truth) along exactly that
+trajectory; executing it again, or a plan made before the arm moved, is refused with nothing moved; a step the
+gripper cannot make is refused when planned, and no plan is kept."""
+
+from __future__ import annotations
+
+import httpx
+import numpy as np
+import pytest
+
+import live
+from armlab.kinematics import load_arm
+from armlab.station.config import StationConfig
+from armlab.station.factory import make_sim_station
+from server.app import create_app
+
+TOKEN = "step-plans-token"
+AUTH = {"Authorization": f"Bearer {TOKEN}", "X-Armlab-Controller": "pad"}
+ARM = load_arm("rx200")
+STEP_M = 0.03
+
+
+@pytest.fixture(scope="module")
+def station_url(tmp_path_factory):
+    built = {}
+
+    def factory():
+        built["sim"] = make_sim_station(StationConfig(workcell="rx200_armlab"), tmp_path_factory.mktemp("steps") / "db.sqlite3")
+        return built["sim"]
+
+    with live.serve(create_app(station_factory=factory, token=TOKEN)) as url:
+        with httpx.Client(base_url=url, timeout=120) as http:
+            assert http.post("/api/control/take", headers=AUTH).status_code == 200
+            assert http.post("/api/arm/home", params={"wait": "true"}, headers=AUTH).status_code == 200
+            yield built["sim"].cell, http
+
+
+def _joints(cell) -> np.ndarray:
+    return np.asarray(cell.arm.read_joint_state().position_rad, float)
+
+
+def _at_rest(cell) -> np.ndarray:
+    live.wait_for(lambda: not cell.arm.is_moving(), 15, 0.01)
+    return _joints(cell)
+
+
+def _still(cell, before: np.ndarray) -> None:
+    live.wait_sim(cell, 0.5)
+    assert not cell.arm.is_moving() and np.abs(_joints(cell) - before).max() < 2e-3, "the arm moved"
+
+
+def _plan_step(http, axis: str = "z", distance_m: float = STEP_M):
+    return http.post("/api/arm/step", params={"plan_only": "true"}, json={"axis": axis, "distance_m": distance_m},
+                     headers=AUTH)
+
+
+def test_a_step_planned_moves_nothing_and_executes_as_shown(station_url):
+    cell, http = station_url
+    before = _at_rest(cell)
+    answer = _plan_step(http)
+    assert answer.status_code == 200, answer.text
+    plan = answer.json()
+    assert plan["command"] == "jog" and plan["controller"] == "pad", plan
+    start_m, goal_m = ARM.fk(before)[:3, 3], np.asarray(plan["gripper_path_m"][-1])
+    assert goal_m[2] - start_m[2] == pytest.approx(STEP_M, abs=0.002) and np.linalg.norm(goal_m[:2] - start_m[:2]) < 0.002
+    assert np.abs(np.asarray(plan["q_rad"][0]) - before).max() < 0.02
+    assert http.get("/api/status").json()["state"] == "idle"
+    _still(cell, before)
+
+    done, trace = live.execute_plan_recorded(http, cell, plan["plan_id"], AUTH)
+    assert done.status_code == 200, done.text
+    after = _at_rest(cell)
+    assert np.abs(after - np.asarray(plan["goal_q_rad"])).max() < 0.01, (after, plan["goal_q_rad"])
+    assert ARM.fk(after)[2, 3] - start_m[2] == pytest.approx(STEP_M, abs=0.003)
+    # the servos were sent the plan's trajectory: its reference ended exactly at the plan's goal
+    assert np.abs(trace["reference_rad"][-1] - np.asarray(plan["goal_q_rad"])).max() < 1e-6
+
+    again = http.post(f"/api/plans/{plan['plan_id']}/execute", headers=AUTH)
+    assert again.status_code == 409 and again.json()["error"]["reason"] == "executed", again.text
+    _still(cell, after)
+
+
+def test_a_step_plan_made_before_the_arm_moved_is_refused_stale(station_url):
+    cell, http = station_url
+    _at_rest(cell)
+    plan = _plan_step(http, "x", 0.02).json()
+    assert http.post("/api/arm/step", params={"wait": "true"}, json={"axis": "x", "distance_m": -0.02},
+                     headers=AUTH).status_code == 200
+    before = _at_rest(cell)
+    stale = http.post(f"/api/plans/{plan['plan_id']}/execute", headers=AUTH)
+    assert stale.status_code == 409 and stale.json()["error"]["reason"] in ("arm_moved", "arm_commanded"), stale.text
+    _still(cell, before)
+
+
+def test_a_step_the_gripper_cannot_make_is_refused_when_planned(station_url):
+    cell, http = station_url
+    before = _at_rest(cell)
+    refused = _plan_step(http, "z", -0.5)  # half a metre down: through the board
+    assert refused.status_code == 422, refused.text
+    _still(cell, before)
+    listed = http.get("/api/status").json()
+    assert listed["state"] == "idle"
