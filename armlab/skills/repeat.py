@@ -81,8 +81,10 @@ class _Runner:
     """The repeat job's loop (one instance per job, used only on the job's thread)."""
 
     def __init__(self, station: Station, ctx: JobContext, program, cycles: int | None, control: RunControl,
-                 settings: RepeatSettings, trace: CycleTrace, plans: dict[float, CyclePlan] | None = None) -> None:
+                 settings: RepeatSettings, trace: CycleTrace, plans: dict[float, CyclePlan] | None = None,
+                 ease_in: tuple | None = None) -> None:
         self.station, self.ctx, self.program, self.cycles = station, ctx, program, cycles
+        self.ease_in = ease_in  # (points, run, labels) planned already (a plan shown, then executed), else planned here
         self.control, self.settings, self.trace = control, settings, trace
         self.plans: dict[float, CyclePlan] = {} if plans is None else plans
         self.speed_cap, self.run_speed = 100.0, control.speed_percent
@@ -320,7 +322,8 @@ class _Runner:
     def run(self) -> dict:
         station, waypoints = self.station, self.program.waypoints
         first = np.asarray(waypoints[0].joints_rad)
-        points, ease, labels = plan_ease_in(station, station.start_position(), first, self.control.speed_percent, self.settings)
+        points, ease, labels = self.ease_in or plan_ease_in(station, station.start_position(), first,
+                                                            self.control.speed_percent, self.settings)
         ease_cap = 100.0 * self.settings.ease_in_speed_fraction
         self.move(points, ease, labels, ease_cap)
         self.wait(lambda: not station.arm.is_moving(), 5.0)
@@ -361,25 +364,66 @@ class _Runner:
 
 
 def repeat(station: Station, program_id: int, cycles: int | None = 1, speed_percent: float | None = None,
-           source: str | None = None, settings: RepeatSettings = RepeatSettings()) -> Job:
+           source: str | None = None, settings: RepeatSettings = RepeatSettings(), plan_only: bool = False) -> Job | dict:
     """Start repeating program `program_id` `cycles` times (None: until cancelled) at `speed_percent`: the station's
     speed override (None: as it is; a number becomes the override once the job has started, station/speed.py).
 
     Refused before anything moves (ValueError, UnsafeTrajectory, NotFound, CommandRefused) when the state
-    does not allow it, the numbers are out of range, or a waypoint or segment fails the motion check."""
+    does not allow it, the numbers are out of range, or a waypoint or segment fails the motion check.
+    plan_only: the same planning and refusals, nothing moves; the plan (the ease-in, one cycle, the way home) is kept
+    and Execute starts the repeat on exactly those motions (Station.plan_job)."""
+    if plan_only:
+        return station.plan_job("repeat", lambda: _planned(station, program_id, cycles, speed_percent, source, settings),
+                                source=source)
+    return _started(station, program_id, cycles, speed_percent, source, settings)
+
+
+def _planned(station: Station, program_id: int, cycles: int | None, speed_percent: float | None, source: str | None,
+             settings: RepeatSettings) -> tuple[list, list[str], object]:
+    """Station.plan_job's make(): the repeat's motions as the job will send them, their names, and its start."""
+    planned: dict = {}
+    _started(station, program_id, cycles, speed_percent, source, settings, planned=planned)
+    plan, (_, ease, _), home, waypoints = planned["cycle"], planned["ease_in"], planned["home"], planned["waypoints"]
+    trajectories, names = [ease.trajectory], ["ease in to waypoint 1"]
+    for step in plan.steps:
+        if cycles == 1 and step.closing:
+            continue  # a single cycle does not return to waypoint 1
+        if step.kind == "move":
+            trajectories.append(step.run.trajectory)
+            names.append(f"move to waypoint {step.waypoint + 1}")
+        else:
+            names.append(f"{step.action or step.kind} at waypoint {step.waypoint + 1}")
+    trajectories.append(home.trajectory)
+    names.append("home")
+    times = "once" if cycles == 1 else (f"× {cycles} (one cycle shown)" if cycles else "until stopped (one cycle shown)")
+    names[0] = f"{names[0]} ({len(waypoints)} waypoints, {times})"
+    start = lambda: _started(station, program_id, cycles, speed_percent, source, settings,  # noqa: E731
+                             ease_in=planned["ease_in"], plans={plan.speed_percent: plan})
+    return trajectories, names, start
+
+
+def _started(station: Station, program_id: int, cycles: int | None, speed_percent: float | None, source: str | None,
+             settings: RepeatSettings, planned: dict | None = None, ease_in: tuple | None = None,
+             plans: dict | None = None) -> Job | None:
+    """repeat()'s checks and plans, then its job started; with `planned` (a dict) the plans are put there and no job
+    starts. ease_in, plans: planned already (the plan Execute runs), used as they are."""
     station.allowed_or_raise("repeat", source)
     if cycles is not None and (isinstance(cycles, bool) or not isinstance(cycles, int) or not 1 <= cycles <= MAX_CYCLES):
         raise InvalidInput(f"cycles must be an integer from 1 to {MAX_CYCLES} (or none: until stopped), got {cycles!r}")
     speed_percent = checked_speed_percent(station.speed_percent if speed_percent is None else speed_percent)
     program = station.store.get_program(program_id, station.program_owner)  # another arm's program: WrongArm
-    plan = plan_cycle(station, program, speed_percent, settings)
-    plan_ease_in(station, station.joints_rad(), program.waypoints[0].joints_rad, speed_percent, settings)
-    plan_transfer(station, program.waypoints[-1].joints_rad, station.model.home_rad, speed_percent, settings,
-                  labels=(len(program.waypoints) - 1, HOME_LABEL))
+    plans = dict(plans or {})  # cycle plans by speed, shared with the speed check of set_job_speed
+    plan = plans.get(speed_percent) or plan_cycle(station, program, speed_percent, settings)
+    plans[speed_percent] = plan
+    first_ease_in = ease_in or plan_ease_in(station, station.joints_rad(), program.waypoints[0].joints_rad, speed_percent,
+                                            settings)
+    home = plan_transfer(station, program.waypoints[-1].joints_rad, station.model.home_rad, speed_percent, settings,
+                         labels=(len(program.waypoints) - 1, HOME_LABEL))
+    if planned is not None:
+        planned.update(cycle=plan, ease_in=first_ease_in, home=home, waypoints=program.waypoints)
+        return None
     control = RunControl(speed_percent)
     control.trace = CycleTrace(station.model.joint_names)
-
-    plans = {speed_percent: plan}  # cycle plans by speed, shared with the speed check of set_job_speed
 
     def check_speed(speed: float) -> None:  # a speed the cycle cannot be planned at is refused, the job runs on
         if speed not in plans:
@@ -388,7 +432,7 @@ def repeat(station: Station, program_id: int, cycles: int | None = 1, speed_perc
     control.validate_speed = check_speed
 
     def run(ctx: JobContext) -> dict:
-        return _Runner(station, ctx, program, cycles, control, settings, control.trace, plans).run()
+        return _Runner(station, ctx, program, cycles, control, settings, control.trace, plans, ease_in).run()
 
     times = f"× {cycles}" if cycles is not None else "until stopped"
     job = station.start_job("repeat", "repeat", run, detail=f"program '{program.name}' {times} at {speed_percent:g} %",

@@ -154,6 +154,21 @@ class PlannedMoves:
                                        speed, start=start, goal_rad=goal, steps=tuple(step.name for step in steps)))
         return self.plan_wire(plan)
 
+    def plan_job(self, command: str, make: Callable[[], tuple], source: str | None = None) -> dict:
+        """A job's motions planned and checked by the job's own planner at its own speed, kept as a plan and returned
+        in its wire form; nothing moves. make() -> (its trajectories in order, the steps' names, start: the job
+        running exactly them, started by Execute). The same refusals as plan_only before make() runs."""
+        self.require_arm(command)
+        self.allowed_or_raise(command, source)
+        self._refuse_while_moving(command)
+        world, gripper_command, speed = self._world_snapshot(), self._gripper_command(), self.speed_percent
+        trajectories, names, start = make()
+        measured = self.joints_rad()
+        check_start(trajectories[0], measured, self.motion_config.start_tolerance_rad, self.model.joint_names)
+        plan = self.plans.add(MovePlan(new_plan_id(), command, source, joined(trajectories), measured, gripper_command,
+                                       world, speed, start=start, steps=tuple(names)))
+        return self.plan_wire(plan)
+
     def _arm_busy(self) -> bool:
         """The arm moves, or a motion sent to it has yet to end on the station's clock."""
         return self.arm.is_moving() or self.commanded_motion_running()

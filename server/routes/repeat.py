@@ -16,21 +16,25 @@ from server.deps import ControlAuth, StationDep
 from server.errors import ApiError
 from server.models import JobResponse, ProgramId
 from server.program_models import RepeatRequest, SpeedRequest, TraceResponse
-from server.routes.jobs import WAITED_JOB, job_response
+from server.routes.jobs import PLAN_ONLY, WAITED_JOB_OR_PLAN, job_response
 
 router = APIRouter(prefix="/api", tags=["repeat"])
 
 
-@router.post("/programs/{program_id}/repeat", response_model=JobResponse, status_code=202, responses=WAITED_JOB)
+@router.post("/programs/{program_id}/repeat", response_model=JobResponse, status_code=202, responses=WAITED_JOB_OR_PLAN)
 async def post_repeat(
     request: Request, program_id: ProgramId, station: StationDep, controller: ControlAuth, body: RepeatRequest | None = None,
-    wait: bool = False,
+    wait: bool = False, plan_only: bool = PLAN_ONLY,
 ) -> JSONResponse:
     """Repeat a program `cycles` times (None: until cancelled) at `speed_percent`, as a job: every waypoint
-    and segment checked first, eased in from the current pose, paced by absolute deadlines, home at the end."""
+    and segment checked first, eased in from the current pose, paced by absolute deadlines, home at the end.
+    ?plan_only=true: the plan (the ease-in, one cycle, the way home), nothing moves; Execute starts the repeat on it."""
     body = body or RepeatRequest()
-    job = await run_in_threadpool(skills.repeat, station, program_id, body.cycles, body.speed_percent, source=controller)
-    return await job_response(request, job, wait)
+    started = await run_in_threadpool(lambda: skills.repeat(station, program_id, body.cycles, body.speed_percent,
+                                                            source=controller, plan_only=plan_only))
+    if plan_only:
+        return JSONResponse(started, status_code=200)
+    return await job_response(request, started, wait)
 
 
 def _job(job) -> dict:

@@ -68,10 +68,13 @@ def _execute(http, cell, plan: dict) -> tuple[dict, dict]:
 
 
 def _held_reference_rad(trace: dict) -> np.ndarray:
-    """The servos' reference where it rested longest while the job ran (the gripper acting: no motion commanded)."""
+    """The servos' reference where it rested longest between the job's motions (the gripper acting: no motion
+    commanded). The rests before the first motion and after the last one are not between motions: how long they last
+    depends on how soon the recording started and stopped (long on a loaded machine)."""
     reference = trace["reference_rad"]
     still = np.flatnonzero(np.abs(np.diff(reference, axis=0)).max(axis=1) < 1e-9)
-    runs = np.split(still, np.flatnonzero(np.diff(still) > 1) + 1)
+    runs = [run for run in np.split(still, np.flatnonzero(np.diff(still) > 1) + 1)
+            if len(run) and run[0] > 0 and run[-1] < len(reference) - 2]
     longest = max(runs, key=len)
     return reference[longest[0]]
 

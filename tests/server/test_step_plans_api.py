@@ -6,6 +6,8 @@ gripper cannot make is refused when planned, and no plan is kept."""
 
 from __future__ import annotations
 
+import json
+
 import httpx
 import numpy as np
 import pytest
@@ -102,3 +104,61 @@ def test_a_step_the_gripper_cannot_make_is_refused_when_planned(station_url):
     _still(cell, before)
     listed = http.get("/api/status").json()
     assert listed["state"] == "idle"
+
+
+WAYPOINTS_RAD = [[0.4, -0.2, 0.3, 0.6, 0.0], [0.0, 0.1, 0.2, 0.8, 0.3], [-0.4, -0.1, 0.2, 0.7, 0.0]]
+
+
+def _program(http) -> int:
+    content = json.dumps({"name": "plan-repeat", "waypoints": [{"joints_rad": q, "gripper": "release"} for q in WAYPOINTS_RAD]})
+    answer = http.post("/api/programs/import", json={"format": "json", "content": content}, headers=AUTH)
+    assert answer.status_code in (200, 201), answer.text
+    return answer.json()["id"]
+
+
+def test_a_repeat_planned_moves_nothing_then_runs_those_motions(station_url):
+    cell, http = station_url
+    program_id = _program(http)
+    before = _at_rest(cell)
+    answer = http.post(f"/api/programs/{program_id}/repeat", params={"plan_only": "true"}, json={"cycles": 1},
+                       headers=AUTH)
+    assert answer.status_code == 200, answer.text
+    plan = answer.json()
+    assert plan["command"] == "repeat" and plan["steps"][0].startswith("ease in") and plan["steps"][-1] == "home", plan
+    assert np.abs(np.asarray(plan["q_rad"][0]) - before).max() < 0.02
+    home = np.asarray(ARM.home_rad)
+    assert np.abs(np.asarray(plan["goal_q_rad"]) - home).max() < 1e-6  # the way home shown at the end
+    shown = np.asarray(plan["q_rad"])
+    for q in WAYPOINTS_RAD:  # the path shown passes through every waypoint
+        assert np.abs(shown - np.asarray(q)).max(axis=1).min() < 0.05, q
+    assert http.get("/api/status").json()["state"] == "idle"
+    _still(cell, before)
+
+    done, trace = live.execute_plan_recorded(http, cell, plan["plan_id"], AUTH)
+    assert done.status_code == 200, done.text
+    assert done.json()["job"]["name"] == "repeat" and done.json()["job"]["state"] == "succeeded", done.text
+    reference = trace["reference_rad"]  # what the simulated servos were sent, at every control tick
+    for q in (WAYPOINTS_RAD[0], WAYPOINTS_RAD[-1]):  # the run stops at its first and last waypoints (blends between)
+        assert np.abs(reference - np.asarray(q)).max(axis=1).min() < 1e-3, q
+    # every point of the path shown was sent (within a control tick's travel): the motions run are the plan's
+    misses = [np.abs(reference - q).max(axis=1).min() for q in shown]
+    assert max(misses) < 5e-3, max(misses)
+    assert np.abs(reference[-1] - home).max() < 1e-6
+    again = http.post(f"/api/plans/{plan['plan_id']}/execute", headers=AUTH)
+    assert again.status_code == 409 and again.json()["error"]["reason"] == "executed", again.text
+
+
+def test_a_repeat_plan_made_before_the_arm_moved_is_refused_stale(station_url):
+    cell, http = station_url
+    program_id = _program(http)
+    _at_rest(cell)
+    plan = http.post(f"/api/programs/{program_id}/repeat", params={"plan_only": "true"}, json={"cycles": 2},
+                     headers=AUTH).json()
+    assert "one cycle shown" in plan["steps"][0], plan["steps"]
+    assert http.post("/api/arm/step", params={"wait": "true"}, json={"axis": "z", "distance_m": 0.02},
+                     headers=AUTH).status_code == 200
+    before = _at_rest(cell)
+    stale = http.post(f"/api/plans/{plan['plan_id']}/execute", headers=AUTH)
+    assert stale.status_code == 409 and stale.json()["error"]["reason"] in ("arm_moved", "arm_commanded"), stale.text
+    _still(cell, before)
+    assert http.get("/api/status").json()["state"] == "idle"

@@ -70,7 +70,8 @@ class App {
       canJog: () => !$("btn-send-joints").disabled && (this.status?.allowed_commands || []).includes("jog"),
       moveOrPlan: (...args) => this.previewSetting.moveOrPlan(...args),
     });
-    this.repeat = new RepeatPanel({ api: this.api, run: (a, c) => this.run(a, c), log: this.log });
+    this.repeat = new RepeatPanel({ api: this.api, run: (a, c) => this.run(a, c), log: this.log,
+                                    moveOrPlan: (...args) => this.previewSetting.moveOrPlan(...args) });
     this.teach = new TeachPanel({
       api: this.api,
       run: (a, c) => this.run(a, c),

@@ -15,10 +15,12 @@ export function progressText(r) {
 }
 
 export class RepeatPanel {
-  constructor({ api, run, log }) {
+  /** moveOrPlan(action, path, body, send): send() now, or with "preview before moving" on the repeat's plan. */
+  constructor({ api, run, log, moveOrPlan = (action, path, body, send) => send() }) {
     this.api = api;
     this.run = run;
     this.log = log;
+    this.moveOrPlan = moveOrPlan;
     this.jobId = null;
     this.cyclesSeen = -1;
     this.plot = null;
@@ -41,7 +43,9 @@ export class RepeatPanel {
   start(program) {
     const text = $("repeat-cycles").value.trim();
     const cycles = text === "" ? null : Math.max(1, Math.round(Number(text)) || 1);
-    return this.run(`repeat ${program.name}`, () => this.api.repeat(program.id, cycles, this.speedPercent));
+    const path = `/api/programs/${encodeURIComponent(program.id)}/repeat`;
+    return this.moveOrPlan(`plan repeat ${program.name}`, path, { cycles, speed_percent: this.speedPercent },
+      () => this.run(`repeat ${program.name}`, () => this.api.repeat(program.id, cycles, this.speedPercent)));
   }
 
   /** The slider sets the station's one speed override (the top bar's): the running repeat re-plans at it. */
