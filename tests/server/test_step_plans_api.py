@@ -14,9 +14,6 @@ import pytest
 
 import live
 from armlab.kinematics import load_arm
-from armlab.station.config import StationConfig
-from armlab.station.factory import make_sim_station
-from server.app import create_app
 
 TOKEN = "step-plans-token"
 AUTH = {"Authorization": f"Bearer {TOKEN}", "X-Armlab-Controller": "pad"}
@@ -24,19 +21,16 @@ ARM = load_arm("rx200")
 STEP_M = 0.03
 
 
+cell, url = live.module_fixtures(seed=5, token=TOKEN)
+
+
 @pytest.fixture(scope="module")
-def station_url(tmp_path_factory):
-    built = {}
-
-    def factory():
-        built["sim"] = make_sim_station(StationConfig(workcell="rx200_armlab"), tmp_path_factory.mktemp("steps") / "db.sqlite3")
-        return built["sim"]
-
-    with live.serve(create_app(station_factory=factory, token=TOKEN)) as url:
-        with httpx.Client(base_url=url, timeout=120) as http:
-            assert http.post("/api/control/take", headers=AUTH).status_code == 200
-            assert http.post("/api/arm/home", params={"wait": "true"}, headers=AUTH).status_code == 200
-            yield built["sim"].cell, http
+def station_url(cell, url):
+    """The simulation and a client holding the control lease (as the pad), the arm at home."""
+    with httpx.Client(base_url=url, timeout=120) as http:
+        assert http.post("/api/control/take", headers=AUTH).status_code == 200
+        assert http.post("/api/arm/home", params={"wait": "true"}, headers=AUTH).status_code == 200
+        yield cell, http
 
 
 def _joints(cell) -> np.ndarray:
