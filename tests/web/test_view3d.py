@@ -17,7 +17,7 @@ import pytest
 from playwright.sync_api import TimeoutError as PlaywrightTimeout
 
 from armlab.tasks.judge import GRIPPER_BOX_M
-from browser_helpers import open_page, ready_idle
+from browser_helpers import enter_click_mode, open_page, ready_idle
 
 pytestmark = pytest.mark.browser
 
@@ -144,6 +144,56 @@ def test_blocks_ground_truth_and_depth_points(server, browser):
         page.check("[data-view3d-layer='box']")
         centre = page.evaluate("armlab.view3d.gripperBox.visible && armlab.view3d.gripperBox.position.toArray()")
         assert np.allclose(centre, (np.asarray(box["min_m"]) + box["max_m"]) / 2, atol=1e-6)
+        assert page.errors == []
+    finally:
+        page.close()
+
+
+def test_grab_and_drop_by_clicking_in_the_3d_view(server, browser):
+    """Acting in 3-D (issue 22 item 3): in Click-grab mode a click on a detected block's box in the 3-D view grabs that
+    block (ground truth: the gripper holds it); in Click-drop mode a click on the board there puts it down at that point
+    (ground truth within 10 mm). A drag orbits the view and grabs nothing."""
+    ready_idle(server)
+    server.post("/api/arm/sleep?wait=true", {"moving_time_s": 2.0})
+    if server.get("/api/status")["calibration_state"] != "trusted":
+        server.post("/api/calibrate?wait=true", timeout_s=120)
+    server.wait_status(lambda s: s["calibration_state"] == "trusted" and s["state"] == "idle", 60.0, "calibrated")
+    page = _panel_page(browser, server)
+    try:
+        page.click("[data-view3d-preset='top']")
+        page.wait_for_function("armlab.view3d.detections.group.children.length > 0"
+                               " && (armlab.status?.detections || []).some((d) => d.is_cube)", timeout=30_000)
+        cubes = [d for d in page.evaluate("armlab.status.detections") if d["is_cube"] and not d.get("occluded")]
+        cube = min(cubes, key=lambda d: abs(float(np.hypot(*d["position_m"][:2])) - 0.25))
+        objects = server.get("/api/sim/truth")["objects"]
+        block = min(objects, key=lambda o: float(np.linalg.norm(np.asarray(o["position_m"][:2]) - cube["position_m"][:2])))
+        enter_click_mode(page, "grab")
+        grabs_before = {row["id"] for row in server.get("/api/history/jobs?limit=1000")["data"] if row["name"] == "grab"}
+        x, y = page.evaluate("(p) => armlab.view3d.clientPointOf(p)", cube["position_m"])
+        page.mouse.move(x, y)  # a drag across the block orbits the view: no grab
+        page.mouse.down()
+        page.mouse.move(x + 60, y + 20, steps=5)
+        page.mouse.up()
+        x, y = page.evaluate("(p) => armlab.view3d.clientPointOf(p)", cube["position_m"])  # where the orbit put it
+        page.mouse.click(x, y)
+        status = server.wait_status(lambda s: (s.get("job") or {}).get("name") == "grab" and s["job"]["state"] != "running"
+                                    and s["state"] == "idle", 90.0, "the grab from the 3-D view to end")
+        assert status["job"]["state"] == "succeeded", status["job"]
+        grabs = [row for row in server.get("/api/history/jobs?limit=1000")["data"]
+                 if row["name"] == "grab" and row["id"] not in grabs_before]
+        assert len(grabs) == 1, grabs  # the click's, not the drag's too
+        assert server.get("/api/sim/truth")["gripper"]["holding_id"] == block["id"]
+
+        drop_m = [0.15, 0.2, 0.0]
+        enter_click_mode(page, "drop")
+        page.mouse.click(*page.evaluate("(p) => armlab.view3d.clientPointOf(p)", drop_m))
+        status = server.wait_status(lambda s: (s.get("job") or {}).get("name") == "drop" and s["job"]["state"] != "running"
+                                    and s["state"] == "idle", 90.0, "the drop from the 3-D view to end")
+        assert status["job"]["state"] == "succeeded", status["job"]
+        truth = server.get("/api/sim/truth")
+        placed = next(o for o in truth["objects"] if o["id"] == block["id"])
+        assert truth["gripper"]["holding_id"] is None
+        assert np.linalg.norm(np.asarray(placed["position_m"][:2]) - drop_m[:2]) < 0.010, placed["position_m"]
         assert page.errors == []
     finally:
         page.close()

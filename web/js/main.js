@@ -309,7 +309,8 @@ class App {
     if (!this.view3dLoading) {
       const prefetched = prefetchView3d(this.api);
       this.view3dLoading = import("./view3d.js").then(async ({ View3D }) => {
-        const view = new View3D({ root: $("view3d-panel"), api: this.api, prefetched, serverNowS: () => this.stream.serverNowS() });
+        const view = new View3D({ root: $("view3d-panel"), api: this.api, prefetched, serverNowS: () => this.stream.serverNowS(),
+                                  onPick: (positionM) => this.picked3d(positionM) });
         if (this.calibrationShown) view.setCalibration(this.calibrationShown);
         $("view3d-panel").hidden = false;
         await view.start();
@@ -320,6 +321,13 @@ class App {
     }
     await this.view3dLoading;
     this.view3d?.show(button.getAttribute("aria-pressed") === "true");
+  }
+
+  /** A click in the 3-D view: in Click-grab / Click-drop mode the same grab or drop as a click on the video. */
+  picked3d(positionM) {
+    const mode = this.live.mode;
+    if (mode === "grab" || mode === "drop") this.clicks.clickTarget({ mode, positionM });
+    else this.log.toast("info", "3-D view", "choose Click-grab or Click-drop, then click a block or the board here");
   }
 
   showCalibration(calibration) {

@@ -21,11 +21,15 @@ import {
 const TRUTH_POLL_MS = 500;
 const POINTS_POLL_MS = 1000;
 const REFUSED_COLOR = 0xe53935; // the part of the arm a refused plan would crash
+const PICK_MAX_DRAG_PX = 5; // a press and release closer than this is a click (a pick), farther an orbit
+const BOARD_PLANE = new THREE.Plane(new THREE.Vector3(0, 0, 1), 0); // the board's top, z = 0 in the world
 
 export class View3D {
-  /** root: the panel element (holds a .view3d-canvas-wrap and the controls); serverNowS: the server clock. */
-  constructor({ root, api, prefetched = null, serverNowS = () => Date.now() / 1000 }) {
+  /** root: the panel element (holds a .view3d-canvas-wrap and the controls); serverNowS: the server clock;
+   * onPick(positionM): a click (not a drag) on a detected block (its top's centre) or on the board (z = 0). */
+  constructor({ root, api, prefetched = null, serverNowS = () => Date.now() / 1000, onPick = () => {} }) {
     this.root = root;
+    this.onPick = onPick;
     this.api = api;
     this.prefetched = prefetched; // view3d_prefetch.js: the scene and mesh files, already on their way
     this.serverNowS = serverNowS;
@@ -59,6 +63,7 @@ export class View3D {
     this.camera.up.set(0, 0, 1);
     this.controls = new OrbitControls(this.camera, this.renderer.domElement);
     this.controls.addEventListener("change", () => this.invalidate());
+    this.bindPicking(this.renderer.domElement);
     this.resize();
     new ResizeObserver(() => this.resize()).observe(this.wrap);
 
@@ -143,6 +148,42 @@ export class View3D {
     this.planShown.path.material.dispose();
     this.planShown = null;
     this.invalidate();
+  }
+
+  /** A left click that does not drag (the orbit's drags do) picks the world point under it (pickAt). */
+  bindPicking(element) {
+    let pressed = null;
+    element.addEventListener("pointerdown", (e) => { pressed = e.button === 0 ? { x: e.clientX, y: e.clientY } : null; });
+    element.addEventListener("pointerup", (e) => {
+      const start = pressed;
+      pressed = null;
+      if (!start || e.button !== 0 || Math.hypot(e.clientX - start.x, e.clientY - start.y) > PICK_MAX_DRAG_PX) return;
+      const positionM = this.pickAt(e.clientX, e.clientY);
+      if (positionM) this.onPick(positionM);
+    });
+  }
+
+  /** The world point (m) under a page point: the top centre of the nearest detected block the ray meets, else
+   * where it meets the board (z = 0); null off the board's plane. */
+  pickAt(clientX, clientY) {
+    const r = this.renderer.domElement.getBoundingClientRect();
+    const ndc = new THREE.Vector2(((clientX - r.left) / r.width) * 2 - 1, -((clientY - r.top) / r.height) * 2 + 1);
+    const raycaster = new THREE.Raycaster();
+    raycaster.setFromCamera(ndc, this.camera);
+    const [hit] = raycaster.intersectObjects(this.detections.group.children, false);
+    if (hit) {
+      const box = hit.object;
+      return [box.position.x, box.position.y, box.position.z + box.geometry.parameters.depth / 2];
+    }
+    const onBoard = raycaster.ray.intersectPlane(BOARD_PLANE, new THREE.Vector3());
+    return onBoard ? [onBoard.x, onBoard.y, 0] : null;
+  }
+
+  /** The page point where a world point (m) is drawn (tests and the bench click there). */
+  clientPointOf(positionM) {
+    const r = this.renderer.domElement.getBoundingClientRect();
+    const p = new THREE.Vector3(...positionM).project(this.camera);
+    return [r.left + ((p.x + 1) / 2) * r.width, r.top + ((1 - p.y) / 2) * r.height];
   }
 
   bindControls() {
