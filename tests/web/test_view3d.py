@@ -199,6 +199,68 @@ def test_grab_and_drop_by_clicking_in_the_3d_view(server, browser):
         page.close()
 
 
+HANDLE_POINT = """(name) => { const g = armlab.view3d.goal; const root = g.controls.getHelper();
+    root.updateMatrixWorld(true); const gizmo = root.children.find((c) => c.picker);
+    const handle = gizmo.picker.translate.children.find((c) => c.name === name);
+    handle.geometry.computeBoundingBox();  // the handle's offset is in its geometry, at the gizmo's scale
+    const centre = handle.geometry.boundingBox.getCenter(handle.position.clone()).applyMatrix4(handle.matrixWorld);
+    return armlab.view3d.clientPointOf(centre.toArray()); }"""
+
+
+def _drag_goal_marker(page, to_m) -> dict:
+    """Drag the goal marker by its XY handle (the square between its x and y arrows: moves it in the board's plane)
+    by as much as the page point of to_m is from the marker's; the Go to panel's answer once it has one."""
+    page.evaluate("delete document.getElementById('target-result').dataset.state")
+    marker = page.evaluate("armlab.view3d.clientPointOf(armlab.view3d.goal.positionM())")
+    target = page.evaluate("(p) => armlab.view3d.clientPointOf(p)", to_m)
+    start = page.evaluate(HANDLE_POINT, "XY")
+    end = [start[0] + target[0] - marker[0], start[1] + target[1] - marker[1]]
+    page.mouse.move(*start)
+    page.mouse.down()
+    page.mouse.move(*end, steps=12)
+    page.mouse.up()
+    page.wait_for_function("['checked', 'refused'].includes(document.getElementById('target-result').dataset.state)",
+                           timeout=30_000)
+    return page.evaluate("""() => { const g = armlab.view3d.goal; const r = document.getElementById('target-result');
+        return { state: r.dataset.state, text: r.textContent, marker: g.positionM(),
+                 fields: ['x', 'y', 'z'].map((a) => Number(document.getElementById(`target-${a}`).value)),
+                 solution: g.solution ? g.solution.toolPosition() : null }; }""")
+
+
+def test_the_goal_marker_shows_the_solution_or_why_there_is_none(server, browser):
+    """Acting in 3-D (issue 22 item 3): the goal marker starts at the gripper; dragged to a reachable point it fills the
+    Go to panel's x, y, z and shows the station's solution as a green arm whose gripper is at the marker; dragged out
+    of reach it shows the station's reason and no arm. Nothing moves either way (the measured joints)."""
+    ready_idle(server)
+    server.post("/api/arm/joints?wait=true", {"q_rad": [0.3, 0.0, 0.3, 0.9, 0.0], "moving_time_s": 1.5})
+    before = ready_idle(server)["joints_rad"]
+    page = _panel_page(browser, server)
+    try:
+        page.click("[data-view3d-preset='top']")
+        page.check("[data-view3d-goal]")
+        page.wait_for_function("armlab.view3d.goal.shown", timeout=10_000)
+        start = page.evaluate("armlab.view3d.goal.positionM()")
+        tool = page.evaluate("armlab.view3d.arm.toolPosition()")
+        assert np.linalg.norm(np.asarray(start) - tool) < 1e-6  # it starts at the gripper
+        reachable = [0.20, 0.15, start[2]]
+        shown = _drag_goal_marker(page, reachable)
+        assert shown["state"] == "checked" and "reachable" in shown["text"], shown
+        assert np.linalg.norm(np.asarray(shown["marker"][:2]) - reachable[:2]) < 0.005, shown["marker"]
+        assert np.allclose(shown["fields"], np.asarray(shown["marker"]) * 1000, atol=0.06), shown  # the panel's x, y, z
+        assert np.linalg.norm(np.asarray(shown["solution"]) - shown["marker"]) < 0.005, shown  # the goal arm's gripper
+        out_of_reach = [0.55, 0.45, start[2]]
+        shown = _drag_goal_marker(page, out_of_reach)
+        assert shown["state"] == "refused" and "no way there" in shown["text"], shown
+        assert shown["solution"] is None
+        now = server.get("/api/status")
+        assert now["state"] == "idle" and np.abs(np.subtract(now["joints_rad"], before)).max() < 2e-3
+        page.uncheck("[data-view3d-goal]")
+        assert not page.evaluate("armlab.view3d.goal.shown")
+        assert page.errors == []
+    finally:
+        page.close()
+
+
 def test_the_page_without_the_panel_loads_no_three_js(server, browser):
     page = open_page(browser, f"{server.base_url}/?token={server.token}")
     try:

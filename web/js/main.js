@@ -310,7 +310,8 @@ class App {
       const prefetched = prefetchView3d(this.api);
       this.view3dLoading = import("./view3d.js").then(async ({ View3D }) => {
         const view = new View3D({ root: $("view3d-panel"), api: this.api, prefetched, serverNowS: () => this.stream.serverNowS(),
-                                  onPick: (positionM) => this.picked3d(positionM) });
+                                  onPick: (positionM) => this.picked3d(positionM),
+                                  onGoal: (positionM) => this.target.goalMoved(positionM) });
         if (this.calibrationShown) view.setCalibration(this.calibrationShown);
         $("view3d-panel").hidden = false;
         await view.start();

@@ -43,6 +43,7 @@ export class TargetPanel {
     this.run = run;
     this.status = status;
     this.names = [];
+    this.view3d = view3d;
     this.preview = new PlanPreview({ api, run, show: (state, text) => this.show(state, text), openView3d, view3d });
     $("btn-target-go").addEventListener("click", () => this.goPose(previewOn()));
     $("btn-joints-go").addEventListener("click", () => this.goJoints(previewOn()));
@@ -95,6 +96,30 @@ export class TargetPanel {
     const time = readMovingTimeS($("jog-time"));
     if (!time.ok) this.show("refused", time.message);
     return time;
+  }
+
+  /** The 3-D view's goal marker was dragged to positionM: its x, y, z into the fields (pitch and yaw as typed), then
+   * the station's check of that pose (nothing moves); the solution drawn as the marker's goal arm, or the reason. */
+  async goalMoved(positionM) {
+    positionM.forEach((v, i) => { $(`target-${"xyz"[i]}`).value = (v * 1000).toFixed(1); });
+    const read = readPoseForm({
+      x: $("target-x").value, y: $("target-y").value, z: $("target-z").value,
+      pitch: $("target-pitch").value, yaw: $("target-yaw").value,
+    });
+    const goal = this.view3d()?.goal;
+    if (read.message) {
+      goal?.showSolution(null);
+      return this.show("refused", `goal marker: ${read.message}`);
+    }
+    const where = read.body.position_m.map((v) => (v * 1000).toFixed(0)).join(", ");
+    try {
+      const checked = await this.api.checkPose(read.body);
+      goal?.showSolution(checked.q_rad);
+      return this.show("checked", `goal ${where} mm: reachable (${checked.duration_s.toFixed(1)} s from here); Plan or Go moves there`);
+    } catch (e) {
+      goal?.showSolution(null);
+      return this.show("refused", `goal ${where} mm: no way there: ${e.message}`);
+    }
   }
 
   /** Go (or, with planOnly, plan without moving: plan_preview.js) to the typed pose. */

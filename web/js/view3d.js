@@ -17,6 +17,7 @@ import {
   detectionBoxes,
   truthBoxes,
 } from "./view3d_scene.js";
+import { GoalMarker } from "./view3d_goal.js";
 
 const TRUTH_POLL_MS = 500;
 const POINTS_POLL_MS = 1000;
@@ -26,10 +27,13 @@ const BOARD_PLANE = new THREE.Plane(new THREE.Vector3(0, 0, 1), 0); // the board
 
 export class View3D {
   /** root: the panel element (holds a .view3d-canvas-wrap and the controls); serverNowS: the server clock;
-   * onPick(positionM): a click (not a drag) on a detected block (its top's centre) or on the board (z = 0). */
-  constructor({ root, api, prefetched = null, serverNowS = () => Date.now() / 1000, onPick = () => {} }) {
+   * onPick(positionM): a click (not a drag) on a detected block (its top's centre) or on the board (z = 0);
+   * onGoal(positionM): the goal marker (view3d_goal.js) was dragged there. */
+  constructor({ root, api, prefetched = null, serverNowS = () => Date.now() / 1000, onPick = () => {}, onGoal = () => {} }) {
     this.root = root;
     this.onPick = onPick;
+    this.onGoal = onGoal;
+    this.goal = null; // GoalMarker, once the scene is up
     this.api = api;
     this.prefetched = prefetched; // view3d_prefetch.js: the scene and mesh files, already on their way
     this.serverNowS = serverNowS;
@@ -62,7 +66,10 @@ export class View3D {
     this.camera = new THREE.PerspectiveCamera(45, 1, 0.01, 20);
     this.camera.up.set(0, 0, 1);
     this.controls = new OrbitControls(this.camera, this.renderer.domElement);
-    this.controls.addEventListener("change", () => this.invalidate());
+    this.controls.addEventListener("change", () => {
+      this.goal?.fitToView();
+      this.invalidate();
+    });
     this.bindPicking(this.renderer.domElement);
     this.resize();
     new ResizeObserver(() => this.resize()).observe(this.wrap);
@@ -88,6 +95,7 @@ export class View3D {
         ? `${description.arm.name}: meshes ${description.arm.meshes.source} (${description.arm.meshes.licence})`
         : `${description.arm.name}: the simulation's shapes`;
     }
+    this.goal = new GoalMarker(this, (positionM) => this.onGoal(positionM));
     this.bindControls();
     if (this.calibration) this.setCalibration(this.calibration);
     this.loop = () => {
@@ -153,7 +161,9 @@ export class View3D {
   /** A left click that does not drag (the orbit's drags do) picks the world point under it (pickAt). */
   bindPicking(element) {
     let pressed = null;
-    element.addEventListener("pointerdown", (e) => { pressed = e.button === 0 ? { x: e.clientX, y: e.clientY } : null; });
+    element.addEventListener("pointerdown", (e) => {
+      pressed = e.button === 0 && !this.goal?.active ? { x: e.clientX, y: e.clientY } : null; // the marker's handles drag it
+    });
     element.addEventListener("pointerup", (e) => {
       const start = pressed;
       pressed = null;
@@ -193,6 +203,8 @@ export class View3D {
     for (const box of this.root.querySelectorAll("[data-view3d-layer]")) {
       box.addEventListener("change", () => this.applyLayers());
     }
+    const goalBox = this.root.querySelector("[data-view3d-goal]");
+    goalBox?.addEventListener("change", () => this.goal.show(goalBox.checked ? this.arm?.toolPosition() ?? [0.2, 0.1, 0.1] : null));
     this.applyLayers();
   }
 
@@ -285,6 +297,7 @@ export class View3D {
     this.camera.updateProjectionMatrix();
     this.controls.target.copy(centre);
     this.controls.update();
+    this.goal?.fitToView();
     this.preset = name;
     this.invalidate();
   }
