@@ -62,6 +62,10 @@ class Status(Wire):
     state: Literal["idle", "calibrate", "teach", "repeat", "click_grab", "click_drop", "auto_sort", "estop", "fault"]
     detail: str
     joints_rad: list[float]
+    commanded_joints_rad: list[float] | None = Field(None, description="the commanded reference now (the last "
+                                                     "trajectory sent, at the station's clock; its end once it has run "
+                                                     "out): the measured joints trail it; None before any motion was "
+                                                     "sent or after a halt")
     joint_names: list[str]
     joint_limits_rad: list[list[float]] = Field(description="[lower, upper] per joint")
     gripper: GripperStatus

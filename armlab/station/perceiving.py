@@ -75,10 +75,12 @@ class Perceiving:
             lost = dict(self._lost)
         perception, _ = self.perception.get()
         camera_warning = perception.camera_warning if checked and perception is not None else None
+        commanded = self.commanded_joints_rad() if self.has_arm else None
         return {
             "state": state.value,
             "detail": detail,
             "joints_rad": [float(v) for v in q],
+            "commanded_joints_rad": None if commanded is None else [float(v) for v in commanded],
             "joint_names": list(self.model.joint_names) if self.has_arm else [],
             "joint_limits_rad": [[float(lo), float(hi)] for lo, hi in zip(self.model.lower_rad, self.model.upper_rad)] if self.has_arm else [],
             "gripper": gripper_dict,

@@ -12,6 +12,8 @@ simulation has it. The page without the panel opened fetches none of three.js.""
 
 from __future__ import annotations
 
+import json
+
 import numpy as np
 import pytest
 from playwright.sync_api import TimeoutError as PlaywrightTimeout
@@ -259,6 +261,51 @@ def test_the_goal_marker_shows_the_solution_or_why_there_is_none(server, browser
         assert page.errors == []
     finally:
         page.close()
+
+
+TEACH_POSES_RAD = [[0.4, -0.2, 0.3, 0.6, 0.0], [0.0, 0.1, 0.2, 0.8, 0.3], [-0.4, -0.1, 0.2, 0.7, 0.0]]
+ARM_TOOLS = """() => armlab.view3d.program.arms.map((a) => a.loaded ? a.toolPosition() : null)"""
+ARM_OPACITIES = """() => armlab.view3d.program.arms.map((a) => { let o = null;
+    a.robot.traverse((n) => { if (n.isMesh && o === null) o = n.material.opacity; }); return o; })"""
+
+
+def test_a_programs_waypoints_in_3d_and_the_commanded_arm_during_its_repeat(server, browser):
+    """Teach in 3-D (issue 22 item 4): the selected program's waypoints are see-through arms whose grippers are at the
+    waypoints' gripper points (the server's FK, 5 mm); a row chosen in the waypoint table stands out in 3-D; during
+    a repeat a second arm shows the commanded joints (the station's), gone once the repeat has ended."""
+    ready_idle(server)
+    content = json.dumps({"name": "teach-in-3d", "waypoints": [{"joints_rad": q, "gripper": "release"} for q in TEACH_POSES_RAD]})
+    program = server.post("/api/programs/import", {"format": "json", "content": content})
+    stored = server.get(f"/api/programs/{program['id']}")
+    page = _panel_page(browser, server)
+    try:
+        page.click("#btn-programs-refresh")
+        page.click(f"#program-list li[data-program-id='{program['id']}'] span")
+        page.wait_for_function(f"armlab.view3d.program.arms.length === {len(TEACH_POSES_RAD)}"
+                               " && armlab.view3d.program.arms.every((a) => a.loaded)", timeout=30_000)
+        tools = page.evaluate(ARM_TOOLS)
+        for tool, waypoint in zip(tools, stored["waypoints"]):
+            assert np.linalg.norm(np.asarray(tool) - waypoint["gripper_position_m"]) < 0.005, (tool, waypoint)
+        page.click("#program-table tbody tr:nth-child(2) td:first-child")
+        page.wait_for_function("armlab.view3d.program.selected === 1 && armlab.view3d.program.arms[1].loaded", timeout=10_000)
+        opacities = page.evaluate(ARM_OPACITIES)
+        assert opacities[1] > opacities[0] and opacities[1] > opacities[2], opacities  # the chosen one stands out
+        assert page.evaluate("document.querySelector('#program-table tbody tr:nth-child(2)').classList.contains('selected')")
+
+        assert page.evaluate("armlab.view3d.commandedArm") is None
+        server.post(f"/api/programs/{program['id']}/repeat", {"cycles": 1, "speed_percent": 30})
+        page.wait_for_function("""armlab.status?.state === 'repeat' && armlab.view3d.commandedArm?.loaded
+            && Array.isArray(armlab.status.commanded_joints_rad)""", timeout=30_000)
+        drawn = page.evaluate("""() => { const v = armlab.view3d; const names = v.armDescription.joint_names;
+            return { commanded: names.map((n) => v.commandedArm.robot.joints[n].angle),
+                     telemetry: armlab.status.commanded_joints_rad }; }""")
+        assert np.abs(np.subtract(drawn["commanded"], drawn["telemetry"])).max() < 0.02, drawn
+        server.wait_status(lambda s: s["state"] == "idle" and not s["moving"], 120.0, "the repeat to end")
+        page.wait_for_function("armlab.view3d.commandedArm === null", timeout=10_000)
+        assert page.errors == []
+    finally:
+        page.close()
+        server.request("DELETE", f"/api/programs/{program['id']}")
 
 
 def test_the_page_without_the_panel_loads_no_three_js(server, browser):

@@ -80,6 +80,8 @@ class App {
       onRepeat: (program) => this.repeat.start(program),
       afterChange: () => this.refreshAllowed(),
       onPath: (path) => this.programPath.set(path),
+      onProgram: (waypoints) => { this.programShown = waypoints; this.view3d?.program.show(waypoints); },
+      onWaypointSelected: (index) => this.view3d?.program.select(index),
     });
     this.lease = new ControlLease({ api: this.api, log: this.log, onChange: () => this.refreshAllowed() });
     this.intrinsics = new IntrinsicsPanel({ root: $("intrinsics-panel"), api: this.api, log: this.log });
@@ -317,6 +319,7 @@ class App {
         await view.start();
         if (this.backend) view.setBackend(this.backend);
         if (this.status) view.onTelemetry(this.status);
+        if (this.programShown) view.program.show(this.programShown);
         this.view3d = view;
       }).catch((e) => this.log.add("error", `3-D view: ${e.message}`));
     }

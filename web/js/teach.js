@@ -33,7 +33,7 @@ function toRequest(w) {
 
 export class TeachPanel {
   /** api: Api; run(action, call); log: EventLog; status(): the newest status; onRepeat(program): start a repeat. */
-  constructor({ api, run, log, status, onRepeat, afterChange, onPath }) {
+  constructor({ api, run, log, status, onRepeat, afterChange, onPath, onProgram, onWaypointSelected }) {
     this.api = api;
     this.run = run;
     this.log = log;
@@ -41,6 +41,8 @@ export class TeachPanel {
     this.onRepeat = onRepeat;
     this.afterChange = afterChange || (() => {});
     this.onPath = onPath || (() => {}); // the selected program's path (or null) for the live view
+    this.onProgram = onProgram || (() => {}); // the selected program's waypoints (or null) for the 3-D view
+    this.onWaypointSelected = onWaypointSelected || (() => {}); // a table row chosen (its index), for the 3-D view
     this.programs = [];
     this.selectedId = null;
     this.jointNames = [];
@@ -226,6 +228,7 @@ export class TeachPanel {
 
   /** Hand the program's gripper points (the server's gripper_position_m of each waypoint) to the live view. */
   showPath(p) {
+    this.onProgram(p ? p.waypoints : null);
     const points = p ? p.waypoints.map((w) => w.gripper_position_m) : [];
     this.onPath(points.length && points.every(Array.isArray) ? { points_m: points, gripper: p.waypoints.map((w) => w.gripper) } : null);
   }
@@ -237,6 +240,13 @@ export class TeachPanel {
     const head = table.createTHead().insertRow();
     ["#", ...names.map((n) => `${n}°`), "gripper", "dwell s", "time s", ""].forEach((h) => { head.insertCell().textContent = h; });
     const body = table.createTBody();
+    body.addEventListener("click", (e) => { // a row chosen: it stands out here and in the 3-D view
+      const row = e.target.closest("tr[data-index]");
+      if (!row) return;
+      for (const other of body.querySelectorAll("tr.selected")) other.classList.remove("selected");
+      row.classList.add("selected");
+      this.onWaypointSelected(Number(row.dataset.index));
+    });
     waypoints.forEach((w, i) => {
       const tr = body.insertRow();
       tr.dataset.index = String(i);

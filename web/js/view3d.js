@@ -18,10 +18,12 @@ import {
   truthBoxes,
 } from "./view3d_scene.js";
 import { GoalMarker } from "./view3d_goal.js";
+import { ProgramFigures } from "./view3d_program.js";
 
 const TRUTH_POLL_MS = 500;
 const POINTS_POLL_MS = 1000;
 const REFUSED_COLOR = 0xe53935; // the part of the arm a refused plan would crash
+const COMMANDED_COLOR = 0x42a5f5; // the commanded arm during a repeat
 const PICK_MAX_DRAG_PX = 5; // a press and release closer than this is a click (a pick), farther an orbit
 const BOARD_PLANE = new THREE.Plane(new THREE.Vector3(0, 0, 1), 0); // the board's top, z = 0 in the world
 
@@ -34,6 +36,7 @@ export class View3D {
     this.onPick = onPick;
     this.onGoal = onGoal;
     this.goal = null; // GoalMarker, once the scene is up
+    this.commandedArm = null; // ArmFigure of the commanded joints during a repeat (showCommanded)
     this.api = api;
     this.prefetched = prefetched; // view3d_prefetch.js: the scene and mesh files, already on their way
     this.serverNowS = serverNowS;
@@ -96,6 +99,7 @@ export class View3D {
         : `${description.arm.name}: the simulation's shapes`;
     }
     this.goal = new GoalMarker(this, (positionM) => this.onGoal(positionM));
+    this.program = new ProgramFigures(this);
     this.bindControls();
     if (this.calibration) this.setCalibration(this.calibration);
     this.loop = () => {
@@ -142,6 +146,20 @@ export class View3D {
     figure.setJoints(atQRad, null);
     this.refusalShown = { part, links, atQRad, figure };
     this.invalidate();
+  }
+
+  /** During a repeat, the commanded arm (the servos' reference) see-through beside the measured one; none (null)
+   * otherwise. True if the drawing changed. */
+  showCommanded(qRad) {
+    if (!Array.isArray(qRad) || !this.armDescription) {
+      if (!this.commandedArm) return false;
+      this.removeArm(this.commandedArm);
+      this.commandedArm = null;
+      return true;
+    }
+    this.commandedArm ??= this.addArm({ opacity: 0.3, color: COMMANDED_COLOR });
+    this.commandedArm.setJoints(qRad, null);
+    return true;
   }
 
   clearPlan() {
@@ -336,6 +354,7 @@ export class View3D {
         changed = true;
       }
     }
+    changed = this.showCommanded(status.state === "repeat" ? status.commanded_joints_rad : null) || changed;
     if (Array.isArray(status.detections) && this.workcell) {
       changed = this.detections.set(detectionBoxes(status.detections, this.workcell)) || changed;
     }

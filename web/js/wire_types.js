@@ -654,6 +654,7 @@ export const EVENT_KINDS = Object.freeze(["general", "scene"]);
  * @property {("idle"|"calibrate"|"teach"|"repeat"|"click_grab"|"click_drop"|"auto_sort"|"estop"|"fault")} state
  * @property {string} detail
  * @property {Array<number>} joints_rad
+ * @property {(Array<number>|null)} [commanded_joints_rad] the commanded reference now (the last trajectory sent, at the station's clock; its end once it has run out): the measured joints trail it; None before any motion was sent or after a halt
  * @property {Array<string>} joint_names
  * @property {Array<Array<number>>} joint_limits_rad [lower, upper] per joint
  * @property {GripperStatus} gripper
@@ -771,6 +772,7 @@ export const EVENT_KINDS = Object.freeze(["general", "scene"]);
  * @property {("idle"|"calibrate"|"teach"|"repeat"|"click_grab"|"click_drop"|"auto_sort"|"estop"|"fault")} state
  * @property {string} detail
  * @property {Array<number>} joints_rad
+ * @property {(Array<number>|null)} [commanded_joints_rad] the commanded reference now (the last trajectory sent, at the station's clock; its end once it has run out): the measured joints trail it; None before any motion was sent or after a halt
  * @property {Array<string>} joint_names
  * @property {Array<Array<number>>} joint_limits_rad [lower, upper] per joint
  * @property {GripperStatus} gripper
