@@ -40,7 +40,7 @@ from server.app import create_app
 
 TOKEN = "fuzz-token"
 AUTH = {"Authorization": f"Bearer {TOKEN}"}
-MAX_EXAMPLES = 30  # per operation and generation mode; ~30 operations → well over 1,000 calls
+MAX_EXAMPLES = 20  # per operation and generation mode (and the coverage phase's cases): ~3,000 calls over 94 operations
 MIN_CASES = 1000
 # A refused call must leave the arm where it was: the halted arm settles by a few mrad under gravity.
 STILL_TOL_RAD = 5e-3

@@ -19,6 +19,7 @@ export class GoalMarker {
       new THREE.MeshLambertMaterial({ color: MARKER_COLOR }));
     this.marker.name = "goal marker";
     this.controls = new TransformControls(view.camera, view.renderer.domElement);
+    this.controls.enabled = false; // until shown: its handles, never placed, would take clicks around the origin
     this.controls.setMode("translate");
     this.controls.attach(this.marker);
     this.controls.addEventListener("change", () => view.invalidate());
@@ -56,10 +57,12 @@ export class GoalMarker {
       this.marker.position.set(...positionM);
       if (!this.shown) scene.add(this.marker, this.controls.getHelper());
       this.shown = true;
+      this.controls.enabled = true;
       this.fitToView();
     } else {
       scene.remove(this.marker, this.controls.getHelper());
       this.shown = false;
+      this.controls.enabled = false;
       this.showSolution(null);
     }
     this.view.invalidate();
