@@ -34,6 +34,7 @@ class SimGripper(SimDevice, Gripper):
         self._command = "release"
         self._command_s = 0.0
         self._still_since_s: float | None = None
+        self._held_since_command = False  # the gripper has read holding since its last command (a grasp)
         self._reference_m = offset_max_m  # where the fingers are driven (per-finger offset)
         self._stop_requested = threading.Event()
 
@@ -59,6 +60,7 @@ class SimGripper(SimDevice, Gripper):
             self._command = command
             self._command_s = self._cell.sim_time_s
             self._still_since_s = None
+            self._held_since_command = False
             self._reference_m = offset_m
             self._cell.apply_finger_reference(offset_m)
             self._last_reading = self._measure()
@@ -80,8 +82,9 @@ class SimGripper(SimDevice, Gripper):
 
     def stop(self) -> None:
         """Hold the fingers where they are (at once if the workcell's lock is free, else at the next tick);
-        closed on a block (holding) they keep squeezing it: the reference stays inside the block, so the
-        grip force holds (a reference set to where the pads touch it would let it fall, issue 21)."""
+        closed on a block (holding, now or at any time since the grasp) they keep squeezing it: the reference stays
+        inside the block, so the grip force holds (a reference set to where the pads touch it would let it fall,
+        issue 21; the fingers jiggle for ~90 ms after an arm's halt and the holding reading drops meanwhile)."""
         self._require()
         self._stop_requested.set()
         if self._cell.lock.acquire(blocking=False):
@@ -95,7 +98,7 @@ class SimGripper(SimDevice, Gripper):
         if not self._stop_requested.is_set():
             return
         self._stop_requested.clear()
-        if self._measure().holding:
+        if self._held_since_command or self._measure().holding:
             return
         left, right = self._cell.finger_positions()
         self._reference_m = 0.5 * (left + right)
@@ -128,3 +131,4 @@ class SimGripper(SimDevice, Gripper):
         else:
             self._still_since_s = None
         self._last_reading = self._measure()
+        self._held_since_command = self._held_since_command or self._last_reading.holding

@@ -5,9 +5,10 @@ nothing, stacks of six stand and a block released half off a stack falls."""
 import numpy as np
 import pytest
 
+from armlab.devices.arm import JointTrajectory
 from armlab.devices.sim import SimWorkcell, SimWorkcellConfig
 from armlab.scene import Scene, SceneObject, quat_from_yaw
-from sim_helpers import move_to
+from sim_helpers import move_to, topdown_ik
 
 BLOCK_XY = np.array([0.05, 0.25])
 BLOCK_YAW = 0.2
@@ -209,3 +210,37 @@ def test_block_released_by_the_gripper_on_a_stack_stays_or_falls(cell, offset_m,
     else:
         assert placed["position_m"][2] == pytest.approx(0.095, abs=0.002)
         assert np.linalg.norm(np.array(placed["position_m"][:2]) - drop[:2]) < 0.003
+
+
+def test_a_stop_in_the_jolt_of_an_arm_halt_keeps_squeezing_the_block(cell):
+    """Issue 18/21: an e-stop halts the arm and then the fingers. Just after the arm's halt the fingers jiggle, so for
+    ~90 ms the gripper does not read as holding (its stillness test); a finger stop that landed then (under load, at
+    the next tick) set the fingers' reference where they stood, the squeeze went and the carried block fell (a
+    fresh-clone run, 3 workers). Once it has held since its grasp, a stop keeps squeezing whatever it reads."""
+    centre = np.array([0.0, 0.25, 0.019])
+    cell.set_scene(Scene((SceneObject("b", "block", "red", "large", tuple(centre), quat_from_yaw(0.0)),)))
+    cell.gripper.release()
+    move_to(cell, centre + [0, 0, 0.08])
+    move_to(cell, centre)
+    cell.gripper.grasp()
+    assert cell.gripper.read_state().holding
+    q0 = cell.arm.read_joint_state().position_rad
+    q1 = topdown_ik(centre + [0.1, -0.05, 0.12], 0.0, 0.0)
+    times = np.linspace(0.0, 0.8, 81)
+    s = times / 0.8
+    cell.arm.command_trajectory(JointTrajectory(times, q0 + np.outer(10 * s**3 - 15 * s**4 + 6 * s**5, q1 - q0)), wait=False)
+    cell.step(0.3)
+    cell.arm.stop()  # the e-stop's arm halt: the fingers jiggle with the jolt
+    for _ in range(50):
+        cell.step(0.002)
+        if not cell.gripper.read_state().holding:
+            break
+    assert not cell.gripper.read_state().holding, "the jolt did not unsettle the grip reading: nothing tested"
+    cell.gripper.stop()  # the e-stop's finger halt, landing in the jolt
+    carried_z = cell.truth()["objects"][0]["position_m"][2]
+    assert carried_z > 0.04  # lifted off the board
+    cell.step(1.5)
+    truth = cell.truth()
+    assert truth["gripper"]["holding_id"] == "b", truth["gripper"]
+    assert abs(truth["objects"][0]["position_m"][2] - carried_z) < 0.003, (carried_z, truth["objects"][0])  # still up
+    cell.gripper.release()
