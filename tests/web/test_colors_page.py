@@ -7,7 +7,7 @@ from __future__ import annotations
 
 import pytest
 
-from browser_helpers import canvas_point, open_page, ready_idle, wait_frames
+from browser_helpers import canvas_point, enter_click_mode, open_page, ready_idle, wait_frames
 
 pytestmark = pytest.mark.browser
 
@@ -22,11 +22,16 @@ def test_name_a_blocks_colour_from_the_page(browser, server):
         detections = server.get("/api/detections")["data"]
         block = next(d for d in detections if d["is_cube"] and d["color"] == "green")
         u, v = block["center_px"]
-        page.click("#click-mode button[data-mode='color']")
+        # The mode buttons are enabled once the page has the camera model (a loaded machine: seconds after the first
+        # frames); a click on a disabled one did nothing and the block's click then took no sample.
+        enter_click_mode(page, "color")
+        page.wait_for_function("document.getElementById('live').dataset.mode === 'color'", timeout=10_000)
         page.select_option("#colors-name", "green")
         page.mouse.click(*canvas_point(page, u, v))
-        page.wait_for_function("document.querySelectorAll('#colors-samples li').length === 1", timeout=30_000)
+        page.wait_for_function("document.querySelectorAll('#colors-samples li').length === 1"
+                               " || document.getElementById('colors-message').dataset.refused === 'true'", timeout=30_000)
         message = page.text_content("#colors-message")
+        assert page.eval_on_selector_all("#colors-samples li", "lis => lis.length") == 1, message
         assert message.startswith("green at") and "read green before" in message, message
         samples = server.get("/api/colors")["samples"]
         assert [s["name"] for s in samples] == ["green"] and abs(samples[0]["u"] - u) < 3
