@@ -14,6 +14,7 @@ job.extra["repeat"]; commanded and measured joints of the last cycle are kept in
 from __future__ import annotations
 
 import threading
+from dataclasses import dataclass
 
 import numpy as np
 
@@ -375,53 +376,45 @@ def repeat(station: Station, program_id: int, cycles: int | None = 1, speed_perc
     if plan_only:
         return station.plan_job("repeat", lambda: _planned(station, program_id, cycles, speed_percent, source, settings),
                                 source=source)
-    return _started(station, program_id, cycles, speed_percent, source, settings)
+    return _start(station, _checked(station, program_id, cycles, speed_percent, source, settings), source, settings)
 
 
-def _planned(station: Station, program_id: int, cycles: int | None, speed_percent: float | None, source: str | None,
-             settings: RepeatSettings) -> tuple[list, list[str], object]:
-    """Station.plan_job's make(): the repeat's motions as the job will send them, their names, and its start."""
-    planned: dict = {}
-    _started(station, program_id, cycles, speed_percent, source, settings, planned=planned)
-    plan, (_, ease, _), home, waypoints = planned["cycle"], planned["ease_in"], planned["home"], planned["waypoints"]
-    trajectories, names = [ease.trajectory], ["ease in to waypoint 1"]
-    for step in plan.steps:
-        if cycles == 1 and step.closing:
-            continue  # a single cycle does not return to waypoint 1
-        if step.kind == "move":
-            trajectories.append(step.run.trajectory)
-            names.append(f"move to waypoint {step.waypoint + 1}")
-        else:
-            names.append(f"{step.action or step.kind} at waypoint {step.waypoint + 1}")
-    trajectories.append(home.trajectory)
-    names.append("home")
-    times = "once" if cycles == 1 else (f"× {cycles} (one cycle shown)" if cycles else "until stopped (one cycle shown)")
-    names[0] = f"{names[0]} ({len(waypoints)} waypoints, {times})"
-    start = lambda: _started(station, program_id, cycles, speed_percent, source, settings,  # noqa: E731
-                             ease_in=planned["ease_in"], plans={plan.speed_percent: plan})
-    return trajectories, names, start
+@dataclass(frozen=True)
+class _Checked:
+    """A repeat's request checked and planned, before its job starts. ease_in: (points, run, labels) from the
+    measured joints; exact: it was handed in (a plan shown, then executed) and the job runs it as it is."""
+
+    program: object
+    cycles: int | None
+    speed_percent: float
+    plans: dict  # cycle plans by speed, shared with the speed check of set_job_speed
+    ease_in: tuple
+    home: Run
+    exact: bool
 
 
-def _started(station: Station, program_id: int, cycles: int | None, speed_percent: float | None, source: str | None,
-             settings: RepeatSettings, planned: dict | None = None, ease_in: tuple | None = None,
-             plans: dict | None = None) -> Job | None:
-    """repeat()'s checks and plans, then its job started; with `planned` (a dict) the plans are put there and no job
-    starts. ease_in, plans: planned already (the plan Execute runs), used as they are."""
+def _checked(station: Station, program_id: int, cycles: int | None, speed_percent: float | None, source: str | None,
+             settings: RepeatSettings, ease_in: tuple | None = None, plans: dict | None = None) -> _Checked:
+    """repeat()'s refusals (state, numbers, the program, every waypoint and segment) and its plans. ease_in, plans:
+    planned already (the plan Execute runs), used as they are."""
     station.allowed_or_raise("repeat", source)
     if cycles is not None and (isinstance(cycles, bool) or not isinstance(cycles, int) or not 1 <= cycles <= MAX_CYCLES):
         raise InvalidInput(f"cycles must be an integer from 1 to {MAX_CYCLES} (or none: until stopped), got {cycles!r}")
     speed_percent = checked_speed_percent(station.speed_percent if speed_percent is None else speed_percent)
     program = station.store.get_program(program_id, station.program_owner)  # another arm's program: WrongArm
-    plans = dict(plans or {})  # cycle plans by speed, shared with the speed check of set_job_speed
-    plan = plans.get(speed_percent) or plan_cycle(station, program, speed_percent, settings)
-    plans[speed_percent] = plan
-    first_ease_in = ease_in or plan_ease_in(station, station.joints_rad(), program.waypoints[0].joints_rad, speed_percent,
-                                            settings)
+    plans = dict(plans or {})
+    plans[speed_percent] = plans.get(speed_percent) or plan_cycle(station, program, speed_percent, settings)
+    exact = ease_in is not None
+    if not exact:
+        ease_in = plan_ease_in(station, station.joints_rad(), program.waypoints[0].joints_rad, speed_percent, settings)
     home = plan_transfer(station, program.waypoints[-1].joints_rad, station.model.home_rad, speed_percent, settings,
                          labels=(len(program.waypoints) - 1, HOME_LABEL))
-    if planned is not None:
-        planned.update(cycle=plan, ease_in=first_ease_in, home=home, waypoints=program.waypoints)
-        return None
+    return _Checked(program, cycles, speed_percent, plans, ease_in, home, exact)
+
+
+def _start(station: Station, checked: _Checked, source: str | None, settings: RepeatSettings) -> Job:
+    """The repeat's job started on the checked plans (the ease-in planned again when the job starts unless exact)."""
+    program, cycles, speed_percent, plans = checked.program, checked.cycles, checked.speed_percent, checked.plans
     control = RunControl(speed_percent)
     control.trace = CycleTrace(station.model.joint_names)
 
@@ -430,6 +423,7 @@ def _started(station: Station, program_id: int, cycles: int | None, speed_percen
             plans[speed] = plan_cycle(station, program, speed, settings)
 
     control.validate_speed = check_speed
+    ease_in = checked.ease_in if checked.exact else None
 
     def run(ctx: JobContext) -> dict:
         return _Runner(station, ctx, program, cycles, control, settings, control.trace, plans, ease_in).run()
@@ -439,6 +433,33 @@ def _started(station: Station, program_id: int, cycles: int | None, speed_percen
                             source=source, control=control)
     station.set_speed(speed_percent, source=source)  # the one override: the top bar shows the repeat's speed
     return job
+
+
+def _planned(station: Station, program_id: int, cycles: int | None, speed_percent: float | None, source: str | None,
+             settings: RepeatSettings) -> tuple[list, list[str], object]:
+    """Station.plan_job's make(): the repeat's motions as the job will send them, their names, and its start."""
+    checked = _checked(station, program_id, cycles, speed_percent, source, settings)
+    plan = checked.plans[checked.speed_percent]
+    trajectories, names = [checked.ease_in[1].trajectory], ["ease in to waypoint 1"]
+    for step in plan.steps:
+        if cycles == 1 and step.closing:
+            continue  # a single cycle does not return to waypoint 1
+        if step.kind == "move":
+            trajectories.append(step.run.trajectory)
+            names.append(f"move to waypoint {step.waypoint + 1}")
+        else:
+            names.append(f"{step.action or step.kind} at waypoint {step.waypoint + 1}")
+    trajectories.append(checked.home.trajectory)
+    names.append("home")
+    times = "once" if cycles == 1 else (f"× {cycles} (one cycle shown)" if cycles else "until stopped (one cycle shown)")
+    names[0] = f"{names[0]} ({len(checked.program.waypoints)} waypoints, {times})"
+
+    def start() -> Job:  # checked again when executed (state, program), on exactly the motions shown
+        again = _checked(station, program_id, cycles, speed_percent, source, settings, ease_in=checked.ease_in,
+                         plans={plan.speed_percent: plan})
+        return _start(station, again, source, settings)
+
+    return trajectories, names, start
 
 
 __all__ = ["CycleTrace", "repeat"]

@@ -102,71 +102,64 @@ class PlannedMoves:
         """The move `command` (move_joints: q_goal_rad; move_to: pose = (position_m, pitch_rad, yaw_rad)) would make,
         planned and checked as the move itself, kept as a plan and returned in its wire form; nothing moves."""
         self.require_arm(command)
-        self.allowed_or_raise(command, source)  # state, latch, lease: as the move would be refused
+        self.allowed_or_raise(command, source)  # state, latch, lease: as the move would be refused, before any IK
         if pose is not None:
             q_goal_rad = self.solve_pose(*pose)
         self.checked_joints(q_goal_rad)
-        self._refuse_while_moving(command)
-        world, gripper_command, speed = self._world_snapshot(), self._gripper_command(), self.speed_percent
-        trajectory = self._paced(self.plan_move(q_goal_rad, moving_time_s), speed, from_rest=True)
+        context = self._plan_context(command, source)
+        trajectory = self._paced(self.plan_move(q_goal_rad, moving_time_s), context[2], from_rest=True)
         self.check_motion(trajectory)
-        return self._kept_plan(command, source, trajectory, world, gripper_command, speed)
+        return self._kept_plan(command, source, trajectory, context)
 
     def plan_motion(self, command: str, make: Callable[[], JointTrajectory], source: str | None = None) -> dict:
         """A motion made by make() (planned and checked as the command makes it, e.g. a jog step) kept as a plan and
         returned in its wire form; nothing moves. The same refusals as plan_only before make() runs."""
-        self.require_arm(command)
-        self.allowed_or_raise(command, source)
-        self._refuse_while_moving(command)
-        world, gripper_command, speed = self._world_snapshot(), self._gripper_command(), self.speed_percent
+        context = self._plan_context(command, source)
         trajectory = make()
         self.check_motion(trajectory)
-        return self._kept_plan(command, source, trajectory, world, gripper_command, speed)
-
-    def _kept_plan(self, command: str, source: str | None, trajectory: JointTrajectory, world: tuple,
-                   gripper_command: str | None, speed: float) -> dict:
-        """The checked trajectory kept as a plan from the measured joints (it must start there); its wire form."""
-        measured = self.joints_rad()
-        check_start(trajectory, measured, self.motion_config.start_tolerance_rad, self.model.joint_names)
-        plan = self.plans.add(MovePlan(new_plan_id(), command, source, trajectory, measured, gripper_command, world, speed))
-        return self.plan_wire(plan)
+        return self._kept_plan(command, source, trajectory, context)
 
     def plan_steps(self, command: str, steps: Sequence, start: Callable[[], object], source: str | None = None) -> dict:
         """A skill's motion (grab, drop: its TrajectoryStep / GripperStep as it would run them) kept as a plan and
         returned in its wire form; nothing moves. Each motion gets the full check the gate gives it (paced at the
         speed override, as the job would send it). Execute calls start(): the skill's job with exactly these steps."""
-        self.require_arm(command)
-        self.allowed_or_raise(command, source)
-        self._refuse_while_moving(command)
-        world, gripper_command, speed = self._world_snapshot(), self._gripper_command(), self.speed_percent
+        context = self._plan_context(command, source)
         shown, goal = [], None
         for step in steps:
             if isinstance(step, TrajectoryStep):
-                shown.append(self._paced(step.trajectory, speed, from_rest=True))
+                shown.append(self._paced(step.trajectory, context[2], from_rest=True))
                 self.check_motion(shown[-1])
             elif goal is None and shown:  # the gripper acts where the motion before it ends
                 goal = shown[-1].positions_rad[-1].copy()
         if not shown:
             raise ValueError(f"{command}: the plan has no motion")
-        measured = self.joints_rad()
-        check_start(shown[0], measured, self.motion_config.start_tolerance_rad, self.model.joint_names)
-        plan = self.plans.add(MovePlan(new_plan_id(), command, source, joined(shown), measured, gripper_command, world,
-                                       speed, start=start, goal_rad=goal, steps=tuple(step.name for step in steps)))
-        return self.plan_wire(plan)
+        return self._kept_plan(command, source, joined(shown), context, start=start, goal_rad=goal,
+                               steps=tuple(step.name for step in steps))
 
     def plan_job(self, command: str, make: Callable[[], tuple], source: str | None = None) -> dict:
         """A job's motions planned and checked by the job's own planner at its own speed, kept as a plan and returned
         in its wire form; nothing moves. make() -> (its trajectories in order, the steps' names, start: the job
         running exactly them, started by Execute). The same refusals as plan_only before make() runs."""
+        context = self._plan_context(command, source)
+        trajectories, names, start = make()
+        return self._kept_plan(command, source, joined(trajectories), context, start=start, steps=tuple(names))
+
+    def _plan_context(self, command: str, source: str | None) -> tuple:
+        """The refusals every plan gets (an arm, the state, latch and lease, the arm at rest), then what it depends
+        on, read before it is planned: (world snapshot, the gripper's last command, the speed override)."""
         self.require_arm(command)
         self.allowed_or_raise(command, source)
         self._refuse_while_moving(command)
-        world, gripper_command, speed = self._world_snapshot(), self._gripper_command(), self.speed_percent
-        trajectories, names, start = make()
+        return self._world_snapshot(), self._gripper_command(), self.speed_percent
+
+    def _kept_plan(self, command: str, source: str | None, trajectory: JointTrajectory, context: tuple, **job) -> dict:
+        """The checked trajectory kept as a plan from the measured joints (it must start there; job: a job's start,
+        goal_rad and steps, see MovePlan); its wire form."""
+        world, gripper_command, speed = context
         measured = self.joints_rad()
-        check_start(trajectories[0], measured, self.motion_config.start_tolerance_rad, self.model.joint_names)
-        plan = self.plans.add(MovePlan(new_plan_id(), command, source, joined(trajectories), measured, gripper_command,
-                                       world, speed, start=start, steps=tuple(names)))
+        check_start(trajectory, measured, self.motion_config.start_tolerance_rad, self.model.joint_names)
+        plan = self.plans.add(MovePlan(new_plan_id(), command, source, trajectory, measured, gripper_command, world, speed,
+                                       **job))
         return self.plan_wire(plan)
 
     def _arm_busy(self) -> bool:

@@ -98,14 +98,19 @@ export class TargetPanel {
     return time;
   }
 
+  /** The pose form as typed: readPoseForm's {body} or {message}. */
+  typedPose() {
+    return readPoseForm({
+      x: $("target-x").value, y: $("target-y").value, z: $("target-z").value,
+      pitch: $("target-pitch").value, yaw: $("target-yaw").value,
+    });
+  }
+
   /** The 3-D view's goal marker was dragged to positionM: its x, y, z into the fields (pitch and yaw as typed), then
    * the station's check of that pose (nothing moves); the solution drawn as the marker's goal arm, or the reason. */
   async goalMoved(positionM) {
     positionM.forEach((v, i) => { $(`target-${"xyz"[i]}`).value = (v * 1000).toFixed(1); });
-    const read = readPoseForm({
-      x: $("target-x").value, y: $("target-y").value, z: $("target-z").value,
-      pitch: $("target-pitch").value, yaw: $("target-yaw").value,
-    });
+    const read = this.typedPose();
     const goal = this.view3d()?.goal;
     if (read.message) {
       goal?.showSolution(null);
@@ -124,10 +129,7 @@ export class TargetPanel {
 
   /** Go (or, with planOnly, plan without moving: plan_preview.js) to the typed pose. */
   goPose(planOnly = false) {
-    const read = readPoseForm({
-      x: $("target-x").value, y: $("target-y").value, z: $("target-z").value,
-      pitch: $("target-pitch").value, yaw: $("target-yaw").value,
-    });
+    const read = this.typedPose();
     if (read.message) return Promise.resolve(this.show("refused", `not sent: ${read.message}`));
     const time = this.movingTime();
     if (!time.ok) return Promise.resolve();
