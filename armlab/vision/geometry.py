@@ -99,10 +99,21 @@ def intersect_rays_with_plane(T_world_camera: np.ndarray, rays_camera: np.ndarra
 
 def project_points(T_world_camera: np.ndarray, K: np.ndarray, dist: np.ndarray, points_m: np.ndarray) -> np.ndarray:
     """Pixels (N, 2) of world points (N, 3) through the camera (with lens distortion)."""
-    pts = as_points(points_m, 3, "points_m")
+    return project_points_rt(projection_pose(T_world_camera), K, dist, points_m)
+
+
+def projection_pose(T_world_camera: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """(rvec, tvec): the world -> camera pose as cv2.projectPoints takes it (what project_points computes
+    per call; a caller projecting every frame through one calibration keeps it)."""
     T_camera_world = invert_transform(T_world_camera)
     rvec, _ = cv2.Rodrigues(T_camera_world[:3, :3])
-    pixels, _ = cv2.projectPoints(pts.reshape(-1, 1, 3), rvec, T_camera_world[:3, 3], K, np.asarray(dist, dtype=np.float64))
+    return rvec, T_camera_world[:3, 3]
+
+
+def project_points_rt(pose: tuple[np.ndarray, np.ndarray], K: np.ndarray, dist: np.ndarray, points_m: np.ndarray) -> np.ndarray:
+    """project_points with the pose given as projection_pose(T_world_camera)."""
+    pts = as_points(points_m, 3, "points_m")
+    pixels, _ = cv2.projectPoints(pts.reshape(-1, 1, 3), pose[0], pose[1], K, np.asarray(dist, dtype=np.float64))
     return pixels.reshape(-1, 2)
 
 

@@ -22,7 +22,7 @@ import numpy as np
 
 from armlab.vision.calibration import Calibration
 from armlab.vision.config import SelfFilterConfig
-from armlab.vision.geometry import as_points, invert_transform, normalized_rays, project_points
+from armlab.vision.geometry import as_points, invert_transform, normalized_rays, project_points_rt, projection_pose
 
 _CELL_NEIGHBOURS = np.ones((3, 3), np.uint8)
 _UNIT_CUBE = np.array([[x, y, z] for x in (-1.0, 1.0) for y in (-1.0, 1.0) for z in (-1.0, 1.0)])
@@ -81,13 +81,21 @@ def _capsule_boxes(ends_m: np.ndarray, radii_m: np.ndarray) -> np.ndarray:
     length = np.linalg.norm(axis, axis=1)
     u = np.where(length[:, None] > 1e-9, axis / np.maximum(length, 1e-9)[:, None], [0.0, 0.0, 1.0])
     helper = np.where(np.abs(u[:, :1]) < 0.9, [1.0, 0.0, 0.0], [0.0, 1.0, 0.0])
-    v = np.cross(u, helper)
+    v = _cross_rows(u, helper)
     v /= np.linalg.norm(v, axis=1)[:, None]
-    w = np.cross(u, v)
+    w = _cross_rows(u, v)
     half = np.stack([0.5 * length + radii_m, radii_m, radii_m], axis=1)  # (N, 3) along u, v, w
     scaled = _UNIT_CUBE[None] * half[:, None, :]  # (N, 8, 3)
     centre = 0.5 * (ends_m[:, 0] + ends_m[:, 1])
     return centre[:, None] + scaled[..., :1] * u[:, None] + scaled[..., 1:2] * v[:, None] + scaled[..., 2:] * w[:, None]
+
+
+def _cross_rows(a: np.ndarray, b: np.ndarray) -> np.ndarray:
+    """np.cross of (N, 3) rows, by the same products and differences (bitwise the same), without
+    np.cross's generality: a tenth of its time on a handful of rows."""
+    a0, a1, a2 = a[:, 0], a[:, 1], a[:, 2]
+    b0, b1, b2 = b[:, 0], b[:, 1], b[:, 2]
+    return np.stack([a1 * b2 - a2 * b1, a2 * b0 - a0 * b2, a0 * b1 - a1 * b0], axis=1)
 
 
 def _in_capsule(X, Y, Z, a, b, radius_m: float) -> np.ndarray:
@@ -97,7 +105,8 @@ def _in_capsule(X, Y, Z, a, b, radius_m: float) -> np.ndarray:
     dx, dy, dz = X - np.float32(a[0]), Y - np.float32(a[1]), Z - np.float32(a[2])
     if denom > 1e-18:
         t = (dx * np.float32(ab[0]) + dy * np.float32(ab[1]) + dz * np.float32(ab[2])) * np.float32(1.0 / denom)
-        np.clip(t, 0.0, 1.0, out=t)
+        np.maximum(t, np.float32(0.0), out=t)  # np.clip's values, without its overhead
+        np.minimum(t, np.float32(1.0), out=t)
         dx -= t * np.float32(ab[0])
         dy -= t * np.float32(ab[1])
         dz -= t * np.float32(ab[2])
@@ -182,6 +191,7 @@ class _RayGrid:
             yn = ((vs - cal.K[1, 2]) / cal.K[1, 1]).astype(np.float32)
             self.x, self.y = np.broadcast_to(xn[None, :], (len(vs), len(us))), np.broadcast_to(yn[:, None], (len(vs), len(us)))
         self.T_camera_world = invert_transform(cal.T_world_depth)  # depth points are tested: the depth model
+        self.projection = projection_pose(cal.T_world_camera)  # silhouettes are drawn in the colour image
 
 
 def robot_mask(depth_mm: np.ndarray, cal: Calibration, volume: RobotVolume, pixel_step: int = 2, rays: _RayGrid | None = None) -> np.ndarray:
@@ -203,20 +213,19 @@ def robot_mask(depth_mm: np.ndarray, cal: Calibration, volume: RobotVolume, pixe
     local = volume.in_frame(rays.T_camera_world)
     corners_world = volume.hull_corners_m()
     corners_camera = corners_world @ rays.T_camera_world[:3, :3].T + rays.T_camera_world[:3, 3]
-    pixels = project_points(cal.T_world_camera, cal.K, cal.dist, corners_world.reshape(-1, 3)).reshape(-1, 8, 2)
+    grid_pts = project_points_rt(rays.projection, cal.K, cal.dist, corners_world.reshape(-1, 3)).reshape(-1, 8, 2) / step
+    # Every part's window on the sample grid and its hull's corners in the window (1/16 px), all parts at once.
+    # A part reaching behind the camera (a nonsense calibration or pose) has no silhouette: it is skipped.
+    in_front = np.all(corners_camera[..., 2] > 0.01, axis=1).tolist()
+    lows = np.maximum(np.floor(grid_pts.min(axis=1)).astype(int), 0)
+    highs = np.minimum(np.ceil(grid_pts.max(axis=1)).astype(int) + 1, (grid_w, grid_h))
+    corners_fixed = np.round((grid_pts - lows[:, None, :]) * 16).astype(np.int32)
     n_capsules = len(local.capsule_radii_m)
-    for index, (hull_px, hull_camera) in enumerate(zip(pixels, corners_camera)):
-        if np.all(hull_camera[:, 2] > 0.01):
-            grid_pts = hull_px / step
-            x0, y0 = np.maximum(np.floor(grid_pts.min(axis=0)).astype(int), 0)
-            x1, y1 = np.minimum(np.ceil(grid_pts.max(axis=0)).astype(int) + 1, (grid_w, grid_h))
-            if x0 >= x1 or y0 >= y1:
-                continue  # outside the image
-            silhouette = np.zeros((y1 - y0, x1 - x0), np.uint8)
-            hull = cv2.convexHull(np.round((grid_pts - [x0, y0]) * 16).astype(np.int32))
-            cv2.fillConvexPoly(silhouette, hull, 1, lineType=cv2.LINE_8, shift=4)
-        else:  # a part reaches behind the camera (a nonsense calibration or pose): no silhouette, skip it
-            continue
+    for index, ((x0, y0), (x1, y1)) in enumerate(zip(lows.tolist(), highs.tolist())):
+        if not in_front[index] or x0 >= x1 or y0 >= y1:
+            continue  # behind the camera, or outside the image
+        silhouette = np.zeros((y1 - y0, x1 - x0), np.uint8)
+        cv2.fillConvexPoly(silhouette, cv2.convexHull(corners_fixed[index]), 1, lineType=cv2.LINE_8, shift=4)
         inside = silhouette.view(bool)
         d_mm = depth_mm[y0 * step : y1 * step : step, x0 * step : x1 * step : step][inside]  # a part's points project inside it
         Z = d_mm.astype(np.float32) * np.float32(0.001)
