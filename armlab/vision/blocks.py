@@ -100,14 +100,23 @@ def _seeded_blob(mask: np.ndarray, seed: np.ndarray | None) -> np.ndarray | None
 
 MAX_GROWTH = 1.7
 EDGE_GROW_PX = 3  # a real depth image rounds a top's edges over ~3 px (L515, ROB 550 frames): the face regains them from colour
+_EDGE_GROW_KERNEL = np.ones((2 * EDGE_GROW_PX + 1, 2 * EDGE_GROW_PX + 1), np.uint8)
+
+
+def pixels_of(mask: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """(flat indices, rows, columns) of a 2-D mask's set pixels in row-major order: np.nonzero's rows and
+    columns, from flat indices (which gather with np.take far cheaper than row/column pairs index)."""
+    flat = np.flatnonzero(mask)
+    ys, xs = np.divmod(flat, mask.shape[1])
+    return flat, ys, xs
 
 
 def _top_face_in_roi(
     z: np.ndarray, band: np.ndarray, keep: np.ndarray, tol_m: float, seed: np.ndarray | None = None,
     grow: np.ndarray | None = None,
-) -> tuple[np.ndarray, np.ndarray, np.ndarray, float] | None:
-    """ROI pixels (rows, columns), contour (ROI coordinates) and median height of the flat face in the
-    band of heights z within tol_m of the guess (band), among the pixels to keep.
+) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, float] | None:
+    """ROI pixels (flat indices, rows, columns), contour (ROI coordinates) and median height of the flat
+    face in the band of heights z within tol_m of the guess (band), among the pixels to keep.
 
     Two passes: the loose band finds the face, a tight band around its median keeps only the face
     (side-face pixels just below the top edge would bias the footprint toward the camera).
@@ -115,25 +124,26 @@ def _top_face_in_roi(
     blob = _seeded_blob(band & keep, seed)
     if blob is None:
         return None
-    face_m = quantile(z[blob.view(bool)], 0.5)
+    face_m = quantile(z.ravel().compress(blob.ravel().view(bool)), 0.5)
     blob &= (np.abs(z - face_m) < 0.5 * tol_m).view(np.uint8)
-    if not blob.any():
+    blob_px = cv2.countNonZero(blob)
+    if not blob_px:
         return None
     if grow is not None:  # the edge pixels depth smoothing pulled below the band, where colour says top
-        grown = blob | (cv2.dilate(blob, np.ones((2 * EDGE_GROW_PX + 1, 2 * EDGE_GROW_PX + 1), np.uint8)) & grow.view(np.uint8))
+        grown = blob | (cv2.dilate(blob, _EDGE_GROW_KERNEL) & grow.view(np.uint8))
         # A ring of EDGE_GROW_PX around a face: at most (29/23)^2 ~ 1.6x a small cube's top at 1 m. More is a
         # sliver (a lower stack member's side) growing into a face, not an edge regained.
-        if np.count_nonzero(grown) <= MAX_GROWTH * np.count_nonzero(blob):
+        if cv2.countNonZero(grown) <= MAX_GROWTH * blob_px:
             blob = grown
     contours, _ = cv2.findContours(blob, cv2.RETR_EXTERNAL, cv2.CHAIN_APPROX_SIMPLE)
     contour = max(contours, key=cv2.contourArea)
     # Holes inside the outline (a highlight, a knot in the wood, a depth dropout) are the face too.
     filled = np.zeros_like(blob)
     cv2.drawContours(filled, [contour], -1, 1, thickness=cv2.FILLED)
-    ys, xs = np.nonzero(filled)
-    zs = z[ys, xs]
+    flat, ys, xs = pixels_of(filled)
+    zs = z.take(flat)
     zs = zs[np.isfinite(zs)]
-    return ys, xs, contour, quantile(zs, 0.5) if zs.size else face_m
+    return flat, ys, xs, contour, quantile(zs, 0.5) if zs.size else face_m
 
 
 def _face_from_pixels(ys: np.ndarray, xs: np.ndarray, roi, contour: np.ndarray, top_m: float, camera: PlaneCamera) -> Face:
@@ -239,11 +249,11 @@ def detect_blocks(
         if area < 4:
             continue
         sel = labels[y : y + bh, x : x + bw] == k
-        comp_classes = classes[y : y + bh, x : x + bw][sel]
-        comp_z = z_small[y : y + bh, x : x + bw][sel]
+        flat, ys, xs = pixels_of(sel)
+        comp_classes = classes[y : y + bh, x : x + bw].ravel().take(flat)
+        comp_z = z_small[y : y + bh, x : x + bw].ravel().take(flat)
         counts = np.bincount(comp_classes, minlength=len(names) + 1)
         roi = (max(0, x * step - 8), max(0, y * step - 8), min(w, (x + bw) * step + 8), min(h, (y + bh) * step + 8))
-        ys, xs = np.nonzero(sel)
         box_z = z_small[y : y + bh, x : x + bw]
         box_colourless = colourless[y : y + bh, x : x + bw]
         tops: dict[int, tuple[float, np.ndarray, np.ndarray]] = {}  # colour -> (top, centroid, bbox)
@@ -255,8 +265,10 @@ def detect_blocks(
             tag_layer = box_colourless & (np.abs(box_z - top_m) < bc.top_face_tolerance_m)
             if np.count_nonzero(layer) + np.count_nonzero(tag_layer) < min_face_px:
                 continue  # only a sliver of this colour at its top: the side of a lower stack member
-            pts = np.stack([xs[layer], ys[layer]], axis=1)
-            tops[int(ci)] = (top_m, pts.mean(axis=0), np.concatenate([pts.min(axis=0) - 1, pts.max(axis=0) + 1]))
+            top_xs, top_ys = xs[layer], ys[layer]
+            # The centroid from integer sums (exact: as np.mean's), the bounding box grown by a pixel.
+            centroid = np.array([top_xs.sum() / len(top_xs), top_ys.sum() / len(top_ys)])
+            tops[int(ci)] = (top_m, centroid, np.array([top_xs.min() - 1, top_ys.min() - 1, top_xs.max() + 1, top_ys.max() + 1]))
         region = None  # the ROI's colour and heights, shared by the colours of this component
         made: list[Block] = []  # this component's blocks: a face holds every colour on it
         for ci, (top_m, centroid, box) in tops.items():
@@ -349,8 +361,8 @@ def _blocks_from_region(color_bgr, geo: BlockGeometry, cfg, region: _Region, top
     found = _top_face_in_roi(z, band, keep, tol, seed, grow)
     if found is None:
         return []
-    ys, xs, contour, face_m = found
-    face_classes = classes[ys, xs]
+    flat, ys, xs, contour, face_m = found
+    face_classes = classes.ravel().take(flat)
     if np.count_nonzero(face_classes) / len(ys) < 0.15:
         return []  # the face is mostly another object's colourless top
     face = _face_from_pixels(ys, xs, roi, contour, face_m, geo.camera)
@@ -362,7 +374,7 @@ def _blocks_from_region(color_bgr, geo: BlockGeometry, cfg, region: _Region, top
         return []  # a lower member of a stack: something sits on its centre
 
     def part_of_more() -> bool:  # only asked about faces that would otherwise be cubes
-        return (dark_and_colourless(hsv[ys, xs], face_classes, region.board_value)
+        return (dark_and_colourless(hsv.reshape(-1, 3).take(flat, axis=0), face_classes, region.board_value)
                 or part_of_larger_surface(face, z_small, step, tol, region.coloured_small))
 
     def block_of(f: Face, classified: ClassifiedFace | None = None, out_of_view: bool = False) -> Block:
@@ -370,11 +382,11 @@ def _blocks_from_region(color_bgr, geo: BlockGeometry, cfg, region: _Region, top
             return _make_block(f, names[face_colour(f.classes, ci) - 1], geo.camera, cfg, z_small, step, z, classified, out_of_view)
         px = f.pixels_px
         if f.classes is not None and np.count_nonzero(f.classes) >= 10:
-            px = px[f.classes > 0]
+            px = px.compress(f.classes > 0, axis=0)
         if len(px) > MAX_FACE_SAMPLES:  # the pixels face_median_rgb would keep, before gathering them
             px = px[:: len(px) // MAX_FACE_SAMPLES]
         px = px.astype(np.intp)
-        reading = colour_of(color_bgr[px[:, 1], px[:, 0]], f.center_px)
+        reading = colour_of(_pixels_at(color_bgr, px), f.center_px)
         return _make_block(f, reading.name, geo.camera, cfg, z_small, step, z, classified, out_of_view, reading.measured_lab)
 
     if runs_off_image(ys, xs, roi, geo.calibration):
@@ -392,6 +404,13 @@ def _blocks_from_region(color_bgr, geo: BlockGeometry, cfg, region: _Region, top
     if any(b.is_cube for b in blocks) and part_of_more():
         blocks = [not_cube(b) for b in blocks]
     return [(block, face_looks_tagged(color_bgr, block, roi, hsv, region.board_value)) for block in blocks]
+
+
+def _pixels_at(color_bgr: np.ndarray, px: np.ndarray) -> np.ndarray:
+    """color_bgr[px[:, 1], px[:, 0]] (px: (N, 2) integer columns and rows), by one np.take of flat indices."""
+    if not color_bgr.flags.c_contiguous:
+        return color_bgr[px[:, 1], px[:, 0]]
+    return color_bgr.reshape(-1, color_bgr.shape[2]).take(px[:, 1] * color_bgr.shape[1] + px[:, 0], axis=0)
 
 
 def _make_block(face: Face, color: str, camera: PlaneCamera, cfg, z_small, step, z_roi=None, classified: ClassifiedFace | None = None,
