@@ -213,23 +213,23 @@ def detect_blocks(
     table = _class_table(lut)
     classes = _color_classes(hsv_small, cfg, table)
     colourless = classes == 0  # e.g. the white and black of a tag on a block's top
-    classes[~raised] = 0
+    classes *= raised  # no colour class where nothing is raised (the board's own colours)
     # The board's own brightness (median value of its pixels in this frame): the scale a block's
     # colourfulness is judged on (lighting and exposure change both alike).
     with np.errstate(invalid="ignore"):
         board_px = np.abs(z_small[::2, ::2]) < cfg.board_plane.inlier_m
     board_value = quantile(hsv_small[::2, ::2, 2][board_px], 0.5) if np.count_nonzero(board_px) >= 20 else 255.0
     z_cover = z_small  # what may hide part of a face: what stands above it, and the robot
-    if ignore_mask is not None:  # the robot: neither colour nor a tag's white
-        ignored_small = ignore_mask[::step, ::step]
+    ignored_small = None if ignore_mask is None else np.ascontiguousarray(ignore_mask[::step, ::step])  # contiguous: cheaper masking
+    if ignored_small is not None:  # the robot: neither colour nor a tag's white
         classes[ignored_small] = 0
         colourless[ignored_small] = False
         z_cover = z_small.copy()
         z_cover[ignored_small] = np.inf
     board_small = (z_small < bc.min_height_m) & (z_small > -0.03)  # at the board (or its depth offset): the colour model's grey
     board_small &= geo.board_region(cfg.board.x_range_m, cfg.board.y_range_m)
-    if ignore_mask is not None:
-        board_small &= ~ignore_mask[::step, ::step]
+    if ignored_small is not None:
+        board_small &= ~ignored_small
     colour_of = _face_colour(color_model or ColorModel.from_config(cfg), BoardGrey(small_bgr, board_small, scale=step),
                              frame_clip_levels_rgb(small_bgr))
     coloured = (classes > 0).astype(np.uint8)

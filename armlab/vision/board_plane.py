@@ -77,14 +77,21 @@ def fit_inverse_depth_plane(
     best, best_count = None, -1
     samples = rng.integers(0, n, size=(iterations, 3))
     try:  # every sample's plane in one call (the same LAPACK solve per 3 x 3 system), one by one if any is singular
-        coefs = list(np.linalg.solve(A[samples], w[samples][..., None])[..., 0])
+        solutions = np.linalg.solve(A[samples], w[samples][..., None])[..., 0]
+        # The plane must face the camera.
+        valid = solutions[np.isfinite(solutions).all(axis=1) & (solutions[:, 2] > 0)]
     except np.linalg.LinAlgError:
         coefs = [_solve_or_none(A[idx], w[idx]) for idx in samples]
-    # The plane must face the camera; every valid sample's inliers counted in one pass over the points.
-    valid = [coef for coef in coefs if coef is not None and np.all(np.isfinite(coef)) and coef[2] > 0]
-    if valid:
-        C = np.stack(valid, axis=1)  # (3, k)
-        counts = np.count_nonzero(np.abs((1.0 - d[:, None] * (A @ C)) / np.sqrt(np.einsum("ij,ij->j", C, C))) < inlier_m, axis=0)
+        valid = np.array([coef for coef in coefs if coef is not None and np.all(np.isfinite(coef)) and coef[2] > 0]).reshape(-1, 3)
+    if len(valid):
+        # Every valid sample's inliers counted in one pass over the points (in place: no image-sized temporaries).
+        C = np.ascontiguousarray(valid.T)  # (3, k)
+        residual = A @ C
+        residual *= d[:, None]
+        np.subtract(1.0, residual, out=residual)
+        residual /= np.sqrt(np.einsum("ij,ij->j", C, C))
+        # Inliers per sample as one product (whole numbers, exact), far cheaper than a column-wise count of the (N, k) mask.
+        counts = np.ones(n) @ (np.abs(residual, out=residual) < inlier_m).astype(np.float64)
         first_best = int(np.argmax(counts))  # the first of equals, as one by one
         best, best_count = valid[first_best], int(counts[first_best])
     if best is None or best_count < min_fraction * n:
@@ -92,7 +99,7 @@ def fit_inverse_depth_plane(
     inliers = np.abs(heights(best)) < inlier_m
     coef = best
     for _ in range(2):  # least squares on the inliers: coef . X = 1 for camera points X on the plane
-        coef = _plane_lstsq(A[inliers] * d[inliers][:, None])
+        coef = _plane_lstsq(A.compress(inliers, axis=0) * d[inliers][:, None])
         inliers = np.abs(heights(coef)) < inlier_m
     h = heights(coef)[inliers]
     norm = math.sqrt(float(coef @ coef))
@@ -145,7 +152,12 @@ def fit_board_plane(
     ys, xs = np.nonzero(cand)
     if ys.size < 50:
         raise BoardPlaneError(f"only {ys.size} board pixels have depth within {window_m * 1000:.0f} mm of the tags' plane")
-    xx, yy, dd = x[ys, xs], y[ys, xs], depth_m[ys, xs]
+    return _fit_candidates(x[ys, xs], y[ys, xs], depth_m[ys, xs], inlier_m, sample_step, seed, min_fraction)
+
+
+def _fit_candidates(xx: np.ndarray, yy: np.ndarray, dd: np.ndarray, inlier_m: float, sample_step: int, seed: int,
+                    min_fraction: float) -> BoardPlane:
+    """fit_board_plane on its candidates (1-D normalised coordinates and depths, in image order)."""
     sub = slice(None, None, max(1, int(sample_step)))
     # RANSAC on a quarter of the candidates (thousands of pixels: the plane is fixed long before).
     rough = fit_inverse_depth_plane(xx[sub][::2], yy[sub][::2], dd[sub][::2], inlier_m, iterations=16, seed=seed,
@@ -252,11 +264,21 @@ class BoardPlaneFitter:
         self.tag_coefficients = r3[0] * self.x + r3[1] * self.y + r3[2]
         self.tag_t = float(T_world_camera[2, 3])
         self.on_board = board_pixel_mask((h, w), K, T_world_camera, x_range_m, y_range_m, step)
+        # The board's pixels (flat indices, image order) and their terms: a frame's candidates are looked for there only.
+        self.board_flat = np.flatnonzero(self.on_board)
+        self.board_x, self.board_y = self.x.ravel()[self.board_flat], self.y.ravel()[self.board_flat]
+        self.board_tag_coefficients = self.tag_coefficients.ravel()[self.board_flat]
 
     def fit(self, depth_m_small: np.ndarray, window_m: float, inlier_m: float, exclude_small: np.ndarray | None = None,
             min_fraction: float = 0.5) -> BoardPlane:
-        """The board plane of a depth image already sampled at this fitter's step (metres, 0 = none)."""
+        """The board plane of a depth image already sampled at this fitter's step (metres, 0 = none):
+        fit_board_plane over the board's pixels only (the same candidates in the same order)."""
+        depth = np.take(depth_m_small, self.board_flat)
         with np.errstate(invalid="ignore"):
-            tag_heights = depth_m_small * self.tag_coefficients + self.tag_t
-        return fit_board_plane(depth_m_small, self.x, self.y, tag_heights, self.on_board, window_m, inlier_m,
-                               exclude=exclude_small, min_fraction=min_fraction)
+            cand = (depth > 0) & (np.abs(depth * self.board_tag_coefficients + self.tag_t) < window_m)
+        if exclude_small is not None:
+            cand &= ~np.take(exclude_small, self.board_flat)
+        count = int(np.count_nonzero(cand))
+        if count < 50:
+            raise BoardPlaneError(f"only {count} board pixels have depth within {window_m * 1000:.0f} mm of the tags' plane")
+        return _fit_candidates(self.board_x[cand], self.board_y[cand], depth[cand], inlier_m, 2, 0, min_fraction)

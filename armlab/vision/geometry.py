@@ -205,5 +205,5 @@ def height_map_m(
         coefficients = height_coefficients(d.shape, K, T_world_camera, step)
     z = np.multiply(d, coefficients)  # then in place: one image-sized array, no temporaries
     z += np.float32(T_world_camera[2, 3])
-    z[d <= 0] = np.nan
+    np.copyto(z, np.nan, where=d <= 0)
     return z
