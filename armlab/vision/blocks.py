@@ -68,6 +68,20 @@ def _class_table(lut: np.ndarray) -> np.ndarray:
     return table
 
 
+@lru_cache(maxsize=16)
+def _frozen_class_table(centres_deg: tuple[float, ...]) -> np.ndarray:
+    """_class_table of these colour centres, built once (read-only)."""
+    table = _class_table(_hue_lut(centres_deg))
+    table.flags.writeable = False
+    return table
+
+
+def _xy_distance_m(a: np.ndarray, b: np.ndarray) -> float:
+    """np.linalg.norm(a[:2] - b[:2]) by the same dot product, without norm's overhead."""
+    d = a[:2] - b[:2]
+    return math.sqrt(d.dot(d))
+
+
 def _color_classes(hsv: np.ndarray, cfg: PerceptionConfig, table: np.ndarray) -> np.ndarray:
     """Per-pixel colour index + 1 (0 = not a block colour: grey, dark or washed out).
 
@@ -205,12 +219,12 @@ def detect_blocks(
     geo = frame_geometry(geo, depth_small, cfg)
     z_small = height_map_m(depth_small, geo.small_K, geo.height_row, coefficients=geo.small_coefficients)
     raised = (z_small > bc.min_height_m) & (z_small < bc.max_height_m)
-    lut, names = hue_lut(cfg)
+    names = list(cfg.blocks.colors)
     # Every step-th pixel: nearest-neighbour resizing by an integer factor picks exactly those, and
     # far faster than copying the strided view.
     small_bgr = cv2.resize(color_bgr, geo.small_shape[::-1], interpolation=cv2.INTER_NEAREST)
     hsv_small = cv2.cvtColor(small_bgr, cv2.COLOR_BGR2HSV)
-    table = _class_table(lut)
+    table = _frozen_class_table(tuple(cfg.blocks.colors[name] for name in names))
     classes = _color_classes(hsv_small, cfg, table)
     colourless = classes == 0  # e.g. the white and black of a tag on a block's top
     classes *= raised  # no colour class where nothing is raised (the board's own colours)
@@ -286,13 +300,13 @@ def detect_blocks(
             region.coloured_small = coloured
             for block, looks_tagged in _blocks_from_region(color_bgr, geo, cfg, region, top_m, names, ci, z_cover, step, colour_of):
                 made.append(block)
-                if any(np.linalg.norm(block.position_m[:2] - b.position_m[:2]) < 0.015 and block.height_m <= b.height_m + 0.01
+                if any(_xy_distance_m(block.position_m, b.position_m) < 0.015 and block.height_m <= b.height_m + 0.01
                        for b in blocks):
                     continue  # found already (from another colour on it)
                 if block.aruco_id is None and looks_tagged and block.is_cube:  # not on the arm or a distractor
                     detector = detector or make_detector(cfg.tags.block_tag_dictionary)
                     block = with_tag(block, color_bgr, roi, detector, cfg)
-                twins = [b for b in blocks if np.linalg.norm(block.position_m[:2] - b.position_m[:2]) < 0.015]
+                twins = [b for b in blocks if _xy_distance_m(block.position_m, b.position_m) < 0.015]
                 if not twins:
                     blocks.append(block)
                 elif all(block.height_m > b.height_m + 0.01 for b in twins):  # keep a stack's top only

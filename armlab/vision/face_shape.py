@@ -41,8 +41,17 @@ def quantile(values: np.ndarray, q: float) -> float:
 
 
 def mean_rows(points: np.ndarray) -> np.ndarray:
-    """points.mean(axis=0) of a float (N, k) array: the same reduction and division, without np.mean's overhead."""
-    return np.add.reduce(points, axis=0) / points.shape[0]
+    """points.mean(axis=0) of a float (N, k) array, bitwise. numpy sums a C-contiguous (N, 2) array's columns
+    row by row (one running sum per column); a cumulative sum of its rows viewed as complex numbers runs
+    both sums at once in the same order, at a quarter of the time on a face's thousands of points."""
+    complex_type = _COMPLEX_OF.get(points.dtype)
+    if complex_type is None or points.ndim != 2 or points.shape[1] != 2 or points.shape[0] == 0 or not points.flags.c_contiguous:
+        return points.mean(axis=0)
+    total = np.add.accumulate(points.view(complex_type).ravel())[-1]
+    return np.array([total.real, total.imag], points.dtype) / points.shape[0]
+
+
+_COMPLEX_OF = {np.dtype(np.float32): np.complex64, np.dtype(np.float64): np.complex128}
 
 
 @dataclass
@@ -170,7 +179,7 @@ def split_touching_classified(face: Face, cfg: PerceptionConfig) -> list[tuple[F
     if not candidates or not fits_some_stack(face.top_m, cfg):
         return [(face, None)]
     pts = face.points_xy.astype(np.float32)
-    centred = pts - pts.mean(axis=0)
+    centred = pts - mean_rows(pts)
     axis = np.linalg.svd(centred, full_matrices=False)[2][0]  # the row of cubes lies along this axis
     along = centred @ axis
     pitch = math.sqrt(face.pixel_area_m2)
@@ -219,8 +228,7 @@ def split_touching_classified(face: Face, cfg: PerceptionConfig) -> list[tuple[F
             # starts there and settles in a few iterations.
             _, _, centres = cv2.kmeans(np.ascontiguousarray(pts[::sample]), n, np.ascontiguousarray(labels[::sample]), criteria, 1,
                                        cv2.KMEANS_USE_INITIAL_LABELS)
-            dx, dy = pts[:, :1] - centres[:, 0], pts[:, 1:] - centres[:, 1]
-            labels = np.argmin(dx * dx + dy * dy, axis=1).astype(np.int32)
+            labels = _nearest_centre(pts, centres)
             if parts_if_all_fit(labels) is None:
                 continue
             labels = labels.reshape(-1, 1)
@@ -229,6 +237,23 @@ def split_touching_classified(face: Face, cfg: PerceptionConfig) -> list[tuple[F
         if parts is not None:
             return parts
     return [(face, None)]
+
+
+def _nearest_centre(pts: np.ndarray, centres: np.ndarray) -> np.ndarray:
+    """(N,) int32: each point's nearest centre (squared distance as the float32 points give it; the first of
+    equals, as np.argmin), one centre at a time: cheaper than an argmin along the rows of an (N, k) array."""
+    x, y = np.ascontiguousarray(pts[:, 0]), np.ascontiguousarray(pts[:, 1])
+    best = labels = None
+    for k, (cx, cy) in enumerate(centres.astype(np.float32)):
+        dx, dy = x - cx, y - cy
+        d2 = dx * dx + dy * dy
+        if best is None:
+            best, labels = d2, np.zeros(len(x), np.int32)
+        else:
+            closer = d2 < best
+            labels[closer] = k
+            np.minimum(best, d2, out=best)
+    return labels
 
 
 def runs_off_image(ys: np.ndarray, xs: np.ndarray, roi, cal: Calibration) -> bool:
