@@ -25,6 +25,7 @@ from armlab.vision.config import SelfFilterConfig
 from armlab.vision.geometry import as_points, invert_transform, normalized_rays, project_points_rt, projection_pose
 
 _CELL_NEIGHBOURS = np.ones((3, 3), np.uint8)
+_DEPTH_MARGIN_M = 0.001  # beyond a part's box in depth: far more than float32 rounding of a point's depth (~1e-7 m)
 _UNIT_CUBE = np.array([[x, y, z] for x in (-1.0, 1.0) for y in (-1.0, 1.0) for z in (-1.0, 1.0)])
 
 
@@ -217,6 +218,10 @@ def robot_mask(depth_mm: np.ndarray, cal: Calibration, volume: RobotVolume, pixe
     # Every part's window on the sample grid and its hull's corners in the window (1/16 px), all parts at once.
     # A part reaching behind the camera (a nonsense calibration or pose) has no silhouette: it is skipped.
     in_front = np.all(corners_camera[..., 2] > 0.01, axis=1).tolist()
+    # Each part lies within its box, so a point can be inside it only at a depth within its box corners' (plus a
+    # millimetre for rounding): only those points are tested (the others' answer is known: outside).
+    depth_lows = (corners_camera[..., 2].min(axis=1) - _DEPTH_MARGIN_M).tolist()
+    depth_highs = (corners_camera[..., 2].max(axis=1) + _DEPTH_MARGIN_M).tolist()
     lows = np.maximum(np.floor(grid_pts.min(axis=1)).astype(int), 0)
     highs = np.minimum(np.ceil(grid_pts.max(axis=1)).astype(int) + 1, (grid_w, grid_h))
     corners_fixed = np.round((grid_pts - lows[:, None, :]) * 16).astype(np.int32)
@@ -229,14 +234,17 @@ def robot_mask(depth_mm: np.ndarray, cal: Calibration, volume: RobotVolume, pixe
         inside = silhouette.view(bool)
         d_mm = depth_mm[y0 * step : y1 * step : step, x0 * step : x1 * step : step][inside]  # a part's points project inside it
         Z = d_mm.astype(np.float32) * np.float32(0.001)
-        X, Y = Z * rays.x[y0:y1, x0:x1][inside], Z * rays.y[y0:y1, x0:x1][inside]
-        if index < n_capsules:
-            (a, b), r = local.capsule_ends_m[index], local.capsule_radii_m[index]
-            hit_inside = _in_capsule(X, Y, Z, a, b, r)
-        else:
-            k = index - n_capsules
-            hit_inside = _in_box(X, Y, Z, local.box_poses[k], local.box_half_extents_m[k])
-        hit_inside |= d_mm == 0
+        hit_inside = d_mm == 0
+        near = np.flatnonzero((Z >= depth_lows[index]) & (Z <= depth_highs[index]))
+        if len(near):
+            Z = Z.take(near)
+            X, Y = Z * rays.x[y0:y1, x0:x1][inside].take(near), Z * rays.y[y0:y1, x0:x1][inside].take(near)
+            if index < n_capsules:
+                (a, b), r = local.capsule_ends_m[index], local.capsule_radii_m[index]
+                hit_inside[near] |= _in_capsule(X, Y, Z, a, b, r)
+            else:
+                k = index - n_capsules
+                hit_inside[near] |= _in_box(X, Y, Z, local.box_poses[k], local.box_half_extents_m[k])
         hit = np.zeros(inside.shape, bool)
         hit[inside] = hit_inside
         full = mask[y0 * step : y1 * step, x0 * step : x1 * step]
