@@ -11,7 +11,8 @@ face is then measured on a full-resolution region of interest.
 from __future__ import annotations
 
 import math
-from functools import lru_cache
+from collections.abc import Callable
+from functools import lru_cache, partial
 
 import cv2
 import numpy as np
@@ -303,7 +304,7 @@ def detect_blocks(
                 if any(_xy_distance_m(block.position_m, b.position_m) < 0.015 and block.height_m <= b.height_m + 0.01
                        for b in blocks):
                     continue  # found already (from another colour on it)
-                if block.aruco_id is None and looks_tagged and block.is_cube:  # not on the arm or a distractor
+                if block.aruco_id is None and block.is_cube and looks_tagged():  # not on the arm or a distractor
                     detector = detector or make_detector(cfg.tags.block_tag_dictionary)
                     block = with_tag(block, color_bgr, roi, detector, cfg)
                 twins = [b for b in blocks if _xy_distance_m(block.position_m, b.position_m) < 0.015]
@@ -344,10 +345,10 @@ def _face_colour(model: ColorModel, grey: BoardGrey, clip_from_rgb: np.ndarray):
 
 
 def _blocks_from_region(color_bgr, geo: BlockGeometry, cfg, region: _Region, top_m, names, ci, z_small, step,
-                        colour_of=None) -> list[tuple[Block, bool]]:
+                        colour_of=None) -> list[tuple[Block, Callable[[], bool]]]:
     """The top face at about top_m in the ROI that holds this colour's top pixels, as blocks, each with
-    whether its face looks tagged (face_looks_tagged). The face is every block-coloured (or
-    colourless, e.g. a tag) pixel at that height connected to them: a cube whose top reads as two hues
+    a call saying whether its face looks tagged (face_looks_tagged; asked only of cubes without a tag id).
+    The face is every block-coloured (or colourless, e.g. a tag) pixel at that height connected to them: a cube whose top reads as two hues
     (real yellow next to orange, a shaded edge) stays one face, touching cubes form one face that is
     then split by their footprints; each face or part is named by colour_of (_face_colour: the colour
     model on its block-coloured pixels, a tag's black and white left out), else by its pixels' majority hue class."""
@@ -408,8 +409,8 @@ def _blocks_from_region(color_bgr, geo: BlockGeometry, cfg, region: _Region, top
         # No tag lookup: a tag on a cut face is likely cut too.
         clipped = classify_clipped(face, ys, xs, roi, geo, cfg)
         if clipped is None or not clipped.is_cube or part_of_more():
-            return [(not_cube(block_of(face, clipped, out_of_view=True)), False)]
-        return [(block_of(face, clipped), False)]
+            return [(not_cube(block_of(face, clipped, out_of_view=True)), _never)]
+        return [(block_of(face, clipped), _never)]
     classified = classify_face(face, cfg)
     if classified.is_cube:
         blocks = [block_of(face, classified)]
@@ -417,7 +418,12 @@ def _blocks_from_region(color_bgr, geo: BlockGeometry, cfg, region: _Region, top
         blocks = [block_of(part, part_classified or classified) for part, part_classified in split_touching_classified(face, cfg)]
     if any(b.is_cube for b in blocks) and part_of_more():
         blocks = [not_cube(b) for b in blocks]
-    return [(block, face_looks_tagged(color_bgr, block, roi, hsv, region.board_value)) for block in blocks]
+    return [(block, partial(face_looks_tagged, color_bgr, block, roi, hsv, region.board_value)) for block in blocks]
+
+
+def _never() -> bool:
+    """A face that never looks tagged (cut by the image's edge: a tag on it is likely cut too)."""
+    return False
 
 
 def _pixels_at(color_bgr: np.ndarray, px: np.ndarray) -> np.ndarray:
@@ -464,17 +470,18 @@ def _is_occluded(face: Face, centre_xy, yaw: float, size: str, camera: PlaneCame
     edge = cfg.blocks.large_size_m if size == "large" else cfg.blocks.small_size_m
     half = 0.5 * edge
     c, s = math.cos(yaw), math.sin(yaw)
-    square = np.array([[centre_xy[0] + c * a - s * b, centre_xy[1] + s * a + c * b]
-                       for a, b in ((-half, -half), (half, -half), (half, half), (-half, half))])
+    cx, cy = float(centre_xy[0]), float(centre_xy[1])  # plain floats: the same sums, cheaper than numpy scalars
+    square = np.array([[cx + c * a - s * b, cy + s * a + c * b] for a, b in ((-half, -half), (half, -half), (half, half), (-half, half))])
     poly = camera.project(square, face.top_m, face.plane_H) / step
-    x0, y0 = np.maximum(np.floor(poly.min(axis=0)).astype(int) - 1, 0)
-    x1, y1 = np.ceil(poly.max(axis=0)).astype(int) + 2
+    us, vs = poly[:, 0].tolist(), poly[:, 1].tolist()
+    x0, y0 = max(math.floor(min(us)) - 1, 0), max(math.floor(min(vs)) - 1, 0)
+    x1, y1 = math.ceil(max(us)) + 2, math.ceil(max(vs)) + 2
     window = z_small[y0:y1, x0:x1]
     if window.size == 0:
         return False
     inside = np.zeros(window.shape, np.uint8)
     cv2.fillConvexPoly(inside, np.round(poly - [x0, y0]).astype(np.int32), 1)
-    above = np.count_nonzero((window > face.top_m + 0.008) & (inside > 0))
+    above = np.count_nonzero((window > face.top_m + 0.008) & inside.view(bool))
     # At least 3 samples: a small cube's square holds ~30, and one or two can be a depth dropout the
     # robot mask claims at its edge.
-    return above > max(2, 0.05 * np.count_nonzero(inside))
+    return above > max(2, 0.05 * cv2.countNonZero(inside))

@@ -443,14 +443,13 @@ def face_and_board_at(color_bgr: np.ndarray, center_px, side_px: float | None = 
 def frame_clip_levels_rgb(color_bgr: np.ndarray) -> np.ndarray:
     """(3,) RGB: the level from which each channel counts as clipped in this BGR frame (the CLIP_TOP_PIXELS-th
     brightest value less CLIP_MARGIN, never above CLIPPED; CLIPPED where that is below MIN_CLIP_LEVEL)."""
-    levels = []
     image = np.ascontiguousarray(color_bgr)
-    for channel in (2, 1, 0):
-        counts = cv2.calcHist([image], [channel], None, [256], [0, 256]).ravel().astype(np.int64)  # a bincount without the channel's copy
-        top = int(np.searchsorted(np.cumsum(counts[::-1]), CLIP_TOP_PIXELS))  # levels down from 255
-        level = 255 - top - CLIP_MARGIN
-        levels.append(float(min(CLIPPED, level)) if level >= MIN_CLIP_LEVEL else float(CLIPPED))
-    return np.array(levels)
+    # Per channel, R G B: pixels at each level from 255 down (calcHist: a bincount without the channel's copy).
+    counts = np.stack([cv2.calcHist([image], [channel], None, [256], [0, 256]).ravel()[::-1] for channel in (2, 1, 0)])
+    # Levels down from 255 before CLIP_TOP_PIXELS are reached (np.searchsorted's answer on each running count).
+    tops = np.count_nonzero(np.cumsum(counts.astype(np.int64), axis=1) < CLIP_TOP_PIXELS, axis=1).tolist()
+    levels = [255 - top - CLIP_MARGIN for top in tops]
+    return np.array([float(min(CLIPPED, level)) if level >= MIN_CLIP_LEVEL else float(CLIPPED) for level in levels])
 
 
 def measure_at(model: ColorModel, color_bgr: np.ndarray, center_px, side_px: float | None = None,

@@ -129,8 +129,7 @@ def classify_face(face: Face, cfg: PerceptionConfig, rect: tuple | None = None) 
         and height_err <= cfg.blocks.stack_height_tolerance_m
         and circle_fill(hull, pitch, face.pixel_count) <= MAX_CIRCLE_FILL
     )
-    centroid = mean_rows(face.points_xy)
-    return ClassifiedFace(size, side, yaw, is_cube, centroid if is_cube else centre, stacks)
+    return ClassifiedFace(size, side, yaw, is_cube, mean_rows(face.points_xy) if is_cube else centre, stacks)
 
 
 def fits_some_stack(top_m: float, cfg: PerceptionConfig) -> bool:
@@ -260,9 +259,9 @@ def runs_off_image(ys: np.ndarray, xs: np.ndarray, roi, cal: Calibration) -> boo
     """True when a face (ROI rows ys, columns xs) reaches within BORDER_MARGIN_PX of the image's edge."""
     x0, y0 = roi[0], roi[1]
     m = BORDER_MARGIN_PX
-    return bool(
-        xs.min() + x0 <= m or ys.min() + y0 <= m or xs.max() + x0 >= cal.width - 1 - m or ys.max() + y0 >= cal.height - 1 - m
-    )
+    x_min, x_max = int(np.minimum.reduce(xs)), int(np.maximum.reduce(xs))  # the ufuncs' own reductions: xs.min()'s values
+    y_min, y_max = int(np.minimum.reduce(ys)), int(np.maximum.reduce(ys))
+    return x_min + x0 <= m or y_min + y0 <= m or x_max + x0 >= cal.width - 1 - m or y_max + y0 >= cal.height - 1 - m
 
 
 def classify_clipped(face: Face, ys: np.ndarray, xs: np.ndarray, roi, geo: BlockGeometry, cfg: PerceptionConfig) -> ClassifiedFace | None:
@@ -294,6 +293,5 @@ def covered_by_stack(contour: np.ndarray, top_m: float, z: np.ndarray) -> bool:
     of the ROI's heights z), a sizeable part stands well above the face (the block on top)."""
     inside = np.zeros(z.shape, np.uint8)
     cv2.fillConvexPoly(inside, cv2.convexHull(contour), 1)
-    inside = inside.view(bool)
-    above = np.count_nonzero((z > top_m + 0.01) & inside)
-    return above > 0.15 * max(1, np.count_nonzero(inside))
+    above = np.count_nonzero((z > top_m + 0.01) & inside.view(bool))
+    return above > 0.15 * max(1, cv2.countNonZero(inside))

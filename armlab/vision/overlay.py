@@ -51,11 +51,13 @@ def draw_overlay(
     layers: OverlayLayers = OverlayLayers(),
     grid_points_m: np.ndarray | None = None,
     grid_px: np.ndarray | None = None,
+    camera: PlaneCamera | None = None,
 ) -> np.ndarray:
     """A copy of the image with the enabled layers drawn; the input is never modified.
 
     grid_px: grid_pixels(calibration, grid_points_m, image size) when the caller keeps it per
-    calibration (it changes only with the calibration); computed here when None."""
+    calibration (it changes only with the calibration); computed here when None. camera: the
+    calibration's PlaneCamera, likewise (for the yaw arrows)."""
     check_color_image(color_bgr)
     out = color_bgr.copy() if color_bgr.ndim == 3 else cv2.cvtColor(color_bgr, cv2.COLOR_GRAY2BGR)
     if layers.grid and calibration is not None:
@@ -71,7 +73,8 @@ def draw_overlay(
                 u, v = np.round(tag.center_px).astype(int)
                 cv2.putText(out, str(tag.id), (int(u) - 6, int(v) - 14), cv2.FONT_HERSHEY_SIMPLEX, 0.5, (0, 255, 0), 1, cv2.LINE_AA)
     if layers.detections and blocks:
-        camera = PlaneCamera(calibration.T_world_camera, calibration.K, calibration.dist) if calibration is not None else None
+        if camera is None and calibration is not None:
+            camera = PlaneCamera(calibration.T_world_camera, calibration.K, calibration.dist)
         labels = [_draw_block(out, block, camera, layers.labels) for block in blocks]
         placed: list[tuple[int, int, int, int]] = []
         for label in labels:

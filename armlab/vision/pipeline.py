@@ -146,5 +146,7 @@ class PerceptionPipeline:
                 grid_px = self._grid_px.get(size)
                 if grid_px is None:
                     grid_px = self._grid_px[size] = grid_pixels(cal, self._grid_m, size)
-            overlay = draw_overlay(color_bgr, tags=tags, blocks=blocks, calibration=cal, layers=layers, grid_points_m=self._grid_m, grid_px=grid_px)
+            camera = None if cal is None or self._block_geometry is None else self._block_geometry.camera  # the calibration's
+            overlay = draw_overlay(color_bgr, tags=tags, blocks=blocks, calibration=cal, layers=layers, grid_points_m=self._grid_m, grid_px=grid_px,
+                                   camera=camera)
         return PerceptionResult(tags, blocks, overlay, robot_mask)
