@@ -211,6 +211,10 @@ def robot_mask(depth_mm: np.ndarray, cal: Calibration, volume: RobotVolume, pixe
         rays = _RayGrid(cal, step)
     grid_h, grid_w = rays.x.shape
     mask = np.zeros((h, w), bool)
+    # The parts' robot cells on the sample grid, filled in at full resolution once (an upscale by a whole factor
+    # maps each pixel to its cell, so this is the union of the parts' own upscaled cells).
+    cells = np.zeros((grid_h, grid_w), np.uint8)
+    span = [grid_w, grid_h, 0, 0]  # the grid window holding every part's cells
     local = volume.in_frame(rays.T_camera_world)
     corners_world = volume.hull_corners_m()
     corners_camera = corners_world @ rays.T_camera_world[:3, :3].T + rays.T_camera_world[:3, 3]
@@ -247,11 +251,18 @@ def robot_mask(depth_mm: np.ndarray, cal: Calibration, volume: RobotVolume, pixe
                 hit_inside[near] |= _in_box(X, Y, Z, local.box_poses[k], local.box_half_extents_m[k])
         hit = np.zeros(inside.shape, bool)
         hit[inside] = hit_inside
-        full = mask[y0 * step : y1 * step, x0 * step : x1 * step]
+        hit = hit.view(np.uint8)
         if step > 1:  # a sample stands for its cell; grown by one cell so the robot's edge cells are covered
-            cells = cv2.dilate(hit.view(np.uint8), _CELL_NEIGHBOURS)
-            hit = cv2.resize(cells, (cells.shape[1] * step, cells.shape[0] * step), interpolation=cv2.INTER_NEAREST).view(bool)
-        full |= hit[: full.shape[0], : full.shape[1]]
+            hit = cv2.dilate(hit, _CELL_NEIGHBOURS)
+        cells[y0:y1, x0:x1] |= hit
+        span = [min(span[0], x0), min(span[1], y0), max(span[2], x1), max(span[3], y1)]
+    x0, y0, x1, y1 = span
+    if x1 > x0 and y1 > y0:
+        hit = cells[y0:y1, x0:x1]
+        if step > 1:
+            hit = cv2.resize(hit, ((x1 - x0) * step, (y1 - y0) * step), interpolation=cv2.INTER_NEAREST)
+        full = mask[y0 * step : y1 * step, x0 * step : x1 * step]
+        full |= hit[: full.shape[0], : full.shape[1]].view(bool)
     return mask
 
 
