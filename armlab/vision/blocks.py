@@ -93,6 +93,23 @@ def _color_classes(hsv: np.ndarray, cfg: PerceptionConfig, table: np.ndarray) ->
     return cv2.bitwise_and(classes, colourful)
 
 
+def _components(mask: np.ndarray) -> tuple[int, np.ndarray, list[list[int]]]:
+    """8-connected components of a uint8 mask: (count with the background, labels over the window of the
+    mask's set pixels, each label's [x, y, width, height, area] in image coordinates; the first row is the
+    window's x, y). Grana's block-based labelling: the default's (Spaghetti's) labels here, about 3x faster;
+    on the window only (its corner on even rows and columns, as the labelling's 2x2 blocks lie in the image,
+    so the labels are numbered as over the whole image): the stats cost time per pixel."""
+    x, y, w, h = cv2.boundingRect(mask)
+    if w == 0 or h == 0:  # nothing set: the background alone
+        return 1, np.zeros((0, 0), np.int32), [[0, 0, 0, 0, 0]]
+    x0, y0 = x - x % 2, y - y % 2
+    n, labels, stats, _ = cv2.connectedComponentsWithStatsWithAlgorithm(mask[y0 : y + h, x0 : x + w], 8, cv2.CV_32S, cv2.CCL_GRANA)
+    stats[:, 0] += x0
+    stats[:, 1] += y0
+    stats[0, :2] = (x0, y0)
+    return n, labels, stats.tolist()  # plain ints: cheaper arithmetic and slicing than numpy scalars
+
+
 def _largest_blob(mask: np.ndarray) -> np.ndarray | None:
     n, labels, stats, _ = cv2.connectedComponentsWithStats(mask.view(np.uint8), connectivity=4)
     if n <= 1:
@@ -252,9 +269,8 @@ def detect_blocks(
     # so the thin coloured ring around it stays one candidate at this resolution.
     near_colour = cv2.dilate(coloured, np.ones((7, 7), np.uint8)) > 0
     candidates = coloured | (raised & colourless & near_colour & (hsv_small[..., 2] >= 150)).astype(np.uint8)
-    # Grana's block-based labelling: the same labels as the default (Spaghetti) here, about 3x faster.
-    n, labels, stats, _ = cv2.connectedComponentsWithStatsWithAlgorithm(candidates, 8, cv2.CV_32S, cv2.CCL_GRANA)
-    stats_list = stats.tolist()  # plain ints: cheaper arithmetic and slicing than numpy scalars
+    n, labels, stats_list = _components(candidates)
+    labels_x, labels_y = stats_list[0][:2]  # the labels' window in the image (_components)
     pixel_m = abs(float(cal.T_world_camera[2, 3])) / cal.K[0, 0] * step  # board-level pixel size, roughly
     min_face_px = 0.25 * bc.small_size_m**2 / pixel_m**2
     detector = tag_detector
@@ -263,7 +279,7 @@ def detect_blocks(
         x, y, bw, bh, area = stats_list[k]
         if area < 4:
             continue
-        sel = labels[y : y + bh, x : x + bw] == k
+        sel = labels[y - labels_y : y - labels_y + bh, x - labels_x : x - labels_x + bw] == k
         flat, ys, xs = pixels_of(sel)
         comp_classes = classes[y : y + bh, x : x + bw].ravel().take(flat)
         comp_z = z_small[y : y + bh, x : x + bw].ravel().take(flat)
