@@ -93,6 +93,9 @@ def _color_classes(hsv: np.ndarray, cfg: PerceptionConfig, table: np.ndarray) ->
     return cv2.bitwise_and(classes, colourful)
 
 
+_NEAR_COLOUR_KERNEL = np.ones((7, 7), np.uint8)  # a tag's white within 3 quarter-resolution pixels of block colour
+
+
 def _components(mask: np.ndarray) -> tuple[int, np.ndarray, list[list[int]]]:
     """8-connected components of a uint8 mask: (count with the background, labels over the window of the
     mask's set pixels, each label's [x, y, width, height, area] in image coordinates; the first row is the
@@ -267,8 +270,13 @@ def detect_blocks(
     coloured = (classes > 0).astype(np.uint8)
     # A tag on a block's top is white and black: bridge its white (next to colour, never the dark arm)
     # so the thin coloured ring around it stays one candidate at this resolution.
-    near_colour = cv2.dilate(coloured, np.ones((7, 7), np.uint8)) > 0
-    candidates = coloured | (raised & colourless & near_colour & (hsv_small[..., 2] >= 150)).astype(np.uint8)
+    candidates = coloured.copy()
+    # Near colour is within the colour's bounding box grown by the kernel's reach: worked out there only.
+    cx, cy, cw, ch = cv2.boundingRect(coloured)
+    if cw and ch:
+        win = np.s_[max(cy - 3, 0) : cy + ch + 3, max(cx - 3, 0) : cx + cw + 3]
+        near_colour = cv2.dilate(coloured[win], _NEAR_COLOUR_KERNEL).view(bool)
+        candidates[win] |= (raised[win] & colourless[win] & near_colour & (hsv_small[win][..., 2] >= 150)).view(np.uint8)
     n, labels, stats_list = _components(candidates)
     labels_x, labels_y = stats_list[0][:2]  # the labels' window in the image (_components)
     pixel_m = abs(float(cal.T_world_camera[2, 3])) / cal.K[0, 0] * step  # board-level pixel size, roughly
