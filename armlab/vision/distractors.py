@@ -21,7 +21,7 @@ def dark_and_colourless(face_hsv: np.ndarray, face_classes: np.ndarray, board_va
     coloured = face_classes > 0
     if not coloured.any():
         return False
-    hsv = face_hsv[coloured].astype(np.float32)
+    hsv = face_hsv.compress(coloured, axis=0).astype(np.float32)  # boolean indexing's rows, cheaper
     chroma = hsv[:, 1] * hsv[:, 2] / 255.0
     return quantile(chroma, 0.5) < MIN_CHROMA * board_value
 
