@@ -251,8 +251,7 @@ def detect_blocks(
     classes *= raised  # no colour class where nothing is raised (the board's own colours)
     # The board's own brightness (median value of its pixels in this frame): the scale a block's
     # colourfulness is judged on (lighting and exposure change both alike).
-    with np.errstate(invalid="ignore"):
-        board_px = np.abs(z_small[::2, ::2]) < cfg.board_plane.inlier_m
+    board_px = np.abs(z_small[::2, ::2]) < cfg.board_plane.inlier_m  # NaN (no depth) compares False, quietly
     board_value = quantile(hsv_small[::2, ::2, 2][board_px], 0.5) if np.count_nonzero(board_px) >= 20 else 255.0
     z_cover = z_small  # what may hide part of a face: what stands above it, and the robot
     ignored_small = None if ignore_mask is None else np.ascontiguousarray(ignore_mask[::step, ::step])  # contiguous: cheaper masking
@@ -393,10 +392,9 @@ def _blocks_from_region(color_bgr, geo: BlockGeometry, cfg, region: _Region, top
             keep |= colour & (value >= 0.7 * quantile(value[top], 0.95))
         else:
             keep |= colour
-    with np.errstate(invalid="ignore"):
-        # Bright block colour no lower than half a small cube under the top (and not above it: the
-        # block on top of a lower stack member): the top's rounded edge.
-        grow = keep & (classes > 0) & (z > top_m - 0.5 * cfg.blocks.small_size_m) & (z < top_m + tol)
+    # Bright block colour no lower than half a small cube under the top (and not above it: the
+    # block on top of a lower stack member): the top's rounded edge. (NaN heights compare False, quietly.)
+    grow = keep & (classes > 0) & (z > top_m - 0.5 * cfg.blocks.small_size_m) & (z < top_m + tol)
     found = _top_face_in_roi(z, band, keep, tol, seed, grow)
     if found is None:
         return []

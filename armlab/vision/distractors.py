@@ -45,8 +45,7 @@ def part_of_larger_surface(face: Face, z_small: np.ndarray, step: int, tol_m: fl
     window = z_small[y0 : int(v) + r + 1, x0 : int(u) + r + 1]
     if window.size == 0:
         return False
-    with np.errstate(invalid="ignore"):
-        band = (np.abs(window - face.top_m) < tol_m).astype(np.uint8)
+    band = (np.abs(window - face.top_m) < tol_m).astype(np.uint8)  # NaN and the robot's inf compare False, quietly
     n, labels = cv2.connectedComponents(band, connectivity=8)
     cu, cv_ = min(int(u) - x0, window.shape[1] - 1), min(int(v) - y0, window.shape[0] - 1)
     label = labels[cv_, cu]
