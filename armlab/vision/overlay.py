@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
+from functools import lru_cache
 
 import cv2
 import numpy as np
@@ -110,14 +111,23 @@ def _boxes_overlap(a: tuple[int, int, int, int], b: tuple[int, int, int, int]) -
     return a[0] < b[0] + b[2] and b[0] < a[0] + a[2] and a[1] < b[1] + b[3] and b[1] < a[1] + a[3]
 
 
+_DIMMED = (np.arange(256) * 0.35).astype(np.uint8)  # a label's dark box: each 8-bit value times 0.35, truncated
+
+
+@lru_cache(maxsize=512)
+def _label_size(text: str) -> tuple[tuple[int, int], int]:
+    """cv2.getTextSize of a label (the same few texts every frame: measured once each)."""
+    return cv2.getTextSize(text, cv2.FONT_HERSHEY_SIMPLEX, LABEL_SCALE, 1)
+
+
 def _draw_label(out: np.ndarray, text: str, anchor: tuple[int, int], colour, placed) -> tuple[int, int, int, int]:
     """Draw `text` on a dark box placed clear of the labels already drawn; returns its box."""
-    (tw, th), baseline = cv2.getTextSize(text, cv2.FONT_HERSHEY_SIMPLEX, LABEL_SCALE, 1)
+    (tw, th), baseline = _label_size(text)
     w, h = tw + 2 * LABEL_PAD_PX, th + baseline + 2 * LABEL_PAD_PX
     x, y, w, h = place_label(anchor, (w, h), placed, (out.shape[1], out.shape[0]))
     x0, y0, x1, y1 = max(x, 0), max(y, 0), min(x + w, out.shape[1]), min(y + h, out.shape[0])
     if x1 > x0 and y1 > y0:
-        out[y0:y1, x0:x1] = (out[y0:y1, x0:x1] * 0.35).astype(out.dtype)
+        out[y0:y1, x0:x1] = cv2.LUT(out[y0:y1, x0:x1], _DIMMED)
     cv2.putText(out, text, (x + LABEL_PAD_PX, y + LABEL_PAD_PX + th), cv2.FONT_HERSHEY_SIMPLEX, LABEL_SCALE, colour, 1, cv2.LINE_AA)
     return (x, y, w, h)
 
