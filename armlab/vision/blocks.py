@@ -359,6 +359,8 @@ class _Region:
             self.classes[ignored] = 0
             self.colourless[ignored] = False
             self.z[ignored] = np.nan
+        self.coloured = self.classes > 0
+        self.value = cv2.extractChannel(self.hsv, 2)  # HSV value, contiguous
 
 
 def _face_colour(model: ColorModel, grey: BoardGrey, clip_from_rgb: np.ndarray):
@@ -383,18 +385,18 @@ def _blocks_from_region(color_bgr, geo: BlockGeometry, cfg, region: _Region, top
     # Lit from above, a top face is brighter than the block's sides: dim pixels of a colour are side
     # faces that the depth filter smeared up to the top's height at the edge facing the camera. Each
     # colour is compared with its own brightest top pixels (a blue top is darker than a yellow one).
-    value = hsv[..., 2]
+    value = region.value
     keep = region.colourless.copy()
     for cj in np.flatnonzero(np.bincount(classes[band], minlength=1)[1:]) + 1:
-        colour = classes == cj
-        top = colour & band
+        colour, top = (mine, seed) if cj == ci else (classes == cj, None)
+        top = (colour & band) if top is None else top
         if np.count_nonzero(top) >= 10:
             keep |= colour & (value >= 0.7 * quantile(value[top], 0.95))
         else:
             keep |= colour
     # Bright block colour no lower than half a small cube under the top (and not above it: the
     # block on top of a lower stack member): the top's rounded edge. (NaN heights compare False, quietly.)
-    grow = keep & (classes > 0) & (z > top_m - 0.5 * cfg.blocks.small_size_m) & (z < top_m + tol)
+    grow = keep & region.coloured & (z > top_m - 0.5 * cfg.blocks.small_size_m) & (z < top_m + tol)
     found = _top_face_in_roi(z, band, keep, tol, seed, grow)
     if found is None:
         return []
