@@ -24,6 +24,14 @@ import cv2
 import numpy as np
 
 from armlab.errors import InvalidInput
+from armlab.vision.board_grey import (  # the board's grey, re-exported: part of the colour model's interface
+    BOARD_CHROMATICITY_BAND,
+    BOARD_LUMINANCE_BAND,
+    BOARD_MAX_SATURATION,
+    MIN_BOARD_PIXELS,
+    BoardGrey,
+    board_reference_bgr,
+)
 from armlab.vision.geometry import project_points
 
 UNKNOWN = "unknown"
@@ -31,10 +39,6 @@ UNKNOWN = "unknown"
 # sRGB (linear) -> CIE XYZ, D65; the white point is the matrix's row sums.
 _RGB_TO_XYZ = np.array([[0.4124, 0.3576, 0.1805], [0.2126, 0.7152, 0.0722], [0.0193, 0.1192, 0.9505]])
 _WHITE_XYZ = _RGB_TO_XYZ.sum(axis=1)
-BOARD_MAX_SATURATION = 128  # HSV saturation (0..255) above which a pixel is not the board even under a strong colour cast
-BOARD_LUMINANCE_BAND = 0.2  # board pixels within this fraction of the median brightness (drops grid lines, tags' white, shadows)
-BOARD_CHROMATICITY_BAND = 0.03  # ... and within this of the median chromaticity (r, b of r + g + b; drops wood, paper, cables)
-MIN_BOARD_PIXELS = 20
 CLIPPED = 250  # an 8-bit channel at or above this may be clipped: the face is compared with references as the camera would clip them
 # A camera that scales its channels after the sensor clipped (white balance, digital gain) and adds noise
 # shows a clipped channel as a noisy plateau below 255 (the simulated L515 at a red gain of 0.92: an orange
@@ -124,59 +128,6 @@ def normalised_rgb(face_bgr: np.ndarray, board_bgr: np.ndarray, face_rgb: np.nda
     board = _board_grey(board_bgr)
     face_rgb = face_median_rgb(face_bgr) if face_rgb is None else face_rgb
     return srgb_to_linear(face_rgb) / np.maximum(srgb_to_linear(board[::-1]), 1e-4)
-
-
-def board_reference_bgr(color_bgr: np.ndarray, board_mask: np.ndarray) -> np.ndarray:
-    """The board's grey (3,) BGR in this light: per-channel median of the masked pixels that are not
-    strongly coloured (HSV saturation <= BOARD_MAX_SATURATION) and, twice from the medians, within
-    BOARD_LUMINANCE_BAND of the median brightness and BOARD_CHROMATICITY_BAND of the median
-    chromaticity: the dominant grey (grid lines, tags' white, shadows, wood and paper dropped; a colour
-    cast of the light is kept, it is what the reference measures).
-    color_bgr: (H, W, 3) uint8; board_mask: (H, W) bool, e.g. board-height pixels around a block.
-    ValueError when fewer than MIN_BOARD_PIXELS such pixels remain."""
-    if color_bgr.ndim != 3 or board_mask.shape != color_bgr.shape[:2]:
-        raise InvalidInput(f"board_reference_bgr: mask {board_mask.shape} does not match image {color_bgr.shape}")
-    # np.compress: the same rows as boolean indexing, several times faster on (N, 3) arrays.
-    pixels = np.ascontiguousarray(color_bgr).reshape(-1, 3).compress(np.ravel(board_mask).astype(bool, copy=False), axis=0)
-    if len(pixels) < MIN_BOARD_PIXELS:
-        raise InvalidInput(f"board_reference_bgr: only {len(pixels)} board pixels (needs {MIN_BOARD_PIXELS})")
-    # Saturation (hi - lo) / hi <= BOARD_MAX_SATURATION / 255, in whole numbers (_GREY_SPREAD_MAX) on the 8-bit channels.
-    b, g, r = pixels[:, 0], pixels[:, 1], pixels[:, 2]
-    hi = np.maximum(np.maximum(b, g), r)
-    is_grey = hi - np.minimum(np.minimum(b, g), r) <= _GREY_SPREAD_MAX[hi]
-    if np.count_nonzero(is_grey) < MIN_BOARD_PIXELS:
-        raise InvalidInput(f"board_reference_bgr: only {np.count_nonzero(is_grey)} grey board pixels (needs {MIN_BOARD_PIXELS})")
-    grey = pixels.T.astype(np.float32).compress(is_grey, axis=1)  # (3, N) B, G, R
-    total = grey[0] + grey[1] + grey[2]  # whole numbers: exact in float32
-    # Rows: brightness and chromaticity (b, r of b + g + r), so each round's three medians are one partial sort.
-    stats = np.empty((3, total.size), np.float32)
-    stats[0] = total
-    np.divide(grey[0], np.maximum(total, 1.0), out=stats[1])
-    np.divide(grey[2], np.maximum(total, 1.0), out=stats[2])
-    keep = None
-    for _ in range(2):
-        median, blue, red = _row_medians(stats.copy() if keep is None else stats.compress(keep, axis=1))
-        keep = ((np.abs(total - median) <= BOARD_LUMINANCE_BAND * max(median, 3.0))
-                & (np.abs(stats[1] - blue) <= BOARD_CHROMATICITY_BAND)
-                & (np.abs(stats[2] - red) <= BOARD_CHROMATICITY_BAND))
-        if np.count_nonzero(keep) < MIN_BOARD_PIXELS:
-            raise InvalidInput("board_reference_bgr: the board pixels have no dominant grey")
-    reference = np.array(_row_medians(grey.compress(keep, axis=1)), dtype=float)
-    if np.any(reference <= 0):
-        raise InvalidInput("board_reference_bgr: the board reads black (no light?)")
-    return reference
-
-
-# Per brightest channel value hi: the largest hi - lo with (hi - lo) * 255 <= BOARD_MAX_SATURATION * max(hi, 1).
-_GREY_SPREAD_MAX = (BOARD_MAX_SATURATION * np.maximum(np.arange(256), 1) // 255).astype(np.uint8)
-
-
-def _row_medians(rows: np.ndarray) -> list[float]:
-    """The median of each row of a (R, N) array (N >= 1; the upper middle for an even N) as floats, by one
-    partial sort in place (pass a fresh array): far cheaper than np.median on a board window's few hundred pixels."""
-    k = rows.shape[1] // 2
-    rows.partition(k, axis=1)
-    return rows[:, k].tolist()
 
 
 def lab_distance(lab: np.ndarray, reference: np.ndarray, k_lightness: float, k_chroma: float) -> float:
@@ -443,13 +394,24 @@ def face_and_board_at(color_bgr: np.ndarray, center_px, side_px: float | None = 
 def frame_clip_levels_rgb(color_bgr: np.ndarray) -> np.ndarray:
     """(3,) RGB: the level from which each channel counts as clipped in this BGR frame (the CLIP_TOP_PIXELS-th
     brightest value less CLIP_MARGIN, never above CLIPPED; CLIPPED where that is below MIN_CLIP_LEVEL)."""
-    image = np.ascontiguousarray(color_bgr)
-    # Per channel, R G B: pixels at each level from 255 down (calcHist: a bincount without the channel's copy).
-    counts = np.stack([cv2.calcHist([image], [channel], None, [256], [0, 256]).ravel()[::-1] for channel in (2, 1, 0)])
-    # Levels down from 255 before CLIP_TOP_PIXELS are reached (np.searchsorted's answer on each running count).
-    tops = np.count_nonzero(np.cumsum(counts.astype(np.int64), axis=1) < CLIP_TOP_PIXELS, axis=1).tolist()
-    levels = [255 - top - CLIP_MARGIN for top in tops]
-    return np.array([float(min(CLIPPED, level)) if level >= MIN_CLIP_LEVEL else float(CLIPPED) for level in levels])
+    blue, green, red = cv2.split(np.ascontiguousarray(color_bgr))
+    return np.array([_clip_level(red), _clip_level(green), _clip_level(blue)])
+
+
+def _clip_level(plane: np.ndarray) -> float:
+    """frame_clip_levels_rgb of one 8-bit channel. The CLIP_TOP_PIXELS-th brightest value is the highest v with
+    that many pixels at v or above: counted from the channel's maximum down (a few whole-image counts, cheaper
+    than its histogram), and only down to the lowest value that gives a level (MIN_CLIP_LEVEL + CLIP_MARGIN)."""
+    lowest = MIN_CLIP_LEVEL + CLIP_MARGIN
+    brightest = int(cv2.minMaxLoc(plane)[1])
+    for value in range(brightest, max(brightest - 3, lowest - 1), -1):
+        if cv2.countNonZero(cv2.compare(plane, value, cv2.CMP_GE)) >= CLIP_TOP_PIXELS:
+            return float(min(CLIPPED, value - CLIP_MARGIN))
+    bright = plane[plane >= lowest]  # more levels to go: the bright values' own CLIP_TOP_PIXELS-th largest
+    if bright.size < CLIP_TOP_PIXELS:
+        return float(CLIPPED)
+    bright.partition(bright.size - CLIP_TOP_PIXELS)
+    return float(min(CLIPPED, int(bright[bright.size - CLIP_TOP_PIXELS]) - CLIP_MARGIN))
 
 
 def measure_at(model: ColorModel, color_bgr: np.ndarray, center_px, side_px: float | None = None,
@@ -464,42 +426,7 @@ def classify_at(model: ColorModel, color_bgr: np.ndarray, center_px, side_px: fl
     return model.classify(*face_and_board_at(color_bgr, center_px, side_px, board_mask))
 
 
-class BoardGrey:
-    """The board's grey for the faces of one frame: measured from board pixels (board_mask) in a window
-    around each face, else over the whole board, else over the whole image (the board is its largest
-    grey), else a mid grey (no normalisation: a frame with no grey at all). Cheap at the resolution
-    given (detect_blocks passes its quarter-resolution image)."""
-
-    def __init__(self, color_bgr: np.ndarray, board_mask: np.ndarray, scale: float = 1.0, window_px: int = 24) -> None:
-        self.color_bgr, self.board_mask, self.scale, self.window_px = color_bgr, board_mask, scale, window_px
-        self._global: np.ndarray | None = None
-
-    def overall(self) -> np.ndarray:
-        if self._global is None:
-            image = self.color_bgr[::4, ::4]  # thousands of pixels are plenty for a median
-            for mask in (self.board_mask[::4, ::4], np.ones(image.shape[:2], bool)):
-                try:
-                    self._global = board_reference_bgr(image, mask)
-                    break
-                except ValueError:
-                    continue
-            else:
-                self._global = np.array([128.0, 128.0, 128.0])
-        return self._global
-
-    def near(self, center_px) -> np.ndarray:
-        """The board's grey around a full-resolution pixel (falls back to the whole board's)."""
-        u, v = int(round(float(center_px[0]) / self.scale)), int(round(float(center_px[1]) / self.scale))
-        r = self.window_px
-        h, w = self.board_mask.shape
-        y0, y1, x0, x1 = max(0, v - r), min(h, v + r + 1), max(0, u - r), min(w, u + r + 1)
-        try:
-            # Every other pixel of the window: ~600 board pixels, a quarter of the work.
-            return board_reference_bgr(self.color_bgr[y0:y1:2, x0:x1:2], self.board_mask[y0:y1:2, x0:x1:2])
-        except ValueError:
-            return self.overall()
-
-
-__all__ = ["UNKNOWN", "BoardGrey", "ColorModel", "ColorReading", "ColorSample", "board_mask_near", "board_reference_bgr",
-           "board_region_mask", "classify_at", "frame_clip_levels_rgb", "face_and_board_at", "face_patch", "lab_distance", "lab_from_relative_rgb",
-           "measure_at", "normalised_rgb", "relative_rgb_from_lab", "srgb_to_linear"]
+__all__ = ["BOARD_CHROMATICITY_BAND", "BOARD_LUMINANCE_BAND", "BOARD_MAX_SATURATION", "MIN_BOARD_PIXELS", "UNKNOWN", "BoardGrey",
+           "ColorModel", "ColorReading", "ColorSample", "board_mask_near", "board_reference_bgr", "board_region_mask", "classify_at",
+           "frame_clip_levels_rgb", "face_and_board_at", "face_patch", "lab_distance", "lab_from_relative_rgb", "measure_at",
+           "normalised_rgb", "relative_rgb_from_lab", "srgb_to_linear"]

@@ -208,11 +208,23 @@ def test_board_reference_bgr_matches_its_direct_formulation(board_frame):
             np.testing.assert_array_equal(board_reference_bgr(window, mask), expected)
 
 
+def _clip_test_images(color: np.ndarray, rng) -> list[np.ndarray]:
+    """Frames from dark to overexposed, and planes whose CLIP_TOP_PIXELS-th brightest value lies far below
+    their brightest (a few hot pixels), exactly at it, or just short of a level."""
+    images = [np.clip(color.astype(float) * scale + rng.normal(0, 3, color.shape), 0, 255).astype(np.uint8)[::4, ::4]
+              for scale in (0.5, 1.0, 1.3, 2.0)]
+    for hot, rest_max in ((CLIP_TOP_PIXELS - 1, 230), (CLIP_TOP_PIXELS, 200), (CLIP_TOP_PIXELS + 3, 240), (3, 222), (50, 252)):
+        image = rng.integers(0, rest_max + 1, (180, 320, 3)).astype(np.uint8)
+        flat = image.reshape(-1, 3)
+        flat[rng.choice(len(flat), hot, replace=False)] = rng.integers(rest_max, 256, (hot, 3))
+        images.append(image)
+    return images
+
+
 def test_frame_clip_levels_match_a_search_per_channel(board_frame):
     color, _ = board_frame
     rng = np.random.default_rng(2)
-    for scale in (1.0, 1.3, 2.0):
-        image = np.clip(color.astype(float) * scale + rng.normal(0, 3, color.shape), 0, 255).astype(np.uint8)[::4, ::4]
+    for image in _clip_test_images(color, rng):
         expected = []
         for channel in (2, 1, 0):
             counts = np.bincount(image[..., channel].ravel(), minlength=256)
