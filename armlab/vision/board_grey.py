@@ -43,10 +43,11 @@ def board_reference_bgr(color_bgr: np.ndarray, board_mask: np.ndarray) -> np.nda
     np.divide(grey[2], np.maximum(total, 1.0), out=stats[2])
     keep = None
     for _ in range(2):
-        median, blue, red = _row_medians(stats.copy() if keep is None else stats.compress(keep, axis=1))
-        keep = ((np.abs(total - median) <= BOARD_LUMINANCE_BAND * max(median, 3.0))
-                & (np.abs(stats[1] - blue) <= BOARD_CHROMATICITY_BAND)
-                & (np.abs(stats[2] - red) <= BOARD_CHROMATICITY_BAND))
+        medians = _row_medians(stats.copy() if keep is None else stats.compress(keep, axis=1))
+        # Each row within its band of its median, all three rows at once in float32 (as float32 rows compare with
+        # Python floats: the bands rounded to float32).
+        bands = np.array([BOARD_LUMINANCE_BAND * max(medians[0], 3.0), BOARD_CHROMATICITY_BAND, BOARD_CHROMATICITY_BAND], np.float32)
+        keep = np.logical_and.reduce(np.abs(stats - np.array(medians, np.float32)[:, None]) <= bands[:, None])
         if np.count_nonzero(keep) < MIN_BOARD_PIXELS:
             raise InvalidInput("board_reference_bgr: the board pixels have no dominant grey")
     reference = np.array(_row_medians(grey.compress(keep, axis=1)), dtype=float)
