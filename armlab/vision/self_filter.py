@@ -187,10 +187,12 @@ class _RayGrid:
             rays = normalized_rays(grid, cal.K, cal.dist)
             self.x = rays[:, 0].reshape(len(vs), len(us)).astype(np.float32)
             self.y = rays[:, 1].reshape(len(vs), len(us)).astype(np.float32)
-        else:
+            self.x_of_column = self.y_of_row = None
+        else:  # a pinhole: x depends on the column only, y on the row
             xn = ((us - cal.K[0, 2]) / cal.K[0, 0]).astype(np.float32)
             yn = ((vs - cal.K[1, 2]) / cal.K[1, 1]).astype(np.float32)
             self.x, self.y = np.broadcast_to(xn[None, :], (len(vs), len(us))), np.broadcast_to(yn[:, None], (len(vs), len(us)))
+            self.x_of_column, self.y_of_row = xn, yn
         self.T_camera_world = invert_transform(cal.T_world_depth)  # depth points are tested: the depth model
         self.projection = projection_pose(cal.T_world_camera)  # silhouettes are drawn in the colour image
 
@@ -242,7 +244,11 @@ def robot_mask(depth_mm: np.ndarray, cal: Calibration, volume: RobotVolume, pixe
         near = np.flatnonzero((Z >= depth_lows[index]) & (Z <= depth_highs[index]))
         if len(near):
             Z = Z.take(near)
-            X, Y = Z * rays.x[y0:y1, x0:x1][inside].take(near), Z * rays.y[y0:y1, x0:x1][inside].take(near)
+            if rays.x_of_column is not None:  # a pinhole: the near samples' rays from their columns and rows
+                rows, columns = np.divmod(np.flatnonzero(inside).take(near), x1 - x0)
+                X, Y = Z * rays.x_of_column.take(columns + x0), Z * rays.y_of_row.take(rows + y0)
+            else:
+                X, Y = Z * rays.x[y0:y1, x0:x1][inside].take(near), Z * rays.y[y0:y1, x0:x1][inside].take(near)
             if index < n_capsules:
                 (a, b), r = local.capsule_ends_m[index], local.capsule_radii_m[index]
                 hit_inside[near] |= _in_capsule(X, Y, Z, a, b, r)
