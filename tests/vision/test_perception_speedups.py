@@ -319,3 +319,13 @@ def test_robot_mask_is_every_sample_tested(cfg, board_frame, intrinsics, step):
         mask = robot_mask(noisy, cal, volume, step)
         assert 0 < np.count_nonzero(mask) < mask.size
         np.testing.assert_array_equal(mask, _robot_mask_before(noisy, cal, volume, step))
+
+
+def test_column_sums_are_numpys_sums_bitwise():
+    from armlab.vision.board_plane import _column_sums
+
+    rng = np.random.default_rng(12)
+    for count in (1, 2, 7, 8, 9, 1500, 3201):
+        points = rng.normal(size=(count, 3)) * rng.choice([1e-3, 1.0, 1e3]) + rng.normal(size=3)
+        np.testing.assert_array_equal(_column_sums(points), points.sum(axis=0))
+    np.testing.assert_array_equal(_column_sums(points[::2]), points[::2].sum(axis=0))  # strided: numpy's own
