@@ -261,7 +261,7 @@ class ColorModel:
         linear = srgb_to_linear(np.concatenate([face_rgb, board[::-1]]))  # the face's and the board's RGB in one call
         face_lin, board_lin = linear[:3], np.maximum(linear[3:], 1e-4)
         clip_from = np.full(3, float(CLIPPED)) if clip_from_rgb is None else np.asarray(clip_from_rgb, dtype=float).reshape(3)
-        if np.any(face_rgb >= clip_from):
+        if (face_rgb >= clip_from).any():
             # The face's CIELAB and the references as clipped (both of _clipped_rgb's tables) in one conversion.
             labs = lab_from_relative_rgb(np.concatenate([(face_lin / board_lin)[None], *self._clipped_rgb(board_lin, face_rgb, face_lin, clip_from)]),
                                          self.board_reflectance)
@@ -283,10 +283,11 @@ class ColorModel:
         ref_lin = self._table[2] * board_lin  # (M, 3)
         at_board = np.minimum(ref_lin, ceiling) / board_lin
         if np.count_nonzero(free) >= 2:
-            free_refs = ref_lin[:, free]
+            free_refs = ref_lin.compress(free, axis=1)  # boolean indexing's columns, cheaper
             norm = np.einsum("ij,ij->i", free_refs, free_refs)
-            fit = free_refs @ face_lin[free]
-            gain = np.clip(np.where(norm > 1e-12, fit / np.maximum(norm, 1e-12), 1.0), 1.0 / MAX_FACE_GAIN, MAX_FACE_GAIN)
+            fit = free_refs @ face_lin.compress(free)
+            # np.clip's values (no NaN here), without its overhead.
+            gain = np.minimum(np.maximum(np.where(norm > 1e-12, fit / np.maximum(norm, 1e-12), 1.0), 1.0 / MAX_FACE_GAIN), MAX_FACE_GAIN)
             ref_lin = ref_lin * gain[:, None]
         return at_board, np.minimum(ref_lin, ceiling) / board_lin
 
@@ -297,14 +298,14 @@ class ColorModel:
         names, refs, _ = self._table
         refs = refs if seen is None else seen
         d = lab_distances(lab, refs, self.k_lightness, self.k_chroma)
-        measured = tuple(round(float(x), 2) for x in lab)
+        measured = tuple(round(x, 2) for x in lab.tolist())
         if len(d) == 0:
             return ColorReading(UNKNOWN, measured, math.inf, UNKNOWN)
-        nearest = int(np.argmin(d))
+        nearest = int(d.argmin())
         allowed = d.copy()
         if chroma(lab) < self.min_chroma:  # a grey, black or white face is never a chromatic class
             allowed[np.hypot(refs[:, 1], refs[:, 2]) >= self.min_chroma] = np.inf
-        best = int(np.argmin(allowed))
+        best = int(allowed.argmin())
         if allowed[best] <= self.max_distance:
             return ColorReading(names[best], measured, float(allowed[best]), names[best])
         return ColorReading(UNKNOWN, measured, float(d[nearest]), names[nearest])
