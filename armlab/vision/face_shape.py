@@ -14,7 +14,7 @@ from armlab.vision.block_geometry import BlockGeometry
 from armlab.vision.calibration import Calibration
 from armlab.vision.clipped_face import fit_clipped_square, on_image_border
 from armlab.vision.config import PerceptionConfig
-from armlab.vision.geometry import inverse_homography
+from armlab.vision.geometry import dehomogenise, inverse_homography
 from armlab.vision.stacks import stack_candidates
 
 # Shape of a top face, from ideal shapes with room for real edges: area / minimum-area rectangle
@@ -97,7 +97,7 @@ def face_hull_xy(face: Face) -> np.ndarray:
     hull_px = cv2.convexHull(face.contour_px.astype(np.float32)).reshape(-1, 2).astype(np.float64)
     H_inv = inverse_homography(face.plane_H)
     xyw = hull_px @ H_inv[:, :2].T + H_inv[:, 2]
-    return xyw[:, :2] / xyw[:, 2:3]
+    return dehomogenise(xyw)
 
 
 @dataclass(frozen=True)

@@ -329,3 +329,15 @@ def test_column_sums_are_numpys_sums_bitwise():
         points = rng.normal(size=(count, 3)) * rng.choice([1e-3, 1.0, 1e3]) + rng.normal(size=3)
         np.testing.assert_array_equal(_column_sums(points), points.sum(axis=0))
     np.testing.assert_array_equal(_column_sums(points[::2]), points[::2].sum(axis=0))  # strided: numpy's own
+
+
+def test_dehomogenise_is_the_broadcast_division():
+    from armlab.vision.geometry import dehomogenise
+
+    rng = np.random.default_rng(13)
+    for dtype in (np.float64, np.float32):
+        points = (rng.normal(size=(1001, 3)) + [0.0, 0.0, 3.0]).astype(dtype)
+        expected = points[:, :2] / points[:, 2:3]
+        found = dehomogenise(points)
+        assert found.dtype == expected.dtype
+        np.testing.assert_array_equal(found, expected)
