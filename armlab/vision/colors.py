@@ -116,8 +116,9 @@ def channel_medians(pixels: np.ndarray) -> np.ndarray:
 def _board_grey(board_bgr) -> np.ndarray:
     """board_bgr as (3,) floats; ValueError unless 3 finite positive values."""
     board = np.asarray(board_bgr, dtype=float).reshape(3)
-    if not (math.isfinite(board[0] + board[1] + board[2]) and board.min() > 0):
-        raise InvalidInput(f"normalised_rgb: board grey must be 3 positive values (BGR), got {board.tolist()}")
+    b, g, r = board.tolist()
+    if not (math.isfinite(b + g + r) and min(b, g, r) > 0):
+        raise InvalidInput(f"normalised_rgb: board grey must be 3 positive values (BGR), got {[b, g, r]}")
     return board
 
 
@@ -298,7 +299,8 @@ class ColorModel:
         names, refs, _ = self._table
         refs = refs if seen is None else seen
         d = lab_distances(lab, refs, self.k_lightness, self.k_chroma)
-        measured = tuple(round(x, 2) for x in lab.tolist())
+        l_star, a_star, b_star = lab.tolist()
+        measured = (round(l_star, 2), round(a_star, 2), round(b_star, 2))
         if len(d) == 0:
             return ColorReading(UNKNOWN, measured, math.inf, UNKNOWN)
         nearest = int(d.argmin())

@@ -291,7 +291,9 @@ def classify_clipped(face: Face, ys: np.ndarray, xs: np.ndarray, roi, geo: Block
 def covered_by_stack(contour: np.ndarray, top_m: float, z: np.ndarray) -> bool:
     """True for a lower member of a stack: within the face's convex hull (contour in the coordinates
     of the ROI's heights z), a sizeable part stands well above the face (the block on top)."""
-    inside = np.zeros(z.shape, np.uint8)
-    cv2.fillConvexPoly(inside, cv2.convexHull(contour), 1)
-    above = np.count_nonzero((z > top_m + 0.01) & inside.view(bool))
+    hull = cv2.convexHull(contour)
+    x, y, w, h = cv2.boundingRect(hull)  # the hull's pixels lie in its bounding box: counted there only
+    inside = np.zeros((h, w), np.uint8)
+    cv2.fillConvexPoly(inside, hull - np.array([x, y], hull.dtype), 1)
+    above = np.count_nonzero((z[y : y + h, x : x + w] > top_m + 0.01) & inside.view(bool))
     return above > 0.15 * max(1, cv2.countNonZero(inside))

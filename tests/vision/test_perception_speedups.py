@@ -350,3 +350,21 @@ def test_a_seeded_generator_draws_as_a_freshly_seeded_one():
         first = _seeded_generator(seed).integers(0, 1600, size=(16, 3))
         np.testing.assert_array_equal(first, np.random.default_rng(seed).integers(0, 1600, size=(16, 3)))
         np.testing.assert_array_equal(_seeded_generator(seed).integers(0, 1600, size=(16, 3)), first)  # reset, not continued
+
+
+def test_covered_by_stack_counts_in_the_hulls_box_as_over_the_whole_region():
+    from armlab.vision.face_shape import covered_by_stack
+
+    rng = np.random.default_rng(14)
+    for _ in range(200):
+        z = rng.normal(0.04, 0.01, (60, 70))
+        z[rng.random(z.shape) > 0.9] = np.nan
+        mask = np.zeros(z.shape, np.uint8)
+        cv2.ellipse(mask, (int(rng.integers(10, 60)), int(rng.integers(10, 50))), (int(rng.integers(2, 25)), int(rng.integers(2, 20))),
+                    float(rng.random() * 180), 0, 360, 1, -1)
+        contour = max(cv2.findContours(mask, cv2.RETR_EXTERNAL, cv2.CHAIN_APPROX_SIMPLE)[0], key=cv2.contourArea)
+        top_m = float(rng.normal(0.035, 0.01))
+        inside = np.zeros(z.shape, np.uint8)
+        cv2.fillConvexPoly(inside, cv2.convexHull(contour), 1)
+        expected = np.count_nonzero((z > top_m + 0.01) & inside.view(bool)) > 0.15 * max(1, np.count_nonzero(inside))
+        assert covered_by_stack(contour, top_m, z) == expected
