@@ -209,6 +209,7 @@ def detect_blocks(
     geometry: BlockGeometry | None = None,
     ignore_mask: np.ndarray | None = None,
     color_model: ColorModel | None = None,
+    ignore_cells: tuple[np.ndarray, int] | None = None,
 ) -> list[Block]:
     """Blocks (top of each stack) and flagged non-cubes on the board, sorted by y then x.
 
@@ -218,6 +219,8 @@ def detect_blocks(
     built from them, and a block partly hidden under them, or partly inside them, is flagged occluded.
     color_model: names each face's colour from its pixels and the board's grey around it (default: the
     config's, armlab.vision.colors); the hue classes only find candidate pixels.
+    ignore_cells: (cells, step) that ignore_mask is the upscale of (self_filter.robot_mask_cells), if the caller
+    has them: the mask is then read at quarter resolution, and regions tested for robot pixels, on them (cheaper).
     """
     check_color_image(color_bgr)
     if color_bgr.ndim != 3:
@@ -254,7 +257,13 @@ def detect_blocks(
     board_px = np.abs(z_small[::2, ::2]) < cfg.board_plane.inlier_m  # NaN (no depth) compares False, quietly
     board_value = quantile(hsv_small[::2, ::2, 2][board_px], 0.5) if np.count_nonzero(board_px) >= 20 else 255.0
     z_cover = z_small  # what may hide part of a face: what stands above it, and the robot
-    ignored_small = None if ignore_mask is None else np.ascontiguousarray(ignore_mask[::step, ::step])  # contiguous: cheaper masking
+    cells = ignore_cells if ignore_mask is not None and ignore_cells is not None and step % ignore_cells[1] == 0 else None
+    if ignore_mask is None:
+        ignored_small = None
+    elif cells is not None:  # full[step * i, step * j] is cells[step * i // s, step * j // s]
+        ignored_small = np.ascontiguousarray(cells[0][:: step // cells[1], :: step // cells[1]]).view(bool)
+    else:
+        ignored_small = np.ascontiguousarray(ignore_mask[::step, ::step])  # contiguous: cheaper masking
     if ignored_small is not None:  # the robot: neither colour nor a tag's white
         classes[ignored_small] = 0
         colourless[ignored_small] = False
@@ -319,7 +328,7 @@ def detect_blocks(
             if any(abs(b.height_m - top_m) < bc.top_face_tolerance_m
                    and cv2.pointPolygonTest(b.contour_px.astype(np.float32).reshape(-1, 1, 2), (u, v), False) >= 0 for b in made):
                 continue  # this colour's top is part of a face already measured (a second hue on it)
-            region = region or _Region(color_bgr, depth_mm, geo, cfg, roi, table, ignore_mask)
+            region = region or _Region(color_bgr, depth_mm, geo, cfg, roi, table, ignore_mask, cells)
             region.board_value = board_value
             region.coloured_small = coloured
             for block, looks_tagged in _blocks_from_region(color_bgr, geo, cfg, region, top_m, names, ci, z_cover, step, colour_of):
@@ -345,7 +354,7 @@ class _Region:
     """A region of interest at full resolution: its HSV image, colour classes and world heights."""
 
     def __init__(self, color_bgr: np.ndarray, depth_mm: np.ndarray, geo: BlockGeometry, cfg: PerceptionConfig, roi, table: np.ndarray,
-                 ignore_mask: np.ndarray | None = None) -> None:
+                 ignore_mask: np.ndarray | None = None, ignore_cells: tuple[np.ndarray, int] | None = None) -> None:
         x0, y0, x1, y1 = roi
         self.roi = roi
         self.board_value = 255.0
@@ -354,13 +363,22 @@ class _Region:
         self.classes = _color_classes(self.hsv, cfg, table)
         self.colourless = self.classes == 0
         self.z = roi_heights(depth_mm, geo, roi)
-        ignored = None if ignore_mask is None else ignore_mask[y0:y1, x0:x1]
-        if ignored is not None and ignored.any():  # the robot: no height, so it neither forms a face nor covers one
+        ignored = None if ignore_mask is None or not _any_ignored(ignore_mask, ignore_cells, roi) else ignore_mask[y0:y1, x0:x1]
+        if ignored is not None:  # the robot: no height, so it neither forms a face nor covers one
             self.classes[ignored] = 0
             self.colourless[ignored] = False
             self.z[ignored] = np.nan
         self.coloured = self.classes > 0
         self.value = cv2.extractChannel(self.hsv, 2)  # HSV value, contiguous
+
+
+def _any_ignored(ignore_mask: np.ndarray, ignore_cells: tuple[np.ndarray, int] | None, roi) -> bool:
+    """Whether the ROI holds ignored pixels: on the cells ignore_mask upscales, if given (the cells its pixels fall in)."""
+    x0, y0, x1, y1 = roi
+    if ignore_cells is None:
+        return bool(ignore_mask[y0:y1, x0:x1].any())
+    cells, s = ignore_cells
+    return bool(cells[y0 // s : (y1 - 1) // s + 1, x0 // s : (x1 - 1) // s + 1].any())
 
 
 def _face_colour(model: ColorModel, grey: BoardGrey, clip_from_rgb: np.ndarray):

@@ -198,11 +198,19 @@ class _RayGrid:
 
 
 def robot_mask(depth_mm: np.ndarray, cal: Calibration, volume: RobotVolume, pixel_step: int = 2, rays: _RayGrid | None = None) -> np.ndarray:
-    """(H, W) bool: pixels whose depth point lies inside the volume, or that have no depth reading
+    """(H, W) bool: the robot's pixels (robot_mask_cells' mask)."""
+    return robot_mask_cells(depth_mm, cal, volume, pixel_step, rays)[0]
+
+
+def robot_mask_cells(depth_mm: np.ndarray, cal: Calibration, volume: RobotVolume, pixel_step: int = 2,
+                     rays: _RayGrid | None = None) -> tuple[np.ndarray, np.ndarray]:
+    """((H, W) bool mask, (H', W') uint8 cells): the mask holds pixels whose depth point lies inside the volume, or that have no depth reading
     and lie inside the volume's projected silhouette. depth_mm: (H, W) uint16 mm along the optical
     axis, 0 = none. Every pixel_step-th pixel is tested and fills its pixel_step x pixel_step cell
     (with pixel_step > 1 the cells next to a robot cell are marked too: at most pixel_step pixels more).
-    rays: a cached _RayGrid for (cal, pixel_step), if the caller keeps one."""
+    rays: a cached _RayGrid for (cal, pixel_step), if the caller keeps one. cells: 1 where a pixel_step x pixel_step
+    cell is the robot's: the mask is the cells upscaled pixel_step times (cropped to the image), so a caller may read
+    the mask at a coarser step, or test a window for robot pixels, on the cells (see blocks.detect_blocks)."""
     h, w = cal.height, cal.width
     if not isinstance(depth_mm, np.ndarray) or depth_mm.shape != (h, w) or depth_mm.dtype != np.uint16:
         raise ValueError(f"depth must be a uint16 (H, W) = ({h}, {w}) image in mm, got {getattr(depth_mm, 'shape', None)}")
@@ -269,7 +277,7 @@ def robot_mask(depth_mm: np.ndarray, cal: Calibration, volume: RobotVolume, pixe
             hit = cv2.resize(hit, ((x1 - x0) * step, (y1 - y0) * step), interpolation=cv2.INTER_NEAREST)
         full = mask[y0 * step : y1 * step, x0 * step : x1 * step]
         full |= hit[: full.shape[0], : full.shape[1]].view(bool)
-    return mask
+    return mask, cells
 
 
 class RobotSelfFilter:
@@ -287,7 +295,13 @@ class RobotSelfFilter:
 
     def mask(self, depth_mm: np.ndarray, cal: Calibration, joints_rad, held_block_edge_m: float | None = None) -> np.ndarray:
         """(H, W) bool robot mask of a depth image taken with the arm at joints_rad (see robot_mask)."""
+        return self.mask_and_cells(depth_mm, cal, joints_rad, held_block_edge_m)[0]
+
+    def mask_and_cells(self, depth_mm: np.ndarray, cal: Calibration, joints_rad,
+                       held_block_edge_m: float | None = None) -> tuple[np.ndarray, tuple[np.ndarray, int]]:
+        """(mask, (cells, pixel_step)): mask and robot_mask_cells' cells, with the step they are upscaled by."""
         step = self.cfg.pixel_step
         if self._rays is None or self._rays.calibration is not cal or self._rays.step != step:
             self._rays = _RayGrid(cal, step)
-        return robot_mask(depth_mm, cal, self.volume(joints_rad, held_block_edge_m), step, self._rays)
+        mask, cells = robot_mask_cells(depth_mm, cal, self.volume(joints_rad, held_block_edge_m), step, self._rays)
+        return mask, (cells, step)

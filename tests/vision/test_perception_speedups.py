@@ -368,3 +368,25 @@ def test_covered_by_stack_counts_in_the_hulls_box_as_over_the_whole_region():
         cv2.fillConvexPoly(inside, cv2.convexHull(contour), 1)
         expected = np.count_nonzero((z > top_m + 0.01) & inside.view(bool)) > 0.15 * max(1, np.count_nonzero(inside))
         assert covered_by_stack(contour, top_m, z) == expected
+
+
+@pytest.mark.parametrize("step", [1, 2, 3])
+def test_the_robot_cells_are_the_mask_coarsened(cfg, board_frame, intrinsics, step):
+    """detect_blocks reads the self-filter's mask at quarter resolution, and tests regions for robot pixels, on its
+    cells (ignore_cells): the same answers as on the mask."""
+    from armlab.vision.blocks import _any_ignored
+    from armlab.vision.self_filter import robot_mask_cells
+
+    color, depth = board_frame
+    cal = calibrate_extrinsics(color, intrinsics, cfg, depth_mm=depth)
+    rng = np.random.default_rng(20 + step)
+    noisy = rng.integers(300, 1300, depth.shape).astype(np.uint16)
+    volume = RobotSelfFilter(load_arm("rx200"), cfg.self_filter).volume(np.array([0.6, -0.3, 0.4, 0.9, 0.2]), held_block_edge_m=0.038)
+    mask, cells = robot_mask_cells(noisy, cal, volume, step)
+    assert mask.any()
+    if STEP % step == 0:
+        np.testing.assert_array_equal(cells[:: STEP // step, :: STEP // step].view(bool), mask[::STEP, ::STEP])
+    for _ in range(300):
+        x0, y0 = int(rng.integers(0, 1270)), int(rng.integers(0, 710))
+        roi = (x0, y0, min(1280, x0 + int(rng.integers(1, 150))), min(720, y0 + int(rng.integers(1, 150))))
+        assert _any_ignored(mask, (cells, step), roi) == bool(mask[roi[1] : roi[3], roi[0] : roi[2]].any())
