@@ -12,13 +12,23 @@ from __future__ import annotations
 
 import math
 from collections.abc import Callable
-from functools import lru_cache, partial
+from functools import partial
 
 import cv2
 import numpy as np
 
 from armlab.vision.block import Block
 from armlab.vision.block_geometry import STEP, BlockGeometry, frame_geometry, roi_heights
+from armlab.vision.block_pixels import (
+    NEAR_COLOUR_KERNEL,
+    any_ignored,
+    colour_classes,
+    components,
+    frozen_class_table,
+    pixels_at,
+    pixels_of,
+    seeded_blob,
+)
 from armlab.vision.block_tags import face_looks_tagged, with_tag
 from armlab.vision.calibration import Calibration
 from armlab.vision.colors import MAX_FACE_SAMPLES, BoardGrey, ColorModel, frame_clip_levels_rgb
@@ -47,103 +57,15 @@ from armlab.vision.tags import check_color_image, make_detector
 __all__ = ["Block", "BlockGeometry", "detect_blocks", "stack_from_height", "stack_candidates"]
 
 
-def hue_lut(cfg: PerceptionConfig) -> tuple[np.ndarray, list[str]]:
-    """Lookup table hue (0..179) -> index of the nearest configured colour (cyclic hue distance)."""
-    names = list(cfg.blocks.colors)
-    return _hue_lut(tuple(cfg.blocks.colors[n] for n in names)).copy(), names
-
-
-@lru_cache(maxsize=16)
-def _hue_lut(centres_deg: tuple[float, ...]) -> np.ndarray:
-    hues = np.arange(180)[:, None]
-    diff = np.abs(hues - np.array(centres_deg)[None, :])
-    diff = np.minimum(diff, 180 - diff)
-    return np.argmin(diff, axis=1).astype(np.uint8)
-
-
-def _class_table(lut: np.ndarray) -> np.ndarray:
-    """hue_lut's table as cv2.LUT wants it: 256 entries of colour index + 1."""
-    table = np.empty(256, np.uint8)
-    table[:180] = lut + 1
-    table[180:] = table[179]
-    return table
-
-
-@lru_cache(maxsize=16)
-def _frozen_class_table(centres_deg: tuple[float, ...]) -> np.ndarray:
-    """_class_table of these colour centres, built once (read-only)."""
-    table = _class_table(_hue_lut(centres_deg))
-    table.flags.writeable = False
-    return table
-
-
 def _xy_distance_m(a: np.ndarray, b: np.ndarray) -> float:
     """np.linalg.norm(a[:2] - b[:2]) by the same dot product, without norm's overhead."""
     d = a[:2] - b[:2]
     return math.sqrt(d.dot(d))
 
 
-def _color_classes(hsv: np.ndarray, cfg: PerceptionConfig, table: np.ndarray) -> np.ndarray:
-    """Per-pixel colour index + 1 (0 = not a block colour: grey, dark or washed out).
-
-    Two OpenCV passes: the _class_table on the hue plane (hues past 179 count as 179), and a range
-    mask for enough saturation and value."""
-    classes = cv2.LUT(cv2.extractChannel(hsv, 0), table)
-    colourful = cv2.inRange(hsv, (0, cfg.blocks.min_saturation, cfg.blocks.min_value), (255, 255, 255))
-    return cv2.bitwise_and(classes, colourful)
-
-
-_NEAR_COLOUR_KERNEL = np.ones((7, 7), np.uint8)  # a tag's white within 3 quarter-resolution pixels of block colour
-
-
-def _components(mask: np.ndarray) -> tuple[int, np.ndarray, list[list[int]]]:
-    """8-connected components of a uint8 mask: (count with the background, labels over the window of the
-    mask's set pixels, each label's [x, y, width, height, area] in image coordinates; the first row is the
-    window's x, y). Grana's block-based labelling: the default's (Spaghetti's) labels here, about 3x faster;
-    on the window only (its corner on even rows and columns, as the labelling's 2x2 blocks lie in the image,
-    so the labels are numbered as over the whole image): the stats cost time per pixel."""
-    x, y, w, h = cv2.boundingRect(mask)
-    if w == 0 or h == 0:  # nothing set: the background alone
-        return 1, np.zeros((0, 0), np.int32), [[0, 0, 0, 0, 0]]
-    x0, y0 = x - x % 2, y - y % 2
-    n, labels, stats, _ = cv2.connectedComponentsWithStatsWithAlgorithm(mask[y0 : y + h, x0 : x + w], 8, cv2.CV_32S, cv2.CCL_GRANA)
-    stats[:, 0] += x0
-    stats[:, 1] += y0
-    stats[0, :2] = (x0, y0)
-    return n, labels, stats.tolist()  # plain ints: cheaper arithmetic and slicing than numpy scalars
-
-
-def _largest_blob(mask: np.ndarray) -> np.ndarray | None:
-    n, labels, stats, _ = cv2.connectedComponentsWithStats(mask.view(np.uint8), connectivity=4)
-    if n <= 1:
-        return None
-    return (labels == 1 + int(np.argmax(stats[1:, cv2.CC_STAT_AREA]))).view(np.uint8)
-
-
-def _seeded_blob(mask: np.ndarray, seed: np.ndarray | None) -> np.ndarray | None:
-    """The connected part of mask holding most seed pixels (the largest when no seed pixel is in it)."""
-    if seed is None:
-        return _largest_blob(mask)
-    n, labels = cv2.connectedComponents(mask.view(np.uint8), connectivity=4)
-    if n <= 1:
-        return None
-    hits = np.bincount(labels[seed & mask.view(bool)], minlength=n)
-    if hits[1:].max() == 0:
-        return _largest_blob(mask)
-    return (labels == 1 + int(np.argmax(hits[1:]))).view(np.uint8)
-
-
 MAX_GROWTH = 1.7
 EDGE_GROW_PX = 3  # a real depth image rounds a top's edges over ~3 px (L515, ROB 550 frames): the face regains them from colour
 _EDGE_GROW_KERNEL = np.ones((2 * EDGE_GROW_PX + 1, 2 * EDGE_GROW_PX + 1), np.uint8)
-
-
-def pixels_of(mask: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """(flat indices, rows, columns) of a 2-D mask's set pixels in row-major order: np.nonzero's rows and
-    columns, from flat indices (which gather with np.take far cheaper than row/column pairs index)."""
-    flat = np.flatnonzero(mask)
-    ys, xs = np.divmod(flat, mask.shape[1])
-    return flat, ys, xs
 
 
 def _top_face_in_roi(
@@ -156,7 +78,7 @@ def _top_face_in_roi(
     Two passes: the loose band finds the face, a tight band around its median keeps only the face
     (side-face pixels just below the top edge would bias the footprint toward the camera).
     """
-    blob = _seeded_blob(band & keep, seed)
+    blob = seeded_blob(band & keep, seed)
     if blob is None:
         return None
     face_m = quantile(z.ravel().compress(blob.ravel().view(bool)), 0.5)
@@ -248,8 +170,8 @@ def detect_blocks(
     # far faster than copying the strided view.
     small_bgr = cv2.resize(color_bgr, geo.small_shape[::-1], interpolation=cv2.INTER_NEAREST)
     hsv_small = cv2.cvtColor(small_bgr, cv2.COLOR_BGR2HSV)
-    table = _frozen_class_table(tuple(cfg.blocks.colors[name] for name in names))
-    classes = _color_classes(hsv_small, cfg, table)
+    table = frozen_class_table(tuple(cfg.blocks.colors[name] for name in names))
+    classes = colour_classes(hsv_small, cfg, table)
     colourless = classes == 0  # e.g. the white and black of a tag on a block's top
     classes *= raised  # no colour class where nothing is raised (the board's own colours)
     # The board's own brightness (median value of its pixels in this frame): the scale a block's
@@ -283,10 +205,10 @@ def detect_blocks(
     cx, cy, cw, ch = cv2.boundingRect(coloured)
     if cw and ch:
         win = np.s_[max(cy - 3, 0) : cy + ch + 3, max(cx - 3, 0) : cx + cw + 3]
-        near_colour = cv2.dilate(coloured[win], _NEAR_COLOUR_KERNEL).view(bool)
+        near_colour = cv2.dilate(coloured[win], NEAR_COLOUR_KERNEL).view(bool)
         candidates[win] |= (raised[win] & colourless[win] & near_colour & (hsv_small[win][..., 2] >= 150)).view(np.uint8)
-    n, labels, stats_list = _components(candidates)
-    labels_x, labels_y = stats_list[0][:2]  # the labels' window in the image (_components)
+    n, labels, stats_list = components(candidates)
+    labels_x, labels_y = stats_list[0][:2]  # the labels' window in the image (components)
     pixel_m = abs(float(cal.T_world_camera[2, 3])) / cal.K[0, 0] * step  # board-level pixel size, roughly
     min_face_px = 0.25 * bc.small_size_m**2 / pixel_m**2
     detector = tag_detector
@@ -360,25 +282,16 @@ class _Region:
         self.board_value = 255.0
         self.coloured_small: np.ndarray | None = None  # the frame's block-coloured pixels at STEP
         self.hsv = cv2.cvtColor(color_bgr[y0:y1, x0:x1], cv2.COLOR_BGR2HSV)
-        self.classes = _color_classes(self.hsv, cfg, table)
+        self.classes = colour_classes(self.hsv, cfg, table)
         self.colourless = self.classes == 0
         self.z = roi_heights(depth_mm, geo, roi)
-        ignored = None if ignore_mask is None or not _any_ignored(ignore_mask, ignore_cells, roi) else ignore_mask[y0:y1, x0:x1]
+        ignored = None if ignore_mask is None or not any_ignored(ignore_mask, ignore_cells, roi) else ignore_mask[y0:y1, x0:x1]
         if ignored is not None:  # the robot: no height, so it neither forms a face nor covers one
             self.classes[ignored] = 0
             self.colourless[ignored] = False
             self.z[ignored] = np.nan
         self.coloured = self.classes > 0
         self.value = cv2.extractChannel(self.hsv, 2)  # HSV value, contiguous
-
-
-def _any_ignored(ignore_mask: np.ndarray, ignore_cells: tuple[np.ndarray, int] | None, roi) -> bool:
-    """Whether the ROI holds ignored pixels: on the cells ignore_mask upscales, if given (the cells its pixels fall in)."""
-    x0, y0, x1, y1 = roi
-    if ignore_cells is None:
-        return bool(ignore_mask[y0:y1, x0:x1].any())
-    cells, s = ignore_cells
-    return bool(cells[y0 // s : (y1 - 1) // s + 1, x0 // s : (x1 - 1) // s + 1].any())
 
 
 def _face_colour(model: ColorModel, grey: BoardGrey, clip_from_rgb: np.ndarray):
@@ -443,7 +356,7 @@ def _blocks_from_region(color_bgr, geo: BlockGeometry, cfg, region: _Region, top
         if len(px) > MAX_FACE_SAMPLES:  # the pixels face_median_rgb would keep, before gathering them
             px = px[:: len(px) // MAX_FACE_SAMPLES]
         px = px.astype(np.intp)
-        reading = colour_of(_pixels_at(color_bgr, px), f.center_px)
+        reading = colour_of(pixels_at(color_bgr, px), f.center_px)
         return _make_block(f, reading.name, geo.camera, cfg, z_small, step, z, classified, out_of_view, reading.measured_lab)
 
     if runs_off_image(ys, xs, roi, geo.calibration):
@@ -466,13 +379,6 @@ def _blocks_from_region(color_bgr, geo: BlockGeometry, cfg, region: _Region, top
 def _never() -> bool:
     """A face that never looks tagged (cut by the image's edge: a tag on it is likely cut too)."""
     return False
-
-
-def _pixels_at(color_bgr: np.ndarray, px: np.ndarray) -> np.ndarray:
-    """color_bgr[px[:, 1], px[:, 0]] (px: (N, 2) integer columns and rows), by one np.take of flat indices."""
-    if not color_bgr.flags.c_contiguous:
-        return color_bgr[px[:, 1], px[:, 0]]
-    return color_bgr.reshape(-1, color_bgr.shape[2]).take(px[:, 1] * color_bgr.shape[1] + px[:, 0], axis=0)
 
 
 def _make_block(face: Face, color: str, camera: PlaneCamera, cfg, z_small, step, z_roi=None, classified: ClassifiedFace | None = None,

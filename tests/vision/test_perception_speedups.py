@@ -15,7 +15,7 @@ import pytest
 from armlab.kinematics.arm_model import load_arm
 from armlab.vision import calibrate_extrinsics
 from armlab.vision.block_geometry import STEP, BlockGeometry
-from armlab.vision.blocks import _components, pixels_of
+from armlab.vision.block_pixels import components, pixels_of
 from armlab.vision.board_plane import fit_board_plane
 from armlab.vision.colors import (
     BOARD_CHROMATICITY_BAND,
@@ -153,7 +153,7 @@ def test_components_on_the_set_pixels_window_are_the_whole_images():
         mask[rng.random((180, 320)) > 0.995] = 1
         masks.append(mask)
     for mask in masks:
-        n, labels, stats = _components(mask)
+        n, labels, stats = components(mask)
         n_ref, labels_ref, stats_ref, _ = cv2.connectedComponentsWithStatsWithAlgorithm(mask, 8, cv2.CV_32S, cv2.CCL_GRANA)
         assert n == n_ref
         assert stats[1:] == stats_ref[1:].tolist()
@@ -374,7 +374,7 @@ def test_covered_by_stack_counts_in_the_hulls_box_as_over_the_whole_region():
 def test_the_robot_cells_are_the_mask_coarsened(cfg, board_frame, intrinsics, step):
     """detect_blocks reads the self-filter's mask at quarter resolution, and tests regions for robot pixels, on its
     cells (ignore_cells): the same answers as on the mask."""
-    from armlab.vision.blocks import _any_ignored
+    from armlab.vision.block_pixels import any_ignored
     from armlab.vision.self_filter import robot_mask_cells
 
     color, depth = board_frame
@@ -389,4 +389,4 @@ def test_the_robot_cells_are_the_mask_coarsened(cfg, board_frame, intrinsics, st
     for _ in range(300):
         x0, y0 = int(rng.integers(0, 1270)), int(rng.integers(0, 710))
         roi = (x0, y0, min(1280, x0 + int(rng.integers(1, 150))), min(720, y0 + int(rng.integers(1, 150))))
-        assert _any_ignored(mask, (cells, step), roi) == bool(mask[roi[1] : roi[3], roi[0] : roi[2]].any())
+        assert any_ignored(mask, (cells, step), roi) == bool(mask[roi[1] : roi[3], roi[0] : roi[2]].any())
