@@ -57,10 +57,14 @@ from armlab.vision.tags import check_color_image, make_detector
 __all__ = ["Block", "BlockGeometry", "detect_blocks", "stack_from_height", "stack_candidates"]
 
 
-def _xy_distance_m(a: np.ndarray, b: np.ndarray) -> float:
-    """np.linalg.norm(a[:2] - b[:2]) by the same dot product, without norm's overhead."""
+def _closer_than_m(a: np.ndarray, b: np.ndarray, limit_m: float) -> bool:
+    """np.linalg.norm(a[:2] - b[:2]) < limit_m, by norm's own dot product, worked out only for points within
+    1.01 limit_m of each other along both axes: the others are farther than limit_m whatever the rounding."""
+    dx, dy = float(a[0]) - float(b[0]), float(a[1]) - float(b[1])
+    if abs(dx) > 1.01 * limit_m or abs(dy) > 1.01 * limit_m:
+        return False
     d = a[:2] - b[:2]
-    return math.sqrt(d.dot(d))
+    return math.sqrt(d.dot(d)) < limit_m
 
 
 MAX_GROWTH = 1.7
@@ -255,13 +259,13 @@ def detect_blocks(
             region.coloured_small = coloured
             for block, looks_tagged in _blocks_from_region(color_bgr, geo, cfg, region, top_m, names, ci, z_cover, step, colour_of):
                 made.append(block)
-                if any(_xy_distance_m(block.position_m, b.position_m) < 0.015 and block.height_m <= b.height_m + 0.01
+                if any(_closer_than_m(block.position_m, b.position_m, 0.015) and block.height_m <= b.height_m + 0.01
                        for b in blocks):
                     continue  # found already (from another colour on it)
                 if block.aruco_id is None and block.is_cube and looks_tagged():  # not on the arm or a distractor
                     detector = detector or make_detector(cfg.tags.block_tag_dictionary)
                     block = with_tag(block, color_bgr, roi, detector, cfg)
-                twins = [b for b in blocks if _xy_distance_m(block.position_m, b.position_m) < 0.015]
+                twins = [b for b in blocks if _closer_than_m(block.position_m, b.position_m, 0.015)]
                 if not twins:
                     blocks.append(block)
                 elif all(block.height_m > b.height_m + 0.01 for b in twins):  # keep a stack's top only
