@@ -32,8 +32,8 @@ def face_looks_tagged(color_bgr: np.ndarray, block: Block, roi=None, roi_hsv: np
         hsv = cv2.cvtColor(patch, cv2.COLOR_BGR2HSV)
     if board_value is not None:
         chroma = hsv[..., 1].astype(np.float32) * hsv[..., 2] / 255.0
-        return bool(np.mean(chroma < MIN_CHROMA * board_value) > 0.5)
-    return bool(np.mean((hsv[..., 1] < 60) | (hsv[..., 2] < 60)) > 0.5)
+        return np.count_nonzero(chroma < MIN_CHROMA * board_value) / chroma.size > 0.5  # the fraction np.mean gives
+    return np.count_nonzero((hsv[..., 1] < 60) | (hsv[..., 2] < 60)) / hsv[..., 1].size > 0.5
 
 
 TAG_RETRY_SCALES = (3.0, 4.0, 1.0)  # when the 2x read finds no tag on a face: a tag of ~2 px per bit reads at some scales only

@@ -17,6 +17,7 @@ within a height band, then least squares on the inliers (twice).
 from __future__ import annotations
 
 import math
+import threading
 from dataclasses import dataclass
 
 import numpy as np
@@ -67,7 +68,7 @@ def fit_inverse_depth_plane(
         raise BoardPlaneError(f"only {n} board pixels have depth; a plane fit needs at least 50")
     A = np.column_stack([x, y, np.ones(n)])
     w = 1.0 / d
-    rng = np.random.default_rng(seed)
+    rng = _seeded_generator(seed)
 
     def heights(coef: np.ndarray) -> np.ndarray:
         # n.X + D with n = -coef/|coef|, D = 1/|coef|: (1 - depth * coef.r) / |coef|.
@@ -77,14 +78,21 @@ def fit_inverse_depth_plane(
     best, best_count = None, -1
     samples = rng.integers(0, n, size=(iterations, 3))
     try:  # every sample's plane in one call (the same LAPACK solve per 3 x 3 system), one by one if any is singular
-        coefs = list(np.linalg.solve(A[samples], w[samples][..., None])[..., 0])
+        solutions = np.linalg.solve(A[samples], w[samples][..., None])[..., 0]
+        # The plane must face the camera.
+        valid = solutions[np.isfinite(solutions).all(axis=1) & (solutions[:, 2] > 0)]
     except np.linalg.LinAlgError:
         coefs = [_solve_or_none(A[idx], w[idx]) for idx in samples]
-    # The plane must face the camera; every valid sample's inliers counted in one pass over the points.
-    valid = [coef for coef in coefs if coef is not None and np.all(np.isfinite(coef)) and coef[2] > 0]
-    if valid:
-        C = np.stack(valid, axis=1)  # (3, k)
-        counts = np.count_nonzero(np.abs((1.0 - d[:, None] * (A @ C)) / np.sqrt(np.einsum("ij,ij->j", C, C))) < inlier_m, axis=0)
+        valid = np.array([coef for coef in coefs if coef is not None and np.all(np.isfinite(coef)) and coef[2] > 0]).reshape(-1, 3)
+    if len(valid):
+        # Every valid sample's inliers counted in one pass over the points (in place: no image-sized temporaries).
+        C = np.ascontiguousarray(valid.T)  # (3, k)
+        residual = A @ C
+        residual *= d[:, None]
+        np.subtract(1.0, residual, out=residual)
+        residual /= np.sqrt(np.einsum("ij,ij->j", C, C))
+        # Inliers per sample as one product (whole numbers, exact), far cheaper than a column-wise count of the (N, k) mask.
+        counts = np.ones(n) @ (np.abs(residual, out=residual) < inlier_m).astype(np.float64)
         first_best = int(np.argmax(counts))  # the first of equals, as one by one
         best, best_count = valid[first_best], int(counts[first_best])
     if best is None or best_count < min_fraction * n:
@@ -92,12 +100,30 @@ def fit_inverse_depth_plane(
     inliers = np.abs(heights(best)) < inlier_m
     coef = best
     for _ in range(2):  # least squares on the inliers: coef . X = 1 for camera points X on the plane
-        coef = _plane_lstsq(A[inliers] * d[inliers][:, None])
+        coef = _plane_lstsq(A.compress(inliers, axis=0) * d[inliers][:, None])
         inliers = np.abs(heights(coef)) < inlier_m
     h = heights(coef)[inliers]
     norm = math.sqrt(float(coef @ coef))
     return BoardPlane(normal=-coef / norm, distance_m=1.0 / norm, rms_m=float(np.sqrt(np.mean(h * h))),
                       inliers=int(inliers.sum()), inlier_fraction=float(inliers.mean()))
+
+
+_GENERATORS = threading.local()  # per thread: seed -> (a generator, its state right after seeding)
+
+
+def _seeded_generator(seed: int) -> np.random.Generator:
+    """np.random.default_rng(seed) as freshly seeded (the same draws follow), by resetting one generator per
+    thread and seed to its seeded state: seeding hashes the seed anew each time, a few times the cost."""
+    generators = getattr(_GENERATORS, "by_seed", None)
+    if generators is None:
+        generators = _GENERATORS.by_seed = {}
+    entry = generators.get(seed)
+    if entry is None:
+        generator = np.random.default_rng(seed)
+        entry = generators[seed] = (generator, generator.bit_generator.state)
+    generator, state = entry
+    generator.bit_generator.state = state
+    return generator
 
 
 def _solve_or_none(M: np.ndarray, b: np.ndarray) -> np.ndarray | None:
@@ -110,7 +136,17 @@ def _solve_or_none(M: np.ndarray, b: np.ndarray) -> np.ndarray | None:
 def _plane_lstsq(points: np.ndarray) -> np.ndarray:
     """c minimising sum (c . X_i - 1)^2 over camera points X (N, 3): the normal equations (3 x 3),
     far cheaper than an SVD of the N x 3 matrix; the points are ~1 m away, so they are well conditioned."""
-    return np.linalg.solve(points.T @ points, points.sum(axis=0))
+    return np.linalg.solve(points.T @ points, _column_sums(points))
+
+
+def _column_sums(points: np.ndarray) -> np.ndarray:
+    """points.sum(axis=0) of a C-contiguous float64 (N, 3) array, bitwise: numpy sums its columns row by row (a
+    running sum per column); running sums of the first two columns as complex numbers and of the third give the
+    same sums in the same order at half the time."""
+    if points.dtype != np.float64 or points.ndim != 2 or points.shape[1] != 3 or not len(points) or not points.flags.c_contiguous:
+        return points.sum(axis=0)
+    first_two = np.add.accumulate(points[:, :2].view(np.complex128)[:, 0])[-1]
+    return np.array([first_two.real, first_two.imag, np.add.accumulate(points[:, 2])[-1]])
 
 
 def board_pixel_mask(shape: tuple[int, int], K: np.ndarray, T_world_camera: np.ndarray, x_range_m, y_range_m,
@@ -145,7 +181,12 @@ def fit_board_plane(
     ys, xs = np.nonzero(cand)
     if ys.size < 50:
         raise BoardPlaneError(f"only {ys.size} board pixels have depth within {window_m * 1000:.0f} mm of the tags' plane")
-    xx, yy, dd = x[ys, xs], y[ys, xs], depth_m[ys, xs]
+    return _fit_candidates(x[ys, xs], y[ys, xs], depth_m[ys, xs], inlier_m, sample_step, seed, min_fraction)
+
+
+def _fit_candidates(xx: np.ndarray, yy: np.ndarray, dd: np.ndarray, inlier_m: float, sample_step: int, seed: int,
+                    min_fraction: float) -> BoardPlane:
+    """fit_board_plane on its candidates (1-D normalised coordinates and depths, in image order)."""
     sub = slice(None, None, max(1, int(sample_step)))
     # RANSAC on a quarter of the candidates (thousands of pixels: the plane is fixed long before).
     rough = fit_inverse_depth_plane(xx[sub][::2], yy[sub][::2], dd[sub][::2], inlier_m, iterations=16, seed=seed,
@@ -252,11 +293,21 @@ class BoardPlaneFitter:
         self.tag_coefficients = r3[0] * self.x + r3[1] * self.y + r3[2]
         self.tag_t = float(T_world_camera[2, 3])
         self.on_board = board_pixel_mask((h, w), K, T_world_camera, x_range_m, y_range_m, step)
+        # The board's pixels (flat indices, image order) and their terms: a frame's candidates are looked for there only.
+        self.board_flat = np.flatnonzero(self.on_board)
+        self.board_x, self.board_y = self.x.ravel()[self.board_flat], self.y.ravel()[self.board_flat]
+        self.board_tag_coefficients = self.tag_coefficients.ravel()[self.board_flat]
 
     def fit(self, depth_m_small: np.ndarray, window_m: float, inlier_m: float, exclude_small: np.ndarray | None = None,
             min_fraction: float = 0.5) -> BoardPlane:
-        """The board plane of a depth image already sampled at this fitter's step (metres, 0 = none)."""
+        """The board plane of a depth image already sampled at this fitter's step (metres, 0 = none):
+        fit_board_plane over the board's pixels only (the same candidates in the same order)."""
+        depth = np.take(depth_m_small, self.board_flat)
         with np.errstate(invalid="ignore"):
-            tag_heights = depth_m_small * self.tag_coefficients + self.tag_t
-        return fit_board_plane(depth_m_small, self.x, self.y, tag_heights, self.on_board, window_m, inlier_m,
-                               exclude=exclude_small, min_fraction=min_fraction)
+            cand = (depth > 0) & (np.abs(depth * self.board_tag_coefficients + self.tag_t) < window_m)
+        if exclude_small is not None:
+            cand &= ~np.take(exclude_small, self.board_flat)
+        count = int(np.count_nonzero(cand))
+        if count < 50:
+            raise BoardPlaneError(f"only {count} board pixels have depth within {window_m * 1000:.0f} mm of the tags' plane")
+        return _fit_candidates(self.board_x[cand], self.board_y[cand], depth[cand], inlier_m, 2, 0, min_fraction)

@@ -24,6 +24,14 @@ import cv2
 import numpy as np
 
 from armlab.errors import InvalidInput
+from armlab.vision.board_grey import (  # the board's grey, re-exported: part of the colour model's interface
+    BOARD_CHROMATICITY_BAND,
+    BOARD_LUMINANCE_BAND,
+    BOARD_MAX_SATURATION,
+    MIN_BOARD_PIXELS,
+    BoardGrey,
+    board_reference_bgr,
+)
 from armlab.vision.geometry import project_points
 
 UNKNOWN = "unknown"
@@ -31,10 +39,6 @@ UNKNOWN = "unknown"
 # sRGB (linear) -> CIE XYZ, D65; the white point is the matrix's row sums.
 _RGB_TO_XYZ = np.array([[0.4124, 0.3576, 0.1805], [0.2126, 0.7152, 0.0722], [0.0193, 0.1192, 0.9505]])
 _WHITE_XYZ = _RGB_TO_XYZ.sum(axis=1)
-BOARD_MAX_SATURATION = 128  # HSV saturation (0..255) above which a pixel is not the board even under a strong colour cast
-BOARD_LUMINANCE_BAND = 0.2  # board pixels within this fraction of the median brightness (drops grid lines, tags' white, shadows)
-BOARD_CHROMATICITY_BAND = 0.03  # ... and within this of the median chromaticity (r, b of r + g + b; drops wood, paper, cables)
-MIN_BOARD_PIXELS = 20
 CLIPPED = 250  # an 8-bit channel at or above this may be clipped: the face is compared with references as the camera would clip them
 # A camera that scales its channels after the sensor clipped (white balance, digital gain) and adds noise
 # shows a clipped channel as a noisy plateau below 255 (the simulated L515 at a red gain of 0.92: an orange
@@ -100,20 +104,23 @@ def face_median_rgb(face_bgr: np.ndarray) -> np.ndarray:
 def channel_medians(pixels: np.ndarray) -> np.ndarray:
     """np.median(pixels, axis=0) of (N, 3) pixels (N >= 1), the same values (the mean of the two middle ones
     for an even N) by one partial sort of the channels as rows: a third of np.median's time on a face."""
-    rows = pixels.T.copy()  # (3, N) contiguous: each channel's partition runs along memory
+    rows = pixels.T.copy()  # (3, N) contiguous: each channel's partition runs along memory, in place on this copy
     n = rows.shape[1]
     k = n // 2
     if n % 2:
-        return np.partition(rows, k, axis=1)[:, k].astype(np.float64)
-    middle = np.partition(rows, (k - 1, k), axis=1)[:, k - 1 : k + 1].astype(np.float64)
+        rows.partition(k, axis=1)
+        return rows[:, k].astype(np.float64)
+    rows.partition((k - 1, k), axis=1)
+    middle = rows[:, k - 1 : k + 1].astype(np.float64)
     return (middle[:, 0] + middle[:, 1]) / 2.0
 
 
 def _board_grey(board_bgr) -> np.ndarray:
     """board_bgr as (3,) floats; ValueError unless 3 finite positive values."""
     board = np.asarray(board_bgr, dtype=float).reshape(3)
-    if not (math.isfinite(board[0] + board[1] + board[2]) and board.min() > 0):
-        raise InvalidInput(f"normalised_rgb: board grey must be 3 positive values (BGR), got {board.tolist()}")
+    b, g, r = board.tolist()
+    if not (math.isfinite(b + g + r) and min(b, g, r) > 0):
+        raise InvalidInput(f"normalised_rgb: board grey must be 3 positive values (BGR), got {[b, g, r]}")
     return board
 
 
@@ -124,50 +131,6 @@ def normalised_rgb(face_bgr: np.ndarray, board_bgr: np.ndarray, face_rgb: np.nda
     board = _board_grey(board_bgr)
     face_rgb = face_median_rgb(face_bgr) if face_rgb is None else face_rgb
     return srgb_to_linear(face_rgb) / np.maximum(srgb_to_linear(board[::-1]), 1e-4)
-
-
-def _median(values: np.ndarray) -> float:
-    """The median of a non-empty 1-D array (upper middle for an even count), by partial sort: far
-    cheaper than np.median on the few hundred pixels of a board window."""
-    k = values.size // 2
-    return float(np.partition(values, k)[k])
-
-
-def board_reference_bgr(color_bgr: np.ndarray, board_mask: np.ndarray) -> np.ndarray:
-    """The board's grey (3,) BGR in this light: per-channel median of the masked pixels that are not
-    strongly coloured (HSV saturation <= BOARD_MAX_SATURATION) and, twice from the medians, within
-    BOARD_LUMINANCE_BAND of the median brightness and BOARD_CHROMATICITY_BAND of the median
-    chromaticity: the dominant grey (grid lines, tags' white, shadows, wood and paper dropped; a colour
-    cast of the light is kept, it is what the reference measures).
-    color_bgr: (H, W, 3) uint8; board_mask: (H, W) bool, e.g. board-height pixels around a block.
-    ValueError when fewer than MIN_BOARD_PIXELS such pixels remain."""
-    if color_bgr.ndim != 3 or board_mask.shape != color_bgr.shape[:2]:
-        raise InvalidInput(f"board_reference_bgr: mask {board_mask.shape} does not match image {color_bgr.shape}")
-    pixels = color_bgr[board_mask.astype(bool)]
-    if len(pixels) < MIN_BOARD_PIXELS:
-        raise InvalidInput(f"board_reference_bgr: only {len(pixels)} board pixels (needs {MIN_BOARD_PIXELS})")
-    # Channel by channel (a reduction over a row of 3 costs numpy far more than 3 whole-column operations).
-    b, g, r = (pixels[:, channel].astype(np.int32) for channel in range(3))
-    hi = np.maximum(np.maximum(b, g), r)
-    lo = np.minimum(np.minimum(b, g), r)
-    is_grey = (hi - lo) * 255 <= BOARD_MAX_SATURATION * np.maximum(hi, 1)
-    if np.count_nonzero(is_grey) < MIN_BOARD_PIXELS:
-        raise InvalidInput(f"board_reference_bgr: only {np.count_nonzero(is_grey)} grey board pixels (needs {MIN_BOARD_PIXELS})")
-    grey = np.stack([b[is_grey], g[is_grey], r[is_grey]]).astype(np.float32)  # (3, N)
-    total = grey[0] + grey[1] + grey[2]  # whole numbers: exact in float32
-    blue, red = grey[0] / np.maximum(total, 1.0), grey[2] / np.maximum(total, 1.0)  # chromaticity
-    keep = np.ones(total.size, bool)
-    for _ in range(2):
-        median = _median(total[keep])
-        keep = ((np.abs(total - median) <= BOARD_LUMINANCE_BAND * max(median, 3.0))
-                & (np.abs(blue - _median(blue[keep])) <= BOARD_CHROMATICITY_BAND)
-                & (np.abs(red - _median(red[keep])) <= BOARD_CHROMATICITY_BAND))
-        if np.count_nonzero(keep) < MIN_BOARD_PIXELS:
-            raise InvalidInput("board_reference_bgr: the board pixels have no dominant grey")
-    reference = np.array([_median(grey[channel][keep]) for channel in range(3)], dtype=float)
-    if np.any(reference <= 0):
-        raise InvalidInput("board_reference_bgr: the board reads black (no light?)")
-    return reference
 
 
 def lab_distance(lab: np.ndarray, reference: np.ndarray, k_lightness: float, k_chroma: float) -> float:
@@ -301,7 +264,7 @@ class ColorModel:
         linear = srgb_to_linear(np.concatenate([face_rgb, board[::-1]]))  # the face's and the board's RGB in one call
         face_lin, board_lin = linear[:3], np.maximum(linear[3:], 1e-4)
         clip_from = np.full(3, float(CLIPPED)) if clip_from_rgb is None else np.asarray(clip_from_rgb, dtype=float).reshape(3)
-        if np.any(face_rgb >= clip_from):
+        if (face_rgb >= clip_from).any():
             # The face's CIELAB and the references as clipped (both of _clipped_rgb's tables) in one conversion.
             labs = lab_from_relative_rgb(np.concatenate([(face_lin / board_lin)[None], *self._clipped_rgb(board_lin, face_rgb, face_lin, clip_from)]),
                                          self.board_reflectance)
@@ -323,10 +286,11 @@ class ColorModel:
         ref_lin = self._table[2] * board_lin  # (M, 3)
         at_board = np.minimum(ref_lin, ceiling) / board_lin
         if np.count_nonzero(free) >= 2:
-            free_refs = ref_lin[:, free]
+            free_refs = ref_lin.compress(free, axis=1)  # boolean indexing's columns, cheaper
             norm = np.einsum("ij,ij->i", free_refs, free_refs)
-            fit = free_refs @ face_lin[free]
-            gain = np.clip(np.where(norm > 1e-12, fit / np.maximum(norm, 1e-12), 1.0), 1.0 / MAX_FACE_GAIN, MAX_FACE_GAIN)
+            fit = free_refs @ face_lin.compress(free)
+            # np.clip's values (no NaN here), without its overhead.
+            gain = np.minimum(np.maximum(np.where(norm > 1e-12, fit / np.maximum(norm, 1e-12), 1.0), 1.0 / MAX_FACE_GAIN), MAX_FACE_GAIN)
             ref_lin = ref_lin * gain[:, None]
         return at_board, np.minimum(ref_lin, ceiling) / board_lin
 
@@ -337,14 +301,15 @@ class ColorModel:
         names, refs, _ = self._table
         refs = refs if seen is None else seen
         d = lab_distances(lab, refs, self.k_lightness, self.k_chroma)
-        measured = tuple(round(float(x), 2) for x in lab)
+        l_star, a_star, b_star = lab.tolist()
+        measured = (round(l_star, 2), round(a_star, 2), round(b_star, 2))
         if len(d) == 0:
             return ColorReading(UNKNOWN, measured, math.inf, UNKNOWN)
-        nearest = int(np.argmin(d))
+        nearest = int(d.argmin())
         allowed = d.copy()
         if chroma(lab) < self.min_chroma:  # a grey, black or white face is never a chromatic class
             allowed[np.hypot(refs[:, 1], refs[:, 2]) >= self.min_chroma] = np.inf
-        best = int(np.argmin(allowed))
+        best = int(allowed.argmin())
         if allowed[best] <= self.max_distance:
             return ColorReading(names[best], measured, float(allowed[best]), names[best])
         return ColorReading(UNKNOWN, measured, float(d[nearest]), names[nearest])
@@ -434,14 +399,24 @@ def face_and_board_at(color_bgr: np.ndarray, center_px, side_px: float | None = 
 def frame_clip_levels_rgb(color_bgr: np.ndarray) -> np.ndarray:
     """(3,) RGB: the level from which each channel counts as clipped in this BGR frame (the CLIP_TOP_PIXELS-th
     brightest value less CLIP_MARGIN, never above CLIPPED; CLIPPED where that is below MIN_CLIP_LEVEL)."""
-    levels = []
-    image = np.ascontiguousarray(color_bgr)
-    for channel in (2, 1, 0):
-        counts = cv2.calcHist([image], [channel], None, [256], [0, 256]).ravel().astype(np.int64)  # a bincount without the channel's copy
-        top = int(np.searchsorted(np.cumsum(counts[::-1]), CLIP_TOP_PIXELS))  # levels down from 255
-        level = 255 - top - CLIP_MARGIN
-        levels.append(float(min(CLIPPED, level)) if level >= MIN_CLIP_LEVEL else float(CLIPPED))
-    return np.array(levels)
+    blue, green, red = cv2.split(np.ascontiguousarray(color_bgr))
+    return np.array([_clip_level(red), _clip_level(green), _clip_level(blue)])
+
+
+def _clip_level(plane: np.ndarray) -> float:
+    """frame_clip_levels_rgb of one 8-bit channel. The CLIP_TOP_PIXELS-th brightest value is the highest v with
+    that many pixels at v or above: counted from the channel's maximum down (a few whole-image counts, cheaper
+    than its histogram), and only down to the lowest value that gives a level (MIN_CLIP_LEVEL + CLIP_MARGIN)."""
+    lowest = MIN_CLIP_LEVEL + CLIP_MARGIN
+    brightest = int(cv2.minMaxLoc(plane)[1])
+    for value in range(brightest, max(brightest - 3, lowest - 1), -1):
+        if cv2.countNonZero(cv2.compare(plane, value, cv2.CMP_GE)) >= CLIP_TOP_PIXELS:
+            return float(min(CLIPPED, value - CLIP_MARGIN))
+    bright = plane[plane >= lowest]  # more levels to go: the bright values' own CLIP_TOP_PIXELS-th largest
+    if bright.size < CLIP_TOP_PIXELS:
+        return float(CLIPPED)
+    bright.partition(bright.size - CLIP_TOP_PIXELS)
+    return float(min(CLIPPED, int(bright[bright.size - CLIP_TOP_PIXELS]) - CLIP_MARGIN))
 
 
 def measure_at(model: ColorModel, color_bgr: np.ndarray, center_px, side_px: float | None = None,
@@ -456,42 +431,7 @@ def classify_at(model: ColorModel, color_bgr: np.ndarray, center_px, side_px: fl
     return model.classify(*face_and_board_at(color_bgr, center_px, side_px, board_mask))
 
 
-class BoardGrey:
-    """The board's grey for the faces of one frame: measured from board pixels (board_mask) in a window
-    around each face, else over the whole board, else over the whole image (the board is its largest
-    grey), else a mid grey (no normalisation: a frame with no grey at all). Cheap at the resolution
-    given (detect_blocks passes its quarter-resolution image)."""
-
-    def __init__(self, color_bgr: np.ndarray, board_mask: np.ndarray, scale: float = 1.0, window_px: int = 24) -> None:
-        self.color_bgr, self.board_mask, self.scale, self.window_px = color_bgr, board_mask, scale, window_px
-        self._global: np.ndarray | None = None
-
-    def overall(self) -> np.ndarray:
-        if self._global is None:
-            image = self.color_bgr[::4, ::4]  # thousands of pixels are plenty for a median
-            for mask in (self.board_mask[::4, ::4], np.ones(image.shape[:2], bool)):
-                try:
-                    self._global = board_reference_bgr(image, mask)
-                    break
-                except ValueError:
-                    continue
-            else:
-                self._global = np.array([128.0, 128.0, 128.0])
-        return self._global
-
-    def near(self, center_px) -> np.ndarray:
-        """The board's grey around a full-resolution pixel (falls back to the whole board's)."""
-        u, v = int(round(float(center_px[0]) / self.scale)), int(round(float(center_px[1]) / self.scale))
-        r = self.window_px
-        h, w = self.board_mask.shape
-        y0, y1, x0, x1 = max(0, v - r), min(h, v + r + 1), max(0, u - r), min(w, u + r + 1)
-        try:
-            # Every other pixel of the window: ~600 board pixels, a quarter of the work.
-            return board_reference_bgr(self.color_bgr[y0:y1:2, x0:x1:2], self.board_mask[y0:y1:2, x0:x1:2])
-        except ValueError:
-            return self.overall()
-
-
-__all__ = ["UNKNOWN", "BoardGrey", "ColorModel", "ColorReading", "ColorSample", "board_mask_near", "board_reference_bgr",
-           "board_region_mask", "classify_at", "frame_clip_levels_rgb", "face_and_board_at", "face_patch", "lab_distance", "lab_from_relative_rgb",
-           "measure_at", "normalised_rgb", "relative_rgb_from_lab", "srgb_to_linear"]
+__all__ = ["BOARD_CHROMATICITY_BAND", "BOARD_LUMINANCE_BAND", "BOARD_MAX_SATURATION", "MIN_BOARD_PIXELS", "UNKNOWN", "BoardGrey",
+           "ColorModel", "ColorReading", "ColorSample", "board_mask_near", "board_reference_bgr", "board_region_mask", "classify_at",
+           "frame_clip_levels_rgb", "face_and_board_at", "face_patch", "lab_distance", "lab_from_relative_rgb", "measure_at",
+           "normalised_rgb", "relative_rgb_from_lab", "srgb_to_linear"]

@@ -99,10 +99,21 @@ def intersect_rays_with_plane(T_world_camera: np.ndarray, rays_camera: np.ndarra
 
 def project_points(T_world_camera: np.ndarray, K: np.ndarray, dist: np.ndarray, points_m: np.ndarray) -> np.ndarray:
     """Pixels (N, 2) of world points (N, 3) through the camera (with lens distortion)."""
-    pts = as_points(points_m, 3, "points_m")
+    return project_points_rt(projection_pose(T_world_camera), K, dist, points_m)
+
+
+def projection_pose(T_world_camera: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """(rvec, tvec): the world -> camera pose as cv2.projectPoints takes it (what project_points computes
+    per call; a caller projecting every frame through one calibration keeps it)."""
     T_camera_world = invert_transform(T_world_camera)
     rvec, _ = cv2.Rodrigues(T_camera_world[:3, :3])
-    pixels, _ = cv2.projectPoints(pts.reshape(-1, 1, 3), rvec, T_camera_world[:3, 3], K, np.asarray(dist, dtype=np.float64))
+    return rvec, T_camera_world[:3, 3]
+
+
+def project_points_rt(pose: tuple[np.ndarray, np.ndarray], K: np.ndarray, dist: np.ndarray, points_m: np.ndarray) -> np.ndarray:
+    """project_points with the pose given as projection_pose(T_world_camera)."""
+    pts = as_points(points_m, 3, "points_m")
+    pixels, _ = cv2.projectPoints(pts.reshape(-1, 1, 3), pose[0], pose[1], K, np.asarray(dist, dtype=np.float64))
     return pixels.reshape(-1, 2)
 
 
@@ -142,7 +153,7 @@ class PlaneCamera:
         H = self.homography(plane_z_m) if H is None else H
         H = H / H[2, 2]
         uvw = pts @ H[:, :2].T + H[:, 2]
-        return uvw[:, :2] / uvw[:, 2:3]
+        return dehomogenise(uvw)
 
     def to_plane(self, pixels: np.ndarray, plane_z_m: float, H: np.ndarray | None = None) -> np.ndarray:
         """World (x, y) (N, 2) of pixels (N, 2) on the plane z = plane_z_m: one inverse homography when
@@ -151,7 +162,16 @@ class PlaneCamera:
             return intersect_rays_with_plane(self.T_world_camera, normalized_rays(pixels, self.K, self.dist), plane_z_m)[:, :2]
         H_inv = np.linalg.inv(self.homography(plane_z_m)) if H is None else inverse_homography(H)
         xyw = pixels @ H_inv[:, :2].T + H_inv[:, 2]
-        return xyw[:, :2] / xyw[:, 2:3]
+        return dehomogenise(xyw)
+
+
+def dehomogenise(points_h: np.ndarray) -> np.ndarray:
+    """(N, 2) = points_h[:, :2] / points_h[:, 2:3] for homogeneous points (N, 3): the same divisions, column by
+    column (a broadcast over (N, 2) strided views costs several times more on a face's thousands of points)."""
+    out = np.empty((len(points_h), 2), points_h.dtype if points_h.dtype.kind == "f" else np.float64)
+    np.divide(points_h[:, 0], points_h[:, 2], out=out[:, 0])
+    np.divide(points_h[:, 1], points_h[:, 2], out=out[:, 1])
+    return out
 
 
 _LAST_INVERSE: tuple[np.ndarray | None, np.ndarray | None] = (None, None)
@@ -194,5 +214,5 @@ def height_map_m(
         coefficients = height_coefficients(d.shape, K, T_world_camera, step)
     z = np.multiply(d, coefficients)  # then in place: one image-sized array, no temporaries
     z += np.float32(T_world_camera[2, 3])
-    z[d <= 0] = np.nan
+    np.copyto(z, np.nan, where=d <= 0)
     return z

@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
+from functools import lru_cache
 
 import cv2
 import numpy as np
@@ -51,11 +52,13 @@ def draw_overlay(
     layers: OverlayLayers = OverlayLayers(),
     grid_points_m: np.ndarray | None = None,
     grid_px: np.ndarray | None = None,
+    camera: PlaneCamera | None = None,
 ) -> np.ndarray:
     """A copy of the image with the enabled layers drawn; the input is never modified.
 
     grid_px: grid_pixels(calibration, grid_points_m, image size) when the caller keeps it per
-    calibration (it changes only with the calibration); computed here when None."""
+    calibration (it changes only with the calibration); computed here when None. camera: the
+    calibration's PlaneCamera, likewise (for the yaw arrows)."""
     check_color_image(color_bgr)
     out = color_bgr.copy() if color_bgr.ndim == 3 else cv2.cvtColor(color_bgr, cv2.COLOR_GRAY2BGR)
     if layers.grid and calibration is not None:
@@ -71,7 +74,8 @@ def draw_overlay(
                 u, v = np.round(tag.center_px).astype(int)
                 cv2.putText(out, str(tag.id), (int(u) - 6, int(v) - 14), cv2.FONT_HERSHEY_SIMPLEX, 0.5, (0, 255, 0), 1, cv2.LINE_AA)
     if layers.detections and blocks:
-        camera = PlaneCamera(calibration.T_world_camera, calibration.K, calibration.dist) if calibration is not None else None
+        if camera is None and calibration is not None:
+            camera = PlaneCamera(calibration.T_world_camera, calibration.K, calibration.dist)
         labels = [_draw_block(out, block, camera, layers.labels) for block in blocks]
         placed: list[tuple[int, int, int, int]] = []
         for label in labels:
@@ -107,14 +111,23 @@ def _boxes_overlap(a: tuple[int, int, int, int], b: tuple[int, int, int, int]) -
     return a[0] < b[0] + b[2] and b[0] < a[0] + a[2] and a[1] < b[1] + b[3] and b[1] < a[1] + a[3]
 
 
+_DIMMED = (np.arange(256) * 0.35).astype(np.uint8)  # a label's dark box: each 8-bit value times 0.35, truncated
+
+
+@lru_cache(maxsize=512)
+def _label_size(text: str) -> tuple[tuple[int, int], int]:
+    """cv2.getTextSize of a label (the same few texts every frame: measured once each)."""
+    return cv2.getTextSize(text, cv2.FONT_HERSHEY_SIMPLEX, LABEL_SCALE, 1)
+
+
 def _draw_label(out: np.ndarray, text: str, anchor: tuple[int, int], colour, placed) -> tuple[int, int, int, int]:
     """Draw `text` on a dark box placed clear of the labels already drawn; returns its box."""
-    (tw, th), baseline = cv2.getTextSize(text, cv2.FONT_HERSHEY_SIMPLEX, LABEL_SCALE, 1)
+    (tw, th), baseline = _label_size(text)
     w, h = tw + 2 * LABEL_PAD_PX, th + baseline + 2 * LABEL_PAD_PX
     x, y, w, h = place_label(anchor, (w, h), placed, (out.shape[1], out.shape[0]))
     x0, y0, x1, y1 = max(x, 0), max(y, 0), min(x + w, out.shape[1]), min(y + h, out.shape[0])
     if x1 > x0 and y1 > y0:
-        out[y0:y1, x0:x1] = (out[y0:y1, x0:x1] * 0.35).astype(out.dtype)
+        out[y0:y1, x0:x1] = cv2.LUT(out[y0:y1, x0:x1], _DIMMED)
     cv2.putText(out, text, (x + LABEL_PAD_PX, y + LABEL_PAD_PX + th), cv2.FONT_HERSHEY_SIMPLEX, LABEL_SCALE, colour, 1, cv2.LINE_AA)
     return (x, y, w, h)
 
@@ -129,10 +142,21 @@ def grid_pixels(cal: Calibration, grid_points_m: np.ndarray | None, image_hw: tu
     return ((px[:, 1] * w + px[:, 0])[:, None] + offsets[None, :]).ravel()
 
 
+# A block's outline is drawn through the corners of its contour that matter: within this of every contour point
+# (cv2.approxPolyDP). A face's contour is a pixel staircase of ~100 corners; each thick anti-aliased segment
+# costs ~1 us to draw, and a fifth of them draw the same outline to the eye (a 2 px line, smoothed).
+OUTLINE_TOLERANCE_PX = 0.75
+
+
+def outline_px(contour_px: np.ndarray) -> np.ndarray:
+    """(K, 1, 2) int32: the polygon the overlay draws for a contour (N, 2), within OUTLINE_TOLERANCE_PX of it."""
+    return cv2.approxPolyDP(np.round(contour_px).astype(np.int32).reshape(-1, 1, 2), OUTLINE_TOLERANCE_PX, True)
+
+
 def _draw_block(out: np.ndarray, block: Block, camera: PlaneCamera | None, labels: bool):
     """Outline, centre and yaw arrow of a block; returns its label (text, anchor px, colour) or None."""
     colour = DRAW_BGR.get(block.color, (255, 255, 255)) if block.is_cube else (160, 160, 160)
-    cv2.drawContours(out, [np.round(block.contour_px).astype(np.int32)], -1, colour, 2, cv2.LINE_AA)
+    cv2.drawContours(out, [outline_px(block.contour_px)], -1, colour, 2, cv2.LINE_AA)
     centre = tuple(int(round(x)) for x in block.center_px)
     cv2.circle(out, centre, 3, (255, 255, 255), -1)
     if camera is not None:

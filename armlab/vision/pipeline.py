@@ -120,7 +120,7 @@ class PerceptionPipeline:
         """
         tags = self.find_tags(color_bgr, cal)
         blocks = []
-        robot_mask = None
+        robot_mask = robot_cells = None
         if arm_joints_rad is not None:
             if self.self_filter is None:
                 raise ValueError("process: arm_joints_rad needs a PerceptionPipeline built with an arm_model")
@@ -130,10 +130,10 @@ class PerceptionPipeline:
             if self._block_geometry is None:
                 self._block_geometry = BlockGeometry(cal, self.cfg)
             if arm_joints_rad is not None and self.cfg.self_filter.enabled:
-                robot_mask = self.self_filter.mask(depth_mm, cal, np.asarray(arm_joints_rad, dtype=float), held_block_edge_m)
+                robot_mask, robot_cells = self.self_filter.mask_and_cells(depth_mm, cal, np.asarray(arm_joints_rad, dtype=float), held_block_edge_m)
             blocks = detect_blocks(
                 color_bgr, depth_mm, cal, self.cfg, tag_detector=self._block_detector, geometry=self._block_geometry, ignore_mask=robot_mask,
-                color_model=self.color_model,
+                color_model=self.color_model, ignore_cells=robot_cells,
             )
             if frame_time_s is not None or arm_joints_rad is not None:
                 seen_joints = joints if arm_joints_rad is not None else None
@@ -146,5 +146,7 @@ class PerceptionPipeline:
                 grid_px = self._grid_px.get(size)
                 if grid_px is None:
                     grid_px = self._grid_px[size] = grid_pixels(cal, self._grid_m, size)
-            overlay = draw_overlay(color_bgr, tags=tags, blocks=blocks, calibration=cal, layers=layers, grid_points_m=self._grid_m, grid_px=grid_px)
+            camera = None if cal is None or self._block_geometry is None else self._block_geometry.camera  # the calibration's
+            overlay = draw_overlay(color_bgr, tags=tags, blocks=blocks, calibration=cal, layers=layers, grid_points_m=self._grid_m, grid_px=grid_px,
+                                   camera=camera)
         return PerceptionResult(tags, blocks, overlay, robot_mask)

@@ -21,8 +21,9 @@ def stack_candidates(top_m: float, top_size: str, cfg: PerceptionConfig) -> list
     n_large = int(cfg.blocks.max_height_m // large) + 1  # 0 .. n_large - 1 large blocks below
     n_small = int(cfg.blocks.max_height_m // small) + 1 if top_size == "small" else 1
     errors = np.abs(below - _pile_heights(large, small, n_large, n_small))
-    order = np.argsort(errors, kind="stable")[:6].tolist()
-    return [(float(errors[i]), ("large",) * (i // n_small) + ("small",) * (i % n_small) + (top_size,)) for i in order]
+    order = errors.argsort(kind="stable")[:6].tolist()
+    best = errors.take(order).tolist()
+    return [(e, ("large",) * (i // n_small) + ("small",) * (i % n_small) + (top_size,)) for e, i in zip(best, order)]
 
 
 @lru_cache(maxsize=16)

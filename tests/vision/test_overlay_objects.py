@@ -2,6 +2,9 @@
 
 from __future__ import annotations
 
+from dataclasses import replace
+
+import cv2
 import numpy as np
 import pytest
 
@@ -88,3 +91,22 @@ def test_plane_fit_and_bad_depth(cfg, cal):
         detect_objects_from_depth(np.zeros((720, 1280), np.uint16), cal, cfg)
     with pytest.raises(ValueError, match="depth must be"):
         detect_objects_from_depth(np.zeros((10, 10), np.uint16), cal, cfg)
+
+
+def test_a_blocks_outline_is_drawn_within_a_pixel_of_its_contour(cfg, board_frame, cal):
+    """The overlay draws a block's contour through its corners that matter (OUTLINE_TOLERANCE_PX): every point
+    of the contour lies within that of the drawn polygon, which has far fewer corners than a pixel staircase,
+    and the drawing covers the contour."""
+    from armlab.vision.overlay import OUTLINE_TOLERANCE_PX, outline_px
+
+    mask = np.zeros((120, 160), np.uint8)
+    cv2.ellipse(mask, (80, 60), (37, 21), 17.0, 0, 360, 1, -1)  # a tilted face: a long pixel staircase
+    contour = max(cv2.findContours(mask, cv2.RETR_EXTERNAL, cv2.CHAIN_APPROX_SIMPLE)[0], key=cv2.contourArea).reshape(-1, 2) + [600, 300]
+    polygon = outline_px(contour.astype(np.float64))
+    assert 4 <= len(polygon) <= len(contour) // 2
+    distances = [abs(cv2.pointPolygonTest(polygon, (float(x), float(y)), True)) for x, y in contour]
+    assert max(distances) <= OUTLINE_TOLERANCE_PX
+    block = replace(_block(cal), contour_px=contour.astype(np.float64), center_px=contour.mean(axis=0))
+    color = board_frame[0]
+    drawn = np.any(draw_overlay(color, [], [block], cal, OverlayLayers(tags=False, detections=True, grid=False, labels=False)) != color, axis=2)
+    assert all(drawn[y, x] or drawn[y - 1 : y + 2, x - 1 : x + 2].any() for x, y in contour)
