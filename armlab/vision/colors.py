@@ -104,14 +104,12 @@ def face_median_rgb(face_bgr: np.ndarray) -> np.ndarray:
 def channel_medians(pixels: np.ndarray) -> np.ndarray:
     """np.median(pixels, axis=0) of (N, 3) pixels (N >= 1), the same values (the mean of the two middle ones
     for an even N) by one partial sort of the channels as rows: a third of np.median's time on a face."""
-    rows = pixels.T.copy()  # (3, N) contiguous: each channel's partition runs along memory, in place on this copy
+    rows = pixels.T.copy()  # (3, N) contiguous: each channel's partition runs along memory
     n = rows.shape[1]
     k = n // 2
     if n % 2:
-        rows.partition(k, axis=1)
-        return rows[:, k].astype(np.float64)
-    rows.partition((k - 1, k), axis=1)
-    middle = rows[:, k - 1 : k + 1].astype(np.float64)
+        return np.partition(rows, k, axis=1)[:, k].astype(np.float64)
+    middle = np.partition(rows, (k - 1, k), axis=1)[:, k - 1 : k + 1].astype(np.float64)
     return (middle[:, 0] + middle[:, 1]) / 2.0
 
 
