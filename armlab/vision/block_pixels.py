@@ -96,7 +96,7 @@ def seeded_blob(mask: np.ndarray, seed: np.ndarray | None) -> np.ndarray | None:
 def pixels_of(mask: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """(flat indices, rows, columns) of a 2-D mask's set pixels in row-major order: np.nonzero's rows and
     columns, from flat indices (which gather with np.take far cheaper than row/column pairs index)."""
-    flat = mask.ravel().nonzero()[0]  # np.flatnonzero's answer, without its two Python-level calls
+    flat = np.flatnonzero(mask)
     ys, xs = np.divmod(flat, mask.shape[1])
     return flat, ys, xs
 

@@ -231,7 +231,7 @@ def detect_blocks(
         box_colourless = colourless[y : y + bh, x : x + bw]
         tops: dict[int, tuple[float, np.ndarray, np.ndarray]] = {}  # colour -> (top, centroid, bbox)
         coloured_area = max(1, area - int(counts[0]))
-        for ci in (counts[1:] >= max(3, 0.1 * coloured_area)).nonzero()[0] + 1:
+        for ci in np.nonzero(counts[1:] >= max(3, 0.1 * coloured_area))[0] + 1:
             mine = comp_classes == ci
             top_m = quantile(comp_z[mine], 0.9)
             layer = mine & (np.abs(comp_z - top_m) < bc.top_face_tolerance_m)
@@ -322,7 +322,7 @@ def _blocks_from_region(color_bgr, geo: BlockGeometry, cfg, region: _Region, top
     # colour is compared with its own brightest top pixels (a blue top is darker than a yellow one).
     value = region.value
     keep = region.colourless.copy()
-    for cj in np.bincount(classes[band], minlength=1)[1:].nonzero()[0] + 1:
+    for cj in np.flatnonzero(np.bincount(classes[band], minlength=1)[1:]) + 1:
         colour, top = (mine, seed) if cj == ci else (classes == cj, None)
         top = (colour & band) if top is None else top
         if np.count_nonzero(top) >= 10:

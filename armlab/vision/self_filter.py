@@ -255,11 +255,11 @@ def robot_mask_cells(depth_mm: np.ndarray, cal: Calibration, volume: RobotVolume
         d_mm = depth_mm[y0 * step : y1 * step : step, x0 * step : x1 * step : step][inside]  # a part's points project inside it
         Z = d_mm.astype(np.float32) * np.float32(0.001)
         hit_inside = d_mm == 0
-        near = ((Z >= depth_lows[index]) & (Z <= depth_highs[index])).nonzero()[0]
+        near = np.flatnonzero((Z >= depth_lows[index]) & (Z <= depth_highs[index]))
         if len(near):
             Z = Z.take(near)
             if rays.x_of_column is not None:  # a pinhole: the near samples' rays from their columns and rows
-                rows, columns = np.divmod(inside.ravel().nonzero()[0].take(near), x1 - x0)
+                rows, columns = np.divmod(np.flatnonzero(inside).take(near), x1 - x0)
                 X, Y = Z * rays.x_of_column.take(columns + x0), Z * rays.y_of_row.take(rows + y0)
             else:
                 X, Y = Z * rays.x[y0:y1, x0:x1][inside].take(near), Z * rays.y[y0:y1, x0:x1][inside].take(near)
