@@ -79,21 +79,16 @@ def _capsule_boxes(ends_m: np.ndarray, radii_m: np.ndarray) -> np.ndarray:
     """(N, 8, 3) corners of the box around each capsule (ends (N, 2, 3), radii (N,)), its long axis
     along the segment."""
     axis = ends_m[:, 1] - ends_m[:, 0]
-    length = _row_norms(axis)
+    length = np.linalg.norm(axis, axis=1)
     u = np.where(length[:, None] > 1e-9, axis / np.maximum(length, 1e-9)[:, None], [0.0, 0.0, 1.0])
     helper = np.where(np.abs(u[:, :1]) < 0.9, [1.0, 0.0, 0.0], [0.0, 1.0, 0.0])
     v = _cross_rows(u, helper)
-    v /= _row_norms(v)[:, None]
+    v /= np.linalg.norm(v, axis=1)[:, None]
     w = _cross_rows(u, v)
     half = np.stack([0.5 * length + radii_m, radii_m, radii_m], axis=1)  # (N, 3) along u, v, w
     scaled = _UNIT_CUBE[None] * half[:, None, :]  # (N, 8, 3)
     centre = 0.5 * (ends_m[:, 0] + ends_m[:, 1])
     return centre[:, None] + scaled[..., :1] * u[:, None] + scaled[..., 1:2] * v[:, None] + scaled[..., 2:] * w[:, None]
-
-
-def _row_norms(rows: np.ndarray) -> np.ndarray:
-    """np.linalg.norm(rows, axis=1) of real (N, 3) rows: its own sum of squares, without its overhead."""
-    return np.sqrt(np.add.reduce(rows * rows, axis=1))
 
 
 def _cross_rows(a: np.ndarray, b: np.ndarray) -> np.ndarray:
@@ -169,8 +164,7 @@ def _off_segment_m(p: np.ndarray, a: np.ndarray, b: np.ndarray) -> float:
     """Distance of point p from the segment a-b."""
     ab = b - a
     t = min(max(float((p - a) @ ab) / max(float(ab @ ab), 1e-18), 0.0), 1.0)
-    d = p - a - t * ab
-    return math.sqrt(d.dot(d))  # np.linalg.norm's own dot product
+    return float(np.linalg.norm(p - a - t * ab))
 
 
 def _offset(T: np.ndarray, along_x_m: float) -> np.ndarray:

@@ -400,27 +400,3 @@ def test_closer_than_is_the_norm_compared():
         a = rng.normal(0, 0.3, 3)
         b = a + rng.choice([rng.normal(0, 0.01, 3), rng.normal(0, 0.1, 3), np.array([0.015, 0.0, 0.0]), np.array([0.0, -0.015, 0.0])])
         assert _closer_than_m(a, b, 0.015) == (np.linalg.norm(a[:2] - b[:2]) < 0.015)
-
-
-def test_the_robot_parts_boxes_are_np_cross_and_norms():
-    """The self-filter's part boxes (their corners bound its silhouettes) by np.cross's and np.linalg.norm's own
-    arithmetic, bitwise."""
-    from armlab.vision.self_filter import _UNIT_CUBE, _capsule_boxes, _off_segment_m
-
-    rng = np.random.default_rng(16)
-    for _ in range(200):
-        ends, radii = rng.normal(0, 0.2, (5, 2, 3)), rng.uniform(0.02, 0.08, 5)
-        ends[0, 1] = ends[0, 0]  # a zero-length capsule
-        axis = ends[:, 1] - ends[:, 0]
-        length = np.linalg.norm(axis, axis=1)
-        u = np.where(length[:, None] > 1e-9, axis / np.maximum(length, 1e-9)[:, None], [0.0, 0.0, 1.0])
-        v = np.cross(u, np.where(np.abs(u[:, :1]) < 0.9, [1.0, 0.0, 0.0], [0.0, 1.0, 0.0]))
-        v /= np.linalg.norm(v, axis=1)[:, None]
-        w = np.cross(u, v)
-        scaled = _UNIT_CUBE[None] * np.stack([0.5 * length + radii, radii, radii], axis=1)[:, None, :]
-        centre = 0.5 * (ends[:, 0] + ends[:, 1])
-        expected = centre[:, None] + scaled[..., :1] * u[:, None] + scaled[..., 1:2] * v[:, None] + scaled[..., 2:] * w[:, None]
-        np.testing.assert_array_equal(_capsule_boxes(ends, radii), expected)
-        p, a, b = rng.normal(0, 0.2, (3, 3))
-        t = min(max(float((p - a) @ (b - a)) / max(float((b - a) @ (b - a)), 1e-18), 0.0), 1.0)
-        assert _off_segment_m(p, a, b) == float(np.linalg.norm(p - a - t * (b - a)))
