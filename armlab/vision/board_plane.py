@@ -136,17 +136,7 @@ def _solve_or_none(M: np.ndarray, b: np.ndarray) -> np.ndarray | None:
 def _plane_lstsq(points: np.ndarray) -> np.ndarray:
     """c minimising sum (c . X_i - 1)^2 over camera points X (N, 3): the normal equations (3 x 3),
     far cheaper than an SVD of the N x 3 matrix; the points are ~1 m away, so they are well conditioned."""
-    return np.linalg.solve(points.T @ points, _column_sums(points))
-
-
-def _column_sums(points: np.ndarray) -> np.ndarray:
-    """points.sum(axis=0) of a C-contiguous float64 (N, 3) array, bitwise: numpy sums its columns row by row (a
-    running sum per column); running sums of the first two columns as complex numbers and of the third give the
-    same sums in the same order at half the time."""
-    if points.dtype != np.float64 or points.ndim != 2 or points.shape[1] != 3 or not len(points) or not points.flags.c_contiguous:
-        return points.sum(axis=0)
-    first_two = np.add.accumulate(points[:, :2].view(np.complex128)[:, 0])[-1]
-    return np.array([first_two.real, first_two.imag, np.add.accumulate(points[:, 2])[-1]])
+    return np.linalg.solve(points.T @ points, points.sum(axis=0))
 
 
 def board_pixel_mask(shape: tuple[int, int], K: np.ndarray, T_world_camera: np.ndarray, x_range_m, y_range_m,

@@ -32,7 +32,7 @@ from armlab.vision.colors import (
     channel_medians,
     frame_clip_levels_rgb,
 )
-from armlab.vision.face_shape import _nearest_centre, mean_rows
+from armlab.vision.face_shape import _nearest_centre
 from armlab.vision.geometry import inverse_homography, project_points
 from armlab.vision.self_filter import RobotSelfFilter, _in_box, _in_capsule, _RayGrid, robot_mask
 from rob550_dev import DEV, needs_dev_frames
@@ -117,20 +117,6 @@ def test_the_real_frames_give_the_detections_of_the_detector_before_the_speedups
         cal = calibrate_extrinsics(color, intr, cfg, depth_mm=depth, tags=detect_tags(color, cfg))
         found = [_summary(b) for b in PerceptionPipeline(cfg).process(color, depth, cal, layers=None).blocks]
         assert found == blocks, name
-
-
-@pytest.mark.parametrize("dtype", [np.float32, np.float64])
-def test_mean_rows_is_numpys_mean_bitwise(dtype):
-    rng = np.random.default_rng(7)
-    for count in (1, 2, 3, 7, 8, 9, 100, 1001, 4096):
-        points = (rng.normal(size=(count, 2)) * rng.choice([1e-3, 1.0, 1e3]) + rng.normal(size=2)).astype(dtype)
-        mean = mean_rows(points)
-        assert mean.dtype == points.dtype
-        np.testing.assert_array_equal(mean, points.mean(axis=0))
-    odd = rng.normal(size=(50, 3))  # not (N, 2): numpy's own mean
-    np.testing.assert_array_equal(mean_rows(odd), odd.mean(axis=0))
-    strided = rng.normal(size=(50, 4))[:, :2]
-    np.testing.assert_array_equal(mean_rows(strided), strided.mean(axis=0))
 
 
 def test_pixels_of_is_nonzero_in_row_major_order():
@@ -319,16 +305,6 @@ def test_robot_mask_is_every_sample_tested(cfg, board_frame, intrinsics, step):
         mask = robot_mask(noisy, cal, volume, step)
         assert 0 < np.count_nonzero(mask) < mask.size
         np.testing.assert_array_equal(mask, _robot_mask_before(noisy, cal, volume, step))
-
-
-def test_column_sums_are_numpys_sums_bitwise():
-    from armlab.vision.board_plane import _column_sums
-
-    rng = np.random.default_rng(12)
-    for count in (1, 2, 7, 8, 9, 1500, 3201):
-        points = rng.normal(size=(count, 3)) * rng.choice([1e-3, 1.0, 1e3]) + rng.normal(size=3)
-        np.testing.assert_array_equal(_column_sums(points), points.sum(axis=0))
-    np.testing.assert_array_equal(_column_sums(points[::2]), points[::2].sum(axis=0))  # strided: numpy's own
 
 
 def test_dehomogenise_is_the_broadcast_division():
