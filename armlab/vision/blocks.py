@@ -58,13 +58,8 @@ __all__ = ["Block", "BlockGeometry", "detect_blocks", "stack_from_height", "stac
 
 
 def _closer_than_m(a: np.ndarray, b: np.ndarray, limit_m: float) -> bool:
-    """np.linalg.norm(a[:2] - b[:2]) < limit_m, by norm's own dot product, worked out only for points within
-    1.01 limit_m of each other along both axes: the others are farther than limit_m whatever the rounding."""
-    dx, dy = float(a[0]) - float(b[0]), float(a[1]) - float(b[1])
-    if abs(dx) > 1.01 * limit_m or abs(dy) > 1.01 * limit_m:
-        return False
-    d = a[:2] - b[:2]
-    return math.sqrt(d.dot(d)) < limit_m
+    """Whether points a and b are closer than limit_m in x and y."""
+    return math.hypot(float(a[0]) - float(b[0]), float(a[1]) - float(b[1])) < limit_m
 
 
 MAX_GROWTH = 1.7

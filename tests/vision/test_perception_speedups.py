@@ -366,13 +366,3 @@ def test_the_robot_cells_are_the_mask_coarsened(cfg, board_frame, intrinsics, st
         x0, y0 = int(rng.integers(0, 1270)), int(rng.integers(0, 710))
         roi = (x0, y0, min(1280, x0 + int(rng.integers(1, 150))), min(720, y0 + int(rng.integers(1, 150))))
         assert any_ignored(mask, (cells, step), roi) == bool(mask[roi[1] : roi[3], roi[0] : roi[2]].any())
-
-
-def test_closer_than_is_the_norm_compared():
-    from armlab.vision.blocks import _closer_than_m
-
-    rng = np.random.default_rng(15)
-    for _ in range(20000):
-        a = rng.normal(0, 0.3, 3)
-        b = a + rng.choice([rng.normal(0, 0.01, 3), rng.normal(0, 0.1, 3), np.array([0.015, 0.0, 0.0]), np.array([0.0, -0.015, 0.0])])
-        assert _closer_than_m(a, b, 0.015) == (np.linalg.norm(a[:2] - b[:2]) < 0.015)
