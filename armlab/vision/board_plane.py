@@ -17,7 +17,6 @@ within a height band, then least squares on the inliers (twice).
 from __future__ import annotations
 
 import math
-import threading
 from dataclasses import dataclass
 
 import numpy as np
@@ -68,7 +67,7 @@ def fit_inverse_depth_plane(
         raise BoardPlaneError(f"only {n} board pixels have depth; a plane fit needs at least 50")
     A = np.column_stack([x, y, np.ones(n)])
     w = 1.0 / d
-    rng = _seeded_generator(seed)
+    rng = np.random.default_rng(seed)
 
     def heights(coef: np.ndarray) -> np.ndarray:
         # n.X + D with n = -coef/|coef|, D = 1/|coef|: (1 - depth * coef.r) / |coef|.
@@ -106,24 +105,6 @@ def fit_inverse_depth_plane(
     norm = math.sqrt(float(coef @ coef))
     return BoardPlane(normal=-coef / norm, distance_m=1.0 / norm, rms_m=float(np.sqrt(np.mean(h * h))),
                       inliers=int(inliers.sum()), inlier_fraction=float(inliers.mean()))
-
-
-_GENERATORS = threading.local()  # per thread: seed -> (a generator, its state right after seeding)
-
-
-def _seeded_generator(seed: int) -> np.random.Generator:
-    """np.random.default_rng(seed) as freshly seeded (the same draws follow), by resetting one generator per
-    thread and seed to its seeded state: seeding hashes the seed anew each time, a few times the cost."""
-    generators = getattr(_GENERATORS, "by_seed", None)
-    if generators is None:
-        generators = _GENERATORS.by_seed = {}
-    entry = generators.get(seed)
-    if entry is None:
-        generator = np.random.default_rng(seed)
-        entry = generators[seed] = (generator, generator.bit_generator.state)
-    generator, state = entry
-    generator.bit_generator.state = state
-    return generator
 
 
 def _solve_or_none(M: np.ndarray, b: np.ndarray) -> np.ndarray | None:

@@ -245,8 +245,7 @@ def runs_off_image(ys: np.ndarray, xs: np.ndarray, roi, cal: Calibration) -> boo
     """True when a face (ROI rows ys, columns xs) reaches within BORDER_MARGIN_PX of the image's edge."""
     x0, y0 = roi[0], roi[1]
     m = BORDER_MARGIN_PX
-    x_min, x_max = int(np.minimum.reduce(xs)), int(np.maximum.reduce(xs))  # the ufuncs' own reductions: xs.min()'s values
-    y_min, y_max = int(np.minimum.reduce(ys)), int(np.maximum.reduce(ys))
+    x_min, x_max, y_min, y_max = int(xs.min()), int(xs.max()), int(ys.min()), int(ys.max())
     return x_min + x0 <= m or y_min + y0 <= m or x_max + x0 >= cal.width - 1 - m or y_max + y0 >= cal.height - 1 - m
 
 

@@ -319,15 +319,6 @@ def test_dehomogenise_is_the_broadcast_division():
         np.testing.assert_array_equal(found, expected)
 
 
-def test_a_seeded_generator_draws_as_a_freshly_seeded_one():
-    from armlab.vision.board_plane import _seeded_generator
-
-    for seed in (0, 3, 0):
-        first = _seeded_generator(seed).integers(0, 1600, size=(16, 3))
-        np.testing.assert_array_equal(first, np.random.default_rng(seed).integers(0, 1600, size=(16, 3)))
-        np.testing.assert_array_equal(_seeded_generator(seed).integers(0, 1600, size=(16, 3)), first)  # reset, not continued
-
-
 def test_covered_by_stack_counts_in_the_hulls_box_as_over_the_whole_region():
     from armlab.vision.face_shape import covered_by_stack
 
