@@ -343,7 +343,7 @@ def main(argv=None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--scenes", type=int, default=110)
     parser.add_argument("--first-seed", type=int, default=0)
-    parser.add_argument("--timing-frames", type=int, default=5)
+    parser.add_argument("--timing-frames", type=int, default=15, help="frames timed: the first scenes, 15 = one of every event and level")
     parser.add_argument("--repeats", type=int, default=20)
     parser.add_argument("--verbose", action="store_true")
     parser.add_argument("--board-scenes", type=int, default=5, help="rigs per board in the 36h11 vs 41h12 comparison (0: skip)")
