@@ -191,19 +191,20 @@ class JobControls:
             self._job = job
             self._jog = None
             start_job_thread(job, self._after_rest(function), self._on_job_end, cleanup=cleanup)
-        try:  # on disk while it runs: a station killed mid-job shows it 'interrupted' after the restart
-            self.store.record_job_start(job.to_dict())
-        except Exception as store_error:  # noqa: BLE001 - the job matters more than its record
-            log.warning("could not record the start of job %s: %s", job.id, store_error)
         self.events.add("info", f"job '{name}' started" + (f": {detail}" if detail else ""))
         return job
 
     def _after_rest(self, function: Callable[[JobContext], Any]) -> Callable[[JobContext], Any]:
         """The job's function, run once a motion still in progress (a manual move, a jog running out) has been
-        braked to rest: every job plans from the arm at rest."""
+        braked to rest (every job plans from the arm at rest) and the job's history row is written, by the job's
+        own thread: a locked database delays the job, never the request that started it."""
 
         def run(ctx: JobContext) -> Any:
             self.brake_to_rest(ctx)
+            try:  # on disk while it runs: a station killed mid-job shows it 'interrupted' after the restart
+                self.store.record_job_start(ctx.job.to_dict())
+            except Exception as store_error:  # noqa: BLE001 - the job matters more than its record
+                log.warning("could not record the start of job %s: %s", ctx.job.id, store_error)
             return function(ctx)
 
         return run

@@ -130,6 +130,25 @@ def test_estop_answers_during_a_blocked_sqlite_write(cell, db_path, idle):
     assert saved["program"].name in [program.name for program in station.store.list_programs()]
 
 
+def test_a_job_starts_without_waiting_for_a_locked_database(cell, db_path, idle):
+    """Starting a job (an HTTP request's thread) never waits on SQLite: the job's history row is written by the
+    job's own thread (a locked database held the caller for the 5 s busy timeout, and under load the job's own
+    save timed out before the caller got back)."""
+    station = idle
+    lock = DatabaseLock(db_path)
+    started, box = threading.Event(), {}
+    try:
+        threading.Thread(target=lambda: (box.update(job=station.start_job("auto", "quick", lambda ctx: "done")), started.set()),
+                         daemon=True).start()
+        answered = started.wait(BLOCKED_WAIT_S)
+    finally:
+        lock.release()
+    assert answered, "starting a job waited for the locked database"
+    job = box["job"]
+    assert job.wait(10) and job.state == "succeeded", job.message
+    live.wait_for(lambda: any(row["id"] == job.id for row in station.store.job_results()), 10)
+
+
 def test_estop_answers_during_a_calibration_write(cell, db_path, idle):
     station = idle
     cell.set_scene(Scene())
