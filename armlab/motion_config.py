@@ -84,15 +84,6 @@ class MotionConfig(StrictModel):
         that the pads (reaching pad_reach_m below the gripper point) touch what the block stands on."""
         return max(0.0, min(self.grasp_depth_m, edge_m - self.pad_reach_m))
 
-    def held_below_top_m(self, edge_m: float, gripper_type: str = "fingers") -> float:
-        """Where the tool point holds a block, below its top face: grasp_depth_for(edge) between fingers,
-        suction_press_m for a suction cup (which holds the top face)."""
-        if gripper_type == "suction":
-            return self.suction_press_m
-        if gripper_type != "fingers":
-            raise InvalidInput(f"gripper type must be 'fingers' or 'suction', got {gripper_type!r}")
-        return self.grasp_depth_for(edge_m)
-
 
 def load_motion_config(path: str | Path | None = None) -> MotionConfig:
     """Load config/motion.yaml (or `path`); ConfigError naming the file and field when invalid."""

@@ -23,6 +23,7 @@ from armlab.devices.arm import JointTrajectory
 from armlab.errors import InvalidInput
 from armlab.kinematics import Unreachable
 from armlab.motion.cartesian import plan_vertical_segment
+from armlab.motion.end_effector import FINGERS, EndEffector, end_effector
 from armlab.motion.safety import check_trajectory
 from armlab.motion.trajectory import plan_joint_move
 from armlab.motion_config import MotionConfig
@@ -67,22 +68,6 @@ def _check_finite(name: str, value: float) -> float:
     return value
 
 
-GRIPPER_TYPES = ("fingers", "suction")
-
-
-def checked_gripper_type(gripper_type: str) -> str:
-    """gripper_type if it is one the planners know ('fingers', 'suction'), else ValueError."""
-    if gripper_type not in GRIPPER_TYPES:
-        raise InvalidInput(f"gripper type must be one of {', '.join(GRIPPER_TYPES)}, got {gripper_type!r}")
-    return gripper_type
-
-
-def lowest_pitch_rad(config: MotionConfig, gripper_type: str) -> float:
-    """The shallowest approach pitch a plan may fall back to: 0 (horizontal) for fingers; none below
-    top-down for a suction cup, whose seal holds only flat on a face."""
-    return config.top_down_pitch_rad if checked_gripper_type(gripper_type) == "suction" else 0.0
-
-
 def _pitch_candidates(preferred_rad: float, lowest_rad: float = 0.0) -> list[float]:
     count = int(math.floor((preferred_rad - lowest_rad) / PITCH_STEP_RAD + 1e-9))
     return [preferred_rad - k * PITCH_STEP_RAD for k in range(max(count, 0) + 1)]
@@ -124,7 +109,7 @@ def _approach_steps(
     config: MotionConfig,
     action: Literal["grasp", "release"],
     words: tuple[str, str, str],
-    gripper_type: str = "fingers",
+    tool: EndEffector = FINGERS,
     q_seed_rad=None,
 ) -> list[Step]:
     """Move above point_m, descend to it, do `action`, lift; all trajectories checked. q_seed_rad: the IK seed
@@ -134,7 +119,7 @@ def _approach_steps(
     # Solving the low point first fixes the pitch and IK branch; the descent itself reaches it.
     seed = q_now_rad if q_seed_rad is None else q_seed_rad
     pitch, (_q_point, q_above, _q_lift) = solve_approach(
-        arm, seed, [point_m, above_m, lift_m], yaw_rad, config.top_down_pitch_rad, lowest_pitch_rad(config, gripper_type)
+        arm, seed, [point_m, above_m, lift_m], yaw_rad, config.top_down_pitch_rad, tool.lowest_pitch_rad(config)
     )
     vertical = dict(pitch_rad=pitch, yaw_rad=yaw_rad, speed_m_s=config.vertical_speed_m_s,
                     accel_m_s2=config.vertical_accel_m_s2, rate_hz=config.sample_rate_hz)
@@ -155,7 +140,7 @@ def _approach_steps(
 
 def plan_pick(
     arm, q_now_rad, position_m, yaw_rad: float, config: MotionConfig, block_height_m: float | None = None,
-    gripper_type: str = "fingers", q_seed_rad=None,
+    tool: EndEffector | str = FINGERS, q_seed_rad=None,
 ) -> list[Step]:
     """Steps to pick the block whose top-face centre is position_m (world, metres) with yaw yaw_rad.
 
@@ -163,27 +148,25 @@ def plan_pick(
     to grasp_depth_for(block_height_m) below the top face (pads clear of what it stands on), grasp,
     go straight up lift_height_m. The grasp point is never lower than board_clearance_m. A suction cup
     goes straight down along its axis (pointing down) onto the top face centre, suction_press_m into
-    it, and "grasp" turns the vacuum on ("release": off).
+    it, and "grasp" turns the vacuum on ("release": off). tool: the end effector (or its type name).
     """
-    checked_gripper_type(gripper_type)
+    tool = end_effector(tool)
     top_m = _check_point("position_m", position_m)
     yaw = _check_finite("yaw_rad", yaw_rad)
-    depth_m = config.grasp_depth_m if gripper_type == "fingers" else config.suction_press_m
+    height = math.inf  # unknown: as deep as the tool holds any block
     if block_height_m is not None:
         height = _check_finite("block_height_m", block_height_m)
         if height <= 0.0:
             raise InvalidInput(f"block_height_m must be > 0, got {height}")
-        depth_m = config.held_below_top_m(height, gripper_type)
-    grasp_m = top_m - np.array([0.0, 0.0, depth_m])
-    pads_m = config.pad_reach_m if gripper_type == "fingers" else 0.0  # never grasp lower: the pads stay on the board
-    grasp_m[2] = max(grasp_m[2], config.board_clearance_m, pads_m)
+    grasp_m = top_m - np.array([0.0, 0.0, tool.held_below_top_m(config, height)])
+    grasp_m[2] = max(grasp_m[2], config.board_clearance_m, tool.lowest_grasp_m(config))
     steps = _approach_steps(arm, q_now_rad, grasp_m, yaw, config, "grasp", ("move above block", "descend to grasp", "lift"),
-                            gripper_type, q_seed_rad)
-    return [GripperStep("open before pick" if gripper_type == "fingers" else "vacuum off before pick", "release"), *steps]
+                            tool, q_seed_rad)
+    return [GripperStep(tool.release_before_pick, "release"), *steps]
 
 
 def plan_place(
-    arm, q_now_rad, position_m, yaw_rad: float, config: MotionConfig, block_height_m: float, gripper_type: str = "fingers",
+    arm, q_now_rad, position_m, yaw_rad: float, config: MotionConfig, block_height_m: float, tool: EndEffector | str = FINGERS,
     q_seed_rad=None,
 ) -> list[Step]:
     """Steps to set the held block down with its bottom-face centre at position_m (world, metres).
@@ -197,11 +180,12 @@ def plan_place(
     height = _check_finite("block_height_m", block_height_m)
     if height <= 0.0:
         raise InvalidInput(f"block_height_m must be > 0, got {height}")
-    held_below_top_m = config.held_below_top_m(height, checked_gripper_type(gripper_type))  # as plan_pick grasped it
+    tool = end_effector(tool)
+    held_below_top_m = tool.held_below_top_m(config, height)  # as plan_pick grasped it
     release_m = surface_m + np.array([0.0, 0.0, height - held_below_top_m + config.place_clearance_m])
     release_m[2] = max(release_m[2], config.board_clearance_m)
     return _approach_steps(arm, q_now_rad, release_m, yaw, config, "release", ("move above place", "descend to place", "retreat"),
-                           gripper_type, q_seed_rad)
+                           tool, q_seed_rad)
 
 
 def plan_move_to_pose(

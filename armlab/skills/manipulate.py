@@ -16,9 +16,9 @@ from armlab.motion import plan_place as motion_plan_place
 from armlab.motion.cartesian import plan_vertical_segment
 from armlab.motion.clearance import first_collision
 from armlab.motion.gripper_box import joint_moves_inside
-from armlab.motion.pick_place import lowest_pitch_rad, solve_approach
+from armlab.motion.pick_place import solve_approach
 from armlab.motion.safety import UnsafeTrajectory
-from armlab.station.arm_info import station_gripper_type
+from armlab.station.arm_info import station_end_effector
 from armlab.station.core import Station
 from armlab.station.jobs import JobContext
 
@@ -31,7 +31,7 @@ def plan_pick_steps(station: Station, top_center_m, yaw_rad: float | None, q_sta
     """
     q_start = station.joints_rad() if q_start_rad is None else np.asarray(q_start_rad, float)
     return motion_plan_pick(station.model, q_start, np.asarray(top_center_m, float), 0.0 if yaw_rad is None else yaw_rad, station.motion_config,
-                            gripper_type=station_gripper_type(station), q_seed_rad=_wrist_turned(q_start, wrist_offset_rad))
+                            tool=station_end_effector(station), q_seed_rad=_wrist_turned(q_start, wrist_offset_rad))
 
 
 def plan_place_steps(station: Station, surface_m, yaw_rad: float | None, held_height_m: float, q_start_rad=None,
@@ -40,7 +40,7 @@ def plan_place_steps(station: Station, surface_m, yaw_rad: float | None, held_he
     q_start = station.joints_rad() if q_start_rad is None else np.asarray(q_start_rad, float)
     yaw = 0.0 if yaw_rad is None else yaw_rad
     return motion_plan_place(station.model, q_start, np.asarray(surface_m, float), yaw, station.motion_config, held_height_m,
-                             gripper_type=station_gripper_type(station), q_seed_rad=_wrist_turned(q_start, wrist_offset_rad))
+                             tool=station_end_effector(station), q_seed_rad=_wrist_turned(q_start, wrist_offset_rad))
 
 
 def _wrist_turned(q_rad: np.ndarray, offset_rad: float) -> np.ndarray | None:
@@ -127,10 +127,9 @@ def _transfer_plan(station: Station, q_start, point_m, yaw_rad: float | None, bo
     seed and no finger tips in the clearance check."""
     config = station.motion_config
     model = station.model
-    gripper_type = station_gripper_type(station)
-    suction = gripper_type == "suction"
-    lowest_pitch = lowest_pitch_rad(config, gripper_type)
-    finger_length_m = 0.0 if suction else 0.03  # the finger tips below the gripper point (clearance.first_collision)
+    tool = station_end_effector(station)
+    lowest_pitch = tool.lowest_pitch_rad(config)
+    finger_length_m = tool.finger_length_m  # the finger tips below the gripper point (clearance.first_collision)
     point_m = np.asarray(point_m, float)
     carried = 0.0 if held_edge_m is None else held_edge_m
     vertical = dict(speed_m_s=config.vertical_speed_m_s, accel_m_s2=config.vertical_accel_m_s2, rate_hz=config.sample_rate_hz)
@@ -142,8 +141,8 @@ def _transfer_plan(station: Station, q_start, point_m, yaw_rad: float | None, bo
         return [TrajectoryStep(name, move) for move in joint_moves_inside(model, q_a, q_b, gripper_box, joint_move)]
 
     q_start = np.asarray(q_start, float)
-    seed = _facing_seed(model, q_start, point_m) if suction else q_start
-    if finger_axis_rad is not None and yaw_rad is not None and not suction:
+    seed = q_start if tool.has_heading else _facing_seed(model, q_start, point_m)  # a round cup: any turn, so facing the point
+    if finger_axis_rad is not None and yaw_rad is not None and tool.has_heading:
         seed = _finger_seed(station, q_start, point_m, config.top_down_pitch_rad, yaw_rad, finger_axis_rad)
     # Carrying a block, approach from higher by its edge (so the block itself clears its neighbours)
     # where that is reachable at the pitch wanted; else from the usual approach height; else (a column's
@@ -226,18 +225,17 @@ def _transfer_plan(station: Station, q_start, point_m, yaw_rad: float | None, bo
 def plan_pick(station: Station, top_center_m, yaw_rad: float | None, edge_m: float, boxes: list, q_start=None,
               max_transfer_z_m: float = 0.42, finger_axis_rad: float | None = None, gripper_box=None) -> list:
     """Plan picking the block whose top-face centre is top_center_m: open, transfer above it, descend
-    to config.held_below_top_m(edge) below its top (a suction cup: onto it), grasp, rise. boxes: other objects; gripper_box: a
+    to the end effector's held_below_top_m(edge) below its top (a suction cup: onto it), grasp, rise. boxes: other objects; gripper_box: a
     GripperBox the gripper point keeps inside (None: no such limit)."""
     config = station.motion_config
     top = np.asarray(top_center_m, float)
-    gripper_type = station_gripper_type(station)
-    grasp_m = top - np.array([0.0, 0.0, config.held_below_top_m(edge_m, gripper_type)])
-    pads_m = config.pad_reach_m if gripper_type == "fingers" else 0.0  # never grasp lower: the pads stay on the board
-    grasp_m[2] = max(grasp_m[2], config.board_clearance_m, pads_m)
+    tool = station_end_effector(station)
+    grasp_m = top - np.array([0.0, 0.0, tool.held_below_top_m(config, edge_m)])
+    grasp_m[2] = max(grasp_m[2], config.board_clearance_m, tool.lowest_grasp_m(config))
     q_start = station.joints_rad() if q_start is None else q_start
     steps = _transfer_plan(station, q_start, grasp_m, yaw_rad, boxes, None, "grasp", ("move above block", "descend to grasp", "lift"),
                            max_transfer_z_m, finger_axis_rad, gripper_box=gripper_box)
-    return [GripperStep("open before pick" if gripper_type == "fingers" else "vacuum off before pick", "release"), *steps]
+    return [GripperStep(tool.release_before_pick, "release"), *steps]
 
 
 def plan_place(station: Station, surface_m, yaw_rad: float | None, edge_m: float, boxes: list, q_start=None,
@@ -248,7 +246,7 @@ def plan_place(station: Station, surface_m, yaw_rad: float | None, edge_m: float
     the fingers open along (e.g. across a line of blocks, so they do not push the neighbours)."""
     config = station.motion_config
     surface = np.asarray(surface_m, float)
-    held_below_top = config.held_below_top_m(edge_m, station_gripper_type(station))
+    held_below_top = station_end_effector(station).held_below_top_m(config, edge_m)
     release_m = surface + np.array([0.0, 0.0, edge_m - held_below_top + config.place_clearance_m])
     q_start = station.joints_rad() if q_start is None else q_start
     return _transfer_plan(station, q_start, release_m, yaw_rad, boxes, edge_m, "release",
@@ -261,8 +259,9 @@ def plan_side_place(station: Station, surface_m, edge_m: float, boxes: list, q_s
     horizontal (pitch 0), for surfaces too high for a top-down place (tall towers). The wrist turns
     to a multiple of 90° so the block's faces stay level; its centre lies (edge/2 - grasp depth)
     beyond the gripper point along the horizontal approach axis."""
-    if station_gripper_type(station) != "fingers":
-        raise Unreachable(f"a side place needs fingers: a {station_gripper_type(station)} gripper holds the block by its top face, "
+    tool = station_end_effector(station)
+    if not tool.holds_by_sides:
+        raise Unreachable(f"a side place needs fingers: a {tool.name} gripper holds the block by its top face, "
                           "which would turn sideways", "out of reach")
     config = station.motion_config
     model = station.model

@@ -16,7 +16,7 @@ from armlab.skills.clear_path import known_obstacles, plan_clear_pick, plan_clea
 from armlab.skills.manipulate import run_steps
 from armlab.skills.operator_advice import advised
 from armlab.skills.perceive import block_near, target_point
-from armlab.station.arm_info import station_gripper_type
+from armlab.station.arm_info import station_end_effector
 from armlab.station.calibration_trust import calibration_summary
 from armlab.station.core import Station
 from armlab.station.jobs import Job, JobContext
@@ -133,8 +133,7 @@ def grab(station: Station, position_m=None, pixel=None, source: str | None = Non
         holding = bool(station.gripper.read_state().holding)
         station.set_held_block({**(block or {}), "edge_m": edge, "yaw_rad": yaw} if holding else None)
         if not holding:
-            how = "the suction cup did not seal" if station_gripper_type(station) == "suction" else "the fingers closed on nothing"
-            raise GripperEmpty(f"nothing in the gripper: {how} at {detail}")
+            raise GripperEmpty(f"nothing in the gripper: {station_end_effector(station).missed_grasp} at {detail}")
         ctx.job.update(message="holding the block")
         return {"target_m": [float(x) for x in top], "yaw_rad": yaw, "block": block, "holding": holding}
 

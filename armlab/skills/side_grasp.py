@@ -34,7 +34,7 @@ from armlab.motion.cartesian import plan_vertical_segment
 from armlab.motion.clearance import box_around, first_collision
 from armlab.motion.line import plan_line_segment
 from armlab.motion.safety import UnsafeTrajectory
-from armlab.station.arm_info import station_gripper_type
+from armlab.station.arm_info import station_end_effector
 from armlab.station.core import Station
 
 PITCH_STEP_RAD = math.radians(5.0)
@@ -341,9 +341,10 @@ def plan_side_pick_place(station: Station, top_center_m, surface_m, edge_m: floa
     """The pick steps and grasp for the first of pitches_rad at which both the pick (from q_start) and
     the place after it (plan_side_place from the pick's end) plan and pass every check. Fingers only:
     another gripper type is refused (Unreachable) before anything is planned."""
-    if station_gripper_type(station) != "fingers":
+    tool = station_end_effector(station)
+    if not tool.holds_by_sides:
         raise Unreachable(f"a side grasp needs fingers closing on the block's sides: this station's gripper is a "
-                          f"{station_gripper_type(station)} gripper", "out of reach")
+                          f"{tool.name} gripper", "out of reach")
     problems = []
     for pitch in pitches_rad:
         try:

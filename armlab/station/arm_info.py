@@ -4,6 +4,7 @@ guesses from the number of joints or the arm's name."""
 
 from __future__ import annotations
 
+from armlab.motion.end_effector import EndEffector, end_effector
 from armlab.motion.pose_path import holds_full_pose
 from armlab.workcell import DEFAULT_WORKCELL, load_workcell
 
@@ -29,6 +30,12 @@ def station_gripper_type(station) -> str:
         return "fingers"
 
     return load_workcell(workcell_name).gripper.type
+
+
+def station_end_effector(station) -> EndEffector:
+    """The station's end effector (armlab.motion.end_effector), from station_gripper_type; InvalidInput for a
+    station with no arm."""
+    return end_effector(station_gripper_type(station))
 
 
 def arm_info(station) -> dict:

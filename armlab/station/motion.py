@@ -21,10 +21,9 @@ from armlab.errors import PLAN_REFUSALS, ArmMoving, CommandRefused, InvalidInput
 from armlab.motion import check_trajectory
 from armlab.motion.blend import arm_limits, plan_stop
 from armlab.motion.clearance import self_collision
-from armlab.motion.gripper_step import FingerBox
 from armlab.motion.handover import Handover, continuity_problem, reference_velocity, splice, take_over, trimmed
 from armlab.motion.safety import UnsafeTrajectory, check_start
-from armlab.station.arm_info import station_gripper_type
+from armlab.station.arm_info import station_end_effector
 from armlab.station.body_check import check_parts_above_board, palm_corners_m
 from armlab.station.job_control import SPEED_WAIT_FACTOR
 from armlab.station.jobs import JobCancelled, JobContext
@@ -162,20 +161,12 @@ class MotionGate:
 
     def palm_corners_m(self) -> np.ndarray | None:
         """(8, 3) corners of a finger gripper's palm in the gripper frame; None for a suction cup."""
-        return None if station_gripper_type(self) == "suction" else palm_corners_m(self.model.config.name)
+        return palm_corners_m(self.model.config.name) if station_end_effector(self).has_palm else None
 
     def finger_box(self):
         """The box the gripper occupies beyond the wrist (armlab.motion.gripper_step.FingerBox): the open fingers
         from config, or the suction cup's body."""
-        config = self.motion_config
-        gripper = getattr(self.model.config, "gripper", None)
-        cup = getattr(self.model.config, "suction_cup", None)
-        if station_gripper_type(self) == "suction" and cup is not None:  # the cup's body, back from its lip
-            return FingerBox(cup.body_length_m, 0.0, cup.body_radius_m, cup.body_radius_m)
-        return FingerBox(
-            config.finger_back_m, config.pad_reach_m,
-            (gripper.finger_offset_max_m if gripper is not None else 0.0) + config.finger_thickness_m, config.finger_half_height_m,
-        )
+        return station_end_effector(self).body_box(self.motion_config, self.model.config)
 
     def _command_arm(self, trajectory: JointTrajectory, swept_box: np.ndarray, handover: Handover | None = None,
                      planned_after: int | None = None) -> JointTrajectory:

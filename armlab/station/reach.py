@@ -15,8 +15,9 @@ from typing import Any
 import numpy as np
 
 from armlab.errors import Unreachable
-from armlab.motion.pick_place import lowest_pitch_rad, solve_approach
-from armlab.station.arm_info import station_gripper_type
+from armlab.motion.end_effector import EndEffector
+from armlab.motion.pick_place import solve_approach
+from armlab.station.arm_info import station_end_effector
 from armlab.workcell import load_workcell
 
 REACH_STEP_M = 0.025  # the grid's spacing
@@ -24,22 +25,21 @@ TOP_DOWN, TILTED, OUT_OF_REACH = "T", "t", "."
 LEGEND = {TOP_DOWN: "top-down", TILTED: "only tilted", OUT_OF_REACH: "out of reach"}
 
 
-def grasp_height_m(workcell: Any, motion_config: Any, gripper_type: str) -> float:
+def grasp_height_m(workcell: Any, motion_config: Any, tool: EndEffector) -> float:
     """Where the tool point holds a large block standing on the board (plan_pick's grasp point)."""
     edge = workcell.block_edge_m("large")
-    z = edge - motion_config.held_below_top_m(edge, gripper_type)
-    pads = motion_config.pad_reach_m if gripper_type == "fingers" else 0.0
-    return float(max(z, motion_config.board_clearance_m, pads))
+    z = edge - tool.held_below_top_m(motion_config, edge)
+    return float(max(z, motion_config.board_clearance_m, tool.lowest_grasp_m(motion_config)))
 
 
-def classify(model: Any, motion_config: Any, gripper_type: str, point_m, q_seed_rad) -> tuple[str, np.ndarray | None]:
+def classify(model: Any, motion_config: Any, tool: EndEffector, point_m, q_seed_rad) -> tuple[str, np.ndarray | None]:
     """(TOP_DOWN, TILTED or OUT_OF_REACH, the joints at the grasp point or None) for a grasp point (its approach point
     above included)."""
     point = np.asarray(point_m, float)
     near = point + np.array([0.0, 0.0, motion_config.approach_height_m])
     try:
         pitch, (q_point, _) = solve_approach(model, q_seed_rad, [point, near], None, motion_config.top_down_pitch_rad,
-                                             lowest_pitch_rad(motion_config, gripper_type))
+                                             tool.lowest_pitch_rad(motion_config))
     except Unreachable:
         return OUT_OF_REACH, None
     return (TOP_DOWN if pitch >= motion_config.top_down_pitch_rad - 1e-9 else TILTED), q_point
@@ -57,13 +57,13 @@ def horizontal_reach_m(model: Any, samples: int = 20000, seed: int = 0) -> float
     return float(np.max(np.linalg.norm(points[:, :2] - base[:2], axis=1))) * 1.05
 
 
-def reach_map(model: Any, motion_config: Any, gripper_type: str, workcell: Any, step_m: float = REACH_STEP_M) -> dict:
+def reach_map(model: Any, motion_config: Any, tool: EndEffector, workcell: Any, step_m: float = REACH_STEP_M) -> dict:
     """The wire dict: {x0_m, y0_m, step_m, nx, ny, z_m, rows (ny strings of nx letters, row j at y0 + j·step), legend}."""
     (x_lo, x_hi), (y_lo, y_hi) = workcell.board.x_range_m, workcell.board.y_range_m
     nx, ny = int(np.floor((x_hi - x_lo) / step_m)) + 1, int(np.floor((y_hi - y_lo) / step_m)) + 1
     x0 = x_lo + 0.5 * ((x_hi - x_lo) - (nx - 1) * step_m)
     y0 = y_lo + 0.5 * ((y_hi - y_lo) - (ny - 1) * step_m)
-    z = grasp_height_m(workcell, motion_config, gripper_type)
+    z = grasp_height_m(workcell, motion_config, tool)
     home = np.asarray(model.home_rad, float)
     started = time.monotonic()
     farthest = horizontal_reach_m(model)
@@ -77,12 +77,12 @@ def reach_map(model: Any, motion_config: Any, gripper_type: str, workcell: Any, 
                 row.append(OUT_OF_REACH)
                 seed = home
                 continue
-            letter, q = classify(model, motion_config, gripper_type, (x, y, z), seed)
+            letter, q = classify(model, motion_config, tool, (x, y, z), seed)
             row.append(letter)
             seed = q if q is not None else home
         rows.append("".join(row))
     return {"x0_m": float(x0), "y0_m": float(y0), "step_m": float(step_m), "nx": nx, "ny": ny, "z_m": z, "rows": rows,
-            "legend": dict(LEGEND), "gripper": gripper_type, "compute_s": round(time.monotonic() - started, 3)}
+            "legend": dict(LEGEND), "gripper": tool.name, "compute_s": round(time.monotonic() - started, 3)}
 
 
 def cell_of(reach: dict, x_m: float, y_m: float) -> str:
@@ -107,6 +107,6 @@ class ReachCache:
         with self._lock:
             if self._map is None or key != self._key:
                 workcell = load_workcell(station.config.workcell)
-                self._map = reach_map(station.model, station.motion_config, station_gripper_type(station), workcell)
+                self._map = reach_map(station.model, station.motion_config, station_end_effector(station), workcell)
                 self._key = key
             return self._map

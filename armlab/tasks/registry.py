@@ -7,8 +7,8 @@ from collections.abc import Callable
 from dataclasses import dataclass
 
 from armlab.errors import InvalidInput
-from armlab.scene import COLORS, as_workcell
-from armlab.scene.model import SIZES
+from armlab.motion.end_effector import END_EFFECTORS, end_effector
+from armlab.scene import as_workcell
 from armlab.station.core import NotCalibrated, Station
 from armlab.station.jobs import Job, JobContext
 from armlab.tasks import (
@@ -22,6 +22,7 @@ from armlab.tasks import (
     stack_high,
     to_the_sky,
 )
+from armlab.tasks.job_params import JobParams, NoParams, StackHereParams, validated_params
 from armlab.tasks.judge import EVENT_LIMITS_S
 from armlab.tasks.judge import GRIPPER_BOX_M as box
 from armlab.tasks.policy import Plan
@@ -65,12 +66,11 @@ class JobSpec:
     levels: tuple[int, ...]
     make_policy: Callable[[int | None, dict, TaskRunner], Callable[[list[dict], set], Plan]]
     summary: str
-    param_types: tuple[tuple[str, type], ...] = ()
-    # What the job needs of the workcell (config/workcells/<name>.yaml): the end effectors it works with
-    # (gripper.type), why it needs them, and a check of the workcell's geometry (None = any; else a
-    # function returning what is missing, or None when the workcell has it).
-    gripper_types: tuple[str, ...] = ("fingers", "suction")
-    gripper_why: str = ""
+    params_model: type[JobParams] = NoParams  # its parameters (armlab.tasks.job_params)
+    # What the job needs of the workcell (config/workcells/<name>.yaml): an end effector that holds blocks by
+    # their sides (and why), and a check of the workcell's geometry (None = any; else a function returning what
+    # is missing, or None when the workcell has it).
+    side_grasps_why: str | None = None
     workcell_check: Callable[[Workcell], str | None] | None = None
 
 
@@ -88,7 +88,7 @@ JOBS: dict[str, JobSpec] = {
                 "per size, one column of the six blocks in rainbow order, red at the bottom"),
         JobSpec("to_the_sky", (1,), to_the_sky.make_policy,
                 "one tower of large blocks, as tall as the arm can build (fed by the feeder)",
-                gripper_types=("fingers",), gripper_why="side grasps for the tower's upper blocks"),
+                side_grasps_why="side grasps for the tower's upper blocks"),
         JobSpec("sort_stack", (1, 2, 3), sort_stack.make_policy,
                 "every block to its side of y < 0, stacked in rainbow order per side"),
         JobSpec("sort_by_tag", (1, 2, 3), sort_by_tag.make_policy,
@@ -97,7 +97,7 @@ JOBS: dict[str, JobSpec] = {
                 "every object on the board, any colour or shape, into the bin"),
         JobSpec("stack_here", (), stack_here.make_policy,
                 "all blocks (or one colour / size) stacked at a point, large ones first",
-                (("x_m", float), ("y_m", float), ("color", str), ("size", str))),
+                params_model=StackHereParams),
     )
 }
 
@@ -114,23 +114,7 @@ def checked_request(job: str, level, params) -> tuple[JobSpec, int | None, dict]
             raise InvalidInput(f"job '{job}' has levels {', '.join(map(str, spec.levels))}, not {level!r}")
     elif level is not None:
         raise InvalidInput(f"job '{job}' has no levels; leave 'level' out")
-    params = {} if params is None else params
-    if not isinstance(params, dict):
-        raise InvalidInput("params must be an object")
-    known = dict(spec.param_types)
-    for name, value in params.items():
-        if name not in known:
-            raise InvalidInput(f"job '{job}' has no parameter {name!r}" + (f"; parameters: {', '.join(known)}" if known else ""))
-        wanted = known[name]
-        accepted = (int, float) if wanted is float else wanted
-        if isinstance(value, bool) and wanted is not bool or not isinstance(value, accepted):
-            raise InvalidInput(f"parameter {name!r} of job '{job}' must be {wanted.__name__}, got {type(value).__name__}")
-        if wanted is float and not (math.isfinite(value) and abs(value) <= 1.0):
-            raise InvalidInput(f"parameter {name!r} of job '{job}' must be a finite position within 1 m, got {value!r}")
-
-    if params.get("color") not in (None, *COLORS) or params.get("size") not in (None, *SIZES):
-        raise InvalidInput(f"color must be one of {', '.join(COLORS)} and size one of {', '.join(SIZES)}")
-    return spec, level, params
+    return spec, level, validated_params(job, spec.params_model, params)
 
 
 def unsupported_reason(job: str, workcell: Workcell | str | None = None) -> str | None:
@@ -140,9 +124,10 @@ def unsupported_reason(job: str, workcell: Workcell | str | None = None) -> str 
     if spec is None:
         return None
     cell = as_workcell(workcell)
-    if cell.gripper.type not in spec.gripper_types:
-        why = f" ({spec.gripper_why})" if spec.gripper_why else ""
-        return f"a gripper of type {' or '.join(spec.gripper_types)}{why}; this workcell's is {cell.gripper.type}"
+    tool = end_effector(cell.gripper.type)
+    if spec.side_grasps_why is not None and not tool.holds_by_sides:
+        holders = " or ".join(other.name for other in END_EFFECTORS.values() if other.holds_by_sides)
+        return f"a gripper that holds blocks by their sides: {holders} ({spec.side_grasps_why}); this workcell's is {tool.name}"
     return spec.workcell_check(cell) if spec.workcell_check is not None else None
 
 

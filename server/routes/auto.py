@@ -11,6 +11,7 @@ from pydantic import ValidationError
 from starlette.concurrency import run_in_threadpool
 
 from armlab.tasks import JOBS, JobSpec, start_auto
+from armlab.tasks.job_params import param_types
 from armlab.tasks.judge import EVENT_LIMITS_S
 from armlab.tasks.registry import check_supported, checked_request, unsupported_reason
 from server.auto_runs import SCORE_WAIT_S, AutoRun, is_judged, is_scored, watch_run
@@ -40,7 +41,7 @@ def _job_info(spec: JobSpec, workcell: str | None = None) -> dict:
         "name": spec.name,
         "levels": list(spec.levels),
         "summary": spec.summary,
-        "params": [{"name": name, "type": kind.__name__} for name, kind in spec.param_types],
+        "params": [{"name": name, "type": kind} for name, kind in param_types(spec.params_model)],
         "judged": judged,
         "scored": is_scored(spec.name),
         "scene": _has_scene(spec.name, spec.levels),
@@ -48,16 +49,6 @@ def _job_info(spec: JobSpec, workcell: str | None = None) -> dict:
         "available": missing is None,
         "unavailable_reason": None if missing is None else f"needs {missing}",
     }
-
-
-def _widened(name: str, params: dict | None) -> dict | None:
-    """JSON has one number type: a whole number sent for a float parameter counts as that float
-    (as for every float field of the API). Nothing else is converted."""
-    spec = JOBS.get(name)
-    if spec is None or not params:
-        return params
-    kinds = dict(spec.param_types)
-    return {key: float(value) if kinds.get(key) is float and type(value) is int else value for key, value in params.items()}
 
 
 def _last_run(request: Request) -> AutoRun | None:
@@ -82,9 +73,8 @@ async def post_auto(body: AutoRequest, request: Request, station: StationDep, co
     job the station's workcell cannot run (naming what it lacks); 409 unless idle or without a calibration."""
 
     def start():
-        params = _widened(body.job, body.params)
         station.allowed_or_raise("auto")
-        _, level, _ = checked_request(body.job, body.level, params)
+        _, level, params = checked_request(body.job, body.level, body.params)  # params as the job's model read them
         check_supported(body.job, station.config.workcell)
         sim_start_s = station.sim.sim_time_s if station.sim is not None else None
         job = start_auto(station, body.job, level, params, source=controller)

@@ -88,7 +88,7 @@ def _trajectory_steps(steps):
 
 def test_suction_pick_comes_straight_down_the_cup_axis_onto_the_top_face_centre():
     top = np.array([-0.30, -0.15, 0.038])
-    steps = plan_pick(UR3, START_POSES["pointing down"], top, 0.3, CONFIG, block_height_m=0.038, gripper_type="suction")
+    steps = plan_pick(UR3, START_POSES["pointing down"], top, 0.3, CONFIG, block_height_m=0.038, tool="suction")
     assert [s.action for s in steps if isinstance(s, GripperStep)] == ["release", "grasp"]  # vacuum off, then on
     moves = _trajectory_steps(steps)
     for name in ("descend to grasp", "lift"):
@@ -99,14 +99,14 @@ def test_suction_pick_comes_straight_down_the_cup_axis_onto_the_top_face_centre(
     lowest = UR3.fk_dh(moves["descend to grasp"].positions_rad[-1])[2, 3]
     assert top[2] - 0.005 < lowest <= top[2], f"the cup stops at z = {lowest * 1000:.1f} mm: not on the top face"
     # fingers grasp lower, around the block's sides
-    fingers = _trajectory_steps(plan_pick(UR3, START_POSES["pointing down"], top, 0.3, CONFIG, 0.038, gripper_type="fingers"))
+    fingers = _trajectory_steps(plan_pick(UR3, START_POSES["pointing down"], top, 0.3, CONFIG, 0.038, tool="fingers"))
     assert UR3.fk_dh(fingers["descend to grasp"].positions_rad[-1])[2, 3] < top[2] - 0.01
 
 
 def test_suction_place_lowers_the_held_block_onto_the_surface_straight_down():
     surface = np.array([-0.15, -0.30, 0.0])
     edge = 0.038
-    steps = plan_place(UR3, START_POSES["pointing down"], surface, 0.0, CONFIG, edge, gripper_type="suction")
+    steps = plan_place(UR3, START_POSES["pointing down"], surface, 0.0, CONFIG, edge, tool="suction")
     moves = _trajectory_steps(steps)
     T = UR3.fk_dh(moves["descend to place"].positions_rad)
     assert np.degrees(np.arccos(np.clip(T[:, :3, 0] @ DOWN, -1.0, 1.0))).max() < 0.1
@@ -117,16 +117,16 @@ def test_suction_place_lowers_the_held_block_onto_the_surface_straight_down():
 def test_suction_never_falls_back_to_a_tilted_approach():
     # 580 mm out (beyond the 0.5 m reach pointing down) fingers still take a block tilted; a cup would not seal.
     point = np.array([0.58 * math.cos(-2.4), 0.58 * math.sin(-2.4), 0.038])
-    fingers = _trajectory_steps(plan_pick(UR3, START_POSES["pointing down"], point, 0.0, CONFIG, 0.038, gripper_type="fingers"))
+    fingers = _trajectory_steps(plan_pick(UR3, START_POSES["pointing down"], point, 0.0, CONFIG, 0.038, tool="fingers"))
     approach = UR3.fk_dh(fingers["descend to grasp"].positions_rad[-1])[:3, 0]
     assert np.degrees(np.arccos(approach @ DOWN)) > 10.0  # the premise: reachable only tilted
     with pytest.raises(Unreachable, match="suction cup"):
-        plan_pick(UR3, START_POSES["pointing down"], point, 0.0, CONFIG, 0.038, gripper_type="suction")
+        plan_pick(UR3, START_POSES["pointing down"], point, 0.0, CONFIG, 0.038, tool="suction")
 
 
 def test_unknown_gripper_type_is_refused():
     with pytest.raises(ValueError, match="gripper type"):
-        plan_pick(UR3, START_POSES["pointing down"], [-0.3, -0.15, 0.038], 0.0, CONFIG, 0.038, gripper_type="magnet")
+        plan_pick(UR3, START_POSES["pointing down"], [-0.3, -0.15, 0.038], 0.0, CONFIG, 0.038, tool="magnet")
 
 
 def _heading_deg(T) -> float:

@@ -143,6 +143,18 @@ def test_bad_requests_are_422_and_nothing_moves(http, calibrated, body, fragment
 
 
 PROBE_PARAMS = (("count", int), ("speed_m_s", float), ("color", str), ("neat", bool))
+
+
+def _probe_params_model():
+    from armlab.tasks.job_params import JobParams
+
+    class ProbeParams(JobParams):
+        count: int = None  # type: ignore[assignment]
+        speed_m_s: float = None  # type: ignore[assignment]
+        color: str = None  # type: ignore[assignment]
+        neat: bool = None  # type: ignore[assignment]
+
+    return ProbeParams
 WRONG_VALUES = {"int": ["three", 2.5, True], "float": ["3.5", False, None], "str": [5, True, ["red"]], "bool": [1, "true", 0.0]}
 
 
@@ -151,7 +163,8 @@ def probe_job(monkeypatch):
     """A job with typed parameters in the real registry (pick_sort's policy; its parameters unused)."""
     from armlab.tasks import JOBS, JobSpec
 
-    spec = JobSpec("typed_probe", (1,), JOBS["pick_sort"].make_policy, "pick_sort with typed parameters", PROBE_PARAMS)
+    spec = JobSpec("typed_probe", (1,), JOBS["pick_sort"].make_policy, "pick_sort with typed parameters",
+                   params_model=_probe_params_model())
     monkeypatch.setitem(JOBS, spec.name, spec)
     return spec.name
 

@@ -41,3 +41,33 @@ def test_the_jobs_that_run_on_the_ur3_pass_the_check(job):
 @pytest.mark.parametrize("job", ["to_the_sky", "pick_stack", "line_up"])
 def test_the_rx200_runs_them(job):
     assert check_request(job, 1, None) == 1 and check_request(job, 1, "rx200_armlab") == 1
+
+
+@pytest.mark.parametrize("params, problem", [
+    ({"x_m": True}, "parameter 'x_m' of job 'stack_here'"),
+    ({"x_m": None}, "parameter 'x_m' of job 'stack_here'"),
+    ({"x_m": "0.1"}, "parameter 'x_m' of job 'stack_here'"),
+    ({"y_m": 1.5}, "parameter 'y_m' of job 'stack_here'"),
+    ({"x_m": float("nan")}, "parameter 'x_m' of job 'stack_here'"),
+    ({"color": "pink"}, "parameter 'color' of job 'stack_here'"),
+    ({"size": "huge"}, "parameter 'size' of job 'stack_here'"),
+    ({"z_m": 0.1}, "has no parameter 'z_m'; parameters: x_m, y_m, color, size"),
+    ([0.1], "params must be an object"),
+])
+def test_a_jobs_parameters_are_checked_by_its_model(params, problem):
+    from armlab.errors import InvalidInput
+    from armlab.tasks.registry import checked_request
+
+    with pytest.raises(InvalidInput, match=problem.replace("(", r"\(").replace(")", r"\)")):
+        checked_request("stack_here", None, params)
+
+
+def test_the_parameters_given_are_passed_as_numbers_and_a_job_without_parameters_takes_none():
+    from armlab.errors import InvalidInput
+    from armlab.tasks.registry import checked_request
+
+    _, level, params = checked_request("stack_here", None, {"x_m": 0, "y_m": -0.12, "color": "red"})
+    assert level is None and params == {"x_m": 0.0, "y_m": -0.12, "color": "red"} and isinstance(params["x_m"], float)
+    assert checked_request("pick_sort", 2, None)[1:] == (2, {})
+    with pytest.raises(InvalidInput, match="job 'pick_sort' has no parameter 'color'"):
+        checked_request("pick_sort", 2, {"color": "red"})
