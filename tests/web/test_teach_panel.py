@@ -120,8 +120,10 @@ def test_teach_edit_repeat_pause_plot_and_csv(browser, server, tmp_path):
         server.wait_status(lambda s: s["state"] == "repeat" and s["moving"], 10.0, "resumed")
         final = server.wait_status(lambda s: s["state"] == "idle", 120.0, "the repeat to end")
         assert final["job"]["state"] == "succeeded", final["job"]
-        page.eval_on_selector("#repeat-speed", "el => { el.value = '100'; el.dispatchEvent(new Event('input')); "
-                                               "el.dispatchEvent(new Event('change')); }")
+        # Moved back before the page has seen the repeat end (its status lags the station's under load): the change
+        # is still the station's override, not a refused change to the ended job.
+        page.evaluate("() => { window.armlab.repeat.jobId = 'a repeat that has ended'; const el = document.getElementById("
+                      "'repeat-speed'); el.value = '100'; el.dispatchEvent(new Event('input')); el.dispatchEvent(new Event('change')); }")
         server.wait_status(lambda s: s["speed_percent"] == 100, 10.0, "the speed override back at 100 % (shared server)")
         page.wait_for_function("Number(document.getElementById('cycle-plot').dataset.samples || 0) > 10", timeout=10_000)
 

@@ -147,7 +147,6 @@ export class Api {
   updateProgram(id, body) { return this.request("PATCH", `/api/programs/${encodeURIComponent(id)}`, body); }
   duplicateProgram(id) { return this.post(`/api/programs/${encodeURIComponent(id)}/duplicate`); }
   deleteProgram(id) { return this.request("DELETE", `/api/programs/${encodeURIComponent(id)}`); }
-  setJobSpeed(speedPercent) { return this.request("PATCH", "/api/jobs/current", { speed_percent: speedPercent }); }
   teachStop(name) { return this.post("/api/teach/stop", { name }); }
   teachExit() { return this.post("/api/teach/exit"); }
   repeat(programId, cycles, speedPercent = 100) {

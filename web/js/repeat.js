@@ -48,10 +48,11 @@ export class RepeatPanel {
       () => this.run(`repeat ${program.name}`, () => this.api.repeat(program.id, cycles, this.speedPercent)));
   }
 
-  /** The slider sets the station's one speed override (the top bar's): the running repeat re-plans at it. */
+  /** The slider sets the station's one speed override (the top bar's), which a running repeat takes (re-planning at
+   * it, or refusing it with its reason). Always PUT /api/speed: the page's idea of whether a repeat runs lags the
+   * station (a change just after a repeat ended went to the ended job and was refused). */
   speedChanged() {
-    if (this.jobId) this.run(`speed ${this.speedPercent} %`, () => this.api.setJobSpeed(this.speedPercent));
-    else this.run(`speed override ${this.speedPercent} %`, () => this.api.request("PUT", "/api/speed", { speed_percent: this.speedPercent }));
+    this.run(`speed override ${this.speedPercent} %`, () => this.api.request("PUT", "/api/speed", { speed_percent: this.speedPercent }));
   }
 
   /** Follow the status: progress line, and the cycle plot whenever a cycle completed or the repeat ended. */
