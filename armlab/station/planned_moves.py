@@ -205,6 +205,11 @@ class PlannedMoves:
         claimed: list[bool] = []
 
         def send_as_planned(handover) -> JointTrajectory:
+            # The world first: a move commanded since the plan, in its last still samples, is a handover at rest whose
+            # position the plan does not start from (the splice would refuse it as a discontinuity, not as stale).
+            change = world_change(plan.world, self._world_snapshot())
+            if change is not None:
+                raise PlanStale(*change)
             if handover is not None and not handover.at_rest:
                 raise PlanStale("the plan is stale: the arm is moving; plan again once it has stopped", "arm_moving")
             return plan.trajectory

@@ -24,3 +24,24 @@ def test_a_plan_is_answered_the_moment_the_arm_has_stopped(fast):
     plan = station.plan_only("move_joints", q_goal_rad=GOAL_RAD)
     assert np.allclose(plan["q_rad"][-1], GOAL_RAD, atol=1e-9)
     assert np.abs(np.asarray(plan["q_rad"][0]) - np.asarray(START_RAD)).max() < station.motion_config.start_tolerance_rad
+
+
+def test_a_plan_overtaken_by_a_move_is_stale_even_while_that_move_ends(fast):
+    """A plan made, then another move commanded (ending within the start tolerance of the plan's start, so the
+    measured joints alone do not tell): executed while that move's last, still samples run on the station's clock
+    (a fresh-clone run at load 12-20 hit it), it is stale (409 'arm_commanded'), not a 422 about the handover."""
+    from armlab.errors import PlanStale
+
+    station, cell = fast
+    station.move_joints(START_RAD, moving_time_s=1.0)
+    assert cell.wait_for(lambda: not cell.arm.is_moving(), 10.0)
+    plan = station.plan_only("move_joints", q_goal_rad=GOAL_RAD)
+    nearby = np.asarray(START_RAD) + [0.0, 0.0, 0.0, 0.03, 0.0]  # within start_tolerance_rad (0.05) of the plan's start
+    station.move_joints(nearby, moving_time_s=1.0)
+    trajectory, started_s = station._commanded[:2]
+    ends_s = started_s + trajectory.duration_s
+    assert cell.wait_for(lambda: station.clock_s() >= ends_s - 0.5 * station.motion_config.handover_lead_s, 10.0)
+    assert station.clock_s() < ends_s  # the move still runs on the station's clock (its last, still samples)
+    with pytest.raises(PlanStale) as stale:
+        station.execute_plan(plan["plan_id"])
+    assert stale.value.reason in ("arm_commanded", "arm_moved"), stale.value
