@@ -1,10 +1,20 @@
 """Recording benchmark (issue 23 item 2): what an MCAP recording costs the station.
 
 1. CPU and size at 30 fps colour + 100 Hz joints: a replay station publishes the simulated camera's own frames
-   (rendered once, replayed at --fps with their depth) and an arm moving in a sine at 100 Hz readings (the RX200
-   model, so the transforms are real); the recorder records it for --seconds with the product's config
-   (recording: JPEG quality 80, depth 5 Hz, transforms 30 Hz). Figures: the recorder threads' CPU (psutil per-thread
-   times, % of one core; target <= 10 %), MB per minute, sustained write throughput, messages per second.
+   (REPLAY_FRAMES of them rendered once, each with its own sensor noise, replayed in a loop at --fps with their
+   depth) and an arm moving in a sine at 100 Hz readings (the RX200 model, so the transforms are real); the recorder
+   records it for --seconds with the product's config (recording: JPEG quality 80, depth 5 Hz, transforms 30 Hz).
+   Figures: the recording's CPU (% of one core; target <= 10 %), MB per minute, sustained write throughput,
+   messages per second, and the rates actually recorded (a saturated machine can starve the replay or the sampler,
+   and a recording that keeps fewer samples costs less: read the CPU with them).
+   The recording's CPU is every thread of the process except the replay station's camera, the ticker and the main
+   thread (psutil per-thread times over the same seconds): the recorder's two threads and the helper threads their
+   work wakes. Until 2026-12-04 it counted the two named threads only, and missed OpenCV's worker thread: a
+   cv2.resize of a 640x360 output is split across OpenCV's pool, whose worker then spins waiting for more work
+   (measured: 2.3 % of one core at 30 fps, as much as the resize itself). The recorder threads' own figure is
+   printed too. And the replay looped 12 frames until then: a 1 MB MCAP chunk of colour alone holds ~36 JPEGs, so
+   zstd found each frame three times over and MB/min (and the compression's CPU) were those of a repeating video,
+   not of a camera.
 2. Peak write throughput: the same messages logged back to back (no rate limit) on one thread: MB/s and colour
    frames/s the encoder and writer keep up with.
 4. LeRobot export (--lerobot; --lerobot-only skips 1-3): a --lerobot-seconds recording of the replay station (its
@@ -18,7 +28,7 @@
    the station) and its press(): the arm set moving, the e-stop pressed by Station.estop(); answer and halt times
    (ms), p50 / p95 / max, --trials each.
 
-    PYTHONPATH=$PWD .venv/bin/python bench/recording.py [--seconds 30] [--trials 15]
+    PYTHONPATH=$PWD .venv/bin/python bench/recording.py [--seconds 30] [--trials 15] [--defaults-only] [--no-estop]
     PYTHONPATH=$PWD .venv/bin/python bench/recording.py --lerobot-only [--lerobot-python /work/lerobot-venv/bin/python]
 """
 
@@ -106,6 +116,10 @@ class ReplayStation:
             next_s += self._period_s
             self._stop.wait(max(0.0, next_s - time.monotonic()))
 
+    @property
+    def camera_thread_id(self) -> int | None:
+        return self._thread.native_id
+
     def __enter__(self):
         self._thread.start()
         return self
@@ -124,10 +138,24 @@ def rendered_frames(count: int) -> list:
         return [cell.capture_next_frame() for _ in range(count)]
 
 
+REPLAY_FRAMES = 48  # 1.6 s at 30 fps: more than any 1 MB chunk holds (~36 640x360 JPEGs), so no chunk repeats a frame
+
+
 def thread_cpu_s(names: set[str]) -> float:
     """CPU seconds (user + system) of this process's threads with those names."""
     ids = {thread.native_id for thread in threading.enumerate() if thread.name in names}
     return sum(t.user_time + t.system_time for t in psutil.Process().threads() if t.id in ids)
+
+
+def cpu_by_thread_s() -> dict[int, float]:
+    """CPU seconds (user + system) of every thread of this process, by native thread id."""
+    return {t.id: t.user_time + t.system_time for t in psutil.Process().threads()}
+
+
+def cpu_except_s(before: dict[int, float], after: dict[int, float], excluded: set[int]) -> float:
+    """CPU seconds between two cpu_by_thread_s() of the threads not in `excluded` (a thread started in between
+    counts from 0)."""
+    return sum(cpu - before.get(tid, 0.0) for tid, cpu in after.items() if tid not in excluded)
 
 
 def cpu_and_size(frames: list, seconds: float, fps: float, **config) -> dict:
@@ -143,15 +171,19 @@ def cpu_and_size(frames: list, seconds: float, fps: float, **config) -> dict:
         idle_cpu_s = (after.user + after.system) - (before.user + before.system)
         info = library.start(station)
         time.sleep(0.5)  # the threads exist; measured from here
-        cpu0, wall0, size0, process0 = thread_cpu_s(names), time.monotonic(), library.active()["size_bytes"], process.cpu_times()
         with Ticker() as ticker:
+            not_recording = {threading.main_thread().native_id, station.camera_thread_id, ticker.thread_id}
+            cpu0, wall0, size0, process0 = thread_cpu_s(names), time.monotonic(), library.active()["size_bytes"], process.cpu_times()
+            threads0 = cpu_by_thread_s()
             time.sleep(seconds)
-        cpu1, wall1, size1, process1 = thread_cpu_s(names), time.monotonic(), library.active()["size_bytes"], process.cpu_times()
+            threads1 = cpu_by_thread_s()
+            cpu1, wall1, size1, process1 = thread_cpu_s(names), time.monotonic(), library.active()["size_bytes"], process.cpu_times()
         ended = library.stop()
         summary = summarize(Path(tmp) / f"{info['id']}.mcap")
     wall = wall1 - wall0
     return {
-        "cpu_percent_of_one_core": 100 * (cpu1 - cpu0) / wall,
+        "cpu_percent_of_one_core": 100 * cpu_except_s(threads0, threads1, not_recording) / wall,
+        "recorder_threads_percent": 100 * (cpu1 - cpu0) / wall,
         "process_percent_added": 100 * ((process1.user + process1.system - process0.user - process0.system) / wall - idle_cpu_s / seconds),
         "mb_per_minute": (size1 - size0) / 1e6 / wall * 60,
         "write_mb_s": (size1 - size0) / 1e6 / wall, "messages_per_s": summary.message_count / summary.duration_s,
@@ -205,6 +237,10 @@ class Ticker:
             now = time.perf_counter()
             self.late_ms.append((now - last - 0.001) * 1000)
             last = now
+
+    @property
+    def thread_id(self) -> int | None:
+        return self._thread.native_id
 
     def __enter__(self):
         self._thread.start()
@@ -379,6 +415,7 @@ def main() -> None:
     parser.add_argument("--peak-frames", type=int, default=150)
     parser.add_argument("--estop-only", action="store_true", help="only the e-stop comparison")
     parser.add_argument("--no-estop", action="store_true", help="no e-stop comparison")
+    parser.add_argument("--defaults-only", action="store_true", help="part 1 at the config's defaults only (no other cases)")
     parser.add_argument("--estop-camera-fps", type=float, default=30.0, help="the simulated camera's rate in the e-stop rig")
     parser.add_argument("--lerobot", action="store_true", help="also the LeRobot export (part 4)")
     parser.add_argument("--lerobot-only", action="store_true", help="only the LeRobot export (part 4)")
@@ -387,7 +424,7 @@ def main() -> None:
     parser.add_argument("--lerobot-python", default=None, help="a Python with LeRobot: load the export with LeRobotDataset")
     args = parser.parse_args()
     print(f"bench/recording.py on {os.cpu_count()} CPUs (load average {os.getloadavg()[0]:.2f})", flush=True)
-    frames = rendered_frames(12)
+    frames = rendered_frames(REPLAY_FRAMES)
     if frames:
         height, width = frames[0].color_bgr.shape[:2]
         print(f"frames: {width}x{height} colour + depth from the simulated camera, replayed at {args.fps:g} fps; joints at 100 Hz")
@@ -400,14 +437,15 @@ def main() -> None:
     cases = [("the config's defaults", {}), ("colour and joints (no depth)", {"depth_rate_hz": 0.0}),
              ("full size (camera_scale 1)", {"camera_scale": 1.0}),
              ("joints, gripper, transforms only (no camera)", {"camera_rate_hz": 0.0, "depth_rate_hz": 0.0})]
-    for name, config in [] if args.estop_only else cases:
+    for name, config in [] if args.estop_only else cases[:1] if args.defaults_only else cases:
         settings = {**default.model_dump(), **config}
         result = cpu_and_size(frames, args.seconds, args.fps, **config)
         print(f"{name}: camera {settings['camera_rate_hz']:g} fps x{settings['camera_scale']:g} JPEG q{settings['jpeg_quality']}, depth "
               f"{settings['depth_rate_hz']:g} Hz, joints {settings['joint_rate_hz']:g} Hz; {result['duration_s']:.1f} s "
-              f"({'complete' if result['complete'] else 'NOT complete'}): recorder threads {result['cpu_percent_of_one_core']:.1f} % "
-              f"of one core (target <= 10 %), the process {result['process_percent_added']:+.1f} % against the same seconds without "
-              f"recording; {result['mb_per_minute']:.1f} MB/min; sustained write {result['write_mb_s']:.2f} MB/s; "
+              f"({'complete' if result['complete'] else 'NOT complete'}): recording {result['cpu_percent_of_one_core']:.1f} % "
+              f"of one core (target <= 10 %; its two threads {result['recorder_threads_percent']:.1f} %), the process "
+              f"{result['process_percent_added']:+.1f} % against the same seconds without recording; {result['mb_per_minute']:.1f} MB/min; "
+              f"sustained write {result['write_mb_s']:.2f} MB/s; "
               f"{result['messages_per_s']:.0f} messages/s (colour {result['colour_fps']:.1f} fps, depth {result['depth_fps']:.1f} fps, "
               f"joints {result['joint_hz']:.1f} Hz); a 1 ms Python ticker woke late by {result['late_with']} "
               f"(without recording: {result['late_without']})", flush=True)
