@@ -23,10 +23,12 @@
    /work/lerobot-venv/bin/python), bench/lerobot_load_check.py loads it with LeRobot's LeRobotDataset and compares every
    frame with the recording (read here by armlab's reader: the joints, gripper and commands newest at or before each
    frame time; the colour frame shown then, as 8x8-px block means).
-3. E-stop latency with and without a recording running: bench/estop.py's rig (a real-time simulated workcell, the
-   station, the REST server in this process; here the camera watchdog at 10 s, so a loaded machine does not fault
-   the station) and its press(): the arm set moving, the e-stop pressed by Station.estop(); answer and halt times
-   (ms), p50 / p95 / max, --trials each.
+3. E-stop and stream latency with and without a recording running: bench/estop.py's rig (a real-time simulated
+   workcell, the station, the REST server in this process; here the camera watchdog at 10 s, so a loaded machine
+   does not fault the station) and its press(): the arm set moving, the e-stop pressed by Station.estop(); answer
+   and halt times (ms), p50 / p95 / max, --trials each. Meanwhile a websocket client in another process (as a
+   browser, bench/stream.py's view: colour with its layers) reads the station's /ws stream and acks every frame:
+   capture-to-client latency (ms) and frames per second over the same presses.
 
     PYTHONPATH=$PWD .venv/bin/python bench/recording.py [--seconds 30] [--trials 15] [--defaults-only] [--no-estop]
     PYTHONPATH=$PWD .venv/bin/python bench/recording.py --lerobot-only [--lerobot-python /work/lerobot-venv/bin/python]
@@ -284,20 +286,23 @@ def estop_rig(tmp: Path, camera_fps: float):
     rig.thread.start()
     wait_for(lambda: rig.server.started, 60, 0.05)
     rig.http = None
+    rig.ws_url = f"ws://127.0.0.1:{port}/ws"
     rig.close = lambda: (setattr(rig.server, "should_exit", True), rig.thread.join(20), rig.cell.close())
     return rig
 
 
-def estop_latency(trials: int, record: bool, camera_fps: float, replay: list) -> tuple[list[float], list[float], int]:
+def estop_latency(trials: int, record: bool, camera_fps: float, replay: list) -> tuple[list[float], list[float], int, dict]:
     """bench/estop.py's press (Station.estop()), the arm moving (its load_idle), with or without a recording running
     (started through the app's library, as POST /api/recordings/start does). The simulated camera of a loaded 2-core
     machine renders a few frames a second, so with `replay` frames a second recorder records a replay station at
-    30 fps in the same process too: the recorder's full load. Returns answers, halts (ms), colour frames recorded."""
+    30 fps in the same process too: the recorder's full load. Returns answers, halts (ms), colour frames recorded,
+    and the stream client's {"latency_ms", "seconds"} over the presses."""
     import contextlib
 
     from estop import moving_presses
+    from stream_client import StreamReader
 
-    answers, halts, frames = [], [], 0
+    answers, halts, frames, stream = [], [], 0, {}
     with tempfile.TemporaryDirectory(prefix="armlab-bench-estop-") as tmp, contextlib.ExitStack() as stack:
         rig = estop_rig(Path(tmp), camera_fps)
         library = rig.app.state.recordings
@@ -307,7 +312,9 @@ def estop_latency(trials: int, record: bool, camera_fps: float, replay: list) ->
                 library.start(rig.station)
                 if replay:
                     full.start(stack.enter_context(ReplayStation(replay, 30.0)))
-            answers, halts, _ = moving_presses(rig, trials)
+            with StreamReader(rig.ws_url) as reader:
+                answers, halts, _ = moving_presses(rig, trials)
+            stream = reader.result
             if record:
                 frames = library.stop()["topics"].get("/camera/color/compressed", 0)
                 if replay:
@@ -315,7 +322,7 @@ def estop_latency(trials: int, record: bool, camera_fps: float, replay: list) ->
         finally:
             full.close()
             rig.close()
-    return answers, halts, frames
+    return answers, halts, frames, stream
 
 
 def lerobot_expected(path: Path, fps: int, block: int = 8) -> dict:
@@ -456,10 +463,13 @@ def main() -> None:
               f"({1000 * peak['cpu_s_per_frame']:.1f} ms CPU per frame with its JPEG encode)", flush=True)
 
     for record in () if args.no_estop else (False, True):
-        answers, halts, recorded = estop_latency(args.trials, record, args.estop_camera_fps, frames)
+        answers, halts, recorded, stream = estop_latency(args.trials, record, args.estop_camera_fps, frames)
         label = f"recording ({recorded} colour frames)" if record else "no recording"
         print(f"e-stop, {label}, {args.trials} presses, camera {args.estop_camera_fps:g} fps (ms): answer {figures(answers)} | "
               f"halt {figures(halts)}", flush=True)
+        if stream.get("latency_ms"):
+            print(f"stream, {label}: {len(stream['latency_ms']) / stream['seconds']:.1f} fps to the client, capture-to-client "
+                  f"latency (ms) {figures(stream['latency_ms'])}", flush=True)
 
 
 if __name__ == "__main__":
