@@ -4,6 +4,8 @@
    (REPLAY_FRAMES of them rendered once, each with its own sensor noise, replayed in a loop at --fps with their
    depth) and an arm moving in a sine at 100 Hz readings (the RX200 model, so the transforms are real); the recorder
    records it for --seconds with the product's config (recording: JPEG quality 80, depth 5 Hz, transforms 30 Hz).
+   Each frame is published as a fresh copy, as a camera writes it into new arrays (ReplayStation._camera; until
+   2026-12-04 the stored frames themselves, read cold from memory by the recorder).
    Figures: the recording's CPU (% of one core; target <= 10 %), MB per minute, sustained write throughput,
    messages per second, and the rates actually recorded (a saturated machine can starve the replay or the sampler,
    and a recording that keeps fewer samples costs less: read the CPU with them).
@@ -108,12 +110,17 @@ class ReplayStation:
         return JointState(self._q(now), np.full(self.model.dof, 0.3 * math.cos(now - self._start_s)), now)
 
     def _camera(self) -> None:
+        """Each frame published as a fresh copy: a camera writes every frame into new arrays just before it publishes
+        it (SimCamera.publish adds its noise into new ones, the threaded cameras copy the driver's buffer), so the
+        recorder reads it from the cache; the stored frames themselves (rendered long ago, 220 MB) would be read from
+        memory, a cost no station has (measured: +0.5 % of one core on the image thread)."""
         from dataclasses import replace
 
         index, next_s = 0, time.monotonic()
         while not self._stop.is_set():
             frame = self._frames[index % len(self._frames)]
-            self.frames.publish(replace(frame, timestamp_s=time.time(), sequence=index))
+            self.frames.publish(replace(frame, color_bgr=frame.color_bgr.copy(), depth_mm=None if frame.depth_mm is None else frame.depth_mm.copy(),
+                                        timestamp_s=time.time(), sequence=index))
             index += 1
             next_s += self._period_s
             self._stop.wait(max(0.0, next_s - time.monotonic()))
