@@ -33,6 +33,7 @@ import cv2
 import numpy as np
 
 from armlab.recording import channels as ch
+from armlab.recording.scaling import scaled
 from armlab.recording.urdf_frames import UrdfFrames, finger_offset_m, joint_positions, station_urdf
 from armlab.station.config import SamplingConfig
 from armlab.station.perception import DEVICE_ERRORS
@@ -305,12 +306,9 @@ class StationSampler:
                 self._log("/camera/depth", self.channels.depth, ch.depth_image(frame_ns, self._scaled(frame.depth_mm, cv2.INTER_NEAREST)), now_ns)
 
     def _scaled(self, image: np.ndarray, interpolation: int) -> np.ndarray:
-        """camera_scale of the image (depth: nearest, so every value is one the camera measured)."""
-        scale = self.config.camera_scale
-        if scale >= 1.0:
-            return image
-        height, width = image.shape[:2]
-        return cv2.resize(image, (max(1, round(width * scale)), max(1, round(height * scale))), interpolation=interpolation)
+        """camera_scale of the image (depth: nearest, so every value is one the camera measured), on this thread
+        (scaling.py: the same pixels as cv2.resize without OpenCV's thread pool)."""
+        return scaled(image, self.config.camera_scale, interpolation)
 
     def _calibration(self, frame: Any, frame_ns: int, now_ns: int) -> None:
         if not self._wanted(self.channels.calibration):
