@@ -1,10 +1,22 @@
 """Recording benchmark (issue 23 item 2): what an MCAP recording costs the station.
 
 1. CPU and size at 30 fps colour + 100 Hz joints: a replay station publishes the simulated camera's own frames
-   (rendered once, replayed at --fps with their depth) and an arm moving in a sine at 100 Hz readings (the RX200
-   model, so the transforms are real); the recorder records it for --seconds with the product's config
-   (recording: JPEG quality 80, depth 5 Hz, transforms 30 Hz). Figures: the recorder threads' CPU (psutil per-thread
-   times, % of one core; target <= 10 %), MB per minute, sustained write throughput, messages per second.
+   (REPLAY_FRAMES of them rendered once, each with its own sensor noise, replayed in a loop at --fps with their
+   depth) and an arm moving in a sine at 100 Hz readings (the RX200 model, so the transforms are real); the recorder
+   records it for --seconds with the product's config (recording: JPEG quality 80, depth 5 Hz, transforms 30 Hz).
+   Each frame is published as a fresh copy, as a camera writes it into new arrays (ReplayStation._camera; until
+   2026-12-04 the stored frames themselves, read cold from memory by the recorder).
+   Figures: the recording's CPU (% of one core; target <= 10 %), MB per minute, sustained write throughput,
+   messages per second, and the rates actually recorded (a saturated machine can starve the replay or the sampler,
+   and a recording that keeps fewer samples costs less: read the CPU with them).
+   The recording's CPU is every thread of the process except the replay station's camera, the ticker and the main
+   thread (psutil per-thread times over the same seconds): the recorder's two threads and the helper threads their
+   work wakes. Until 2026-12-04 it counted the two named threads only, and missed OpenCV's worker thread: a
+   cv2.resize of a 640x360 output is split across OpenCV's pool, whose worker then spins waiting for more work
+   (measured: 2.3 % of one core at 30 fps, as much as the resize itself). The recorder threads' own figure is
+   printed too. And the replay looped 12 frames until then: a 1 MB MCAP chunk of colour alone holds ~36 JPEGs, so
+   zstd found each frame three times over and MB/min (and the compression's CPU) were those of a repeating video,
+   not of a camera.
 2. Peak write throughput: the same messages logged back to back (no rate limit) on one thread: MB/s and colour
    frames/s the encoder and writer keep up with.
 4. LeRobot export (--lerobot; --lerobot-only skips 1-3): a --lerobot-seconds recording of the replay station (its
@@ -13,12 +25,14 @@
    /work/lerobot-venv/bin/python), bench/lerobot_load_check.py loads it with LeRobot's LeRobotDataset and compares every
    frame with the recording (read here by armlab's reader: the joints, gripper and commands newest at or before each
    frame time; the colour frame shown then, as 8x8-px block means).
-3. E-stop latency with and without a recording running: bench/estop.py's rig (a real-time simulated workcell, the
-   station, the REST server in this process; here the camera watchdog at 10 s, so a loaded machine does not fault
-   the station) and its press(): the arm set moving, the e-stop pressed by Station.estop(); answer and halt times
-   (ms), p50 / p95 / max, --trials each.
+3. E-stop and stream latency with and without a recording running: bench/estop.py's rig (a real-time simulated
+   workcell, the station, the REST server in this process; here the camera watchdog at 10 s, so a loaded machine
+   does not fault the station) and its press(): the arm set moving, the e-stop pressed by Station.estop(); answer
+   and halt times (ms), p50 / p95 / max, --trials each. Meanwhile a websocket client in another process (as a
+   browser, bench/stream.py's view: colour with its layers) reads the station's /ws stream and acks every frame:
+   capture-to-client latency (ms) and frames per second over the same presses.
 
-    PYTHONPATH=$PWD .venv/bin/python bench/recording.py [--seconds 30] [--trials 15]
+    PYTHONPATH=$PWD .venv/bin/python bench/recording.py [--seconds 30] [--trials 15] [--defaults-only] [--no-estop]
     PYTHONPATH=$PWD .venv/bin/python bench/recording.py --lerobot-only [--lerobot-python /work/lerobot-venv/bin/python]
 """
 
@@ -96,15 +110,24 @@ class ReplayStation:
         return JointState(self._q(now), np.full(self.model.dof, 0.3 * math.cos(now - self._start_s)), now)
 
     def _camera(self) -> None:
+        """Each frame published as a fresh copy: a camera writes every frame into new arrays just before it publishes
+        it (SimCamera.publish adds its noise into new ones, the threaded cameras copy the driver's buffer), so the
+        recorder reads it from the cache; the stored frames themselves (rendered long ago, 220 MB) would be read from
+        memory, a cost no station has (measured: +0.5 % of one core on the image thread)."""
         from dataclasses import replace
 
         index, next_s = 0, time.monotonic()
         while not self._stop.is_set():
             frame = self._frames[index % len(self._frames)]
-            self.frames.publish(replace(frame, timestamp_s=time.time(), sequence=index))
+            self.frames.publish(replace(frame, color_bgr=frame.color_bgr.copy(), depth_mm=None if frame.depth_mm is None else frame.depth_mm.copy(),
+                                        timestamp_s=time.time(), sequence=index))
             index += 1
             next_s += self._period_s
             self._stop.wait(max(0.0, next_s - time.monotonic()))
+
+    @property
+    def camera_thread_id(self) -> int | None:
+        return self._thread.native_id
 
     def __enter__(self):
         self._thread.start()
@@ -124,10 +147,24 @@ def rendered_frames(count: int) -> list:
         return [cell.capture_next_frame() for _ in range(count)]
 
 
+REPLAY_FRAMES = 48  # 1.6 s at 30 fps: more than any 1 MB chunk holds (~36 640x360 JPEGs), so no chunk repeats a frame
+
+
 def thread_cpu_s(names: set[str]) -> float:
     """CPU seconds (user + system) of this process's threads with those names."""
     ids = {thread.native_id for thread in threading.enumerate() if thread.name in names}
     return sum(t.user_time + t.system_time for t in psutil.Process().threads() if t.id in ids)
+
+
+def cpu_by_thread_s() -> dict[int, float]:
+    """CPU seconds (user + system) of every thread of this process, by native thread id."""
+    return {t.id: t.user_time + t.system_time for t in psutil.Process().threads()}
+
+
+def cpu_except_s(before: dict[int, float], after: dict[int, float], excluded: set[int]) -> float:
+    """CPU seconds between two cpu_by_thread_s() of the threads not in `excluded` (a thread started in between
+    counts from 0)."""
+    return sum(cpu - before.get(tid, 0.0) for tid, cpu in after.items() if tid not in excluded)
 
 
 def cpu_and_size(frames: list, seconds: float, fps: float, **config) -> dict:
@@ -143,15 +180,19 @@ def cpu_and_size(frames: list, seconds: float, fps: float, **config) -> dict:
         idle_cpu_s = (after.user + after.system) - (before.user + before.system)
         info = library.start(station)
         time.sleep(0.5)  # the threads exist; measured from here
-        cpu0, wall0, size0, process0 = thread_cpu_s(names), time.monotonic(), library.active()["size_bytes"], process.cpu_times()
         with Ticker() as ticker:
+            not_recording = {threading.main_thread().native_id, station.camera_thread_id, ticker.thread_id}
+            cpu0, wall0, size0, process0 = thread_cpu_s(names), time.monotonic(), library.active()["size_bytes"], process.cpu_times()
+            threads0 = cpu_by_thread_s()
             time.sleep(seconds)
-        cpu1, wall1, size1, process1 = thread_cpu_s(names), time.monotonic(), library.active()["size_bytes"], process.cpu_times()
+            threads1 = cpu_by_thread_s()
+            cpu1, wall1, size1, process1 = thread_cpu_s(names), time.monotonic(), library.active()["size_bytes"], process.cpu_times()
         ended = library.stop()
         summary = summarize(Path(tmp) / f"{info['id']}.mcap")
     wall = wall1 - wall0
     return {
-        "cpu_percent_of_one_core": 100 * (cpu1 - cpu0) / wall,
+        "cpu_percent_of_one_core": 100 * cpu_except_s(threads0, threads1, not_recording) / wall,
+        "recorder_threads_percent": 100 * (cpu1 - cpu0) / wall,
         "process_percent_added": 100 * ((process1.user + process1.system - process0.user - process0.system) / wall - idle_cpu_s / seconds),
         "mb_per_minute": (size1 - size0) / 1e6 / wall * 60,
         "write_mb_s": (size1 - size0) / 1e6 / wall, "messages_per_s": summary.message_count / summary.duration_s,
@@ -206,6 +247,10 @@ class Ticker:
             self.late_ms.append((now - last - 0.001) * 1000)
             last = now
 
+    @property
+    def thread_id(self) -> int | None:
+        return self._thread.native_id
+
     def __enter__(self):
         self._thread.start()
         return self
@@ -248,20 +293,23 @@ def estop_rig(tmp: Path, camera_fps: float):
     rig.thread.start()
     wait_for(lambda: rig.server.started, 60, 0.05)
     rig.http = None
+    rig.ws_url = f"ws://127.0.0.1:{port}/ws"
     rig.close = lambda: (setattr(rig.server, "should_exit", True), rig.thread.join(20), rig.cell.close())
     return rig
 
 
-def estop_latency(trials: int, record: bool, camera_fps: float, replay: list) -> tuple[list[float], list[float], int]:
+def estop_latency(trials: int, record: bool, camera_fps: float, replay: list) -> tuple[list[float], list[float], int, dict]:
     """bench/estop.py's press (Station.estop()), the arm moving (its load_idle), with or without a recording running
     (started through the app's library, as POST /api/recordings/start does). The simulated camera of a loaded 2-core
     machine renders a few frames a second, so with `replay` frames a second recorder records a replay station at
-    30 fps in the same process too: the recorder's full load. Returns answers, halts (ms), colour frames recorded."""
+    30 fps in the same process too: the recorder's full load. Returns answers, halts (ms), colour frames recorded,
+    and the stream client's {"latency_ms", "seconds"} over the presses."""
     import contextlib
 
     from estop import moving_presses
+    from stream_client import StreamReader
 
-    answers, halts, frames = [], [], 0
+    answers, halts, frames, stream = [], [], 0, {}
     with tempfile.TemporaryDirectory(prefix="armlab-bench-estop-") as tmp, contextlib.ExitStack() as stack:
         rig = estop_rig(Path(tmp), camera_fps)
         library = rig.app.state.recordings
@@ -271,7 +319,9 @@ def estop_latency(trials: int, record: bool, camera_fps: float, replay: list) ->
                 library.start(rig.station)
                 if replay:
                     full.start(stack.enter_context(ReplayStation(replay, 30.0)))
-            answers, halts, _ = moving_presses(rig, trials)
+            with StreamReader(rig.ws_url) as reader:
+                answers, halts, _ = moving_presses(rig, trials)
+            stream = reader.result
             if record:
                 frames = library.stop()["topics"].get("/camera/color/compressed", 0)
                 if replay:
@@ -279,7 +329,7 @@ def estop_latency(trials: int, record: bool, camera_fps: float, replay: list) ->
         finally:
             full.close()
             rig.close()
-    return answers, halts, frames
+    return answers, halts, frames, stream
 
 
 def lerobot_expected(path: Path, fps: int, block: int = 8) -> dict:
@@ -379,6 +429,7 @@ def main() -> None:
     parser.add_argument("--peak-frames", type=int, default=150)
     parser.add_argument("--estop-only", action="store_true", help="only the e-stop comparison")
     parser.add_argument("--no-estop", action="store_true", help="no e-stop comparison")
+    parser.add_argument("--defaults-only", action="store_true", help="part 1 at the config's defaults only (no other cases)")
     parser.add_argument("--estop-camera-fps", type=float, default=30.0, help="the simulated camera's rate in the e-stop rig")
     parser.add_argument("--lerobot", action="store_true", help="also the LeRobot export (part 4)")
     parser.add_argument("--lerobot-only", action="store_true", help="only the LeRobot export (part 4)")
@@ -387,7 +438,7 @@ def main() -> None:
     parser.add_argument("--lerobot-python", default=None, help="a Python with LeRobot: load the export with LeRobotDataset")
     args = parser.parse_args()
     print(f"bench/recording.py on {os.cpu_count()} CPUs (load average {os.getloadavg()[0]:.2f})", flush=True)
-    frames = rendered_frames(12)
+    frames = rendered_frames(REPLAY_FRAMES)
     if frames:
         height, width = frames[0].color_bgr.shape[:2]
         print(f"frames: {width}x{height} colour + depth from the simulated camera, replayed at {args.fps:g} fps; joints at 100 Hz")
@@ -400,14 +451,15 @@ def main() -> None:
     cases = [("the config's defaults", {}), ("colour and joints (no depth)", {"depth_rate_hz": 0.0}),
              ("full size (camera_scale 1)", {"camera_scale": 1.0}),
              ("joints, gripper, transforms only (no camera)", {"camera_rate_hz": 0.0, "depth_rate_hz": 0.0})]
-    for name, config in [] if args.estop_only else cases:
+    for name, config in [] if args.estop_only else cases[:1] if args.defaults_only else cases:
         settings = {**default.model_dump(), **config}
         result = cpu_and_size(frames, args.seconds, args.fps, **config)
         print(f"{name}: camera {settings['camera_rate_hz']:g} fps x{settings['camera_scale']:g} JPEG q{settings['jpeg_quality']}, depth "
               f"{settings['depth_rate_hz']:g} Hz, joints {settings['joint_rate_hz']:g} Hz; {result['duration_s']:.1f} s "
-              f"({'complete' if result['complete'] else 'NOT complete'}): recorder threads {result['cpu_percent_of_one_core']:.1f} % "
-              f"of one core (target <= 10 %), the process {result['process_percent_added']:+.1f} % against the same seconds without "
-              f"recording; {result['mb_per_minute']:.1f} MB/min; sustained write {result['write_mb_s']:.2f} MB/s; "
+              f"({'complete' if result['complete'] else 'NOT complete'}): recording {result['cpu_percent_of_one_core']:.1f} % "
+              f"of one core (target <= 10 %; its two threads {result['recorder_threads_percent']:.1f} %), the process "
+              f"{result['process_percent_added']:+.1f} % against the same seconds without recording; {result['mb_per_minute']:.1f} MB/min; "
+              f"sustained write {result['write_mb_s']:.2f} MB/s; "
               f"{result['messages_per_s']:.0f} messages/s (colour {result['colour_fps']:.1f} fps, depth {result['depth_fps']:.1f} fps, "
               f"joints {result['joint_hz']:.1f} Hz); a 1 ms Python ticker woke late by {result['late_with']} "
               f"(without recording: {result['late_without']})", flush=True)
@@ -418,10 +470,13 @@ def main() -> None:
               f"({1000 * peak['cpu_s_per_frame']:.1f} ms CPU per frame with its JPEG encode)", flush=True)
 
     for record in () if args.no_estop else (False, True):
-        answers, halts, recorded = estop_latency(args.trials, record, args.estop_camera_fps, frames)
+        answers, halts, recorded, stream = estop_latency(args.trials, record, args.estop_camera_fps, frames)
         label = f"recording ({recorded} colour frames)" if record else "no recording"
         print(f"e-stop, {label}, {args.trials} presses, camera {args.estop_camera_fps:g} fps (ms): answer {figures(answers)} | "
               f"halt {figures(halts)}", flush=True)
+        if stream.get("latency_ms"):
+            print(f"stream, {label}: {len(stream['latency_ms']) / stream['seconds']:.1f} fps to the client, capture-to-client "
+                  f"latency (ms) {figures(stream['latency_ms'])}", flush=True)
 
 
 if __name__ == "__main__":

@@ -80,7 +80,7 @@ class Recording:
             self._writer.flush()  # the header, the metadata and the channels are on disk before the first sample
             self._next_flush_s = time.monotonic() + self.config.flush_interval_s
             self._sampler = StationSampler(self.station, self._channels, self.config, housekeeping=self._housekeeping,
-                                           on_failure=lambda reason: self.stop(reason, problem=True))
+                                           on_failure=lambda reason: self.stop(reason, problem=True), batch_joints=True)
             self._sampler.start()
         except BaseException:
             self._writer.close()

@@ -101,6 +101,19 @@ def test_joint_frames_end_at_the_gripper_and_move_with_the_joints(rx200, ur3):
     assert elbow_world[2] < frames[0, 2, 2, 3]  # shoulder forward pitches the elbow down
 
 
+def test_joint_frames_of_one_configuration_equal_the_batch(rx200, ur3):
+    """One configuration takes its own path on urdf_origins arms (every joint's exponential at once): the same
+    frames as the batch path, at every joint."""
+    rng = np.random.default_rng(11)
+    for arm in (rx200, ur3):
+        q = rng.uniform(arm.lower_rad, arm.upper_rad, size=(300, arm.dof))
+        batch = arm.joint_frames(q)
+        single = np.array([arm.joint_frames(one) for one in q])
+        assert single.shape == batch.shape
+        assert np.allclose(single, batch, atol=1e-12, rtol=0.0)
+        assert np.allclose(single[:, -1], arm.fk(q), atol=1e-12)
+
+
 @pytest.mark.parametrize("bad", [[0.0, 0.0, np.nan, 0.0, 0.0], [0.0] * 4, [[0.0] * 6], "abc", [0.0, 0.0, np.inf, 0.0, 0.0]])
 def test_fk_rejects_bad_joint_vectors(rx200, bad):
     with pytest.raises(ValueError):

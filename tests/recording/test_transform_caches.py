@@ -70,3 +70,31 @@ def test_joint_states_equal_the_per_element_build():
     no_velocity = ch.JointStates(timestamp=ch.stamp(5), joints=[
         ch.JointState(name=n, position=float(a), velocity=math.nan) for n, a in zip(names, q)])
     assert ch.joint_states(5, names, q).encode() == no_velocity.encode()
+
+
+TILTED_URDF = """<robot name="t">
+  <link name="a"/><link name="b"/><link name="c"/><link name="d"/><link name="e"/>
+  <joint name="turn" type="revolute"><parent link="a"/><child link="b"/><origin xyz="0.1 0.2 0.3" rpy="0.3 -0.2 1.1"/><axis xyz="0.3 0.4 0.866"/></joint>
+  <joint name="spin" type="continuous"><parent link="b"/><child link="c"/><origin xyz="0 0 0.05"/><axis xyz="1 1 0"/></joint>
+  <joint name="slide" type="prismatic"><parent link="c"/><child link="d"/><origin xyz="0.01 0 0" rpy="0 1.2 0"/><axis xyz="0 0.6 0.8"/></joint>
+  <joint name="bolt" type="fixed"><parent link="d"/><child link="e"/><origin xyz="0 0 0.02" rpy="0.1 0 0"/></joint>
+</robot>"""
+
+
+def test_urdf_transforms_in_one_pass_equal_each_joints_own_motion():
+    """UrdfFrames.transforms computes every moving joint at once: the same matrices as each joint's origin times its
+    own motion (_axis_motion), for revolute, continuous (tilted axes) and prismatic joints."""
+    from armlab.recording.urdf_frames import UrdfFrames, _axis_motion, station_urdf
+
+    rng = np.random.default_rng(4)
+    for urdf in (TILTED_URDF, station_urdf(SimpleNamespace(model=load_arm("rx200")))):
+        frames = UrdfFrames(urdf)
+        for _ in range(50):
+            positions = {joint.name: float(rng.uniform(-3.0, 3.0)) for joint in frames.joints}
+            expected = [(joint.parent, joint.child, joint.origin @ _axis_motion(joint.kind, joint.axis, positions[joint.name]))
+                        for joint in frames.joints]
+            got = frames.transforms(positions)
+            assert [link[:2] for link in got] == [link[:2] for link in expected]
+            for (_, child, T), (_, _, T_expected) in zip(got, expected):
+                assert np.allclose(T, T_expected, atol=1e-12, rtol=0.0), child
+        assert np.allclose(frames.transforms({})[0][2], frames.joints[0].origin)  # a joint not given: at 0
