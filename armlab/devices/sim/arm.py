@@ -81,6 +81,7 @@ class SimArm(SimDevice, Arm):
         self._settle_timeout_s = settle_timeout_s
         self._trajectory: JointTrajectory | None = None
         self._start_s = 0.0
+        self._taken_over: tuple[JointTrajectory, float] | None = None  # the running trajectory a new one replaced, its start
         self._hold_rad: np.ndarray | None = None
         self._torque = True
         self._halt_requested = threading.Event()  # set by stop() without the lock; applied under it
@@ -145,6 +146,8 @@ class SimArm(SimDevice, Arm):
             if not self._torque:
                 raise InvalidInput(f"{self}: torque is off; enable it before commanding motion")
             now_s = self._cell.sim_time_s
+            running = self._trajectory
+            self._taken_over = (running, self._start_s) if running is not None and now_s - self._start_s < running.duration_s else None
             self._trajectory = trajectory
             self._start_s = now_s if start_time_s is None else float(start_time_s)
             # The servos take it at their next control tick, as a servo takes a new goal at its next cycle. Applied
@@ -232,6 +235,15 @@ class SimArm(SimDevice, Arm):
             return
         t = sim_time_s - self._start_s
         position, velocity, accel = sample_trajectory(trajectory, t)
+        if self._taken_over is not None:
+            # A takeover starts inside a segment of the motion it replaces (the station splices the new plan onto the
+            # running samples): until that segment's middle its velocity and acceleration go on as they ran there
+            # (the new trajectory knows only the change of slope after it: the reference jumped by up to a*h/2).
+            if len(trajectory.times_s) >= 3 and t < _middle(trajectory.times_s, 0):
+                running, running_start_s = self._taken_over
+                _, velocity, accel = sample_trajectory(running, sim_time_s - running_start_s)
+            else:
+                self._taken_over = None
         self._cell.apply_arm_reference(position, velocity, accel)
         if t >= trajectory.duration_s:
             error = np.max(np.abs(self._cell.arm_positions() - position))

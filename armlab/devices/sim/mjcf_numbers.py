@@ -23,7 +23,7 @@ def quat_wxyz_from_matrix(R: np.ndarray) -> np.ndarray:
 
 def feed_forward_actuator(joint: str, force_limit_nm: float) -> str:
     """The ideal servo's acceleration feed-forward: a torque motor on the joint whose ctrl the workcell sets to the
-    arm's inertia times the commanded acceleration (SimWorkcell.apply_arm_reference). Without it the position and
+    torque the commanded acceleration takes (SimWorkcell._inverse_dynamics). Without it the position and
     velocity servo reaches a new commanded acceleration only through a tracking error, then overshoots it (14 %
     of every step of the acceleration at the servos' damping, ~1.3-1.7x the limit where a jog or a blend reverses
     it). The joint's actuatorfrcrange caps the servo's total torque as before."""
