@@ -197,9 +197,12 @@ class SimArm(SimDevice, Arm):
     @property
     def reference_rad(self) -> np.ndarray:
         """The position the servos are commanded to hold now (the trajectory's current sample): what the
-        station commanded, even where the physical arm is blocked (by the board, say)."""
+        station commanded, even where the physical arm is blocked (by the board, say). Between control ticks (a
+        command just sent, which the servos take at the next tick) the trajectory's sample at the clock."""
         self._require()
         with self._cell.lock:
+            if self._trajectory is not None and self._torque and not self._halt_requested.is_set():
+                return sample_trajectory(self._trajectory, self._cell.sim_time_s - self._start_s)[0]
             return self._cell.arm_reference()
 
     @property
