@@ -59,7 +59,7 @@ def test_station_starts_on_the_ur3_suction_workcell(tmp_path):
         station, cell = sim_station.station, sim_station.cell
         assert station.model.name == "ur3" and station.model.joint_names == cell.arm.joint_names
         assert type(station.gripper).__name__ == "SuctionGripper" and station.gripper.gripper_type == "suction"
-        assert cell.model.actuator("suction") is not None and cell.model.nu == 6 * 2 + 1  # 6 servo pairs + vacuum
+        assert cell.model.actuator("suction") is not None and cell.model.nu == 6 * 3 + 1  # 6 servos (position, velocity, acceleration feed-forward) + vacuum
         # the station's arm model stands where the simulated arm stands: its FK is the simulated tool point
         assert station.sim.wait_for(lambda: cell.sim_time_s > 0.2, 5.0)
         q = cell.arm.read_joint_state().position_rad

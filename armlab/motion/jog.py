@@ -75,7 +75,15 @@ def plan_jog(
         v_try = v + np.clip(goal - v, -dv_max, dv_max)
         reach = q + v_try * dt + v_try * np.abs(v_try) / (2.0 * accel)
         over = ((v_try > 0) & (reach > high)) | ((v_try < 0) & (reach < low))
-        v = np.where(over, v + np.clip(-v, -dv_max, dv_max), v_try)
+        # Braking for a limit, the joint takes the fastest velocity toward it that can still stop inside it (on the
+        # braking curve), braking no harder than the limit allows: full braking at every sample where the step toward
+        # the goal was over, and the step back toward the goal at the next one, made the acceleration reverse at
+        # every sample (the servos followed that chatter at 1.05x the acceleration limit).
+        room = np.where(v_try > 0, high - q, q - low)
+        on_curve = np.sign(v_try) * accel * (np.sqrt(dt * dt + 2.0 * np.maximum(room, 0.0) / accel) - dt)
+        braked = np.where(v_try > 0, np.maximum(v - dv_max, np.minimum(v_try, on_curve)),
+                          np.minimum(v + dv_max, np.maximum(v_try, on_curve)))
+        v = np.where(over, braked, v_try)
         q = q + v * dt
         t += dt
         positions.append(q.copy())

@@ -18,10 +18,11 @@ from armlab.store import Waypoint
 
 ARM = load_arm("rx200")
 ACCEL = np.asarray(ARM.accel_limit_rad_s2, dtype=float)
-# A legal plan's measured joints overshoot its command through the simulated servos' tracking (a lone trapezoid:
-# 1.14x; a jog, whose acceleration switches sign at once: 1.4x); a move planned from rest while the waist turns at
-# 3 rad/s measured 22x.
-MEASURED_MAX = 1.5
+# A legal plan's measured joints follow its command through the simulated servos' tracking within a few per cent
+# (test_servo_tracking.py; 1.04x at most here): before the servos fed the acceleration forward they overshot it (a lone
+# trapezoid: 1.14x; a jog, whose acceleration switches sign at once: 1.4x; 1.5x was allowed here); a move planned from
+# rest while the waist turns at 3 rad/s measured 22x.
+MEASURED_MAX = 1.05
 STEP_MAX_RAD = 1e-3  # smooth motion changes by ~1e-4 rad from one 4 ms tick to the next
 
 

@@ -20,8 +20,8 @@ from armlab.devices.sim.clutter import realism_world_xml
 from armlab.devices.sim.config import SceneRealismConfig, SimCameraConfig, SimConfig
 from armlab.devices.sim.feeder import FEEDER_PROBE, parked_objects
 from armlab.devices.sim.mjcf_dh import DhArmGeometry
+from armlab.devices.sim.mjcf_numbers import feed_forward_actuator, quat_wxyz_from_matrix
 from armlab.devices.sim.mjcf_numbers import fmt_numbers as _fmt
-from armlab.devices.sim.mjcf_numbers import quat_wxyz_from_matrix
 from armlab.scene import Scene, SceneObject
 from armlab.workcell import Workcell, load_workcell
 
@@ -195,9 +195,10 @@ def _gear_tendons(arm: ArmGeometry) -> str:
 
 
 def _finger_arm_actuators(arm: ArmGeometry, sim: SimConfig) -> str:
-    """Position + velocity servo per joint, a position servo per finger capped at the grasp effort. The real
-    arm's: the firmware's P gain with its PWM (torque) saturating at the stall torque, and the motor's back-EMF
-    damping (the velocity actuator, fed no velocity: the firmware's feed-forward gains are 0)."""
+    """Position + velocity servo per joint (the ideal arm's with its acceleration feed-forward, mjcf_numbers.feed_forward_actuator), a position servo
+    per finger capped at the grasp effort. The real arm's: the firmware's P gain with its PWM (torque) saturating at
+    the stall torque, and the motor's back-EMF damping (the velocity actuator, fed no velocity: the firmware's
+    feed-forward gains are 0)."""
     actuators = []
     real = arm.real
     for i, name in enumerate(arm.joint_names):
@@ -207,6 +208,7 @@ def _finger_arm_actuators(arm: ArmGeometry, sim: SimConfig) -> str:
                 f'ctrlrange="{arm.lower_rad[i]:.9g} {arm.upper_rad[i]:.9g}"/>'
             )
             actuators.append(f'<velocity name="{name}_vel" joint="{name}" kv="{sim.arm.kv[i]}" ctrlrange="-10 10"/>')
+            actuators.append(feed_forward_actuator(name, sim.arm.force_limit_nm[i]))
             continue
         stall = real.stall_torque_nm[i]
         actuators.append(

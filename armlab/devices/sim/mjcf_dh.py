@@ -19,6 +19,7 @@ import numpy as np
 
 from armlab.config import read_config_file, resolve_config_path
 from armlab.devices.sim.config import ArmServoConfig, SimConfig
+from armlab.devices.sim.mjcf_numbers import feed_forward_actuator
 from armlab.devices.sim.mjcf_numbers import fmt_numbers as _fmt
 from armlab.devices.sim.mjcf_numbers import quat_wxyz_from_matrix as _quat
 from armlab.kinematics import load_arm
@@ -196,14 +197,15 @@ def _chain_xml(arm: DhArmGeometry, servo: ArmServoConfig, sim: SimConfig) -> str
 
 
 def _actuators_xml(arm: DhArmGeometry, servo: ArmServoConfig, sim: SimConfig) -> str:
-    """Per joint: a position servo (kp) and a velocity servo (kv) whose reference is capped at the joint's
-    speed limit; the cup's adhesion actuator (ctrl 0 = vented .. 1 = full vacuum)."""
+    """Per joint: a position servo (kp), a velocity servo (kv) whose reference is capped at the joint's
+    speed limit and the acceleration feed-forward (mjcf_numbers.feed_forward_actuator); the cup's adhesion actuator (ctrl 0 = vented .. 1 = full vacuum)."""
     actuators = []
     for i, name in enumerate(arm.joint_names):
         v = arm.velocity_limit_rad_s[i]
         actuators.append(
             f'<position name="{name}_pos" joint="{name}" kp="{servo.kp[i]}" ctrlrange="{arm.lower_rad[i]:.9g} {arm.upper_rad[i]:.9g}"/>'
             f'<velocity name="{name}_vel" joint="{name}" kv="{servo.kv[i]}" ctrlrange="{-v:.9g} {v:.9g}"/>'
+            f'{feed_forward_actuator(name, servo.force_limit_nm[i])}'
         )
     actuators.append(
         f'<adhesion name="{SUCTION_ACTUATOR}" body="{CUP_BODY}" ctrlrange="0 1" gain="{sim.suction.adhesion_force_n}"/>'

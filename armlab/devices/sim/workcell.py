@@ -37,6 +37,7 @@ from armlab.devices.sim.feeder import FeederRuntime, parked_objects
 from armlab.devices.sim.gripper import SimGripper
 from armlab.devices.sim.mjcf import CAMERA_NAME, GRIPPER_SITE, OBJECT_PREFIX, build_model_xml
 from armlab.devices.sim.mjcf_dh import CUP_BODY, LIP_MARGIN_M, LIP_PREFIX, SUCTION_ACTUATOR, DhArmGeometry
+from armlab.devices.sim.mjcf_numbers import FEED_FORWARD_SUFFIX
 from armlab.devices.sim.path import PathRecorder
 from armlab.devices.sim.realism import RealCamera
 from armlab.devices.sim.render import RawImages, RenderThread
@@ -129,6 +130,8 @@ class SimWorkcell(SimClock, SimCameraRig, SimTruth):
         arm_root = model.body("base").id
         pos_act = np.array([model.actuator(f"{n}_pos").id for n in names])
         vel_act = np.array([model.actuator(f"{n}_vel").id for n in names])
+        actuator_names = {model.actuator(k).name for k in range(model.nu)}
+        ff_act = np.array([model.actuator(n + FEED_FORWARD_SUFFIX).id for n in names if n + FEED_FORWARD_SUFFIX in actuator_names], dtype=int)
         object_bodies = {obj.id: model.body(OBJECT_PREFIX + obj.id).id for obj in scene.objects}
         parked = parked_objects(scene.feeder, self._workcell) if scene.feeder is not None else []
         sides = () if self._suction else ("left", "right")
@@ -144,6 +147,7 @@ class SimWorkcell(SimClock, SimCameraRig, SimTruth):
             "_finger_qvel": np.array([model.jnt_dofadr[model.joint(f"{s}_finger").id] for s in sides], dtype=int),
             "_pos_act": pos_act,
             "_vel_act": vel_act,
+            "_ff_act": ff_act,  # the ideal servos' acceleration feed-forward (none on the real arm: its firmware's gains are 0)
             "_finger_act": np.array([model.actuator(f"{s}_finger").id for s in sides], dtype=int),
             "_arm_gains": (model.actuator_gainprm[pos_act, 0].copy(), model.actuator_gainprm[vel_act, 0].copy()),
             "_arm_body_ids": np.flatnonzero((model.body_gravcomp > 0) & (model.body_rootid == arm_root)),
@@ -185,6 +189,8 @@ class SimWorkcell(SimClock, SimCameraRig, SimTruth):
             data.qvel[self._finger_qvel] = previous["finger_qvel"]
             data.ctrl[self._pos_act] = previous["pos_ctrl"]
             data.ctrl[self._vel_act] = previous["vel_ctrl"]
+            if len(self._ff_act) == len(previous["ff_ctrl"]):
+                data.ctrl[self._ff_act] = previous["ff_ctrl"]
             data.ctrl[self._finger_act] = previous["finger_ctrl"]
             if not previous["torque"]:
                 self._apply_torque(model, False)
@@ -222,6 +228,7 @@ class SimWorkcell(SimClock, SimCameraRig, SimTruth):
                 "finger_qvel": data.qvel[self._finger_qvel].copy(),
                 "pos_ctrl": data.ctrl[self._pos_act].copy(),
                 "vel_ctrl": data.ctrl[self._vel_act].copy(),
+                "ff_ctrl": data.ctrl[self._ff_act].copy(),
                 "finger_ctrl": data.ctrl[self._finger_act].copy(),
                 "torque": self._torque,
             }
@@ -273,12 +280,29 @@ class SimWorkcell(SimClock, SimCameraRig, SimTruth):
         left, right = self._data.qvel[self._finger_qvel]
         return float(left), float(right)
 
-    def apply_arm_reference(self, position_rad: np.ndarray, velocity_rad_s: np.ndarray) -> None:
+    def apply_arm_reference(self, position_rad: np.ndarray, velocity_rad_s: np.ndarray, accel_rad_s2: np.ndarray | None = None) -> None:
+        """The servos' references: position, velocity and (the ideal servos) acceleration, fed forward through the
+        arm's rigid-body dynamics (_inverse_dynamics); None: no feed-forward (a hold, a halt)."""
         self._data.ctrl[self._pos_act] = position_rad
         if self._publisher is not None:  # the real firmware: no velocity feed-forward (its velocity actuator is the motor's damping)
             self._commanded_velocity = np.clip(np.asarray(velocity_rad_s, dtype=float), -10.0, 10.0)
             return
         self._data.ctrl[self._vel_act] = np.clip(velocity_rad_s, -10.0, 10.0)
+        if len(self._ff_act):
+            self._data.ctrl[self._ff_act] = self._inverse_dynamics(accel_rad_s2, velocity_rad_s) if accel_rad_s2 is not None else 0.0
+
+    def _inverse_dynamics(self, accel_rad_s2, velocity_rad_s) -> np.ndarray:
+        """The torque (N*m, the arm's joints) that makes the arm follow `accel_rad_s2` at `velocity_rad_s`, from the
+        model, as the ideal servos compensate gravity from it (gravcomp): M(q) a (the joints' coupling included) +
+        the Coriolis and centrifugal terms at the measured state + the joints' viscous friction. The mass-matrix term
+        alone left 1.05x the limit where a joint's acceleration changes while the others move fast (bench seed 0)."""
+        model, data = self._model, self._data
+        vector = np.zeros(model.nv)
+        vector[self._arm_qvel] = accel_rad_s2
+        torque = np.zeros(model.nv)
+        mujoco.mj_mulM(model, data, torque, vector)
+        torque += data.qfrc_bias - data.qfrc_gravcomp
+        return torque[self._arm_qvel] + model.dof_damping[self._arm_qvel] * np.asarray(velocity_rad_s, float)
 
     def apply_finger_reference(self, offset_m: float) -> None:
         self._data.ctrl[self._finger_act] = offset_m
@@ -304,6 +328,7 @@ class SimWorkcell(SimClock, SimCameraRig, SimTruth):
         model.actuator_biasprm[self._pos_act, 1] = -kp
         model.actuator_gainprm[self._vel_act, 0] = kv
         model.actuator_biasprm[self._vel_act, 2] = -kv
+        model.actuator_gainprm[self._ff_act, 0] = 1.0 if enabled else 0.0
         model.body_gravcomp[self._arm_body_ids] = 1.0 if enabled else 0.0
 
     def set_arm_torque(self, enabled: bool) -> None:
