@@ -273,9 +273,17 @@ ARM_OPACITIES = """() => armlab.view3d.program.arms.map((a) => { let o = null;
     a.robot.traverse((n) => { if (n.isMesh && o === null) o = n.material.opacity; }); return o; })"""
 
 
+FOREARM_POINT = """(i) => { const v = armlab.view3d; const arm = v.program.arms[i]; const names = v.armDescription.joint_names;
+    arm.robot.updateMatrixWorld(true);
+    const at = (n) => arm.robot.joints[n].getWorldPosition(arm.robot.position.clone());
+    const mid = at(names[2]).add(at(names[3])).multiplyScalar(0.5);
+    return v.clientPointOf(mid.toArray()); }"""
+
+
 def test_a_programs_waypoints_in_3d_and_the_commanded_arm_during_its_repeat(server, browser):
     """Teach in 3-D (issue 22 item 4): the selected program's waypoints are see-through arms whose grippers are at the
-    waypoints' gripper points (the server's FK, 5 mm); a row chosen in the waypoint table stands out in 3-D; during
+    waypoints' gripper points (the server's FK, 5 mm); a row chosen in the waypoint table stands out in 3-D, and a click
+    on a waypoint's arm in the 3-D view chooses its row in the table (moving nothing); during
     a repeat a second arm shows the commanded joints (the station's), gone once the repeat has ended."""
     ready_idle(server)
     content = json.dumps({"name": "teach-in-3d", "waypoints": [{"joints_rad": q, "gripper": "release"} for q in TEACH_POSES_RAD]})
@@ -295,6 +303,19 @@ def test_a_programs_waypoints_in_3d_and_the_commanded_arm_during_its_repeat(serv
         opacities = page.evaluate(ARM_OPACITIES)
         assert opacities[1] > opacities[0] and opacities[1] > opacities[2], opacities  # the chosen one stands out
         assert page.evaluate("document.querySelector('#program-table tbody tr:nth-child(2)').classList.contains('selected')")
+
+        # the reverse: a click on waypoint 3's arm in the 3-D view (seen from the top, on its forearm between the elbow
+        # and the wrist) chooses row 3 in the table, and that arm stands out
+        page.click("[data-view3d-preset='top']")
+        page.wait_for_function("armlab.view3d.preset === 'top' && !armlab.view3d.dirty", timeout=10_000)
+        page.mouse.click(*page.evaluate(FOREARM_POINT, 2))
+        page.wait_for_function("document.querySelector('#program-table tbody tr:nth-child(3)').classList.contains('selected')",
+                               timeout=10_000)
+        assert page.evaluate("document.querySelectorAll('#program-table tbody tr.selected').length") == 1
+        page.wait_for_function("armlab.view3d.program.selected === 2 && armlab.view3d.program.arms[2].loaded", timeout=10_000)
+        opacities = page.evaluate(ARM_OPACITIES)
+        assert opacities[2] > opacities[0] and opacities[2] > opacities[1], opacities
+        assert server.get("/api/status")["state"] == "idle"  # a choice, not a grab or a move
 
         assert page.evaluate("armlab.view3d.commandedArm") is None
         server.post(f"/api/programs/{program['id']}/repeat", {"cycles": 1, "speed_percent": 30})

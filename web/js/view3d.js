@@ -29,7 +29,8 @@ const BOARD_PLANE = new THREE.Plane(new THREE.Vector3(0, 0, 1), 0); // the board
 
 export class View3D {
   /** root: the panel element (holds a .view3d-canvas-wrap and the controls); serverNowS: the server clock;
-   * onPick(positionM): a click (not a drag) on a detected block (its top's centre) or on the board (z = 0);
+   * onPick(positionM, waypoint): a click (not a drag) on a detected block (its top's centre) or on the board (z = 0,
+   * else null), and the index of the shown program waypoint whose see-through arm it hit (-1: none);
    * onGoal(positionM): the goal marker (view3d_goal.js) was dragged there. */
   constructor({ root, api, prefetched = null, serverNowS = () => Date.now() / 1000, onPick = () => {}, onGoal = () => {} }) {
     this.root = root;
@@ -187,17 +188,24 @@ export class View3D {
       pressed = null;
       if (!start || e.button !== 0 || Math.hypot(e.clientX - start.x, e.clientY - start.y) > PICK_MAX_DRAG_PX) return;
       const positionM = this.pickAt(e.clientX, e.clientY);
-      if (positionM) this.onPick(positionM);
+      const waypoint = this.program?.pickAt(this.rayAt(e.clientX, e.clientY)) ?? -1;
+      if (positionM || waypoint >= 0) this.onPick(positionM, waypoint);
     });
+  }
+
+  /** The ray from the camera through a page point. */
+  rayAt(clientX, clientY) {
+    const r = this.renderer.domElement.getBoundingClientRect();
+    const ndc = new THREE.Vector2(((clientX - r.left) / r.width) * 2 - 1, -((clientY - r.top) / r.height) * 2 + 1);
+    const raycaster = new THREE.Raycaster();
+    raycaster.setFromCamera(ndc, this.camera);
+    return raycaster;
   }
 
   /** The world point (m) under a page point: the top centre of the nearest detected block the ray meets, else
    * where it meets the board (z = 0); null off the board's plane. */
   pickAt(clientX, clientY) {
-    const r = this.renderer.domElement.getBoundingClientRect();
-    const ndc = new THREE.Vector2(((clientX - r.left) / r.width) * 2 - 1, -((clientY - r.top) / r.height) * 2 + 1);
-    const raycaster = new THREE.Raycaster();
-    raycaster.setFromCamera(ndc, this.camera);
+    const raycaster = this.rayAt(clientX, clientY);
     const [hit] = raycaster.intersectObjects(this.detections.group.children, false);
     if (hit) {
       const box = hit.object;
