@@ -313,7 +313,7 @@ class App {
       this.view3dLoading = import("./view3d.js").then(async ({ View3D }) => {
         const view = new View3D({ root: $("view3d-panel"), api: this.api, prefetched, serverNowS: () => this.stream.serverNowS(),
                                   onPick: (positionM, waypoint) => this.picked3d(positionM, waypoint),
-                                  onGoal: (positionM) => this.target.goalMoved(positionM) });
+                                  onGoal: (positionM, angles) => this.target.goalMoved(positionM, angles) });
         if (this.calibrationShown) view.setCalibration(this.calibrationShown);
         $("view3d-panel").hidden = false;
         await view.start();

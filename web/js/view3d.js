@@ -31,7 +31,8 @@ export class View3D {
   /** root: the panel element (holds a .view3d-canvas-wrap and the controls); serverNowS: the server clock;
    * onPick(positionM, waypoint): a click (not a drag) on a detected block (its top's centre) or on the board (z = 0,
    * else null), and the index of the shown program waypoint whose see-through arm it hit (-1: none);
-   * onGoal(positionM): the goal marker (view3d_goal.js) was dragged there. */
+   * onGoal(positionM, angles): the goal marker (view3d_goal.js) was dragged there (angles: {pitchRad, yawRad} after a
+   * turn of its rings, else null). */
   constructor({ root, api, prefetched = null, serverNowS = () => Date.now() / 1000, onPick = () => {}, onGoal = () => {} }) {
     this.root = root;
     this.onPick = onPick;
@@ -99,7 +100,7 @@ export class View3D {
         ? `${description.arm.name}: meshes ${description.arm.meshes.source} (${description.arm.meshes.licence})`
         : `${description.arm.name}: the simulation's shapes`;
     }
-    this.goal = new GoalMarker(this, (positionM) => this.onGoal(positionM));
+    this.goal = new GoalMarker(this, (positionM, angles) => this.onGoal(positionM, angles));
     this.program = new ProgramFigures(this);
     this.bindControls();
     if (this.calibration) this.setCalibration(this.calibration);
@@ -230,7 +231,10 @@ export class View3D {
       box.addEventListener("change", () => this.applyLayers());
     }
     const goalBox = this.root.querySelector("[data-view3d-goal]");
-    goalBox?.addEventListener("change", () => this.goal.show(goalBox.checked ? this.arm?.toolPosition() ?? [0.2, 0.1, 0.1] : null));
+    goalBox?.addEventListener("change", () => this.goal.show(goalBox.checked ? this.arm?.toolPosition() ?? [0.2, 0.1, 0.1] : null,
+      Number.isFinite(this.gripperPose?.pitch_rad) ? { pitchRad: this.gripperPose.pitch_rad, yawRad: this.gripperPose.yaw_rad } : null));
+    const turnBox = this.root.querySelector("[data-view3d-goal-turn]");
+    turnBox?.addEventListener("change", () => this.goal.setTurning(turnBox.checked));
     this.applyLayers();
   }
 
@@ -349,6 +353,7 @@ export class View3D {
   /** Pose the arm, move the path and the blocks to a telemetry message; true if anything drawn changed. */
   applyTelemetry({ status }) {
     let changed = false;
+    this.gripperPose = status.gripper_pose ?? null;
     if (this.arm && Array.isArray(status.joints_rad)) {
       const width = status.gripper?.width_m;
       const last = this.lastDrawn;
