@@ -429,6 +429,32 @@ def test_the_page_without_the_panel_loads_no_three_js(server, browser):
         page.close()
 
 
+PANEL_SIZES = """() => { const v = armlab.view3d; const col = document.querySelector('.view-col').getBoundingClientRect();
+    const panel = v.root.getBoundingClientRect();
+    return { canvas: v.renderer.domElement.height, wrap: v.wrap.clientHeight, col: [col.top, col.bottom],
+             panel: [panel.top, panel.bottom] }; }"""
+
+
+def test_the_panel_expands_to_the_columns_height(server, browser):
+    """At 1600x1000 the panel under the video draws ~250 px; Expand makes it as tall as the view column (the canvas
+    drawn at that size, the panel on screen in the column); pressed again it goes back under the video."""
+    page = _panel_page(browser, server)
+    try:
+        before = page.evaluate(PANEL_SIZES)
+        page.click("[data-view3d-expand]")
+        page.wait_for_function("""() => { const v = armlab.view3d; const col = document.querySelector('.view-col');
+            return v.wrap.clientHeight > 0.8 * col.clientHeight && v.renderer.domElement.height === v.wrap.clientHeight; }""",
+                               timeout=10_000)
+        expanded = page.evaluate(PANEL_SIZES)
+        assert expanded["canvas"] >= 2 * before["canvas"], (before, expanded)
+        assert expanded["col"][0] - 1 <= expanded["panel"][0] and expanded["panel"][1] <= expanded["col"][1] + 1, expanded
+        page.click("[data-view3d-expand]")
+        page.wait_for_function("(h) => armlab.view3d.renderer.domElement.height === h", arg=before["canvas"], timeout=10_000)
+        assert page.errors == []
+    finally:
+        page.close()
+
+
 def test_the_ur3_workcell_shows_its_own_arm(ur3_server, browser):
     ready_idle(ur3_server)
     page = _panel_page(browser, ur3_server)

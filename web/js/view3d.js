@@ -230,12 +230,23 @@ export class View3D {
     for (const box of this.root.querySelectorAll("[data-view3d-layer]")) {
       box.addEventListener("change", () => this.applyLayers());
     }
+    const expand = this.root.querySelector("[data-view3d-expand]");
+    expand?.addEventListener("click", () => this.expand(expand.getAttribute("aria-pressed") !== "true"));
     const goalBox = this.root.querySelector("[data-view3d-goal]");
     goalBox?.addEventListener("change", () => this.goal.show(goalBox.checked ? this.arm?.toolPosition() ?? [0.2, 0.1, 0.1] : null,
       Number.isFinite(this.gripperPose?.pitch_rad) ? { pitchRad: this.gripperPose.pitch_rad, yawRad: this.gripperPose.yaw_rad } : null));
     const turnBox = this.root.querySelector("[data-view3d-goal-turn]");
     turnBox?.addEventListener("change", () => this.goal.setTurning(turnBox.checked));
     this.applyLayers();
+  }
+
+  /** As tall as the view column (scrolled to), or back under the video; the canvas follows (ResizeObserver). */
+  expand(on) {
+    const button = this.root.querySelector("[data-view3d-expand]");
+    button?.setAttribute("aria-pressed", String(on));
+    button?.classList.toggle("on", on);
+    this.root.classList.toggle("expanded", on);
+    if (on) this.root.scrollIntoView({ block: "start" });
   }
 
   layerOn(name) {
