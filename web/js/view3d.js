@@ -2,7 +2,8 @@
 // joints from telemetry, the board with its grid, tags and places, detected blocks (and, in the simulation,
 // ground truth), the calibrated camera's frustum and the gripper's recent path. Orbit / pan / zoom with the
 // mouse, preset views Top, Front, Camera. Geometry comes from GET /api/view3d/scene and the calibration.
-// It renders only when something changed (the arm, the blocks, the view, a layer), so an idle panel costs no frames.
+// It renders only when something changed (the arm, the blocks, the view, a layer), so an idle panel costs no frames,
+// and at most MAX_FPS frames a second.
 
 import * as THREE from "three";
 import { OrbitControls } from "three/addons/controls/OrbitControls.js";
@@ -24,6 +25,10 @@ const TRUTH_POLL_MS = 500;
 const POINTS_POLL_MS = 1000;
 const REFUSED_COLOR = 0xe53935; // the part of the arm a refused plan would crash
 const COMMANDED_COLOR = 0x42a5f5; // the commanded arm during a repeat
+// At most this many 3-D frames a second (a little above telemetry's 30 Hz, so each message still gets its own frame):
+// a continuous orbit asked for one every display frame (60/s), and on a machine without a GPU each software-rendered
+// frame took CPU from the video's decode and from the simulated camera (bench/view3d.py: the video's rate orbiting).
+const MAX_FPS = 36;
 const PICK_MAX_DRAG_PX = 5; // a press and release closer than this is a click (a pick), farther an orbit
 const BOARD_PLANE = new THREE.Plane(new THREE.Vector3(0, 0, 1), 0); // the board's top, z = 0 in the world
 
@@ -44,6 +49,8 @@ export class View3D {
     this.serverNowS = serverNowS;
     this.wrap = root.querySelector(".view3d-canvas-wrap");
     this.dirty = true;
+    this.maxFps = MAX_FPS; // the cap on frames drawn a second (the bench compares it with none: Infinity)
+    this.nextFrameMs = 0; // the earliest time (performance.now) the next frame may be drawn
     this.arm = null; // ArmFigure of the measured arm
     this.workcell = null;
     this.calibration = null;
@@ -388,12 +395,15 @@ export class View3D {
   frame() {
     if (this.root.hidden) return;
     const started = performance.now();
+    const intervalMs = 1000 / this.maxFps;
+    if (started < this.nextFrameMs - 1) return; // the cap: the telemetry and the change wait for the next frame
     const pending = this.pendingTelemetry;
     this.pendingTelemetry = null;
     const moved = pending ? this.applyTelemetry(pending) : false;
     if (!moved && !this.dirty) return; // nothing new: no frame (telemetry repeats itself while the arm is still)
     this.renderer.render(this.scene, this.camera);
     this.dirty = false;
+    this.nextFrameMs = Math.max(this.nextFrameMs, started - intervalMs) + intervalMs; // on average maxFps, not beyond
     const doneMs = performance.now();
     this.stats.frames += 1;
     this.stats.renderMs.push(doneMs - started);
