@@ -6,8 +6,9 @@ to waypoint 1 at a safe speed, and runs the cycle's steps each at its deadline o
 (anchor + cycle × cycle time + the step's offset), so 100 cycles take 100 × one cycle with no drift.
 The job's RunControl (pause, resume, step, speed) is read at every wait: a pause brakes to rest on a
 jerk-limited stop, resume re-plans from where the arm stopped through the waypoints that run had left,
-step goes to the next waypoint only, and a speed change re-plans the rest of the run from the motion
-in progress; each of these re-anchors the deadlines. Progress (cycle, waypoint, time left, speed) is in
+step goes to the next waypoint only (while paused the job offers that step's planner through its RunControl, so the
+step can be planned and shown first and then run exactly as shown: Station.plan_job_step), and a speed change re-plans
+the rest of the run from the motion in progress; each of these re-anchors the deadlines. Progress (cycle, waypoint, time left, speed) is in
 job.extra["repeat"]; commanded and measured joints of the last cycle are kept in the control's trace.
 """
 
@@ -184,6 +185,9 @@ class _Runner:
                            self._limits(self._speed()), None, self.settings, allow_blend=False)
 
     def _move_planner(self, points: list, remaining: list[int], labels: list[int]):
+        """The planner a pause inside a move offers: its next step, to points[remaining[0]] (the lists are not mutated:
+        move() makes new ones, so a request thread may call it while the job waits)."""
+
         def plan():
             label = labels[remaining[0]]
             name = "move home" if label == HOME_LABEL else f"move to waypoint {label + 1}"
