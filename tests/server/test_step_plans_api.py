@@ -5,7 +5,7 @@ trajectory; executing it again, or a plan made before the arm moved, is refused 
 gripper cannot make is refused when planned, and no plan is kept. The same for a repeat (`?plan_only=true` on its
 start) and for the next step of a paused repeat (`POST /api/jobs/step?plan_only=true`: planned while the job waits,
 nothing moves; executed, the servos are sent exactly the step shown and the arm stops at its goal, the job paused at the
-step after; stale once the speed override or the job's controls changed; refused while the job runs or without one)."""
+step after; stale once the speed override changed, the arm was pushed away or the job's controls changed; refused while the job runs or without one)."""
 
 from __future__ import annotations
 
@@ -240,7 +240,7 @@ def test_the_next_step_of_a_paused_repeat_is_planned_then_executed_as_shown(paus
     assert _paused_at_rest(http, cell)["waypoint"] == 2
 
 
-def test_a_next_step_plan_is_stale_once_the_speed_or_the_job_changed(paused_repeat):
+def test_a_next_step_plan_is_stale_once_the_speed_the_arm_or_the_job_changed(paused_repeat):
     cell, http = paused_repeat
     before = _joints(cell)
     plan = _plan_next_step(http).json()
@@ -250,11 +250,31 @@ def test_a_next_step_plan_is_stale_once_the_speed_or_the_job_changed(paused_repe
     assert stale.status_code == 409 and stale.json()["error"]["reason"] == "speed_changed", stale.text
     _still(cell, before)
 
+    # the arm pushed away while the job waits (the simulated servos' hold moved, as a hand would): stale, nothing sent
+    plan = _plan_next_step(http).json()
+    with cell.lock:
+        held = np.asarray(cell.arm_reference(), float).copy()
+        cell.apply_arm_reference(held + np.array([0.15, 0, 0, 0, 0]), np.zeros_like(held))  # 3x the start tolerance
+    try:
+        live.wait_for(lambda: abs(_joints(cell)[0] - held[0] - 0.15) < 0.01, 15, 0.01)
+        stale = http.post(f"/api/plans/{plan['plan_id']}/execute", headers=AUTH)
+        assert stale.status_code == 409 and stale.json()["error"]["reason"] == "arm_moved", stale.text
+        live.wait_sim(cell, 0.5)
+        with cell.lock:  # nothing was sent: the servos still hold where the push left them
+            assert np.abs(np.asarray(cell.arm_reference()) - held - [0.15, 0, 0, 0, 0]).max() < 1e-9
+    finally:
+        with cell.lock:
+            cell.apply_arm_reference(held, np.zeros_like(held))
+    live.wait_for(lambda: np.abs(_joints(cell) - held).max() < 0.005, 15, 0.01)
+    _at_rest(cell)
+
     plan = _plan_next_step(http).json()
     assert http.post("/api/jobs/pause", headers=AUTH).status_code == 200  # the job's controls changed, nothing moved
     stale = http.post(f"/api/plans/{plan['plan_id']}/execute", headers=AUTH)
     assert stale.status_code == 409 and stale.json()["error"]["reason"] == "job_changed", stale.text
-    _still(cell, before)
+    live.wait_sim(cell, 0.5)
+    with cell.lock:  # nothing was sent: the servos hold where they held
+        assert np.abs(np.asarray(cell.arm_reference()) - held).max() < 1e-9
     assert _repeat_status(http)["paused"] is True
 
 
