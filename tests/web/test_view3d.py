@@ -58,7 +58,15 @@ def _drawn_at(page, server, q_rad) -> dict:
     """Move to q_rad, wait for the arm to settle and for the panel to draw the settled telemetry; the panel's
     joints (three.js), tool point and the truth read after it."""
     server.post("/api/arm/joints?wait=true", {"q_rad": q_rad, "moving_time_s": 1.5})
-    status = server.wait_status(lambda s: s["state"] == "idle" and not s["moving"], 20.0, "the arm settled")
+    last = {}
+
+    def settled(s) -> bool:  # idle, not moving, and the joints still from one read to the next (0.1 s apart): the
+        # servos creep on by ~1 mrad after `moving` turns false, and a panel that drew the later telemetry never matched
+        before, last["q"] = last.get("q"), s["joints_rad"]
+        return (s["state"] == "idle" and not s["moving"] and before is not None
+                and max(abs(a - b) for a, b in zip(before, s["joints_rad"])) < 1e-4)
+
+    status = server.wait_status(settled, 20.0, "the arm settled")
     try:
         page.wait_for_function(
             """(q) => { const d = armlab.view3d.lastDrawn; return d && d.joints_rad.length === q.length
