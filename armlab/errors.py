@@ -161,7 +161,7 @@ class PlanNotFound(RefusedByCheck):
 class PlanStale(RefusedByCheck):
     """A motion plan that may no longer be executed (HTTP 409 `stale_plan`): it was executed already, expired, or the
     arm or its world changed since it was made. `reason` is the short word (executed, expired, arm_moved,
-    arm_commanded, halted, scene_changed, calibration_changed, gripper_changed, speed_changed, arm_moving); the
+    arm_commanded, halted, scene_changed, calibration_changed, gripper_changed, speed_changed, arm_moving, job_changed); the
     message says what changed. Nothing moved: plan again."""
 
     def __init__(self, message: str, reason: str) -> None:

@@ -16,7 +16,8 @@ class MovePlan(Wire):
 
     plan_id: str = Field(description="the plan's id, for POST /api/plans/{plan_id}/execute and DELETE /api/plans/{plan_id}")
     command: str = Field(description="the station command it executes as (move_joints, move_to, home, sleep, jog: a jog step; grab, drop: "
-                         "a job of several motions and gripper steps)")
+                         "a job of several motions and gripper steps; repeat: a repeat's motions; step: a paused job's next "
+                         "step)")
     controller: str | None = Field(description="the controller that made it: only it may execute it")
     goal_q_rad: list[float] = Field(description="the goal joints, radians, joint_names order (grab, drop: where the gripper "
                                     "grasps or releases)")

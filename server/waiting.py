@@ -146,6 +146,11 @@ async def until_fingers_still(request: Request, station) -> bool:
                                           on_devices=True)
 
 
+async def until_step_taken(request: Request, taken, timeout_s: float) -> bool:
+    """Await a planned step's end: the paused job waits at its next step again, or ended (job_control.StepTaken)."""
+    return await waiter_of(request).until(request, taken.done, timeout_s, on_devices=False)
+
+
 async def until_job_ended(request: Request, job, timeout_s: float) -> bool:
     """Await the end of a job (its own thread runs it and, on a fast-mode simulation, the physics)."""
     return await waiter_of(request).until(request, lambda: job.done, timeout_s, on_devices=False)

@@ -6,8 +6,9 @@ to waypoint 1 at a safe speed, and runs the cycle's steps each at its deadline o
 (anchor + cycle × cycle time + the step's offset), so 100 cycles take 100 × one cycle with no drift.
 The job's RunControl (pause, resume, step, speed) is read at every wait: a pause brakes to rest on a
 jerk-limited stop, resume re-plans from where the arm stopped through the waypoints that run had left,
-step goes to the next waypoint only, and a speed change re-plans the rest of the run from the motion
-in progress; each of these re-anchors the deadlines. Progress (cycle, waypoint, time left, speed) is in
+step goes to the next waypoint only (while paused the job offers that step's planner through its RunControl, so the
+step can be planned and shown first and then run exactly as shown: Station.plan_job_step), and a speed change re-plans
+the rest of the run from the motion in progress; each of these re-anchors the deadlines. Progress (cycle, waypoint, time left, speed) is in
 job.extra["repeat"]; commanded and measured joints of the last cycle are kept in the control's trace.
 """
 
@@ -160,17 +161,39 @@ class _Runner:
 
     # Moves with pause, step and speed changes -------------------------------------------------------
 
-    def _wait_paused(self) -> str:
-        """Hold still until resumed ("resume") or asked to step ("step")."""
+    def _wait_paused(self, planner=None) -> str:
+        """Hold still until resumed ("resume") or asked to step ("step"). planner() -> (Run or None, name): the step
+        this wait is at, planned as it will run, offered meanwhile for a plan shown before it runs (plan_job_step)."""
         self.phase_before, self.phase = self.phase, "paused"
-        self.report()
-        while True:
-            if self.control.take_step():
-                return "step"
-            if not self.control.paused:
-                return "resume"
-            version = self.control.version
-            self.wait(lambda: self.control.version != version, WAIT_LIMIT_S)
+        self.control.offer_step(planner)
+        try:
+            self.report()
+            while True:
+                if self.control.take_step():
+                    return "step"
+                if not self.control.paused:
+                    return "resume"
+                version = self.control.version
+                self.wait(lambda: self.control.version != version, WAIT_LIMIT_S)
+        finally:
+            self.control.offer_step(None)
+
+    def _step_run(self, points: list, target: int, labels: list[int]) -> Run:
+        """The run a single step makes from where the arm holds to points[target] alone (no blend) at the speed now."""
+        here = self.station.start_position()
+        return checked_run(self.station, np.vstack([here, points[target]]), [-1, labels[target]],
+                           self._limits(self._speed()), None, self.settings, allow_blend=False)
+
+    def _move_planner(self, points: list, remaining: list[int], labels: list[int]):
+        """The planner a pause inside a move offers: its next step, to points[remaining[0]] (the lists are not mutated:
+        move() makes new ones, so a request thread may call it while the job waits)."""
+
+        def plan():
+            label = labels[remaining[0]]
+            name = "move home" if label == HOME_LABEL else f"move to waypoint {label + 1}"
+            return self._step_run(points, remaining[0], labels), name
+
+        return plan
 
     def _brake(self) -> None:
         """Pause: brake the motion in progress to rest on a jerk-limited stop within the limits of the speed it
@@ -241,14 +264,20 @@ class _Runner:
             if self.control.paused or self.control.steps_pending or pending is None:  # None: braked, resumed since
                 action = "resume"
                 if self.control.paused or self.control.steps_pending:
-                    action = self._wait_paused()
+                    action = self._wait_paused(self._move_planner(points, remaining, labels))
                     self.phase = self.phase_before
                 here = self.station.start_position()
                 targets = remaining[:1] if action == "step" else remaining
                 self.run_speed = self._speed()
-                pending, started = checked_run(self.station, np.vstack([here, [points[i] for i in targets]]),
-                                               [-1, *(labels[i] for i in targets)], self._limits(self.run_speed), None,
-                                               self.settings, allow_blend=action != "step"), None
+                planned = self.control.take_planned() if action == "step" else None  # a step's plan shown, executed
+                if planned is not None:
+                    pending, started = planned, None
+                elif action == "step":
+                    pending, started = self._step_run(points, targets[0], labels), None
+                else:
+                    pending, started = checked_run(self.station, np.vstack([here, [points[i] for i in targets]]),
+                                                   [-1, *(labels[i] for i in targets)], self._limits(self.run_speed),
+                                                   None, self.settings), None
                 if action == "step":
                     self._run_to_end(pending, targets, labels)
                     remaining = remaining[1:]
@@ -301,7 +330,8 @@ class _Runner:
         self.wait(lambda: self.clock() >= self.deadline(step) - self.eps, max(0.0, self.deadline(step) - self.clock()) + 5.0)
         disrupted = self.control.version
         if step.kind != "move" and (self.control.paused or self.control.steps_pending):
-            self._wait_paused()  # a step request is used up by this gripper step or dwell
+            name = f"{step.action or step.kind} at waypoint {step.waypoint + 1}"
+            self._wait_paused(lambda: (None, name))  # a step request is used up by this gripper step or dwell
             self.phase = self.phase_before
         if step.kind == "move":
             points = [waypoints[i].joints_rad for i in step.points]

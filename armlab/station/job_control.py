@@ -13,9 +13,13 @@ from __future__ import annotations
 import logging
 import threading
 from collections.abc import Callable
+from dataclasses import dataclass
 from typing import Any
 
-from armlab.errors import CommandRefused, InvalidInput
+import numpy as np
+
+from armlab.devices.arm import JointTrajectory
+from armlab.errors import CommandRefused, InvalidInput, PlanStale
 from armlab.station.jobs import Job, JobContext, start_job_thread
 from armlab.station.perception import DEVICE_ERRORS
 from armlab.station.states import JOB_STATES
@@ -49,6 +53,9 @@ class RunControl:
         self._speed_percent = checked_speed_percent(speed_percent)
         self._paused = False
         self._steps = 0
+        self._offer = None  # while the job waits paused at a step: what that step would run (plan_next_step)
+        self._offers = 0  # how many steps the job has offered so far
+        self._planned = None  # what a planned step handed in for the job to run (its Run; None: plan it then)
         self.version = 0
         self.trace = None  # the job's record of commanded and measured joints (repeat: skills.repeat.CycleTrace)
         self.validate_speed = None  # the job's check of a new speed (raises with the reason), run before it applies
@@ -63,7 +70,7 @@ class RunControl:
 
     def resume(self) -> None:
         with self._lock:
-            self._paused, self._steps = False, 0
+            self._paused, self._steps, self._planned = False, 0, None
             self._bump()
 
     def step(self) -> None:
@@ -71,7 +78,52 @@ class RunControl:
         with self._lock:
             self._steps += 1
             self._paused = True
+            self._planned = None
             self._bump()
+
+    # The next step, planned without moving (issue 22: single-stepping with plan, then execute) ----------------------
+
+    def offer_step(self, planner: Callable[[], tuple] | None) -> None:
+        """The job: it waits paused at a step; planner() -> (the step's Run or None for a gripper step or dwell, its
+        name) plans that step as the job will run it. None: the job goes on (the offer is withdrawn)."""
+        with self._lock:
+            self._offer = planner
+            if planner is not None:
+                self._offers += 1
+
+    @property
+    def offers(self) -> int:
+        with self._lock:
+            return self._offers
+
+    def step_offer(self) -> tuple[Callable[[], tuple], int]:
+        """(the planner of the step the paused job waits at, the control's version then), else PlanStale-like refusal
+        (CommandRefused) when the job is not waiting at a step."""
+        with self._lock:
+            if self._offer is None or self._steps:
+                raise CommandRefused("step", "repeat (the job is not waiting paused at a step: pause it, wait until it "
+                                     "has stopped, then plan its next step)", ["pause", "step", "resume", "cancel"])
+            return self._offer, self.version
+
+    def step_planned(self, run, version: int) -> int:
+        """Execute a planned step: the job runs exactly `run` (None: the gripper step or dwell it waits at) as its next
+        step, then pauses again; PlanStale 'job_changed' when the job went on, was resumed, re-speeded or ended since
+        the plan (its version differs, or it no longer waits at a step). Returns the offers count before the step."""
+        with self._lock:
+            if self._offer is None or self._steps or version != self.version:
+                raise PlanStale("the plan is stale: the job went on (stepped, resumed, changed speed or ended) since the "
+                                "plan was made; plan its next step again", "job_changed")
+            self._steps += 1
+            self._paused = True
+            self._planned = run
+            self._bump()
+            return self._offers
+
+    def take_planned(self):
+        """The job, taking a step: the Run a planned step handed in (once), else None (plan the step now)."""
+        with self._lock:
+            planned, self._planned = self._planned, None
+            return planned
 
     def set_speed(self, speed_percent: float) -> None:
         """Change the speed; InvalidInput (the job's reason, e.g. a waypoint the cycle fails at that speed) leaves it."""
@@ -109,6 +161,19 @@ class RunControl:
             return self._speed_percent
 
 
+@dataclass(frozen=True)
+class StepTaken:
+    """A planned step handed to the paused job (execute_plan's answer for a step plan): done() once the job waits at
+    its next step again or has ended."""
+
+    job: Any
+    control: RunControl
+    offers: int
+
+    def done(self) -> bool:
+        return bool(self.job.done) or self.control.offers > self.offers
+
+
 class JobControls:
     """start_job, cancel_job, current_job; pause_job, resume_job, step_job, set_job_speed: table-checked, the
     controls forwarded to the job's RunControl."""
@@ -137,6 +202,32 @@ class JobControls:
     def step_job(self, source: str | None = None):
         self._run_control("step", source).step()
         return self.current_job()
+
+    def plan_job_step(self, source: str | None = None) -> dict:
+        """The paused job's next step (the next waypoint's move, or the gripper step or dwell it waits at) planned as
+        single-stepping runs it, kept as a plan and returned in its wire form; nothing moves. Execute hands the job
+        exactly that motion (StepTaken); the plan goes stale once the arm or the scene changed, or the job went on."""
+        with self._lock:
+            self._check("step", source)
+            job = self._job
+            control = getattr(job, "control", None)
+        if not isinstance(control, RunControl):
+            raise CommandRefused("step", f"{self.state.value} (the job '{getattr(job, 'name', '')}' has no step)", ["cancel", "estop"])
+
+        def make() -> tuple:
+            planner, version = control.step_offer()
+            run, name = planner()
+            if run is None:  # a gripper step or a dwell: the arm stays where it is
+                trajectory = JointTrajectory(np.zeros(1), np.asarray(self.start_position(), float)[None, :])
+            else:
+                trajectory = run.trajectory
+
+            def start() -> StepTaken:
+                return StepTaken(job, control, control.step_planned(run, version))
+
+            return [trajectory], [name], start
+
+        return self.plan_job("step", make, source)
 
     def set_job_speed(self, speed_percent: float, source: str | None = None):
         """The running repeat's speed: the station's one speed override (speed.py set_speed), refused (CommandRefused)

@@ -6,7 +6,7 @@ import csv
 import io
 from typing import Literal
 
-from fastapi import APIRouter, Request, Response
+from fastapi import APIRouter, Query, Request, Response
 from fastapi.responses import JSONResponse
 from starlette.concurrency import run_in_threadpool
 
@@ -15,6 +15,7 @@ from armlab.skills import program_files
 from server.deps import ControlAuth, StationDep
 from server.errors import ApiError
 from server.models import JobResponse, ProgramId
+from server.plan_models import MovePlan
 from server.program_models import RepeatRequest, SpeedRequest, TraceResponse
 from server.routes.jobs import PLAN_ONLY, WAITED_JOB_OR_PLAN, job_response
 
@@ -53,9 +54,19 @@ def post_resume(station: StationDep, controller: ControlAuth) -> dict:
     return _job(station.resume_job(source=controller))
 
 
-@router.post("/jobs/step", response_model=JobResponse)
-def post_step(station: StationDep, controller: ControlAuth) -> dict:
-    """Paused: go on to the next waypoint (and do what it says), then pause again; running: pause."""
+STEP_PLAN = {200: {"model": JobResponse | MovePlan, "description": "the job; ?plan_only=true: the next step's plan (MovePlan), "
+                   "nothing moves"}}
+
+
+@router.post("/jobs/step", response_model=JobResponse, responses=STEP_PLAN)
+def post_step(station: StationDep, controller: ControlAuth, plan_only: bool = Query(
+        False, description="the paused job's next step (the next waypoint's move, or the gripper step it waits at) "
+        "planned as the step would run, nothing moves: answers the plan (MovePlan) with its id for POST "
+        "/api/plans/{plan_id}/execute, which hands the job exactly that step")) -> dict | JSONResponse:
+    """Paused: go on to the next waypoint (and do what it says), then pause again; running: pause.
+    ?plan_only=true (the job paused at rest): the next step's plan."""
+    if plan_only:
+        return JSONResponse(station.plan_job_step(source=controller), status_code=200)
     return _job(station.step_job(source=controller))
 
 

@@ -101,6 +101,9 @@ def running_server(folder: Path, args: tuple[str, ...] = tuple(SCENE_ARGS)) -> I
     token = secrets.token_urlsafe(16)
     log_path = folder / "serve.log"
     env = dict(os.environ, MUJOCO_GL=os.environ.get("MUJOCO_GL", "egl"))
+    # this checkout's armlab, server and web/ first: the venv's editable install may point at another checkout (a git
+    # worktree sharing the main checkout's .venv served that checkout's page and code)
+    env["PYTHONPATH"] = os.pathsep.join(filter(None, [str(REPO), os.environ.get("PYTHONPATH")]))
     db_path = folder / "armlab.sqlite3"  # a fresh store: no calibration or programs from earlier runs
     with log_path.open("wb") as log:
         process = subprocess.Popen(

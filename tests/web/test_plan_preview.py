@@ -3,10 +3,12 @@ moving (?plan_only=true), draws the see-through goal arm and the gripper's path 
 does not move (ground truth over sim time); Execute runs that plan to the goal (ground truth); Discard drops it
 (the station no longer has it); a plan into the board is refused with the station's reason in place, the arm drawn
 where it would fail with the offending part's links in red, and a plan gone stale because the arm moved is refused at
-Execute with its reason. Real server, real Chromium."""
+Execute with its reason. With "preview before moving" on, click-grab, a jog step and a paused repeat's Step plan first
+and wait for Execute. Real server, real Chromium."""
 
 from __future__ import annotations
 
+import json
 import time
 
 import numpy as np
@@ -221,3 +223,44 @@ def test_with_preview_on_a_jog_step_waits_for_execute_then_steps(page, server):
         assert page.errors == []
     finally:
         page.uncheck("#preview-moves")
+
+
+STEP_PROGRAM_RAD = [[0.4, -0.2, 0.3, 0.6, 0.0], [0.0, 0.1, 0.2, 0.8, 0.3]]
+
+
+def _paused(s) -> bool:
+    repeat = ((s.get("job") or {}).get("extra") or {}).get("repeat") or {}
+    return s["state"] == "repeat" and repeat.get("phase") == "paused" and not s["moving"]
+
+
+def test_with_preview_on_a_paused_repeats_step_waits_for_execute_then_steps(page, server):
+    """Single-stepping a paused repeat with the setting on: Step plans the job's next step (the goal arm and path in 3-D)
+    and nothing moves (ground truth over sim time); Execute runs it: the arm stops at the goal shown (ground truth) and
+    the job waits paused at the step after."""
+    content = json.dumps({"name": "step-preview", "waypoints": [{"joints_rad": q, "gripper": "release"} for q in STEP_PROGRAM_RAD]})
+    program = server.post("/api/programs/import", {"format": "json", "content": content})
+    page.check("#preview-moves")
+    try:
+        server.request("POST", f"/api/programs/{program['id']}/repeat", json={"cycles": 1})
+        server.post("/api/jobs/pause")
+        server.wait_status(_paused, 60.0, "the repeat paused at rest")
+        page.wait_for_function("!document.getElementById('btn-repeat-step').disabled", timeout=30_000)
+        q0, _, t0 = _truth(server)
+        page.click("#btn-repeat-step")
+        assert "nothing moves until Execute" in _result(page, "planned")
+        shown = _shown_plan(page)
+        q1, _, _ = _after_sim_time(server, t0 + 1.0)
+        assert np.abs(q1 - q0).max() < 2e-3, "the arm moved on Step"
+        assert _paused(server.get("/api/status"))
+        page.click("#btn-plan-execute")
+        assert "executing the plan" in _result(page, "sent")
+        server.wait_status(lambda s: _paused(s) and np.abs(np.subtract(s["joints_rad"], q0)).max() > 0.01, 60.0,
+                           "the step to end, paused again")
+        q2, _, _ = _truth(server)
+        assert np.abs(q2 - np.asarray(shown["joints"])).max() < 0.02, (q2, shown["joints"])
+        assert page.errors == []
+    finally:
+        page.uncheck("#preview-moves")
+        server.request("POST", "/api/jobs/cancel")
+        server.wait_status(lambda s: s["state"] == "idle", 60.0, "the repeat cancelled")
+        server.request("DELETE", f"/api/programs/{program['id']}")

@@ -58,7 +58,15 @@ def _drawn_at(page, server, q_rad) -> dict:
     """Move to q_rad, wait for the arm to settle and for the panel to draw the settled telemetry; the panel's
     joints (three.js), tool point and the truth read after it."""
     server.post("/api/arm/joints?wait=true", {"q_rad": q_rad, "moving_time_s": 1.5})
-    status = server.wait_status(lambda s: s["state"] == "idle" and not s["moving"], 20.0, "the arm settled")
+    last = {}
+
+    def settled(s) -> bool:  # idle, not moving, and the joints still from one read to the next (0.1 s apart): the
+        # servos creep on by ~1 mrad after `moving` turns false, and a panel that drew the later telemetry never matched
+        before, last["q"] = last.get("q"), s["joints_rad"]
+        return (s["state"] == "idle" and not s["moving"] and before is not None
+                and max(abs(a - b) for a, b in zip(before, s["joints_rad"])) < 1e-4)
+
+    status = server.wait_status(settled, 20.0, "the arm settled")
     try:
         page.wait_for_function(
             """(q) => { const d = armlab.view3d.lastDrawn; return d && d.joints_rad.length === q.length
@@ -267,15 +275,102 @@ def test_the_goal_marker_shows_the_solution_or_why_there_is_none(server, browser
         page.close()
 
 
+RING_ARC = """([axis, turn]) => { const g = armlab.view3d; const goal = g.goal; const root = goal.rotator.getHelper();
+    root.updateMatrixWorld(true); const gizmo = root.children.find((c) => c.picker);
+    const ring = gizmo.picker.rotate.children.find((c) => c.name === axis);
+    const at = (t) => new ring.position.constructor(0.5 * Math.cos(t), 0.5 * Math.sin(t), 0).applyMatrix4(ring.matrixWorld);
+    // start where the ring is farthest from the other ring's plane (the yaw ring: from the pitch ring's, y = 0)
+    const away = (t) => Math.abs(goal.turn.worldToLocal(at(t))[axis === 'Z' ? 'y' : 'z']);
+    let start = 0; for (let t = 0; t < 2 * Math.PI; t += Math.PI / 36) if (away(t) > away(start)) start = t;
+    return Array.from({ length: 13 }, (_, i) => g.clientPointOf(at(start + (turn * i) / 12).toArray())); }"""
+SOLUTION_JOINTS = """() => { const v = armlab.view3d; const s = v.goal.solution;
+    return s ? v.armDescription.joint_names.map((n) => s.robot.joints[n].angle) : null; }"""
+
+
+def _turn_goal_marker(page, axis: str, turn_rad: float) -> dict:
+    """Drag the goal marker's yaw (Z) or pitch (Y) ring along an arc of turn_rad; the panel's answer once it has one."""
+    page.evaluate("delete document.getElementById('target-result').dataset.state")
+    arc = page.evaluate(RING_ARC, [axis, turn_rad])
+    page.mouse.move(*arc[0])
+    page.mouse.down()
+    for point in arc[1:]:
+        page.mouse.move(*point)
+    page.mouse.up()
+    page.wait_for_function("['checked', 'refused'].includes(document.getElementById('target-result').dataset.state)",
+                           timeout=30_000)
+    return page.evaluate("""() => { const g = armlab.view3d.goal; const r = document.getElementById('target-result');
+        const field = (n) => document.getElementById(`target-${n}`).value;
+        return { state: r.dataset.state, text: r.textContent, pose: { ...g.pose },
+                 fields: ['x', 'y', 'z', 'pitch', 'yaw'].map(field) }; }""")
+
+
+def _check_answer(server, page, shown: dict) -> None:
+    """The panel's pitch and yaw are the marker's; the green arm is the station's own answer for the fields' pose (or
+    there is none and the reason shows)."""
+    pitch_deg, yaw_deg = float(shown["fields"][3]), float(shown["fields"][4])
+    assert abs(pitch_deg - np.degrees(shown["pose"]["pitchRad"])) < 0.06 and abs(yaw_deg - np.degrees(shown["pose"]["yawRad"])) < 0.06, shown
+    body = {"position_m": [float(v) / 1000 for v in shown["fields"][:3]], "pitch_rad": np.radians(pitch_deg),
+            "yaw_rad": np.radians(yaw_deg)}
+    answer = server.request("POST", "/api/arm/pose/check", json=body)
+    solution = page.evaluate(SOLUTION_JOINTS)
+    if shown["state"] == "checked":
+        assert answer.status_code == 200, answer.text
+        assert solution is not None and np.abs(np.subtract(solution, answer.json()["q_rad"])).max() < 1e-3, (solution, answer.text)
+    else:
+        assert answer.status_code == 422 and "no way there" in shown["text"] and solution is None, (shown, answer.text)
+
+
+def test_the_goal_marker_turns_to_a_yaw_and_a_pitch(server, browser):
+    """Acting in 3-D (issue 22 item 3): with *Turn* the goal marker's rings set the gripper's yaw (the ring about the
+    vertical) and pitch (the ring across the arm's plane): a drag of the yaw ring changes the Go to panel's yaw (its
+    pitch stays) and the green arm is the station's solution for that pose; a drag of the pitch ring changes the
+    pitch (the yaw stays), the green arm following or the reason shown. Nothing moves."""
+    ready_idle(server)
+    server.post("/api/arm/joints?wait=true", {"q_rad": [0.3, 0.0, 0.3, 0.9, 0.0], "moving_time_s": 1.5})
+    before = ready_idle(server)
+    page = _panel_page(browser, server)
+    try:
+        page.check("[data-view3d-goal-turn]")
+        page.check("[data-view3d-goal]")
+        page.wait_for_function("armlab.view3d.goal.shown && armlab.view3d.goal.turning", timeout=10_000)
+        start = page.evaluate("({ ...armlab.view3d.goal.pose })")
+        pose = before["gripper_pose"]
+        assert abs(start["pitchRad"] - pose["pitch_rad"]) < 0.01 and abs(start["yawRad"] - pose["yaw_rad"]) < 0.01  # the gripper now
+
+        shown = _turn_goal_marker(page, "Z", 0.6)
+        turned = np.degrees(np.angle(np.exp(1j * (shown["pose"]["yawRad"] - start["yawRad"]))))
+        assert abs(turned) > 5 and abs(shown["pose"]["pitchRad"] - start["pitchRad"]) < 1e-9, (shown, start)
+        assert shown["state"] == "checked", shown  # a yaw at this pitch is the wrist's roll: reachable
+        _check_answer(server, page, shown)
+        yawed = shown["pose"]
+
+        shown = _turn_goal_marker(page, "Y", -0.4)
+        assert abs(shown["pose"]["pitchRad"] - yawed["pitchRad"]) > np.radians(5) and shown["pose"]["yawRad"] == yawed["yawRad"], shown
+        _check_answer(server, page, shown)
+        now = server.get("/api/status")
+        assert now["state"] == "idle" and np.abs(np.subtract(now["joints_rad"], before["joints_rad"])).max() < 2e-3
+        assert page.errors == []
+    finally:
+        page.close()
+
+
 TEACH_POSES_RAD = [[0.4, -0.2, 0.3, 0.6, 0.0], [0.0, 0.1, 0.2, 0.8, 0.3], [-0.4, -0.1, 0.2, 0.7, 0.0]]
 ARM_TOOLS = """() => armlab.view3d.program.arms.map((a) => a.loaded ? a.toolPosition() : null)"""
 ARM_OPACITIES = """() => armlab.view3d.program.arms.map((a) => { let o = null;
     a.robot.traverse((n) => { if (n.isMesh && o === null) o = n.material.opacity; }); return o; })"""
 
 
+FOREARM_POINT = """(i) => { const v = armlab.view3d; const arm = v.program.arms[i]; const names = v.armDescription.joint_names;
+    arm.robot.updateMatrixWorld(true);
+    const at = (n) => arm.robot.joints[n].getWorldPosition(arm.robot.position.clone());
+    const mid = at(names[2]).add(at(names[3])).multiplyScalar(0.5);
+    return v.clientPointOf(mid.toArray()); }"""
+
+
 def test_a_programs_waypoints_in_3d_and_the_commanded_arm_during_its_repeat(server, browser):
     """Teach in 3-D (issue 22 item 4): the selected program's waypoints are see-through arms whose grippers are at the
-    waypoints' gripper points (the server's FK, 5 mm); a row chosen in the waypoint table stands out in 3-D; during
+    waypoints' gripper points (the server's FK, 5 mm); a row chosen in the waypoint table stands out in 3-D, and a click
+    on a waypoint's arm in the 3-D view chooses its row in the table (moving nothing); during
     a repeat a second arm shows the commanded joints (the station's), gone once the repeat has ended."""
     ready_idle(server)
     content = json.dumps({"name": "teach-in-3d", "waypoints": [{"joints_rad": q, "gripper": "release"} for q in TEACH_POSES_RAD]})
@@ -295,6 +390,19 @@ def test_a_programs_waypoints_in_3d_and_the_commanded_arm_during_its_repeat(serv
         opacities = page.evaluate(ARM_OPACITIES)
         assert opacities[1] > opacities[0] and opacities[1] > opacities[2], opacities  # the chosen one stands out
         assert page.evaluate("document.querySelector('#program-table tbody tr:nth-child(2)').classList.contains('selected')")
+
+        # the reverse: a click on waypoint 3's arm in the 3-D view (seen from the top, on its forearm between the elbow
+        # and the wrist) chooses row 3 in the table, and that arm stands out
+        page.click("[data-view3d-preset='top']")
+        page.wait_for_function("armlab.view3d.preset === 'top' && !armlab.view3d.dirty", timeout=10_000)
+        page.mouse.click(*page.evaluate(FOREARM_POINT, 2))
+        page.wait_for_function("document.querySelector('#program-table tbody tr:nth-child(3)').classList.contains('selected')",
+                               timeout=10_000)
+        assert page.evaluate("document.querySelectorAll('#program-table tbody tr.selected').length") == 1
+        page.wait_for_function("armlab.view3d.program.selected === 2 && armlab.view3d.program.arms[2].loaded", timeout=10_000)
+        opacities = page.evaluate(ARM_OPACITIES)
+        assert opacities[2] > opacities[0] and opacities[2] > opacities[1], opacities
+        assert server.get("/api/status")["state"] == "idle"  # a choice, not a grab or a move
 
         assert page.evaluate("armlab.view3d.commandedArm") is None
         server.post(f"/api/programs/{program['id']}/repeat", {"cycles": 1, "speed_percent": 30})
@@ -324,6 +432,32 @@ def test_the_page_without_the_panel_loads_no_three_js(server, browser):
         assert not page.evaluate("document.getElementById('view3d-panel').hidden")
         page.click("#btn-view3d")
         assert page.evaluate("document.getElementById('view3d-panel').hidden")
+        assert page.errors == []
+    finally:
+        page.close()
+
+
+PANEL_SIZES = """() => { const v = armlab.view3d; const col = document.querySelector('.view-col').getBoundingClientRect();
+    const panel = v.root.getBoundingClientRect();
+    return { canvas: v.renderer.domElement.height, wrap: v.wrap.clientHeight, col: [col.top, col.bottom],
+             panel: [panel.top, panel.bottom] }; }"""
+
+
+def test_the_panel_expands_to_the_columns_height(server, browser):
+    """At 1600x1000 the panel under the video draws ~250 px; Expand makes it as tall as the view column (the canvas
+    drawn at that size, the panel on screen in the column); pressed again it goes back under the video."""
+    page = _panel_page(browser, server)
+    try:
+        before = page.evaluate(PANEL_SIZES)
+        page.click("[data-view3d-expand]")
+        page.wait_for_function("""() => { const v = armlab.view3d; const col = document.querySelector('.view-col');
+            return v.wrap.clientHeight > 0.8 * col.clientHeight && v.renderer.domElement.height === v.wrap.clientHeight; }""",
+                               timeout=10_000)
+        expanded = page.evaluate(PANEL_SIZES)
+        assert expanded["canvas"] >= 2 * before["canvas"], (before, expanded)
+        assert expanded["col"][0] - 1 <= expanded["panel"][0] and expanded["panel"][1] <= expanded["col"][1] + 1, expanded
+        page.click("[data-view3d-expand]")
+        page.wait_for_function("(h) => armlab.view3d.renderer.domElement.height === h", arg=before["canvas"], timeout=10_000)
         assert page.errors == []
     finally:
         page.close()

@@ -312,8 +312,8 @@ class App {
       const prefetched = prefetchView3d(this.api);
       this.view3dLoading = import("./view3d.js").then(async ({ View3D }) => {
         const view = new View3D({ root: $("view3d-panel"), api: this.api, prefetched, serverNowS: () => this.stream.serverNowS(),
-                                  onPick: (positionM) => this.picked3d(positionM),
-                                  onGoal: (positionM) => this.target.goalMoved(positionM) });
+                                  onPick: (positionM, waypoint) => this.picked3d(positionM, waypoint),
+                                  onGoal: (positionM, angles) => this.target.goalMoved(positionM, angles) });
         if (this.calibrationShown) view.setCalibration(this.calibrationShown);
         $("view3d-panel").hidden = false;
         await view.start();
@@ -327,10 +327,12 @@ class App {
     this.view3d?.show(button.getAttribute("aria-pressed") === "true");
   }
 
-  /** A click in the 3-D view: in Click-grab / Click-drop mode the same grab or drop as a click on the video. */
-  picked3d(positionM) {
+  /** A click in the 3-D view: in Click-grab / Click-drop mode the same grab or drop as a click on the video; else a
+   * click on a program waypoint's arm chooses its row in the waypoint table. */
+  picked3d(positionM, waypoint = -1) {
     const mode = this.live.mode;
-    if (mode === "grab" || mode === "drop") this.clicks.clickTarget({ mode, positionM });
+    if ((mode === "grab" || mode === "drop") && positionM) this.clicks.clickTarget({ mode, positionM });
+    else if (waypoint >= 0) this.teach.selectWaypoint(waypoint);
     else this.log.toast("info", "3-D view", "choose Click-grab or Click-drop, then click a block or the board here");
   }
 

@@ -1,5 +1,5 @@
 // "Preview before moving" (issue 22): a page setting, kept in this browser, that makes every manual move (click-grab,
-// click-drop, Go, Go to joints, Send joints, Home, Sleep, jog steps, Repeat) plan without moving (?plan_only=true) and wait for Execute
+// click-drop, Go, Go to joints, Send joints, Home, Sleep, jog steps, Repeat, a paused repeat's Step) plan without moving (?plan_only=true) and wait for Execute
 // in the Go to panel (plan_preview.js), the goal arm and path drawn in the 3-D view.
 
 const KEY = "armlab.previewMoves";

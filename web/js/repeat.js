@@ -28,7 +28,9 @@ export class RepeatPanel {
     const on = (id, fn) => $(id).addEventListener("click", fn);
     on("btn-repeat-pause", () => this.run("pause", () => this.api.post("/api/jobs/pause")));
     on("btn-repeat-resume", () => this.run("resume", () => this.api.post("/api/jobs/resume")));
-    on("btn-repeat-step", () => this.run("step", () => this.api.post("/api/jobs/step")));
+    // with "preview before moving" on, Step plans the paused job's next step (shown in 3-D) and waits for Execute
+    on("btn-repeat-step", () => this.moveOrPlan("plan the next step", "/api/jobs/step", undefined,
+      () => this.run("step", () => this.api.post("/api/jobs/step"))));
     on("btn-repeat-stop", () => this.run("stop repeat", () => this.api.cancelJob()));
     const speed = $("repeat-speed");
     speed.addEventListener("input", () => { $("repeat-speed-out").textContent = `${speed.value} %`; });

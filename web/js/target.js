@@ -106,10 +106,15 @@ export class TargetPanel {
     });
   }
 
-  /** The 3-D view's goal marker was dragged to positionM: its x, y, z into the fields (pitch and yaw as typed), then
-   * the station's check of that pose (nothing moves); the solution drawn as the marker's goal arm, or the reason. */
-  async goalMoved(positionM) {
+  /** The 3-D view's goal marker was dragged to positionM: its x, y, z into the fields (pitch and yaw as typed, or
+   * after a turn of its rings angles' {pitchRad, yawRad}), then the station's check of that pose (nothing moves); the
+   * solution drawn as the marker's goal arm, or the reason. */
+  async goalMoved(positionM, angles = null) {
     positionM.forEach((v, i) => { $(`target-${"xyz"[i]}`).value = (v * 1000).toFixed(1); });
+    if (angles) {
+      $("target-pitch").value = (angles.pitchRad / DEG).toFixed(1);
+      $("target-yaw").value = (angles.yawRad / DEG).toFixed(1);
+    }
     const read = this.typedPose();
     const goal = this.view3d()?.goal;
     if (read.message) {

@@ -233,6 +233,21 @@ export class TeachPanel {
     this.onPath(points.length && points.every(Array.isArray) ? { points_m: points, gripper: p.waypoints.map((w) => w.gripper) } : null);
   }
 
+  selectRow(row) {
+    for (const other of row.parentElement.querySelectorAll("tr.selected")) other.classList.remove("selected");
+    row.classList.add("selected");
+    this.onWaypointSelected(Number(row.dataset.index));
+  }
+
+  /** Choose waypoint `index` (0-based) of the program shown (a click on its arm in the 3-D view): its row stands out,
+   * scrolled into view. */
+  selectWaypoint(index) {
+    const row = $("program-table").querySelector(`tbody tr[data-index='${index}']`);
+    if (!row) return;
+    this.selectRow(row);
+    row.scrollIntoView({ block: "nearest" });
+  }
+
   /** A waypoint table; with `program` its cells are editable and rows carry actions. */
   renderTable(table, waypoints, program) {
     const names = this.jointNames.length ? this.jointNames : (waypoints[0]?.joints_rad || []).map((_, i) => `q${i + 1}`);
@@ -242,10 +257,7 @@ export class TeachPanel {
     const body = table.createTBody();
     body.addEventListener("click", (e) => { // a row chosen: it stands out here and in the 3-D view
       const row = e.target.closest("tr[data-index]");
-      if (!row) return;
-      for (const other of body.querySelectorAll("tr.selected")) other.classList.remove("selected");
-      row.classList.add("selected");
-      this.onWaypointSelected(Number(row.dataset.index));
+      if (row) this.selectRow(row);
     });
     waypoints.forEach((w, i) => {
       const tr = body.insertRow();

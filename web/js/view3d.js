@@ -2,7 +2,8 @@
 // joints from telemetry, the board with its grid, tags and places, detected blocks (and, in the simulation,
 // ground truth), the calibrated camera's frustum and the gripper's recent path. Orbit / pan / zoom with the
 // mouse, preset views Top, Front, Camera. Geometry comes from GET /api/view3d/scene and the calibration.
-// It renders only when something changed (the arm, the blocks, the view, a layer), so an idle panel costs no frames.
+// It renders only when something changed (the arm, the blocks, the view, a layer), so an idle panel costs no frames,
+// and at most MAX_FPS frames a second.
 
 import * as THREE from "three";
 import { OrbitControls } from "three/addons/controls/OrbitControls.js";
@@ -24,13 +25,19 @@ const TRUTH_POLL_MS = 500;
 const POINTS_POLL_MS = 1000;
 const REFUSED_COLOR = 0xe53935; // the part of the arm a refused plan would crash
 const COMMANDED_COLOR = 0x42a5f5; // the commanded arm during a repeat
+// At most this many 3-D frames a second (a little above telemetry's 30 Hz, so each message still gets its own frame):
+// a continuous orbit asked for one every display frame (60/s), and on a machine without a GPU each software-rendered
+// frame took CPU from the video's decode and from the simulated camera (bench/view3d.py: the video's rate orbiting).
+const MAX_FPS = 36;
 const PICK_MAX_DRAG_PX = 5; // a press and release closer than this is a click (a pick), farther an orbit
 const BOARD_PLANE = new THREE.Plane(new THREE.Vector3(0, 0, 1), 0); // the board's top, z = 0 in the world
 
 export class View3D {
   /** root: the panel element (holds a .view3d-canvas-wrap and the controls); serverNowS: the server clock;
-   * onPick(positionM): a click (not a drag) on a detected block (its top's centre) or on the board (z = 0);
-   * onGoal(positionM): the goal marker (view3d_goal.js) was dragged there. */
+   * onPick(positionM, waypoint): a click (not a drag) on a detected block (its top's centre) or on the board (z = 0,
+   * else null), and the index of the shown program waypoint whose see-through arm it hit (-1: none);
+   * onGoal(positionM, angles): the goal marker (view3d_goal.js) was dragged there (angles: {pitchRad, yawRad} after a
+   * turn of its rings, else null). */
   constructor({ root, api, prefetched = null, serverNowS = () => Date.now() / 1000, onPick = () => {}, onGoal = () => {} }) {
     this.root = root;
     this.onPick = onPick;
@@ -42,6 +49,8 @@ export class View3D {
     this.serverNowS = serverNowS;
     this.wrap = root.querySelector(".view3d-canvas-wrap");
     this.dirty = true;
+    this.maxFps = MAX_FPS; // the cap on frames drawn a second (the bench compares it with none: Infinity)
+    this.nextFrameMs = 0; // the earliest time (performance.now) the next frame may be drawn
     this.arm = null; // ArmFigure of the measured arm
     this.workcell = null;
     this.calibration = null;
@@ -98,7 +107,7 @@ export class View3D {
         ? `${description.arm.name}: meshes ${description.arm.meshes.source} (${description.arm.meshes.licence})`
         : `${description.arm.name}: the simulation's shapes`;
     }
-    this.goal = new GoalMarker(this, (positionM) => this.onGoal(positionM));
+    this.goal = new GoalMarker(this, (positionM, angles) => this.onGoal(positionM, angles));
     this.program = new ProgramFigures(this);
     this.bindControls();
     if (this.calibration) this.setCalibration(this.calibration);
@@ -187,17 +196,24 @@ export class View3D {
       pressed = null;
       if (!start || e.button !== 0 || Math.hypot(e.clientX - start.x, e.clientY - start.y) > PICK_MAX_DRAG_PX) return;
       const positionM = this.pickAt(e.clientX, e.clientY);
-      if (positionM) this.onPick(positionM);
+      const waypoint = this.program?.pickAt(this.rayAt(e.clientX, e.clientY)) ?? -1;
+      if (positionM || waypoint >= 0) this.onPick(positionM, waypoint);
     });
+  }
+
+  /** The ray from the camera through a page point. */
+  rayAt(clientX, clientY) {
+    const r = this.renderer.domElement.getBoundingClientRect();
+    const ndc = new THREE.Vector2(((clientX - r.left) / r.width) * 2 - 1, -((clientY - r.top) / r.height) * 2 + 1);
+    const raycaster = new THREE.Raycaster();
+    raycaster.setFromCamera(ndc, this.camera);
+    return raycaster;
   }
 
   /** The world point (m) under a page point: the top centre of the nearest detected block the ray meets, else
    * where it meets the board (z = 0); null off the board's plane. */
   pickAt(clientX, clientY) {
-    const r = this.renderer.domElement.getBoundingClientRect();
-    const ndc = new THREE.Vector2(((clientX - r.left) / r.width) * 2 - 1, -((clientY - r.top) / r.height) * 2 + 1);
-    const raycaster = new THREE.Raycaster();
-    raycaster.setFromCamera(ndc, this.camera);
+    const raycaster = this.rayAt(clientX, clientY);
     const [hit] = raycaster.intersectObjects(this.detections.group.children, false);
     if (hit) {
       const box = hit.object;
@@ -221,9 +237,23 @@ export class View3D {
     for (const box of this.root.querySelectorAll("[data-view3d-layer]")) {
       box.addEventListener("change", () => this.applyLayers());
     }
+    const expand = this.root.querySelector("[data-view3d-expand]");
+    expand?.addEventListener("click", () => this.expand(expand.getAttribute("aria-pressed") !== "true"));
     const goalBox = this.root.querySelector("[data-view3d-goal]");
-    goalBox?.addEventListener("change", () => this.goal.show(goalBox.checked ? this.arm?.toolPosition() ?? [0.2, 0.1, 0.1] : null));
+    goalBox?.addEventListener("change", () => this.goal.show(goalBox.checked ? this.arm?.toolPosition() ?? [0.2, 0.1, 0.1] : null,
+      Number.isFinite(this.gripperPose?.pitch_rad) ? { pitchRad: this.gripperPose.pitch_rad, yawRad: this.gripperPose.yaw_rad } : null));
+    const turnBox = this.root.querySelector("[data-view3d-goal-turn]");
+    turnBox?.addEventListener("change", () => this.goal.setTurning(turnBox.checked));
     this.applyLayers();
+  }
+
+  /** As tall as the view column (scrolled to), or back under the video; the canvas follows (ResizeObserver). */
+  expand(on) {
+    const button = this.root.querySelector("[data-view3d-expand]");
+    button?.setAttribute("aria-pressed", String(on));
+    button?.classList.toggle("on", on);
+    this.root.classList.toggle("expanded", on);
+    if (on) this.root.scrollIntoView({ block: "start" });
   }
 
   layerOn(name) {
@@ -341,6 +371,7 @@ export class View3D {
   /** Pose the arm, move the path and the blocks to a telemetry message; true if anything drawn changed. */
   applyTelemetry({ status }) {
     let changed = false;
+    this.gripperPose = status.gripper_pose ?? null;
     if (this.arm && Array.isArray(status.joints_rad)) {
       const width = status.gripper?.width_m;
       const last = this.lastDrawn;
@@ -364,12 +395,15 @@ export class View3D {
   frame() {
     if (this.root.hidden) return;
     const started = performance.now();
+    const intervalMs = 1000 / this.maxFps;
+    if (started < this.nextFrameMs - 1) return; // the cap: the telemetry and the change wait for the next frame
     const pending = this.pendingTelemetry;
     this.pendingTelemetry = null;
     const moved = pending ? this.applyTelemetry(pending) : false;
     if (!moved && !this.dirty) return; // nothing new: no frame (telemetry repeats itself while the arm is still)
     this.renderer.render(this.scene, this.camera);
     this.dirty = false;
+    this.nextFrameMs = Math.max(this.nextFrameMs, started - intervalMs) + intervalMs; // on average maxFps, not beyond
     const doneMs = performance.now();
     this.stats.frames += 1;
     this.stats.renderMs.push(doneMs - started);

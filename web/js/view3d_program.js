@@ -1,5 +1,6 @@
 // Teach in 3-D (issue 22 item 4): the selected program's waypoints as see-through arms along the gripper's path
-// through them (the server's gripper_position_m of each waypoint); the waypoint selected in the table stands out.
+// through them (the server's gripper_position_m of each waypoint); the waypoint selected in the table stands out, and a
+// click on a waypoint's arm (pickAt) chooses its row in the table.
 
 import * as THREE from "three";
 
@@ -37,6 +38,16 @@ export class ProgramFigures {
     const figure = this.view.addArm(style);
     figure.setJoints(waypoint.joints_rad, null);
     return figure;
+  }
+
+  /** The waypoint (0-based index) whose arm the ray (a THREE.Raycaster) meets nearest, else -1. */
+  pickAt(raycaster) {
+    let best = { index: -1, distance: Infinity };
+    this.arms.forEach((figure, index) => {
+      const [hit] = raycaster.intersectObject(figure.robot, true);
+      if (hit && hit.distance < best.distance) best = { index, distance: hit.distance };
+    });
+    return best.index;
   }
 
   /** Waypoint index (0-based) drawn as selected; -1: none. */

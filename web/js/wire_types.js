@@ -457,7 +457,7 @@ export const EVENT_KINDS = Object.freeze(["general", "scene"]);
  * is stale (stale_when).
  * @typedef {Object} MovePlan
  * @property {string} plan_id the plan's id, for POST /api/plans/{plan_id}/execute and DELETE /api/plans/{plan_id}
- * @property {string} command the station command it executes as (move_joints, move_to, home, sleep, jog: a jog step; grab, drop: a job of several motions and gripper steps)
+ * @property {string} command the station command it executes as (move_joints, move_to, home, sleep, jog: a jog step; grab, drop: a job of several motions and gripper steps; repeat: a repeat's motions; step: a paused job's next step)
  * @property {(string|null)} controller the controller that made it: only it may execute it
  * @property {Array<number>} goal_q_rad the goal joints, radians, joint_names order (grab, drop: where the gripper grasps or releases)
  * @property {number} duration_s the trajectory's duration at the speed override it was planned at
