@@ -45,6 +45,15 @@ def back_to_idle(station) -> None:
     live.wait_for(lambda: not station.arm.is_moving(), 10)
 
 
+def at_rest(station, q) -> None:
+    """The station idle (e-stopped and reset if it was not) with the arm at rest at joints q."""
+    if station.state.value != "idle":
+        station.estop()
+        station.reset()
+    station.move_joints(q, wait=True)
+    station.wait_motion(5.0)
+
+
 def still_for(cell, station, duration_s: float, tol_rad: float = HALT_TOL_RAD) -> bool:
     """True if the arm's joints stay within tol_rad of where they are now for duration_s of sim time."""
     q0 = joints(station)

@@ -15,6 +15,7 @@ from armlab.errors import ArmMoving
 from armlab.kinematics import load_arm
 from armlab.motion.measure import motion_figures
 from armlab.store import Waypoint
+from station_helpers import at_rest
 
 ARM = load_arm("rx200")
 ACCEL = np.asarray(ARM.accel_limit_rad_s2, dtype=float)
@@ -25,14 +26,6 @@ ACCEL = np.asarray(ARM.accel_limit_rad_s2, dtype=float)
 MEASURED_MAX = 1.05
 STEP_MAX_RAD = 1e-3  # smooth motion changes by ~1e-4 rad from one 4 ms tick to the next
 
-
-
-def _at_rest(station, q) -> None:
-    if station.state.value != "idle":
-        station.estop()
-        station.reset()
-    station.move_joints(q, wait=True)
-    station.wait_motion(5.0)
 
 
 def _figures(cell, during_s: float):
@@ -49,7 +42,7 @@ def _assert_continuous(figures) -> None:
 
 def test_a_move_sent_while_the_waist_turns_continues_its_motion(fast):
     station, cell = fast
-    _at_rest(station, [-1.5, 0.0, 0.0, 0.0, 0.0])
+    at_rest(station, [-1.5, 0.0, 0.0, 0.0, 0.0])
     station.move_joints([1.5, 0.0, 0.0, 0.0, 0.0])
     cell.step(0.8)  # the waist turns at ~3 rad/s
     assert station.arm.read_joint_state().velocity_rad_s[0] > 2.5
@@ -64,7 +57,7 @@ def test_a_takeover_that_reaches_the_arm_late_continues_the_same_curve(fast, mon
     command. The arm samples the splice at its own clock minus the start the station gave, so the reversal
     stays within the limit (before: the arm started the splice 50 ms late, shifted back, at 9x the limit)."""
     station, cell = fast
-    _at_rest(station, [-1.5, 0.0, 0.0, 0.0, 0.0])
+    at_rest(station, [-1.5, 0.0, 0.0, 0.0, 0.0])
     station.move_joints([1.5, 0.0, 0.0, 0.0, 0.0])
     cell.step(0.8)  # the waist turns at ~3 rad/s
     command_trajectory = cell.arm.command_trajectory
@@ -85,7 +78,7 @@ def test_a_move_from_rest_that_reaches_the_arm_late_is_then_taken_over_continuou
     """A move from rest sent late starts late (from rest nothing jumps) and the station follows the arm's start:
     a takeover planned from it then continues the curve the arm really runs."""
     station, cell = fast
-    _at_rest(station, [-1.5, 0.0, 0.0, 0.0, 0.0])
+    at_rest(station, [-1.5, 0.0, 0.0, 0.0, 0.0])
     command_trajectory = cell.arm.command_trajectory
 
     def late(*args, **kwargs):
@@ -107,7 +100,7 @@ def test_a_takeover_whose_start_check_reads_the_arm_late_is_not_refused(fast, mo
     batch): the arm is that much further along the same curve, which is no jump (before: 422 'the trajectory starts
     0.12 rad from where waist is', seen over HTTP under CPU hogs)."""
     station, cell = fast
-    _at_rest(station, [-1.5, 0.0, 0.0, 0.0, 0.0])
+    at_rest(station, [-1.5, 0.0, 0.0, 0.0, 0.0])
     station.move_joints([1.5, 0.0, 0.0, 0.0, 0.0])
     cell.step(0.8)  # the waist turns at ~3 rad/s
     joints_rad = station.joints_rad
@@ -126,7 +119,7 @@ def test_a_takeover_whose_start_check_reads_the_arm_late_is_not_refused(fast, mo
 
 def test_moves_and_jogs_take_over_one_another_continuously(fast):
     station, cell = fast
-    _at_rest(station, [0.0, -0.3, 0.3, 0.5, 0.0])
+    at_rest(station, [0.0, -0.3, 0.3, 0.5, 0.0])
     cell.start_joint_recording()
     station.move_joints([1.2, 0.2, 0.1, 0.9, 1.0])
     cell.step(0.3)
@@ -143,7 +136,7 @@ def test_moves_and_jogs_take_over_one_another_continuously(fast):
 
 def test_a_job_started_while_the_arm_moves_brakes_it_first(fast):
     station, cell = fast
-    _at_rest(station, [-2.5, 0.0, 0.0, 0.0, 0.0])
+    at_rest(station, [-2.5, 0.0, 0.0, 0.0, 0.0])
     program = station.store.save_program("after a move", [Waypoint((0.0, -0.3, 0.3, 0.9, 0.0), "release"),
                                                           Waypoint((0.4, 0.0, 0.3, 1.0, 0.0), "release")])
     station.move_joints([2.5, 0.0, 0.0, 0.0, 0.0])
@@ -163,7 +156,7 @@ def test_a_job_started_while_the_arm_moves_brakes_it_first(fast):
 
 def test_a_jobs_trajectory_that_does_not_continue_the_motion_is_refused(fast):
     station, cell = fast
-    _at_rest(station, [-1.2, 0.0, 0.0, 0.0, 0.0])
+    at_rest(station, [-1.2, 0.0, 0.0, 0.0, 0.0])
     refused = []
 
     def line(q, delta, duration_s):  # constant velocity from q, 100 samples per second
@@ -193,7 +186,7 @@ def test_a_replacement_the_trajectory_library_cannot_plan_is_refused_and_the_mot
     from armlab.motion.blend import Limits, plan_run
 
     station, cell = fast
-    _at_rest(station, [-1.0, 0.0, 0.0, 0.0, 0.0])
+    at_rest(station, [-1.0, 0.0, 0.0, 0.0, 0.0])
     outcome = {}
 
     def job(ctx):
@@ -220,7 +213,7 @@ def test_a_burst_of_moves_plans_only_the_newest(fast, monkeypatch):
     and those a newer one replaces before their turn are refused unplanned (409): the planner's CPU went to ~40
     plans, each at once replaced, and starved status and the physics (bench/estop.py)."""
     station, _ = fast
-    _at_rest(station, [0.0, 0.0, 0.0, 0.0, 0.0])
+    at_rest(station, [0.0, 0.0, 0.0, 0.0, 0.0])
     held, planned, entered, outcomes = threading.Event(), [], [], {}
     send_replacing, plan_move, plan_move_from = station._send_replacing, station.plan_move, station.plan_move_from
 

@@ -14,18 +14,11 @@ import pytest
 
 from armlab.kinematics import load_arm
 from armlab.motion.measure import motion_figures
+from station_helpers import at_rest
 
 ARM = load_arm("rx200")
 ACCEL = np.asarray(ARM.accel_limit_rad_s2, dtype=float)
 MEASURED_MAX = 1.05
-
-
-def _at_rest(station, q) -> None:
-    if station.state.value != "idle":
-        station.estop()
-        station.reset()
-    station.move_joints(q, wait=True)
-    station.wait_motion(5.0)
 
 
 def _ratios(cell, during_s: float) -> tuple[float, float]:
@@ -37,7 +30,7 @@ def _ratios(cell, during_s: float) -> tuple[float, float]:
 def test_a_lone_fastest_move_is_followed_within_the_acceleration_limit(fast, goal_waist_rad):
     """Before: 1.14x (the trapezoid), 1.33x (the triangle, whose acceleration reverses at once at its apex)."""
     station, cell = fast
-    _at_rest(station, [-1.5, 0.0, 0.0, 0.0, 0.0])
+    at_rest(station, [-1.5, 0.0, 0.0, 0.0, 0.0])
     cell.start_joint_recording()
     station.move_joints([goal_waist_rad, 0.0, 0.0, 0.0, 0.0])
     # (the command is not checked here: the triangle's reads 1.009-1.012x depending on the phase of the control ticks,
@@ -49,7 +42,7 @@ def test_a_lone_fastest_move_is_followed_within_the_acceleration_limit(fast, goa
 def test_a_move_that_replaces_one_at_speed_is_followed_within_the_acceleration_limit(fast):
     """The reversal of issue 18 item 1 (the waist at ~3 rad/s), sent between two control ticks. Before: 1.11x."""
     station, cell = fast
-    _at_rest(station, [-1.5, 0.0, 0.0, 0.0, 0.0])
+    at_rest(station, [-1.5, 0.0, 0.0, 0.0, 0.0])
     station.move_joints([1.5, 0.0, 0.0, 0.0, 0.0])
     cell.step(0.802)  # the waist turns at ~3 rad/s; half a control period past a tick
     cell.start_joint_recording()
@@ -63,7 +56,7 @@ def test_a_jog_and_its_release_are_followed_within_the_acceleration_limit(fast):
     """A hold-to-run jog at the top jog speed: its velocity steps once per sample (no jerk limit), then it brakes.
     Before: 1.11x."""
     station, cell = fast
-    _at_rest(station, [-1.0, 0.0, 0.0, 0.0, 0.0])
+    at_rest(station, [-1.0, 0.0, 0.0, 0.0, 0.0])
     top = station.motion_config.jog_max_speed_rad_s
     cell.start_joint_recording()
     station.jog([top, 0.0, 0.0, 0.0, 0.0], source="pad")
