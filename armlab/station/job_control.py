@@ -76,10 +76,14 @@ class RunControl:
     def step(self) -> None:
         """While paused: go on to the next waypoint (and do what it says), then pause again. Running: pause there."""
         with self._lock:
-            self._steps += 1
-            self._paused = True
-            self._planned = None
-            self._bump()
+            self._take_step(None)
+
+    def _take_step(self, planned) -> None:
+        """One more step to go, then pause; planned: the Run the step runs (None: the job plans it). Under the lock."""
+        self._steps += 1
+        self._paused = True
+        self._planned = planned
+        self._bump()
 
     # The next step, planned without moving (issue 22: single-stepping with plan, then execute) ----------------------
 
@@ -97,8 +101,8 @@ class RunControl:
             return self._offers
 
     def step_offer(self) -> tuple[Callable[[], tuple], int]:
-        """(the planner of the step the paused job waits at, the control's version then), else PlanStale-like refusal
-        (CommandRefused) when the job is not waiting at a step."""
+        """(the planner of the step the paused job waits at, the control's version then); CommandRefused when the job
+        is not waiting at a step."""
         with self._lock:
             if self._offer is None or self._steps:
                 raise CommandRefused("step", "repeat (the job is not waiting paused at a step: pause it, wait until it "
@@ -113,10 +117,7 @@ class RunControl:
             if self._offer is None or self._steps or version != self.version:
                 raise PlanStale("the plan is stale: the job went on (stepped, resumed, changed speed or ended) since the "
                                 "plan was made; plan its next step again", "job_changed")
-            self._steps += 1
-            self._paused = True
-            self._planned = run
-            self._bump()
+            self._take_step(run)
             return self._offers
 
     def take_planned(self):
@@ -178,7 +179,9 @@ class JobControls:
     """start_job, cancel_job, current_job; pause_job, resume_job, step_job, set_job_speed: table-checked, the
     controls forwarded to the job's RunControl."""
 
-    def _run_control(self, command: str, source: str | None) -> RunControl:
+    def _run_control(self, command: str, source: str | None, transition: bool = True) -> RunControl:
+        """The running job's RunControl once `command` is allowed (CommandRefused: not allowed, or a job without
+        controls); transition=False for a command that changes nothing (a plan)."""
         with self._lock:
             self._check(command, source)
             job = self._job
@@ -186,7 +189,8 @@ class JobControls:
             if not isinstance(control, RunControl):
                 state = self._effective_state().value
                 raise CommandRefused(command, f"{state} (the job '{getattr(job, 'name', '')}' has no {command})", ["cancel", "estop"])
-            self._transition(command, source=source)  # repeat stays repeat; a free lease goes to `source`
+            if transition:
+                self._transition(command, source=source)  # repeat stays repeat; a free lease goes to `source`
         return control
 
     def pause_job(self, source: str | None = None):
@@ -207,12 +211,8 @@ class JobControls:
         """The paused job's next step (the next waypoint's move, or the gripper step or dwell it waits at) planned as
         single-stepping runs it, kept as a plan and returned in its wire form; nothing moves. Execute hands the job
         exactly that motion (StepTaken); the plan goes stale once the arm or the scene changed, or the job went on."""
-        with self._lock:
-            self._check("step", source)
-            job = self._job
-            control = getattr(job, "control", None)
-        if not isinstance(control, RunControl):
-            raise CommandRefused("step", f"{self.state.value} (the job '{getattr(job, 'name', '')}' has no step)", ["cancel", "estop"])
+        control = self._run_control("step", source, transition=False)
+        job = self.current_job()
 
         def make() -> tuple:
             planner, version = control.step_offer()
