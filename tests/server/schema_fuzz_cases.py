@@ -107,7 +107,10 @@ def _shard(loaded, spec: str | None):
     if not 0 <= index < count:
         raise ValueError(f"ARMLAB_FUZZ_SHARD={spec!r}: want i/n with 0 <= i < n")
     labels = [result.ok().label for result in loaded.get_all_operations()]
-    return loaded.include(name=labels[index::count]), count
+    # exclude, not include: the config's [[operations]] entry gives the schema an include-everything filter, and
+    # includes are alternatives (any one admits an operation), so an include here would admit every operation.
+    others = [label for position, label in enumerate(labels) if position % count != index]
+    return loaded.exclude(name=others), count
 
 
 schema, SHARDS = _shard(_load_schema(), os.environ.get("ARMLAB_FUZZ_SHARD"))
