@@ -32,6 +32,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from armlab.errors import InvalidInput
+from armlab.kinematics.rotations import rotation_about
 
 GRAVITY_M_S2 = 9.81
 MIN_POSES = 12
@@ -90,13 +91,6 @@ def gravity_torques(model, q_rad) -> np.ndarray:
     return torques[0] if single else torques
 
 
-def _rotations(axes: np.ndarray, angles: np.ndarray) -> np.ndarray:
-    """(N, 3, 3) rotations by angles (N,) about the unit axis (3,) (Rodrigues)."""
-    K = np.array([[0, -axes[2], axes[1]], [axes[2], 0, -axes[0]], [-axes[1], axes[0], 0]])
-    s, c = np.sin(angles)[:, None, None], np.cos(angles)[:, None, None]
-    return np.eye(3) + s * K + (1.0 - c) * (K @ K)
-
-
 def chain_fk(model, q_rad, length_delta_m=None) -> np.ndarray:
     """World pose(s) of the gripper point from the URDF origins (each one's length changed by length_delta_m,
     (dof+1,), along its own direction) and the pox axes: model.fk's pose when the deltas are zero."""
@@ -112,7 +106,7 @@ def chain_fk(model, q_rad, length_delta_m=None) -> np.ndarray:
     position = np.zeros((len(batch), 3))
     for k in range(model.dof):
         position = position + rotation @ origins[k]
-        rotation = rotation @ _rotations(axes[k], batch[:, k])
+        rotation = rotation @ rotation_about(axes[k], batch[:, k])
     position = position + rotation @ origins[-1]
     T = np.broadcast_to(np.eye(4), (len(batch), 4, 4)).copy()
     T[:, :3, :3] = rotation @ np.asarray(model.config.pox.M, float)[:3, :3]

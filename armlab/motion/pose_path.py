@@ -36,19 +36,6 @@ def top_down_rotation(yaw_rad: float) -> np.ndarray:
     return np.stack([x_axis, y_axis, np.cross(x_axis, y_axis)], axis=1)
 
 
-def rotation_about(axis, angle_rad: float) -> np.ndarray:
-    """Rotation matrix of angle_rad about the unit vector `axis` (Rodrigues)."""
-    k = np.asarray(axis, float) / np.linalg.norm(axis)
-    K = np.array([[0.0, -k[2], k[1]], [k[2], 0.0, -k[0]], [-k[1], k[0], 0.0]])
-    return np.eye(3) + math.sin(angle_rad) * K + (1.0 - math.cos(angle_rad)) * (K @ K)
-
-
-def rotation_angle_rad(R_a, R_b) -> float:
-    """Angle of the rotation taking R_a to R_b (0 .. π)."""
-    cosine = (float(np.trace(np.asarray(R_a, float).T @ np.asarray(R_b, float))) - 1.0) / 2.0
-    return math.acos(max(-1.0, min(1.0, cosine)))
-
-
 def solve_pose_path(arm, q_start, poses: np.ndarray, label: str) -> np.ndarray:
     """ik_pose of each world pose (N, 4, 4), the first row replaced by q_start; DiscontinuousPath if
     the joints would jump (IK changed branch), Unreachable (from the model) if a pose has no solution."""

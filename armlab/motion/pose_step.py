@@ -14,8 +14,9 @@ import numpy as np
 
 from armlab.devices.arm import JointTrajectory
 from armlab.errors import InvalidInput
+from armlab.kinematics.rotations import rotation_about, rotation_angle_rad
 from armlab.motion.errors import DiscontinuousPath, StepRefused
-from armlab.motion.pose_path import plan_pose_path, rotation_about, rotation_angle_rad
+from armlab.motion.pose_path import plan_pose_path
 from armlab.motion.trajectory import minimum_time
 
 LINEAR_AXES = ("x", "y", "z")

@@ -12,6 +12,8 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from armlab.errors import InvalidInput
+from armlab.kinematics.rotations import quat_wxyz_from_yaw as quat_from_yaw
+from armlab.kinematics.rotations import yaw_from_quat_wxyz as yaw_from_quat
 from armlab.workcell import DEFAULT_WORKCELL, Workcell, load_workcell
 from armlab.workcell.objects import DISTRACTOR_SHAPES
 
@@ -35,17 +37,6 @@ def workcell_name(workcell: Workcell | str | None) -> str:
 def object_dimensions_m(obj_type: str, size: str | None, workcell: Workcell | str | None = None) -> tuple[float, float, float]:
     """(extent_x, extent_y, height) of an object in its body frame, metres (default workcell if None)."""
     return as_workcell(workcell).object_dimensions_m(obj_type, size)
-
-
-def quat_from_yaw(yaw_rad: float) -> tuple[float, float, float, float]:
-    """Quaternion (w, x, y, z) of a rotation by yaw_rad about world z."""
-    return (math.cos(yaw_rad / 2.0), 0.0, 0.0, math.sin(yaw_rad / 2.0))
-
-
-def yaw_from_quat(quat_wxyz) -> float:
-    """Heading of the body x axis projected on the board, radians in (-pi, pi]."""
-    w, x, y, z = (float(v) for v in quat_wxyz)
-    return math.atan2(2.0 * (w * z + x * y), 1.0 - 2.0 * (y * y + z * z))
 
 
 WORKCELL_BOUND_M = 5.0  # |coordinate| of anything placed in a scene

@@ -22,6 +22,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from armlab.errors import InvalidInput
+from armlab.kinematics.rotations import rotation_taking
 
 
 class BoardPlaneError(InvalidInput):
@@ -201,15 +202,7 @@ def depth_correction(plane: BoardPlane, T_world_camera: np.ndarray, centre_xy_m)
     cx, cy = float(centre_xy_m[0]), float(centre_xy_m[1])
     z0 = -(d + n_w[0] * cx + n_w[1] * cy) / n_w[2]  # the depth plane's height at the centre
     tilt = math.acos(min(1.0, float(n_w[2])))
-    # Rotation taking n_w to +z (Rodrigues about n_w x z).
-    axis = np.cross(n_w, [0.0, 0.0, 1.0])
-    s = np.linalg.norm(axis)
-    if s < 1e-12:
-        R = np.eye(3)
-    else:
-        k = axis / s
-        Kx = np.array([[0, -k[2], k[1]], [k[2], 0, -k[0]], [-k[1], k[0], 0]])
-        R = np.eye(3) + math.sin(tilt) * Kx + (1 - math.cos(tilt)) * Kx @ Kx
+    R = rotation_taking(n_w, [0.0, 0.0, 1.0])
     p0 = np.array([cx, cy, z0])
     T = np.eye(4)
     T[:3, :3] = R

@@ -8,8 +8,8 @@ import numpy as np
 
 from armlab.devices.sim.checkerboard import BODY_NAME as CHECKERBOARD
 from armlab.devices.sim.checkerboard import PARKED_POSITION_M, checked_pose
-from armlab.devices.sim.config import rotation_from_rotvec
-from armlab.devices.sim.mjcf import CAMERA_NAME, quat_wxyz_from_matrix
+from armlab.devices.sim.mjcf import CAMERA_NAME
+from armlab.kinematics.rotations import quat_wxyz_from_matrix, rotation_from_rotvec
 
 
 class SimCameraRig:

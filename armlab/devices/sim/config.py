@@ -14,6 +14,7 @@ from armlab.config import StrictModel, load_config, resolve_config_path
 from armlab.devices.camera import Intrinsics
 from armlab.devices.finger_gripper import FingerGripperConfig
 from armlab.devices.sim.arm_realism import ArmRealismConfig
+from armlab.kinematics.rotations import rotation_from_rotvec
 
 Positive = Annotated[float, Field(gt=0.0)]
 NonNegative = Annotated[float, Field(ge=0.0)]
@@ -319,16 +320,6 @@ def nominal_T_world_camera(mount: MountConfig) -> np.ndarray:
     T[:3, :3] = np.column_stack([x_axis, y_axis, z_axis])
     T[:3, 3] = mount.position_m
     return T
-
-
-def rotation_from_rotvec(rotvec: np.ndarray) -> np.ndarray:
-    """Rodrigues' formula: the rotation matrix of a rotation vector (radians)."""
-    angle = float(np.linalg.norm(rotvec))
-    if angle < 1e-12:
-        return np.eye(3)
-    kx, ky, kz = np.asarray(rotvec, dtype=float) / angle
-    K = np.array([[0.0, -kz, ky], [kz, 0.0, -kx], [-ky, kx, 0.0]])
-    return np.eye(3) + math.sin(angle) * K + (1.0 - math.cos(angle)) * (K @ K)
 
 
 def draw_pose_error(rng: np.random.Generator, error: PoseErrorConfig) -> np.ndarray:

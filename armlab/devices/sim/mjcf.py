@@ -20,8 +20,9 @@ from armlab.devices.sim.clutter import realism_world_xml
 from armlab.devices.sim.config import SceneRealismConfig, SimCameraConfig, SimConfig
 from armlab.devices.sim.feeder import FEEDER_PROBE, parked_objects
 from armlab.devices.sim.mjcf_dh import DhArmGeometry
-from armlab.devices.sim.mjcf_numbers import feed_forward_actuator, quat_wxyz_from_matrix
+from armlab.devices.sim.mjcf_numbers import feed_forward_actuator
 from armlab.devices.sim.mjcf_numbers import fmt_numbers as _fmt
+from armlab.kinematics.rotations import quat_wxyz_from_matrix
 from armlab.scene import Scene, SceneObject
 from armlab.workcell import Workcell, load_workcell
 

@@ -21,8 +21,8 @@ from armlab.config import read_config_file, resolve_config_path
 from armlab.devices.sim.config import ArmServoConfig, SimConfig
 from armlab.devices.sim.mjcf_numbers import feed_forward_actuator
 from armlab.devices.sim.mjcf_numbers import fmt_numbers as _fmt
-from armlab.devices.sim.mjcf_numbers import quat_wxyz_from_matrix as _quat
 from armlab.kinematics import load_arm
+from armlab.kinematics.rotations import quat_wxyz_from_matrix as _quat
 
 GRIPPER_SITE = "gripper_point"  # same name as the RX200 model's (armlab.devices.sim.mjcf)
 CUP_BODY = "suction_cup"

@@ -12,15 +12,6 @@ def fmt_numbers(values) -> str:
     return " ".join(f"{float(v):.9g}" for v in np.ravel(values))
 
 
-def quat_wxyz_from_matrix(R: np.ndarray) -> np.ndarray:
-    """Unit quaternion (w, x, y, z) of a rotation matrix."""
-    import mujoco
-
-    quat = np.zeros(4)
-    mujoco.mju_mat2Quat(quat, np.ascontiguousarray(R, dtype=float).ravel())
-    return quat
-
-
 def feed_forward_actuator(joint: str, force_limit_nm: float) -> str:
     """The ideal servo's acceleration feed-forward: a torque motor on the joint whose ctrl the workcell sets to the
     torque the commanded acceleration takes (SimWorkcell._inverse_dynamics). Without it the position and

@@ -15,9 +15,9 @@ from armlab.devices.sim.config import (
     draw_pose_error,
     load_camera_config,
     nominal_T_world_camera,
-    rotation_from_rotvec,
 )
 from armlab.errors import ConfigError
+from armlab.kinematics.rotations import rotation_from_rotvec
 
 
 def write_variant(tmp_path, name, edit):
