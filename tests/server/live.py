@@ -86,11 +86,11 @@ def start_serve_process(token: str, db_path, config_path, *extra_args: str) -> t
     return process, base
 
 
-def start_cell(seed: int = 0, camera_fps: float = TEST_CAMERA_FPS):
-    """A real-time SimWorkcell (camera at camera_fps), started."""
+def start_cell(seed: int = 0, camera_fps: float = TEST_CAMERA_FPS, time_scale: float = 1.0):
+    """A real-time SimWorkcell (camera at camera_fps, physics at time_scale simulated seconds a wall second), started."""
     from armlab.devices.sim import SimWorkcell, SimWorkcellConfig
 
-    cell = SimWorkcell(SimWorkcellConfig(realtime=True, seed=seed, camera_fps=camera_fps))
+    cell = SimWorkcell(SimWorkcellConfig(realtime=True, seed=seed, camera_fps=camera_fps, time_scale=time_scale))
     cell.start()
     return cell
 
@@ -129,13 +129,13 @@ def station_server(cell, db_path, token: str, **app_options):
         yield url
 
 
-def module_fixtures(seed: int, token: str, **app_options):
+def module_fixtures(seed: int, token: str, time_scale: float = 1.0, **app_options):
     """The module-scoped `cell` (a started real-time simulation) and `url` (a real server on it) fixtures of a
     test module: `cell, url = live.module_fixtures(seed=3, token=TOKEN)`."""
 
     @pytest.fixture(scope="module")
     def cell():
-        started = start_cell(seed)
+        started = start_cell(seed, time_scale=time_scale)
         yield started
         started.close()
 

@@ -102,9 +102,10 @@ class SimClock:
         wall0 = time.monotonic()
         sim0 = self.sim_time_s
         timestep = self._model.opt.timestep
+        scale = float(self.config.time_scale)
         while not self._stop_event.is_set():
             with self.lock:
-                target = sim0 + (time.monotonic() - wall0)
+                target = sim0 + scale * (time.monotonic() - wall0)
                 steps = 0
                 while self._data.time < target and steps < int(MAX_CATCH_UP_S / timestep):
                     self._step_once()

@@ -38,6 +38,9 @@ class SimWorkcellConfig(StrictModel):
     """How to run the simulation. realtime=False is the deterministic fast mode for tests/evaluations."""
 
     realtime: bool = False
+    # Real time only: simulated seconds per wall-clock second (the physics thread's pace). 1 for the product; the
+    # tests' long real-time runs (whole jobs over HTTP) take 2-3, as a fast machine would run ahead of the clock.
+    time_scale: Annotated[float, Field(ge=0.1, le=10.0)] = 1.0
     seed: int = 0
     camera_pose_error: bool = True
     arm_rig_error: bool = True  # realism real: the arm's seeded joint offsets, link lengths and base pose (False: nominal)

@@ -185,6 +185,17 @@ def test_truth_has_the_documented_structure(cell):
     assert set(truth["gripper"]) >= {"left_contacts", "right_contacts", "holding_id", "width_m"}
 
 
+def test_a_time_scale_runs_the_real_time_physics_ahead_of_the_wall_clock_at_its_pace():
+    """time_scale 3: three simulated seconds a wall second (the tests' whole-job runs), never more."""
+    with SimWorkcell(SimWorkcellConfig(realtime=True, seed=0, camera_fps=5.0, time_scale=3.0)) as sim:
+        wall0, sim0 = time.monotonic(), sim.sim_time_s
+        _sim_wait(sim, 1.5, timeout_s=30.0)
+        factor = (sim.sim_time_s - sim0) / (time.monotonic() - wall0)
+        assert 1.1 < factor < 3.1, factor  # ahead of the wall clock, never past its pace; loose below for a busy CI
+    with pytest.raises(ValueError):
+        SimWorkcellConfig(realtime=True, time_scale=0.0)
+
+
 def test_realtime_mode_paces_physics_to_the_wall_clock_and_streams_frames():
     config = SimWorkcellConfig(realtime=True, seed=0, camera_fps=15.0)
     threads_before = set(threading.enumerate())
