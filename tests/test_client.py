@@ -16,7 +16,7 @@ from armlab.client import InterbotixManipulatorXS, StationClient, StationError, 
 TOKEN = "client-token"
 
 
-cell, url = live.module_fixtures(seed=2, token=TOKEN)
+cell, url = live.module_fixtures(seed=2, token=TOKEN, time_scale=live.FAST_TIME_SCALE)
 
 
 @pytest.fixture()

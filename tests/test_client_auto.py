@@ -16,7 +16,7 @@ TOKEN = "client-auto-token"
 ONE_BLOCK = [{"id": "r", "type": "block", "color": "red", "size": "large", "position_m": [0.08, 0.24, 0.019], "yaw_rad": 0.3}]
 
 
-cell, url = live.module_fixtures(seed=4, token=TOKEN)
+cell, url = live.module_fixtures(seed=4, token=TOKEN, time_scale=live.FAST_TIME_SCALE)
 
 
 @pytest.fixture()

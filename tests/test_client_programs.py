@@ -14,7 +14,7 @@ from armlab.client import StationClient, StationError  # noqa: E402
 
 TOKEN = "client-programs-token"
 
-cell, url = live.module_fixtures(seed=4, token=TOKEN)
+cell, url = live.module_fixtures(seed=4, token=TOKEN, time_scale=live.FAST_TIME_SCALE)
 
 
 @pytest.fixture()

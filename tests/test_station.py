@@ -28,7 +28,7 @@ HALT_TOL_RAD = 5e-3
 
 @pytest.fixture(scope="module")
 def cell():
-    cell = live.start_cell(seed=3)
+    cell = live.start_cell(seed=3, time_scale=live.FAST_TIME_SCALE)
     yield cell
     cell.close()
 

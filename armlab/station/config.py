@@ -22,6 +22,7 @@ class SimStartConfig(StrictModel):
     scene_seed: int = 0
     camera_fps: float = Field(30.0, gt=0.0, le=120.0)
     realism: Literal["real", "camera", "ideal"] | None = None  # None: config/sim.yaml `realism` (`armlab serve --realism`)
+    time_scale: float = Field(1.0, ge=0.1, le=10.0)  # simulated seconds a wall second (1: real time; tests run whole jobs faster)
 
 
 class SamplingConfig(StrictModel):

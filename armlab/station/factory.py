@@ -46,7 +46,7 @@ def make_sim_station(config: StationConfig | None = None, db_path: str | Path | 
 
     config = config or StationConfig()
     cell = SimWorkcell(SimWorkcellConfig(realtime=True, seed=config.sim.seed, camera_fps=config.sim.camera_fps,
-                                         workcell=config.workcell, realism=config.sim.realism))
+                                         workcell=config.workcell, realism=config.sim.realism, time_scale=config.sim.time_scale))
     cell.start()
     try:
         if config.sim.event:

@@ -35,6 +35,10 @@ def free_port() -> int:
 # station's perception rate (perception_rate_hz 5), so every detection, calibration and camera-moved check sees the
 # frames it would see at 30 fps; tests of the frame clock itself choose their own rate (test_sim_workcell, test_camera_contract).
 TEST_CAMERA_FPS = 10.0
+# Simulated seconds a wall second for modules whose tests wait on whole jobs and motions (the product runs at 1; a
+# scaled clock is still the real physics, the servos at their control period): tests of the pace itself, of wall-clock
+# deadlines (hold-to-run, heartbeats, watchdogs) and of e-stop timing keep the real-time pace.
+FAST_TIME_SCALE = 3.0
 TEST_CAMERA_TIMEOUT_S = 10.0
 
 

@@ -21,7 +21,7 @@ HALT_TOL_RAD = 5e-3
 
 @pytest.fixture(scope="module")
 def cell():
-    cell = live.start_cell(seed=5)
+    cell = live.start_cell(seed=5, time_scale=live.FAST_TIME_SCALE)
     yield cell
     cell.close()
 

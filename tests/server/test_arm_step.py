@@ -17,7 +17,7 @@ TOKEN = "step-token"
 PAGE = {"Authorization": f"Bearer {TOKEN}", "X-Armlab-Controller": "pad"}
 ARM = load_arm("rx200")
 
-cell, url = live.module_fixtures(seed=19, token=TOKEN)
+cell, url = live.module_fixtures(seed=19, token=TOKEN, time_scale=live.FAST_TIME_SCALE)
 
 
 def gripper(cell) -> tuple[np.ndarray, np.ndarray]:

@@ -21,7 +21,7 @@ RUN_TIMEOUT_S = 240.0  # wall seconds for a ~35 s simulated run on a busy machin
 SCENE_SEED = 3  # pick_sort L1: three large cubes R, G, B in y > 0
 
 
-TIME_SCALE = 3.0  # simulated seconds a wall second: whole jobs run here (the real-time pace is tested in tests/devices/sim)
+TIME_SCALE = live.FAST_TIME_SCALE
 cell, url = live.module_fixtures(seed=7, token=TOKEN, time_scale=TIME_SCALE)
 
 

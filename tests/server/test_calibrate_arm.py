@@ -19,7 +19,7 @@ pytestmark = pytest.mark.slow
 def url(tmp_path_factory):
     from armlab.devices.sim import SimWorkcell, SimWorkcellConfig
 
-    cell = SimWorkcell(SimWorkcellConfig(realtime=True, seed=3, realism="real"))
+    cell = SimWorkcell(SimWorkcellConfig(realtime=True, seed=3, realism="real", time_scale=live.FAST_TIME_SCALE))
     cell.start()
     try:
         with live.station_server(cell, tmp_path_factory.mktemp("station") / "station.sqlite3", TOKEN) as base_url:

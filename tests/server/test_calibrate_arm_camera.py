@@ -12,7 +12,7 @@ import live
 TOKEN = "arm-camera-token"
 AUTH = {"Authorization": f"Bearer {TOKEN}"}
 
-cell, url = live.module_fixtures(seed=4, token=TOKEN)
+cell, url = live.module_fixtures(seed=4, token=TOKEN, time_scale=live.FAST_TIME_SCALE)
 
 
 def test_the_route_calibrates_from_the_arm_and_keeps_the_tag_calibration(cell, url):

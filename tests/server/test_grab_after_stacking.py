@@ -31,7 +31,7 @@ def served(tmp_path_factory):
     built = {}
 
     def factory():
-        built["sim"] = make_sim_station(StationConfig(), tmp_path_factory.mktemp("stack") / "db.sqlite3")
+        built["sim"] = make_sim_station(StationConfig(sim={"time_scale": live.FAST_TIME_SCALE}), tmp_path_factory.mktemp("stack") / "db.sqlite3")
         return built["sim"]
 
     with live.serve(create_app(station_factory=factory, token=TOKEN)) as url:

@@ -24,7 +24,7 @@ STACK_XY = (0.10, 0.25)
 GAP_M = 0.057  # the distance from the stack's centre to the clicked empty board
 MOVED_TOL_M = 0.003
 
-cell, url = live.module_fixtures(seed=21, token=TOKEN)
+cell, url = live.module_fixtures(seed=21, token=TOKEN, time_scale=live.FAST_TIME_SCALE)
 
 
 def _stack() -> dict:

@@ -34,7 +34,8 @@ def station_url(request, tmp_path_factory):
     built = {}
 
     def factory():
-        built["sim"] = make_sim_station(StationConfig(workcell=request.param), tmp_path_factory.mktemp("jog") / "db.sqlite3")
+        built["sim"] = make_sim_station(StationConfig(workcell=request.param, sim={"time_scale": live.FAST_TIME_SCALE}),
+                                        tmp_path_factory.mktemp("jog") / "db.sqlite3")
         return built["sim"]
 
     with live.serve(create_app(station_factory=factory, token=TOKEN)) as url:

@@ -26,7 +26,7 @@ EDGE_M = WORKCELL.block_edge_m("large")
 ARM = load_arm("rx200")
 FAR_Q = [0.8, 0.3, 0.2, 0.4, 0.5]
 
-cell, url = live.module_fixtures(seed=29, token=TOKEN)
+cell, url = live.module_fixtures(seed=29, token=TOKEN, time_scale=live.FAST_TIME_SCALE)
 
 
 @pytest.fixture(scope="module")

@@ -24,7 +24,7 @@ START_RAD = [0.3, 0.0, 0.3, 0.9, 0.0]
 ARM = load_arm("rx200")
 GRIPPER_GEOMS = {"fingers": {"left_finger_link", "right_finger_link", "left_pad", "right_pad"}, "palm": {"palm"}}
 
-cell, url = live.module_fixtures(seed=29, token=TOKEN)
+cell, url = live.module_fixtures(seed=29, token=TOKEN, time_scale=live.FAST_TIME_SCALE)
 
 
 @pytest.fixture()

@@ -16,7 +16,7 @@ AUTH = {"Authorization": f"Bearer {TOKEN}"}
 BINARY = {**AUTH, "Content-Type": "application/octet-stream"}
 PICK = [(list(POSE_A), "release"), (list(POSE_B), "release"), (list(POSE_B), "grasp"), (list(POSE_C), "grasp")]
 
-cell, url = live.module_fixtures(seed=5, token=TOKEN)
+cell, url = live.module_fixtures(seed=5, token=TOKEN, time_scale=live.FAST_TIME_SCALE)
 
 
 @pytest.fixture()

@@ -24,7 +24,7 @@ POSE_B = [-0.3, 0.0, 0.3, 0.5, 0.2]
 POSE_C = [0.0, -0.2, 0.1, 0.6, 0.0]
 WAIT_S = 0.5
 
-cell, url = live.module_fixtures(seed=23, token=TOKEN)
+cell, url = live.module_fixtures(seed=23, token=TOKEN, time_scale=live.FAST_TIME_SCALE)
 
 
 @pytest.fixture()

@@ -24,7 +24,7 @@ POSE_C = [0.0, -0.2, 0.1, 0.6, 0.0]
 
 @pytest.fixture(scope="module")
 def cell():
-    cell = live.start_cell(seed=3)
+    cell = live.start_cell(seed=3, time_scale=live.FAST_TIME_SCALE)
     yield cell
     cell.close()
 

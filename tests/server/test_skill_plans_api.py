@@ -32,7 +32,8 @@ def station_url(tmp_path_factory):
     built = {}
 
     def factory():
-        built["sim"] = make_sim_station(StationConfig(workcell="rx200_armlab"), tmp_path_factory.mktemp("plans") / "db.sqlite3")
+        built["sim"] = make_sim_station(StationConfig(workcell="rx200_armlab", sim={"time_scale": live.FAST_TIME_SCALE}),
+                                        tmp_path_factory.mktemp("plans") / "db.sqlite3")
         return built["sim"]
 
     with live.serve(create_app(station_factory=factory, token=TOKEN)) as url:

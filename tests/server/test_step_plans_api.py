@@ -24,7 +24,7 @@ ARM = load_arm("rx200")
 STEP_M = 0.03
 
 
-cell, url = live.module_fixtures(seed=5, token=TOKEN)
+cell, url = live.module_fixtures(seed=5, token=TOKEN, time_scale=live.FAST_TIME_SCALE)
 
 
 @pytest.fixture(scope="module")
