@@ -42,9 +42,10 @@ FAST_TIME_SCALE = 3.0
 TEST_CAMERA_TIMEOUT_S = 10.0
 
 
-def serve_config(folder) -> str:
-    """A copy of config/station.yaml in `folder` with the simulated camera at TEST_CAMERA_FPS, for the tests'
-    `armlab serve --config` subprocesses (same reason as above); returns its path."""
+def serve_config(folder, time_scale: float = 1.0) -> str:
+    """A copy of config/station.yaml in `folder` with the simulated camera at TEST_CAMERA_FPS (and the physics at
+    time_scale, see FAST_TIME_SCALE), for the tests' `armlab serve --config` subprocesses (same reason as above);
+    returns its path."""
     from pathlib import Path
 
     import yaml
@@ -52,7 +53,7 @@ def serve_config(folder) -> str:
     from armlab.config import config_dir
 
     config = yaml.safe_load((config_dir() / "station.yaml").read_text())
-    config["sim"] = {**config.get("sim", {}), "camera_fps": TEST_CAMERA_FPS}
+    config["sim"] = {**config.get("sim", {}), "camera_fps": TEST_CAMERA_FPS, "time_scale": time_scale}
     # A loaded machine can starve the simulated camera's render thread for seconds; the product's 2 s watchdog is
     # for real cameras (a shared test server faulted mid-test at load 13); the camera-loss tests set their own.
     config["camera_timeout_s"] = TEST_CAMERA_TIMEOUT_S

@@ -92,12 +92,12 @@ class Server:
 
 
 @contextlib.contextmanager
-def running_server(folder: Path, args: tuple[str, ...] = tuple(SCENE_ARGS)) -> Iterator[Server]:
+def running_server(folder: Path, args: tuple[str, ...] = tuple(SCENE_ARGS), time_scale: float = 1.0) -> Iterator[Server]:
     """A fresh `armlab serve` (its own port, token and SQLite file in `folder`; config/station.yaml with the
     tests' camera, live.serve_config) until the block ends; args: the scene and workcell options (default: the RX200
-    workcell with SCENE_ARGS)."""
+    workcell with SCENE_ARGS); time_scale: the simulation's pace (live.FAST_TIME_SCALE for whole jobs)."""
     port = live.free_port()
-    config_path = live.serve_config(folder)  # the tests' camera rate and watchdog, as for the HTTP tests' servers
+    config_path = live.serve_config(folder, time_scale)  # the tests' camera rate and watchdog, as for the HTTP tests' servers
     token = secrets.token_urlsafe(16)
     log_path = folder / "serve.log"
     env = dict(os.environ, MUJOCO_GL=os.environ.get("MUJOCO_GL", "egl"))
@@ -197,8 +197,9 @@ def pytest_runtest_teardown(item, nextitem):
 
 @pytest.fixture(scope="module")
 def ur3_server(tmp_path_factory) -> Iterator[Server]:
-    """`armlab serve --workcell ur3_suction` (the UR3 with its suction cup) for one test module."""
-    with running_server(tmp_path_factory.mktemp("ur3"), ("--workcell", "ur3_suction", "--seed", "1")) as srv:
+    """`armlab serve --workcell ur3_suction` (the UR3 with its suction cup) for one test module, at the fast pace (its
+    tests run jobs and jog steps; none times a hold-to-run or a heartbeat)."""
+    with running_server(tmp_path_factory.mktemp("ur3"), ("--workcell", "ur3_suction", "--seed", "1"), live.FAST_TIME_SCALE) as srv:
         yield srv
 
 
