@@ -264,9 +264,33 @@ class Ticker:
         return f"p50 {ordered[len(ordered) // 2]:.2f} p99 {ordered[int(0.99 * (len(ordered) - 1))]:.2f} max {ordered[-1]:.2f} ms"
 
 
-def estop_rig(tmp: Path, camera_fps: float):
+def recorded_camera(folder: Path, frames: list, fps: float):
+    """A RecordedCamera playing `frames` (written to `folder` as PNG pairs with their intrinsics) at `fps`, each pair
+    held for a second: frames that cost the CPU only their copy, as a real camera's arrive, unlike the simulated
+    camera's renders (~55 ms of CPU each here), which the recorder's CPU would be taken from."""
+    import json
+
+    import cv2
+
+    from armlab.devices.recorded.camera_recorded import RecordedCamera
+    from armlab.devices.recorded.configuration_recorded import RecordedCameraConfig
+
+    folder.mkdir(parents=True, exist_ok=True)
+    for index, frame in enumerate(frames):
+        cv2.imwrite(str(folder / f"image_{index:03d}.png"), frame.color_bgr)
+        cv2.imwrite(str(folder / f"depth_{index:03d}.png"), frame.depth_mm)
+    intr = frames[0].intrinsics
+    (folder / "intrinsics.json").write_text(json.dumps({"K": intr.K.tolist(), "dist": list(intr.dist), "image_size": [intr.width, intr.height]}))
+    camera = RecordedCamera(RecordedCameraConfig(source=str(folder), fps=fps, seconds_per_pair=1.0))
+    camera.connect()
+    return camera
+
+
+def estop_rig(tmp: Path, camera_fps: float, stream_frames: list | None = None):
     """bench/estop.py's Rig (cell, station, REST server; its idle() and press()), the camera at camera_fps and the camera
-    watchdog at 10 s: a 30 fps render on a loaded 2-core machine starves and faults the station (camera lost)."""
+    watchdog at 10 s: a 30 fps render on a loaded 2-core machine starves and faults the station (camera lost).
+    stream_frames: the station's camera plays these instead (recorded_camera, at camera_fps) and the simulated one
+    renders at 1 fps for nobody."""
     import uvicorn
     from estop import Rig, free_port, wait_for
 
@@ -277,11 +301,12 @@ def estop_rig(tmp: Path, camera_fps: float):
 
     rig = Rig.__new__(Rig)
     rig.db = tmp / "bench.sqlite3"
-    rig.cell = SimWorkcell(SimWorkcellConfig(realtime=True, seed=2, camera_fps=camera_fps))
+    rig.cell = SimWorkcell(SimWorkcellConfig(realtime=True, seed=2, camera_fps=1.0 if stream_frames else camera_fps))
     rig.cell.start()
+    camera = recorded_camera(tmp / "camera", stream_frames, camera_fps) if stream_frames else rig.cell.camera
 
     def factory():
-        rig.station = Station(rig.cell.arm, rig.cell.gripper, rig.cell.camera, model=load_arm("rx200"),
+        rig.station = Station(rig.cell.arm, rig.cell.gripper, camera, model=load_arm("rx200"),
                               config=StationConfig(database_path=str(rig.db), camera_timeout_s=10.0), sim=rig.cell)
         rig.station.start()
         return rig.station
@@ -294,11 +319,12 @@ def estop_rig(tmp: Path, camera_fps: float):
     wait_for(lambda: rig.server.started, 60, 0.05)
     rig.http = None
     rig.ws_url = f"ws://127.0.0.1:{port}/ws"
-    rig.close = lambda: (setattr(rig.server, "should_exit", True), rig.thread.join(20), rig.cell.close())
+    rig.close = lambda: (setattr(rig.server, "should_exit", True), rig.thread.join(20), rig.cell.close(),
+                         camera.close() if stream_frames else None)
     return rig
 
 
-def estop_latency(trials: int, record: bool, camera_fps: float, replay: list) -> tuple[list[float], list[float], int, dict]:
+def estop_latency(trials: int, record: bool, camera_fps: float, replay: list, recorded_stream: bool = False) -> tuple[list[float], list[float], int, dict]:
     """bench/estop.py's press (Station.estop()), the arm moving (its load_idle), with or without a recording running
     (started through the app's library, as POST /api/recordings/start does). The simulated camera of a loaded 2-core
     machine renders a few frames a second, so with `replay` frames a second recorder records a replay station at
@@ -311,20 +337,21 @@ def estop_latency(trials: int, record: bool, camera_fps: float, replay: list) ->
 
     answers, halts, frames, stream = [], [], 0, {}
     with tempfile.TemporaryDirectory(prefix="armlab-bench-estop-") as tmp, contextlib.ExitStack() as stack:
-        rig = estop_rig(Path(tmp), camera_fps)
+        rig = estop_rig(Path(tmp), camera_fps, replay if recorded_stream else None)
         library = rig.app.state.recordings
         full = RecordingLibrary(Path(tmp) / "replay", RecordingConfig(min_free_mb=0))
+        second = bool(replay) and not recorded_stream  # the station's own camera at 30 fps is the recorder's full load
         try:
             if record:
                 library.start(rig.station)
-                if replay:
+                if second:
                     full.start(stack.enter_context(ReplayStation(replay, 30.0)))
             with StreamReader(rig.ws_url) as reader:
                 answers, halts, _ = moving_presses(rig, trials)
             stream = reader.result
             if record:
                 frames = library.stop()["topics"].get("/camera/color/compressed", 0)
-                if replay:
+                if second:
                     frames += full.stop()["topics"].get("/camera/color/compressed", 0)
         finally:
             full.close()
@@ -430,7 +457,10 @@ def main() -> None:
     parser.add_argument("--estop-only", action="store_true", help="only the e-stop comparison")
     parser.add_argument("--no-estop", action="store_true", help="no e-stop comparison")
     parser.add_argument("--defaults-only", action="store_true", help="part 1 at the config's defaults only (no other cases)")
-    parser.add_argument("--estop-camera-fps", type=float, default=30.0, help="the simulated camera's rate in the e-stop rig")
+    parser.add_argument("--estop-camera-fps", type=float, default=30.0, help="the station's camera rate in the e-stop rig")
+    parser.add_argument("--stream-camera", choices=("sim", "recorded"), default="sim",
+                        help="the e-stop rig's camera: the simulated one (renders cost ~55 ms of CPU each) or the rendered "
+                             "frames played as a recorded camera (a frame costs its copy, as a real camera's)")
     parser.add_argument("--lerobot", action="store_true", help="also the LeRobot export (part 4)")
     parser.add_argument("--lerobot-only", action="store_true", help="only the LeRobot export (part 4)")
     parser.add_argument("--lerobot-seconds", type=float, default=60.0, help="the exported recording's length")
@@ -470,9 +500,10 @@ def main() -> None:
               f"({1000 * peak['cpu_s_per_frame']:.1f} ms CPU per frame with its JPEG encode)", flush=True)
 
     for record in () if args.no_estop else (False, True):
-        answers, halts, recorded, stream = estop_latency(args.trials, record, args.estop_camera_fps, frames)
+        answers, halts, recorded, stream = estop_latency(args.trials, record, args.estop_camera_fps, frames,
+                                                         recorded_stream=args.stream_camera == "recorded")
         label = f"recording ({recorded} colour frames)" if record else "no recording"
-        print(f"e-stop, {label}, {args.trials} presses, camera {args.estop_camera_fps:g} fps (ms): answer {figures(answers)} | "
+        print(f"e-stop, {label}, {args.trials} presses, {args.stream_camera} camera {args.estop_camera_fps:g} fps (ms): answer {figures(answers)} | "
               f"halt {figures(halts)}", flush=True)
         if stream.get("latency_ms"):
             print(f"stream, {label}: {len(stream['latency_ms']) / stream['seconds']:.1f} fps to the client, capture-to-client "
