@@ -87,17 +87,17 @@ def gripper_rotation(model, pitch_rad: float, bearing: float) -> np.ndarray:
     return np.asarray(model.fk(q), float)[:3, :3]
 
 
-@lru_cache(maxsize=1)
-def gripper_outline():
-    """The RX200 finger gripper's palm and fingers around the finger plane (armlab.devices.finger_gripper's
-    FingerGripperOutline, from config/arms/rx200.yaml and config/sim.yaml: the sizes the simulation builds)."""
-    return load_finger_gripper_outline("rx200")
+@lru_cache(maxsize=4)
+def gripper_outline(arm: str):
+    """The arm's finger gripper: palm and fingers around the finger plane (armlab.devices.finger_gripper's
+    FingerGripperOutline, from config/arms/<arm>.yaml and config/sim.yaml: the sizes the simulation builds)."""
+    return load_finger_gripper_outline(arm)
 
 
-def lowest_below_gripper_point_m(pitch_rad: float) -> float:
-    """How far below the gripper point the gripper's lowest part (palm or finger) reaches at this pitch."""
+def lowest_below_gripper_point_m(arm: str, pitch_rad: float) -> float:
+    """How far below the gripper point the arm's gripper's lowest part (palm or finger) reaches at this pitch."""
     s, c = math.sin(pitch_rad), math.cos(pitch_rad)
-    outline = gripper_outline()
+    outline = gripper_outline(arm)
     palm = outline.palm_half_height_m * c - outline.palm_front_behind_m * s
     finger = outline.finger_half_height_m * c + outline.finger_tip_beyond_m * s
     return max(palm, finger)
@@ -112,7 +112,7 @@ def grasp_point(station: Station, top_center_m, edge_m: float, pitch_rad: float)
     centre = top - np.array([0.0, 0.0, edge_m / 2.0])
     approach = gripper_rotation(station.model, pitch_rad, bearing_rad(top))[:, 0]
     point = centre - approach * (edge_m / 2.0 - config.grasp_depth_for(edge_m))
-    floor = top[2] - edge_m + lowest_below_gripper_point_m(pitch_rad) + TABLE_MARGIN_M
+    floor = top[2] - edge_m + lowest_below_gripper_point_m(station.model.name, pitch_rad) + TABLE_MARGIN_M
     point[2] = max(point[2], floor, config.board_clearance_m)
     return point
 
@@ -150,7 +150,7 @@ def gripper_points(model, positions_rad: np.ndarray) -> np.ndarray:
     frames = np.asarray(model.fk(np.asarray(positions_rad, float)))
     if frames.ndim == 2:
         frames = frames[None]
-    outline = gripper_outline()
+    outline = gripper_outline(model.name)
     local = np.array([[x, side * outline.open_outer_m, 0.0]
                       for x in (outline.finger_tip_beyond_m, -outline.palm_front_behind_m, -outline.palm_back_behind_m)
                       for side in (-1.0, 1.0)])
@@ -168,7 +168,7 @@ def _check(station: Station, trajectories: list, boxes: list, grasp: SideGrasp |
         positions = trajectory.positions_rad[:: max(1, len(trajectory.positions_rad) // 40)]
         if collision is None:
             sides = gripper_points(model, positions)
-            collision = _corner_hit(sides[1:], boxes, gripper_outline().finger_half_height_m, skip=sides[0])
+            collision = _corner_hit(sides[1:], boxes, gripper_outline(model.name).finger_half_height_m, skip=sides[0])
         if collision is None and grasp is not None:
             collision = _corner_hit(held_block_corners(model, positions, grasp, edge_m), block_boxes or boxes, BLOCK_MARGIN_M)
         if collision is not None:
