@@ -27,6 +27,7 @@ import numpy as np
 
 from armlab.devices.arm import Arm
 from armlab.devices.camera import Camera, Frame
+from armlab.devices.clock import Clock, WallClock
 from armlab.devices.gripper import Gripper
 from armlab.errors import InvalidInput, NoArmError, RefusedByCheck, ShuttingDown
 from armlab.kinematics.calibrated_arm import CalibratedArm
@@ -102,6 +103,7 @@ class Station(Latch, MotionGate, ManualCommands, PlannedMoves, TeachCommands, Jo
         sim: Any = None,
         backend: str = "sim",
         synchronous: bool = False,
+        clock: Clock | None = None,
     ) -> None:
         if synchronous and (sim is None or sim.realtime):
             raise ValueError("synchronous mode needs a fast-mode simulation (SimWorkcell with realtime=False)")
@@ -115,6 +117,9 @@ class Station(Latch, MotionGate, ManualCommands, PlannedMoves, TeachCommands, Jo
         self.perception_config = perception_config
         self._motion_config = motion_config
         self.sim = sim
+        # The motion clock: the simulation's own when simulated (its fast mode advances only while waited on), else
+        # the wall clock; timeouts of motions, gripper settling and job waits are on it.
+        self.clock: Clock = clock or (sim.clock if sim is not None else WallClock())
         self.backend = backend
         self.synchronous = synchronous
         self._lock = threading.RLock()
@@ -400,5 +405,5 @@ class Station(Latch, MotionGate, ManualCommands, PlannedMoves, TeachCommands, Jo
         return checked_joints(self.model, q_rad)
 
     def clock_s(self) -> float:
-        """The motion clock: simulated time on the simulation, else monotonic wall time."""
-        return self.sim.sim_time_s if self.sim is not None else time.monotonic()
+        """The motion clock's time (self.clock: simulated time on the simulation, else monotonic wall time)."""
+        return self.clock.now_s()

@@ -54,13 +54,8 @@ class MotionGate:
                 if ctx is not None and not ctx.in_cleanup:
                     raise JobCancelled("the station was e-stopped")
                 return predicate()
-            if self.sim is not None:
-                if self.sim.wait_for(lambda: predicate() or latched(), WAIT_CHUNK_S) and not latched():
-                    return True
-            elif predicate():
+            if self.clock.wait_for(lambda: predicate() or latched(), WAIT_CHUNK_S) and not latched():
                 return True
-            else:
-                self._halt.wait(0.005)
             if self.clock_s() > deadline:
                 return predicate()
 

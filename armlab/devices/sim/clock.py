@@ -12,6 +12,7 @@ from collections.abc import Callable
 
 import mujoco
 
+from armlab.devices.clock import Clock
 from armlab.errors import InvalidInput
 
 logger = logging.getLogger(__name__)
@@ -19,8 +20,29 @@ logger = logging.getLogger(__name__)
 MAX_CATCH_UP_S = 0.1  # real time: if physics falls this far behind the wall clock, it drops the backlog
 
 
+class SimulationTime(Clock):
+    """A SimWorkcell's time as the Clock the station is given: simulated seconds, and waits that advance the
+    physics in fast mode (or follow the physics thread in real time, at its time scale)."""
+
+    def __init__(self, cell: SimClock) -> None:
+        self._cell = cell
+
+    def now_s(self) -> float:
+        return self._cell.sim_time_s
+
+    def wait_for(self, predicate: Callable[[], bool], timeout_s: float) -> bool:
+        if self._cell.realtime:  # the cell's wait is in wall seconds then
+            return self._cell.wait_for(predicate, timeout_s / float(self._cell.config.time_scale))
+        return self._cell.wait_for(predicate, timeout_s)
+
+
 class SimClock:
     """Stepping the physics of a SimWorkcell (reads its _model/_data, devices and feeder under self.lock)."""
+
+    @property
+    def clock(self) -> Clock:
+        """This simulation's time for the station (armlab.devices.clock.Clock)."""
+        return SimulationTime(self)
 
     @property
     def realtime(self) -> bool:
