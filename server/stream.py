@@ -40,9 +40,9 @@ from armlab.workcell import load_workcell
 from server.errors import error_status
 from server.models import (
     AckMessage,
-    CartesianJogMessage,
     CommandMessage,
     HeartbeatMessage,
+    JogCartesianMessage,
     JogMessage,
     JogStopMessage,
     ViewMessage,
@@ -66,7 +66,7 @@ def _said(error: Exception) -> str:
 CLIENT_MESSAGE = TypeAdapter(Annotated[Union[CLIENT_MESSAGES], Field(discriminator="type")])  # noqa: UP007 - a tuple
 _CLIENT_TYPES = [message_type(model) for model in CLIENT_MESSAGES]
 _SESSION_NUMBERS = itertools.count(1)
-JOG_MESSAGES = (JogMessage, CartesianJogMessage, JogStopMessage)
+JOG_MESSAGES = (JogMessage, JogCartesianMessage, JogStopMessage)
 MAX_QUEUED_CALLS = 32  # a session's station calls waiting behind a slow one; more are refused with an error event
 
 
@@ -85,7 +85,8 @@ def _jog_request(text: str) -> dict | None:
         parsed = json.loads(text)
     except ValueError:
         return None
-    if not isinstance(parsed, dict) or parsed.get("type") not in {message_type(model) for model in JOG_MESSAGES}:
+    kind = parsed.get("type") if isinstance(parsed, dict) else None
+    if not isinstance(kind, str) or kind not in {message_type(model) for model in JOG_MESSAGES}:
         return None
     message_id = parsed.get("id")
     valid_id = isinstance(message_id, int) and not isinstance(message_id, bool) and 0 <= message_id < 2**31
@@ -400,7 +401,7 @@ class StreamHub:
         station, source = self.station, client.controller
         if isinstance(message, JogMessage):
             call = lambda: station.jog(message.velocity_rad_s, source=source, speed_percent=message.speed_percent)  # noqa: E731
-        elif isinstance(message, CartesianJogMessage):
+        elif isinstance(message, JogCartesianMessage):
             call = lambda: station.jog_cartesian(message.axis, message.velocity_m_s, source=source,  # noqa: E731
                                                  speed_percent=message.speed_percent)
         else:

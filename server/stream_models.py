@@ -146,7 +146,7 @@ class JogMessage(JogRequest):
     id: int | None = JogId
 
 
-class CartesianJogMessage(CartesianJogRequest):
+class JogCartesianMessage(CartesianJogRequest):
     """Start (or keep going) a hold-to-run Cartesian jog, as POST /api/arm/jog/cartesian; answered by a jog_reply."""
 
     type: Literal["jog_cartesian"]
@@ -174,7 +174,7 @@ class JogReplyMessage(Wire):
 
 # Every websocket message each side sends, one model per `type` (the generator and stream.py read these).
 SERVER_MESSAGES = (FrameHeader, TelemetryMessage, EventMessage, CalibrationMessage, HelloMessage, JogReplyMessage)
-CLIENT_MESSAGES = (AckMessage, ViewMessage, CommandMessage, HeartbeatMessage, JogMessage, CartesianJogMessage, JogStopMessage)
+CLIENT_MESSAGES = (AckMessage, ViewMessage, CommandMessage, HeartbeatMessage, JogMessage, JogCartesianMessage, JogStopMessage)
 
 
 def message_type(model: type[Wire]) -> str:

@@ -168,16 +168,6 @@ export const EVENT_KINDS = Object.freeze(["general", "scene"]);
  */
 
 /**
- * Start (or keep going) a hold-to-run Cartesian jog, as POST /api/arm/jog/cartesian; answered by a jog_reply.
- * @typedef {Object} CartesianJogMessage
- * @property {("x"|"y"|"z")} axis the world axis the gripper point moves along
- * @property {number} velocity_m_s metres per second along the axis (+ or −); 0 ramps down to rest
- * @property {number} [speed_percent] speed override, % of the configured speed (10-100)
- * @property {"jog_cartesian"} type
- * @property {(number|null)} [id] echoed in the jog_reply, so the page knows which request it answers
- */
-
-/**
  * Hold-to-run Cartesian jog: the gripper point moves along world x|y|z at velocity_m_s (signed; its top speed is
  * the station's jog_max_speed_m_s, scaled by speed_percent) keeping its pitch and yaw, for jog_hold_s after each
  * heartbeat, then brakes to rest by itself; where the line cannot go on it stops before it (422 when it cannot move).
@@ -431,6 +421,16 @@ export const EVENT_KINDS = Object.freeze(["general", "scene"]);
 /**
  * @typedef {Object} JobResponse
  * @property {(JobInfo|null)} job
+ */
+
+/**
+ * Start (or keep going) a hold-to-run Cartesian jog, as POST /api/arm/jog/cartesian; answered by a jog_reply.
+ * @typedef {Object} JogCartesianMessage
+ * @property {("x"|"y"|"z")} axis the world axis the gripper point moves along
+ * @property {number} velocity_m_s metres per second along the axis (+ or −); 0 ramps down to rest
+ * @property {number} [speed_percent] speed override, % of the configured speed (10-100)
+ * @property {"jog_cartesian"} type
+ * @property {(number|null)} [id] echoed in the jog_reply, so the page knows which request it answers
  */
 
 /**
