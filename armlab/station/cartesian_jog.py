@@ -4,7 +4,8 @@ A mixin of core.Station, beside the joint jog (manual.py): the gripper point mov
 speed in m/s (scaled by the operator's speed_percent) keeping its pitch and yaw, planned by
 armlab.motion.cartesian_jog on the line where the jog began. Like the joint jog it runs jog_hold_s past its last
 heartbeat (heartbeat() in manual.py re-plans it) and then brakes by itself, so a released button, a hung page or a
-dropped connection stops it with no timer involved. Each plan is checked by the station's own trajectory check
+dropped connection stops it with no timer involved. A jog of another axis (or a joint jog, or a move) still running
+is first brought to rest, then the new line starts from there. Each plan is checked by the station's own trajectory check
 sample by sample (joint limits, the board, the arm against itself): where the line cannot go on, it brakes before
 that place and the event log says why once; a jog asked to start there is refused with the reason (422).
 """
@@ -17,8 +18,10 @@ import numpy as np
 
 from armlab.devices.arm import JointTrajectory
 from armlab.errors import PLAN_REFUSALS, CommandRefused, InvalidInput, NotController
+from armlab.motion.blend import arm_limits
 from armlab.motion.cartesian_jog import AXES, MOVES_M, jog_line, plan_cartesian_jog
 from armlab.motion.errors import StepRefused
+from armlab.motion.jog import plan_jog
 from armlab.motion.safety import UnsafeTrajectory
 from armlab.station.manual import checked_speed_percent
 
@@ -51,8 +54,17 @@ class CartesianJog:
             else:
                 q0, qdot0 = handover.position_rad, handover.segment_velocity_rad_s
                 hold_s = max(config.jog_hold_s - (handover.takes_over_s - self.clock_s()), dt)
-            same_line = (handover is not None and running is not None and running.get("axis") == axis
-                         and running["source"] == source and self.arm.is_moving())
+            ours = running is not None and running["source"] == source and self.arm.is_moving()
+            same_line = handover is not None and ours and running.get("axis") == axis
+            # Another motion runs (or, taken over before this line's own motion began, is still braking): to rest first.
+            braking = same_line and handover.takes_over_s < running["line_from_s"]
+            brake, brake_from = None, None
+            if handover is not None and not handover.at_rest and (braking or not same_line):
+                brake_from = running["brake_from"] if braking else (running if ours and "axis" in running else None)
+                brake = self._brake(handover, brake_from)
+                q0, qdot0, hold_s = brake.positions_rad[-1], None, max(hold_s - brake.duration_s, dt)
+                outcome.update(line_from_s=handover.takes_over_s + brake.duration_s,
+                               brake_from=None if brake_from is None else {"axis": brake_from["axis"], "line": brake_from["line"]})
             line = running["line"] if same_line else jog_line(self.model, q0, axis)
             v0 = 0.0 if qdot0 is None else (line.distance_m(self.model, q0) - line.distance_m(self.model, q0 - qdot0 * dt)) / dt
             if abs(v0) < AT_REST_M_S:
@@ -63,13 +75,14 @@ class CartesianJog:
                 raise StepRefused(f"{_label(axis, velocity)} cannot move from here: {jog.stopped_by}", "boundary")
             outcome.update(line=line, stopped_by=jog.stopped_by,
                            reported=same_line and running.get("reported") is not None)
-            return jog.trajectory
+            return jog.trajectory if brake is None else _joined(brake, jog.trajectory)
 
         trajectory, _ = self._send_replacing(plan, lambda: self._transition("jog", source=source), "jog")
         reason = outcome["stopped_by"]
         with self._lock:
             self._jog = {"trajectory": trajectory, "start_s": self.clock_s(), "velocity": velocity, "source": source,
-                         "axis": axis, "line": outcome["line"], "reported": reason}
+                         "axis": axis, "line": outcome["line"], "reported": reason,
+                         "line_from_s": outcome.get("line_from_s", -math.inf), "brake_from": outcome.get("brake_from")}
         if reason is not None and not outcome["reported"]:
             self.events.add("warn", f"{_label(axis, velocity)} stops short: {reason}")
         return trajectory
@@ -89,6 +102,21 @@ class CartesianJog:
         except (CommandRefused, NotController, *PLAN_REFUSALS):  # the jog runs out by itself
             return False
         return True
+
+    def _brake(self, handover, running: dict | None) -> JointTrajectory:
+        """The motion running at `handover` brought to rest at once, before a jog of another kind or axis starts from
+        there (the new line's plan from rest would not continue its velocity): along its own line when it is a
+        Cartesian jog (`running`: its axis and line), else each joint at its acceleration limit (the joint jog's)."""
+        config = self.motion_config
+        dt = 1.0 / config.sample_rate_hz
+        q0, qdot0 = handover.position_rad, handover.segment_velocity_rad_s
+        if running is not None:
+            line = running["line"]
+            v0 = (line.distance_m(self.model, q0) - line.distance_m(self.model, q0 - qdot0 * dt)) / dt
+            return plan_cartesian_jog(self.model, line, q0, v0, 0.0, dt, config.jog_accel_m_s2, config.sample_rate_hz,
+                                      self._first_unsafe).trajectory
+        return plan_jog(q0, qdot0, np.zeros_like(qdot0), dt, self.model.lower_rad, self.model.upper_rad,
+                        arm_limits(self.model).accel_rad_s2, config.sample_rate_hz)
 
     def _first_unsafe(self, trajectory: JointTrajectory) -> tuple[int, str] | None:
         """(index of the first sample the station's trajectory check refuses, the reason), or None when it passes
@@ -116,6 +144,12 @@ def _checked_velocity_m_s(velocity_m_s, limit_m_s: float) -> float:
     if abs(float(velocity_m_s)) > limit_m_s + 1e-12:
         raise InvalidInput(f"velocity_m_s {float(velocity_m_s):.3f} m/s is above the Cartesian jog's top speed {limit_m_s:.3f} m/s")
     return float(velocity_m_s)
+
+
+def _joined(first: JointTrajectory, second: JointTrajectory) -> JointTrajectory:
+    """`second` (starting where `first` ends, on the same sample period) run after `first`."""
+    times = np.concatenate([first.times_s, first.times_s[-1] + second.times_s[1:] - second.times_s[0]])
+    return JointTrajectory(times, np.vstack([first.positions_rad, second.positions_rad[1:]]))
 
 
 def _label(axis: str, velocity_m_s: float) -> str:
