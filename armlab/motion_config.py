@@ -39,6 +39,10 @@ class MotionConfig(StrictModel):
     # The fastest hold-to-run joint jog (rad/s, capped by each joint's own limit): the deadman's stopping distance
     # is v * jog_hold_s + v^2 / (2 a), 0.22 rad at 0.8 rad/s and 5 rad/s^2 (1.93 rad at pi rad/s with a 0.3 s hold).
     jog_max_speed_rad_s: float = Field(0.8, gt=0.0, le=10.0)
+    # The fastest hold-to-run Cartesian jog of the gripper point along a world axis, and its ramp: a released one
+    # stops within v * (jog_hold_s + one control period) + v^2 / (2 a) (20 + 10 mm at 0.1 m/s and 0.5 m/s^2).
+    jog_max_speed_m_s: float = Field(0.1, gt=0.0, le=0.5)
+    jog_accel_m_s2: float = Field(0.5, gt=0.0, le=5.0)
     # A motion that replaces a running one takes over this long after it is planned (the running trajectory goes
     # on meanwhile), so planning and checking never make the command jump (armlab.motion.handover).
     handover_lead_s: float = Field(0.05, ge=0.02, le=0.5)

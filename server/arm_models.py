@@ -1,4 +1,5 @@
-"""Request bodies of the arm's routes (server/routes/arm.py): joint and pose moves, torque, jog, steps, gripper."""
+"""Request bodies of the arm's routes (server/routes/arm.py): joint and pose moves, torque, joint and Cartesian jogs, steps,
+gripper."""
 
 from __future__ import annotations
 
@@ -47,6 +48,20 @@ class JogRequest(Request):
     heartbeat), then the arm ramps to rest by itself."""
 
     velocity_rad_s: list[Velocity] = Field(min_length=1, max_length=12, description="joint velocities, joint_names order; zeros stop")
+    speed_percent: SpeedPercent = 100.0
+
+
+JOG_SPEED_LIMIT_M_S = 0.5  # the schema's bound; the station applies its jog_max_speed_m_s (config/motion.yaml)
+
+
+class CartesianJogRequest(Request):
+    """Hold-to-run Cartesian jog: the gripper point moves along world x|y|z at velocity_m_s (signed; its top speed is
+    the station's jog_max_speed_m_s, scaled by speed_percent) keeping its pitch and yaw, for jog_hold_s after each
+    heartbeat, then brakes to rest by itself; where the line cannot go on it stops before it (422 when it cannot move)."""
+
+    axis: Literal["x", "y", "z"] = Field(description="the world axis the gripper point moves along")
+    velocity_m_s: float = Field(ge=-JOG_SPEED_LIMIT_M_S, le=JOG_SPEED_LIMIT_M_S,
+                                description="metres per second along the axis (+ or −); 0 ramps down to rest")
     speed_percent: SpeedPercent = 100.0
 
 

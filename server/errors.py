@@ -65,7 +65,7 @@ def _validation_message(error: RequestValidationError) -> str:
     return "invalid request: " + "; ".join(parts)
 
 
-def _classify(error: Exception) -> tuple[int, str]:
+def error_status(error: Exception) -> tuple[int, str]:
     """HTTP status and wire code for an exception (the first row of ERROR_STATUS it is an instance of)."""
     for error_class, status_code, code in ERROR_STATUS:
         if isinstance(error, error_class):
@@ -162,7 +162,7 @@ def install_error_handlers(app: FastAPI) -> None:
         return error_response(error.status_code, code, message, headers=getattr(error, "headers", None))
 
     async def _library(request: Request, error: Exception) -> JSONResponse:
-        status_code, code = _classify(error)
+        status_code, code = error_status(error)
         if status_code == 500:
             log.error("internal error in %s %s", request.method, request.url.path, exc_info=error)
             return error_response(500, code, f"internal error ({type(error).__name__}); the server log has the traceback")

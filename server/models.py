@@ -17,6 +17,7 @@ from pydantic import BaseModel, Field, model_validator
 from server.arm_models import (
     STEP_ANGLE_LIMIT_RAD,
     STEP_DISTANCE_LIMIT_M,
+    CartesianJogRequest,
     GripperRequest,
     JogRequest,
     JointsRequest,
@@ -71,6 +72,10 @@ from server.stream_models import (
     GridInfo,
     HeartbeatMessage,
     HelloMessage,
+    JogCartesianMessage,
+    JogMessage,
+    JogReplyMessage,
+    JogStopMessage,
     LimitsInfo,
     TelemetryMessage,
     ViewMessage,
@@ -160,6 +165,7 @@ WIRE_MODELS: tuple[type[BaseModel], ...] = (
     PoseNameRequest,
     TorqueRequest,
     JogRequest,
+    CartesianJogRequest,
     StepRequest,
     GripperRequest,
     PixelRequest,
@@ -181,6 +187,10 @@ WIRE_MODELS: tuple[type[BaseModel], ...] = (
     ViewMessage,
     CommandMessage,
     HeartbeatMessage,
+    JogMessage,
+    JogCartesianMessage,
+    JogStopMessage,
+    JogReplyMessage,
 )
 
 WIRE_MODELS = (

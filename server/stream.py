@@ -7,8 +7,9 @@ client acknowledged the previous frame — the newest frame of its view. Nothing
 a slow or stalled client holds at most one frame in flight and never slows anyone else.
 
 A session with the control token is a controller named by `?controller=` (else a name of its own): it
-may take the control lease, its heartbeats keep its hold-to-run jog going, and when its last session
-closes the lease it holds is released. Calls into the station run off the event loop (e-stop on the
+may take the control lease, start and stop hold-to-run jogs (jog, jog_cartesian, jog_stop: the REST routes'
+station calls and checks, each answered by a jog_reply), its heartbeats keep its jog going, and when its last
+session closes its jog ramps down and the lease it holds is released. Calls into the station run off the event loop (e-stop on the
 app's safety pool). A session's e-stop is never queued behind its other messages: acks, view changes and
 e-stops are handled as they arrive, the station calls of other commands and heartbeats in order on the
 session's own task.
@@ -36,7 +37,16 @@ from armlab.station.core import Station
 from armlab.station.lease import checked_controller
 from armlab.station.perception import _Worker
 from armlab.workcell import load_workcell
-from server.models import AckMessage, CommandMessage, HeartbeatMessage, ViewMessage
+from server.errors import error_status
+from server.models import (
+    AckMessage,
+    CommandMessage,
+    HeartbeatMessage,
+    JogCartesianMessage,
+    JogMessage,
+    JogStopMessage,
+    ViewMessage,
+)
 from server.stream_models import CLIENT_MESSAGES, message_type
 from server.views import ViewKey, compose_view, encode_jpeg
 
@@ -56,6 +66,7 @@ def _said(error: Exception) -> str:
 CLIENT_MESSAGE = TypeAdapter(Annotated[Union[CLIENT_MESSAGES], Field(discriminator="type")])  # noqa: UP007 - a tuple
 _CLIENT_TYPES = [message_type(model) for model in CLIENT_MESSAGES]
 _SESSION_NUMBERS = itertools.count(1)
+JOG_MESSAGES = (JogMessage, JogCartesianMessage, JogStopMessage)
 MAX_QUEUED_CALLS = 32  # a session's station calls waiting behind a slow one; more are refused with an error event
 
 
@@ -65,6 +76,21 @@ def _message_error(text: str, error: ValidationError) -> str:
     where = ".".join(str(part) for part in first.get("loc", ()))
     expected = f"{', '.join(_CLIENT_TYPES[:-1])} or {_CLIENT_TYPES[-1]}"
     return f"bad message {text[:80]!r}: {where + ': ' if where else ''}{first.get('msg')} (expected type {expected})"
+
+
+def _jog_request(text: str) -> dict | None:
+    """A message that failed validation but is a jog request (its type says so): its JSON object, for the reply's id
+    (an id that is not an int is left out); None otherwise."""
+    try:
+        parsed = json.loads(text)
+    except ValueError:
+        return None
+    kind = parsed.get("type") if isinstance(parsed, dict) else None
+    if not isinstance(kind, str) or kind not in {message_type(model) for model in JOG_MESSAGES}:
+        return None
+    message_id = parsed.get("id")
+    valid_id = isinstance(message_id, int) and not isinstance(message_id, bool) and 0 <= message_id < 2**31
+    return {**parsed, "id": message_id if valid_id else None}
 
 
 @dataclass(frozen=True)
@@ -242,11 +268,13 @@ class StreamHub:
         return load_workcell(station_workcell_name(self.station)).to_wire()
 
     def _limits(self) -> dict:
-        """Limits of operator inputs (HelloMessage.limits): the longest manual move and the hold-to-run jog's top speed and hold."""
+        """Limits of operator inputs (HelloMessage.limits): the longest manual move, the hold-to-run jogs' top speeds, hold
+        and the Cartesian jog's acceleration."""
         limits = {"max_moving_time_s": float(self.station.config.max_moving_time_s)}
         motion = getattr(self.station, "motion_config", None)
         if motion is not None:
-            limits.update(jog_max_speed_rad_s=float(motion.jog_max_speed_rad_s), jog_hold_s=float(motion.jog_hold_s))
+            limits.update(jog_max_speed_rad_s=float(motion.jog_max_speed_rad_s), jog_hold_s=float(motion.jog_hold_s),
+                          jog_max_speed_m_s=float(motion.jog_max_speed_m_s), jog_accel_m_s2=float(motion.jog_accel_m_s2))
         return limits
 
     @staticmethod
@@ -289,6 +317,7 @@ class StreamHub:
             self.encoder.unwatch(client.key)
             self._forget_unwatched()
             if client.can_control and not any(other.controller == client.controller for other in self.clients):
+                await self._off_loop(self.station.stop_jog, client.controller)  # its held jog ramps down now
                 await self._off_loop(self.station.release_control, client.controller, "released (disconnected)")
 
     async def _send_loop(self, client: ClientSession) -> None:
@@ -324,7 +353,10 @@ class StreamHub:
             try:
                 parsed = CLIENT_MESSAGE.validate_json(text)
             except ValidationError as error:
-                await self._reply_error(client, _message_error(text, error))
+                if (jog := _jog_request(text)) is not None:  # a refused jog is answered like one: the page ends its hold
+                    await self._jog_reply(client, jog.get("id"), 422, "invalid", _message_error(text, error))
+                else:
+                    await self._reply_error(client, _message_error(text, error))
                 continue
             if isinstance(parsed, AckMessage):
                 if parsed.seq == client.awaiting_ack:
@@ -354,8 +386,39 @@ class StreamHub:
                         await self._off_loop(self.station.heartbeat, client.controller)
                     except Exception as error:  # noqa: BLE001 - reported; the session goes on
                         await self._reply_error(client, f"heartbeat: {_said(error)}")
+            elif isinstance(parsed, JOG_MESSAGES):
+                await self._jog(client, parsed)
             else:
                 await self._command(client, parsed.name)
+
+    async def _jog(self, client: ClientSession, message) -> None:
+        """A jog, jog_cartesian or jog_stop message: the station call of the REST route (the same checks and lease),
+        answered by a jog_reply with the status and error code the route would give."""
+        if not client.can_control:
+            await self._jog_reply(client, message.id, 401, "unauthorized",
+                                  f"{message.type} refused: this connection is view-only (no control token)")
+            return
+        station, source = self.station, client.controller
+        if isinstance(message, JogMessage):
+            call = lambda: station.jog(message.velocity_rad_s, source=source, speed_percent=message.speed_percent)  # noqa: E731
+        elif isinstance(message, JogCartesianMessage):
+            call = lambda: station.jog_cartesian(message.axis, message.velocity_m_s, source=source,  # noqa: E731
+                                                 speed_percent=message.speed_percent)
+        else:
+            call = lambda: station.stop_jog(source=source)  # noqa: E731
+        try:
+            await self._off_loop(call)
+        except Exception as error:  # noqa: BLE001 - answered to the client
+            status_code, code = error_status(error)
+            await self._jog_reply(client, message.id, status_code, code, _said(error))
+            return
+        await self._jog_reply(client, message.id, 200, None, None)
+
+    async def _jog_reply(self, client: ClientSession, message_id: int | None, status_code: int, code: str | None,
+                         message: str | None) -> None:
+        reply = {"type": "jog_reply", "id": message_id, "ok": status_code == 200, "status_code": status_code, "code": code,
+                 "message": message}
+        await client.websocket.send_text(json.dumps(reply))
 
     async def _change_view(self, client: ClientSession, view: str, layers: list[str]) -> None:
         try:

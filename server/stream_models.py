@@ -6,6 +6,7 @@ from typing import Literal, get_args
 
 from pydantic import Field
 
+from server.arm_models import CartesianJogRequest, JogRequest
 from server.response_models import CalibrationInfo, Detection, Status
 from server.wire_base import Layer, Request, View, Wire
 
@@ -98,6 +99,8 @@ class LimitsInfo(Wire):
     max_moving_time_s: float = Field(description="longest manual move accepted (moving_time_s is in (0, this])")
     jog_max_speed_rad_s: float | None = Field(None, description="fastest hold-to-run joint jog at 100 % (each joint's own limit caps it)")
     jog_hold_s: float | None = Field(None, description="a hold-to-run jog brakes this long after the controller's last heartbeat")
+    jog_max_speed_m_s: float | None = Field(None, description="fastest hold-to-run Cartesian jog of the gripper point at 100 %")
+    jog_accel_m_s2: float | None = Field(None, description="the Cartesian jog's ramp (and braking) acceleration")
 
 
 class HelloMessage(Wire):
@@ -133,9 +136,45 @@ class HeartbeatMessage(Request):
     type: Literal["heartbeat"]
 
 
+JogId = Field(None, ge=0, le=2**31 - 1, description="echoed in the jog_reply, so the page knows which request it answers")
+
+
+class JogMessage(JogRequest):
+    """Start (or keep going) a hold-to-run joint jog, as POST /api/arm/jog; answered by a jog_reply."""
+
+    type: Literal["jog"]
+    id: int | None = JogId
+
+
+class JogCartesianMessage(CartesianJogRequest):
+    """Start (or keep going) a hold-to-run Cartesian jog, as POST /api/arm/jog/cartesian; answered by a jog_reply."""
+
+    type: Literal["jog_cartesian"]
+    id: int | None = JogId
+
+
+class JogStopMessage(Request):
+    """The held button or key was let go: this session's controller's jog ramps down now (POST /api/arm/jog/stop)."""
+
+    type: Literal["jog_stop"]
+    id: int | None = JogId
+
+
+class JogReplyMessage(Wire):
+    """The answer to a jog, jog_cartesian or jog_stop message: ok, or the HTTP status and error code the REST route
+    would give (422 invalid / unreachable / unsafe, 409 not_controller / wrong_state, ...) and the reason."""
+
+    type: Literal["jog_reply"] = "jog_reply"
+    id: int | None = None
+    ok: bool
+    status_code: int = Field(200, description="what the REST route answers for the same request")
+    code: str | None = Field(None, description="the error code (ErrorBody.code) when not ok")
+    message: str | None = None
+
+
 # Every websocket message each side sends, one model per `type` (the generator and stream.py read these).
-SERVER_MESSAGES = (FrameHeader, TelemetryMessage, EventMessage, CalibrationMessage, HelloMessage)
-CLIENT_MESSAGES = (AckMessage, ViewMessage, CommandMessage, HeartbeatMessage)
+SERVER_MESSAGES = (FrameHeader, TelemetryMessage, EventMessage, CalibrationMessage, HelloMessage, JogReplyMessage)
+CLIENT_MESSAGES = (AckMessage, ViewMessage, CommandMessage, HeartbeatMessage, JogMessage, JogCartesianMessage, JogStopMessage)
 
 
 def message_type(model: type[Wire]) -> str:

@@ -32,7 +32,7 @@ from armlab.program_io import ProgramFileError
 from armlab.station.core import NotCalibrated
 from armlab.store import NotFound
 from armlab.tasks.registry import JobUnsupported
-from server.errors import _classify
+from server.errors import error_status as _classify
 
 CASES = [
     (InvalidInput("position_m must be 3 numbers"), 422, "invalid"),

@@ -42,23 +42,25 @@ def plan_jog(
     upper_rad,
     accel_limit_rad_s2,
     rate_hz: float = 100.0,
+    margin: float = LIMIT_MARGIN_RAD,
 ) -> JointTrajectory:
     """A trajectory from q0 moving at v0 that reaches v_target, keeps it until hold_s (rounded down to the
     sample grid), then stops.
 
     Per joint: the velocity moves toward its target (v_target before hold_s, 0 after, 0 sooner when the
-    braking distance would carry the joint past limit - LIMIT_MARGIN_RAD) by at most accel·dt per sample.
+    braking distance would carry the joint past limit - margin) by at most accel·dt per sample.
     The result starts at q0, ends at rest and stays within the acceleration limit (finite differences);
     it stays inside the limits whenever the start can still stop in time (|v0|²/2a within the distance
     to the limit ahead, as for the reference state of the jog being replaced). v0: that reference
-    velocity (zeros from rest).
+    velocity (zeros from rest). margin: how far inside a limit braking stops (LIMIT_MARGIN_RAD for joints;
+    the Cartesian jog plans its distance along the line with it, in metres).
     """
     q = np.asarray(q0_rad, dtype=float).copy()
     v = np.asarray(v0_rad_s, dtype=float).copy()
     target = np.asarray(v_target_rad_s, dtype=float)
     accel = np.asarray(accel_limit_rad_s2, dtype=float)
-    low = np.asarray(lower_rad, dtype=float) + LIMIT_MARGIN_RAD
-    high = np.asarray(upper_rad, dtype=float) - LIMIT_MARGIN_RAD
+    low = np.asarray(lower_rad, dtype=float) + margin
+    high = np.asarray(upper_rad, dtype=float) - margin
     if not (math.isfinite(hold_s) and hold_s > 0.0 and rate_hz > 0.0):
         raise InvalidInput(f"hold_s and rate_hz must be positive, got {hold_s}, {rate_hz}")
     dt = 1.0 / rate_hz

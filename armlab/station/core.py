@@ -33,6 +33,7 @@ from armlab.errors import InvalidInput, NoArmError, RefusedByCheck, ShuttingDown
 from armlab.kinematics.calibrated_arm import CalibratedArm
 from armlab.station.arm_calibration import ArmCalibrationKeeper
 from armlab.station.calibration_trust import CalibrationTrust
+from armlab.station.cartesian_jog import CartesianJog
 from armlab.station.checks import checked_joints
 from armlab.station.colors import StationColors
 from armlab.station.config import StationConfig
@@ -75,9 +76,9 @@ class NotCalibrated(RefusedByCheck, RuntimeError):
 _UNLATCHED = ("estop",)  # the only command the latch and the lease never refuse
 
 
-class Station(Latch, MotionGate, ManualCommands, PlannedMoves, TeachCommands, JobControls, SpeedOverride, Perceiving,
+class Station(Latch, MotionGate, ManualCommands, CartesianJog, PlannedMoves, TeachCommands, JobControls, SpeedOverride, Perceiving,
               CalibrationTrust, ArmCalibrationKeeper):
-    """The control station's gate (its parts: latch.py, motion.py, manual.py, planned_moves.py, teach.py,
+    """The control station's gate (its parts: latch.py, motion.py, manual.py, cartesian_jog.py, planned_moves.py, teach.py,
     job_control.py: start, cancel and control jobs, perceiving.py: status, detections, fresh frames).
     Backends are injected; `sim` is the SimWorkcell when simulated (else None).
 

@@ -202,7 +202,10 @@ class ManualCommands:
         if jog is None or jog["source"] != source or not self.arm.is_moving():
             return False
         try:
-            self.jog(jog["velocity"], source=source)
+            if "axis" in jog:  # a Cartesian jog (cartesian_jog.py): on along its line
+                self.jog_cartesian(jog["axis"], jog["velocity"], source=source)
+            else:
+                self.jog(jog["velocity"], source=source)
         except (CommandRefused, NotController, *PLAN_REFUSALS):  # the jog runs out by itself
             return False
         return True

@@ -10,6 +10,7 @@ from armlab.station.arm_info import arm_info
 from server.deps import ControlAuth, StationDep
 from server.models import (
     ArmInfo,
+    CartesianJogRequest,
     GripperRequest,
     JogRequest,
     JointsRequest,
@@ -118,6 +119,23 @@ def post_jog(body: JogRequest, station: StationDep, controller: ControlAuth) -> 
     """Hold-to-run joint jog: runs for jog_hold_s after this request or the controller's last heartbeat
     (POST /api/heartbeat or the websocket's heartbeat message), then ramps to rest by itself."""
     station.jog(body.velocity_rad_s, source=controller, speed_percent=body.speed_percent)
+    return station.status()
+
+
+@router.post("/arm/jog/cartesian", response_model=Status)
+def post_cartesian_jog(body: CartesianJogRequest, station: StationDep, controller: ControlAuth) -> dict:
+    """Hold-to-run Cartesian jog: the gripper point moves along world x|y|z keeping its pitch and yaw, for jog_hold_s
+    after this request or the controller's last heartbeat, then ramps to rest by itself; it brakes before a place
+    the line cannot pass (the board, a joint limit, out of reach, the arm itself), 422 with the reason when it
+    cannot move at all."""
+    station.jog_cartesian(body.axis, body.velocity_m_s, source=controller, speed_percent=body.speed_percent)
+    return station.status()
+
+
+@router.post("/arm/jog/stop", response_model=Status)
+def post_jog_stop(station: StationDep, controller: ControlAuth) -> dict:
+    """The controller let go: its hold-to-run jog (joint or Cartesian) ramps down to rest now (nothing when none runs)."""
+    station.stop_jog(source=controller)
     return station.status()
 
 

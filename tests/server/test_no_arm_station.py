@@ -44,6 +44,7 @@ MOTION_ROUTES = [
     ("POST", "/api/arm/pose", {"position_m": [0.2, 0.1, 0.1]}),
     ("POST", "/api/arm/torque", {"enabled": False, "confirm": True}),
     ("POST", "/api/arm/jog", {"velocity_rad_s": [0.1, 0.0, 0.0, 0.0, 0.0]}),
+    ("POST", "/api/arm/jog/cartesian", {"axis": "x", "velocity_m_s": 0.05}),
     ("POST", "/api/arm/step", {"axis": "x", "distance_m": 0.01}),
     ("POST", "/api/gripper", {"action": "grasp"}),
     ("POST", "/api/grab", {"position_m": [0.1, 0.2, 0.0]}),

@@ -43,12 +43,14 @@ def test_every_model_has_a_typedef_with_exactly_its_fields():
 
 def test_message_type_lists_are_every_message_each_side_sends():
     text = gen_wire_types.render()
-    assert _constant(text, "CLIENT_MESSAGE_TYPES") == ["ack", "view", "command", "heartbeat"]
-    assert _constant(text, "SERVER_MESSAGE_TYPES") == ["frame", "telemetry", "event", "calibration", "hello"]
+    assert _constant(text, "CLIENT_MESSAGE_TYPES") == ["ack", "view", "command", "heartbeat", "jog", "jog_cartesian", "jog_stop"]
+    assert _constant(text, "SERVER_MESSAGE_TYPES") == ["frame", "telemetry", "event", "calibration", "hello", "jog_reply"]
     assert _constant(text, "EVENT_KINDS") == ["general", "scene"]
     # what the server parses is exactly the client list: one model per type, each accepted
-    assert len(CLIENT_MESSAGES) == 4 and len(SERVER_MESSAGES) == 5
+    assert len(CLIENT_MESSAGES) == 7 and len(SERVER_MESSAGES) == 6
     samples = {"ack": '{"type": "ack", "seq": 1}', "view": '{"type": "view", "view": "color", "layers": []}',
-               "command": '{"type": "command", "name": "estop"}', "heartbeat": '{"type": "heartbeat"}'}
+               "command": '{"type": "command", "name": "estop"}', "heartbeat": '{"type": "heartbeat"}',
+               "jog": '{"type": "jog", "velocity_rad_s": [0.1, 0, 0, 0, 0], "id": 1}',
+               "jog_cartesian": '{"type": "jog_cartesian", "axis": "x", "velocity_m_s": 0.05}', "jog_stop": '{"type": "jog_stop"}'}
     for kind in _constant(text, "CLIENT_MESSAGE_TYPES"):
-        assert type(CLIENT_MESSAGE.validate_json(samples[kind])).__name__.lower().startswith(kind)
+        assert type(CLIENT_MESSAGE.validate_json(samples[kind])).__name__.lower().startswith(kind.replace("_", ""))

@@ -140,3 +140,100 @@ def assert_stopped(what, limits, v, before, after_event, stopped, later):
     print(message)
     assert stopped.q_rad[0] - before.q_rad[0] <= bound, message
     assert abs(later.q_rad - stopped.q_rad).max() < 2e-3, f"{what}: the arm moved again after it stopped: {later.q_rad - stopped.q_rad}"
+
+
+# Cartesian holds (the gripper point along a world axis) --------------------------------------------------------------
+
+POINTING_DOWN_M = [0.0, 0.25, 0.12]  # over the board, the gripper straight down: x, y and z are open both ways
+CARTESIAN_LAG_M = 0.003  # the simulated servos trail the command a little and catch up after the stop
+OFF_AXIS_TOL_M = 0.003
+
+
+@dataclass
+class GripperTruth:
+    time_s: float
+    point_m: np.ndarray
+
+
+def gripper_truth(server) -> GripperTruth:
+    t = server.get("/api/sim/truth")
+    return GripperTruth(float(t["time_s"]), np.asarray(t["gripper"]["position_m"], dtype=float))
+
+
+def to_pointing_down(server) -> GripperTruth:
+    """The idle arm with its gripper straight down at POINTING_DOWN_M (a pose move); its truth."""
+    ready_idle(server)
+    server.post("/api/arm/pose?wait=true", {"position_m": POINTING_DOWN_M, "pitch_rad": float(np.pi / 2), "yaw_rad": 0.0})
+    ready_idle(server)
+    return gripper_truth(server)
+
+
+def cartesian_limits(page) -> tuple[float, float, float, float]:
+    """(top speed m/s at 100 %, acceleration m/s², hold s, control period s): the station's, as the page got them."""
+    from armlab.devices.sim.config import load_sim_config
+
+    limits = page.evaluate("window.armlab.holdLimits")
+    return (float(limits["jog_max_speed_m_s"]), float(limits["jog_accel_m_s2"]), float(limits["jog_hold_s"]),
+            load_sim_config().physics.control_period_s)
+
+
+def held_along(server, start: GripperTruth, axis: int, speed_m_s: float, page, travel_m: float = 0.03) -> tuple[GripperTruth, list]:
+    """Wait until the held Cartesian jog has carried the gripper point travel_m along `axis` (0, 1, 2; + direction) and
+    moves at (nearly) speed_m_s between two truth reads at least 0.05 s of sim time apart: (the last read, all reads)."""
+    samples = [start]
+    deadline = time.monotonic() + 20.0
+    while True:
+        page.wait_for_timeout(50)
+        current = gripper_truth(server)
+        previous = samples[-1]
+        if current.time_s - previous.time_s < 0.05:
+            continue
+        samples.append(current)
+        speed = (current.point_m[axis] - previous.point_m[axis]) / (current.time_s - previous.time_s)
+        if current.point_m[axis] - start.point_m[axis] >= travel_m and speed >= 0.8 * speed_m_s:
+            return current, samples
+        if time.monotonic() > deadline:
+            log = page.evaluate("document.getElementById('event-log').innerText")
+            raise AssertionError(f"the gripper did not move along axis {axis} at {speed_m_s:.3f} m/s; last {current}; log: {log}")
+
+
+def assert_cartesian_stop(what: str, page, server, axis: int, speed_m_s: float, start, samples, before, after_event) -> None:
+    """After the event (truth `before` just before it, `after_event` just after): at rest within the deadman's bound
+    v·(event window + one control period + hold) + v²/2a (+ the servos' lag) along the axis, still 0.5 s of sim time
+    later, and the whole path on the axis' line (the other two coordinates kept within OFF_AXIS_TOL_M)."""
+    top, accel, hold_s, period_s = cartesian_limits(page)
+    server.wait_status(lambda s: not s["moving"], 20.0, "the arm to stop")
+    stopped = gripper_truth(server)
+    later_deadline = time.monotonic() + 20.0
+    while (later := gripper_truth(server)).time_s < stopped.time_s + 0.5:
+        assert time.monotonic() < later_deadline, "the simulation stalled"
+        page.wait_for_timeout(50)
+    window_s = after_event.time_s - before.time_s
+    bound = speed_m_s * (window_s + period_s + hold_s) + speed_m_s**2 / (2 * accel) + CARTESIAN_LAG_M
+    travel = stopped.point_m[axis] - before.point_m[axis]
+    message = (f"{what}: {speed_m_s:.3f} m/s, event window {window_s:.3f} s sim, travelled {travel * 1000:.1f} mm after the last "
+               f"read before it; bound {bound * 1000:.1f} mm")
+    print(message)
+    assert travel <= bound, message
+    assert np.abs(later.point_m - stopped.point_m).max() < 1e-3, f"{what}: the gripper moved again after it stopped"
+    others = [i for i in range(3) if i != axis]
+    off = max(np.abs(t.point_m[others] - start.point_m[others]).max() for t in [*samples, stopped, later])
+    assert off < OFF_AXIS_TOL_M, f"{what}: the gripper point left the line by {off * 1000:.1f} mm"
+
+
+def open_counting_page(browser, url: str, **context_options):
+    """A page at `url` (its own context) whose websocket messages to the station are collected in page.sent (parsed
+    JSON text frames), and page errors in page.errors; the caller closes page.context."""
+    import json
+
+    context = browser.new_context(**({"viewport": {"width": 1600, "height": 1000}} | context_options))
+    page = context.new_page()
+    page.errors, page.sent = [], []
+    page.on("pageerror", lambda error: page.errors.append(str(error)))
+
+    def watch(ws) -> None:
+        ws.on("framesent", lambda payload: page.sent.append(json.loads(payload)) if isinstance(payload, str) else None)
+
+    page.on("websocket", watch)
+    page.goto(url)
+    return page

@@ -194,7 +194,7 @@ class App {
   }
 
   onClose() {
-    this.holdJog.stop("connection lost");
+    this.holdJog.onClosed();
     if (this.connected) this.log.add("warn", "connection lost; reconnecting…");
     this.connected = false;
     this.updateIndicators();
@@ -234,6 +234,9 @@ class App {
         break;
       case "calibration":
         this.showCalibration(msg);
+        break;
+      case "jog_reply":
+        this.holdJog.onReply(msg);
         break;
       case "error":
         this.log.error("command", msg.error || msg);

@@ -8,8 +8,8 @@ export const ARM_COMMANDS = Object.freeze(["home", "sleep", "move_joints", "move
 export const VIEWS = Object.freeze(["color", "depth", "topdown"]);
 export const LAYERS = Object.freeze(["tags", "detections", "grid"]);
 export const ERROR_CODES = Object.freeze(["wrong_state", "unreachable", "unsafe", "invalid", "not_found", "not_calibrated", "unauthorized", "forbidden", "not_controller", "needs_confirmation", "no_arm", "device", "disk_full", "stale_plan", "internal"]);
-export const SERVER_MESSAGE_TYPES = Object.freeze(["frame", "telemetry", "event", "calibration", "hello"]);
-export const CLIENT_MESSAGE_TYPES = Object.freeze(["ack", "view", "command", "heartbeat"]);
+export const SERVER_MESSAGE_TYPES = Object.freeze(["frame", "telemetry", "event", "calibration", "hello", "jog_reply"]);
+export const CLIENT_MESSAGE_TYPES = Object.freeze(["ack", "view", "command", "heartbeat", "jog", "jog_cartesian", "jog_stop"]);
 export const EVENT_KINDS = Object.freeze(["general", "scene"]);
 
 /**
@@ -165,6 +165,16 @@ export const EVENT_KINDS = Object.freeze(["general", "scene"]);
  * @property {(string|null)} [method] 'points' for a calibration from clicked points, 'arm-camera' from the arm's gripper tag (tags otherwise)
  * @property {(Object<string, *>|null)} [points] clicked-point fit: homography, reprojection and per-point errors (px)
  * @property {"calibration"} [type]
+ */
+
+/**
+ * Hold-to-run Cartesian jog: the gripper point moves along world x|y|z at velocity_m_s (signed; its top speed is
+ * the station's jog_max_speed_m_s, scaled by speed_percent) keeping its pitch and yaw, for jog_hold_s after each
+ * heartbeat, then brakes to rest by itself; where the line cannot go on it stops before it (422 when it cannot move).
+ * @typedef {Object} CartesianJogRequest
+ * @property {("x"|"y"|"z")} axis the world axis the gripper point moves along
+ * @property {number} velocity_m_s metres per second along the axis (+ or −); 0 ramps down to rest
+ * @property {number} [speed_percent] speed override, % of the configured speed (10-100)
  */
 
 /**
@@ -414,11 +424,49 @@ export const EVENT_KINDS = Object.freeze(["general", "scene"]);
  */
 
 /**
+ * Start (or keep going) a hold-to-run Cartesian jog, as POST /api/arm/jog/cartesian; answered by a jog_reply.
+ * @typedef {Object} JogCartesianMessage
+ * @property {("x"|"y"|"z")} axis the world axis the gripper point moves along
+ * @property {number} velocity_m_s metres per second along the axis (+ or −); 0 ramps down to rest
+ * @property {number} [speed_percent] speed override, % of the configured speed (10-100)
+ * @property {"jog_cartesian"} type
+ * @property {(number|null)} [id] echoed in the jog_reply, so the page knows which request it answers
+ */
+
+/**
+ * Start (or keep going) a hold-to-run joint jog, as POST /api/arm/jog; answered by a jog_reply.
+ * @typedef {Object} JogMessage
+ * @property {Array<number>} velocity_rad_s joint velocities, joint_names order; zeros stop
+ * @property {number} [speed_percent] speed override, % of the configured speed (10-100)
+ * @property {"jog"} type
+ * @property {(number|null)} [id] echoed in the jog_reply, so the page knows which request it answers
+ */
+
+/**
+ * The answer to a jog, jog_cartesian or jog_stop message: ok, or the HTTP status and error code the REST route
+ * would give (422 invalid / unreachable / unsafe, 409 not_controller / wrong_state, ...) and the reason.
+ * @typedef {Object} JogReplyMessage
+ * @property {"jog_reply"} [type]
+ * @property {(number|null)} [id]
+ * @property {boolean} ok
+ * @property {number} [status_code] what the REST route answers for the same request
+ * @property {(string|null)} [code] the error code (ErrorBody.code) when not ok
+ * @property {(string|null)} [message]
+ */
+
+/**
  * Hold-to-run jog: joint velocities kept for jog_hold_s after each heartbeat (this request, or a
  * heartbeat), then the arm ramps to rest by itself.
  * @typedef {Object} JogRequest
  * @property {Array<number>} velocity_rad_s joint velocities, joint_names order; zeros stop
  * @property {number} [speed_percent] speed override, % of the configured speed (10-100)
+ */
+
+/**
+ * The held button or key was let go: this session's controller's jog ramps down now (POST /api/arm/jog/stop).
+ * @typedef {Object} JogStopMessage
+ * @property {"jog_stop"} type
+ * @property {(number|null)} [id] echoed in the jog_reply, so the page knows which request it answers
  */
 
 /**
@@ -433,6 +481,8 @@ export const EVENT_KINDS = Object.freeze(["general", "scene"]);
  * @property {number} max_moving_time_s longest manual move accepted (moving_time_s is in (0, this])
  * @property {(number|null)} [jog_max_speed_rad_s] fastest hold-to-run joint jog at 100 % (each joint's own limit caps it)
  * @property {(number|null)} [jog_hold_s] a hold-to-run jog brakes this long after the controller's last heartbeat
+ * @property {(number|null)} [jog_max_speed_m_s] fastest hold-to-run Cartesian jog of the gripper point at 100 %
+ * @property {(number|null)} [jog_accel_m_s2] the Cartesian jog's ramp (and braking) acceleration
  */
 
 /**
