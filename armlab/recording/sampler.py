@@ -316,6 +316,8 @@ class StationSampler:
             version = newer  # even with no frame yet (version 0): the next wait then waits
             if frame is None:
                 continue
+            if self.config.image_delay_s > 0 and self._stop.wait(self.config.image_delay_s):
+                break  # after the stream's and perception's work on this frame (SamplingConfig.image_delay_s)
             now_s, now_ns = time.monotonic(), time.time_ns()
             frame_ns = ch.seconds_to_ns(frame.timestamp_s)
             if color_period_s is not None and now_s >= next_color_s and self._wanted(self.channels.color):

@@ -34,6 +34,10 @@ class SamplingConfig(StrictModel):
     depth_rate_hz: float = Field(5.0, ge=0.0, le=120.0)  # depth frames as 16UC1 raw images (0: none)
     joint_rate_hz: float = Field(100.0, gt=0.0, le=1000.0)  # measured and commanded joints
     transforms_rate_hz: float = Field(30.0, gt=0.0, le=200.0)  # frame transforms and the gripper
+    # A camera frame is encoded this long after it arrives (stamped with its own capture time all the same), once
+    # the live stream and perception have taken it: encoding at the same instant as the stream's own encode added
+    # ~1 ms to the stream's latency (bench/recording.py --stream-camera recorded). 0: at once.
+    image_delay_s: float = Field(0.012, ge=0.0, le=0.1)
 
 
 class RecordingConfig(SamplingConfig):
