@@ -284,7 +284,7 @@ class SimArm(SimDevice, Arm):
             return next((ref for ref in known if ref.trajectory is of), None) or TrajectoryReference(of, from_rest)
 
         taken_over = None if self._taken_over is None else (reference(self._taken_over[0]), self._taken_over[1])
-        return reference(trajectory, from_rest=taken_over is None), self._start_s, taken_over
+        return reference(trajectory, from_rest=self._servo is None), self._start_s, taken_over
 
     def _feed(self, sim_time_s: float) -> np.ndarray:
         """Under the lock: the ideal servos' references for the physics step starting at sim_time_s (servo_reference),

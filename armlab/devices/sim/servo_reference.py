@@ -32,10 +32,11 @@ class TrajectoryReference:
     position interpolates the samples linearly; the velocity runs linearly between the segments' midpoints, where
     it is their slopes, down to rest at the last sample, and before the first midpoint continues the change after
     it (armlab.devices.sim.arm.sample_trajectory's velocity, exactly), except from rest (from_rest: no trajectory
-    taken over): then it starts at 0 at the first sample and runs linearly to the first midpoint. Extrapolated back
-    instead, a first segment longer than the next (a jog starts with a 52 ms hold) started the reference at
-    -0.23 rad/s while the arm stood still, and the feed-forward (its change over a step) kicked the arm at 10x the
-    acceleration limit; a regular first segment gives 0 there either way."""
+    taken over): then it starts at 0 at the first sample and runs linearly to the first midpoint after it.
+    Extrapolated back instead, a first segment longer than the next (a jog starts with a 52 ms hold) started the
+    reference at -0.23 rad/s while the arm stood still, and the feed-forward (its change over a step) kicked the arm
+    at 10x the acceleration limit; a plan spliced onto a hold (a first segment of 1.7 ms) at 1.2x. A regular first
+    segment gives 0 there either way."""
 
     def __init__(self, trajectory: JointTrajectory, from_rest: bool = False) -> None:
         self.trajectory = trajectory
@@ -50,9 +51,10 @@ class TrajectoryReference:
             middles = [segment_middle_s(times, i) for i in range(len(times) - 1)]
             self._knots_s = np.array([*middles, times[-1]])
             self._velocities = np.vstack([slopes, np.zeros(positions.shape[1])])
-            if from_rest and middles[0] > times[0]:
-                self._knots_s = np.concatenate([[times[0]], self._knots_s])
-                self._velocities = np.vstack([np.zeros(positions.shape[1]), self._velocities])
+            if from_rest:  # at rest at the first sample; a midpoint before it (a first segment shorter than half the
+                later = self._knots_s > times[0]  # next: a plan spliced onto a hold) is left out
+                self._knots_s = np.concatenate([[times[0]], self._knots_s[later]])
+                self._velocities = np.vstack([np.zeros(positions.shape[1]), self._velocities[later]])
         # lookups at every physics step: plain lists for bisect, each piece's slope precomputed
         self._times_list, self._knots_list = times.tolist(), self._knots_s.tolist()
         self._slopes = slopes
