@@ -95,7 +95,9 @@ def take_over(running: JointTrajectory, running_start_s: float, now_s: float, le
     index = min(max(index, 2), len(times) - 1)
     # The prefix starts at the running trajectory's sample at or before now (its t = 0 is in the past: the gate
     # trims it to the moment it is sent), so its sample spacing stays the running trajectory's own.
-    before = min(int(np.searchsorted(times, t_now, side="right")) - 1, index - 1)
+    # (A motion from rest starts at the control tick that takes it, up to one control period after it was sent: taken
+    # over before that, the prefix starts at its first sample, planned_at_s in the future.)
+    before = max(min(int(np.searchsorted(times, t_now, side="right")) - 1, index - 1), 0)
     prefix = JointTrajectory(times[before : index + 1] - times[before], positions[before : index + 1].copy())
     planned_at_s = running_start_s + float(times[before])
     if at_end:  # the running trajectory ends inside the lead: at rest on its last sample

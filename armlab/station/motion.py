@@ -214,7 +214,7 @@ class MotionGate:
         record = self._commanded = (planned, planned_t0, self._command_count)
         self._paced_motion, self._pace_next = (planned, self._pace_next), None  # speed.py: what a change re-times
         if handover is not None:  # the arm samples the splice at its own clock minus this: a late send continues it
-            start_s = handover.planned_at_s + elapsed
+            start_s = handover.planned_at_s + max(elapsed, 0.0)  # (before 0: a motion from rest not begun yet, as it will)
             self._send_later(lambda: self.arm.command_trajectory(trajectory, start_time_s=start_s))
         elif continues:  # it starts at the running reference now: the same, from now
             self._send_later(lambda: self.arm.command_trajectory(trajectory, start_time_s=now))

@@ -1,8 +1,9 @@
 """SimArm: the Arm interface over the workcell's joint servos. Commands are validated (dof, finite,
-joint limits) before anything changes; the workcell calls control() at each control tick to feed the
-servos the trajectory's position and velocity. stop() never waits for the workcell's lock: when the lock
-is busy (a physics batch, a scene swap) the halt is latched and the next control tick applies it, so
-the arm holds within one control period of simulated time either way."""
+joint limits) before anything changes; the workcell calls control() at each control tick, where the servos
+take the trajectory commanded since, and (the ideal servos) servo_step() at every physics step between ticks,
+where they follow the trajectory taken (servo_reference says how). stop() never waits for the workcell's lock:
+when the lock is busy (a physics batch, a scene swap) the halt is latched and the next control tick applies
+it, so the arm holds within one control period of simulated time either way."""
 
 from __future__ import annotations
 
@@ -14,6 +15,7 @@ import numpy as np
 
 from armlab.devices.arm import Arm, JointState, JointTrajectory
 from armlab.devices.sim.device import SimDevice
+from armlab.devices.sim.servo_reference import TrajectoryReference, segment_middle_s, servo_reference
 from armlab.errors import InvalidInput
 
 if TYPE_CHECKING:
@@ -45,12 +47,7 @@ def sample_trajectory(trajectory: JointTrajectory, t_s: float) -> tuple[np.ndarr
     return positions[i] + slope * (t_s - times[i]), slope + accel * (t_s - _middle(times, i)), accel
 
 
-def _middle(times: np.ndarray, i: int) -> float:
-    """Where segment i's slope is its velocity: its midpoint; the first segment's as if it were as long as the next
-    (a takeover's first segment is a piece of the running trajectory's: the velocity goes on as it ran there)."""
-    if i == 0 and len(times) >= 3:
-        return float(times[1] - 0.5 * (times[2] - times[1]))
-    return float(0.5 * (times[i] + times[i + 1]))
+_middle = segment_middle_s
 
 
 def _segment_accel(times: np.ndarray, positions: np.ndarray, i: int, slope: np.ndarray, t_s: float) -> np.ndarray:
@@ -82,6 +79,9 @@ class SimArm(SimDevice, Arm):
         self._trajectory: JointTrajectory | None = None
         self._start_s = 0.0
         self._taken_over: tuple[JointTrajectory, float] | None = None  # the running trajectory a new one replaced, its start
+        # what the ideal servos follow between control ticks, as the last tick took it: (the trajectory's references, its
+        # start, those of the trajectory it took over and its start)
+        self._servo: tuple[TrajectoryReference, float, tuple[TrajectoryReference, float] | None] | None = None
         self._hold_rad: np.ndarray | None = None
         self._torque = True
         self._halt_requested = threading.Event()  # set by stop() without the lock; applied under it
@@ -149,7 +149,12 @@ class SimArm(SimDevice, Arm):
             running = self._trajectory
             self._taken_over = (running, self._start_s) if running is not None and now_s - self._start_s < running.duration_s else None
             self._trajectory = trajectory
-            self._start_s = now_s if start_time_s is None else float(start_time_s)
+            if start_time_s is not None:
+                self._start_s = float(start_time_s)
+            elif self._cell.ideal_servos:  # from rest: it starts when the servos take it (begun at now, the tick up to 4 ms
+                self._start_s = self._cell.next_control_s  # later took it that far in: a step to v(4 ms) at 1.5x the limit)
+            else:
+                self._start_s = now_s
             # The servos take it at their next control tick, as a servo takes a new goal at its next cycle. Applied
             # here, between ticks, the reference sampled now was held for the rest of the tick, ahead of the one the
             # tick had set by the time since: a one-physics-step kick (a takeover at 3 rad/s: the joints at 1.2x the
@@ -216,6 +221,7 @@ class SimArm(SimDevice, Arm):
             return
         self._halt_requested.clear()
         self._trajectory = None
+        self._servo = None
         self._hold_rad = self._cell.arm_reading()[0]  # as the driver holds: where the arm last read
         self._cell.apply_arm_reference(self._hold_rad, np.zeros_like(self._hold_rad))
         self._last_halt_s = (self._halt_requested_s, self._cell.sim_time_s)
@@ -224,32 +230,71 @@ class SimArm(SimDevice, Arm):
         self._require()
         with self._cell.lock:
             self._trajectory = None
+            self._servo = None
             self._hold_rad = self._cell.arm_reading()[0]
             self._cell.apply_arm_reference(self._hold_rad, np.zeros_like(self._hold_rad))
             self._cell.set_arm_torque(bool(enabled))
             self._torque = bool(enabled)
 
     def control(self, sim_time_s: float) -> None:
-        """Feed the servos (called by the workcell under its lock at every control tick)."""
+        """Feed the servos (called by the workcell under its lock at every control tick): the servos take the trajectory
+        commanded since the last tick; the ideal servos are fed its references for the physics step that starts now
+        (servo_reference) and follow it at every step until the next tick (servo_step); the real arm's firmware gets
+        the position goal once per tick."""
         self._apply_halt()
         self._last_reading = self._measure()
         trajectory = self._trajectory
         if trajectory is None or not self._torque:
+            self._servo = None
             return
         t = sim_time_s - self._start_s
-        position, velocity, accel = sample_trajectory(trajectory, t)
-        if self._taken_over is not None:
-            # A takeover starts inside a segment of the motion it replaces (the station splices the new plan onto the
-            # running samples): until that segment's middle its velocity and acceleration go on as they ran there
-            # (the new trajectory knows only the change of slope after it: the reference jumped by up to a*h/2).
-            if len(trajectory.times_s) >= 3 and t < _middle(trajectory.times_s, 0):
+        if self._taken_over is not None and not (len(trajectory.times_s) >= 3 and t < _middle(trajectory.times_s, 0)):
+            self._taken_over = None
+        if self._cell.ideal_servos:
+            self._servo = self._take(trajectory)
+            position = self._feed(sim_time_s)
+        else:
+            position, velocity, accel = sample_trajectory(trajectory, t)
+            if self._taken_over is not None:
                 running, running_start_s = self._taken_over
                 _, velocity, accel = sample_trajectory(running, sim_time_s - running_start_s)
-            else:
-                self._taken_over = None
-        self._cell.apply_arm_reference(position, velocity, accel)
+            self._cell.apply_arm_reference(position, velocity, accel)
         if t >= trajectory.duration_s:
             error = np.max(np.abs(self._cell.arm_positions() - position))
             if error <= self._settle_tolerance_rad or t >= trajectory.duration_s + self._settle_timeout_s:
                 self._trajectory = None
                 self._hold_rad = position
+                if self._servo is not None:  # the ideal servos hold at rest at the last sample, no acceleration fed
+                    # forward (the last one fed was a bit of the braking: left on, it pushed the held arm ~1.3 mrad away)
+                    self._servo = None
+                    self._cell.apply_arm_reference(position, np.zeros_like(position), np.zeros_like(position))
+
+    def servo_step(self, sim_time_s: float) -> None:
+        """The ideal servos between control ticks (called by the workcell under its lock at every other physics step):
+        follow the trajectory the last tick took."""
+        if self._servo is not None and self._torque and not self._halt_requested.is_set():
+            self._feed(sim_time_s)
+
+    def _take(self, trajectory: JointTrajectory) -> tuple:
+        """The ideal servos' _servo for the current trajectory (references computed once, when a trajectory is first
+        taken: the one taken over is the one followed until now)."""
+        known = () if self._servo is None else (self._servo[0], *(self._servo[2] or ())[:1])
+
+        def reference(of: JointTrajectory, from_rest: bool = False) -> TrajectoryReference:
+            return next((ref for ref in known if ref.trajectory is of), None) or TrajectoryReference(of, from_rest)
+
+        taken_over = None if self._taken_over is None else (reference(self._taken_over[0]), self._taken_over[1])
+        return reference(trajectory, from_rest=self._servo is None), self._start_s, taken_over
+
+    def _feed(self, sim_time_s: float) -> np.ndarray:
+        """Under the lock: the ideal servos' references for the physics step starting at sim_time_s (servo_reference),
+        and the acceleration fed forward: the change from the velocity reference of the step before to this one's over
+        a step, the velocity change the integrator must make (the instantaneous acceleration was up to one 10 ms
+        sample's change early or late at a sample's corner). Returns the position reference."""
+        trajectory, start_s, taken_over = self._servo
+        timestep_s = self._cell.timestep_s
+        position, velocity = servo_reference(trajectory, start_s, taken_over, sim_time_s, timestep_s)
+        accel = (velocity - self._cell.arm_reference_velocity()) / timestep_s
+        self._cell.apply_arm_reference(position, velocity, accel)
+        return position
+

@@ -57,6 +57,11 @@ class SimClock:
     def sim_time_s(self) -> float:
         return float(self._data.time)
 
+    @property
+    def next_control_s(self) -> float:
+        """When the next control tick runs (simulated s; now if it is due at the coming physics step)."""
+        return max(float(self._data.time), float(self._next_control_s))
+
     def _step_once(self) -> None:
         data = self._data
         if data.time + 1e-9 >= self._next_control_s:
@@ -67,7 +72,12 @@ class SimClock:
             self.gripper.control(data.time)
             if self._feeder is not None:
                 self._feeder.tick(self._model, data)
-        mujoco.mj_step(self._model, data)
+        elif self._publisher is None and self.arm.is_connected:  # the ideal servos follow their trajectory at every step
+            self.arm.servo_step(data.time)
+        mujoco.mj_step1(self._model, data)  # mj_step in two halves (bit for bit the same): the ideal servos' feed-forward
+        if self._publisher is None:         # takes the dynamics of the state this step integrates from
+            self._apply_feed_forward()
+        mujoco.mj_step2(self._model, data)
         if self._publisher is not None and self._publisher.due(data.time):
             self._publisher.publish(float(data.time), data.qpos[self._arm_qpos], data.qvel[self._arm_qvel])
         if self._path is not None and self._path.due(data.time):

@@ -69,6 +69,7 @@ class SimWorkcell(SimClock, SimCameraRig, SimTruth):
         self.realism = resolve_realism(self.config.realism, self._sim)
         pose_rng, noise_rng, real_rng, rig_rng = (np.random.default_rng(s) for s in np.random.SeedSequence(self.config.seed).spawn(4))
         self._publisher = None  # the real arm's joint-state publisher; None: the ideal arm (readings are the truth)
+        self._feed_forward: tuple[np.ndarray, np.ndarray] | None = None  # the ideal servos' (acceleration, velocity) to feed forward
         config = None if not arm_is_real(self.realism) or self._suction else self._sim.servos(self._workcell.arm).realism
         if config is not None:  # the DH arms (the UR3) stay ideal: see config/sim.yaml arms
             self._geometry = real_geometry(self._geometry, config, rig_rng, self.config.arm_rig_error)
@@ -254,6 +255,17 @@ class SimWorkcell(SimClock, SimCameraRig, SimTruth):
         """The servos' position references: where the arm is commanded to be now."""
         return self._data.ctrl[self._pos_act].copy()
 
+    @property
+    def ideal_servos(self) -> bool:
+        """The ideal arm's servos (position + velocity servo, acceleration fed forward, following the trajectory at
+        every physics step); False: the real arm's firmware (`realism: real`: a P gain, goals once per control tick)."""
+        return self._publisher is None
+
+    @property
+    def timestep_s(self) -> float:
+        """The physics step (simulated s)."""
+        return float(self._model.opt.timestep)
+
     def arm_reference_velocity(self) -> np.ndarray:
         """The servos' velocity feed-forward: the commanded trajectory's slope now (the real arm's firmware is
         given it but uses none)."""
@@ -288,14 +300,23 @@ class SimWorkcell(SimClock, SimCameraRig, SimTruth):
             self._commanded_velocity = np.clip(np.asarray(velocity_rad_s, dtype=float), -10.0, 10.0)
             return
         self._data.ctrl[self._vel_act] = np.clip(velocity_rad_s, -10.0, 10.0)
+        self._feed_forward = None if accel_rad_s2 is None else (np.asarray(accel_rad_s2, float), np.asarray(velocity_rad_s, float))
+
+    def _apply_feed_forward(self) -> None:
+        """Inside a physics step, between mj_step1 and mj_step2 (the model's mass matrix and bias forces are those of
+        the state the step integrates from): the ideal servos' feed-forward torque for the acceleration last applied
+        (apply_arm_reference), or none. Computed before the step instead, from the step before's quantities: bench
+        seed 0's replacements 1.0007x the acceleration limit instead of 1.0005x."""
         if len(self._ff_act):
-            self._data.ctrl[self._ff_act] = self._inverse_dynamics(accel_rad_s2, velocity_rad_s) if accel_rad_s2 is not None else 0.0
+            request = self._feed_forward
+            self._data.ctrl[self._ff_act] = 0.0 if request is None else self._inverse_dynamics(*request)
 
     def _inverse_dynamics(self, accel_rad_s2, velocity_rad_s) -> np.ndarray:
         """The torque (N*m, the arm's joints) that makes the arm follow `accel_rad_s2` at `velocity_rad_s`, from the
         model, as the ideal servos compensate gravity from it (gravcomp): M(q) a (the joints' coupling included) +
         the Coriolis and centrifugal terms at the measured state + the joints' viscous friction. The mass-matrix term
-        alone left 1.05x the limit where a joint's acceleration changes while the others move fast (bench seed 0)."""
+        alone left 1.05x the limit where a joint's acceleration changes while the others move fast (bench seed 0).
+        Needs the model's position and velocity stages at the current state (mj_step1)."""
         model, data = self._model, self._data
         vector = np.zeros(model.nv)
         vector[self._arm_qvel] = accel_rad_s2
