@@ -38,7 +38,8 @@ def test_a_jog_follows_its_line_keeping_pitch_and_yaw_and_stops_within_the_bound
 
 def test_a_boundary_ahead_is_braked_for_before_it_and_named():
     line = jog_line(ARM, Q_DOWN, "z")
-    wall_m = -0.02  # a check of the caller's refuses the gripper point lower than 20 mm below the start
+    free = plan_cartesian_jog(ARM, line, Q_DOWN, 0.0, -0.1, HOLD_S, ACCEL_M_S2, RATE_HZ)
+    wall_m = 0.6 * float(free.distances_m.min())  # a check of the caller's: the unchecked jog would go well past it
 
     def first_unsafe(trajectory):
         z = np.array([p.position_m[2] for p in gripper_poses(ARM, trajectory.positions_rad)]) - line.origin_m[2]
