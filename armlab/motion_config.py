@@ -20,9 +20,6 @@ class MotionConfig(StrictModel):
     lift_height_m: float = Field(0.08, gt=0.0, le=0.3)
     grasp_depth_m: float = Field(0.015, ge=0.0, le=0.05)
     pad_reach_m: float = Field(0.009, ge=0.0, le=0.1)
-    # The pads close at least this far above a block's centre of mass: gripped below it, a block held a few mm
-    # off-centre (the real arm's residual) pivots about the pads' axis and hangs tipped 90 degrees (issue 19).
-    grasp_above_centre_m: float = Field(0.002, ge=0.0, le=0.02)
     place_clearance_m: float = Field(0.005, ge=0.0, le=0.05)
     board_clearance_m: float = Field(0.003, ge=0.0, le=0.05)
     vertical_speed_m_s: float = Field(0.10, gt=0.0, le=1.0)
@@ -84,9 +81,8 @@ class MotionConfig(StrictModel):
 
     def grasp_depth_for(self, edge_m: float) -> float:
         """How far below a block's top face the gripper point closes: grasp_depth_m, but never so deep
-        that the pads (reaching pad_reach_m below the gripper point) touch what the block stands on, nor
-        below grasp_above_centre_m over the block's centre (the pads' axis above its centre of mass: stable)."""
-        return max(0.0, min(self.grasp_depth_m, edge_m - self.pad_reach_m, edge_m / 2.0 - self.grasp_above_centre_m))
+        that the pads (reaching pad_reach_m below the gripper point) touch what the block stands on."""
+        return max(0.0, min(self.grasp_depth_m, edge_m - self.pad_reach_m))
 
 
 def load_motion_config(path: str | Path | None = None) -> MotionConfig:
