@@ -33,6 +33,8 @@ from collections import Counter, defaultdict
 from dataclasses import dataclass, field
 
 os.environ.setdefault("MUJOCO_GL", "egl")
+# This tree's armlab, not the one the venv's editable install points at (a worktree sharing main's .venv ran main's).
+sys.path.insert(0, os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
 
 from armlab.scene import COLORS  # noqa: E402
 from armlab.tasks import JOBS  # noqa: E402
