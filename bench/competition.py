@@ -33,6 +33,8 @@ from collections import Counter, defaultdict
 from dataclasses import dataclass, field
 
 os.environ.setdefault("MUJOCO_GL", "egl")
+# This tree's armlab, not the one the venv's editable install points at (a worktree sharing main's .venv ran main's).
+sys.path.insert(0, os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
 
 from armlab.scene import COLORS  # noqa: E402
 from armlab.tasks import JOBS  # noqa: E402
@@ -115,14 +117,15 @@ def seconds(value, digits: int = 1) -> str:
     return "-" if value is None else f"{value:.{digits}f} s"
 
 
-def run_cell(cell: Cell, seeds: list[int], workers: int, ray_address: str | None, realism: str | None = None) -> None:
+def run_cell(cell: Cell, seeds: list[int], workers: int, ray_address: str | None, realism: str | None = None,
+             arm_calibration: bool = True) -> None:
     reason = episode_unsupported(cell.job, cell.level, cell.workcell)
     if reason:
         cell.skipped = f"not run: {reason}"
         return
     cell.started_utc = now_utc()
     for run in evaluate(cell.job, cell.level, seeds, workers=workers, ray_address=ray_address, workcell=cell.workcell,
-                        realism=realism):
+                        realism=realism, arm_calibration=arm_calibration):
         cell.runs.append(run)
         print(".", end="", flush=True)
 
@@ -257,6 +260,9 @@ def main() -> int:
     parser.add_argument("--realism", choices=("real", "camera", "ideal"), default=None,
                         help="real (the camera's and the arm's imperfections), camera (the camera's only) or ideal "
                              "(default: config/sim.yaml `realism`)")
+    parser.add_argument("--no-arm-calibration", action="store_true",
+                        help="on the real arm, run the jobs without calibrating the arm from the camera first (issue 19's "
+                             "table beside the calibrated run)")
     parser.add_argument("--workcells", default=DEFAULT_WORKCELL,
                         help=f"comma-separated workcells (config/workcells; default {DEFAULT_WORKCELL}): each job runs on each")
     parser.add_argument("--json-out", metavar="FILE",
@@ -288,7 +294,8 @@ def main() -> int:
     where = f"Ray cluster {args.ray}" if args.ray else f"{args.workers} worker process(es)"
     print(f"seeds ({len(seeds)}): {', '.join(map(str, seeds))}")
     print(f"jobs in armlab.tasks.JOBS: {', '.join(f'{n} L{min(s.levels)}-{max(s.levels)}' if s.levels else n for n, s in JOBS.items())}")
-    print(f"workcells: {', '.join(workcells)}; realism: {args.realism or 'config/sim.yaml'}")
+    print(f"workcells: {', '.join(workcells)}; realism: {args.realism or 'config/sim.yaml'}"
+          + ("; arm calibration OFF" if args.no_arm_calibration else ""))
     print(f"running on {where}; one dot per run", flush=True)
 
     cells: dict[tuple[str, str, int | None], Cell] = {}
@@ -301,7 +308,7 @@ def main() -> int:
                     continue  # none of its levels asked for
                 cell = cells[(workcell, name, level)] = Cell(name, level, workcell=workcell)
                 print(f"{cell.name}: ", end="", flush=True)
-                run_cell(cell, seeds, args.workers, args.ray, args.realism)
+                run_cell(cell, seeds, args.workers, args.ray, args.realism, not args.no_arm_calibration)
                 print(f" {cell.skipped or 'done'}", flush=True)
     elapsed_s = time.monotonic() - started
 

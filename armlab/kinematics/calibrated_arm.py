@@ -4,12 +4,16 @@ swaps one reference inside it, so every planner that holds the station's model (
 pose moves, Cartesian replay, the safety gate, the self filter) moves with the calibrated arm from then on.
 
 fk(q) is where the gripper stands for commanded joints q (the calibrated model); ik solves the nominal model,
-then corrects its target a few times (fixed point) until the calibrated fk meets the requested position and
-pitch within IK_TOLERANCE_M / IK_TOLERANCE_RAD. Without a calibration everything is the nominal model's.
+then corrects its target a few times (fixed point) until the calibrated fk meets the requested position,
+pitch and, when one is asked for, the fingers' yaw (the closing axis across the block's faces, mod 90 degrees:
+without it the base's yaw and the wrist's zero offset turned the fingers ~5 degrees off the block) within
+IK_TOLERANCE_M / IK_TOLERANCE_RAD. Without a calibration everything is the nominal model's.
 Anything else (limits, names, home, config) is the nominal model's.
 """
 
 from __future__ import annotations
+
+import math
 
 import numpy as np
 
@@ -89,15 +93,17 @@ class CalibratedArm:
         if self._calibration is None:
             return q, used
         goal = np.asarray(position_m, float)
-        aim, aim_pitch = goal.copy(), float(used)
+        aim, aim_pitch, aim_yaw = goal.copy(), float(used), yaw
         for _ in range(IK_ITERATIONS):
             T = self.fk(q)
             miss = T[:3, 3] - goal
             pitch_miss = self.pitch_of(q) - used
-            if np.linalg.norm(miss) < IK_TOLERANCE_M and abs(pitch_miss) < IK_TOLERANCE_RAD:
+            yaw_miss = 0.0 if yaw is None else finger_yaw_miss_rad(T, yaw)
+            if np.linalg.norm(miss) < IK_TOLERANCE_M and abs(pitch_miss) < IK_TOLERANCE_RAD and abs(yaw_miss) < IK_TOLERANCE_RAD:
                 return q, used
             aim, aim_pitch = aim - miss, aim_pitch - pitch_miss
-            q, _ = self.nominal.ik_with_pitch(aim, aim_pitch, yaw, q_seed)
+            aim_yaw = None if yaw is None else aim_yaw - yaw_miss
+            q, _ = self.nominal.ik_with_pitch(aim, aim_pitch, aim_yaw, q_seed)
         if np.linalg.norm(self.fk(q)[:3, 3] - goal) > 100 * IK_TOLERANCE_M:
             raise Unreachable(f"target {goal.round(4).tolist()} m: the calibrated arm does not converge there", "out of reach")
         return q, used
@@ -113,16 +119,20 @@ class CalibratedArm:
         wanted = np.array([approach_pitch_rad(T, nominal_base) for T in self.nominal.fk(q[rows])])
         aim, aim_pitch = goal.copy(), np.full(len(goal), np.nan)
         aim_pitch[rows] = wanted
-        yaw_all = None if yaw is None else np.broadcast_to(np.asarray(yaw, float), (len(goal),))
+        yaw_goal = None if yaw is None else np.broadcast_to(np.asarray(yaw, float), (len(goal),)).copy()
+        yaw_all = None if yaw is None else yaw_goal.copy()
         seeds = None if q_seed is None else np.broadcast_to(np.asarray(q_seed, float), q.shape)
         for _ in range(IK_ITERATIONS):
             T = self.fk(q[rows])
             miss = T[:, :3, 3] - goal[rows]
             pitch_miss = np.array([approach_pitch_rad(t, base) for t in T]) - wanted
-            if np.abs(miss).max() < IK_TOLERANCE_M and np.abs(pitch_miss).max() < IK_TOLERANCE_RAD:
+            yaw_miss = np.zeros(len(rows)) if yaw is None else np.array([finger_yaw_miss_rad(t, y) for t, y in zip(T, yaw_goal[rows])])
+            if np.abs(miss).max() < IK_TOLERANCE_M and np.abs(pitch_miss).max() < IK_TOLERANCE_RAD and np.abs(yaw_miss).max() < IK_TOLERANCE_RAD:
                 break
             aim[rows] -= miss
             aim_pitch[rows] -= pitch_miss
+            if yaw_all is not None:
+                yaw_all[rows] -= yaw_miss
             solved, fine = self.nominal.ik_batch(aim[rows], aim_pitch[rows], None if yaw_all is None else yaw_all[rows],
                                                  None if seeds is None else seeds[rows])
             q[rows[fine]] = solved[fine]
@@ -173,6 +183,16 @@ class CalibratedArm:
             except Unreachable:
                 pass
         return q, ok
+
+
+def finger_yaw_miss_rad(T_world_tool: np.ndarray, yaw_rad: float) -> float:
+    """How far (rad, wrapped to +-45 degrees) the fingers' closing axis (the tool's y), seen from above, is turned from
+    the nearest face normal of a block at yaw_rad (yaw + k*90 degrees): 0 when the fingers close across its faces."""
+    axis = np.asarray(T_world_tool, float)[:3, 1]
+    if math.hypot(axis[0], axis[1]) < 1e-6:  # the fingers close vertically: no yaw to meet
+        return 0.0
+    quarter = math.pi / 2
+    return (math.atan2(axis[1], axis[0]) - float(yaw_rad) + quarter / 2) % quarter - quarter / 2
 
 
 def _pose_error(T: np.ndarray, target: np.ndarray) -> np.ndarray:

@@ -6,6 +6,11 @@ offsets, compliance, base pose and link lengths; installed into the station's ar
 The mount (works the same on the real arm): the workcell's gripper tag, flat on the gripper's top, its centre
 measured in the gripper-point frame (config/workcells/<name>.yaml gripper.marker.position_m).
 
+The board need not be cleared: the job first looks at what stands on it, and a pose whose move would pass through
+something seen (a block, a pile) is tried higher (CLEAR_RAISES_M), else skipped with the reason. Before, the
+poses 80 mm over the board swept blocks over: on pick_sort L3 seeds 1 and 2 the calibration tipped 2 and 1 blocks,
+which the jobs then moved lying on their sides (the judge: "tipped 90 deg").
+
 Refused, the previous arm calibration kept and nothing installed: no marker in the workcell, the camera not
 calibrated, the gripper holding something, fewer than MIN_POSES poses where the tag was seen (hidden), a fit
 no better than the nominal model.
@@ -18,10 +23,12 @@ from collections.abc import Sequence
 
 import numpy as np
 
-from armlab.kinematics import Unreachable
+from armlab.errors import PLAN_REFUSALS
 from armlab.kinematics.arm_calibration import MIN_POSES, ArmCalibration, ArmCalibrationError, fit_arm
-from armlab.motion.safety import UnsafeTrajectory
+from armlab.motion.clearance import OBJECT_BOX_RADIUS_M, box_around, first_collision
 from armlab.skills.arm_camera import SETTLE_SPEED_RAD_S, CalibrationPose, pose_joints
+from armlab.skills.perceive import look
+from armlab.station.arm_info import station_end_effector
 from armlab.station.core import Station
 from armlab.station.jobs import Job, JobContext
 from armlab.vision import detect_tags
@@ -29,6 +36,10 @@ from armlab.vision.geometry import transform_points
 from armlab.vision.gripper_marker import MarkerNotFound, find_marker
 from armlab.workcell import load_workcell
 
+CLEAR_RAISES_M = (0.0, 0.06, 0.12)  # a pose whose move would pass through an object seen is tried this much higher
+# The arm is not calibrated yet: the real RX200 stands up to ~40 mm lower (its droop) and ~10 mm aside of where the
+# nominal model says, so the objects' boxes grow by this much up and sideways for the check.
+UNCALIBRATED_MARGIN_UP_M, UNCALIBRATED_MARGIN_SIDE_M = 0.04, 0.01
 JOB_NAME, JOB_DETAIL = "calibrate-arm", "the arm from the camera (gripper tag, offsets + compliance + base)"
 
 
@@ -69,15 +80,15 @@ def calibrate_arm(station: Station, poses: Sequence[CalibrationPose] | None = No
         K, dist = intrinsics.K, np.asarray(intrinsics.dist, dtype=float)
         T_world_depth = np.asarray(calibration.T_world_depth, float)
         q_start, start_s = station.joints_rad(), station.clock_s()
+        boxes = obstacle_boxes(look(station, ctx))
         commanded, readings, seen, used, skipped = [], [], [], [], []
         for index, pose in enumerate(chosen):
             ctx.progress(index / (len(chosen) + 1), f"pose {index + 1} of {len(chosen)}")
-            try:
-                q = pose_joints(station, pose)
-                station.run_trajectory(ctx, station.plan_move(q))
-            except (Unreachable, UnsafeTrajectory) as error:  # planned and checked before moving: nothing moved
-                skipped.append({"pose": index, "reason": f"not visited: {error}"})
+            q, problem = clear_move(station, pose, boxes)
+            if q is None:  # planned and checked before moving: nothing moved
+                skipped.append({"pose": index, "reason": f"not visited: {problem}"})
                 continue
+            station.run_trajectory(ctx, station.plan_move(q))
             station.wait_in_job(ctx, lambda: float(np.abs(station.arm.read_joint_state().velocity_rad_s).max()) < SETTLE_SPEED_RAD_S, 2.0)
             frame = station.frame_after(time.time())
             try:
@@ -106,6 +117,35 @@ def calibrate_arm(station: Station, poses: Sequence[CalibrationPose] | None = No
         return result
 
     return station.start_job("calibrate", JOB_NAME, run, detail=JOB_DETAIL, source=source)
+
+
+def obstacle_boxes(objects: list[dict]) -> list:
+    """Obstacle boxes (armlab.motion.clearance) around every object seen on the board, up to its top, grown by the
+    uncalibrated arm's error (UNCALIBRATED_MARGIN_UP_M, UNCALIBRATED_MARGIN_SIDE_M)."""
+    return [box_around(f"the {o.get('color') or ''} {o.get('size') or 'object'} at ({o['position_m'][0] * 1000:.0f}, "
+                       f"{o['position_m'][1] * 1000:.0f}) mm", o["position_m"], OBJECT_BOX_RADIUS_M + UNCALIBRATED_MARGIN_SIDE_M,
+                       o["position_m"][2] + UNCALIBRATED_MARGIN_UP_M)
+            for o in objects]
+
+
+def clear_move(station: Station, pose: CalibrationPose, boxes: list) -> tuple[np.ndarray | None, str]:
+    """(joints, "") for the pose, or for it raised by the first of CLEAR_RAISES_M whose move from the current joints
+    is reachable, passes the gate's checks and keeps clear of boxes; (None, why) when none does."""
+    finger_length_m = station_end_effector(station).finger_length_m
+    problem = "no height tried"
+    for raise_m in CLEAR_RAISES_M:
+        x, y, z = pose.position_m
+        raised = CalibrationPose((x, y, z + raise_m), pose.pitch_rad, pose.wrist_rotate_rad)
+        try:
+            q = pose_joints(station, raised)
+            hit = first_collision(station.model, station.plan_move(q), boxes, finger_length_m=finger_length_m)
+        except PLAN_REFUSALS as error:
+            problem = str(error)
+            continue
+        if hit is None:
+            return q, ""
+        problem = f"the move would hit {hit}"
+    return None, problem
 
 
 def summary(fit: ArmCalibration, used: list[int], skipped: list[dict], planned: int) -> dict:

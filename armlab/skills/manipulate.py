@@ -14,11 +14,12 @@ from armlab.motion import GripperStep, TrajectoryStep, check_trajectory, plan_jo
 from armlab.motion import plan_pick as motion_plan_pick
 from armlab.motion import plan_place as motion_plan_place
 from armlab.motion.cartesian import plan_vertical_segment
-from armlab.motion.clearance import first_collision
+from armlab.motion.clearance import first_collision, lowest_corners_m
 from armlab.motion.gripper_box import joint_moves_inside
 from armlab.motion.pick_place import solve_approach
 from armlab.motion.safety import UnsafeTrajectory
 from armlab.station.arm_info import station_end_effector
+from armlab.station.body_check import palm_corners_m
 from armlab.station.core import Station
 from armlab.station.jobs import JobContext
 
@@ -77,7 +78,12 @@ def run_steps(station: Station, ctx: JobContext, steps: Sequence, replan: Callab
 TRANSFER_CLEARANCE_M = 0.05  # the held block's bottom (or the fingers) this far above the tallest obstacle
 TALL_OVER_TARGET_M = 0.16  # obstacles this much above the target (taller than a pile of four) are checked on the way down too
 MAX_PLACE_TILT_RAD = np.radians(5.0)  # by default a block is released at most this far from top-down
-SHORT_APPROACH_FRACTIONS = (0.75, 0.5)  # of approach_height_m: last-resort straight descents (a tall column far out)
+SHORT_APPROACH_FRACTIONS = (0.75, 0.5)
+# A grasp whose descent would put the open fingers' box (or the palm) into the board - a low block reached only at a
+# pitch short of top-down, the box's far corners dipping - is raised by the dip (and this margin), at most by
+# MAX_GRASP_RAISE_M in all: the gate refused such picks (the real arm, calibrated, reaches less far: pick_sort L3
+# seed 3 gave up on two small blocks, "the fingers would go 2.8 mm into the board").
+GRASP_RAISE_MARGIN_M, MAX_GRASP_RAISE_M = 0.001, 0.006  # of approach_height_m: last-resort straight descents (a tall column far out)
 
 
 def _finger_seed(station: Station, q_start, point_m, pitch_rad: float, yaw_rad: float, finger_axis_rad: float):
@@ -233,9 +239,28 @@ def plan_pick(station: Station, top_center_m, yaw_rad: float | None, edge_m: flo
     grasp_m = top - np.array([0.0, 0.0, tool.held_below_top_m(config, edge_m)])
     grasp_m[2] = max(grasp_m[2], config.board_clearance_m, tool.lowest_grasp_m(config))
     q_start = station.joints_rad() if q_start is None else q_start
-    steps = _transfer_plan(station, q_start, grasp_m, yaw_rad, boxes, None, "grasp", ("move above block", "descend to grasp", "lift"),
-                           max_transfer_z_m, finger_axis_rad, gripper_box=gripper_box)
+    raised_m = 0.0
+    while True:
+        steps = _transfer_plan(station, q_start, grasp_m, yaw_rad, boxes, None, "grasp", ("move above block", "descend to grasp", "lift"),
+                               max_transfer_z_m, finger_axis_rad, gripper_box=gripper_box)
+        dip_m = _parts_below_board_m(station, steps)
+        if dip_m <= 0.0 or raised_m + dip_m + GRASP_RAISE_MARGIN_M > MAX_GRASP_RAISE_M:
+            break  # clear, or too far to raise: the gate refuses it with its reason
+        grasp_m[2] += dip_m + GRASP_RAISE_MARGIN_M
+        raised_m += dip_m + GRASP_RAISE_MARGIN_M
     return [GripperStep(tool.release_before_pick, "release"), *steps]
+
+
+def _parts_below_board_m(station: Station, steps: list) -> float:
+    """How far (m, 0 when clear) the open fingers' box or the palm (the gate's body check) comes below the board
+    during the plan's descent to grasp (the "descend to grasp" step; the station's model)."""
+    tool = station_end_effector(station)  # the boxes Station.check_body checks (finger_box, palm_corners_m)
+    corners = [tool.body_box(station.motion_config, station.model.config).corners_m()]
+    if tool.has_palm and (palm := palm_corners_m(station.model.config.name)) is not None:
+        corners.append(palm)
+    descents = [s.trajectory.positions_rad for s in steps if isinstance(s, TrajectoryStep) and s.name == "descend to grasp"]
+    lowest = min((float(lowest_corners_m(station.model, q, c)[0].min()) for q in descents for c in corners), default=0.0)
+    return max(0.0, -lowest)
 
 
 def plan_place(station: Station, surface_m, yaw_rad: float | None, edge_m: float, boxes: list, q_start=None,
