@@ -62,6 +62,11 @@ class JogLine:
         point = np.asarray(arm.fk(np.asarray(q_rad, float)), float)[:3, 3]
         return float((point - self.origin_m) @ self.direction)
 
+    def speed_m_s(self, arm, q_rad, qdot_rad_s, dt_s: float) -> float:
+        """The gripper point's speed along the line at q moving at qdot: the distance covered over the last dt_s."""
+        q = np.asarray(q_rad, float)
+        return (self.distance_m(arm, q) - self.distance_m(arm, q - np.asarray(qdot_rad_s, float) * dt_s)) / dt_s
+
     def points_m(self, distances_m: np.ndarray) -> np.ndarray:
         """World points (N, 3) at these distances along the line."""
         return self.origin_m[None, :] + np.asarray(distances_m, float)[:, None] * self.direction[None, :]

@@ -17,13 +17,14 @@ import math
 import numpy as np
 
 from armlab.devices.arm import JointTrajectory
-from armlab.errors import PLAN_REFUSALS, CommandRefused, InvalidInput, NotController
+from armlab.errors import InvalidInput
 from armlab.motion.blend import arm_limits
 from armlab.motion.cartesian_jog import AXES, MOVES_M, jog_line, plan_cartesian_jog
 from armlab.motion.errors import StepRefused
 from armlab.motion.jog import plan_jog
 from armlab.motion.safety import UnsafeTrajectory
 from armlab.station.manual import checked_speed_percent
+from armlab.station.planned_moves import joined
 
 AT_REST_M_S = 1e-4  # the handover moves slower than this along the line: the jog starts from rest
 
@@ -66,7 +67,7 @@ class CartesianJog:
                 outcome.update(line_from_s=handover.takes_over_s + brake.duration_s,
                                brake_from=None if brake_from is None else {"axis": brake_from["axis"], "line": brake_from["line"]})
             line = running["line"] if same_line else jog_line(self.model, q0, axis)
-            v0 = 0.0 if qdot0 is None else (line.distance_m(self.model, q0) - line.distance_m(self.model, q0 - qdot0 * dt)) / dt
+            v0 = 0.0 if qdot0 is None else line.speed_m_s(self.model, q0, qdot0, dt)
             if abs(v0) < AT_REST_M_S:
                 v0 = 0.0
             jog = plan_cartesian_jog(self.model, line, q0, v0, velocity, hold_s, config.jog_accel_m_s2,
@@ -75,7 +76,7 @@ class CartesianJog:
                 raise StepRefused(f"{_label(axis, velocity)} cannot move from here: {jog.stopped_by}", "boundary")
             outcome.update(line=line, stopped_by=jog.stopped_by,
                            reported=same_line and running.get("reported") is not None)
-            return jog.trajectory if brake is None else _joined(brake, jog.trajectory)
+            return jog.trajectory if brake is None else joined([brake, jog.trajectory])
 
         trajectory, _ = self._send_replacing(plan, lambda: self._transition("jog", source=source), "jog")
         reason = outcome["stopped_by"]
@@ -90,18 +91,7 @@ class CartesianJog:
     def stop_jog(self, source: str | None = None) -> bool:
         """The controller let go: its running hold-to-run jog (joint or Cartesian) ramps down to rest now instead of
         jog_hold_s later. False (nothing changes) when it has no jog running."""
-        with self._lock:
-            jog = self._jog
-        if jog is None or jog["source"] != source or not self.arm.is_moving():
-            return False
-        try:
-            if "axis" in jog:
-                self.jog_cartesian(jog["axis"], 0.0, source=source)
-            else:
-                self.jog(np.zeros(len(jog["velocity"])), source=source)
-        except (CommandRefused, NotController, *PLAN_REFUSALS):  # the jog runs out by itself
-            return False
-        return True
+        return self._reissue_jog(source, stop=True)
 
     def _brake(self, handover, running: dict | None) -> JointTrajectory:
         """The motion running at `handover` brought to rest at once, before a jog of another kind or axis starts from
@@ -112,8 +102,7 @@ class CartesianJog:
         q0, qdot0 = handover.position_rad, handover.segment_velocity_rad_s
         if running is not None:
             line = running["line"]
-            v0 = (line.distance_m(self.model, q0) - line.distance_m(self.model, q0 - qdot0 * dt)) / dt
-            return plan_cartesian_jog(self.model, line, q0, v0, 0.0, dt, config.jog_accel_m_s2, config.sample_rate_hz,
+            return plan_cartesian_jog(self.model, line, q0, line.speed_m_s(self.model, q0, qdot0, dt), 0.0, dt, config.jog_accel_m_s2, config.sample_rate_hz,
                                       self._first_unsafe).trajectory
         return plan_jog(q0, qdot0, np.zeros_like(qdot0), dt, self.model.lower_rad, self.model.upper_rad,
                         arm_limits(self.model).accel_rad_s2, config.sample_rate_hz)
@@ -144,12 +133,6 @@ def _checked_velocity_m_s(velocity_m_s, limit_m_s: float) -> float:
     if abs(float(velocity_m_s)) > limit_m_s + 1e-12:
         raise InvalidInput(f"velocity_m_s {float(velocity_m_s):.3f} m/s is above the Cartesian jog's top speed {limit_m_s:.3f} m/s")
     return float(velocity_m_s)
-
-
-def _joined(first: JointTrajectory, second: JointTrajectory) -> JointTrajectory:
-    """`second` (starting where `first` ends, on the same sample period) run after `first`."""
-    times = np.concatenate([first.times_s, first.times_s[-1] + second.times_s[1:] - second.times_s[0]])
-    return JointTrajectory(times, np.vstack([first.positions_rad, second.positions_rad[1:]]))
 
 
 def _label(axis: str, velocity_m_s: float) -> str:

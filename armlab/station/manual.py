@@ -197,16 +197,22 @@ class ManualCommands:
     def heartbeat(self, source: str | None = None) -> bool:
         """The controlling client is still there: extend its running jog by jog_hold_s. False (nothing
         moves) when it has no jog running or the jog may not go on (e-stop, another controller, a limit)."""
+        return self._reissue_jog(source, stop=False)
+
+    def _reissue_jog(self, source: str | None, stop: bool) -> bool:
+        """Send `source`'s running hold-to-run jog again, joint or Cartesian (cartesian_jog.py): at its velocity (held
+        on for jog_hold_s) or, stop=True, at zero (ramping down now). False when it has none running or it may not go
+        on (e-stop, another controller, a limit): then it runs out by itself."""
         with self._lock:
             jog = self._jog
         if jog is None or jog["source"] != source or not self.arm.is_moving():
             return False
         try:
-            if "axis" in jog:  # a Cartesian jog (cartesian_jog.py): on along its line
-                self.jog_cartesian(jog["axis"], jog["velocity"], source=source)
+            if "axis" in jog:
+                self.jog_cartesian(jog["axis"], 0.0 if stop else jog["velocity"], source=source)
             else:
-                self.jog(jog["velocity"], source=source)
-        except (CommandRefused, NotController, *PLAN_REFUSALS):  # the jog runs out by itself
+                self.jog(np.zeros(len(jog["velocity"])) if stop else jog["velocity"], source=source)
+        except (CommandRefused, NotController, *PLAN_REFUSALS):
             return False
         return True
 
