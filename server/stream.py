@@ -67,6 +67,7 @@ CLIENT_MESSAGE = TypeAdapter(Annotated[Union[CLIENT_MESSAGES], Field(discriminat
 _CLIENT_TYPES = [message_type(model) for model in CLIENT_MESSAGES]
 _SESSION_NUMBERS = itertools.count(1)
 JOG_MESSAGES = (JogMessage, JogCartesianMessage, JogStopMessage)
+_JOG_TYPES = frozenset(message_type(model) for model in JOG_MESSAGES)
 MAX_QUEUED_CALLS = 32  # a session's station calls waiting behind a slow one; more are refused with an error event
 
 
@@ -86,7 +87,7 @@ def _jog_request(text: str) -> dict | None:
     except ValueError:
         return None
     kind = parsed.get("type") if isinstance(parsed, dict) else None
-    if not isinstance(kind, str) or kind not in {message_type(model) for model in JOG_MESSAGES}:
+    if not isinstance(kind, str) or kind not in _JOG_TYPES:
         return None
     message_id = parsed.get("id")
     valid_id = isinstance(message_id, int) and not isinstance(message_id, bool) and 0 <= message_id < 2**31
