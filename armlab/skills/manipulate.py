@@ -78,12 +78,12 @@ def run_steps(station: Station, ctx: JobContext, steps: Sequence, replan: Callab
 TRANSFER_CLEARANCE_M = 0.05  # the held block's bottom (or the fingers) this far above the tallest obstacle
 TALL_OVER_TARGET_M = 0.16  # obstacles this much above the target (taller than a pile of four) are checked on the way down too
 MAX_PLACE_TILT_RAD = np.radians(5.0)  # by default a block is released at most this far from top-down
-SHORT_APPROACH_FRACTIONS = (0.75, 0.5)
+SHORT_APPROACH_FRACTIONS = (0.75, 0.5)  # of approach_height_m: last-resort straight descents (a tall column far out)
 # A grasp whose descent would put the open fingers' box (or the palm) into the board - a low block reached only at a
 # pitch short of top-down, the box's far corners dipping - is raised by the dip (and this margin), at most by
 # MAX_GRASP_RAISE_M in all: the gate refused such picks (the real arm, calibrated, reaches less far: pick_sort L3
 # seed 3 gave up on two small blocks, "the fingers would go 2.8 mm into the board").
-GRASP_RAISE_MARGIN_M, MAX_GRASP_RAISE_M = 0.001, 0.006  # of approach_height_m: last-resort straight descents (a tall column far out)
+GRASP_RAISE_MARGIN_M, MAX_GRASP_RAISE_M = 0.001, 0.006
 
 
 def _finger_seed(station: Station, q_start, point_m, pitch_rad: float, yaw_rad: float, finger_axis_rad: float):
