@@ -134,13 +134,13 @@ def station_server(cell, db_path, token: str, **app_options):
         yield url
 
 
-def module_fixtures(seed: int, token: str, time_scale: float = 1.0, **app_options):
+def module_fixtures(seed: int, token: str, time_scale: float = 1.0, camera_fps: float = TEST_CAMERA_FPS, **app_options):
     """The module-scoped `cell` (a started real-time simulation) and `url` (a real server on it) fixtures of a
     test module: `cell, url = live.module_fixtures(seed=3, token=TOKEN)`."""
 
     @pytest.fixture(scope="module")
     def cell():
-        started = start_cell(seed, time_scale=time_scale)
+        started = start_cell(seed, camera_fps=camera_fps, time_scale=time_scale)
         yield started
         started.close()
 

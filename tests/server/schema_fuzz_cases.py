@@ -9,7 +9,7 @@ body); a request the schema forbids is refused (4xx); a refused request moved no
 moving and its joints are where they were). After an accepted command the station is put back to
 idle and still (e-stop, reset, torque on), so each case starts from rest.
 
-Limits, to keep this under ~3 minutes on 2 cores: MAX_EXAMPLES cases per operation and generation
+Limits, to keep this under ~3 minutes on 2 cores: the simulation at FUZZ_TIME_SCALE; MAX_EXAMPLES cases per operation and generation
 mode; calls that would block on a motion or a job (`?wait=true`, and POST /api/gripper unless
 `wait=false`: it waits by default) are left out, as they only add waiting to what the same call
 without waiting exercises. The record is written as JSON lines to $ARMLAB_FUZZ_RECORD if set.
@@ -44,8 +44,13 @@ MAX_EXAMPLES = 20  # per operation and generation mode (and the coverage phase's
 MIN_CASES = 1000
 # A refused call must leave the arm where it was: the halted arm settles by a few mrad under gravity.
 STILL_TOL_RAD = 5e-3
-# How long after a refused call the arm is watched (station clock): a move it had started shows as `moving`.
-WATCH_S = 0.03
+# The server's simulation runs FUZZ_TIME_SCALE times faster than the wall clock, its camera at FUZZ_CAMERA_FPS: the
+# fuzz waits on the arm, not on pictures (a refused call's watch below was 2/3 of a shard's time at the real pace).
+FUZZ_TIME_SCALE = 10.0
+FUZZ_CAMERA_FPS = 2.0
+# How long after a refused call the arm is watched, in simulated seconds (WATCH_SIM_S / FUZZ_TIME_SCALE of the
+# status's wall clock): a move it had started shows as `moving` (a control tick is 4 ms).
+WATCH_SIM_S = 0.03
 CHECKS = [not_a_server_error, status_code_conformance, content_type_conformance, response_schema_conformance, negative_data_rejection]
 TRUE_QUERY = {"true", "1", "yes", "on", "t", "y"}
 
@@ -53,7 +58,7 @@ RECORD: list[dict] = []  # one entry per call, filled by the fuzz test, read by 
 SKIPPED_WAITS: list[str] = []
 
 
-cell, base_url = live.module_fixtures(seed=11, token=TOKEN)
+cell, base_url = live.module_fixtures(seed=11, token=TOKEN, time_scale=FUZZ_TIME_SCALE, camera_fps=FUZZ_CAMERA_FPS)
 
 
 def _decline_negations_that_cannot_be_drawn() -> None:
@@ -168,8 +173,9 @@ def test_api_conforms_and_refused_calls_move_nothing(case, base_url, session):
     try:
         case.validate_response(response, checks=CHECKS, headers=AUTH)
     finally:
-        if refused:  # watch the station's clock for WATCH_S: a started move would show
-            after = live.wait_for(lambda: (s := _status(session, base_url))["time_s"] >= before["time_s"] + WATCH_S and s, 5, 0.005)
+        if refused:  # watch for WATCH_SIM_S of simulated time: a started move would show
+            watch_s = WATCH_SIM_S / FUZZ_TIME_SCALE
+            after = live.wait_for(lambda: (s := _status(session, base_url))["time_s"] >= before["time_s"] + watch_s and s, 5, 0.001)
         else:
             after = _status(session, base_url)
         change = float(np.max(np.abs(np.subtract(after["joints_rad"], before["joints_rad"]))))

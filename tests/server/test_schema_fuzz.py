@@ -23,7 +23,7 @@ REPO = Path(__file__).resolve().parents[2]
 
 
 @pytest.mark.long_first
-@pytest.mark.timeout(1800)  # a shard ~2.5 min quiet; over 1,000 calls in all, each waiting for the station at rest
+@pytest.mark.timeout(1800)  # a shard ~40 s quiet; over 1,000 calls in all, each waiting for the station at rest
 @pytest.mark.parametrize("shard", range(SHARDS))
 def test_the_whole_schema_fuzz_passes_in_a_process_of_its_own(shard):
     env = dict(os.environ, ARMLAB_FUZZ_SHARD=f"{shard}/{SHARDS}")
