@@ -8,9 +8,11 @@ board it stops above it and says why. No wall-clock figures asserted (bench/cart
 
 from __future__ import annotations
 
+import contextlib
 import json
 import math
 import socket
+import threading
 
 import httpx
 import numpy as np
@@ -41,6 +43,27 @@ cell, url = live.module_fixtures(seed=41, token=TOKEN)
 def _truth(cell) -> tuple[float, np.ndarray, np.ndarray]:
     """(sim time, gripper point, joints) of the simulation."""
     return cell.sim_time_s, cell.gripper_point_m(), np.asarray(cell.arm.read_joint_state().position_rad, float)
+
+
+@contextlib.contextmanager
+def _held_down(url: str):
+    """A held jog button: heartbeats back to back on a thread of their own (a test loop that waited between them let
+    the deadman brake the jog short of the board on a machine at load 20)."""
+    released = threading.Event()
+
+    def beat() -> None:
+        with httpx.Client(base_url=url, timeout=30, headers=PAGE) as beats:
+            while not released.is_set():
+                beats.post("/api/heartbeat")
+                released.wait(0.01)
+
+    thread = threading.Thread(target=beat, name="held-down", daemon=True)
+    thread.start()
+    try:
+        yield
+    finally:
+        released.set()
+        thread.join(30)
 
 
 def _to_start(http: httpx.Client) -> None:
@@ -198,13 +221,10 @@ def test_bad_jogs_are_refused_with_a_clear_4xx_and_nothing_moves(url, cell):
 def test_a_jog_into_the_board_stops_above_it_and_says_why(url, cell):
     with httpx.Client(base_url=url, timeout=30, headers=PAGE) as http:
         _to_start(http)
-        assert http.post("/api/arm/jog/cartesian", json={"axis": "z", "velocity_m_s": -MOTION.jog_max_speed_m_s}).status_code == 200
-        beats = 0
-        while cell.arm.is_moving() or beats < 5:  # held down (heartbeats go on) until the arm stops by itself
-            live.wait_sim(cell, 0.03)
-            http.post("/api/heartbeat")
-            beats += 1
-            assert beats < 200, "the jog down never stopped"
+        with _held_down(url):  # heartbeats go on until the arm stops by itself
+            assert http.post("/api/arm/jog/cartesian", json={"axis": "z", "velocity_m_s": -MOTION.jog_max_speed_m_s}).status_code == 200
+            live.wait_for(cell.arm.is_moving, 10, 0.005)
+            assert live.wait_for(lambda: not cell.arm.is_moving(), 60, 0.02), "the jog down never stopped"
         live.wait_sim(cell, 0.3)
         _, point, q = _truth(cell)
         assert cell.contact_depth_at_mm(q, FINGER_GEOMS) == 0.0, "the fingers touch the board"
