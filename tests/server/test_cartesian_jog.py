@@ -46,18 +46,17 @@ def _truth(cell) -> tuple[float, np.ndarray, np.ndarray]:
 
 
 @contextlib.contextmanager
-def _held_down(url: str):
-    """A held jog button: heartbeats back to back on a thread of their own (a test loop that waited between them let
-    the deadman brake the jog short of the board on a machine at load 20)."""
+def _beating(beat):
+    """A held jog button: `beat` (a heartbeat over REST or the websocket) back to back on a thread of its own while
+    the block runs (a test loop that waited between heartbeats let a late one end the jog on a machine at load 17-26)."""
     released = threading.Event()
 
-    def beat() -> None:
-        with httpx.Client(base_url=url, timeout=30, headers=PAGE) as beats:
-            while not released.is_set():
-                beats.post("/api/heartbeat")
-                released.wait(0.01)
+    def run() -> None:
+        while not released.is_set():
+            beat()
+            released.wait(0.01)
 
-    thread = threading.Thread(target=beat, name="held-down", daemon=True)
+    thread = threading.Thread(target=run, name="held-down", daemon=True)
     thread.start()
     try:
         yield
@@ -82,10 +81,9 @@ def _stop_bound_m(v_m_s: float, window_s: float, hold_s: float = MOTION.jog_hold
 
 
 def _hold(cell, beat, seconds: float) -> None:
-    """Beat (a heartbeat over REST or the websocket) every 0.03 s of simulation time for `seconds`."""
-    for _ in range(int(seconds / 0.03)):
-        live.wait_sim(cell, 0.03)
-        beat()
+    """Beat (see _beating) for `seconds` of simulation time."""
+    with _beating(beat):
+        live.wait_sim(cell, seconds)
 
 
 def _check_held_and_stopped(cell, axis: str, sign: int, v_m_s: float, start, before, after_event, what: str,
@@ -221,7 +219,7 @@ def test_bad_jogs_are_refused_with_a_clear_4xx_and_nothing_moves(url, cell):
 def test_a_jog_into_the_board_stops_above_it_and_says_why(url, cell):
     with httpx.Client(base_url=url, timeout=30, headers=PAGE) as http:
         _to_start(http)
-        with _held_down(url):  # heartbeats go on until the arm stops by itself
+        with httpx.Client(base_url=url, timeout=30, headers=PAGE) as beats, _beating(lambda: beats.post("/api/heartbeat")):
             assert http.post("/api/arm/jog/cartesian", json={"axis": "z", "velocity_m_s": -MOTION.jog_max_speed_m_s}).status_code == 200
             live.wait_for(cell.arm.is_moving, 10, 0.005)
             assert live.wait_for(lambda: not cell.arm.is_moving(), 60, 0.02), "the jog down never stopped"
