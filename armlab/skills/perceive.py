@@ -6,6 +6,7 @@ They read the gate's frames and perception (armlab.station) and never move anyth
 from __future__ import annotations
 
 import math
+from dataclasses import replace
 
 import numpy as np
 
@@ -13,7 +14,7 @@ from armlab.errors import InvalidInput, SpotHidden
 from armlab.station.checks import checked_position
 from armlab.station.core import NotCalibrated, Station
 from armlab.station.jobs import JobContext
-from armlab.station.telemetry import block_to_dict
+from armlab.vision.block import Block
 from armlab.vision.config import SelfFilterConfig
 from armlab.vision.geometry import backproject, project_points, transform_points
 from armlab.vision.pixel_world import pixel_to_world_off_robot
@@ -114,22 +115,21 @@ def block_near(station: Station, point_m: np.ndarray) -> dict | None:
     return best
 
 
-def look(station: Station, ctx: JobContext | None = None) -> list[dict]:
-    """The blocks seen in a frame taken after the arm last moved (wire dicts with seen_time_s).
+def look(station: Station, ctx: JobContext | None = None) -> list[Block]:
+    """The blocks seen in a frame taken after the arm last moved, in detection order, each with the frame's
+    capture time (seen_time_s) and the arm's joints then (seen_arm_joints_rad, when perception knew them).
 
     NotCalibrated without a calibration: blocks need one."""
     if station.calibration is None:
         raise NotCalibrated("looking at the board")
     perception = station.fresh_perception(ctx)
-    blocks = [block_to_dict(index, block) for index, block in enumerate(perception.blocks)]
-    for block in blocks:
-        block.setdefault("seen_time_s", perception.capture_time_s)
-    return blocks
+    return [block if block.seen_time_s is not None else replace(block, seen_time_s=perception.capture_time_s)
+            for block in perception.blocks]
 
 
-def is_stale(station: Station, block: dict) -> bool:
+def is_stale(station: Station, block: Block) -> bool:
     """True if the arm moved over the block's spot after the block was seen (do not act on it)."""
-    return station.moved_over_since(block["position_m"], float(block.get("seen_time_s", 0.0)))
+    return station.moved_over_since(block.position_m, float(block.seen_time_s or 0.0))
 
 
 def surface_height_m(station: Station, xy_m, radius_m: float = 0.008, max_height_m: float = 0.6,
