@@ -6,7 +6,6 @@ They read the gate's frames and perception (armlab.station) and never move anyth
 from __future__ import annotations
 
 import math
-from dataclasses import replace
 
 import numpy as np
 
@@ -105,13 +104,14 @@ def target_point(station: Station, position_m, pixel) -> tuple[np.ndarray, str]:
     return checked_position(position_m), "given"
 
 
-def block_near(station: Station, point_m: np.ndarray) -> dict | None:
-    """The detected block whose top centre is nearest `point_m` in x-y, within click_snap_radius_m."""
+def block_near(station: Station, point_m: np.ndarray) -> tuple[int, Block] | None:
+    """The detected block whose top centre is nearest `point_m` in x-y, within click_snap_radius_m, with its index
+    among the detections (its wire id)."""
     best, best_distance = None, station.config.click_snap_radius_m
-    for block in station.detections()["data"]:
-        distance = math.dist(block["position_m"][:2], point_m[:2])
+    for index, block in enumerate(station.detections().blocks):
+        distance = math.dist(block.position_m[:2], point_m[:2])
         if distance <= best_distance:
-            best, best_distance = block, distance
+            best, best_distance = (index, block), distance
     return best
 
 
@@ -122,9 +122,7 @@ def look(station: Station, ctx: JobContext | None = None) -> list[Block]:
     NotCalibrated without a calibration: blocks need one."""
     if station.calibration is None:
         raise NotCalibrated("looking at the board")
-    perception = station.fresh_perception(ctx)
-    return [block if block.seen_time_s is not None else replace(block, seen_time_s=perception.capture_time_s)
-            for block in perception.blocks]
+    return list(station.fresh_perception(ctx).seen_blocks())
 
 
 def is_stale(station: Station, block: Block) -> bool:

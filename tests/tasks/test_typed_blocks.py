@@ -13,7 +13,7 @@ from armlab.tasks import pick_sort, runner, start_auto
 from armlab.tasks.runner import Progress
 from armlab.tasks.seen import StandingObject
 from armlab.vision.block import Block
-from server.response_models import Detection
+from server.response_models import Detection, DetectionsResponse
 
 ONE_BLOCK = {"objects": [
     {"id": "red", "type": "block", "color": "red", "size": "large", "position_m": [0.10, 0.22, 0.019], "yaw_rad": 0.3},
@@ -80,3 +80,26 @@ def test_a_column_seen_only_by_depth_is_an_obstacle_no_policy_picks():
     plan = pick_sort.policy([column], set())
     assert plan.finished and not plan.moves and plan.left == 0
     assert not column.is_cube and column.color is None and column.position_m.tolist() == [0.15, -0.1, 0.114]
+
+
+WIRE_KEYS = ["id", "color", "size", "position_m", "yaw_rad", "height_m", "stack_level", "stack_sizes", "center_px", "is_cube",
+             "occluded", "aruco_id", "destination", "seen_time_s"]  # and color_lab (before seen_time_s) when measured
+
+
+def test_the_stations_detections_are_blocks_and_their_wire_form_is_unchanged(calibrated_station):
+    station = calibrated_station(ONE_BLOCK)
+    station.fresh_perception()
+    detections = station.detections()
+    assert not detections.stale and len(detections.blocks) == 1
+    (block,) = detections.blocks
+    assert isinstance(block, Block) and block.seen_time_s is not None and detections.id_of(block) == 0
+    truth = next(o for o in station.sim.truth()["objects"] if o["id"] == "red")["position_m"]
+    assert np.hypot(*(block.position_m[:2] - np.asarray(truth[:2]))) < 0.01  # the detection is the simulation's block
+    wire = detections.to_dict()
+    DetectionsResponse.model_validate(wire)
+    assert list(wire) == ["data", "count", "time_s", "frame_sequence", "stale", "stale_reason"]
+    assert wire["count"] == 1 and wire["stale"] is False and wire["stale_reason"] is None
+    (data,) = wire["data"]
+    assert [key for key in data if key != "color_lab"] == WIRE_KEYS
+    assert data["id"] == 0 and data["seen_time_s"] == block.seen_time_s and data["color"] == "red" and data["size"] == "large"
+    assert all(isinstance(v, float) for v in data["position_m"] + data["center_px"]) and isinstance(data["yaw_rad"], float)
