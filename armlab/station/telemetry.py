@@ -43,8 +43,9 @@ def gripper_pose_from_matrix(T_world_gripper: np.ndarray, base_xyz_m=(0.0, 0.0, 
 
 @dataclass(frozen=True)
 class Detections:
-    """The newest detected blocks (Station.detections) in detection order, each stamped with its frame's capture
-    time; none, with the reason, while stale (the camera lost, perception older than camera_timeout_s)."""
+    """The newest detected blocks (Station.detections) in detection order (a block's index is its wire id), each
+    stamped with its frame's capture time; none, with the reason, while stale (the camera lost, perception older
+    than camera_timeout_s)."""
 
     blocks: tuple[Block, ...]
     time_s: float  # when perception made them (time.time())
@@ -54,10 +55,6 @@ class Detections:
     @property
     def stale(self) -> bool:
         return self.stale_reason is not None
-
-    def id_of(self, block: Block) -> int | None:
-        """The block's index among these detections (its wire id), None for a block not among them."""
-        return next((index for index, seen in enumerate(self.blocks) if seen is block), None)
 
     def to_dict(self) -> dict:
         """The wire form (server's DetectionsResponse): {data, count, time_s, frame_sequence, stale, stale_reason}."""

@@ -190,8 +190,9 @@ class TaskRunner:
         return self.edges_m.get(block.size or "large", self.edges_m["large"])
 
     def detection_id(self, block: Block) -> int | None:
-        """The block's index among the newest look's detections (its wire id), None for a block not among them."""
-        return next((index for index, seen in enumerate(self.detections) if seen is block), None)
+        """The block's index among the newest look's detections (its wire id), None for a block not among them
+        (a Block equals only itself)."""
+        return self.detections.index(block) if block in self.detections else None
 
     def execute(self, move: Move, objects: list[Seen]) -> bool:
         """Pick move.block and place it at move.to_m; True if the block was held and released there.

@@ -92,7 +92,7 @@ def test_the_stations_detections_are_blocks_and_their_wire_form_is_unchanged(cal
     detections = station.detections()
     assert not detections.stale and len(detections.blocks) == 1
     (block,) = detections.blocks
-    assert isinstance(block, Block) and block.seen_time_s is not None and detections.id_of(block) == 0
+    assert isinstance(block, Block) and block.seen_time_s is not None and detections.blocks.index(block) == 0
     truth = next(o for o in station.sim.truth()["objects"] if o["id"] == "red")["position_m"]
     assert np.hypot(*(block.position_m[:2] - np.asarray(truth[:2]))) < 0.01  # the detection is the simulation's block
     wire = detections.to_dict()
