@@ -16,18 +16,15 @@ class StandingObject:
     """Something standing at position_m (its top centre, world metres) that no policy picks: a column the
     detector missed but depth measures (a column too tall for it), or a column a job built and can no longer see.
 
-    It answers the questions policies ask of a Block (colour, size, level, yaw) with "none": not a cube, no colour."""
+    It answers what the jobs ask of any object before they filter the cubes (where, colour, size, level, yaw) with
+    "none": not a cube, no colour, no size."""
 
     position_m: np.ndarray
     color: str | None = None
     size: str | None = None
     yaw_rad: float = 0.0
     stack_level: int = 0
-    stack_sizes: tuple[str, ...] = ()
     is_cube: bool = False
-    occluded: bool = False
-    aruco_id: int | None = None
-    destination: int | None = None
 
     @classmethod
     def at(cls, xy_m, height_m: float) -> StandingObject:
