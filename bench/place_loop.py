@@ -56,7 +56,7 @@ def rig(seed: int, spots: list, realism: str, loop: bool, folder: str) -> list[t
             runner.place_check.enabled = True  # the first round measures (whatever the station's config says)
 
             def policy(objects, _given_up) -> Plan:
-                blocks = [o for o in objects if o.get("is_cube", True)]
+                blocks = [o for o in objects if o.is_cube]
                 if len(out) >= moves or not blocks:
                     return Plan([], done=len(out), left=0, finished=True)
                 spot = len(out) % len(spots)

@@ -283,7 +283,7 @@ def test_click_grab_lifts_the_block_and_drop_places_it_within_10_mm(idle, cell):
     )
     job = skills.calibrate(station)
     assert job.wait(20) and job.state == "succeeded", job.message
-    live.wait_for(lambda: station.detections()["count"] == 2, 10)
+    live.wait_for(lambda: len(station.detections().blocks) == 2, 10)
     truth = {o["id"]: o for o in cell.truth()["objects"]}
     z_start = truth["red"]["position_m"][2]
     # Click slightly off the block's centre: the station snaps to the detected block (centre, top, yaw).

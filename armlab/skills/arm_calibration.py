@@ -32,6 +32,7 @@ from armlab.station.arm_info import station_end_effector
 from armlab.station.core import Station
 from armlab.station.jobs import Job, JobContext
 from armlab.vision import detect_tags
+from armlab.vision.block import Block
 from armlab.vision.geometry import transform_points
 from armlab.vision.gripper_marker import MarkerNotFound, find_marker
 from armlab.workcell import load_workcell
@@ -119,12 +120,12 @@ def calibrate_arm(station: Station, poses: Sequence[CalibrationPose] | None = No
     return station.start_job("calibrate", JOB_NAME, run, detail=JOB_DETAIL, source=source)
 
 
-def obstacle_boxes(objects: list[dict]) -> list:
+def obstacle_boxes(objects: list[Block]) -> list:
     """Obstacle boxes (armlab.motion.clearance) around every object seen on the board, up to its top, grown by the
     uncalibrated arm's error (UNCALIBRATED_MARGIN_UP_M, UNCALIBRATED_MARGIN_SIDE_M)."""
-    return [box_around(f"the {o.get('color') or ''} {o.get('size') or 'object'} at ({o['position_m'][0] * 1000:.0f}, "
-                       f"{o['position_m'][1] * 1000:.0f}) mm", o["position_m"], OBJECT_BOX_RADIUS_M + UNCALIBRATED_MARGIN_SIDE_M,
-                       o["position_m"][2] + UNCALIBRATED_MARGIN_UP_M)
+    return [box_around(f"the {o.color or ''} {o.size or 'object'} at ({o.position_m[0] * 1000:.0f}, "
+                       f"{o.position_m[1] * 1000:.0f}) mm", o.position_m, OBJECT_BOX_RADIUS_M + UNCALIBRATED_MARGIN_SIDE_M,
+                       o.position_m[2] + UNCALIBRATED_MARGIN_UP_M)
             for o in objects]
 
 

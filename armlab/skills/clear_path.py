@@ -37,13 +37,13 @@ def known_obstacles(station: Station, target_m, *exclude_xy_m) -> list[ObstacleB
     the one the target point stands on (a click on a block's edge grabs or drops on that block)."""
     target = np.asarray(target_m, float)
     boxes = []
-    for detection in station.detections().get("data", []):
-        position = detection["position_m"]
+    for detection in station.detections().blocks:
+        position = detection.position_m
         if any(math.dist(position[:2], xy[:2]) < SAME_OBJECT_M for xy in exclude_xy_m):
             continue
         if np.all(np.abs(target[:2] - np.asarray(position[:2])) < OBJECT_BOX_RADIUS_M) and target[2] >= position[2] - ON_TOP_TOL_M:
             continue
-        name = f"the {detection.get('color') or 'unknown'} block at ({position[0] * 1000:.0f}, {position[1] * 1000:.0f}) mm"
+        name = f"the {detection.color or 'unknown'} block at ({position[0] * 1000:.0f}, {position[1] * 1000:.0f}) mm"
         boxes.append(box_around(name, position[:2], OBJECT_BOX_RADIUS_M, float(position[2])))
     return boxes
 

@@ -20,6 +20,7 @@ from armlab.station.arm_info import station_end_effector
 from armlab.station.calibration_trust import calibration_summary
 from armlab.station.core import Station
 from armlab.station.jobs import Job, JobContext
+from armlab.station.telemetry import block_to_dict
 from armlab.vision import calibrate_extrinsics, detect_tags
 from armlab.vision.calibration import project_grid
 from armlab.vision.click_calibration import calibrate_from_points
@@ -111,11 +112,12 @@ def grab(station: Station, position_m=None, pixel=None, source: str | None = Non
         station.allowed_or_raise("grab")
     station.require_trusted_calibration("grab")
     point, on = target_point(station, position_m, pixel)
-    block = block_near(station, point) if station.calibration is not None else None
+    near = block_near(station, point) if station.calibration is not None else None
+    block_id, block = near if near is not None else (None, None)
     if block is not None:
-        top = np.asarray(block["position_m"], dtype=float)
-        yaw, edge = block["yaw_rad"], block_edge_m(station, block["size"])
-        detail = f"{block['size']} {block['color']} block at ({top[0] * 1000:.0f}, {top[1] * 1000:.0f}) mm"
+        top = np.asarray(block.position_m, dtype=float)
+        yaw, edge = block.yaw_rad, block_edge_m(station, block.size)
+        detail = f"{block.size} {block.color} block at ({top[0] * 1000:.0f}, {top[1] * 1000:.0f}) mm"
     else:
         top, yaw, edge = point, None, station.config.default_block_height_m
         detail = f"point ({top[0] * 1000:.0f}, {top[1] * 1000:.0f}, {top[2] * 1000:.0f}) mm ({on})"
@@ -131,11 +133,13 @@ def grab(station: Station, position_m=None, pixel=None, source: str | None = Non
     def run(ctx: JobContext, replan=plan) -> dict:
         with_advice("grab", top, lambda: run_steps(station, ctx, steps, replan=replan))
         holding = bool(station.gripper.read_state().holding)
-        station.set_held_block({**(block or {}), "edge_m": edge, "yaw_rad": yaw} if holding else None)
+        known = {"color": block.color, "size": block.size} if block is not None else {}
+        station.set_held_block({**known, "edge_m": edge, "yaw_rad": yaw} if holding else None)
         if not holding:
             raise GripperEmpty(f"nothing in the gripper: {station_end_effector(station).missed_grasp} at {detail}")
         ctx.job.update(message="holding the block")
-        return {"target_m": [float(x) for x in top], "yaw_rad": yaw, "block": block, "holding": holding}
+        wire_block = None if block is None else block_to_dict(block_id, block)  # the job's result: the detection's wire dict
+        return {"target_m": [float(x) for x in top], "yaw_rad": yaw, "block": wire_block, "holding": holding}
 
     return _started_or_planned(station, "grab", steps, run, detail, source, plan_only)
 
@@ -163,11 +167,12 @@ def drop(station: Station, position_m=None, pixel=None, source: str | None = Non
     point, on = target_point(station, position_m, pixel)
     surface = point.copy()
     yaw = None
-    below = block_near(station, point) if station.calibration is not None else None
+    near = block_near(station, point) if station.calibration is not None else None
+    below = near[1] if near is not None else None
     if below is not None:  # stack on it: centre on its top face, align with its yaw
-        surface = np.asarray(below["position_m"], dtype=float)
-        yaw = below["yaw_rad"]
-        on = f"{below['color']} block"
+        surface = np.asarray(below.position_m, dtype=float)
+        yaw = below.yaw_rad
+        on = f"{below.color} block"
     surface[2] = surface[2] if surface[2] > BOARD_NOISE_M else 0.0  # depth noise on the board reads as board
     held = station.held_block or {}
     edge = float(held.get("edge_m", station.config.default_block_height_m))

@@ -13,7 +13,7 @@ from armlab.errors import InvalidInput, SpotHidden
 from armlab.station.checks import checked_position
 from armlab.station.core import NotCalibrated, Station
 from armlab.station.jobs import JobContext
-from armlab.station.telemetry import block_to_dict
+from armlab.vision.block import Block
 from armlab.vision.config import SelfFilterConfig
 from armlab.vision.geometry import backproject, project_points, transform_points
 from armlab.vision.pixel_world import pixel_to_world_off_robot
@@ -104,32 +104,30 @@ def target_point(station: Station, position_m, pixel) -> tuple[np.ndarray, str]:
     return checked_position(position_m), "given"
 
 
-def block_near(station: Station, point_m: np.ndarray) -> dict | None:
-    """The detected block whose top centre is nearest `point_m` in x-y, within click_snap_radius_m."""
+def block_near(station: Station, point_m: np.ndarray) -> tuple[int, Block] | None:
+    """The detected block whose top centre is nearest `point_m` in x-y, within click_snap_radius_m, with its index
+    among the detections (its wire id)."""
     best, best_distance = None, station.config.click_snap_radius_m
-    for block in station.detections()["data"]:
-        distance = math.dist(block["position_m"][:2], point_m[:2])
+    for index, block in enumerate(station.detections().blocks):
+        distance = math.dist(block.position_m[:2], point_m[:2])
         if distance <= best_distance:
-            best, best_distance = block, distance
+            best, best_distance = (index, block), distance
     return best
 
 
-def look(station: Station, ctx: JobContext | None = None) -> list[dict]:
-    """The blocks seen in a frame taken after the arm last moved (wire dicts with seen_time_s).
+def look(station: Station, ctx: JobContext | None = None) -> list[Block]:
+    """The blocks seen in a frame taken after the arm last moved, in detection order, each with the frame's
+    capture time (seen_time_s) and the arm's joints then (seen_arm_joints_rad, when perception knew them).
 
     NotCalibrated without a calibration: blocks need one."""
     if station.calibration is None:
         raise NotCalibrated("looking at the board")
-    perception = station.fresh_perception(ctx)
-    blocks = [block_to_dict(index, block) for index, block in enumerate(perception.blocks)]
-    for block in blocks:
-        block.setdefault("seen_time_s", perception.capture_time_s)
-    return blocks
+    return list(station.fresh_perception(ctx).seen_blocks())
 
 
-def is_stale(station: Station, block: dict) -> bool:
+def is_stale(station: Station, block: Block) -> bool:
     """True if the arm moved over the block's spot after the block was seen (do not act on it)."""
-    return station.moved_over_since(block["position_m"], float(block.get("seen_time_s", 0.0)))
+    return station.moved_over_since(block.position_m, float(block.seen_time_s or 0.0))
 
 
 def surface_height_m(station: Station, xy_m, radius_m: float = 0.008, max_height_m: float = 0.6,

@@ -36,6 +36,7 @@ from armlab.motion.line import plan_line_segment
 from armlab.motion.safety import UnsafeTrajectory
 from armlab.station.arm_info import station_end_effector
 from armlab.station.core import Station
+from armlab.vision.block import Block
 
 PITCH_STEP_RAD = math.radians(5.0)
 MIN_PITCH_RAD = 0.0  # never grasp from the board pointing upward (the wrist would be below the fingers)
@@ -68,13 +69,10 @@ def bearing_rad(xy_m) -> float:
     return math.atan2(float(xy_m[1]), float(xy_m[0]))
 
 
-def aligned(block: dict, tolerance_rad: float = ALIGN_TOLERANCE_RAD) -> bool:
+def aligned(block: Block, tolerance_rad: float = ALIGN_TOLERANCE_RAD) -> bool:
     """True if the block's faces line up with its bearing from the base (mod 90°), so fingers closing
     along the horizontal tangent close across two faces."""
-    yaw = block.get("yaw_rad")
-    if yaw is None:
-        return False
-    off = math.remainder(float(yaw) - bearing_rad(block["position_m"]), math.pi / 2)
+    off = math.remainder(float(block.yaw_rad) - bearing_rad(block.position_m), math.pi / 2)
     return abs(off) <= tolerance_rad
 
 

@@ -14,27 +14,22 @@ from armlab.devices.camera import Frame
 from armlab.station.jobs import JobContext
 from armlab.station.perception import DEVICE_ERRORS, Perception, analyse_frame
 from armlab.station.states import allowed_commands
-from armlab.station.telemetry import block_to_dict, gripper_pose_from_matrix
+from armlab.station.telemetry import Detections, gripper_pose_from_matrix
 from armlab.vision.pipeline import PerceptionPipeline
 
 
 class Perceiving:
     """Status, detections, telemetry snapshots, fresh frames and perception."""
 
-    def detections(self) -> dict:
-        """GET /api/detections: the newest detected blocks as wire dicts; none, with stale: true and the
-        reason, while the camera is lost or perception is older than camera_timeout_s."""
+    def detections(self) -> Detections:
+        """The newest detected blocks (GET /api/detections serialises them); none, with the reason, while the
+        camera is lost or perception is older than camera_timeout_s."""
         perception, _ = self.perception.get()
         if perception is None:
-            return {"data": [], "count": 0, "time_s": time.time(), "frame_sequence": -1, "stale": False, "stale_reason": None}
+            return Detections((), time.time(), -1)
         stale_reason = self._perception_stale_reason(perception)
-        data = [] if stale_reason else [block_to_dict(index, block) for index, block in enumerate(perception.blocks)]
-        for block in data:
-            block.setdefault("seen_time_s", perception.capture_time_s)
-        return {
-            "data": data, "count": len(data), "time_s": perception.time_s, "frame_sequence": perception.frame_sequence,
-            "stale": stale_reason is not None, "stale_reason": stale_reason,
-        }
+        blocks = () if stale_reason else perception.seen_blocks()
+        return Detections(blocks, perception.time_s, perception.frame_sequence, stale_reason)
 
     def _perception_stale_reason(self, perception: Perception) -> str | None:
         with self._lock:
@@ -106,8 +101,8 @@ class Perceiving:
         """Status + detections: one telemetry message (the TelemetryPublisher calls this)."""
         snapshot = self.status()
         detections = self.detections()
-        snapshot["detections"] = detections["data"]
-        snapshot["detections_stale"] = detections["stale"]
+        snapshot["detections"] = detections.to_dict()["data"]
+        snapshot["detections_stale"] = detections.stale
         return snapshot
 
 

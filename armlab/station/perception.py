@@ -24,6 +24,7 @@ from armlab.devices.arm import Arm
 from armlab.devices.camera import Camera, Frame
 from armlab.devices.gripper import Gripper
 from armlab.station.slots import NewestSlot
+from armlab.vision.block import Block
 from armlab.vision.drift import DriftMonitor
 from armlab.vision.pipeline import PerceptionPipeline
 
@@ -43,7 +44,7 @@ class Perception:
     depth older than the last motion through its spot is not used (issue 21).
     """
 
-    blocks: tuple = ()
+    blocks: tuple[Block, ...] = ()
     tags: tuple = ()
     frame_sequence: int = -1
     capture_time_s: float = 0.0
@@ -53,6 +54,11 @@ class Perception:
     surface_depth_mm: np.ndarray | None = field(default=None, repr=False)
     surface_time_s: np.ndarray | None = field(default=None, repr=False)
     camera_warning: str | None = None  # "camera moved: recalibrate (...)" while the calibration no longer fits the board tags
+
+    def seen_blocks(self) -> tuple[Block, ...]:
+        """The blocks in detection order, each stamped with this frame's capture time (seen_time_s) unless it has its own."""
+        return tuple(block if block.seen_time_s is not None else replace(block, seen_time_s=self.capture_time_s)
+                     for block in self.blocks)
 
 
 DEVICE_ERRORS = (ConnectionError, TimeoutError, OSError)  # a device failed, as opposed to a bad request

@@ -1,7 +1,8 @@
 """Telemetry: the station's status as plain JSON-ready dicts, published at a fixed rate.
 
 Pure helpers turn library objects (detected blocks, tags, poses) into wire dicts; the
-TelemetryPublisher thread snapshots the station at `rate_hz` into a NewestSlot.
+TelemetryPublisher thread snapshots the station at `rate_hz` into a NewestSlot. Detections is what the
+station's detection accessor returns: typed blocks, serialised by its to_dict (GET /api/detections, telemetry).
 """
 
 from __future__ import annotations
@@ -9,12 +10,14 @@ from __future__ import annotations
 import math
 import time
 from collections.abc import Callable
+from dataclasses import dataclass
 
 import numpy as np
 
 from armlab.kinematics.rx200_geometry import approach_pitch_rad
 from armlab.station.perception import _Worker
 from armlab.station.slots import NewestSlot
+from armlab.vision.block import Block
 
 
 def _floats(values) -> list[float]:
@@ -38,7 +41,29 @@ def gripper_pose_from_matrix(T_world_gripper: np.ndarray, base_xyz_m=(0.0, 0.0, 
     return {"position_m": _floats(T[:3, 3]), "pitch_rad": pitch, "yaw_rad": yaw}
 
 
-def block_to_dict(index: int, block) -> dict:
+@dataclass(frozen=True)
+class Detections:
+    """The newest detected blocks (Station.detections) in detection order (a block's index is its wire id), each
+    stamped with its frame's capture time; none, with the reason, while stale (the camera lost, perception older
+    than camera_timeout_s)."""
+
+    blocks: tuple[Block, ...]
+    time_s: float  # when perception made them (time.time())
+    frame_sequence: int  # the frame they were seen in (-1: no perception yet)
+    stale_reason: str | None = None
+
+    @property
+    def stale(self) -> bool:
+        return self.stale_reason is not None
+
+    def to_dict(self) -> dict:
+        """The wire form (server's DetectionsResponse): {data, count, time_s, frame_sequence, stale, stale_reason}."""
+        data = [block_to_dict(index, block) for index, block in enumerate(self.blocks)]
+        return {"data": data, "count": len(data), "time_s": self.time_s, "frame_sequence": self.frame_sequence,
+                "stale": self.stale, "stale_reason": self.stale_reason}
+
+
+def block_to_dict(index: int | None, block) -> dict:
     """A detected block (armlab.vision Block) as the wire dict of GET /api/detections; seen_time_s
     (the capture time of the frame it was seen in) when the block carries it."""
     size = getattr(block, "size", None)

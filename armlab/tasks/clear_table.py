@@ -12,6 +12,7 @@ from armlab.scene import as_workcell
 from armlab.tasks.look_poses import seeing_look_pose
 from armlab.tasks.policy import Move, Plan, near
 from armlab.tasks.runner import TaskRunner
+from armlab.tasks.seen import Seen, is_unseen
 
 SPOT_PITCH_M = 0.045
 SPOT_EMPTY_HEIGHT_M = 0.010  # a floor spot whose measured height is above this holds something
@@ -27,36 +28,36 @@ def make_policy(level: int | None, params: dict, runner: TaskRunner):
     ys = np.arange(bin_.y_range_m[0] + 0.025, bin_.y_range_m[1] - 0.02 + 1e-9, SPOT_PITCH_M)
     spots = [(float(x), float(y)) for y in ys for x in xs if 0.14 <= math.hypot(x, y) <= 0.36]
 
-    def policy(objects: list[dict], given_up: set) -> Plan:
-        inside = [o for o in objects if bin_.contains(*o["position_m"][:2])]
-        outside = [o for o in objects if not bin_.contains(*o["position_m"][:2]) and not o.get("unseen")]
-        for obj in [o for o in outside if math.hypot(*o["position_m"][:2]) > reach_m]:
+    def policy(objects: list[Seen], given_up: set) -> Plan:
+        inside = [o for o in objects if bin_.contains(*o.position_m[:2])]
+        outside = [o for o in objects if not bin_.contains(*o.position_m[:2]) and not is_unseen(o)]
+        for obj in [o for o in outside if math.hypot(*o.position_m[:2]) > reach_m]:
             runner.note_once(f"left the {_kind(obj)} beyond the arm's reach")
-        outside = [o for o in outside if math.hypot(*o["position_m"][:2]) <= reach_m]
+        outside = [o for o in outside if math.hypot(*o.position_m[:2]) <= reach_m]
         # Free: no detection near and nothing measured standing there (what the job put in the bin can go unseen).
-        free = [s for s in spots if not any(near(o["position_m"], s, 0.035) for o in inside) and runner.height_at(s) <= SPOT_EMPTY_HEIGHT_M]
-        bases = sorted((o for o in inside if o.get("is_cube", True)), key=lambda o: o["position_m"][2])
-        distractors_out = sum(not o.get("is_cube", True) and Move(o, (0.0, 0.0, 0.0), "").key() not in given_up for o in outside)
+        free = [s for s in spots if not any(near(o.position_m, s, 0.035) for o in inside) and runner.height_at(s) <= SPOT_EMPTY_HEIGHT_M]
+        bases = sorted((o for o in inside if o.is_cube), key=lambda o: o.position_m[2])
+        distractors_out = sum(not o.is_cube and Move(o, (0.0, 0.0, 0.0), "").key() not in given_up for o in outside)
         moves = []
         # Nothing stacks on a distractor nor a distractor on anything: distractors go first, onto the floor, and a
         # block goes on the lowest block in the bin only when the floor has no spot to spare (a column in the bin
         # keeps the arm from the floor spots beside it). Then pile tops first: they uncover blocks.
-        for obj in sorted(outside, key=lambda o: (o.get("is_cube", True), -o.get("stack_level", 1))):
-            cube = obj.get("is_cube", True)
+        for obj in sorted(outside, key=lambda o: (o.is_cube, -o.stack_level)):
+            cube = obj.is_cube
             if free and (not cube or len(free) > distractors_out or not bases):
                 target = (*free[0], 0.0)
             elif cube and bases:
-                target = tuple(bases[0]["position_m"])
+                target = tuple(float(v) for v in bases[0].position_m)
             else:
                 continue
             moves.append(Move(obj, target, f"{_kind(obj)} into the bin", yaw_rad=None))
-        hidden = sum(o.get("stack_level", 1) - 1 for o in outside)
+        hidden = sum(o.stack_level - 1 for o in outside)
         return Plan(moves, done=len(inside), left=len(outside) + hidden, finished=not outside)
 
     return policy
 
 
-def _kind(obj: dict) -> str:
+def _kind(obj: Seen) -> str:
     """'red large block', 'unknown large object': how the job names what it moves or leaves."""
-    kind = f"{obj.get('color') or ''} {obj.get('size') or ''} {'block' if obj.get('is_cube', True) else 'object'}"
+    kind = f"{obj.color or ''} {obj.size or ''} {'block' if obj.is_cube else 'object'}"
     return " ".join(kind.split())

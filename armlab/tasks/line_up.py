@@ -17,6 +17,7 @@ from armlab import skills
 from armlab.scene import COLORS
 from armlab.tasks.policy import FINGER_REACH_M, Move, NoFreeSpot, Plan, cubes, near
 from armlab.tasks.runner import TaskRunner
+from armlab.tasks.seen import Seen, is_unseen
 
 SPACING_M = 0.055  # centre to centre: 5 gaps = 275 mm < 300 mm
 LINE_GAP_M = 0.075  # between the large and the small line
@@ -54,7 +55,7 @@ def segment_distances(points: np.ndarray, starts: np.ndarray, ends: np.ndarray) 
     return np.linalg.norm(rel - t[..., None] * d[:, None, :], axis=-1)
 
 
-def choose_layout(runner: TaskRunner, objects: list[dict], sizes: list[str]):
+def choose_layout(runner: TaskRunner, objects: list[Seen], sizes: list[str]):
     """The layout with all slots in reach, on the board and off the tags, preferably with no distractor
     near (the judge's L3 bonus), else with the fewest distractors near (the rules allow moving them: the
     job puts them aside first; a held-out seed with four distractors left no layout clear and the job
@@ -71,11 +72,11 @@ def choose_layout(runner: TaskRunner, objects: list[dict], sizes: list[str]):
         ok &= np.all(np.linalg.norm(flat - np.asarray(tag), axis=-1) > 0.04, axis=1)
     if not ok.any():
         raise RuntimeError("no place for the lines in the arm's reach on the board")
-    movable = [o for o in objects if not o.get("is_cube", True) and not o.get("unseen")]
-    distractors = np.array([o["position_m"][:2] for o in movable]).reshape(-1, 2)
-    blocks = [o for o in objects if o.get("is_cube", True)]
-    block_xy = np.array([o["position_m"][:2] for o in blocks]).reshape(-1, 2)
-    weights = np.array([o.get("stack_level", 1) for o in blocks], float)
+    movable = [o for o in objects if not o.is_cube and not is_unseen(o)]
+    distractors = np.array([o.position_m[:2] for o in movable]).reshape(-1, 2)
+    blocks = [o for o in objects if o.is_cube]
+    block_xy = np.array([o.position_m[:2] for o in blocks]).reshape(-1, 2)
+    weights = np.array([o.stack_level for o in blocks], float)
     cost = 0.1 * radius.sum(axis=1)  # prefer lines near the arm (faster)
     near_line = np.zeros((len(slots), len(movable)), bool)
     for line in range(slots.shape[1]):
@@ -116,7 +117,7 @@ def make_policy(level: int | None, params: dict, runner: TaskRunner):
     sizes = ["large"] if level == 1 else ["large", "small"]
     chosen: dict = {}
 
-    def policy(objects: list[dict], given_up: set) -> Plan:
+    def policy(objects: list[Seen], given_up: set) -> Plan:
         if not chosen:
             layout, direction, to_move = choose_layout(runner, objects, sizes)
             if to_move:
@@ -127,17 +128,17 @@ def make_policy(level: int | None, params: dict, runner: TaskRunner):
         layout, direction = chosen["layout"], chosen["direction"]
         segments = [(line[0], line[-1]) for line in layout.values()]
         across = direction + math.pi / 2
-        blocks = [b for b in cubes(objects) if b["size"] in sizes and b["color"] in COLORS]  # other colours: obstacles
+        blocks = [b for b in cubes(objects) if b.size in sizes and b.color in COLORS]  # other colours: obstacles
 
         def slot_of(block):
-            return layout[block["size"]][COLORS.index(block["color"])]
+            return layout[block.size][COLORS.index(block.color)]
 
         def placed(block) -> bool:
-            return block.get("stack_level", 1) == 1 and near(block["position_m"], slot_of(block), SLOT_TOLERANCE_M)
+            return block.stack_level == 1 and near(block.position_m, slot_of(block), SLOT_TOLERANCE_M)
 
         done = [b for b in blocks if placed(b)]
         loose = [b for b in blocks if not placed(b)]
-        left = sum(int(b.get("stack_level", 1)) for b in loose)
+        left = sum(int(b.stack_level) for b in loose)
         moves: list[Move] = []
 
         def aside_key(obj) -> tuple:
@@ -146,20 +147,20 @@ def make_policy(level: int | None, params: dict, runner: TaskRunner):
         def in_the_way(obj) -> bool:
             """A block in the lines' corridor, or a distractor within DISTRACTOR_CLEARANCE_M of a line, that
             the job has not given up on (a given-up one stays: the lines are built around it)."""
-            if obj in done or obj.get("unseen") or aside_key(obj) in given_up:
+            if obj in done or is_unseen(obj) or aside_key(obj) in given_up:
                 return False
-            reach_m = CORRIDOR_M if obj.get("is_cube", True) else DISTRACTOR_CLEARANCE_M
-            return any(segment_distance(obj["position_m"][:2], a, b) < reach_m for a, b in segments)
+            reach_m = CORRIDOR_M if obj.is_cube else DISTRACTOR_CLEARANCE_M
+            return any(segment_distance(obj.position_m[:2], a, b) < reach_m for a, b in segments)
 
         in_way = [o for o in objects if in_the_way(o)]
 
         def slot_free(xy) -> bool:
-            return not any(near(o["position_m"], xy, 0.035) for o in objects)
+            return not any(near(o.position_m, xy, 0.035) for o in objects)
 
         def to_slot(block) -> Move:
             xy = slot_of(block)
-            return Move(block, (xy[0], xy[1], 0.0), f"to slot {COLORS.index(block['color']) + 1} of the "
-                        f"{block['size']} line", yaw_rad=direction, finger_axis_rad=across)
+            return Move(block, (xy[0], xy[1], 0.0), f"to slot {COLORS.index(block.color) + 1} of the "
+                        f"{block.size} line", yaw_rad=direction, finger_axis_rad=across)
 
         def clear_of_lines(xy) -> bool:
             return all(segment_distance(xy, a, b) >= ASIDE_CLEARANCE_M for a, b in segments)
@@ -168,12 +169,12 @@ def make_policy(level: int | None, params: dict, runner: TaskRunner):
             """obj to a free spot the arm reaches and the parked arm leaves in view (a distractor: clear of
             the lines by ASIDE_CLEARANCE_M); None, said once, when there is none (the lines are built
             around it: a job does not fail for want of a free spot)."""
-            cube = obj.get("is_cube", True)
+            cube = obj.is_cube
             try:
                 x, y = runner.free_spot_in_reach(objects, runner.edge_of(obj), rules=(None if cube else clear_of_lines,))
             except NoFreeSpot as error:
-                runner.note_once(f"left the {'block' if cube else 'distractor'} at ({obj['position_m'][0] * 1000:.0f}, "
-                                 f"{obj['position_m'][1] * 1000:.0f}) mm in the lines' way: {error}")
+                runner.note_once(f"left the {'block' if cube else 'distractor'} at ({obj.position_m[0] * 1000:.0f}, "
+                                 f"{obj.position_m[1] * 1000:.0f}) mm in the lines' way: {error}")
                 return None
             return Move(obj, (x, y, 0.0), "out of the lines' way", yaw_rad=0.0 if cube else None)
 
@@ -183,22 +184,22 @@ def make_policy(level: int | None, params: dict, runner: TaskRunner):
             """Nothing but placed blocks within an opening finger's reach of block's slot, not even the rest of
             its own pile (a release 47 mm from a two-high pile knocked it over: the blocks lay tipped)."""
             xy = slot_of(block)
-            others = [o for o in objects if o not in done and (o is not block or o.get("stack_level", 1) > 1)]
-            return not any(near(o["position_m"], xy, FINGER_REACH_M) for o in others)
+            others = [o for o in objects if o not in done and (o is not block or o.stack_level > 1)]
+            return not any(near(o.position_m, xy, FINGER_REACH_M) for o in others)
 
-        for obj in sorted(in_way, key=lambda o: (o.get("is_cube", True), -(o.get("stack_level") or 1))):  # distractors first
+        for obj in sorted(in_way, key=lambda o: (o.is_cube, -(o.stack_level or 1))):  # distractors first
             wanted = obj in loose and slot_free(slot_of(obj)) and clear_around(obj)
             moves.append(to_slot(obj) if wanted else to_aside(obj))
         moves = [m for m in moves if m is not None]
         if not moves:
-            for block in sorted(loose, key=lambda b: -b.get("stack_level", 1)):
+            for block in sorted(loose, key=lambda b: -b.stack_level):
                 if slot_free(slot_of(block)):
                     moves.append(to_slot(block))
             for block in loose:
-                if block.get("stack_level", 1) > 1:
+                if block.stack_level > 1:
                     moves.append(to_aside(block))
             moves = [m for m in moves if m is not None]
-        distractors_left = [m for m in moves if not m.block.get("is_cube", True)]
+        distractors_left = [m for m in moves if not m.block.is_cube]
         return Plan(moves, done=len(done), left=left, finished=not loose and not distractors_left)
 
     return policy

@@ -17,6 +17,8 @@ from armlab.scene import COLORS
 from armlab.tasks.columns import Column
 from armlab.tasks.policy import Move, NoFreeSpot, Plan, cubes
 from armlab.tasks.runner import TaskRunner
+from armlab.tasks.seen import Seen
+from armlab.vision.block import Block
 
 RANK = {color: rank for rank, color in enumerate(COLORS)}
 COLUMN_MAX_TILT_RAD = math.radians(20.0)  # the top of a tall column is reachable only slightly tilted
@@ -27,8 +29,8 @@ ON_COLUMN_RADIUS_M = 0.045  # a block this close to a column's base and off the 
 InTheWay = Callable[[tuple[float, float], str, float, tuple[float, float]], bool]
 
 
-def pile_sizes(block: dict) -> list[str]:
-    return list(block.get("stack_sizes") or []) or [block["size"]] * int(block.get("stack_level", 1))
+def pile_sizes(block: Block) -> list[str]:
+    return list(block.stack_sizes) or [block.size] * int(block.stack_level)
 
 
 def make_ordered_policy(runner: TaskRunner, bases: dict[str, tuple[float, float]] | None, *,
@@ -38,7 +40,7 @@ def make_ordered_policy(runner: TaskRunner, bases: dict[str, tuple[float, float]
     in_the_way: see the module docstring (None: columns are never in the way)."""
     columns: dict[str, Column] = {}
 
-    def policy(objects: list[dict], given_up: set) -> Plan:
+    def policy(objects: list[Seen], given_up: set) -> Plan:
         if not columns:
             chosen = bases if bases is not None else choose_bases(objects)
             columns.update({size: Column(f"{size} column", xy) for size, xy in chosen.items()})
@@ -47,11 +49,11 @@ def make_ordered_policy(runner: TaskRunner, bases: dict[str, tuple[float, float]
             column.observe(objects, runner.height_at)
 
         def on_a_column(block) -> bool:  # part of a column, not loose (a leaning column shows a strip of a lower block)
-            return any(math.dist(block["position_m"][:2], c.base_xy_m) < ON_COLUMN_RADIUS_M
-                       and block["position_m"][2] > runner.edge_of(block) + 0.01 for c in columns.values())
+            return any(math.dist(block.position_m[:2], c.base_xy_m) < ON_COLUMN_RADIUS_M
+                       and block.position_m[2] > runner.edge_of(block) + 0.01 for c in columns.values())
 
         # A block of a colour outside the rainbow (perception's 'unknown', a taught 'pink') has no place in a column: an obstacle.
-        blocks = [b for b in cubes(objects) if keep(b) and b["size"] in columns and b["color"] in RANK]
+        blocks = [b for b in cubes(objects) if keep(b) and b.size in columns and b.color in RANK]
         tops = {id(c.top) for c in columns.values() if c.top is not None}
         loose = [b for b in blocks if id(b) not in tops and (in_the_way is None or not on_a_column(b))]
         hidden = {size: sum(pile_sizes(b)[:-1].count(size) for b in loose) for size in columns}
@@ -71,28 +73,28 @@ def make_ordered_policy(runner: TaskRunner, bases: dict[str, tuple[float, float]
             top_color = column.top_color()
             if column.top is None or top_color not in RANK:
                 continue
-            lower = [b for b in loose if b["size"] == size and RANK[b["color"]] < RANK[top_color]]
+            lower = [b for b in loose if b.size == size and RANK[b.color] < RANK[top_color]]
             if lower:
                 move = aside(runner, column.top, objects, aside_region, "out of order: make room for the "
-                             f"{lower[0]['color']} block", allowed)
+                             f"{lower[0].color} block", allowed)
                 if move is not None:
                     moves.append(Move(move.block, move.to_m, move.why, on_placed=lambda edge, c=column: c.placed.pop() if c.placed else None))
         next_moves: dict[int, Move] = {}
-        for block in sorted(loose, key=lambda b: (RANK[b["color"]], -b.get("stack_level", 1))):
-            size = block["size"]
+        for block in sorted(loose, key=lambda b: (RANK[b.color], -b.stack_level)):
+            size = block.size
             column = columns[size]
-            same = [b for b in loose if b["size"] == size]
-            is_next = RANK[block["color"]] == min(RANK[b["color"]] for b in same) and hidden[size] == 0
+            same = [b for b in loose if b.size == size]
+            is_next = RANK[block.color] == min(RANK[b.color] for b in same) and hidden[size] == 0
             if is_next:
-                yaw = column.top["yaw_rad"] if column.top is not None else 0.0
+                yaw = column.top.yaw_rad if column.top is not None else 0.0
                 next_moves[id(block)] = Move(block, column.surface_m(), f"next on the {column.name}", yaw_rad=yaw,
                                              max_tilt_rad=COLUMN_MAX_TILT_RAD,
                                              on_placed=lambda edge, c=column, b=block: c.add(b, edge))
         if in_the_way is not None:
             # Before a column grows, what it would then keep from the arm or the camera goes first.
-            for block in sorted(loose, key=lambda b: -b.get("stack_level", 1)):
+            for block in sorted(loose, key=lambda b: -b.stack_level):
                 blocking = [c for size, c in columns.items()
-                            if in_the_way(c.base_xy_m, size, c.height_m + runner.edges_m[size], block["position_m"][:2])]
+                            if in_the_way(c.base_xy_m, size, c.height_m + runner.edges_m[size], block.position_m[:2])]
                 if not blocking:
                     continue
                 if id(block) in next_moves:
@@ -100,15 +102,15 @@ def make_ordered_policy(runner: TaskRunner, bases: dict[str, tuple[float, float]
                 else:
                     moves.append(aside(runner, block, objects, aside_region, f"out of the {blocking[0].name}'s way", allowed))
         moves.extend(next_moves.values())
-        for block in sorted(loose, key=lambda b: -b.get("stack_level", 1)):
-            if block.get("stack_level", 1) > 1:
+        for block in sorted(loose, key=lambda b: -b.stack_level):
+            if block.stack_level > 1:
                 moves.append(aside(runner, block, objects, aside_region, "uncover the pile under it", allowed))
         return Plan([m for m in moves if m is not None], done=done, left=left, finished=not loose)
 
     return policy
 
 
-def aside(runner: TaskRunner, block: dict, objects: list[dict], region, why: str,
+def aside(runner: TaskRunner, block: Block, objects: list[Seen], region, why: str,
           allowed: Callable[[tuple[float, float]], bool] | None = None) -> Move | None:
     """Move `block` to a free spot on the board: in region (None: free_spot's default), else anywhere in the
     arm's reach (REACH_REGION_M), first where allowed(x, y) (when given), then anywhere; None, with the reason
@@ -116,7 +118,7 @@ def aside(runner: TaskRunner, block: dict, objects: list[dict], region, why: str
     try:
         x, y = runner.free_spot_in_reach(objects, runner.edge_of(block), region, (allowed, None) if allowed is not None else (None,))
     except NoFreeSpot:
-        runner.note_once(f"left the {block.get('color')} {block.get('size')} block at ({block['position_m'][0] * 1000:.0f}, "
-                         f"{block['position_m'][1] * 1000:.0f}) mm where it is: no free spot on the board to put it aside")
+        runner.note_once(f"left the {block.color} {block.size} block at ({block.position_m[0] * 1000:.0f}, "
+                         f"{block.position_m[1] * 1000:.0f}) mm where it is: no free spot on the board to put it aside")
         return None
     return Move(block, (x, y, 0.0), why)

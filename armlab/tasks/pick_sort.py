@@ -12,6 +12,8 @@ from collections.abc import Callable
 from armlab.tasks.look_poses import seeing_look_pose
 from armlab.tasks.policy import Move, Plan, cubes, near
 from armlab.tasks.runner import TaskRunner
+from armlab.tasks.seen import Seen
+from armlab.vision.block import Block
 
 # The innermost slots 100 mm from x = 0: at 90 mm a large block was partly hidden by the arm at the look
 # pose once the arm sagged 0.03 rad (then neither detected nor counted done).
@@ -26,9 +28,9 @@ def side_sign(size: str) -> float:
     return 1.0 if size == "large" else -1.0
 
 
-def is_sorted(block: dict) -> bool:
-    x, y = block["position_m"][:2]
-    return y < 0.0 and x * side_sign(block["size"]) > 0.0 and block.get("stack_level", 1) == 1
+def is_sorted(block: Block) -> bool:
+    x, y = block.position_m[:2]
+    return y < 0.0 and x * side_sign(block.size) > 0.0 and block.stack_level == 1
 
 
 def slots(size: str) -> list[tuple[float, float]]:
@@ -36,18 +38,18 @@ def slots(size: str) -> list[tuple[float, float]]:
     return [(sign * x, y) for y in SLOT_YS_M for x in SLOT_XS_M]
 
 
-def policy(objects: list[dict], given_up: set, standing_at: Callable[[tuple[float, float]], float] | None = None) -> Plan:
+def policy(objects: list[Seen], given_up: set, standing_at: Callable[[tuple[float, float]], float] | None = None) -> Plan:
     """The next moves. standing_at(xy): the measured height of what stands at a spot (None: not measured);
     a slot is free when no detection is near it and nothing measurably stands on it (a block the arm
     partly hides at the look goes undetected, but the depth image still shows it there)."""
     blocks = cubes(objects)
     done = [b for b in blocks if is_sorted(b)]
     todo = [b for b in blocks if not is_sorted(b)]
-    hidden = sum(b.get("stack_level", 1) - 1 for b in todo)
+    hidden = sum(b.stack_level - 1 for b in todo)
     moves, claimed, occupied = [], [], []
 
     def free(slot) -> bool:
-        if any(near(o["position_m"], slot, SLOT_FREE_RADIUS_M) for o in objects) or any(near(c, slot, SLOT_FREE_RADIUS_M) for c in claimed):
+        if any(near(o.position_m, slot, SLOT_FREE_RADIUS_M) for o in objects) or any(near(c, slot, SLOT_FREE_RADIUS_M) for c in claimed):
             return False
         if slot in occupied or standing_at is not None and standing_at(slot) > SLOT_EMPTY_HEIGHT_M:
             occupied.append(slot)
@@ -55,12 +57,12 @@ def policy(objects: list[dict], given_up: set, standing_at: Callable[[tuple[floa
         return True
 
     # Pile tops first (they uncover blocks), then nearest the board's middle.
-    for block in sorted(todo, key=lambda b: (-b.get("stack_level", 1), abs(b["position_m"][0]))):
-        target = next((s for s in slots(block["size"]) if free(s)), None)
+    for block in sorted(todo, key=lambda b: (-b.stack_level, abs(b.position_m[0]))):
+        target = next((s for s in slots(block.size) if free(s)), None)
         if target is None:
             continue
         claimed.append(target)
-        moves.append(Move(block, (target[0], target[1], 0.0), f"to the {block['size']} side"))
+        moves.append(Move(block, (target[0], target[1], 0.0), f"to the {block.size} side"))
     return Plan(moves, done=len(done), left=len(todo) + hidden, finished=not todo)
 
 

@@ -19,6 +19,8 @@ from armlab.tasks.judge import GRIPPER_BOX_M, TAG_RADIUS_M
 from armlab.tasks.look_poses import seeing_look_pose
 from armlab.tasks.policy import Move, Plan, cubes
 from armlab.tasks.runner import TaskRunner
+from armlab.tasks.seen import Seen
+from armlab.vision.block import Block
 
 MIN_COLUMN = 3
 BOX_MARGIN_M = 0.010  # planned gripper paths keep this far inside the judge's box (tracking error)
@@ -44,9 +46,9 @@ def column_base(tag_xy, box: GripperBox) -> tuple[float, float]:
     return base
 
 
-def pile_sizes(block: dict) -> list[str]:
+def pile_sizes(block: Block) -> list[str]:
     """Sizes of the pile whose top is `block`, bottom-up (the top's own size when not measured)."""
-    return list(block.get("stack_sizes") or []) or [block["size"]] * int(block.get("stack_level", 1))
+    return list(block.stack_sizes) or [block.size] * int(block.stack_level)
 
 
 def make_policy(level: int | None, params: dict, runner: TaskRunner):
@@ -58,14 +60,14 @@ def make_policy(level: int | None, params: dict, runner: TaskRunner):
     small = Column("small column", column_base(tags[1], runner.gripper_box))
     runner.reserved_m = [large.base_xy_m, small.base_xy_m]
 
-    def policy(objects: list[dict], given_up: set) -> Plan:
+    def policy(objects: list[Seen], given_up: set) -> Plan:
         large.observe(objects, runner.height_at)
         small.observe(objects, runner.height_at)
         blocks = cubes(objects)
         in_columns = {id(c.top) for c in (large, small) if c.top is not None}
         loose = [b for b in blocks if id(b) not in in_columns]
         # Every block seen or counted under a pile top, and every block already in a column, by size.
-        sizes = [s for b in loose for s in pile_sizes(b)] + [p.get("size") for c in (large, small) for p in c.placed]
+        sizes = [s for b in loose for s in pile_sizes(b)] + [p.size for c in (large, small) for p in c.placed]
         two_columns = sizes.count("large") >= MIN_COLUMN and sizes.count("small") >= MIN_COLUMN
         done = large.height + small.height
         left = sum(len(pile_sizes(b)) for b in loose)
@@ -73,18 +75,18 @@ def make_policy(level: int | None, params: dict, runner: TaskRunner):
         # Blocks beside a column base first (once the column is tall the arm cannot reach down beside
         # it), then pile tops (they uncover blocks), large before small.
         def order(b):
-            beside = min(math.dist(b["position_m"][:2], c.base_xy_m) for c in (large, small)) < BESIDE_COLUMN_M
-            return (not beside, -b.get("stack_level", 1), b["size"] != "large")
+            beside = min(math.dist(b.position_m[:2], c.base_xy_m) for c in (large, small)) < BESIDE_COLUMN_M
+            return (not beside, -b.stack_level, b.size != "large")
 
         for block in sorted(loose, key=order):
             if two_columns:
-                column = large if block["size"] == "large" else small
+                column = large if block.size == "large" else small
             else:
                 column = large
                 large_left = any("large" in pile_sizes(b) for b in loose)
-                if block["size"] == "small" and large_left and block.get("stack_level", 1) == 1:
+                if block.size == "small" and large_left and block.stack_level == 1:
                     continue  # small blocks go on top once every large one is in
-            yaw = column.top["yaw_rad"] if column.top is not None else 0.0
+            yaw = column.top.yaw_rad if column.top is not None else 0.0
             moves.append(Move(block, column.surface_m(), f"onto the {column.name}", yaw_rad=yaw,
                               on_placed=lambda edge, c=column, b=block: c.add(b, edge)))
         return Plan(moves, done=done, left=left, finished=not loose)

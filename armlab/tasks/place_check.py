@@ -26,6 +26,8 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from armlab.errors import PLAN_REFUSALS
+from armlab.tasks.seen import Seen, is_unseen
+from armlab.vision.block import Block
 
 SAME_SPOT_M = 0.015  # a target this close (x-y) to an earlier one is the same spot
 FIND_RADIUS_M = 0.03  # the placed block is the cube detection nearest its target within this (x-y)...
@@ -88,7 +90,7 @@ class PlaceCheck:
         shifted = np.asarray(placed_at_m, float)[:2] - to[:2]
         self.pending.append(_Pending(spot, to, float(to[2] + edge_m), name, shifted))
 
-    def check(self, objects: list[dict]) -> list[dict]:
+    def check(self, objects: list[Seen]) -> list[dict]:
         """Measure every block placed since the last look against its target (detections `objects` of a fresh
         look); log each, update the spots' corrections. Returns the new records."""
         new = []
@@ -98,7 +100,7 @@ class PlaceCheck:
         self.records += new
         return new
 
-    def _check_one(self, place: _Pending, objects: list[dict]) -> dict:
+    def _check_one(self, place: _Pending, objects: list[Seen]) -> dict:
         target = place.target_m
         where = f"({target[0] * 1000:.0f}, {target[1] * 1000:.0f}, {target[2] * 1000:.0f}) mm"
         record = {"block": place.name, "target_m": [float(v) for v in target], "shift_mm": (1000 * place.shifted_m).round(2).tolist()}
@@ -107,7 +109,7 @@ class PlaceCheck:
             record.update(residual_mm=None, note="not found at its target")
             self.log("warn", f"place check: the {place.name} placed at {where} is not seen there (slid, knocked or hidden): no correction")
             return record
-        residual = np.asarray(seen["position_m"][:2], float) - target[:2]
+        residual = np.asarray(seen.position_m[:2], float) - target[:2]
         size_mm = float(np.linalg.norm(residual) * 1000)
         spot = place.spot
         spot.residuals_mm.append(round(size_mm, 2))
@@ -146,11 +148,11 @@ class PlaceCheck:
                 "max_mm": round(float(np.max(sizes)), 2) if sizes else None, "records": list(self.records)}
 
 
-def _placed_block(objects: list[dict], target_m: np.ndarray, top_z_m: float) -> dict | None:
+def _placed_block(objects: list[Seen], target_m: np.ndarray, top_z_m: float) -> Block | None:
     """The cube detection nearest target_m (x-y) within FIND_RADIUS_M whose top is within TOP_TOLERANCE_M of top_z_m."""
-    near = [o for o in objects if o.get("is_cube", True) and not o.get("unseen")
-            and math.dist(o["position_m"][:2], target_m[:2]) <= FIND_RADIUS_M and abs(o["position_m"][2] - top_z_m) <= TOP_TOLERANCE_M]
-    return min(near, key=lambda o: math.dist(o["position_m"][:2], target_m[:2]), default=None)
+    near = [o for o in objects if o.is_cube and not is_unseen(o)
+            and math.dist(o.position_m[:2], target_m[:2]) <= FIND_RADIUS_M and abs(o.position_m[2] - top_z_m) <= TOP_TOLERANCE_M]
+    return min(near, key=lambda o: math.dist(o.position_m[:2], target_m[:2]), default=None)
 
 
 def first_passing_target(plan: Callable[[np.ndarray], object], corrected_m, intended_m, say: Callable[[str], None]) -> np.ndarray:

@@ -1,12 +1,16 @@
 """What a job's policy and the runner (runner.py) say to each other: the policy's answer (a Plan of candidate
 Moves, best first), the Policy type, NoFreeSpot (a policy leaves an object where it is), and the pure helpers
-policies share over a look's detections (cubes, blocks counted, nearness, the finger axis away from neighbours)."""
+policies share over a look's objects (seen.py: Blocks and StandingObjects): cubes, blocks counted, nearness, the finger
+axis away from neighbours."""
 
 from __future__ import annotations
 
 import math
 from collections.abc import Callable
 from dataclasses import dataclass, field
+
+from armlab.tasks.seen import Seen
+from armlab.vision.block import Block
 
 
 class NoFreeSpot(RuntimeError):
@@ -15,10 +19,10 @@ class NoFreeSpot(RuntimeError):
 
 @dataclass(frozen=True)
 class Move:
-    """Pick `block` (a detection wire dict) and set it down with its bottom centre at `to_m`
+    """Pick `block` (a detection) and set it down with its bottom centre at `to_m`
     (x, y, surface z) with yaw `yaw_rad` (None: keep the block's own yaw). `why` is shown to the operator."""
 
-    block: dict
+    block: Block
     to_m: tuple[float, float, float]
     why: str
     yaw_rad: float | None = 0.0
@@ -31,7 +35,7 @@ class Move:
     def key(self) -> tuple:
         """Identifies "the same move" across looks (attempt counting): the block, by its kind and where it is."""
         b = self.block
-        return (b.get("color"), b.get("size"), b.get("is_cube", True), round(b["position_m"][0], 2), round(b["position_m"][1], 2))
+        return (b.color, b.size, b.is_cube, round(float(b.position_m[0]), 2), round(float(b.position_m[1]), 2))
 
 
 @dataclass(frozen=True)
@@ -44,17 +48,17 @@ class Plan:
     finished: bool = False
 
 
-Policy = Callable[[list[dict], set], Plan]
+Policy = Callable[[list[Seen], set], Plan]
 
 
-def cubes(objects: list[dict]) -> list[dict]:
-    """The detections that are blocks (not distractors)."""
-    return [o for o in objects if o.get("is_cube", True)]
+def cubes(objects: list[Seen]) -> list[Block]:
+    """The detections that are blocks (not distractors, nothing unseen)."""
+    return [o for o in objects if o.is_cube]
 
 
-def blocks_seen(objects: list[dict]) -> int:
+def blocks_seen(objects: list[Seen]) -> int:
     """How many blocks a look accounts for: every cube detection with the blocks under it (stack_level)."""
-    return sum(max(1, int(o.get("stack_level", 1) or 1)) for o in cubes(objects))
+    return sum(max(1, int(o.stack_level)) for o in cubes(objects))
 
 
 def confirm_finish(plan: Plan, seen_now: int, seen_before: int | None) -> bool:
@@ -71,12 +75,12 @@ def near(a, b, radius_m: float) -> bool:
 FINGER_REACH_M = 0.075  # neighbours closer than this (centre to centre) can meet an opening finger
 
 
-def finger_axis_away(point_m, yaw_rad: float, objects: list[dict], exclude: dict | None = None) -> float | None:
+def finger_axis_away(point_m, yaw_rad: float, objects: list[Seen], exclude: Seen | None = None) -> float | None:
     """Of the two finger directions that close on a block of yaw yaw_rad, the one more across the
     direction to the nearest neighbour within FINGER_REACH_M (None when nobody is that close)."""
-    others = [o for o in objects if o is not exclude and 1e-3 < math.dist(o["position_m"][:2], point_m[:2]) < FINGER_REACH_M]
+    others = [o for o in objects if o is not exclude and 1e-3 < math.dist(o.position_m[:2], point_m[:2]) < FINGER_REACH_M]
     if not others:
         return None
-    nearest = min(others, key=lambda o: math.dist(o["position_m"][:2], point_m[:2]))
-    toward = math.atan2(nearest["position_m"][1] - point_m[1], nearest["position_m"][0] - point_m[0])
+    nearest = min(others, key=lambda o: math.dist(o.position_m[:2], point_m[:2]))
+    toward = math.atan2(nearest.position_m[1] - point_m[1], nearest.position_m[0] - point_m[0])
     return max((yaw_rad, yaw_rad + math.pi / 2), key=lambda axis: abs(math.sin(axis - toward)))

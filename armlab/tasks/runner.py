@@ -11,7 +11,7 @@ from __future__ import annotations
 
 import math
 from collections.abc import Callable
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 
 import numpy as np
 
@@ -26,9 +26,12 @@ from armlab.skills import side_grasp
 from armlab.skills.manipulate import plan_pick, plan_place, plan_side_place, run_steps
 from armlab.station.core import Station
 from armlab.station.jobs import JobContext
+from armlab.station.telemetry import block_to_dict
 from armlab.tasks.look_poses import look_pose, park_pose
 from armlab.tasks.place_check import PlaceCheck, first_passing_target
 from armlab.tasks.policy import Move, NoFreeSpot, Policy, blocks_seen, confirm_finish, finger_axis_away, near
+from armlab.tasks.seen import Seen, StandingObject
+from armlab.vision.block import Block
 from armlab.vision.geometry import project_points
 
 MAX_ATTEMPTS_PER_MOVE = 3
@@ -48,12 +51,15 @@ class Progress:
     attempts: int = 0
     failures: list[str] = field(default_factory=list)
     moves: int = 0
-    next_block: dict | None = None
+    next_block: Block | None = None
+    next_block_id: int | None = None  # its index among the look's detections (the wire's "id")
     next_target_m: list[float] | None = None
 
     def to_dict(self) -> dict:
+        """The job's extra.task (server/auto_models.py TaskProgress): next_block as a detection's wire dict."""
+        next_block = None if self.next_block is None else block_to_dict(self.next_block_id, self.next_block)
         return {"done": self.done, "left": self.left, "step": self.step, "attempts": self.attempts,
-                "failures": list(self.failures), "moves": self.moves, "next_block": self.next_block,
+                "failures": list(self.failures), "moves": self.moves, "next_block": next_block,
                 "next_target_m": self.next_target_m}
 
 
@@ -74,7 +80,8 @@ class TaskRunner:
         self._given_up: set[tuple] = set()
         self.edges_m = {size: float(getattr(station.perception_config.blocks, f"{size}_size_m")) for size in ("large", "small")}
         self.max_transfer_z_m = 0.42  # a job may lower it (pick_stack keeps the gripper under 300 mm)
-        self.last_objects: list[dict] = []  # the newest look's detections (obstacles while parking)
+        self.last_objects: list[Seen] = []  # the newest look's objects (obstacles while parking)
+        self.detections: list[Block] = []  # the newest look's detections, in order (a block's index is its wire id)
         self.reserved_m: list[tuple[float, float]] = []  # spots a job keeps free (column bases, line slots)
         self.look_pose_rad = look_pose(station)  # where the arm waits while the camera looks (a job may change it)
         self.keep_occluded = False  # a job that must find every block acts also on those the parked arm partly hides
@@ -108,7 +115,7 @@ class TaskRunner:
         clear of the objects seen last (straight there, else up first, else up and over the base)."""
         model = self.station.model
         q_park = self.look_pose_rad
-        self.progress.next_block = self.progress.next_target_m = None  # no move planned until the next look
+        self.progress.next_block = self.progress.next_block_id = self.progress.next_target_m = None  # no move planned until the next look
         q_now = self.station.joints_rad()
         if np.abs(q_now - q_park).max() <= 0.02:
             return
@@ -149,41 +156,45 @@ class TaskRunner:
         self.fail("no collision-free way to the park pose; parking straight")
         self.station.move_in_job(self.ctx, q_park)
 
-    def look(self) -> list[dict]:
+    def look(self) -> list[Seen]:
         """Detections of a fresh frame taken with the arm parked (occluded ones left out, unless the job
-        keeps the blocks among them: keep_occluded)."""
+        keeps the blocks among them: keep_occluded), and the columns it missed (unseen_columns)."""
         self.park()
         self.report("looking")
-        seen = skills.look(self.station, self.ctx)
-        objects = [o for o in seen if not o.get("occluded") or (self.keep_occluded and o.get("is_cube", True))]
+        self.detections = skills.look(self.station, self.ctx)
+        objects: list[Seen] = [o for o in self.detections if not o.occluded or (self.keep_occluded and o.is_cube)]
         self.last_objects = objects + self.unseen_columns(objects)
         return self.last_objects
 
-    def unseen_columns(self, objects: list[dict]) -> list[dict]:
+    def unseen_columns(self, objects: list[Seen]) -> list[StandingObject]:
         """Obstacles the detector missed at the job's reserved spots (e.g. a column too tall for it):
         wherever depth measures something standing there and no detection is near, an object of
         that height that no policy picks (is_cube False, no colour)."""
         found = []
         for xy in self.reserved_m:
-            if any(near(o["position_m"], xy, 0.03) for o in objects):
+            if any(near(o.position_m, xy, 0.03) for o in objects):
                 continue
             height = self.height_at(xy)
             if height > 0.005:
-                found.append({"position_m": [float(xy[0]), float(xy[1]), height], "is_cube": False, "color": None,
-                              "size": None, "stack_level": 0, "unseen": True, "yaw_rad": 0.0})
+                found.append(StandingObject.at(xy, height))
         return found
 
-    def boxes(self, objects: list[dict], *exclude: dict) -> list:
+    def boxes(self, objects: list[Seen], *exclude: Seen) -> list:
         """Obstacle boxes around every detected object except `exclude`."""
         skip = {id(o) for o in exclude}
-        return [box_around(f"{o.get('color')} {o.get('size') or 'object'} at ({o['position_m'][0] * 1000:.0f}, "
-                           f"{o['position_m'][1] * 1000:.0f}) mm", o["position_m"], OBJECT_BOX_RADIUS_M, o["position_m"][2])
+        return [box_around(f"{o.color} {o.size or 'object'} at ({o.position_m[0] * 1000:.0f}, "
+                           f"{o.position_m[1] * 1000:.0f}) mm", o.position_m, OBJECT_BOX_RADIUS_M, o.position_m[2])
                 for o in objects if id(o) not in skip]
 
-    def edge_of(self, block: dict) -> float:
-        return self.edges_m.get(block.get("size") or "large", self.edges_m["large"])
+    def edge_of(self, block: Seen) -> float:
+        return self.edges_m.get(block.size or "large", self.edges_m["large"])
 
-    def execute(self, move: Move, objects: list[dict]) -> bool:
+    def detection_id(self, block: Block) -> int | None:
+        """The block's index among the newest look's detections (its wire id), None for a block not among them
+        (a Block equals only itself)."""
+        return self.detections.index(block) if block in self.detections else None
+
+    def execute(self, move: Move, objects: list[Seen]) -> bool:
         """Pick move.block and place it at move.to_m; True if the block was held and released there.
 
         Both the pick and the place are planned (and checked) before the arm moves, the place from
@@ -192,14 +203,15 @@ class TaskRunner:
         edge = self.edge_of(block)
         intended = np.asarray(move.to_m, float)
         to = self.place_check.target_for(intended)  # shifted by what the last looks saw remain there
-        name = f"{block.get('color')} {block.get('size')} block"
-        below = [o for o in objects if o is not block and near(o["position_m"], to, 0.02) and abs(o["position_m"][2] - to[2]) < 0.01]
+        name = f"{block.color} {block.size} block"
+        below = [o for o in objects if o is not block and near(o.position_m, to, 0.02) and abs(o.position_m[2] - to[2]) < 0.01]
         place_boxes = self.boxes(objects, block, *below)
-        yaw = block.get("yaw_rad") if move.yaw_rad is None else move.yaw_rad
+        yaw = block.yaw_rad if move.yaw_rad is None else move.yaw_rad
         axis = move.finger_axis_rad
         if axis is None:
             axis = finger_axis_away(to, yaw or 0.0, [o for o in objects if o is not block and o not in below], block)
-        self.progress.next_block, self.progress.next_target_m = block, [float(v) for v in to]
+        self.progress.next_block, self.progress.next_block_id = block, self.detection_id(block)
+        self.progress.next_target_m = [float(v) for v in to]
         grasp = None  # how a side-grasped block sits in the gripper (move.grasp_pitches_rad)
         if skills.is_stale(self.station, block):
             self.fail(f"the {name} was seen before the arm last moved over it: looking again")
@@ -219,14 +231,14 @@ class TaskRunner:
 
         try:
             if move.grasp_pitches_rad:
-                pick, grasp = side_grasp.plan_side_pick_place(self.station, block["position_m"], to, edge, self.boxes(objects, block),
+                pick, grasp = side_grasp.plan_side_pick_place(self.station, block.position_m, to, edge, self.boxes(objects, block),
                                                               place_boxes, move.grasp_pitches_rad, then_rad=park_pose(self.station.model))
             else:
-                pick = plan_pick(self.station, block["position_m"], block.get("yaw_rad"), edge, self.boxes(objects, block),
+                pick = plan_pick(self.station, block.position_m, block.yaw_rad, edge, self.boxes(objects, block),
                                  max_transfer_z_m=self.max_transfer_z_m, gripper_box=self.gripper_box,
-                                 finger_axis_rad=finger_axis_away(block["position_m"], block.get("yaw_rad") or 0.0, objects, block))
+                                 finger_axis_rad=finger_axis_away(block.position_m, block.yaw_rad or 0.0, objects, block))
         except PLAN_REFUSALS as error:
-            self.fail(f"cannot pick the {name} at ({block['position_m'][0] * 1000:.0f}, {block['position_m'][1] * 1000:.0f}) mm: {error}")
+            self.fail(f"cannot pick the {name} at ({block.position_m[0] * 1000:.0f}, {block.position_m[1] * 1000:.0f}) mm: {error}")
             return False
 
         def plan_at(target) -> list:  # plan_the_place from the pick's end, for this target
@@ -245,7 +257,7 @@ class TaskRunner:
         if not self.station.gripper.read_state().holding:
             self.fail(f"missed the {name} (nothing in the gripper)")
             return False
-        self.station.set_held_block({**block, "edge_m": edge})
+        self.station.set_held_block({"color": block.color, "size": block.size, "edge_m": edge})
         try:
             place = plan_the_place()
         except PLAN_REFUSALS as error:
@@ -258,7 +270,7 @@ class TaskRunner:
         self.station.set_held_block(None)
         self.place_check.placed(intended, to, edge, name)
         self.progress.moves += 1
-        placed = {**block, "position_m": [float(to[0]), float(to[1]), float(to[2] + edge)]}
+        placed = replace(block, position_m=np.array([float(to[0]), float(to[1]), float(to[2] + edge)]))
         self.last_objects = [o for o in self.last_objects if o is not block] + [placed]
         if move.on_placed is not None:
             move.on_placed(edge)
@@ -277,7 +289,7 @@ class TaskRunner:
             return False
         return True
 
-    def put_down_held(self, objects: list[dict] | None = None) -> str:
+    def put_down_held(self, objects: list[Seen] | None = None) -> str:
         """Set a held block down on a free spot of the board (after a failure or a cancel)."""
         held = self.station.held_block
         self.station.wait_gripper()  # a cancel during a grasp: let the fingers settle before asking
@@ -294,14 +306,14 @@ class TaskRunner:
 
     # Space -----------------------------------------------------------------------------------------
 
-    def free_spot(self, objects: list[dict], edge_m: float, region=None, avoid_m: list | None = None,
+    def free_spot(self, objects: list[Seen], edge_m: float, region=None, avoid_m: list | None = None,
                   allowed: Callable[[tuple[float, float]], bool] | None = None) -> tuple[float, float]:
         """A reachable board spot in `region` ((x_min, x_max), (y_min, y_max); default y > 0.06) at least
         one block plus a finger gap from every object and `avoid_m` point (and where allowed(x, y), if given),
         the one farthest from them whose block the arm, waiting at look_pose_rad, leaves in the camera's view
         (a block beside the parked gripper reads occluded, and a job leaves occluded blocks where they are)."""
         (x_min, x_max), (y_min, y_max) = region or ((-0.30, 0.30), (0.08, 0.32))
-        taken = [o["position_m"][:2] for o in objects] + [p[:2] for p in (avoid_m or [])] + list(self.reserved_m)
+        taken = [o.position_m[:2] for o in objects] + [p[:2] for p in (avoid_m or [])] + list(self.reserved_m)
         gap = edge_m / 2 + 0.019 + 0.03
         scored = []
         for x in np.arange(x_min, x_max + 1e-9, 0.02):
@@ -320,7 +332,7 @@ class TaskRunner:
                 return (x, y)
         raise NoFreeSpot("no free spot on the board to put a block aside" + (" that the parked arm leaves in view" if scored else ""))
 
-    def free_spot_in_reach(self, objects: list[dict], edge_m: float, region=None,
+    def free_spot_in_reach(self, objects: list[Seen], edge_m: float, region=None,
                            rules: tuple[Callable[[tuple[float, float]], bool] | None, ...] = (None,)) -> tuple[float, float]:
         """free_spot in `region`, else anywhere in the arm's reach (REACH_REGION_M), for each allowed-rule of `rules`
         in turn (None: anywhere); NoFreeSpot with the last search's reason when none has a spot."""
@@ -407,7 +419,7 @@ class TaskRunner:
             self.progress.attempts += 1
             if not self.execute(move, objects) and self._attempts[key] >= MAX_ATTEMPTS_PER_MOVE:
                 self._given_up.add(key)
-                self.fail(f"gave up on the {move.block.get('color')} {move.block.get('size')} block after "
+                self.fail(f"gave up on the {move.block.color} {move.block.size} block after "
                           f"{MAX_ATTEMPTS_PER_MOVE} attempts")
         if self.place_check.pending:  # the last place's check: one more look
             self.place_check.check(self.look())

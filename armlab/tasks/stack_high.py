@@ -15,6 +15,7 @@ import numpy as np
 
 from armlab.tasks.ordered_columns import make_ordered_policy
 from armlab.tasks.runner import TaskRunner
+from armlab.tasks.seen import Seen
 
 COLUMN_RADIUS_M = 0.17  # distance of a column from the arm's base axis
 MIN_SEPARATION_M = 0.12
@@ -65,7 +66,7 @@ def way_of_columns(runner: TaskRunner):
     return lambda base_xy_m, height_m, point_xy_m: in_the_way(camera_xyz_m, base_xy_m, height_m, point_xy_m)
 
 
-def choose_bases(runner: TaskRunner, objects: list[dict], sizes: list[str]) -> dict[str, tuple[float, float]]:
+def choose_bases(runner: TaskRunner, objects: list[Seen], sizes: list[str]) -> dict[str, tuple[float, float]]:
     """A base per size on the circle of COLUMN_RADIUS_M: the pair whose full columns are in the way of
     the fewest blocks (and not of each other), then the one farthest from every object."""
     way = way_of_columns(runner)
@@ -74,7 +75,7 @@ def choose_bases(runner: TaskRunner, objects: list[dict], sizes: list[str]) -> d
     usable = [c for c in candidates if runner.in_view(c, MAX_COLUMN_HEIGHT_M) and runner.clear_of_park(c)]
     full_m = {size: BLOCKS_PER_COLUMN * runner.edges_m[size] for size in sizes}
     tags = runner.tag_centres()
-    piles = [(o["position_m"][:2], max(1, int(o.get("stack_level", 1)))) for o in objects]
+    piles = [(o.position_m[:2], max(1, int(o.stack_level))) for o in objects]
 
     def blocked(size, xy) -> int:
         return sum(count for at, count in piles if way(xy, full_m[size], at))
@@ -103,5 +104,5 @@ def make_policy(level: int | None, params: dict, runner: TaskRunner):
     runner.keep_occluded = True  # every block must be found, also those the parked arm partly hides
     way = way_of_columns(runner)
     return make_ordered_policy(runner, None, choose_bases=lambda objects: choose_bases(runner, objects, sizes),
-                               keep=lambda block: block["size"] in sizes,
+                               keep=lambda block: block.size in sizes,
                                in_the_way=lambda base, size, height_m, point: way(base, height_m, point))

@@ -7,9 +7,11 @@ from dataclasses import dataclass, field
 import numpy as np
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, eq=False)
 class Block:
-    """A detected block (the top one of a stack); positions in world metres, yaw mod pi/2 in [-pi/4, pi/4)."""
+    """A detected block (the top one of a stack); positions in world metres, yaw mod pi/2 in [-pi/4, pi/4).
+
+    Equal only to itself (eq=False): two detections are two blocks, and a field-wise == would compare numpy arrays."""
 
     color: str
     size: str

@@ -13,4 +13,4 @@ router = APIRouter(prefix="/api", tags=["detections"])
 @router.get("/detections", response_model=DetectionsResponse)
 def read_detections(station: StationDep) -> dict:
     """The newest detections (empty until calibrated)."""
-    return station.detections()
+    return station.detections().to_dict()

@@ -60,7 +60,7 @@ def test_killing_the_camera_mid_job_faults_holds_the_arm_and_recovers(cell, idle
     assert still_for(cell, station, 0.5), "the arm moved after the fault"
     # Detections are stale: none are offered while the camera is gone.
     detections = station.detections()
-    assert detections["stale"] and detections["data"] == [] and "camera" in detections["stale_reason"]
+    assert detections.stale and detections.blocks == () and "camera" in detections.stale_reason
     with pytest.raises(CommandRefused):
         skills.grab(station, position_m=[0.0, 0.3, 0.02])
     with pytest.raises(DeviceLost, match="camera is still lost"):
@@ -71,7 +71,7 @@ def test_killing_the_camera_mid_job_faults_holds_the_arm_and_recovers(cell, idle
     station.reset()
     assert station.state is State.IDLE
     assert any("camera answers again" in message for message in _events(station))
-    live.wait_for(lambda: not station.detections()["stale"], 10)
+    live.wait_for(lambda: not station.detections().stale, 10)
 
 
 def test_losing_the_arm_faults_and_reset_waits_for_it(cell, idle):

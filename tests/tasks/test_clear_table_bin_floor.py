@@ -7,7 +7,10 @@ seeds 0-9 were distractors). Plan level: the policy's moves applied to a model o
 from __future__ import annotations
 
 import math
+from dataclasses import replace
 
+import numpy as np
+from seen_blocks import seen_block
 from test_clear_table_reach import _runner
 
 from armlab.scene import as_workcell
@@ -17,13 +20,17 @@ EDGES_M = {"large": 0.038, "small": 0.025}
 DISTRACTOR_HEIGHT_M = 0.03
 
 
-def obj(kind: str, size: str, x: float, y: float, cube: bool = True) -> dict:
+def obj(kind: str, size: str, x: float, y: float, cube: bool = True):
+    """A block (kind "block", red) or a distractor whose colour names its kind, on the board: its height_m is its own height."""
     top = EDGES_M[size] if cube else DISTRACTOR_HEIGHT_M
-    return {"color": "red" if cube else "green", "size": size, "is_cube": cube, "position_m": [x, y, top], "stack_level": 1,
-            "yaw_rad": 0.0, "kind": kind, "height_m": top}
+    return seen_block("red" if cube else kind, size, x, y, top, cube=cube)
 
 
-def run_on_model(objects: list[dict], max_looks: int = 30) -> tuple[list[dict], list[str]]:
+def kind(o) -> str:
+    return "block" if o.is_cube else o.color
+
+
+def run_on_model(objects: list, max_looks: int = 30) -> tuple[list, list[str]]:
     """Apply the policy's first move each look (the object's top lands one height above the target) until done;
     the end table and the objects set down on the bin's floor after a column stood in the bin."""
     policy = clear_table.make_policy(3, {}, _runner())
@@ -33,9 +40,9 @@ def run_on_model(objects: list[dict], max_looks: int = 30) -> tuple[list[dict], 
         if plan.finished or not plan.moves:
             break
         move = plan.moves[0]
-        if move.to_m[2] == 0.0 and any(o["position_m"][2] > o["height_m"] + 1e-6 for o in objects):
-            floor_after_column.append(move.block["kind"])
-        moved = {**move.block, "position_m": [move.to_m[0], move.to_m[1], move.to_m[2] + move.block["height_m"]]}
+        if move.to_m[2] == 0.0 and any(o.position_m[2] > o.height_m + 1e-6 for o in objects):
+            floor_after_column.append(kind(move.block))
+        moved = replace(move.block, position_m=np.array([move.to_m[0], move.to_m[1], move.to_m[2] + move.block.height_m]))
         objects = [o for o in objects if o is not move.block] + [moved]
     return objects, floor_after_column
 
@@ -45,10 +52,10 @@ def test_every_object_of_an_l3_table_ends_in_the_bin():
     table += [obj(kind, "large", x, 0.30, cube=False) for kind, x in zip(["cylinder", "arch", "triangle"], [-0.1, 0.0, 0.1])]
     bin_ = as_workcell(None).bin
     end, _ = run_on_model(table)
-    outside = [o["kind"] for o in end if not bin_.contains(*o["position_m"][:2])]
+    outside = [kind(o) for o in end if not bin_.contains(*o.position_m[:2])]
     assert outside == [], outside
-    for distractor in [o for o in end if not o["is_cube"]]:
-        assert distractor["position_m"][2] == DISTRACTOR_HEIGHT_M  # on the bin's floor
+    for distractor in [o for o in end if not o.is_cube]:
+        assert distractor.position_m[2] == DISTRACTOR_HEIGHT_M  # on the bin's floor
 
 
 def test_the_floor_is_full_before_a_column_grows_in_the_bin():

@@ -4,6 +4,7 @@ names it once, and finishes when only such things are left."""
 
 from __future__ import annotations
 
+from seen_blocks import seen_block
 from test_stack_high_plan import fake_runner
 
 from armlab.tasks import clear_table
@@ -18,8 +19,8 @@ def _runner():
     return runner
 
 
-HAND = {"color": "unknown", "size": "large", "is_cube": False, "position_m": [0.498, 0.101, 0.031], "stack_level": 1}
-BLOCK = {"color": "red", "size": "large", "is_cube": True, "position_m": [0.10, 0.20, 0.038], "stack_level": 1}
+HAND = seen_block("unknown", "large", 0.498, 0.101, 0.031, cube=False)
+BLOCK = seen_block("red", "large", 0.10, 0.20, 0.038)
 
 
 def test_an_object_beyond_reach_is_left_and_named_once():

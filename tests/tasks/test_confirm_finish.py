@@ -7,6 +7,8 @@ from __future__ import annotations
 
 from types import SimpleNamespace
 
+from seen_blocks import seen_block
+
 from armlab.station.slots import EventLog
 from armlab.tasks.pick_sort import policy
 from armlab.tasks.place_check import PlaceCheck
@@ -14,8 +16,8 @@ from armlab.tasks.policy import Plan, blocks_seen, confirm_finish
 from armlab.tasks.runner import MAX_CONFIRM_LOOKS, Progress, TaskRunner
 
 
-def cube(x: float, y: float, size: str = "large", level: int = 1) -> dict:
-    return {"position_m": [x, y, 0.038 * level], "size": size, "color": "red", "is_cube": True, "stack_level": level}
+def cube(x: float, y: float, size: str = "large", level: int = 1):
+    return seen_block("red", size, x, y, 0.038 * level, level=level)
 
 
 SORTED = [cube(0.15, -0.07), cube(0.22, -0.07), cube(-0.15, -0.07, "small")]
@@ -25,7 +27,7 @@ FIRST = [*SORTED[:2], cube(-0.15, 0.20, "small")]  # the small block still to so
 class ScriptedRunner(TaskRunner):
     """TaskRunner's loop over scripted looks (what the camera reports each time); no arm."""
 
-    def __init__(self, looks: list[list[dict]]) -> None:  # noqa: D107 - TaskRunner's own needs a station
+    def __init__(self, looks: list[list]) -> None:  # noqa: D107 - TaskRunner's own needs a station
         self.looks = list(looks)
         self.looked = 0
         self.name = "pick_sort"
@@ -38,7 +40,7 @@ class ScriptedRunner(TaskRunner):
         self.ctx = SimpleNamespace(progress=lambda *a, **k: None, job=SimpleNamespace(update_extra=lambda **k: None))
         self.place_check = PlaceCheck(False, 2, 0.006, lambda level, words: None)  # the station's default: off
 
-    def look(self) -> list[dict]:
+    def look(self) -> list:
         self.looked += 1
         return self.looks.pop(0) if len(self.looks) > 1 else self.looks[0]
 
@@ -52,7 +54,7 @@ class ScriptedRunner(TaskRunner):
 
 
 def test_blocks_seen_counts_the_blocks_under_a_top_and_no_distractors():
-    assert blocks_seen([cube(0, 0.1, level=3), cube(0.1, 0.1), {"position_m": [0, 0, 0], "is_cube": False}]) == 4
+    assert blocks_seen([cube(0, 0.1, level=3), cube(0.1, 0.1), seen_block(None, None, 0, 0, 0, cube=False)]) == 4
 
 
 def test_only_a_finishing_look_that_sees_fewer_blocks_is_confirmed():

@@ -7,6 +7,7 @@ from __future__ import annotations
 import math
 
 import numpy as np
+from seen_blocks import seen_block
 from test_stack_high_plan import fake_runner
 
 from armlab import skills
@@ -16,14 +17,14 @@ from armlab.vision.self_filter import RobotVolume
 LARGE_EDGE_M = 0.038
 
 
-def _board_with_two_holes() -> list[dict]:
+def _board_with_two_holes() -> list:
     """Blocks every 50 mm over the board but in a wide hole before the parked gripper (0, 140) mm and a
     narrower one at (200, 250) mm: the farthest-from-everything spot is the one beside the gripper."""
     objects = []
     for x in np.arange(-0.35, 0.351, 0.05):
         for y in np.arange(0.0, 0.401, 0.05):
             if math.dist((x, y), (0.0, 0.14)) > 0.10 and math.dist((x, y), (0.2, 0.25)) > 0.08:
-                objects.append({"position_m": [float(x), float(y), LARGE_EDGE_M]})
+                objects.append(seen_block("red", "large", float(x), float(y), LARGE_EDGE_M))
     return objects
 
 

@@ -50,3 +50,23 @@ def test_an_unreachable_block_is_still_a_refusal_the_job_goes_on_from(station, m
     assert not job.message.startswith("internal error"), job.message
     failures = job.to_dict()["extra"]["task"]["failures"]
     assert any("cannot pick the red large block" in failure and "out of reach" in failure for failure in failures), failures
+
+
+@pytest.mark.parametrize("step", ["plan_place", "run_steps"])
+def test_a_bare_value_error_in_a_later_step_is_no_refusal_either(station, monkeypatch, step):
+    """The place's planning (tried at the corrected target, then the intended one: first_passing_target) and the
+    running of planned steps: a bug there fails the job as an internal error too, never "cannot place" or the
+    like, and the job does not go on to another move."""
+    calls = []
+
+    def buggy(*args, **kwargs):
+        calls.append(step)
+        raise ValueError(NUMPY_BUG)
+
+    monkeypatch.setattr(runner, step, buggy)
+    job = start_auto(station, "pick_sort", 1)
+    assert job.wait(300)
+    assert job.state == "failed" and job.message.startswith("internal error: ValueError"), (job.state, job.message)
+    assert calls == [step], calls  # raised once: nothing caught it and tried again
+    failures = (job.to_dict()["extra"].get("task") or {}).get("failures", [])
+    assert not any("cannot" in failure or "unreachable" in failure for failure in failures), failures

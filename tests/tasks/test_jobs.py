@@ -141,15 +141,15 @@ def test_every_competition_event_has_a_job_with_its_levels():
 
 def test_stale_detections_are_refused_after_the_arm_moved_over_them(station):
     blocks = skills.look(station)
-    red = next(b for b in blocks if b["color"] == "red")
+    red = next(b for b in blocks if b.color == "red")
     assert not skills.is_stale(station, red)
 
     def sweep(ctx):
-        q = station.model.ik(red["position_m"][:2] + [0.12], q_seed=station.joints_rad())
+        q = station.model.ik([*red.position_m[:2], 0.12], q_seed=station.joints_rad())
         station.move_in_job(ctx, q)
 
     job = station.start_job("auto", "sweep", sweep)
     assert job.wait(60) and job.state == "succeeded", job.message
     assert skills.is_stale(station, red)  # the arm passed over it after it was seen
-    fresh = next(b for b in skills.look(station) if b["color"] == "red")
+    fresh = next(b for b in skills.look(station) if b.color == "red")
     assert not skills.is_stale(station, fresh)

@@ -8,6 +8,7 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
+from seen_blocks import seen_block
 from test_stack_high_plan import fake_runner
 
 from armlab import skills
@@ -22,7 +23,7 @@ SIZES = ["large", "small"]
 LARGE_EDGE_M = 0.038
 
 
-def first_look(seed: int) -> list[dict]:
+def first_look(seed: int) -> list:
     """The scene's objects as a look reports them (pile tops with their level; distractors not cubes)."""
     piles: dict[tuple, list] = {}
     for obj in generate_scene("line_up", level=3, seed=seed).objects:
@@ -30,14 +31,13 @@ def first_look(seed: int) -> list[dict]:
     looks = []
     for pile in piles.values():
         top = max(pile, key=lambda o: o.position_m[2])
-        looks.append({"position_m": list(top.position_m), "is_cube": top.type == "block", "color": top.color,
-                      "size": top.size, "stack_level": len(pile), "yaw_rad": 0.0})
+        looks.append(seen_block(top.color, top.size, *top.position_m, level=len(pile), cube=top.type == "block"))
     return looks
 
 
-def distractors_near(layout: dict, objects: list[dict]) -> list[dict]:
-    return [o for o in objects if not o["is_cube"] and any(
-        segment_distance(o["position_m"], line[0], line[-1]) < DISTRACTOR_CLEARANCE_M for line in layout.values())]
+def distractors_near(layout: dict, objects: list) -> list:
+    return [o for o in objects if not o.is_cube and any(
+        segment_distance(o.position_m, line[0], line[-1]) < DISTRACTOR_CLEARANCE_M for line in layout.values())]
 
 
 def test_the_seed_leaves_no_layout_clear_of_its_distractors():
@@ -52,7 +52,7 @@ def test_a_blocked_board_gets_a_layout_with_the_fewest_distractors_to_move():
     objects = first_look(BLOCKED_SEED)
     layout, _, to_move = choose_layout(runner, objects, SIZES)
     assert sorted(id(o) for o in to_move) == sorted(id(o) for o in distractors_near(layout, objects))
-    assert 1 <= len(to_move) <= 2, [o["position_m"] for o in to_move]
+    assert 1 <= len(to_move) <= 2, [o.position_m for o in to_move]
     slots = np.array([xy for line in layout.values() for xy in line])
     assert np.all((np.linalg.norm(slots, axis=1) >= 0.14) & (np.linalg.norm(slots, axis=1) <= 0.35))
 
@@ -82,15 +82,14 @@ def policy_with(layout, monkeypatch):
     runner = fake_runner()
     runner.free_spot = lambda objects, edge_m, region=None, avoid_m=None, allowed=None: (-0.25, 0.10)
     runner.free_spot_in_reach = lambda *args, **options: TaskRunner.free_spot_in_reach(runner, *args, **options)
-    runner.edge_of = lambda block: runner.edges_m.get(block.get("size") or "large")
+    runner.edge_of = lambda block: runner.edges_m.get(block.size or "large")
     monkeypatch.setattr(line_up, "choose_layout", lambda runner, objects, sizes: (layout, 0.0, []))
     return line_up.make_policy(3, {}, runner), runner
 
 
 def test_a_block_is_not_set_down_at_its_slot_beside_a_pile(monkeypatch):
     policy, _ = policy_with(LAYOUT, monkeypatch)
-    top = {"position_m": [0.17, 0.31, 0.088], "is_cube": True, "color": "violet", "size": "small", "stack_level": 3,
-           "yaw_rad": 0.0}  # 48 mm from the small line's slot 6 (violet), on two large blocks
+    top = seen_block("violet", "small", 0.17, 0.31, 0.088, level=3)  # 48 mm from the small line's slot 6 (violet), on two large blocks
     plan = policy([top], set())
     assert plan.moves and plan.moves[0].block is top
     assert plan.moves[0].to_m[:2] == (-0.25, 0.10), plan.moves[0]  # aside, not to slot 6 beside its own pile
@@ -98,8 +97,7 @@ def test_a_block_is_not_set_down_at_its_slot_beside_a_pile(monkeypatch):
 
 def test_a_block_goes_straight_to_its_slot_when_nothing_stands_near_it(monkeypatch):
     policy, _ = policy_with(LAYOUT, monkeypatch)
-    alone = {"position_m": [0.17, 0.31, 0.025], "is_cube": True, "color": "violet", "size": "small", "stack_level": 1,
-             "yaw_rad": 0.0}
+    alone = seen_block("violet", "small", 0.17, 0.31, 0.025)
     plan = policy([alone], set())
     assert plan.moves[0].to_m[:2] == pytest.approx(LAYOUT["small"][5])
 

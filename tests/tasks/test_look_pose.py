@@ -68,6 +68,6 @@ def test_one_look_from_the_jobs_look_pose_finds_every_pile_top(station, job):
     tops = pile_tops(station.sim.truth()["objects"])
     assert len(tops) == 4
     for top in tops:
-        found = [o for o in looked["objects"] if math.dist(o["position_m"][:2], top["position_m"][:2]) < 0.015]
-        assert found, f"{top['id']} at {top['position_m'][:2]} not seen (seen: {[o['position_m'] for o in looked['objects']]})"
-        assert found[0]["size"] == top["size"]
+        found = [o for o in looked["objects"] if math.dist(o.position_m[:2], top["position_m"][:2]) < 0.015]
+        assert found, f"{top['id']} at {top['position_m'][:2]} not seen (seen: {[o.position_m for o in looked['objects']]})"
+        assert found[0].size == top["size"]

@@ -9,6 +9,7 @@ import math
 
 import numpy as np
 import pytest
+from seen_blocks import seen_block
 from test_stack_high_plan import fake_runner
 
 from armlab.tasks import sort_stack, stack_high, to_the_sky
@@ -23,36 +24,36 @@ def runner_with_free_spot():
     runner.failures = []
     runner.free_spot = lambda *a, **k: TaskRunner.free_spot(runner, *a, **k)
     runner.free_spot_in_reach = lambda *a, **k: TaskRunner.free_spot_in_reach(runner, *a, **k)
-    runner.edge_of = lambda block: runner.edges_m.get(block.get("size") or "large")
+    runner.edge_of = lambda block: runner.edges_m.get(block.size or "large")
     runner.height_at = lambda xy: 0.0
     runner.note_once = lambda reason: runner.failures.append(reason) if reason not in runner.failures else None
     return runner
 
 
-def crowd(y_min_m: float) -> list[dict]:
+def crowd(y_min_m: float) -> list:
     """Distractors every 50 mm over the board from y_min_m up: no spot there is a block's width free."""
-    return [{"position_m": [float(x), float(y), 0.03], "is_cube": False, "color": None, "size": None, "stack_level": 1,
-             "yaw_rad": 0.0} for x in np.arange(-0.45, 0.451, 0.05) for y in np.arange(y_min_m, 0.451, 0.05)]
+    return [seen_block(None, None, float(x), float(y), 0.03, cube=False)
+            for x in np.arange(-0.45, 0.451, 0.05) for y in np.arange(y_min_m, 0.451, 0.05)]
 
 
-PILE = {"position_m": [0.0, 0.25, 0.05], "is_cube": True, "color": "violet", "size": "small", "stack_level": 2,
-        "stack_sizes": ["small", "small"], "yaw_rad": 0.0}  # a small violet on a small block: it must go aside to uncover it
+# A small violet on a small block: it must go aside to uncover it.
+PILE = seen_block("violet", "small", 0.0, 0.25, 0.05, level=2, stack_sizes=("small", "small"))
 
 
 def test_a_pile_top_goes_aside_outside_a_full_aside_region():
     runner = runner_with_free_spot()
-    objects = [PILE, *[o for o in crowd(0.05) if math.dist(o["position_m"][:2], PILE["position_m"][:2]) > 0.03]]
+    objects = [PILE, *[o for o in crowd(0.05) if math.dist(o.position_m[:2], PILE.position_m[:2]) > 0.03]]
     plan = sort_stack.make_policy(2, {}, runner)(objects, set())
     uncover = [m for m in plan.moves if m.block is PILE]
     assert uncover and uncover[0].why == "uncover the pile under it", plan.moves
     spot = uncover[0].to_m[:2]
-    assert min(math.dist(spot, o["position_m"][:2]) for o in objects if o is not PILE) >= LARGE_EDGE_M / 2 + 0.019
+    assert min(math.dist(spot, o.position_m[:2]) for o in objects if o is not PILE) >= LARGE_EDGE_M / 2 + 0.019
     assert 0.14 <= math.hypot(*spot) <= 0.34
 
 
 def test_a_full_board_leaves_the_pile_with_a_reason_and_the_job_goes_on():
     runner = runner_with_free_spot()
-    objects = [PILE, *[o for o in crowd(-0.15) if math.dist(o["position_m"][:2], PILE["position_m"][:2]) > 0.03]]
+    objects = [PILE, *[o for o in crowd(-0.15) if math.dist(o.position_m[:2], PILE.position_m[:2]) > 0.03]]
     plan = sort_stack.make_policy(2, {}, runner)(objects, set())
     assert not [m for m in plan.moves if m.block is PILE]
     assert any("no free spot" in reason for reason in runner.failures), runner.failures
@@ -60,9 +61,8 @@ def test_a_full_board_leaves_the_pile_with_a_reason_and_the_job_goes_on():
 
 def test_to_the_sky_turns_no_block_when_the_board_is_full():
     runner = runner_with_free_spot()
-    tipped = {"position_m": [0.1, 0.2, 0.038], "is_cube": True, "color": "red", "size": "large", "stack_level": 1,
-              "yaw_rad": 0.7}  # not facing the arm: it would be set down turned, on a free spot
-    objects = [tipped, *[o for o in crowd(-0.15) if math.dist(o["position_m"][:2], tipped["position_m"][:2]) > 0.03]]
+    tipped = seen_block("red", "large", 0.1, 0.2, 0.038, yaw_rad=0.7)  # not facing the arm: it would be set down turned, on a free spot
+    objects = [tipped, *[o for o in crowd(-0.15) if math.dist(o.position_m[:2], tipped.position_m[:2]) > 0.03]]
     assert to_the_sky.turn_moves(runner, [tipped], objects) == []
     assert any("no free spot" in reason for reason in runner.failures), runner.failures
 

@@ -6,11 +6,13 @@ from __future__ import annotations
 
 import math
 
+from seen_blocks import seen_block
+
 from armlab.tasks import pick_sort
 
 
 def block(color, size, x, y, z_top):
-    return {"color": color, "size": size, "position_m": [x, y, z_top], "stack_level": 1, "is_cube": True, "yaw_rad": 0.0}
+    return seen_block(color, size, x, y, z_top)
 
 
 def test_a_slot_with_something_measured_standing_on_it_is_skipped():

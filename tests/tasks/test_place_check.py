@@ -7,14 +7,15 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
+from seen_blocks import seen_block
 
 from armlab.tasks.place_check import PlaceCheck
 
 EDGE_M = 0.038
 
 
-def detection(x_m: float, y_m: float, top_m: float = EDGE_M) -> dict:
-    return {"position_m": [x_m, y_m, top_m], "is_cube": True, "color": "red", "size": "large"}
+def detection(x_m: float, y_m: float, top_m: float = EDGE_M):
+    return seen_block("red", "large", x_m, y_m, top_m)
 
 
 @pytest.fixture

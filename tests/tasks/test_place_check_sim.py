@@ -51,11 +51,11 @@ def shuttle(station: Station, moves: int, place_check: bool) -> tuple[list[tuple
         runner.place_check.enabled = place_check
 
         def policy(objects, _given_up) -> Plan:
-            blocks = [o for o in objects if o.get("is_cube", True)]
+            blocks = [o for o in objects if o.is_cube]
             if len(errors) >= moves or not blocks:
                 return Plan([], done=len(errors), left=0, finished=True)
             block = blocks[0]
-            spot = 1 if math.dist(block["position_m"][:2], SPOTS_M[0]) < math.dist(block["position_m"][:2], SPOTS_M[1]) else 0
+            spot = 1 if math.dist(block.position_m[:2], SPOTS_M[0]) < math.dist(block.position_m[:2], SPOTS_M[1]) else 0
 
             def measured(_edge, spot=spot):
                 truth = next(o for o in station.sim.truth()["objects"] if o["id"] == "b")["position_m"]

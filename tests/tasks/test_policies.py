@@ -6,6 +6,7 @@ from __future__ import annotations
 import math
 
 import pytest
+from seen_blocks import seen_block
 
 from armlab.kinematics import load_arm
 from armlab.motion import plan_joint_move
@@ -18,8 +19,7 @@ from armlab.tasks.policy import finger_axis_away
 ARM = load_arm("rx200")
 
 
-def block(color, size, x, y, z_top, level=1, cube=True):
-    return {"color": color, "size": size, "position_m": [x, y, z_top], "stack_level": level, "is_cube": cube, "yaw_rad": 0.0}
+block = seen_block
 
 
 def test_a_move_through_a_tall_box_collides_and_a_move_above_it_does_not():
@@ -53,7 +53,7 @@ def test_a_column_trusts_the_measured_height_over_its_memory():
     assert column.height == 3 and column.top is top
     assert column.surface_m() == pytest.approx((0.101, 0.2, 0.114))
     column.observe([], lambda xy: 0.076)  # the top block fell off: two remain
-    assert [b["color"] for b in column.placed] == ["red", "orange"]
+    assert [b.color for b in column.placed] == ["red", "orange"]
     assert column.surface_m() == pytest.approx((0.1, 0.2, 0.076))  # no detection: over the base
     column.observe([], lambda xy: 0.0)
     assert column.height == 0 and column.surface_m() == (0.1, 0.2, 0.0)
@@ -66,7 +66,7 @@ def test_pick_sort_sends_each_size_to_its_side_and_finishes_when_sorted():
     first = plan.moves[0]
     assert first.block is objects[0]  # the pile top first: it uncovers a block
     assert first.to_m[0] > 0 and first.to_m[1] < 0
-    small = next(m for m in plan.moves if m.block["size"] == "small")
+    small = next(m for m in plan.moves if m.block.size == "small")
     assert small.to_m[0] < 0 and small.to_m[1] < 0
     done = [block("red", "large", 0.15, -0.1, 0.038), block("blue", "small", -0.15, -0.1, 0.025)]
     assert pick_sort.policy(done, set()).finished

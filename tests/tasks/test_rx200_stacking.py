@@ -18,6 +18,7 @@ from types import SimpleNamespace
 
 import numpy as np
 import pytest
+from seen_blocks import seen_block
 
 from armlab.kinematics import load_arm
 from armlab.motion import TrajectoryStep
@@ -50,7 +51,7 @@ def test_a_large_block_goes_top_down_onto_a_three_block_column_at_the_edge_of_re
 
 
 def block(color, size, x, y, z_top):
-    return {"color": color, "size": size, "position_m": [x, y, z_top], "yaw_rad": 0.0, "stack_level": 1, "is_cube": True}
+    return seen_block(color, size, x, y, z_top)
 
 
 def test_a_column_the_camera_cannot_measure_keeps_what_was_put_on_it():
@@ -62,8 +63,8 @@ def test_a_column_the_camera_cannot_measure_keeps_what_was_put_on_it():
     assert column.height == 5
     assert column.surface_m() == pytest.approx((-0.15, -0.12, 3 * LARGE_M + 2 * SMALL_M))
     obstacle = column.stand_in()  # what the job's moves must keep clear of
-    assert obstacle is not None and not obstacle["is_cube"]
-    assert obstacle["position_m"] == pytest.approx([-0.15, -0.12, 3 * LARGE_M + 2 * SMALL_M])
+    assert obstacle is not None and not obstacle.is_cube
+    assert obstacle.position_m == pytest.approx([-0.15, -0.12, 3 * LARGE_M + 2 * SMALL_M])
     column.observe([], lambda xy: 0.0)  # the board seen there: the column is gone
     assert column.height == 0 and column.surface_m() == (-0.15, -0.12, 0.0) and column.stand_in() is None
 

@@ -11,6 +11,7 @@ from types import SimpleNamespace
 
 import numpy as np
 import pytest
+from seen_blocks import seen_block
 
 from armlab.devices.sim.config import load_camera_config, nominal_T_world_camera
 from armlab.kinematics import Unreachable, load_arm
@@ -50,7 +51,7 @@ def fake_runner():
     return runner
 
 
-def first_look(seed: int) -> list[dict]:
+def first_look(seed: int) -> list:
     """The scene's pile tops as the detector reports them (top-face centre, level, sizes bottom-up)."""
     piles: dict[tuple, list] = {}
     for obj in generate_scene("stack_high", level=2, seed=seed).objects:
@@ -59,9 +60,8 @@ def first_look(seed: int) -> list[dict]:
     for (x, y), pile in piles.items():
         pile.sort(key=lambda o: o.position_m[2])
         top = pile[-1]
-        looks.append({"color": top.color, "size": top.size, "is_cube": True, "yaw_rad": top.yaw_rad,
-                      "position_m": [x, y, sum(EDGES_M[o.size] for o in pile)], "stack_level": len(pile),
-                      "stack_sizes": [o.size for o in pile]})
+        looks.append(seen_block(top.color, top.size, x, y, sum(EDGES_M[o.size] for o in pile), level=len(pile), yaw_rad=top.yaw_rad,
+                                stack_sizes=tuple(o.size for o in pile)))
     return looks
 
 
@@ -89,6 +89,7 @@ class PlanWorld:
         self.runner = runner
         self.blocks = [{"color": o.color, "size": o.size, "xy": (o.position_m[0], o.position_m[1]), "z": o.position_m[2] - EDGES_M[o.size] / 2,
                         "yaw": o.yaw_rad} for o in generate_scene("stack_high", level=2, seed=seed).objects]
+        self.seen: list[tuple] = []  # (detection, the world's block) of the newest look
 
     def pile_at(self, xy):
         return sorted([b for b in self.blocks if math.dist(b["xy"], xy) < 0.012], key=lambda b: b["z"])
@@ -101,7 +102,7 @@ class PlanWorld:
                 tops.append((b, pile))
         return tops
 
-    def looks(self) -> list[dict]:
+    def looks(self) -> list:
         camera_m = self.runner.station.calibration.T_world_camera[:3, 3]
         tops = self.tops()
         seen = []
@@ -118,17 +119,17 @@ class PlanWorld:
                 corners = [np.array([b["xy"][0] + dx, b["xy"][1] + dy, top]) for dx in (-0.008, 0.008) for dy in (-0.008, 0.008)]
                 hidden |= all(ray_hits_box(camera_m, c, low, high) for c in corners)
             if not hidden:
-                seen.append({"color": b["color"], "size": b["size"], "is_cube": True, "yaw_rad": b["yaw"], "seen_time_s": 0.0,
-                             "position_m": [b["xy"][0], b["xy"][1], top], "stack_level": len(pile),
-                             "stack_sizes": [p["size"] for p in pile], "_block": b})
-        return seen
+                seen.append((seen_block(b["color"], b["size"], b["xy"][0], b["xy"][1], top, level=len(pile), yaw_rad=b["yaw"],
+                                        seen_time_s=0.0, stack_sizes=tuple(p["size"] for p in pile)), b))
+        self.seen = seen
+        return [detection for detection, _ in seen]
 
     def height_at(self, xy) -> float:
         pile = self.pile_at(xy)
         return pile[-1]["z"] + EDGES_M[pile[-1]["size"]] if pile else 0.0
 
-    def move(self, block: dict, to_m) -> None:
-        b = block["_block"]
+    def move(self, block, to_m) -> None:
+        b = next(b for detection, b in self.seen if detection is block)
         b["xy"], b["z"] = (float(to_m[0]), float(to_m[1])), float(to_m[2])
 
 
@@ -138,7 +139,7 @@ def run_plan(seed: int, check_picks: bool = True) -> tuple[list[str], PlanWorld]
     runner = fake_runner()
     world = PlanWorld(seed, runner)
     runner.height_at = world.height_at
-    runner.edge_of = lambda block: EDGES_M[block.get("size") or "large"]
+    runner.edge_of = lambda block: EDGES_M[block.size or "large"]
     runner.free_spot = lambda objects, edge_m, **options: TaskRunner.free_spot(runner, objects, edge_m, **options)
     runner.free_spot_in_reach = lambda *args, **options: TaskRunner.free_spot_in_reach(runner, *args, **options)
     policy = stack_high.make_policy(2, {}, runner)
@@ -153,14 +154,14 @@ def run_plan(seed: int, check_picks: bool = True) -> tuple[list[str], PlanWorld]
         move = plan.moves[0]
         block = move.block
         if check_picks:
-            boxes = [box_around("o", o["position_m"][:2], OBJECT_BOX_RADIUS_M, o["position_m"][2]) for o in objects if o is not block]
+            boxes = [box_around("o", o.position_m[:2], OBJECT_BOX_RADIUS_M, o.position_m[2]) for o in objects if o is not block]
             try:
-                plan_pick(runner.station, block["position_m"], block["yaw_rad"], EDGES_M[block["size"]], boxes, q_start=q_look)
+                plan_pick(runner.station, block.position_m, block.yaw_rad, EDGES_M[block.size], boxes, q_start=q_look)
             except (Unreachable, UnsafeTrajectory, ValueError) as error:
-                problems.append(f"{block['color']} {block['size']} at {np.round(block['position_m'][:2], 3)} ({move.why}): {error}")
+                problems.append(f"{block.color} {block.size} at {np.round(block.position_m[:2], 3)} ({move.why}): {error}")
         world.move(block, move.to_m)
         if move.on_placed is not None:
-            move.on_placed(EDGES_M[block["size"]])
+            move.on_placed(EDGES_M[block.size])
     return problems, world
 
 
@@ -178,7 +179,7 @@ def test_the_plan_builds_both_columns_with_every_pick_clear_of_them(seed):
 
 def test_a_leaning_column_still_knows_its_top():
     column = Column("large column", (0.167, -0.03))
-    top = {"color": "violet", "size": "large", "position_m": [0.188, -0.033, 0.227], "stack_level": 6, "yaw_rad": 0.0}
+    top = seen_block("violet", "large", 0.188, -0.033, 0.227, level=6)
     column.observe([top], lambda xy: 0.227)
     assert column.top is top  # 21 mm from its base: the sixth block of a tall column leans that far
 
