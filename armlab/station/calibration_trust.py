@@ -213,7 +213,7 @@ class CalibrationTrust:
     def _idle_for_self_recalibration(self) -> str | None:
         """None when the station may recalibrate itself now, else why not."""
         with self._lock:
-            if self._halt.is_set() or self._closing.is_set() or self._state is not State.IDLE:
+            if self.latch.is_set() or self._closing.is_set() or self._state is not State.IDLE:
                 return f"the station is {self._effective_state().value}"
             if self._job is not None or self._jog is not None or self._recorder is not None:
                 return "a job or a jog is running"

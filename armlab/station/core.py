@@ -3,7 +3,7 @@
 Every command is checked against the transition table (states.py) and the control lease (lease.py) under
 one lock, and every state change goes through `_transition`. The lock guards state only: it is never
 held across I/O (SQLite, IK, planning, scene changes). E-stop does not take it first: it sets a lock-free
-latch (`_halt`), cancels the job and halts the arm and gripper, and only then records the state; every
+latch (`latch`), cancels the job and halts the arm and gripper, and only then records the state; every
 command path checks the latch under the lock before it reaches a device, and every wait checks it, so
 after estop() returns no job or manual command can reach the arm until reset(). A lost device (watch.py)
 latches the same way and puts the station in `fault`; reset is refused while it is still gone.
@@ -29,7 +29,7 @@ from armlab.devices.arm import Arm
 from armlab.devices.camera import Camera, Frame
 from armlab.devices.clock import Clock, WallClock
 from armlab.devices.gripper import Gripper
-from armlab.errors import InvalidInput, NoArmError, RefusedByCheck, ShuttingDown
+from armlab.errors import CommandRefused, DeviceLost, InvalidInput, NoArmError, RefusedByCheck, ShuttingDown
 from armlab.kinematics.calibrated_arm import CalibratedArm
 from armlab.station.arm_calibration import ArmCalibrationKeeper
 from armlab.station.calibration_trust import CalibrationTrust
@@ -76,7 +76,7 @@ class NotCalibrated(RefusedByCheck, RuntimeError):
 _UNLATCHED = ("estop",)  # the only command the latch and the lease never refuse
 
 
-class Station(Latch, MotionGate, ManualCommands, CartesianJog, PlannedMoves, TeachCommands, JobControls, SpeedOverride, Perceiving,
+class Station(MotionGate, ManualCommands, CartesianJog, PlannedMoves, TeachCommands, JobControls, SpeedOverride, Perceiving,
               CalibrationTrust, ArmCalibrationKeeper):
     """The control station's gate (its parts: latch.py, motion.py, manual.py, cartesian_jog.py, planned_moves.py, teach.py,
     job_control.py: start, cancel and control jobs, perceiving.py: status, detections, fresh frames).
@@ -128,8 +128,7 @@ class Station(Latch, MotionGate, ManualCommands, CartesianJog, PlannedMoves, Tea
         self._newest_move = 0  # the ticket of the newest manual move waiting to be planned (motion.py _send_replacing)
         self._send_lock = threading.Lock()  # one sender of device commands at a time, taken before _lock (motion.py _sending)
         self._outbox: list | None = None  # device commands queued under the lock, sent after it (motion.py _sending)
-        self._halts = 0  # how many times the devices were halted (latch.py _halt_devices)
-        self._halt = threading.Event()  # the latch: set by e-stop and device loss (before any lock), cleared by reset
+        self.latch = Latch(arm, gripper, on_halt=self._forget_commanded)  # e-stop, device loss, a failed part (latch.py)
         self._closing = threading.Event()
         self._state = State.IDLE
         self._detail = ""
@@ -142,7 +141,6 @@ class Station(Latch, MotionGate, ManualCommands, CartesianJog, PlannedMoves, Tea
         self._calibration: Any = None
         self._calibration_info: dict | None = None
         self._held_block: dict | None = None
-        self._lost: dict[str, str] = {}  # devices not answering: {name: reason}
         self._last_joints: np.ndarray | None = None
         self._torque_enabled = True  # connect() leaves the arm holding; set_torque() changes it
         self._motions: list[tuple[float, np.ndarray]] = []  # (end time_s, [xmin, ymin, xmax, ymax, x, y, z of the gripper's sampled path...])
@@ -207,11 +205,7 @@ class Station(Latch, MotionGate, ManualCommands, CartesianJog, PlannedMoves, Tea
         """Refuse new commands, cancel the job and halt the arm and gripper, at once (a signal handler may
         call this): waiting requests then return promptly. close() finishes the job."""
         self._closing.set()
-        self._halt.set()
-        job = self._job
-        if job is not None:
-            job.cancel(halted=True)
-        self._halt_devices()
+        self._latch_and_halt()
 
     def close(self) -> dict:
         """Stop the job and the threads (each join bounded by close_timeout_s), halt the arm.
@@ -264,7 +258,7 @@ class Station(Latch, MotionGate, ManualCommands, CartesianJog, PlannedMoves, Tea
 
     def _effective_state(self) -> State:
         """The state, or estop while the latch is set ahead of the transition (caller holds the lock)."""
-        if self._halt.is_set() and self._state not in (State.ESTOP, State.FAULT):
+        if self.latch.is_set() and self._state not in (State.ESTOP, State.FAULT):
             return State.ESTOP
         return self._state
 
@@ -295,6 +289,102 @@ class Station(Latch, MotionGate, ManualCommands, CartesianJog, PlannedMoves, Tea
             self._detail = detail if detail is not None else ("" if new_state is State.IDLE else self._detail)
         self._state = new_state
         return new_state
+
+    # The latch: e-stop, device loss, reset ----------------------------------------------------------
+
+    @property
+    def latched(self) -> bool:
+        """True while the e-stop (or a device loss) latch is set; lock-free."""
+        return self.latch.is_set()
+
+    def _forget_commanded(self) -> None:
+        """Every halt: the arm holds where it is, so there is no commanded motion to continue."""
+        self._commanded = None
+
+    def _halt_devices(self, gripper: bool = True) -> list[str]:
+        """Stop the arm (and gripper) through the latch; never raises (a device that fails is reported). No lock needed."""
+        return self.latch.halt_devices(gripper)
+
+    def _latch_and_halt(self) -> list[str]:
+        """Set the latch first, cancel the job, halt the arm and gripper (before any lock): what fails to stop."""
+        self.latch.set()
+        job = self._job
+        if job is not None:
+            job.cancel(halted=True)
+        return self._halt_devices()
+
+    def estop(self, source: str | None = None) -> None:
+        """Halt now and latch, from any state and from anyone (no lease needed): latch first, cancel the
+        job, stop arm and gripper, then record the state; a command that was being sent when the latch
+        went up is stopped by a second halt once the lock shows it has finished."""
+        failures = self._latch_and_halt()
+        with self._lock:
+            self._jog = None
+            by = f" by '{source}'" if source else ""
+            self._transition("estop", source=source, detail=f"e-stop pressed{by}: reset to continue")
+        failures += self._halt_devices()
+        self.events.add("error", "E-stop: motion halted" + (f" ({'; '.join(sorted(set(failures)))})" if failures else ""))
+
+    def device_problems(self) -> dict[str, str]:
+        """{device: reason} for each device not answering now (reads the arm and gripper, checks the
+        camera's frames); empty when all answer."""
+        problems: dict[str, str] = {}
+        for name, read in (("arm", self.arm.read_joint_state), ("gripper", self.gripper.read_state)):
+            try:
+                read()
+            except DEVICE_ERRORS as error:
+                problems[name] = f"{type(error).__name__}: {error}"
+        if self._frame_source is not None and self._started:
+            camera = self._frame_source.health(self.config.camera_timeout_s)
+            if camera is not None:
+                problems["camera"] = camera
+        return problems
+
+    def _on_device_problems(self, problems: dict[str, str]) -> None:
+        """The device watch's report: fault on a new loss, log a recovery (the station stays in fault)."""
+        new, back = self.latch.note_problems(problems)
+        for name in back:
+            self.events.add("info", f"{name} answers again: reset to continue")
+        if new:
+            self.device_failed(", ".join(new), "; ".join(new.values()))
+
+    def _fault(self, detail: str) -> None:
+        """Latch, cancel the job, hold the arm still, enter fault with `detail`."""
+        self._latch_and_halt()
+        with self._lock:
+            self._jog = None
+            if self._transition("device_failed", event=True) is State.FAULT:
+                self._detail = detail
+
+    def device_failed(self, device: str, reason: str) -> None:
+        """A device is lost: latch, cancel the job, hold the arm still, enter fault with the reason."""
+        self._fault(f"{device} lost: {reason}; reset once it is back")
+        self.events.add("error", f"{device} lost: {reason}: motion halted")
+
+    def component_failed(self, what: str, reason: str) -> None:
+        """A part of the station died (e.g. the teach recorder's thread): latch, cancel the job, hold the arm
+        still, enter fault with the reason, log it. Reset clears it (no device to wait for)."""
+        self._fault(f"{what} failed: {reason}; reset to continue")
+        log.error("%s failed: %s: motion halted, station in fault", what, reason)
+        self.events.add("error", f"{what} failed: {reason}: motion halted")
+
+    def reset(self, source: str | None = None) -> None:
+        """Leave estop/fault for idle without moving the arm; DeviceLost while a device is still gone."""
+        with self._lock:
+            if self._state not in (State.ESTOP, State.FAULT):  # not while an e-stop is still being recorded
+                raise CommandRefused("reset", self._effective_state().value, allowed_commands(self._effective_state()))
+            self._check("reset", source)
+        problems = self.device_problems()  # device reads: outside the lock
+        if problems:
+            self.latch.add_lost(problems)
+            raise DeviceLost("reset refused: " + "; ".join(f"the {name} is still lost ({reason})" for name, reason in problems.items()))
+        with self._lock:
+            self._transition("reset", source=source, detail="")
+            back = self.latch.forget_lost()
+            self.latch.clear()
+        for name in back:
+            self.events.add("info", f"{name} answers again")
+        self.events.add("info", "reset: station idle")
 
     # Control lease --------------------------------------------------------------------------------
 

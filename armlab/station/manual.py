@@ -228,7 +228,7 @@ class ManualCommands:
                 )
             self._transition("torque", source=source)
             self._jog = None
-            if self._halt.is_set():
+            if self.latch.is_set():
                 raise CommandRefused("torque", self._effective_state().value, allowed_commands(self._effective_state()))
             self._send_later(lambda: self.arm.set_torque(bool(enabled)))
         with self._lock:

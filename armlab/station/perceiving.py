@@ -37,8 +37,7 @@ class Perceiving:
         }
 
     def _perception_stale_reason(self, perception: Perception) -> str | None:
-        with self._lock:
-            camera_lost = self._lost.get("camera")
+        camera_lost = self.latch.lost().get("camera")
         if camera_lost is not None:
             return f"the camera is lost ({camera_lost})"
         age_s = time.time() - perception.capture_time_s
@@ -72,7 +71,7 @@ class Perceiving:
             state, detail, lease = self._effective_state(), self._detail, self._lease.to_dict()
             calibrated = self._calibration is not None
             checked = calibrated or self._restored is not None
-            lost = dict(self._lost)
+        lost = self.latch.lost()
         perception, _ = self.perception.get()
         camera_warning = perception.camera_warning if checked and perception is not None else None
         commanded = self.commanded_joints_rad() if self.has_arm else None

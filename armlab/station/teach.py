@@ -71,7 +71,7 @@ class ContinuousRecorder(threading.Thread):
             try:
                 station.teach_record(source=self.source, moving_time_s=max(self.period_s, now - last_t))
             except CommandRefused as error:
-                if station.state is State.TEACH and not station._halt.is_set():
+                if station.state is State.TEACH and not station.latch.is_set():
                     continue  # a record or undo from the operator was being written: record at the next tick
                 self.error = str(error)
                 return
