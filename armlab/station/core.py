@@ -32,7 +32,7 @@ from armlab.devices.gripper import Gripper
 from armlab.errors import CommandRefused, DeviceLost, InvalidInput, NoArmError, RefusedByCheck, ShuttingDown
 from armlab.kinematics.calibrated_arm import CalibratedArm
 from armlab.station.arm_calibration import ArmCalibrationKeeper
-from armlab.station.calibration_trust import CalibrationTrust
+from armlab.station.calibration_trust import SELF_RECALIBRATE_JOB, CalibrationTrust, self_recalibration_job
 from armlab.station.cartesian_jog import CartesianJog
 from armlab.station.checks import checked_joints
 from armlab.station.colors import StationColors
@@ -56,9 +56,9 @@ from armlab.station.speed import SpeedOverride
 from armlab.station.states import ARM_COMMANDS, State, after_event, allowed_commands, next_state
 from armlab.station.teach import TeachCommands
 from armlab.station.telemetry import TelemetryPublisher
-from armlab.station.watch import DeviceWatch
+from armlab.station.watch import DeviceWatch, device_problems
 from armlab.store import Store
-from armlab.vision import load_perception_config
+from armlab.vision import detect_tags, load_perception_config
 from armlab.workcell.loading import load_workcell_motion_config
 
 log = logging.getLogger(__name__)
@@ -77,7 +77,7 @@ _UNLATCHED = ("estop",)  # the only command the latch and the lease never refuse
 
 
 class Station(MotionGate, ManualCommands, CartesianJog, PlannedMoves, TeachCommands, JobControls, SpeedOverride, Perceiving,
-              CalibrationTrust, ArmCalibrationKeeper):
+              ArmCalibrationKeeper):
     """The control station's gate (its parts: latch.py, motion.py, manual.py, cartesian_jog.py, planned_moves.py, teach.py,
     job_control.py: start, cancel and control jobs, perceiving.py: status, detections, fresh frames).
     Backends are injected; `sim` is the SimWorkcell when simulated (else None).
@@ -138,8 +138,6 @@ class Station(MotionGate, ManualCommands, CartesianJog, PlannedMoves, TeachComma
         self._teach_saving = False
         self._recorder: Any = None  # teach's continuous recorder thread (teach.py), if running
         self._jog: dict | None = None  # the running jog: trajectory, start clock, velocity, controller
-        self._calibration: Any = None
-        self._calibration_info: dict | None = None
         self._held_block: dict | None = None
         self._last_joints: np.ndarray | None = None
         self._torque_enabled = True  # connect() leaves the arm holding; set_torque() changes it
@@ -159,6 +157,8 @@ class Station(MotionGate, ManualCommands, CartesianJog, PlannedMoves, TeachComma
         self.perception: NewestSlot[Perception] = NewestSlot()
         self.telemetry: NewestSlot[dict] = NewestSlot()
         self.calibration_slot: NewestSlot[dict] = NewestSlot()
+        self.trust = CalibrationTrust(self.events, self.calibration_slot.publish, lambda: self.perception_config, self.config,
+                                      self._why_not_self_recalibrate, self._start_self_recalibration)  # calibration in use, restored
         self._workers: list = []
         self._frame_source: FrameSource | None = None
         self._started = False
@@ -181,7 +181,8 @@ class Station(MotionGate, ManualCommands, CartesianJog, PlannedMoves, TeachComma
         if interrupted:
             self.events.add("warn", f"{interrupted} job(s) were cut off when the station last stopped: marked interrupted")
         if self.config.restore_calibration:
-            self._restore_calibration()
+            one_look = (lambda: detect_tags(self.sim.capture_next_frame().color_bgr, self.perception_config)) if self.synchronous else None
+            self.trust.restore(self.store.latest_calibration(), one_look)
             self._restore_arm_calibration()
         self._closing.clear()
         if not self.synchronous:
@@ -189,8 +190,8 @@ class Station(MotionGate, ManualCommands, CartesianJog, PlannedMoves, TeachComma
             self._workers = [
                 self._frame_source,
                 PerceptionLoop(
-                    self.frames, self.perception, lambda: self._calibration, self.perception_config, self.config.perception_rate_hz, self.model,
-                    get_check_calibration=self._calibration_to_check, on_check=self._on_calibration_check,
+                    self.frames, self.perception, lambda: self.trust.calibration, self.perception_config, self.config.perception_rate_hz, self.model,
+                    get_check_calibration=self.trust.to_check, on_check=self.trust.on_check,
                     get_color_model=lambda: self.colors.model,
                 ),
                 TelemetryPublisher(self.telemetry_snapshot, self.telemetry, self.config.telemetry_rate_hz),
@@ -326,19 +327,8 @@ class Station(MotionGate, ManualCommands, CartesianJog, PlannedMoves, TeachComma
         self.events.add("error", "E-stop: motion halted" + (f" ({'; '.join(sorted(set(failures)))})" if failures else ""))
 
     def device_problems(self) -> dict[str, str]:
-        """{device: reason} for each device not answering now (reads the arm and gripper, checks the
-        camera's frames); empty when all answer."""
-        problems: dict[str, str] = {}
-        for name, read in (("arm", self.arm.read_joint_state), ("gripper", self.gripper.read_state)):
-            try:
-                read()
-            except DEVICE_ERRORS as error:
-                problems[name] = f"{type(error).__name__}: {error}"
-        if self._frame_source is not None and self._started:
-            camera = self._frame_source.health(self.config.camera_timeout_s)
-            if camera is not None:
-                problems["camera"] = camera
-        return problems
+        """{device: reason} for each device not answering now (watch.py); empty when all answer."""
+        return device_problems(self.arm, self.gripper, self._frame_source if self._started else None, self.config.camera_timeout_s)
 
     def _on_device_problems(self, problems: dict[str, str]) -> None:
         """The device watch's report: fault on a new loss, log a recovery (the station stays in fault)."""
@@ -426,25 +416,50 @@ class Station(MotionGate, ManualCommands, CartesianJog, PlannedMoves, TeachComma
             self.events.add("info", f"control {reason}: '{source}' no longer controls the station")
         return released
 
-    # Calibration and configuration ----------------------------------------------------------------
+    # Calibration (the part: calibration_trust.py) ---------------------------------------------------
 
     @property
     def calibration(self) -> Any:
-        with self._lock:
-            return self._calibration
+        return self.trust.calibration
 
     @property
     def calibration_info(self) -> dict:
-        with self._lock:
-            return dict(self._calibration_info) if self._calibration_info else {"calibrated": False}
+        return self.trust.info
 
     def set_calibration(self, calibration: Any, info: dict) -> None:
         """Install a calibration (armlab.vision Calibration) with its wire summary; publishes it."""
+        self.trust.install(calibration, info)
+
+    @property
+    def calibration_state(self) -> str | None:
+        return self.trust.state
+
+    def require_trusted_calibration(self, what: str) -> None:
+        self.trust.require_trusted(what)
+
+    @property
+    def self_recalibrate(self) -> bool:
+        return self.trust.self_recalibrate
+
+    def set_self_recalibrate(self, enabled: bool, source: str | None = None) -> bool:
+        """The operator's setting (the lease holder's, like any command that changes the station)."""
         with self._lock:
-            self._calibration = calibration
-            self._calibration_info = {"calibrated": True, **info}
-            self._restored = None  # a restored calibration still being checked is superseded (calibration_trust.py)
-        self.calibration_slot.publish(self.calibration_info)
+            if source is not None and self._lease.holder not in (None, source):
+                self._lease.require(source, "calibrate")  # NotController naming the holder
+        return self.trust.set_self_recalibrate(enabled, by=source)
+
+    def _why_not_self_recalibrate(self) -> str | None:
+        """None when the station may recalibrate itself now (idle, nothing running, the arm still), else why not."""
+        with self._lock:
+            if self.latch.is_set() or self._closing.is_set() or self._state is not State.IDLE:
+                return f"the station is {self._effective_state().value}"
+            if self._job is not None or self._jog is not None or self._recorder is not None:
+                return "a job or a jog is running"
+        return self.arm_moving()
+
+    def _start_self_recalibration(self) -> None:
+        self.start_job("calibrate", SELF_RECALIBRATE_JOB, lambda ctx: self_recalibration_job(self, ctx),
+                       detail="camera moved: recalibrating from the board tags")
 
     @property
     def motion_config(self) -> Any:

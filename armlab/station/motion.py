@@ -10,6 +10,7 @@ and, in fast mode, never let the physics run more than one control period past i
 
 from __future__ import annotations
 
+import math
 import time
 from collections.abc import Callable, Iterator
 from contextlib import contextmanager
@@ -234,6 +235,21 @@ class MotionGate:
             if self._commanded is record and started_s != record[1]:
                 self._command_count += 1
                 self._commanded = (record[0], float(started_s), self._command_count)
+
+    def arm_moving(self) -> str | None:
+        """'the arm is moving' (a commanded motion not yet over, or joints turning), a read failure, else None."""
+        with self._lock:
+            last_motion_end_s = self._motions[-1][0] if self._motions else -math.inf
+        if time.time() < last_motion_end_s:
+            return "the arm is moving"
+        try:
+            joint_state = self.arm.read_joint_state()
+            speed = np.abs(np.asarray(joint_state.velocity_rad_s, dtype=float))
+            if self.arm.is_moving() or (speed.size and speed.max() > self.config.moving_speed_rad_s):
+                return "the arm is moving"
+        except (ConnectionError, TimeoutError, OSError) as error:
+            return f"the arm cannot be read ({error})"
+        return None
 
     def commanded_joints_rad(self) -> np.ndarray | None:
         """The commanded reference now (rad): the last trajectory sent, sampled at the station's clock (its end once

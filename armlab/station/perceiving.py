@@ -69,9 +69,8 @@ class Perceiving:
         with self._lock:
             job = self._job or self._last_job
             state, detail, lease = self._effective_state(), self._detail, self._lease.to_dict()
-            calibrated = self._calibration is not None
-            checked = calibrated or self._restored is not None
         lost = self.latch.lost()
+        calibrated, checked = self.trust.calibration is not None, self.trust.checked
         perception, _ = self.perception.get()
         camera_warning = perception.camera_warning if checked and perception is not None else None
         commanded = self.commanded_joints_rad() if self.has_arm else None

@@ -9,8 +9,9 @@ from __future__ import annotations
 
 import logging
 from collections.abc import Callable
+from typing import Any
 
-from armlab.station.perception import _Worker
+from armlab.station.perception import DEVICE_ERRORS, _Worker
 
 log = logging.getLogger(__name__)
 
@@ -29,3 +30,18 @@ class DeviceWatch(_Worker):
     def _run(self) -> None:
         while not self._stop.wait(self.period_s):
             self.on_problems(self.probe())
+
+
+def device_problems(arm: Any, gripper: Any, camera_source: Any = None, camera_timeout_s: float = 1.0) -> dict[str, str]:
+    """{device: reason} for each device not answering now (reads the arm and gripper; the camera: camera_source's
+    health, the FrameSource delivering its frames, when one runs); empty when all answer."""
+    problems: dict[str, str] = {}
+    for name, read in (("arm", arm.read_joint_state), ("gripper", gripper.read_state)):
+        try:
+            read()
+        except DEVICE_ERRORS as error:
+            problems[name] = f"{type(error).__name__}: {error}"
+    camera = camera_source.health(camera_timeout_s) if camera_source is not None else None
+    if camera is not None:
+        problems["camera"] = camera
+    return problems
