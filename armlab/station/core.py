@@ -54,10 +54,10 @@ from armlab.station.reach import ReachCache
 from armlab.station.slots import EventLog, NewestSlot
 from armlab.station.speed import SpeedOverride
 from armlab.station.states import ARM_COMMANDS, State, after_event, allowed_commands, next_state
-from armlab.station.teach import TeachCommands
+from armlab.station.teach import Teach, TeachLinks
 from armlab.station.telemetry import TelemetryPublisher
 from armlab.station.watch import DeviceWatch, device_problems
-from armlab.store import Store
+from armlab.store import Owner, Store
 from armlab.vision import detect_tags, load_perception_config
 from armlab.workcell.loading import load_workcell_motion_config
 
@@ -76,7 +76,7 @@ class NotCalibrated(RefusedByCheck, RuntimeError):
 _UNLATCHED = ("estop",)  # the only command the latch and the lease never refuse
 
 
-class Station(MotionGate, ManualCommands, CartesianJog, PlannedMoves, TeachCommands, JobControls, SpeedOverride, Perceiving,
+class Station(MotionGate, ManualCommands, CartesianJog, PlannedMoves, JobControls, SpeedOverride, Perceiving,
               ArmCalibrationKeeper):
     """The control station's gate (its parts: latch.py, motion.py, manual.py, cartesian_jog.py, planned_moves.py, teach.py,
     job_control.py: start, cancel and control jobs, perceiving.py: status, detections, fresh frames).
@@ -135,8 +135,6 @@ class Station(MotionGate, ManualCommands, CartesianJog, PlannedMoves, TeachComma
         self._lease = ControlLease()
         self._job: Job | None = None
         self._last_job: Job | None = None
-        self._teach_saving = False
-        self._recorder: Any = None  # teach's continuous recorder thread (teach.py), if running
         self._jog: dict | None = None  # the running jog: trajectory, start clock, velocity, controller
         self._held_block: dict | None = None
         self._last_joints: np.ndarray | None = None
@@ -159,6 +157,10 @@ class Station(MotionGate, ManualCommands, CartesianJog, PlannedMoves, TeachComma
         self.calibration_slot: NewestSlot[dict] = NewestSlot()
         self.trust = CalibrationTrust(self.events, self.calibration_slot.publish, lambda: self.perception_config, self.config,
                                       self._why_not_self_recalibrate, self._start_self_recalibration)  # calibration in use, restored
+        self.teach = Teach(self.store, self.events, lambda: self.program_owner, TeachLinks(  # late-bound: what the station does now
+            self.allowed_or_raise, self._teach_transition, self._teaching, self._closing.is_set, lambda: self.joints_rad(),
+            lambda: self.gripper.read_state().command, lambda q: self.check_pose(q), lambda poses: self.check_poses(poses),
+            self.component_failed, threads=not synchronous))
         self._workers: list = []
         self._frame_source: FrameSource | None = None
         self._started = False
@@ -416,6 +418,22 @@ class Station(MotionGate, ManualCommands, CartesianJog, PlannedMoves, TeachComma
             self.events.add("info", f"control {reason}: '{source}' no longer controls the station")
         return released
 
+    # Teach (the part: teach.py) -------------------------------------------------------------------
+
+    @property
+    def program_owner(self) -> Owner | None:
+        """Whose programs and draft this station reads and writes: its arm and workcell (None: no arm, all rows)."""
+        return None if self.model is None else Owner(str(self.model.name), getattr(self.config, "workcell", None), int(self.model.dof))
+
+    def _teach_transition(self, command: str, source: str | None, detail: str, only_in_teach: bool = False) -> None:
+        with self._lock:
+            if not only_in_teach or self._effective_state() is State.TEACH:
+                self._transition(command, source=source, detail=detail)
+
+    def _teaching(self) -> bool:
+        with self._lock:
+            return self._state is State.TEACH and not self.latch.is_set()
+
     # Calibration (the part: calibration_trust.py) ---------------------------------------------------
 
     @property
@@ -450,10 +468,11 @@ class Station(MotionGate, ManualCommands, CartesianJog, PlannedMoves, TeachComma
 
     def _why_not_self_recalibrate(self) -> str | None:
         """None when the station may recalibrate itself now (idle, nothing running, the arm still), else why not."""
+        recording = self.teach.has_recorder  # teach's lock is never taken under the gate's
         with self._lock:
             if self.latch.is_set() or self._closing.is_set() or self._state is not State.IDLE:
                 return f"the station is {self._effective_state().value}"
-            if self._job is not None or self._jog is not None or self._recorder is not None:
+            if self._job is not None or self._jog is not None or recording:
                 return "a job or a jog is running"
         return self.arm_moving()
 
