@@ -136,6 +136,10 @@ class Station(MotionGate, ManualCommands, CartesianJog, PlannedMoves, JobControl
         self._job: Job | None = None
         self._last_job: Job | None = None
         self._jog: dict | None = None  # the running jog: trajectory, start clock, velocity, controller
+        self._step_anchor: tuple | None = None  # the last jog step's commanded end and its motion entry (manual.py jog_step)
+        self._speed_percent = 100.0  # the speed override (speed.py)
+        self._paced_motion: tuple | None = None  # (the trajectory object last sent, the override it was paced at) (speed.py)
+        self._pace_next: float | None = None  # the override of the motion being sent (set under the lock just before it)
         self._held_block: dict | None = None
         self._last_joints: np.ndarray | None = None
         self._torque_enabled = True  # connect() leaves the arm holding; set_torque() changes it
