@@ -40,20 +40,21 @@ from armlab.station.config import StationConfig
 from armlab.station.event_history import EventHistory
 from armlab.station.intrinsics import CameraIntrinsics
 from armlab.station.job_control import JobControls
-from armlab.station.jobs import Job
+from armlab.station.jobs import Job, JobContext
 from armlab.station.latch import Latch
 from armlab.station.lease import ControlLease
 from armlab.station.manual import ManualCommands
 from armlab.station.memory import return_freed_memory
 from armlab.station.motion import MOTION_MEMORY, WAIT_CHUNK_S, MotionGate
-from armlab.station.perceiving import Perceiving
-from armlab.station.perception import DEVICE_ERRORS, FrameSource, Perception, PerceptionLoop
+from armlab.station.perceiving import Perceiver
+from armlab.station.perception import DEVICE_ERRORS, Perception
 from armlab.station.planned_moves import PlannedMoves
 from armlab.station.plans import PlanStore
 from armlab.station.reach import ReachCache
 from armlab.station.slots import EventLog, NewestSlot
 from armlab.station.speed import SpeedOverride
 from armlab.station.states import ARM_COMMANDS, State, after_event, allowed_commands, next_state
+from armlab.station.status import ArmReadings
 from armlab.station.teach import Teach, TeachLinks
 from armlab.station.telemetry import TelemetryPublisher
 from armlab.station.watch import DeviceWatch, device_problems
@@ -76,8 +77,7 @@ class NotCalibrated(RefusedByCheck, RuntimeError):
 _UNLATCHED = ("estop",)  # the only command the latch and the lease never refuse
 
 
-class Station(MotionGate, ManualCommands, CartesianJog, PlannedMoves, JobControls, SpeedOverride, Perceiving,
-              ArmCalibrationKeeper):
+class Station(MotionGate, ManualCommands, CartesianJog, PlannedMoves, JobControls, SpeedOverride, ArmCalibrationKeeper):
     """The control station's gate (its parts: latch.py, motion.py, manual.py, cartesian_jog.py, planned_moves.py, teach.py,
     job_control.py: start, cancel and control jobs, perceiving.py: status, detections, fresh frames).
     Backends are injected; `sim` is the SimWorkcell when simulated (else None).
@@ -141,7 +141,6 @@ class Station(MotionGate, ManualCommands, CartesianJog, PlannedMoves, JobControl
         self._paced_motion: tuple | None = None  # (the trajectory object last sent, the override it was paced at) (speed.py)
         self._pace_next: float | None = None  # the override of the motion being sent (set under the lock just before it)
         self._held_block: dict | None = None
-        self._last_joints: np.ndarray | None = None
         self._torque_enabled = True  # connect() leaves the arm holding; set_torque() changes it
         self._motions: list[tuple[float, np.ndarray]] = []  # (end time_s, [xmin, ymin, xmax, ymax, x, y, z of the gripper's sampled path...])
         self._changed_everywhere_s = -math.inf  # the last change that may have changed any spot (note_change_everywhere)
@@ -149,14 +148,16 @@ class Station(MotionGate, ManualCommands, CartesianJog, PlannedMoves, JobControl
         self._command_count = 0
         self.plans = PlanStore()  # plan, then execute (planned_moves.py)
         self._speed_lock = threading.Lock()  # one override change at a time (speed.py)
-        self._pipeline: Any = None  # synchronous mode's perception pipeline
         self.events = EventLog()
         self.event_history = EventHistory(self.events, self.store)  # kept in the database (History panel)
         self.reach = ReachCache()  # where the gripper reaches on the board (the page's reach overlay)
         self.intrinsics = CameraIntrinsics(camera, self.store, self.events)  # in use: measured here, else the camera's own
         self.colors = StationColors(self.store, self.events, lambda: self.perception_config, lambda: self.calibration)  # defaults + samples
-        self.frames: NewestSlot[Frame] = NewestSlot()
-        self.perception: NewestSlot[Perception] = NewestSlot()
+        self.perceiver = Perceiver(lambda: self.perception_config, self.model, lambda: self.trust.calibration, lambda: self.colors.model,
+                                   lambda: self.latch.lost().get("camera"), self.config.camera_timeout_s,
+                                   capture_now=sim.capture_next_frame if synchronous else None)  # frames on demand: no threads
+        self.frames, self.perception = self.perceiver.frames, self.perceiver.results  # the newest frame and perception
+        self.readings = ArmReadings(arm, gripper, self.model, self.config.moving_speed_rad_s)  # the status' device part
         self.telemetry: NewestSlot[dict] = NewestSlot()
         self.calibration_slot: NewestSlot[dict] = NewestSlot()
         self.trust = CalibrationTrust(self.events, self.calibration_slot.publish, lambda: self.perception_config, self.config,
@@ -166,7 +167,6 @@ class Station(MotionGate, ManualCommands, CartesianJog, PlannedMoves, JobControl
             lambda: self.gripper.read_state().command, lambda q: self.check_pose(q), lambda poses: self.check_poses(poses),
             self.component_failed, threads=not synchronous))
         self._workers: list = []
-        self._frame_source: FrameSource | None = None
         self._started = False
 
     # Lifecycle ------------------------------------------------------------------------------------
@@ -192,14 +192,9 @@ class Station(MotionGate, ManualCommands, CartesianJog, PlannedMoves, JobControl
             self._restore_arm_calibration()
         self._closing.clear()
         if not self.synchronous:
-            self._frame_source = FrameSource(self.camera, self.frames, self.arm, self.gripper)
             self._workers = [
-                self._frame_source,
-                PerceptionLoop(
-                    self.frames, self.perception, lambda: self.trust.calibration, self.perception_config, self.config.perception_rate_hz, self.model,
-                    get_check_calibration=self.trust.to_check, on_check=self.trust.on_check,
-                    get_color_model=lambda: self.colors.model,
-                ),
+                *self.perceiver.threads(self.camera, self.arm, self.gripper, self.config.perception_rate_hz, self.trust.to_check,
+                                        self.trust.on_check),
                 TelemetryPublisher(self.telemetry_snapshot, self.telemetry, self.config.telemetry_rate_hz),
                 DeviceWatch(self.device_problems, self._on_device_problems, 1.0 / self.config.device_check_rate_hz),
             ]
@@ -334,7 +329,7 @@ class Station(MotionGate, ManualCommands, CartesianJog, PlannedMoves, JobControl
 
     def device_problems(self) -> dict[str, str]:
         """{device: reason} for each device not answering now (watch.py); empty when all answer."""
-        return device_problems(self.arm, self.gripper, self._frame_source if self._started else None, self.config.camera_timeout_s)
+        return device_problems(self.arm, self.gripper, lambda: self.perceiver.camera_problem() if self._started else None)
 
     def _on_device_problems(self, problems: dict[str, str]) -> None:
         """The device watch's report: fault on a new loss, log a recovery (the station stays in fault)."""
@@ -517,7 +512,47 @@ class Station(MotionGate, ManualCommands, CartesianJog, PlannedMoves, JobControl
             self.frames.wait_newer(version, timeout_s=1.0)
         return_freed_memory()
 
-    # Status ---------------------------------------------------------------------------------------
+    # Status and what the gate sees (perceiving.py, status.py) ---------------------------------------
+
+    def status(self) -> dict:
+        """GET /api/status: the wire dict (SI units). Works with a device lost (its last reading is shown)."""
+        readings = self.readings.read()
+        with self._lock:
+            job = self._job or self._last_job
+            state, detail, lease = self._effective_state(), self._detail, self._lease.to_dict()
+        perception, _ = self.perception.get()
+        commanded = self.commanded_joints_rad() if self.has_arm else None
+        return {
+            "state": state.value, "detail": detail, **readings,
+            "commanded_joints_rad": None if commanded is None else [float(v) for v in commanded],
+            "torque_enabled": self._torque_enabled, "calibrated": self.trust.calibration is not None,
+            "camera_warning": perception.camera_warning if self.trust.checked and perception is not None else None,
+            "calibration_state": self.calibration_state, "self_recalibrate": self.self_recalibrate,
+            "arm_calibration": self.arm_calibration_status if self.has_arm else None,
+            "backend": self.backend, "controller": lease["controller"], "controller_since_s": lease["since_s"],
+            "devices_lost": self.latch.lost(), "speed_percent": self.speed_percent,
+            "job": job.to_dict() if job is not None else None, "allowed_commands": allowed_commands(state, self.has_arm),
+            "time_s": time.time(),
+        }
+
+    def telemetry_snapshot(self) -> dict:
+        """Status + detections: one telemetry message (the TelemetryPublisher calls this)."""
+        snapshot, detections = self.status(), self.detections()
+        snapshot["detections"], snapshot["detections_stale"] = detections["data"], detections["stale"]
+        return snapshot
+
+    def detections(self) -> dict:
+        return self.perceiver.detections()
+
+    def fresh_frame(self, timeout_s: float = 2.0, max_age_s: float = 2.0) -> Frame:
+        return self.perceiver.fresh_frame(timeout_s, max_age_s)
+
+    def frame_after(self, since_s: float, timeout_s: float = 3.0) -> Frame:
+        return self.perceiver.frame_after(since_s, timeout_s)
+
+    def fresh_perception(self, ctx: JobContext | None = None, timeout_s: float = 5.0) -> Perception:
+        return self.perceiver.fresh_perception(ctx, timeout_s)
+
 
     def joints_rad(self) -> np.ndarray:
         """The measured joint positions (rad)."""

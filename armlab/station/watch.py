@@ -32,16 +32,16 @@ class DeviceWatch(_Worker):
             self.on_problems(self.probe())
 
 
-def device_problems(arm: Any, gripper: Any, camera_source: Any = None, camera_timeout_s: float = 1.0) -> dict[str, str]:
-    """{device: reason} for each device not answering now (reads the arm and gripper; the camera: camera_source's
-    health, the FrameSource delivering its frames, when one runs); empty when all answer."""
+def device_problems(arm: Any, gripper: Any, camera_problem: Callable[[], str | None] = lambda: None) -> dict[str, str]:
+    """{device: reason} for each device not answering now (reads the arm and gripper, then asks camera_problem(): why
+    the camera thread gets no frames, None when it does or none runs); empty when all answer."""
     problems: dict[str, str] = {}
     for name, read in (("arm", arm.read_joint_state), ("gripper", gripper.read_state)):
         try:
             read()
         except DEVICE_ERRORS as error:
             problems[name] = f"{type(error).__name__}: {error}"
-    camera = camera_source.health(camera_timeout_s) if camera_source is not None else None
+    camera = camera_problem()
     if camera is not None:
         problems["camera"] = camera
     return problems
