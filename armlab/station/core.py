@@ -132,7 +132,6 @@ class Station(MotionGate, ManualCommands, CartesianJog, PlannedMoves, JobControl
         self._closing = threading.Event()
         self._state = State.IDLE
         self._detail = ""
-        self._lease = ControlLease()
         self._job: Job | None = None
         self._last_job: Job | None = None
         self._jog: dict | None = None  # the running jog: trajectory, start clock, velocity, controller
@@ -160,6 +159,7 @@ class Station(MotionGate, ManualCommands, CartesianJog, PlannedMoves, JobControl
         self.readings = ArmReadings(arm, gripper, self.model, self.config.moving_speed_rad_s)  # the status' device part
         self.telemetry: NewestSlot[dict] = NewestSlot()
         self.calibration_slot: NewestSlot[dict] = NewestSlot()
+        self.lease = ControlLease(self.events, self._closing.is_set)  # who may command (lease.py)
         self.trust = CalibrationTrust(self.events, self.calibration_slot.publish, lambda: self.perception_config, self.config,
                                       self._why_not_self_recalibrate, self._start_self_recalibration)  # calibration in use, restored
         self.teach = Teach(self.store, self.events, lambda: self.program_owner, TeachLinks(  # late-bound: what the station does now
@@ -272,8 +272,8 @@ class Station(MotionGate, ManualCommands, CartesianJog, PlannedMoves, JobControl
         if not self.has_arm and command in ARM_COMMANDS:
             raise NoArmError(command, self._effective_state().value, allowed_commands(self._effective_state(), False))
         new_state = next_state(self._effective_state(), command)
-        if command not in _UNLATCHED and source is not None and self._lease.holder not in (None, source):
-            self._lease.require(source, command)  # raises NotController naming the holder
+        if command not in _UNLATCHED:
+            self.lease.check(source, command)  # NotController naming the holder
         return new_state
 
     def _transition(self, trigger: str, *, source: str | None = None, detail: str | None = None, event: bool = False) -> State:
@@ -285,8 +285,8 @@ class Station(MotionGate, ManualCommands, CartesianJog, PlannedMoves, JobControl
             new_state = after_event(self._state, trigger)
         else:
             new_state = self._check(trigger, source)
-            if trigger not in _UNLATCHED and self._lease.require(source, trigger):
-                self.events.add("info", f"control taken by '{source}' (the lease was free)")
+            if trigger not in _UNLATCHED:
+                self.lease.require(source, trigger)  # a free lease goes to `source` (announced)
         if new_state is not self._state or detail is not None:
             self._detail = detail if detail is not None else ("" if new_state is State.IDLE else self._detail)
         self._state = new_state
@@ -377,13 +377,13 @@ class Station(MotionGate, ManualCommands, CartesianJog, PlannedMoves, JobControl
             self.events.add("info", f"{name} answers again")
         self.events.add("info", "reset: station idle")
 
-    # Control lease --------------------------------------------------------------------------------
+    # Control lease (the part: station.lease, lease.py) ----------------------------------------------
 
     @property
     def controller(self) -> str | None:
         """Who holds the control lease (None: free)."""
         with self._lock:
-            return self._lease.holder
+            return self.lease.holder
 
     def require_control(self, command: str, source: str | None) -> None:
         """The lease check of a command outside the state table (program edits): NotController naming the
@@ -391,30 +391,19 @@ class Station(MotionGate, ManualCommands, CartesianJog, PlannedMoves, JobControl
         with self._lock:
             if self._closing.is_set():
                 raise ShuttingDown(f"command '{command}' refused: the station is shutting down")
-            taken = self._lease.require(source, command)
-        if taken:
-            self.events.add("info", f"control taken by '{source}' (the lease was free)")
+            self.lease.require(source, command)
 
     def take_control(self, source: str) -> str | None:
-        """Take the control lease over (explicitly); the event log tells everyone, the previous holder too.
-        Returns the previous holder."""
-        if self._closing.is_set():
-            raise ShuttingDown("the station is shutting down")
+        """Take the control lease over (explicitly; announced to everyone, the previous holder too). Returns the previous holder."""
         with self._lock:
-            previous = self._lease.take(source)
-        if previous != source:
-            taken_from = f" from '{previous}'" if previous else ""
-            self.events.add("warn", f"control taken by '{source}'{taken_from}")
-        return previous
+            return self.lease.take(source)
 
     def release_control(self, source: str, reason: str = "released") -> bool:
-        """Give the lease up if `source` holds it (reason: e.g. 'disconnected'); True if it did."""
+        """Give the lease up if `source` holds it (reason: e.g. 'disconnected'), ending its jog; True if it did."""
         with self._lock:
-            released = self._lease.release(source)
+            released = self.lease.release(source, reason)
             if released and self._jog is not None and self._jog["source"] == source:
                 self._jog = None
-        if released:
-            self.events.add("info", f"control {reason}: '{source}' no longer controls the station")
         return released
 
     # Teach (the part: teach.py) -------------------------------------------------------------------
@@ -460,9 +449,7 @@ class Station(MotionGate, ManualCommands, CartesianJog, PlannedMoves, JobControl
 
     def set_self_recalibrate(self, enabled: bool, source: str | None = None) -> bool:
         """The operator's setting (the lease holder's, like any command that changes the station)."""
-        with self._lock:
-            if source is not None and self._lease.holder not in (None, source):
-                self._lease.require(source, "calibrate")  # NotController naming the holder
+        self.lease.check(source, "calibrate")
         return self.trust.set_self_recalibrate(enabled, by=source)
 
     def _why_not_self_recalibrate(self) -> str | None:
@@ -519,7 +506,7 @@ class Station(MotionGate, ManualCommands, CartesianJog, PlannedMoves, JobControl
         readings = self.readings.read()
         with self._lock:
             job = self._job or self._last_job
-            state, detail, lease = self._effective_state(), self._detail, self._lease.to_dict()
+            state, detail, lease = self._effective_state(), self._detail, self.lease.to_dict()
         perception, _ = self.perception.get()
         commanded = self.commanded_joints_rad() if self.has_arm else None
         return {
