@@ -76,7 +76,8 @@ class CalibrationTrust:
     events: the station's EventLog; publish(info): the calibration's wire summary, each time one is installed;
     get_perception_config(): armlab.vision's config (board tags, drift threshold); config: the StationConfig
     (self_recalibrate default, its minimum board tags and retry); why_not_idle(): None when the station may
-    recalibrate itself now, else why not; start_self_recalibration(): starts that job (raises when it cannot)."""
+    recalibrate itself now, else why not; start_self_recalibration(): starts that job (raises when it cannot);
+    check_control(source, command): the lease's check (NotController naming the holder)."""
 
     def __init__(
         self,
@@ -86,9 +87,10 @@ class CalibrationTrust:
         config: Any,
         why_not_idle: Callable[[], str | None] = lambda: "no station",
         start_self_recalibration: Callable[[], None] = lambda: None,
+        check_control: Callable[[str | None, str], None] = lambda source, command: None,
     ) -> None:
         self._events, self._publish, self._perception_config, self._config = events, publish, get_perception_config, config
-        self._why_not_idle, self._start_self_recalibration = why_not_idle, start_self_recalibration
+        self._why_not_idle, self._start_self_recalibration, self._check_control = why_not_idle, start_self_recalibration, check_control
         self._lock = threading.RLock()
         self._calibration: Any = None  # the calibration in use (armlab.vision Calibration)
         self._info: dict | None = None  # its wire summary
@@ -253,15 +255,17 @@ class CalibrationTrust:
         with self._lock:
             return self._config.self_recalibrate if self._self_recalibrate is None else self._self_recalibrate
 
-    def set_self_recalibrate(self, enabled: bool, by: str | None = None) -> bool:
-        """The operator's setting (InvalidInput unless a bool); the event log says when it changes. Returns it."""
+    def set_self_recalibrate(self, enabled: bool, source: str | None = None) -> bool:
+        """The operator's setting (InvalidInput unless a bool; the lease holder's, like any command that changes the
+        station); the event log says when it changes. Returns it."""
         if not isinstance(enabled, bool):
             raise InvalidInput(f"self_recalibrate must be true or false, got {enabled!r}")
+        self._check_control(source, "calibrate")
         with self._lock:
             changed = enabled != self.self_recalibrate
             self._self_recalibrate = enabled
         if changed:
-            who = f" by '{by}'" if by else ""
+            who = f" by '{source}'" if source else ""
             self._events.add("info", f"self-recalibration when idle turned {'on' if enabled else 'off'}{who}")
         return enabled
 

@@ -1,18 +1,15 @@
-"""The Station, the gate: state table, lock, latch, lease, devices, job runner, e-stop; the only writer of arm commands.
+"""The Station, the gate: the state table, its lock and every state change; the only writer of arm commands.
 
-Every command is checked against the transition table (states.py) and the control lease (lease.py) under
-one lock, and every state change goes through `_transition`. The lock guards state only: it is never
-held across I/O (SQLite, IK, planning, scene changes). E-stop does not take it first: it sets a lock-free
-latch (`latch`), cancels the job and halts the arm and gripper, and only then records the state; every
-command path checks the latch under the lock before it reaches a device, and every wait checks it, so
-after estop() returns no job or manual command can reach the arm until reset(). A lost device (watch.py)
-latches the same way and puts the station in `fault`; reset is refused while it is still gone.
-Skills and tasks (armlab.skills, armlab.tasks) sit above the gate and use its small public interface:
-`start_job`, `run_trajectory`, `run_gripper`, `fresh_frame`, `fresh_perception`, `joints_rad`,
-`checked_joints`, `held_block`/`set_held_block`, `moved_over_since`, `clock_s`. The camera, perception,
-telemetry and device watch each run on their own thread, except in synchronous mode (a fast-mode
-simulation for evaluations), where frames are captured on demand and physics advances only while the
-gate waits for the devices.
+Every command is checked against the transition table (states.py), the latch and the control lease under one lock,
+and every state change goes through `_transition`, here. The lock guards state only: it is never held across I/O
+(SQLite, IK, planning, scene changes). E-stop does not take it first: it sets the lock-free latch, cancels the job and
+halts the arm and gripper, and only then records the state; every command path checks the latch under the lock before
+it reaches a device, and every wait checks it, so after estop() returns no job or manual command can reach the arm
+until reset(). A lost device (watch.py) latches the same way and puts the station in `fault`.
+The parts the gate owns, each with its own state: latch (latch.py), lease (lease.py), trust (calibration_trust.py),
+teach (teach.py), perceiver (perceiving.py), readings (status.py). Skills and tasks use its small public interface:
+`start_job`, `run_trajectory`, `run_gripper`, `fresh_frame`, `fresh_perception`, `joints_rad`, `checked_joints`,
+`held_block`/`set_held_block`, `moved_over_since`, `clock_s`.
 """
 
 from __future__ import annotations
@@ -29,12 +26,12 @@ from armlab.devices.arm import Arm
 from armlab.devices.camera import Camera, Frame
 from armlab.devices.clock import Clock, WallClock
 from armlab.devices.gripper import Gripper
-from armlab.errors import CommandRefused, DeviceLost, InvalidInput, NoArmError, RefusedByCheck, ShuttingDown
+from armlab.errors import CommandRefused, DeviceLost, InvalidInput, NoArmError, ShuttingDown
 from armlab.kinematics.calibrated_arm import CalibratedArm
 from armlab.station.arm_calibration import ArmCalibrationKeeper
 from armlab.station.calibration_trust import SELF_RECALIBRATE_JOB, CalibrationTrust, self_recalibration_job
 from armlab.station.cartesian_jog import CartesianJog
-from armlab.station.checks import checked_joints
+from armlab.station.checks import NotCalibrated, checked_joints
 from armlab.station.colors import StationColors
 from armlab.station.config import StationConfig
 from armlab.station.event_history import EventHistory
@@ -67,27 +64,18 @@ log = logging.getLogger(__name__)
 __all__ = ["DEVICE_ERRORS", "MOTION_MEMORY", "WAIT_CHUNK_S", "NotCalibrated", "Station"]
 
 
-class NotCalibrated(RefusedByCheck, RuntimeError):
-    """The command needs a camera calibration: run calibrate first."""
-
-    def __init__(self, what: str = "this command") -> None:
-        super().__init__(f"{what} needs a camera calibration: calibrate first")
-
-
 _UNLATCHED = ("estop",)  # the only command the latch and the lease never refuse
 
 
 class Station(MotionGate, ManualCommands, CartesianJog, PlannedMoves, JobControls, SpeedOverride, ArmCalibrationKeeper):
-    """The control station's gate (its parts: latch.py, motion.py, manual.py, cartesian_jog.py, planned_moves.py, teach.py,
-    job_control.py: start, cancel and control jobs, perceiving.py: status, detections, fresh frames).
-    Backends are injected; `sim` is the SimWorkcell when simulated (else None).
+    """The control station's gate: the parts above, and the command groups still mixed in (motion.py: the motion gate;
+    manual.py, cartesian_jog.py, planned_moves.py, job_control.py, speed.py, arm_calibration.py). Backends are injected.
 
-    model: the armlab.kinematics ArmModel of the arm; perception_config: armlab.vision's config.
-    synchronous: the sim runs in fast mode and nothing runs on threads (evaluations); frames are
-    captured when a skill asks for one and physics advances only while the gate waits.
-    `source` (every command): the controller's name for the lease (None: an in-process caller, not leased).
-    model None: a station with no arm (armlab.devices.none's NoArm and NoGripper as its devices): perception
-    only, every command that needs the arm refused (NoArmError) before anything is planned.
+    model: the armlab.kinematics ArmModel (None: a station with no arm, perception only, every arm command refused
+    with NoArmError); perception_config: armlab.vision's config; sim: the SimWorkcell when simulated (else None);
+    synchronous: the sim runs in fast mode and nothing runs on threads (evaluations): frames are captured when asked
+    and physics advances only while the gate waits. `source` (every command): the controller's name for the lease
+    (None: an in-process caller, not leased).
     """
 
     def __init__(
@@ -161,11 +149,11 @@ class Station(MotionGate, ManualCommands, CartesianJog, PlannedMoves, JobControl
         self.calibration_slot: NewestSlot[dict] = NewestSlot()
         self.lease = ControlLease(self.events, self._closing.is_set)  # who may command (lease.py)
         self.trust = CalibrationTrust(self.events, self.calibration_slot.publish, lambda: self.perception_config, self.config,
-                                      self._why_not_self_recalibrate, self._start_self_recalibration)  # calibration in use, restored
+                                      self._why_not_self_recalibrate, self._start_self_recalibration, self.lease.check)  # in use, restored
         self.teach = Teach(self.store, self.events, lambda: self.program_owner, TeachLinks(  # late-bound: what the station does now
-            self.allowed_or_raise, self._teach_transition, self._teaching, self._closing.is_set, lambda: self.joints_rad(),
-            lambda: self.gripper.read_state().command, lambda q: self.check_pose(q), lambda poses: self.check_poses(poses),
-            self.component_failed, threads=not synchronous))
+            self.allowed_or_raise, self._teach_transition, lambda: self.state is State.TEACH and not self.latch.is_set(),
+            self._closing.is_set, lambda: self.joints_rad(), lambda: self.gripper.read_state().command,
+            lambda q: self.check_pose(q), lambda poses: self.check_poses(poses), self.component_failed, threads=not synchronous))
         self._workers: list = []
         self._started = False
 
@@ -187,7 +175,7 @@ class Station(MotionGate, ManualCommands, CartesianJog, PlannedMoves, JobControl
         if interrupted:
             self.events.add("warn", f"{interrupted} job(s) were cut off when the station last stopped: marked interrupted")
         if self.config.restore_calibration:
-            one_look = (lambda: detect_tags(self.sim.capture_next_frame().color_bgr, self.perception_config)) if self.synchronous else None
+            one_look = (lambda: detect_tags(self.fresh_frame().color_bgr, self.perception_config)) if self.synchronous else None
             self.trust.restore(self.store.latest_calibration(), one_look)
             self._restore_arm_calibration()
         self._closing.clear()
@@ -294,18 +282,9 @@ class Station(MotionGate, ManualCommands, CartesianJog, PlannedMoves, JobControl
 
     # The latch: e-stop, device loss, reset ----------------------------------------------------------
 
-    @property
-    def latched(self) -> bool:
-        """True while the e-stop (or a device loss) latch is set; lock-free."""
-        return self.latch.is_set()
-
     def _forget_commanded(self) -> None:
         """Every halt: the arm holds where it is, so there is no commanded motion to continue."""
         self._commanded = None
-
-    def _halt_devices(self, gripper: bool = True) -> list[str]:
-        """Stop the arm (and gripper) through the latch; never raises (a device that fails is reported). No lock needed."""
-        return self.latch.halt_devices(gripper)
 
     def _latch_and_halt(self) -> list[str]:
         """Set the latch first, cancel the job, halt the arm and gripper (before any lock): what fails to stop."""
@@ -313,7 +292,7 @@ class Station(MotionGate, ManualCommands, CartesianJog, PlannedMoves, JobControl
         job = self._job
         if job is not None:
             job.cancel(halted=True)
-        return self._halt_devices()
+        return self.latch.halt_devices()
 
     def estop(self, source: str | None = None) -> None:
         """Halt now and latch, from any state and from anyone (no lease needed): latch first, cancel the
@@ -324,7 +303,7 @@ class Station(MotionGate, ManualCommands, CartesianJog, PlannedMoves, JobControl
             self._jog = None
             by = f" by '{source}'" if source else ""
             self._transition("estop", source=source, detail=f"e-stop pressed{by}: reset to continue")
-        failures += self._halt_devices()
+        failures += self.latch.halt_devices()
         self.events.add("error", "E-stop: motion halted" + (f" ({'; '.join(sorted(set(failures)))})" if failures else ""))
 
     def device_problems(self) -> dict[str, str]:
@@ -418,10 +397,6 @@ class Station(MotionGate, ManualCommands, CartesianJog, PlannedMoves, JobControl
             if not only_in_teach or self._effective_state() is State.TEACH:
                 self._transition(command, source=source, detail=detail)
 
-    def _teaching(self) -> bool:
-        with self._lock:
-            return self._state is State.TEACH and not self.latch.is_set()
-
     # Calibration (the part: calibration_trust.py) ---------------------------------------------------
 
     @property
@@ -436,21 +411,8 @@ class Station(MotionGate, ManualCommands, CartesianJog, PlannedMoves, JobControl
         """Install a calibration (armlab.vision Calibration) with its wire summary; publishes it."""
         self.trust.install(calibration, info)
 
-    @property
-    def calibration_state(self) -> str | None:
-        return self.trust.state
-
     def require_trusted_calibration(self, what: str) -> None:
         self.trust.require_trusted(what)
-
-    @property
-    def self_recalibrate(self) -> bool:
-        return self.trust.self_recalibrate
-
-    def set_self_recalibrate(self, enabled: bool, source: str | None = None) -> bool:
-        """The operator's setting (the lease holder's, like any command that changes the station)."""
-        self.lease.check(source, "calibrate")
-        return self.trust.set_self_recalibrate(enabled, by=source)
 
     def _why_not_self_recalibrate(self) -> str | None:
         """None when the station may recalibrate itself now (idle, nothing running, the arm still), else why not."""
@@ -514,7 +476,7 @@ class Station(MotionGate, ManualCommands, CartesianJog, PlannedMoves, JobControl
             "commanded_joints_rad": None if commanded is None else [float(v) for v in commanded],
             "torque_enabled": self._torque_enabled, "calibrated": self.trust.calibration is not None,
             "camera_warning": perception.camera_warning if self.trust.checked and perception is not None else None,
-            "calibration_state": self.calibration_state, "self_recalibrate": self.self_recalibrate,
+            "calibration_state": self.trust.state, "self_recalibrate": self.trust.self_recalibrate,
             "arm_calibration": self.arm_calibration_status if self.has_arm else None,
             "backend": self.backend, "controller": lease["controller"], "controller_since_s": lease["since_s"],
             "devices_lost": self.latch.lost(), "speed_percent": self.speed_percent,

@@ -129,7 +129,7 @@ class MotionGate:
             for send in outbox:
                 send()
             if outbox and (self.latch.is_set() or self.latch.halts != halts):
-                self._halt_devices(gripper=self.latch.is_set())
+                self.latch.halt_devices(gripper=self.latch.is_set())
 
     def _send_later(self, send: Callable[[], object]) -> None:
         """Queue a device command for when the lock is released (caller is inside `_sending()`)."""
@@ -469,7 +469,7 @@ class MotionGate:
         checked = ctx if not ctx.in_cleanup else None
         # a lower speed override set while it runs stretches it (speed.py): wait as long as the slowest speed takes
         if not self._wait_until(lambda: not self.arm.is_moving(), trajectory.duration_s * SPEED_WAIT_FACTOR + 5.0, checked):
-            self._halt_devices(gripper=False)
+            self.latch.halt_devices(gripper=False)
             if self.latch.is_set():
                 raise JobCancelled("the station was e-stopped")
             raise TimeoutError(f"the arm did not finish a {trajectory.duration_s:.2f} s move in time")

@@ -53,7 +53,7 @@ def test_the_operators_calibration_is_not_replaced_by_a_restored_one_checked_mea
         station.trust = CalibrationTrust(station.events, station.calibration_slot.publish, lambda: station.perception_config,
                                          station.config)  # the state after a restart: nothing in use...
         station.trust.restore_candidate(restored, {"calibrated": True}, time.time() - 1.0)  # ...the saved one a candidate
-        assert station.calibration_state == "checking"
+        assert station.trust.state == "checking"
 
         real = station.perception_config
         station.perception_config = ConfigCalibratingMidCheck(real, lambda: station.set_calibration(operators, {"method": "operator"}))
@@ -61,7 +61,7 @@ def test_the_operators_calibration_is_not_replaced_by_a_restored_one_checked_mea
         station.perception_config = real
 
         assert station.calibration is operators, "the restored calibration replaced the operator's newer one"
-        assert station.calibration_info.get("method") == "operator" and station.calibration_state == "trusted"
+        assert station.calibration_info.get("method") == "operator" and station.trust.state == "trusted"
     finally:
         station.close()
         cell.close()

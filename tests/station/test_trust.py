@@ -11,7 +11,7 @@ from types import SimpleNamespace
 
 import pytest
 
-from armlab.errors import CalibrationUntrusted, InvalidInput
+from armlab.errors import CalibrationUntrusted, InvalidInput, NotController
 from armlab.station.calibration_trust import CalibrationTrust
 
 THRESHOLD_PX = 2.0
@@ -38,7 +38,13 @@ class Harness:
                                                  tags=SimpleNamespace(board_tags=BOARD))
         config = SimpleNamespace(self_recalibrate=self_recalibrate, self_recalibrate_min_board_tags=4,
                                  self_recalibrate_retry_s=retry_s)
-        self.trust = CalibrationTrust(self.events, self.published.append, self._config, config, lambda: self.idle, self._start)
+        self.trust = CalibrationTrust(self.events, self.published.append, self._config, config, lambda: self.idle, self._start,
+                                      self._check_control)
+
+    @staticmethod
+    def _check_control(source, command) -> None:
+        if source not in (None, "page"):
+            raise NotController(command, "page")
 
     def _config(self):
         if self.on_config_read is not None:
@@ -145,8 +151,11 @@ def test_the_self_recalibration_setting():
     assert trust.self_recalibrate is True  # the config's
     with pytest.raises(InvalidInput):
         trust.set_self_recalibrate("yes")
-    assert trust.set_self_recalibrate(False, by="page") is False and trust.self_recalibrate is False
+    assert trust.set_self_recalibrate(False, source="page") is False and trust.self_recalibrate is False
     trust.set_self_recalibrate(False)
+    with pytest.raises(NotController):
+        trust.set_self_recalibrate(True, source="another page")  # not the lease holder: nothing changes
+    assert trust.self_recalibrate is False
     assert [message for _, message in harness.events.items] == ["self-recalibration when idle turned off by 'page'"]
 
 
