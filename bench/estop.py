@@ -184,12 +184,12 @@ def load_calibration(rig: Rig):
 
 
 def load_sqlite_write(rig: Rig):
-    rig.station.teach_start()
+    rig.station.teach.start()
     rig.station.move_joints(FAR_Q, moving_time_s=4.0)
-    rig.station.teach_record()
+    rig.station.teach.record()
     blocker = sqlite3.connect(str(rig.db), timeout=0, isolation_level=None)
     blocker.execute("BEGIN EXCLUSIVE")
-    saver = threading.Thread(target=lambda: _ignore(rig.station.teach_stop, "bench"), daemon=True)
+    saver = threading.Thread(target=lambda: _ignore(rig.station.teach.stop, "bench"), daemon=True)
     saver.start()
     wait_for(lambda: rig.cell.arm.is_moving())
 

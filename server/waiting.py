@@ -97,7 +97,7 @@ class Waiter:
                 self._wake.wait(1.0)
                 self._wake.clear()
                 continue
-            latched = self.station.latched
+            latched = self.station.latch.is_set()
             for entry in pending:
                 try:
                     done = bool(entry.condition())
@@ -114,8 +114,8 @@ class Waiter:
     def _pause(self, device_wait: bool) -> None:
         """POLL_S of waiting; on a fast-mode simulation with a device wait pending, of physics."""
         sim = getattr(self.station, "sim", None)
-        if device_wait and sim is not None and not sim.realtime and not self.station.latched:
-            sim.wait_for(lambda: self.station.latched, POLL_S)
+        if device_wait and sim is not None and not sim.realtime and not self.station.latch.is_set():
+            sim.wait_for(lambda: self.station.latch.is_set(), POLL_S)
         else:
             self._stop.wait(POLL_S)
 

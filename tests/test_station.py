@@ -66,7 +66,7 @@ def _joints(station) -> np.ndarray:
 def _enter(station, state: State, program_id: int):
     """Put the station in `state` through its public commands; job states run a job that waits for cancel."""
     if state is State.TEACH:
-        station.teach_start()
+        station.teach.start()
     elif state is State.ESTOP:
         station.estop()
     elif state is State.FAULT:
@@ -94,14 +94,14 @@ def _issue(station, command: str, program_id: int):
         "calibrate": lambda: skills.calibrate(station),
         "grab": lambda: skills.grab(station, position_m=[0.0, 0.3, 0.03]),
         "drop": lambda: skills.drop(station, position_m=[0.0, 0.3, 0.0]),
-        "teach_start": lambda: station.teach_start(),
-        "teach_record": lambda: station.teach_record(),
-        "teach_stop": lambda: station.teach_stop("never saved"),
+        "teach_start": lambda: station.teach.start(),
+        "teach_record": lambda: station.teach.record(),
+        "teach_stop": lambda: station.teach.stop("never saved"),
         "repeat": lambda: skills.repeat(station, program_id),
         "auto": lambda: station.start_job("auto", "noop", lambda ctx: None),
         "cancel": lambda: station.cancel_job(),
         "set_scene": lambda: station.allowed_or_raise("set_scene"),
-        "teach_undo": lambda: station.teach_undo(),
+        "teach_undo": lambda: station.teach.undo(),
         "pause": lambda: station.pause_job(),
         "resume": lambda: station.resume_job(),
         "step": lambda: station.step_job(),
@@ -149,7 +149,7 @@ def _start_motion(station, state: State):
     """Get the arm moving in `state` (a long move) — through a job in job states."""
     if state in (State.IDLE, State.TEACH):
         if state is State.TEACH:
-            station.teach_start()
+            station.teach.start()
         station.move_joints(FAR_Q, moving_time_s=3.0)
     else:
         station.start_job(JOB_COMMAND[state], "long move", lambda ctx: station.move_in_job(ctx, FAR_Q, moving_time_s=3.0))
@@ -249,13 +249,13 @@ def test_telemetry_is_published_continuously(idle):
 
 def test_teach_record_stop_saves_a_program_that_repeats(idle):
     station = idle
-    station.teach_start()
+    station.teach.start()
     station.move_joints([0.3, 0.0, 0.0, 0.0, 0.0], moving_time_s=0.6, wait=True)
-    first, count = station.teach_record()
+    first, count = station.teach.record()
     assert count == 1
     station.move_joints([-0.3, 0.1, 0.0, 0.0, 0.0], moving_time_s=0.6, wait=True)
-    assert station.teach_record()[1] == 2
-    program = station.teach_stop("two points")
+    assert station.teach.record()[1] == 2
+    program = station.teach.stop("two points")
     assert station.state is State.IDLE
     assert [w.joints_rad for w in program.waypoints][0] == first.joints_rad
     station.move_joints(station.model.home_rad, moving_time_s=0.6, wait=True)

@@ -99,9 +99,9 @@ def _issue(station, name: str, argument, jobs_moved: list):
     if name == "set_scene":
         return station.set_scene(Scene())
     if name == "teach_stop":
-        return station.teach_stop("random program")
+        return station.teach.stop("random program")
     return {"estop": station.estop, "reset": station.reset, "home": station.home, "sleep": station.sleep,
-            "cancel": station.cancel_job, "teach_start": station.teach_start, "teach_record": station.teach_record}[name]()
+            "cancel": station.cancel_job, "teach_start": station.teach.start, "teach_record": station.teach.record}[name]()
 
 
 def _watch_motion(cell, station, jobs_moved) -> list[np.ndarray]:

@@ -6,7 +6,14 @@ import math
 
 import numpy as np
 
-from armlab.errors import InvalidInput
+from armlab.errors import InvalidInput, RefusedByCheck
+
+
+class NotCalibrated(RefusedByCheck, RuntimeError):
+    """The command needs a camera calibration: run calibrate first."""
+
+    def __init__(self, what: str = "this command") -> None:
+        super().__init__(f"{what} needs a camera calibration: calibrate first")
 
 
 def checked_joints(model, q_rad) -> np.ndarray:

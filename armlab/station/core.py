@@ -1,18 +1,15 @@
-"""The Station, the gate: state table, lock, latch, lease, devices, job runner, e-stop; the only writer of arm commands.
+"""The Station, the gate: the state table, its lock and every state change; the only writer of arm commands.
 
-Every command is checked against the transition table (states.py) and the control lease (lease.py) under
-one lock, and every state change goes through `_transition`. The lock guards state only: it is never
-held across I/O (SQLite, IK, planning, scene changes). E-stop does not take it first: it sets a lock-free
-latch (`_halt`), cancels the job and halts the arm and gripper, and only then records the state; every
-command path checks the latch under the lock before it reaches a device, and every wait checks it, so
-after estop() returns no job or manual command can reach the arm until reset(). A lost device (watch.py)
-latches the same way and puts the station in `fault`; reset is refused while it is still gone.
-Skills and tasks (armlab.skills, armlab.tasks) sit above the gate and use its small public interface:
-`start_job`, `run_trajectory`, `run_gripper`, `fresh_frame`, `fresh_perception`, `joints_rad`,
-`checked_joints`, `held_block`/`set_held_block`, `moved_over_since`, `clock_s`. The camera, perception,
-telemetry and device watch each run on their own thread, except in synchronous mode (a fast-mode
-simulation for evaluations), where frames are captured on demand and physics advances only while the
-gate waits for the devices.
+Every command is checked against the transition table (states.py), the latch and the control lease under one lock,
+and every state change goes through `_transition`, here. The lock guards state only: it is never held across I/O
+(SQLite, IK, planning, scene changes). E-stop does not take it first: it sets the lock-free latch, cancels the job and
+halts the arm and gripper, and only then records the state; every command path checks the latch under the lock before
+it reaches a device, and every wait checks it, so after estop() returns no job or manual command can reach the arm
+until reset(). A lost device (watch.py) latches the same way and puts the station in `fault`.
+The parts the gate owns, each with its own state: latch (latch.py), lease (lease.py), trust (calibration_trust.py),
+teach (teach.py), perceiver (perceiving.py), readings (status.py). Skills and tasks use its small public interface:
+`start_job`, `run_trajectory`, `run_gripper`, `fresh_frame`, `fresh_perception`, `joints_rad`, `checked_joints`,
+`held_block`/`set_held_block`, `moved_over_since`, `clock_s`.
 """
 
 from __future__ import annotations
@@ -29,36 +26,37 @@ from armlab.devices.arm import Arm
 from armlab.devices.camera import Camera, Frame
 from armlab.devices.clock import Clock, WallClock
 from armlab.devices.gripper import Gripper
-from armlab.errors import InvalidInput, NoArmError, RefusedByCheck, ShuttingDown
+from armlab.errors import CommandRefused, DeviceLost, InvalidInput, NoArmError, ShuttingDown
 from armlab.kinematics.calibrated_arm import CalibratedArm
 from armlab.station.arm_calibration import ArmCalibrationKeeper
-from armlab.station.calibration_trust import CalibrationTrust
+from armlab.station.calibration_trust import SELF_RECALIBRATE_JOB, CalibrationTrust, self_recalibration_job
 from armlab.station.cartesian_jog import CartesianJog
-from armlab.station.checks import checked_joints
+from armlab.station.checks import NotCalibrated, checked_joints
 from armlab.station.colors import StationColors
 from armlab.station.config import StationConfig
 from armlab.station.event_history import EventHistory
 from armlab.station.intrinsics import CameraIntrinsics
 from armlab.station.job_control import JobControls
-from armlab.station.jobs import Job
+from armlab.station.jobs import Job, JobContext
 from armlab.station.latch import Latch
 from armlab.station.lease import ControlLease
 from armlab.station.manual import ManualCommands
 from armlab.station.memory import return_freed_memory
 from armlab.station.motion import MOTION_MEMORY, WAIT_CHUNK_S, MotionGate
-from armlab.station.perceiving import Perceiving
-from armlab.station.perception import DEVICE_ERRORS, FrameSource, Perception, PerceptionLoop
+from armlab.station.perceiving import Perceiver
+from armlab.station.perception import DEVICE_ERRORS, Perception
 from armlab.station.planned_moves import PlannedMoves
 from armlab.station.plans import PlanStore
 from armlab.station.reach import ReachCache
 from armlab.station.slots import EventLog, NewestSlot
 from armlab.station.speed import SpeedOverride
 from armlab.station.states import ARM_COMMANDS, State, after_event, allowed_commands, next_state
-from armlab.station.teach import TeachCommands
-from armlab.station.telemetry import TelemetryPublisher
-from armlab.station.watch import DeviceWatch
-from armlab.store import Store
-from armlab.vision import load_perception_config
+from armlab.station.status import ArmReadings
+from armlab.station.teach import Teach, TeachLinks
+from armlab.station.telemetry import Detections, TelemetryPublisher
+from armlab.station.watch import DeviceWatch, device_problems
+from armlab.store import Owner, Store
+from armlab.vision import detect_tags, load_perception_config
 from armlab.workcell.loading import load_workcell_motion_config
 
 log = logging.getLogger(__name__)
@@ -66,28 +64,18 @@ log = logging.getLogger(__name__)
 __all__ = ["DEVICE_ERRORS", "MOTION_MEMORY", "WAIT_CHUNK_S", "NotCalibrated", "Station"]
 
 
-class NotCalibrated(RefusedByCheck, RuntimeError):
-    """The command needs a camera calibration: run calibrate first."""
-
-    def __init__(self, what: str = "this command") -> None:
-        super().__init__(f"{what} needs a camera calibration: calibrate first")
-
-
 _UNLATCHED = ("estop",)  # the only command the latch and the lease never refuse
 
 
-class Station(Latch, MotionGate, ManualCommands, CartesianJog, PlannedMoves, TeachCommands, JobControls, SpeedOverride, Perceiving,
-              CalibrationTrust, ArmCalibrationKeeper):
-    """The control station's gate (its parts: latch.py, motion.py, manual.py, cartesian_jog.py, planned_moves.py, teach.py,
-    job_control.py: start, cancel and control jobs, perceiving.py: status, detections, fresh frames).
-    Backends are injected; `sim` is the SimWorkcell when simulated (else None).
+class Station(MotionGate, ManualCommands, CartesianJog, PlannedMoves, JobControls, SpeedOverride, ArmCalibrationKeeper):
+    """The control station's gate: the parts above, and the command groups still mixed in (motion.py: the motion gate;
+    manual.py, cartesian_jog.py, planned_moves.py, job_control.py, speed.py, arm_calibration.py). Backends are injected.
 
-    model: the armlab.kinematics ArmModel of the arm; perception_config: armlab.vision's config.
-    synchronous: the sim runs in fast mode and nothing runs on threads (evaluations); frames are
-    captured when a skill asks for one and physics advances only while the gate waits.
-    `source` (every command): the controller's name for the lease (None: an in-process caller, not leased).
-    model None: a station with no arm (armlab.devices.none's NoArm and NoGripper as its devices): perception
-    only, every command that needs the arm refused (NoArmError) before anything is planned.
+    model: the armlab.kinematics ArmModel (None: a station with no arm, perception only, every arm command refused
+    with NoArmError); perception_config: armlab.vision's config; sim: the SimWorkcell when simulated (else None);
+    synchronous: the sim runs in fast mode and nothing runs on threads (evaluations): frames are captured when asked
+    and physics advances only while the gate waits. `source` (every command): the controller's name for the lease
+    (None: an in-process caller, not leased).
     """
 
     def __init__(
@@ -128,22 +116,18 @@ class Station(Latch, MotionGate, ManualCommands, CartesianJog, PlannedMoves, Tea
         self._newest_move = 0  # the ticket of the newest manual move waiting to be planned (motion.py _send_replacing)
         self._send_lock = threading.Lock()  # one sender of device commands at a time, taken before _lock (motion.py _sending)
         self._outbox: list | None = None  # device commands queued under the lock, sent after it (motion.py _sending)
-        self._halts = 0  # how many times the devices were halted (latch.py _halt_devices)
-        self._halt = threading.Event()  # the latch: set by e-stop and device loss (before any lock), cleared by reset
+        self.latch = Latch(arm, gripper, on_halt=self._forget_commanded)  # e-stop, device loss, a failed part (latch.py)
         self._closing = threading.Event()
         self._state = State.IDLE
         self._detail = ""
-        self._lease = ControlLease()
         self._job: Job | None = None
         self._last_job: Job | None = None
-        self._teach_saving = False
-        self._recorder: Any = None  # teach's continuous recorder thread (teach.py), if running
         self._jog: dict | None = None  # the running jog: trajectory, start clock, velocity, controller
-        self._calibration: Any = None
-        self._calibration_info: dict | None = None
+        self._step_anchor: tuple | None = None  # the last jog step's commanded end and its motion entry (manual.py jog_step)
+        self._speed_percent = 100.0  # the speed override (speed.py)
+        self._paced_motion: tuple | None = None  # (the trajectory object last sent, the override it was paced at) (speed.py)
+        self._pace_next: float | None = None  # the override of the motion being sent (set under the lock just before it)
         self._held_block: dict | None = None
-        self._lost: dict[str, str] = {}  # devices not answering: {name: reason}
-        self._last_joints: np.ndarray | None = None
         self._torque_enabled = True  # connect() leaves the arm holding; set_torque() changes it
         self._motions: list[tuple[float, np.ndarray]] = []  # (end time_s, [xmin, ymin, xmax, ymax, x, y, z of the gripper's sampled path...])
         self._changed_everywhere_s = -math.inf  # the last change that may have changed any spot (note_change_everywhere)
@@ -151,18 +135,26 @@ class Station(Latch, MotionGate, ManualCommands, CartesianJog, PlannedMoves, Tea
         self._command_count = 0
         self.plans = PlanStore()  # plan, then execute (planned_moves.py)
         self._speed_lock = threading.Lock()  # one override change at a time (speed.py)
-        self._pipeline: Any = None  # synchronous mode's perception pipeline
         self.events = EventLog()
         self.event_history = EventHistory(self.events, self.store)  # kept in the database (History panel)
         self.reach = ReachCache()  # where the gripper reaches on the board (the page's reach overlay)
         self.intrinsics = CameraIntrinsics(camera, self.store, self.events)  # in use: measured here, else the camera's own
         self.colors = StationColors(self.store, self.events, lambda: self.perception_config, lambda: self.calibration)  # defaults + samples
-        self.frames: NewestSlot[Frame] = NewestSlot()
-        self.perception: NewestSlot[Perception] = NewestSlot()
+        self.perceiver = Perceiver(lambda: self.perception_config, self.model, lambda: self.trust.calibration, lambda: self.colors.model,
+                                   lambda: self.latch.lost().get("camera"), self.config.camera_timeout_s,
+                                   capture_now=sim.capture_next_frame if synchronous else None)  # frames on demand: no threads
+        self.frames, self.perception = self.perceiver.frames, self.perceiver.results  # the newest frame and perception
+        self.readings = ArmReadings(arm, gripper, self.model, self.config.moving_speed_rad_s)  # the status' device part
         self.telemetry: NewestSlot[dict] = NewestSlot()
         self.calibration_slot: NewestSlot[dict] = NewestSlot()
+        self.lease = ControlLease(self.events, self._closing.is_set)  # who may command (lease.py)
+        self.trust = CalibrationTrust(self.events, self.calibration_slot.publish, lambda: self.perception_config, self.config,
+                                      self._why_not_self_recalibrate, self._start_self_recalibration, self.lease.check)  # in use, restored
+        self.teach = Teach(self.store, self.events, lambda: self.program_owner, TeachLinks(  # late-bound: what the station does now
+            self.allowed_or_raise, self._teach_transition, lambda: self.state is State.TEACH and not self.latch.is_set(),
+            self._closing.is_set, lambda: self.joints_rad(), lambda: self.gripper.read_state().command,
+            lambda q: self.check_pose(q), lambda poses: self.check_poses(poses), self.component_failed, threads=not synchronous))
         self._workers: list = []
-        self._frame_source: FrameSource | None = None
         self._started = False
 
     # Lifecycle ------------------------------------------------------------------------------------
@@ -183,18 +175,14 @@ class Station(Latch, MotionGate, ManualCommands, CartesianJog, PlannedMoves, Tea
         if interrupted:
             self.events.add("warn", f"{interrupted} job(s) were cut off when the station last stopped: marked interrupted")
         if self.config.restore_calibration:
-            self._restore_calibration()
+            one_look = (lambda: detect_tags(self.fresh_frame().color_bgr, self.perception_config)) if self.synchronous else None
+            self.trust.restore(self.store.latest_calibration(), one_look)
             self._restore_arm_calibration()
         self._closing.clear()
         if not self.synchronous:
-            self._frame_source = FrameSource(self.camera, self.frames, self.arm, self.gripper)
             self._workers = [
-                self._frame_source,
-                PerceptionLoop(
-                    self.frames, self.perception, lambda: self._calibration, self.perception_config, self.config.perception_rate_hz, self.model,
-                    get_check_calibration=self._calibration_to_check, on_check=self._on_calibration_check,
-                    get_color_model=lambda: self.colors.model,
-                ),
+                *self.perceiver.threads(self.camera, self.arm, self.gripper, self.config.perception_rate_hz, self.trust.to_check,
+                                        self.trust.on_check),
                 TelemetryPublisher(self.telemetry_snapshot, self.telemetry, self.config.telemetry_rate_hz),
                 DeviceWatch(self.device_problems, self._on_device_problems, 1.0 / self.config.device_check_rate_hz),
             ]
@@ -207,11 +195,7 @@ class Station(Latch, MotionGate, ManualCommands, CartesianJog, PlannedMoves, Tea
         """Refuse new commands, cancel the job and halt the arm and gripper, at once (a signal handler may
         call this): waiting requests then return promptly. close() finishes the job."""
         self._closing.set()
-        self._halt.set()
-        job = self._job
-        if job is not None:
-            job.cancel(halted=True)
-        self._halt_devices()
+        self._latch_and_halt()
 
     def close(self) -> dict:
         """Stop the job and the threads (each join bounded by close_timeout_s), halt the arm.
@@ -264,7 +248,7 @@ class Station(Latch, MotionGate, ManualCommands, CartesianJog, PlannedMoves, Tea
 
     def _effective_state(self) -> State:
         """The state, or estop while the latch is set ahead of the transition (caller holds the lock)."""
-        if self._halt.is_set() and self._state not in (State.ESTOP, State.FAULT):
+        if self.latch.is_set() and self._state not in (State.ESTOP, State.FAULT):
             return State.ESTOP
         return self._state
 
@@ -276,8 +260,8 @@ class Station(Latch, MotionGate, ManualCommands, CartesianJog, PlannedMoves, Tea
         if not self.has_arm and command in ARM_COMMANDS:
             raise NoArmError(command, self._effective_state().value, allowed_commands(self._effective_state(), False))
         new_state = next_state(self._effective_state(), command)
-        if command not in _UNLATCHED and source is not None and self._lease.holder not in (None, source):
-            self._lease.require(source, command)  # raises NotController naming the holder
+        if command not in _UNLATCHED:
+            self.lease.check(source, command)  # NotController naming the holder
         return new_state
 
     def _transition(self, trigger: str, *, source: str | None = None, detail: str | None = None, event: bool = False) -> State:
@@ -289,20 +273,96 @@ class Station(Latch, MotionGate, ManualCommands, CartesianJog, PlannedMoves, Tea
             new_state = after_event(self._state, trigger)
         else:
             new_state = self._check(trigger, source)
-            if trigger not in _UNLATCHED and self._lease.require(source, trigger):
-                self.events.add("info", f"control taken by '{source}' (the lease was free)")
+            if trigger not in _UNLATCHED:
+                self.lease.require(source, trigger)  # a free lease goes to `source` (announced)
         if new_state is not self._state or detail is not None:
             self._detail = detail if detail is not None else ("" if new_state is State.IDLE else self._detail)
         self._state = new_state
         return new_state
 
-    # Control lease --------------------------------------------------------------------------------
+    # The latch: e-stop, device loss, reset ----------------------------------------------------------
+
+    def _forget_commanded(self) -> None:
+        """Every halt: the arm holds where it is, so there is no commanded motion to continue."""
+        self._commanded = None
+
+    def _latch_and_halt(self) -> list[str]:
+        """Set the latch first, cancel the job, halt the arm and gripper (before any lock): what fails to stop."""
+        self.latch.set()
+        job = self._job
+        if job is not None:
+            job.cancel(halted=True)
+        return self.latch.halt_devices()
+
+    def estop(self, source: str | None = None) -> None:
+        """Halt now and latch, from any state and from anyone (no lease needed): latch first, cancel the
+        job, stop arm and gripper, then record the state; a command that was being sent when the latch
+        went up is stopped by a second halt once the lock shows it has finished."""
+        failures = self._latch_and_halt()
+        with self._lock:
+            self._jog = None
+            by = f" by '{source}'" if source else ""
+            self._transition("estop", source=source, detail=f"e-stop pressed{by}: reset to continue")
+        failures += self.latch.halt_devices()
+        self.events.add("error", "E-stop: motion halted" + (f" ({'; '.join(sorted(set(failures)))})" if failures else ""))
+
+    def device_problems(self) -> dict[str, str]:
+        """{device: reason} for each device not answering now (watch.py); empty when all answer."""
+        return device_problems(self.arm, self.gripper, lambda: self.perceiver.camera_problem() if self._started else None)
+
+    def _on_device_problems(self, problems: dict[str, str]) -> None:
+        """The device watch's report: fault on a new loss, log a recovery (the station stays in fault)."""
+        new, back = self.latch.note_problems(problems)
+        for name in back:
+            self.events.add("info", f"{name} answers again: reset to continue")
+        if new:
+            self.device_failed(", ".join(new), "; ".join(new.values()))
+
+    def _fault(self, detail: str) -> None:
+        """Latch, cancel the job, hold the arm still, enter fault with `detail`."""
+        self._latch_and_halt()
+        with self._lock:
+            self._jog = None
+            if self._transition("device_failed", event=True) is State.FAULT:
+                self._detail = detail
+
+    def device_failed(self, device: str, reason: str) -> None:
+        """A device is lost: latch, cancel the job, hold the arm still, enter fault with the reason."""
+        self._fault(f"{device} lost: {reason}; reset once it is back")
+        self.events.add("error", f"{device} lost: {reason}: motion halted")
+
+    def component_failed(self, what: str, reason: str) -> None:
+        """A part of the station died (e.g. the teach recorder's thread): latch, cancel the job, hold the arm
+        still, enter fault with the reason, log it. Reset clears it (no device to wait for)."""
+        self._fault(f"{what} failed: {reason}; reset to continue")
+        log.error("%s failed: %s: motion halted, station in fault", what, reason)
+        self.events.add("error", f"{what} failed: {reason}: motion halted")
+
+    def reset(self, source: str | None = None) -> None:
+        """Leave estop/fault for idle without moving the arm; DeviceLost while a device is still gone."""
+        with self._lock:
+            if self._state not in (State.ESTOP, State.FAULT):  # not while an e-stop is still being recorded
+                raise CommandRefused("reset", self._effective_state().value, allowed_commands(self._effective_state()))
+            self._check("reset", source)
+        problems = self.device_problems()  # device reads: outside the lock
+        if problems:
+            self.latch.add_lost(problems)
+            raise DeviceLost("reset refused: " + "; ".join(f"the {name} is still lost ({reason})" for name, reason in problems.items()))
+        with self._lock:
+            self._transition("reset", source=source, detail="")
+            back = self.latch.forget_lost()
+            self.latch.clear()
+        for name in back:
+            self.events.add("info", f"{name} answers again")
+        self.events.add("info", "reset: station idle")
+
+    # Control lease (the part: station.lease, lease.py) ----------------------------------------------
 
     @property
     def controller(self) -> str | None:
         """Who holds the control lease (None: free)."""
         with self._lock:
-            return self._lease.holder
+            return self.lease.holder
 
     def require_control(self, command: str, source: str | None) -> None:
         """The lease check of a command outside the state table (program edits): NotController naming the
@@ -310,51 +370,63 @@ class Station(Latch, MotionGate, ManualCommands, CartesianJog, PlannedMoves, Tea
         with self._lock:
             if self._closing.is_set():
                 raise ShuttingDown(f"command '{command}' refused: the station is shutting down")
-            taken = self._lease.require(source, command)
-        if taken:
-            self.events.add("info", f"control taken by '{source}' (the lease was free)")
+            self.lease.require(source, command)
 
     def take_control(self, source: str) -> str | None:
-        """Take the control lease over (explicitly); the event log tells everyone, the previous holder too.
-        Returns the previous holder."""
-        if self._closing.is_set():
-            raise ShuttingDown("the station is shutting down")
+        """Take the control lease over (explicitly; announced to everyone, the previous holder too). Returns the previous holder."""
         with self._lock:
-            previous = self._lease.take(source)
-        if previous != source:
-            taken_from = f" from '{previous}'" if previous else ""
-            self.events.add("warn", f"control taken by '{source}'{taken_from}")
-        return previous
+            return self.lease.take(source)
 
     def release_control(self, source: str, reason: str = "released") -> bool:
-        """Give the lease up if `source` holds it (reason: e.g. 'disconnected'); True if it did."""
+        """Give the lease up if `source` holds it (reason: e.g. 'disconnected'), ending its jog; True if it did."""
         with self._lock:
-            released = self._lease.release(source)
+            released = self.lease.release(source, reason)
             if released and self._jog is not None and self._jog["source"] == source:
                 self._jog = None
-        if released:
-            self.events.add("info", f"control {reason}: '{source}' no longer controls the station")
         return released
 
-    # Calibration and configuration ----------------------------------------------------------------
+    # Teach (the part: teach.py) -------------------------------------------------------------------
+
+    @property
+    def program_owner(self) -> Owner | None:
+        """Whose programs and draft this station reads and writes: its arm and workcell (None: no arm, all rows)."""
+        return None if self.model is None else Owner(str(self.model.name), getattr(self.config, "workcell", None), int(self.model.dof))
+
+    def _teach_transition(self, command: str, source: str | None, detail: str, only_in_teach: bool = False) -> None:
+        with self._lock:
+            if not only_in_teach or self._effective_state() is State.TEACH:
+                self._transition(command, source=source, detail=detail)
+
+    # Calibration (the part: calibration_trust.py) ---------------------------------------------------
 
     @property
     def calibration(self) -> Any:
-        with self._lock:
-            return self._calibration
+        return self.trust.calibration
 
     @property
     def calibration_info(self) -> dict:
-        with self._lock:
-            return dict(self._calibration_info) if self._calibration_info else {"calibrated": False}
+        return self.trust.info
 
     def set_calibration(self, calibration: Any, info: dict) -> None:
         """Install a calibration (armlab.vision Calibration) with its wire summary; publishes it."""
+        self.trust.install(calibration, info)
+
+    def require_trusted_calibration(self, what: str) -> None:
+        self.trust.require_trusted(what)
+
+    def _why_not_self_recalibrate(self) -> str | None:
+        """None when the station may recalibrate itself now (idle, nothing running, the arm still), else why not."""
+        recording = self.teach.has_recorder  # teach's lock is never taken under the gate's
         with self._lock:
-            self._calibration = calibration
-            self._calibration_info = {"calibrated": True, **info}
-            self._restored = None  # a restored calibration still being checked is superseded (calibration_trust.py)
-        self.calibration_slot.publish(self.calibration_info)
+            if self.latch.is_set() or self._closing.is_set() or self._state is not State.IDLE:
+                return f"the station is {self._effective_state().value}"
+            if self._job is not None or self._jog is not None or recording:
+                return "a job or a jog is running"
+        return self.arm_moving()
+
+    def _start_self_recalibration(self) -> None:
+        self.start_job("calibrate", SELF_RECALIBRATE_JOB, lambda ctx: self_recalibration_job(self, ctx),
+                       detail="camera moved: recalibrating from the board tags")
 
     @property
     def motion_config(self) -> Any:
@@ -389,7 +461,47 @@ class Station(Latch, MotionGate, ManualCommands, CartesianJog, PlannedMoves, Tea
             self.frames.wait_newer(version, timeout_s=1.0)
         return_freed_memory()
 
-    # Status ---------------------------------------------------------------------------------------
+    # Status and what the gate sees (perceiving.py, status.py) ---------------------------------------
+
+    def status(self) -> dict:
+        """GET /api/status: the wire dict (SI units). Works with a device lost (its last reading is shown)."""
+        readings = self.readings.read()
+        with self._lock:
+            job = self._job or self._last_job
+            state, detail, lease = self._effective_state(), self._detail, self.lease.to_dict()
+        perception, _ = self.perception.get()
+        commanded = self.commanded_joints_rad() if self.has_arm else None
+        return {
+            "state": state.value, "detail": detail, **readings,
+            "commanded_joints_rad": None if commanded is None else [float(v) for v in commanded],
+            "torque_enabled": self._torque_enabled, "calibrated": self.trust.calibration is not None,
+            "camera_warning": perception.camera_warning if self.trust.checked and perception is not None else None,
+            "calibration_state": self.trust.state, "self_recalibrate": self.trust.self_recalibrate,
+            "arm_calibration": self.arm_calibration_status if self.has_arm else None,
+            "backend": self.backend, "controller": lease["controller"], "controller_since_s": lease["since_s"],
+            "devices_lost": self.latch.lost(), "speed_percent": self.speed_percent,
+            "job": job.to_dict() if job is not None else None, "allowed_commands": allowed_commands(state, self.has_arm),
+            "time_s": time.time(),
+        }
+
+    def telemetry_snapshot(self) -> dict:
+        """Status + detections: one telemetry message (the TelemetryPublisher calls this)."""
+        snapshot, detections = self.status(), self.detections()
+        snapshot["detections"], snapshot["detections_stale"] = detections.to_dict()["data"], detections.stale
+        return snapshot
+
+    def detections(self) -> Detections:
+        return self.perceiver.detections()
+
+    def fresh_frame(self, timeout_s: float = 2.0, max_age_s: float = 2.0) -> Frame:
+        return self.perceiver.fresh_frame(timeout_s, max_age_s)
+
+    def frame_after(self, since_s: float, timeout_s: float = 3.0) -> Frame:
+        return self.perceiver.frame_after(since_s, timeout_s)
+
+    def fresh_perception(self, ctx: JobContext | None = None, timeout_s: float = 5.0) -> Perception:
+        return self.perceiver.fresh_perception(ctx, timeout_s)
+
 
     def joints_rad(self) -> np.ndarray:
         """The measured joint positions (rad)."""

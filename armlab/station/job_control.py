@@ -251,7 +251,7 @@ class JobControls:
             job.cancel()  # under the lock: any command the job is sending has finished or will see it
             if not job.has_cleanup:
                 self._transition("cancel", source=source, detail="")
-        self._halt_devices(gripper=False)
+        self.latch.halt_devices(gripper=False)
         return job  # the job's end logs "job '<name>' cancelled: ..." once
 
     def current_job(self) -> Job | None:

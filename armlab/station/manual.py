@@ -165,7 +165,7 @@ class ManualCommands:
             raise ArmMoving("jog", self.state.value, allowed_commands(self.state))
         q_start = self.joints_rad()
         with self._lock:  # the anchor holds while no other motion was commanded since (nor halted: that replaces the entry)
-            anchor = getattr(self, "_step_anchor", None)
+            anchor = self._step_anchor
             last_motion = self._motions[-1] if self._motions else None
         if anchor is not None and anchor[1] is last_motion and np.max(np.abs(anchor[0] - q_start)) <= STEP_ANCHOR_TOL_RAD:
             q_start = anchor[0]
@@ -228,7 +228,7 @@ class ManualCommands:
                 )
             self._transition("torque", source=source)
             self._jog = None
-            if self._halt.is_set():
+            if self.latch.is_set():
                 raise CommandRefused("torque", self._effective_state().value, allowed_commands(self._effective_state()))
             self._send_later(lambda: self.arm.set_torque(bool(enabled)))
         with self._lock:

@@ -10,6 +10,7 @@ and, in fast mode, never let the physics run more than one control period past i
 
 from __future__ import annotations
 
+import math
 import time
 from collections.abc import Callable, Iterator
 from contextlib import contextmanager
@@ -46,7 +47,7 @@ class MotionGate:
         latch is set). On the simulation this lets fast mode advance the physics, never beyond one
         control period after the latch; a job's cancel is checked every WAIT_CHUNK_S."""
         deadline = self.clock_s() + timeout_s
-        latched = self._halt.is_set
+        latched = self.latch.is_set
         while True:
             if ctx is not None:
                 ctx.check()
@@ -119,7 +120,7 @@ class MotionGate:
         with self._send_lock:
             outbox: list[Callable[[], object]] = []
             with self._lock:
-                halts = self._halts
+                halts = self.latch.halts
                 self._outbox = outbox
                 try:
                     yield
@@ -127,8 +128,8 @@ class MotionGate:
                     self._outbox = None
             for send in outbox:
                 send()
-            if outbox and (self._halt.is_set() or self._halts != halts):
-                self._halt_devices(gripper=self._halt.is_set())
+            if outbox and (self.latch.is_set() or self.latch.halts != halts):
+                self.latch.halt_devices(gripper=self.latch.is_set())
 
     def _send_later(self, send: Callable[[], object]) -> None:
         """Queue a device command for when the lock is released (caller is inside `_sending()`)."""
@@ -175,7 +176,7 @@ class MotionGate:
         so a send held up after the check still continues the running curve; a motion from rest starts when the
         arm takes it, and the record follows (_started_at)."""
         state = self._effective_state()
-        if self._halt.is_set():
+        if self.latch.is_set():
             raise CommandRefused("move", state.value, allowed_commands(state))
         now = self.clock_s()
         running = self._commanded
@@ -234,6 +235,21 @@ class MotionGate:
             if self._commanded is record and started_s != record[1]:
                 self._command_count += 1
                 self._commanded = (record[0], float(started_s), self._command_count)
+
+    def arm_moving(self) -> str | None:
+        """'the arm is moving' (a commanded motion not yet over, or joints turning), a read failure, else None."""
+        with self._lock:
+            last_motion_end_s = self._motions[-1][0] if self._motions else -math.inf
+        if time.time() < last_motion_end_s:
+            return "the arm is moving"
+        try:
+            joint_state = self.arm.read_joint_state()
+            speed = np.abs(np.asarray(joint_state.velocity_rad_s, dtype=float))
+            if self.arm.is_moving() or (speed.size and speed.max() > self.config.moving_speed_rad_s):
+                return "the arm is moving"
+        except (ConnectionError, TimeoutError, OSError) as error:
+            return f"the arm cannot be read ({error})"
+        return None
 
     def commanded_joints_rad(self) -> np.ndarray | None:
         """The commanded reference now (rad): the last trajectory sent, sampled at the station's clock (its end once
@@ -302,7 +318,7 @@ class MotionGate:
             with self._lock:
                 state = self._effective_state()
                 overtaken = replaceable and ticket != self._newest_move
-            if self._halt.is_set():  # e-stopped while this waited its turn: refused at once, as it would be after planning
+            if self.latch.is_set():  # e-stopped while this waited its turn: refused at once, as it would be after planning
                 raise CommandRefused(command, state.value, allowed_commands(state))
             if overtaken:
                 raise ArmMoving(command, state.value, allowed_commands(state),
@@ -360,7 +376,7 @@ class MotionGate:
         """Inside a job, under the lock: JobCancelled unless this job may still command the devices
         (it is current and not cancelled, or it is running its cleanup after a cancel), and never
         once the latch is set."""
-        if self._job is not ctx.job or self._state not in JOB_STATES or self._halt.is_set():
+        if self._job is not ctx.job or self._state not in JOB_STATES or self.latch.is_set():
             raise JobCancelled("job is no longer current")
         if not ctx.in_cleanup:
             ctx.check()
@@ -453,8 +469,8 @@ class MotionGate:
         checked = ctx if not ctx.in_cleanup else None
         # a lower speed override set while it runs stretches it (speed.py): wait as long as the slowest speed takes
         if not self._wait_until(lambda: not self.arm.is_moving(), trajectory.duration_s * SPEED_WAIT_FACTOR + 5.0, checked):
-            self._halt_devices(gripper=False)
-            if self._halt.is_set():
+            self.latch.halt_devices(gripper=False)
+            if self.latch.is_set():
                 raise JobCancelled("the station was e-stopped")
             raise TimeoutError(f"the arm did not finish a {trajectory.duration_s:.2f} s move in time")
         with self._lock:

@@ -1,116 +1,87 @@
-"""What the gate sees and reports: its status (GET /api/status), detections (marked stale while the camera is
-lost), telemetry snapshots and fresh frames and perception for skills.
+"""What the gate sees: fresh frames and perception for skills, the first frame after a change, and the detections
+(marked stale while the camera is lost).
 
-A mixin of core.Station.
+Owned by core.Station (station.perceiver). Frames come from the camera thread (FrameSource) and perception from the
+perception thread (PerceptionLoop), both started by the station; given `capture_now` (a station that runs no threads:
+the fast-mode simulation renders a frame when asked) a frame is captured and analysed when a skill asks instead.
 """
 
 from __future__ import annotations
 
 import time
-
-import numpy as np
+from collections.abc import Callable
+from typing import Any
 
 from armlab.devices.camera import Frame
 from armlab.station.jobs import JobContext
-from armlab.station.perception import DEVICE_ERRORS, Perception, analyse_frame
-from armlab.station.states import allowed_commands
-from armlab.station.telemetry import Detections, gripper_pose_from_matrix
+from armlab.station.perception import FrameSource, Perception, PerceptionLoop, analyse_frame
+from armlab.station.slots import NewestSlot
+from armlab.station.telemetry import Detections
 from armlab.vision.pipeline import PerceptionPipeline
 
 
-class Perceiving:
-    """Status, detections, telemetry snapshots, fresh frames and perception."""
+class Perceiver:
+    """The frames and perception slots, the camera and perception threads (or capture on demand), fresh frames and
+    perception, detections.
+
+    get_config(): armlab.vision's PerceptionConfig; get_calibration(): the calibration in use (or None);
+    get_color_model(): the station's colour model; camera_lost(): why the camera is lost (the latch's lost
+    devices), else None; capture_now(): a frame rendered now, where no camera thread runs (None: the thread)."""
+
+    def __init__(self, get_config: Callable[[], Any], arm_model: Any, get_calibration: Callable[[], Any],
+                 get_color_model: Callable[[], Any], camera_lost: Callable[[], str | None], camera_timeout_s: float,
+                 capture_now: Callable[[], Frame] | None = None) -> None:
+        self._config, self._arm_model, self._calibration = get_config, arm_model, get_calibration
+        self._color_model, self._camera_lost, self._camera_timeout_s = get_color_model, camera_lost, camera_timeout_s
+        self._capture_now = capture_now
+        self.frames: NewestSlot[Frame] = NewestSlot()
+        self.results: NewestSlot[Perception] = NewestSlot()
+        self._frame_source: FrameSource | None = None  # the camera thread, once threads() made it
+        self._pipeline: Any = None  # the pipeline of perception on demand (capture_now)
+
+    def threads(self, camera: Any, arm: Any, gripper: Any, rate_hz: float, get_check_calibration: Callable[[], Any],
+                on_check: Callable) -> list:
+        """The camera and perception threads, not started (none with capture_now); on_check: the camera-moved check's."""
+        if self._capture_now is not None:
+            return []
+        self._frame_source = FrameSource(camera, self.frames, arm, gripper)
+        return [self._frame_source, PerceptionLoop(
+            self.frames, self.results, self._calibration, self._config(), rate_hz, self._arm_model,
+            get_check_calibration=get_check_calibration, on_check=on_check, get_color_model=self._color_model,
+        )]
+
+    def camera_problem(self) -> str | None:
+        """Why the camera thread gets no frames (it raised, or none for camera_timeout_s), else None (also without one)."""
+        return None if self._frame_source is None else self._frame_source.health(self._camera_timeout_s)
+
+    # Detections -------------------------------------------------------------------------------------
 
     def detections(self) -> Detections:
         """The newest detected blocks (GET /api/detections serialises them); none, with the reason, while the
         camera is lost or perception is older than camera_timeout_s."""
-        perception, _ = self.perception.get()
+        perception, _ = self.results.get()
         if perception is None:
             return Detections((), time.time(), -1)
-        stale_reason = self._perception_stale_reason(perception)
+        stale_reason = self.stale_reason(perception)
         blocks = () if stale_reason else perception.seen_blocks()
         return Detections(blocks, perception.time_s, perception.frame_sequence, stale_reason)
 
-    def _perception_stale_reason(self, perception: Perception) -> str | None:
-        with self._lock:
-            camera_lost = self._lost.get("camera")
+    def stale_reason(self, perception: Perception) -> str | None:
+        camera_lost = self._camera_lost()
         if camera_lost is not None:
             return f"the camera is lost ({camera_lost})"
         age_s = time.time() - perception.capture_time_s
-        if not self.synchronous and age_s > self.config.camera_timeout_s:
+        if self._capture_now is None and age_s > self._camera_timeout_s:
             return f"the newest perception is {age_s:.1f} s old"
         return None
 
-    def _gripper_pose_matrix(self, q_read: np.ndarray) -> np.ndarray:
-        """The gripper's pose from joint readings: the calibrated arm's (fk_measured) when there is one."""
-        fk_measured = getattr(self.model, "fk_measured", None)
-        return fk_measured(q_read) if fk_measured is not None else self.model.fk(q_read)
-
-    def status(self) -> dict:
-        """GET /api/status: the wire dict (SI units). Works with a device lost (its last reading is shown)."""
-        moving_measured, gripper_dict = False, {"width_m": 0.0, "holding": False, "command": "release"}
-        try:
-            joint_state = self.arm.read_joint_state()
-            q = np.asarray(joint_state.position_rad, dtype=float)
-            self._last_joints = q
-            speed = np.abs(np.asarray(joint_state.velocity_rad_s, dtype=float))
-            moving_measured = bool(self.arm.is_moving()) or bool(speed.size and speed.max() > self.config.moving_speed_rad_s)
-        except DEVICE_ERRORS:
-            q = self._last_joints if self._last_joints is not None else np.asarray(self.model.home_rad if self.has_arm else [], dtype=float)
-        try:
-            gripper = self.gripper.read_state()
-            gripper_dict = {"width_m": float(gripper.width_m), "holding": bool(gripper.holding), "command": gripper.command}
-        except DEVICE_ERRORS:
-            pass
-        with self._lock:
-            job = self._job or self._last_job
-            state, detail, lease = self._effective_state(), self._detail, self._lease.to_dict()
-            calibrated = self._calibration is not None
-            checked = calibrated or self._restored is not None
-            lost = dict(self._lost)
-        perception, _ = self.perception.get()
-        camera_warning = perception.camera_warning if checked and perception is not None else None
-        commanded = self.commanded_joints_rad() if self.has_arm else None
-        return {
-            "state": state.value,
-            "detail": detail,
-            "joints_rad": [float(v) for v in q],
-            "commanded_joints_rad": None if commanded is None else [float(v) for v in commanded],
-            "joint_names": list(self.model.joint_names) if self.has_arm else [],
-            "joint_limits_rad": [[float(lo), float(hi)] for lo, hi in zip(self.model.lower_rad, self.model.upper_rad)] if self.has_arm else [],
-            "gripper": gripper_dict,
-            "gripper_pose": gripper_pose_from_matrix(self._gripper_pose_matrix(q), np.asarray(self.model.T_world_base)[:3, 3]) if self.has_arm else None,
-            "moving": moving_measured,
-            "torque_enabled": self._torque_enabled,
-            "calibrated": calibrated,
-            "camera_warning": camera_warning,
-            "calibration_state": self.calibration_state,
-            "arm_calibration": self.arm_calibration_status if self.has_arm else None,
-            "self_recalibrate": self.self_recalibrate,
-            "backend": self.backend,
-            "controller": lease["controller"],
-            "controller_since_s": lease["since_s"],
-            "devices_lost": lost,
-            "speed_percent": self.speed_percent,
-            "job": job.to_dict() if job is not None else None,
-            "allowed_commands": allowed_commands(state, self.has_arm),
-            "time_s": time.time(),
-        }
-
-    def telemetry_snapshot(self) -> dict:
-        """Status + detections: one telemetry message (the TelemetryPublisher calls this)."""
-        snapshot = self.status()
-        detections = self.detections()
-        snapshot["detections"] = detections.to_dict()["data"]
-        snapshot["detections_stale"] = detections.stale
-        return snapshot
-
+    # Fresh frames and perception --------------------------------------------------------------------
 
     def fresh_frame(self, timeout_s: float = 2.0, max_age_s: float = 2.0) -> Frame:
-        """A camera frame taken now (synchronous mode: rendered now; else the newest, waiting for a newer
+        """A camera frame taken now (capture_now: rendered now; else the newest, waiting for a newer
         one when it is older than max_age_s). TimeoutError (a device error) when the camera gives none."""
-        if self.synchronous:
-            frame = self.sim.capture_next_frame()
+        if self._capture_now is not None:
+            frame = self._capture_now()
             self.frames.publish(frame)
             return frame
         frame, version = self.frames.get()
@@ -121,11 +92,11 @@ class Perceiving:
         return frame
 
     def frame_after(self, since_s: float, timeout_s: float = 3.0) -> Frame:
-        """The first camera frame whose picture was taken at or after wall time since_s (synchronous mode:
-        rendered now). What a command that follows a change (a scene, the arm's arrival, a request) must
-        look at: the newest frame may show the world a second ago, more on a busy machine. TimeoutError
-        when the camera gives none in timeout_s."""
-        if self.synchronous:
+        """The first camera frame whose picture was taken at or after wall time since_s (capture_now: rendered
+        now). What a command that follows a change (a scene, the arm's arrival, a request) must look at: the
+        newest frame may show the world a second ago, more on a busy machine. TimeoutError when the camera gives
+        none in timeout_s."""
+        if self._capture_now is not None:
             return self.fresh_frame()
         deadline = time.monotonic() + timeout_s
         frame, version = self.frames.get()
@@ -140,24 +111,25 @@ class Perceiving:
     def fresh_perception(self, ctx: JobContext | None = None, timeout_s: float = 5.0) -> Perception:
         """Perception of a frame captured after this call began (so after the last motion ended).
 
-        Synchronous mode: captured and analysed now. Otherwise: waits for the perception thread."""
-        if self.synchronous:
+        capture_now: captured and analysed now. Otherwise: waits for the perception thread (ctx: a job's cancel
+        is checked while it waits)."""
+        if self._capture_now is not None:
             if self._pipeline is None:
-                self._pipeline = PerceptionPipeline(self.perception_config, arm_model=self.model)
-            self._pipeline.color_model = self.colors.model
+                self._pipeline = PerceptionPipeline(self._config(), arm_model=self._arm_model)
+            self._pipeline.color_model = self._color_model()
             frame = self.fresh_frame()
-            previous, _ = self.perception.get()
-            perception = analyse_frame(self._pipeline, frame, self.calibration, previous.surface_depth_mm if previous else None,
-                                      previous.surface_time_s if previous else None)
-            self.perception.publish(perception)
+            previous, _ = self.results.get()
+            perception = analyse_frame(self._pipeline, frame, self._calibration(), previous.surface_depth_mm if previous else None,
+                                       previous.surface_time_s if previous else None)
+            self.results.publish(perception)
             return perception
         asked_s = time.time()
         deadline = time.monotonic() + timeout_s
-        _, version = self.perception.get()
+        _, version = self.results.get()
         while time.monotonic() < deadline:
             if ctx is not None:
                 ctx.check()
-            perception, version = self.perception.wait_newer(version, timeout_s=0.2)
+            perception, version = self.results.wait_newer(version, timeout_s=0.2)
             if perception is not None and perception.capture_time_s >= asked_s:
                 return perception
         raise TimeoutError(f"no perception of a fresh frame within {timeout_s} s: is the camera running?")

@@ -88,7 +88,7 @@ class PlannedMoves:
         """What a plan depends on besides the arm's joints (in _WORLD's order), read under the lock."""
         with self._lock:
             held = self._held_block
-            return (self._command_count, self._halts, self._changed_everywhere_s, self._calibration,
+            return (self._command_count, self.latch.halts, self._changed_everywhere_s, self.trust.calibration,
                     self._arm_calibration_info, None if held is None else dict(held), self.speed_percent)
 
     def _gripper_command(self) -> str | None:

@@ -21,11 +21,8 @@ from armlab.station.motion import HandoverLate
 
 
 class SpeedOverride:
-    """speed_percent, set_speed, and the pacing of newly planned motions (`_paced`)."""
-
-    _speed_percent: float = 100.0
-    _paced_motion: tuple | None = None  # (the trajectory object last sent, the override it was paced at, or None)
-    _pace_next: float | None = None  # the override of the motion being sent (set under the lock just before it)
+    """speed_percent, set_speed, and the pacing of newly planned motions (`_paced`); its state is declared in
+    Station.__init__ (core.py)."""
 
     @property
     def speed_percent(self) -> float:

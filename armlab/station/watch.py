@@ -9,8 +9,9 @@ from __future__ import annotations
 
 import logging
 from collections.abc import Callable
+from typing import Any
 
-from armlab.station.perception import _Worker
+from armlab.station.perception import DEVICE_ERRORS, _Worker
 
 log = logging.getLogger(__name__)
 
@@ -29,3 +30,18 @@ class DeviceWatch(_Worker):
     def _run(self) -> None:
         while not self._stop.wait(self.period_s):
             self.on_problems(self.probe())
+
+
+def device_problems(arm: Any, gripper: Any, camera_problem: Callable[[], str | None] = lambda: None) -> dict[str, str]:
+    """{device: reason} for each device not answering now (reads the arm and gripper, then asks camera_problem(): why
+    the camera thread gets no frames, None when it does or none runs); empty when all answer."""
+    problems: dict[str, str] = {}
+    for name, read in (("arm", arm.read_joint_state), ("gripper", gripper.read_state)):
+        try:
+            read()
+        except DEVICE_ERRORS as error:
+            problems[name] = f"{type(error).__name__}: {error}"
+    camera = camera_problem()
+    if camera is not None:
+        problems["camera"] = camera
+    return problems

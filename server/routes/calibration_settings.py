@@ -21,7 +21,7 @@ class CalibrationSettings(BaseModel):
 
 
 def _settings(station) -> dict:
-    return {"self_recalibrate": station.self_recalibrate, "calibration_state": station.calibration_state}
+    return {"self_recalibrate": station.trust.self_recalibrate, "calibration_state": station.trust.state}
 
 
 @router.get("/settings", response_model=CalibrationSettings)
@@ -34,5 +34,5 @@ def put_calibration_settings(body: CalibrationSettingsRequest, station: StationD
     """Turn self-recalibration on or off (the control lease holder only). On: when the camera-moved
     warning is up and the station is idle (no job, arm still, not e-stopped) with enough board tags in
     view, it recalibrates from the tags, logs it and clears the warning. Off: the warning stays."""
-    station.set_self_recalibrate(body.self_recalibrate, source=controller)
+    station.trust.set_self_recalibrate(body.self_recalibrate, source=controller)
     return _settings(station)

@@ -55,7 +55,7 @@ def program_out(station, program) -> dict:
 @router.post("/teach/start", response_model=Status)
 def post_teach_start(station: StationDep, controller: ControlAuth, body: TeachStartRequest | None = None) -> dict:
     """Enter teach; an unsaved draft left by a stopped or killed station is resumed unless discard_draft."""
-    station.teach_start(source=controller, discard_draft=bool(body and body.discard_draft))
+    station.teach.start(source=controller, discard_draft=bool(body and body.discard_draft))
     return station.status()
 
 
@@ -63,7 +63,7 @@ def post_teach_start(station: StationDep, controller: ControlAuth, body: TeachSt
 def post_teach_record(station: StationDep, controller: ControlAuth, body: TeachRecordRequest | None = None) -> dict:
     """Add the current pose and gripper state as a waypoint; on disk (the draft) before this answers."""
     body = body or TeachRecordRequest()
-    waypoint, count = station.teach_record(source=controller, dwell_s=body.dwell_s, moving_time_s=body.moving_time_s)
+    waypoint, count = station.teach.record(source=controller, dwell_s=body.dwell_s, moving_time_s=body.moving_time_s)
     return {**waypoint_out(station, waypoint), "count": count}
 
 
@@ -71,22 +71,22 @@ def post_teach_record(station: StationDep, controller: ControlAuth, body: TeachR
 def post_teach_continuous(body: ContinuousRequest, station: StationDep, controller: ControlAuth) -> dict:
     """Trajectory mode: record the pose at rate_hz while it changes (each record on disk, with the time
     since the previous as its moving_time_s), until /api/teach/continuous/stop or teach/stop."""
-    station.teach_continuous(body.rate_hz, body.min_change_rad, source=controller)
-    return {"recording": True, "rate_hz": body.rate_hz, "recorded": 0, "count": len(station.teach_draft())}
+    station.teach.continuous(body.rate_hz, body.min_change_rad, source=controller)
+    return {"recording": True, "rate_hz": body.rate_hz, "recorded": 0, "count": len(station.teach.draft())}
 
 
 @router.post("/teach/continuous/stop", response_model=ContinuousResponse)
 def post_teach_continuous_stop(station: StationDep, controller: ControlAuth) -> dict:
     """End trajectory mode (a no-op when it is not running)."""
     station.allowed_or_raise("teach_record", controller)
-    recorded = station.teach_continuous_stop()
-    return {"recording": False, "rate_hz": None, "recorded": recorded, "count": len(station.teach_draft())}
+    recorded = station.teach.continuous_stop()
+    return {"recording": False, "rate_hz": None, "recorded": recorded, "count": len(station.teach.draft())}
 
 
 @router.post("/teach/undo", response_model=TeachUndoResponse)
 def post_teach_undo(station: StationDep, controller: ControlAuth) -> dict:
     """Remove the last recorded waypoint."""
-    removed, count = station.teach_undo(source=controller)
+    removed, count = station.teach.undo(source=controller)
     return {"removed": waypoint_out(station, removed) if removed is not None else None, "count": count}
 
 
@@ -100,13 +100,13 @@ def read_teach_draft(station: StationDep) -> dict:
 @router.post("/teach/stop", response_model=ProgramInfo)
 def post_teach_stop(body: TeachStopRequest, station: StationDep, controller: ControlAuth) -> dict:
     """Save the draft as a named program (one transaction) and return to idle."""
-    return program_out(station, station.teach_stop(body.name, source=controller))
+    return program_out(station, station.teach.stop(body.name, source=controller))
 
 
 @router.post("/teach/exit", response_model=Status)
 def post_teach_exit(station: StationDep, controller: ControlAuth) -> dict:
     """Leave teach without saving: the draft stays on disk (teach/start resumes it); nothing moves."""
-    station.teach_exit(source=controller)
+    station.teach.exit(source=controller)
     return station.status()
 
 

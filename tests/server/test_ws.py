@@ -202,12 +202,12 @@ def test_a_websocket_estop_latches_while_a_slow_message_of_the_same_session_is_i
         with connect(url.replace("http://", "ws://") + f"/ws?token={TOKEN}&controller=slow", open_timeout=10) as ws:
             assert json.loads(ws.recv(timeout=5))["type"] == "hello"
             _next(ws, "calibration")  # the session is set up (reading the calibration takes the lock too)
-            assert not station._halt.is_set()
+            assert not station.latch.is_set()
             with station._lock:  # take_control now waits for the lock on its worker thread
                 ws.send(json.dumps({"type": "command", "name": "take_control"}))
                 ws.send(json.dumps({"type": "command", "name": "estop"}))
                 # before: the receive loop awaited take_control, so the e-stop waited for this lock
-                live.wait_for(station._halt.is_set, 10.0)
+                live.wait_for(station.latch.is_set, 10.0)
                 assert station.controller is None  # the slow message is indeed still in flight
             live.wait_for(lambda: station.state is State.ESTOP, 10.0)
             live.wait_for(lambda: station.controller == "slow", 10.0)  # and it still ran, in order, after

@@ -76,32 +76,32 @@ def test_a_waypoint_into_the_arm_itself_is_refused_in_programs(fast):
 def test_teach_record_refuses_a_pose_into_the_board_or_the_arm_itself(fast, monkeypatch, position_m, reason):
     """The arm limp in teach can be pushed (or read) where no move may go: that pose is not recorded (it was)."""
     station, _ = fast
-    station.teach_start(discard_draft=True)
+    station.teach.start(discard_draft=True)
     try:
         pose = np.array(ARM.ik(np.array(position_m)), dtype=float)
         monkeypatch.setattr(station, "joints_rad", lambda: pose.copy())  # the measured joints, as the arm reads them
         with pytest.raises(UnsafeTrajectory, match=reason):
-            station.teach_record()
-        assert station.teach_draft() == []
+            station.teach.record()
+        assert station.teach.draft() == []
     finally:
         monkeypatch.undo()
-        station.teach_exit()
+        station.teach.exit()
 
 
 def test_a_draft_waypoint_into_the_arm_itself_is_refused_when_saved_and_edited(fast):
     """A draft written before the record check (resumed from disk) is checked when saved; PATCH-like edits too."""
     station, _ = fast
     at_base = tuple(float(v) for v in ARM.ik(np.array([0.0, 0.05, 0.12])))
-    station.teach_start(discard_draft=True)
+    station.teach.start(discard_draft=True)
     try:
         station.store.append_draft(Waypoint((0.0, 0.0, 0.0, 0.0, 0.0), "release"))
         station.store.append_draft(Waypoint(at_base, "release"))
         with pytest.raises(UnsafeTrajectory, match="waypoint 2: the gripper point would reach the arm's own base"):
-            station.teach_stop("saved into the base")
+            station.teach.stop("saved into the base")
         assert "saved into the base" not in [p.name for p in station.store.list_programs()]
-        assert len(station.teach_draft()) == 2  # nothing lost: undo the bad one and save
+        assert len(station.teach.draft()) == 2  # nothing lost: undo the bad one and save
     finally:
-        station.teach_exit()
+        station.teach.exit()
     from armlab.skills.programs import update_program
 
     program = station.store.save_program("to edit", [Waypoint((0.0, 0.0, 0.0, 0.0, 0.0), "release")])

@@ -114,7 +114,7 @@ def test_self_recalibration_off_keeps_the_warning_on_clears_it_at_the_moved_came
         wait_sim(cell, 4 * CHECK_PERIOD_S)  # four more checks: off, nothing recalibrates
         assert warning_of(station) and station.calibration is old and station.current_job().name == "calibrate"
 
-        station.set_self_recalibrate(True)
+        station.trust.set_self_recalibrate(True)
         until(lambda: warning_of(station) is None and station.calibration is not old, station)
         job = station.current_job()
         assert job.name == "self-recalibrate" and job.state == "succeeded", job.message
@@ -194,11 +194,11 @@ def test_synchronous_mode_checks_a_restored_calibration_with_one_look(tmp_path):
         assert job.state == "succeeded", job.message
         station.close()
         station = start(restore_calibration=True)
-        assert station.calibration_state == "trusted" and station.calibration is not None
+        assert station.trust.state == "trusted" and station.calibration is not None
         station.close()
         fast.knock_camera((0.005, 0.0, 0.0), (0.0, 0.0, 0.0))
         station = start(restore_calibration=True)
-        assert station.calibration_state == "rejected" and station.calibration is None
+        assert station.trust.state == "rejected" and station.calibration is None
         station.close()
     finally:
         fast.close()

@@ -62,7 +62,7 @@ def _halted_within_a_control_period(cell, since_sim_s: float) -> None:
 def _long_move(station, state: State) -> None:
     """The arm moving (a 10 s move) in `state`."""
     if state is State.TEACH:
-        station.teach_start()
+        station.teach.start()
     if state in (State.IDLE, State.TEACH):
         station.move_joints(FAR_Q, moving_time_s=10.0)
     else:
@@ -109,10 +109,10 @@ def test_estop_answers_during_a_blocked_sqlite_write(cell, db_path, idle):
     """teach_stop's program write waits on a locked database: the e-stop neither waits for it nor loses it."""
     station = idle
     _long_move(station, State.TEACH)
-    station.teach_record()
+    station.teach.record()
     lock = DatabaseLock(db_path)
     saved: dict = {}
-    saver = threading.Thread(target=lambda: saved.update(program=station.teach_stop("saved under e-stop")), daemon=True)
+    saver = threading.Thread(target=lambda: saved.update(program=station.teach.stop("saved under e-stop")), daemon=True)
     try:
         saver.start()
         assert station.store.writing.wait(BLOCKED_WAIT_S)

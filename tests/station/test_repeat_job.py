@@ -116,7 +116,7 @@ def test_refused_programs_move_nothing(fast):
     for cycles in (0, -1, True, 1.5):
         with pytest.raises(ValueError):
             skills.repeat(station, good.id, cycles=cycles)
-    station.teach_start(discard_draft=True)
+    station.teach.start(discard_draft=True)
     with pytest.raises(CommandRefused):
         skills.repeat(station, good.id)
     station.estop()

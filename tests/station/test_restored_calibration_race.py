@@ -1,6 +1,6 @@
 """A restored calibration passes its board-tag check on the perception thread just as the operator's own
 calibration lands: the operator's (newer) calibration must stay in use. Before, the check decided
-"still the restored candidate" under the station lock, released it, and installed the restored calibration
+"still the restored candidate" under the lock, released it, and installed the restored calibration
 afterwards, over the one the operator had installed in between.
 
 The interleaving is made deterministic: the check reads its drift threshold from the perception config
@@ -16,6 +16,7 @@ from armlab import skills
 from armlab.devices.sim import SimWorkcell, SimWorkcellConfig
 from armlab.kinematics import load_arm
 from armlab.station import Station, StationConfig
+from armlab.station.calibration_trust import CalibrationTrust
 from armlab.station.perception import Perception
 
 
@@ -49,18 +50,18 @@ def test_the_operators_calibration_is_not_replaced_by_a_restored_one_checked_mea
     try:
         restored, operators = calibrated(station, cell), calibrated(station, cell)
         assert restored is not operators
-        with station._lock:  # the state after a restart: the saved calibration is a candidate, nothing in use
-            station._calibration, station._restored, station._restored_info = None, restored, {"calibrated": True}
-            station._restored_rejected, station._restored_at_s = False, time.time() - 1.0
-        assert station.calibration_state == "checking"
+        station.trust = CalibrationTrust(station.events, station.calibration_slot.publish, lambda: station.perception_config,
+                                         station.config)  # the state after a restart: nothing in use...
+        station.trust.restore_candidate(restored, {"calibrated": True}, time.time() - 1.0)  # ...the saved one a candidate
+        assert station.trust.state == "checking"
 
         real = station.perception_config
         station.perception_config = ConfigCalibratingMidCheck(real, lambda: station.set_calibration(operators, {"method": "operator"}))
-        station._on_calibration_check(restored, 0.3, None, Perception(capture_time_s=time.time()))
+        station.trust.on_check(restored, 0.3, None, Perception(capture_time_s=time.time()))
         station.perception_config = real
 
         assert station.calibration is operators, "the restored calibration replaced the operator's newer one"
-        assert station.calibration_info.get("method") == "operator" and station.calibration_state == "trusted"
+        assert station.calibration_info.get("method") == "operator" and station.trust.state == "trusted"
     finally:
         station.close()
         cell.close()

@@ -15,7 +15,7 @@ from armlab import skills
 from armlab.devices.sim import SimWorkcell, SimWorkcellConfig
 from armlab.kinematics import load_arm
 from armlab.station import Station, StationConfig
-from armlab.station.calibration_trust import SELF_RECALIBRATE_JOB
+from armlab.station.calibration_trust import SELF_RECALIBRATE_JOB, self_recalibration_job
 from armlab.station.intrinsics import camera_key, intrinsics_dict
 from armlab.store import Store
 
@@ -43,7 +43,7 @@ def test_self_recalibration_uses_the_measured_intrinsics_in_use(tmp_path):
             run(skills.calibrate(station), cell)  # the operator's tag calibration: the measured intrinsics
             assert np.asarray(station.calibration.K)[0, 0] == measured["fx"]
 
-            run(station.start_job("calibrate", SELF_RECALIBRATE_JOB, station._self_recalibration_job), cell)
+            run(station.start_job("calibrate", SELF_RECALIBRATE_JOB, lambda ctx: self_recalibration_job(station, ctx)), cell)
             K = np.asarray(station.calibration.K)
             assert (K[0, 0], K[1, 1]) == (measured["fx"], measured["fy"]), f"self-recalibration solved with fx {K[0, 0]:.1f}"
             assert station.intrinsics.info(station.calibration)["calibration_outdated"] is False

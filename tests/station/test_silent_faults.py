@@ -48,8 +48,8 @@ def test_a_teach_recorder_dying_on_a_damaged_database_faults_the_station_and_hal
     station = make_station(cell, path)
     try:
         back_to_idle(station)
-        station.teach_start(discard_draft=True)
-        recorder = station.teach_continuous(20.0)
+        station.teach.start(discard_draft=True)
+        recorder = station.teach.continuous(20.0)
         station.move_joints(FAR_Q, moving_time_s=4.0)
         live.wait_for(lambda: recorder.recorded >= 2, WAIT_S)
         # The database file is damaged under the running station (its WAL too): the next record raises

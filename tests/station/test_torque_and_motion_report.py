@@ -53,10 +53,10 @@ def test_a_limp_arm_falling_is_reported_as_moving(cell, raised):
 
 def test_torque_off_in_teach_needs_no_confirmation(cell, raised):
     station = raised
-    station.teach_start()
+    station.teach.start()
     station.set_torque(False)
     live.wait_for(lambda: station.status()["moving"], 5, 0.005)
     station.set_torque(True)
-    station.teach_record()  # the pose it was moved (fell) to by hand
-    station.teach_stop("limp teach")
+    station.teach.record()  # the pose it was moved (fell) to by hand
+    station.teach.stop("limp teach")
     assert station.state is State.IDLE

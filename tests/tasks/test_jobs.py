@@ -111,7 +111,7 @@ def test_bad_requests_are_refused_and_nothing_moves(station, job, level, params,
 
 
 def test_a_job_while_not_idle_is_refused(station):
-    station.teach_start()
+    station.teach.start()
     with pytest.raises(CommandRefused) as refused:
         start_auto(station, "pick_sort", 1)
     assert "auto" not in refused.value.allowed
