@@ -203,13 +203,13 @@ class MotionGate:
                     raise ArmMoving("move", state.value, allowed_commands(state), f"the new motion does not continue it: {problem}")
         measured, read_s = self.joints_rad(), self.clock_s()
         try:
-            check_start(trajectory, measured, self.motion_config.start_tolerance_rad, self.model.joint_names)
+            self._check_start(trajectory, measured)
         except UnsafeTrajectory:
             if read_s <= now:
                 raise
             # The physics ran on between the check's clock and the reading (a CPU-starved batch): the arm is that much
             # further along the commanded curve, where the trajectory is at the reading's time.
-            check_start(trimmed(trajectory, read_s - now), measured, self.motion_config.start_tolerance_rad, self.model.joint_names)
+            self._check_start(trimmed(trajectory, read_s - now), measured)
         self._command_count += 1
         record = self._commanded = (planned, planned_t0, self._command_count)
         self._paced_motion, self._pace_next = (planned, self._pace_next), None  # speed.py: what a change re-times
@@ -223,6 +223,23 @@ class MotionGate:
         self._motions.append((time.time() + trajectory.duration_s, swept_box))
         del self._motions[:-MOTION_MEMORY]
         return trajectory
+
+    def _check_start(self, trajectory: JointTrajectory, measured: np.ndarray) -> None:
+        """UnsafeTrajectory unless the trajectory starts within start_tolerance_rad of where the arm is: its readings,
+        or the command that holds it there (model.command_holding: the readings less the servos' steady error under
+        the arm's weight). A plan chained from the previous step's commanded end starts at the latter: on the real
+        RX200 at far reach the readings sit 0.04-0.05 rad below it (shoulder, elbow) and the check refused such steps."""
+        tolerance, names = self.motion_config.start_tolerance_rad, self.model.joint_names
+        holding = getattr(self.model, "command_holding", None)
+        try:
+            check_start(trajectory, measured, tolerance, names)
+        except UnsafeTrajectory:
+            if holding is None:
+                raise
+            command = holding(measured)
+            if np.abs(command - measured).max() < 1e-9:
+                raise
+            check_start(trajectory, command, tolerance, names)
 
     def _started_at(self, record: tuple, started_s) -> None:
         """After a motion from rest was sent: remember the arm's own start time of it (a send held up starts
@@ -247,8 +264,9 @@ class MotionGate:
 
     def start_position(self) -> np.ndarray:
         """Where a motion from rest starts: the position the servos were last commanded to hold (the end of the
-        last trajectory sent, also in its last two samples) while the arm is measured within half the start tolerance
-        of it, so the command does not step by the servos' residual error; else (moving, halted, limp, pushed away)
+        last trajectory sent, also in its last two samples) while the command holding the arm where it is measured
+        (model.command_holding: the readings less the servos' steady error under its weight) is within half the start
+        tolerance of it, so the command does not step by the servos' error; else (moving, halted, limp, pushed away)
         the measured joints."""
         measured = self.joints_rad()
         with self._lock:
@@ -260,7 +278,9 @@ class MotionGate:
         if running[0].duration_s - (self.clock_s() - running[1]) > 2.0 / self.motion_config.sample_rate_hz:
             return measured
         held = running[0].positions_rad[-1]
-        if float(np.max(np.abs(held - measured))) > 0.5 * self.motion_config.start_tolerance_rad:
+        holding = getattr(self.model, "command_holding", None)
+        command = measured if holding is None else holding(measured)  # the servos' steady error taken off
+        if float(np.max(np.abs(held - command))) > 0.5 * self.motion_config.start_tolerance_rad:
             return measured
         return held.copy()
 
