@@ -32,9 +32,8 @@ from armlab.station.states import JOB_STATES, allowed_commands
 WAIT_CHUNK_S = 0.05  # waits on the devices check cancel/e-stop this often (simulated time in fast mode)
 CHANGE_ABOVE_M = 0.06  # the gripper point this close above a spot's surface can have changed it (fingers, a held block)
 MOTION_MEMORY = 256  # how many recent arm motions the gate remembers for stale-perception checks
-# The real arm's servos trail a fast move (P-only: the waist 0.02-0.03 rad at the end of a 2.9 rad swing, more with the
-# arm stretched and loaded) while the trajectory is done at its end time: a job's step waits, at most this long, until
-# the arm stands within half the start tolerance of where its command holds it, or has stopped short of it.
+# A job's step waits at most this long after its end time for the arm to arrive (_arrived): the real arm's P-only waist
+# trails a fast long swing (0.03 rad after 2.9 rad, more loaded). Stopped short: slower than this.
 ARRIVE_TIMEOUT_S, ARRIVED_SPEED_RAD_S = 1.0, 0.02
 
 
@@ -229,10 +228,9 @@ class MotionGate:
         return trajectory
 
     def _check_start(self, trajectory: JointTrajectory, measured: np.ndarray) -> None:
-        """UnsafeTrajectory unless the trajectory starts within start_tolerance_rad of where the arm is: its readings,
-        or the command that holds it there (model.command_holding: the readings less the servos' steady error under
-        the arm's weight). A plan chained from the previous step's commanded end starts at the latter: on the real
-        RX200 at far reach the readings sit 0.04-0.05 rad below it (shoulder, elbow) and the check refused such steps."""
+        """UnsafeTrajectory unless the trajectory starts within start_tolerance_rad of the readings or of the command
+        holding the arm there (model.command_holding): a step chained from the last one's commanded end starts at the
+        latter, the real RX200's readings 0.04-0.05 rad below it at far reach (its servos' steady error)."""
         tolerance, names = self.motion_config.start_tolerance_rad, self.model.joint_names
         holding = getattr(self.model, "command_holding", None)
         try:
@@ -488,8 +486,7 @@ class MotionGate:
             ctx.check()
 
     def _arrived(self, command_rad: np.ndarray) -> bool:
-        """The arm stands where command_rad holds it (within half the start tolerance, the servos' steady error taken
-        off: model.command_holding), or it has stopped (a contact, a servo stopped short within its friction)."""
+        """The arm stands within half the start tolerance of where command_rad holds it, or has stopped (a contact)."""
         state = self.arm.read_joint_state()
         holding = getattr(self.model, "command_holding", None)
         here = state.position_rad if holding is None else holding(state.position_rad)
