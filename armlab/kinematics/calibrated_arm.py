@@ -69,6 +69,18 @@ class CalibratedArm:
             return self.nominal.fk(q_read)
         return calibrated_fk(self.nominal, cal, self.nominal._joint_vectors(q_read), measured=True)
 
+    def command_holding(self, q_read) -> np.ndarray:
+        """The joint command that holds the arm at rest where it reads q_read: the reading less the servo's steady
+        error under the arm's weight (P-only servos hold a load tau at servo_compliance * tau past their goal, up to
+        0.05 rad at the RX200's far reach); q_read itself without a calibration (no steady error known)."""
+        cal = self._calibration
+        q = np.asarray(q_read, float)
+        if cal is None:
+            return q.copy()
+        servo = np.asarray(cal.servo_compliance_rad_per_nm, float)
+        command = q - servo * gravity_torques(self.nominal, q)
+        return q - servo * gravity_torques(self.nominal, command)  # the torque at the command, as the fit measured it
+
     def joint_frames(self, q) -> np.ndarray:
         cal = self._calibration
         if cal is None:

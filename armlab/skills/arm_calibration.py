@@ -33,8 +33,8 @@ from armlab.station.core import Station
 from armlab.station.jobs import Job, JobContext
 from armlab.vision import detect_tags
 from armlab.vision.block import Block
-from armlab.vision.geometry import transform_points
 from armlab.vision.gripper_marker import MarkerNotFound, find_marker
+from armlab.vision.pixel_world import depth_points_to_world
 from armlab.workcell import load_workcell
 
 CLEAR_RAISES_M = (0.0, 0.06, 0.12)  # a pose whose move would pass through an object seen is tried this much higher
@@ -79,7 +79,6 @@ def calibrate_arm(station: Station, poses: Sequence[CalibrationPose] | None = No
             raise ArmCalibrationError("the gripper holds something: put it down first (it may hide the gripper's tag)")
         intrinsics = station.intrinsics.current()
         K, dist = intrinsics.K, np.asarray(intrinsics.dist, dtype=float)
-        T_world_depth = np.asarray(calibration.T_world_depth, float)
         q_start, start_s = station.joints_rad(), station.clock_s()
         boxes = obstacle_boxes(look(station, ctx))
         commanded, readings, seen, used, skipped = [], [], [], [], []
@@ -99,7 +98,7 @@ def calibrate_arm(station: Station, poses: Sequence[CalibrationPose] | None = No
                 continue
             commanded.append(q)
             readings.append(station.joints_rad())
-            seen.append(transform_points(T_world_depth, sighting.point_camera_m[None, :])[0])
+            seen.append(depth_points_to_world(calibration, sighting.point_camera_m)[0])
             used.append(index)
         ctx.progress(len(chosen) / (len(chosen) + 1), "back to the start")
         station.run_trajectory(ctx, station.plan_move(q_start))

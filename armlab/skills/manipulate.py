@@ -30,7 +30,7 @@ def plan_pick_steps(station: Station, top_center_m, yaw_rad: float | None, q_sta
 
     Unreachable / UnsafeTrajectory / InvalidInput (PLAN_REFUSALS) before anything moves.
     """
-    q_start = station.joints_rad() if q_start_rad is None else np.asarray(q_start_rad, float)
+    q_start = station.start_position() if q_start_rad is None else np.asarray(q_start_rad, float)
     return motion_plan_pick(station.model, q_start, np.asarray(top_center_m, float), 0.0 if yaw_rad is None else yaw_rad, station.motion_config,
                             tool=station_end_effector(station), q_seed_rad=_wrist_turned(q_start, wrist_offset_rad))
 
@@ -38,7 +38,7 @@ def plan_pick_steps(station: Station, top_center_m, yaw_rad: float | None, q_sta
 def plan_place_steps(station: Station, surface_m, yaw_rad: float | None, held_height_m: float, q_start_rad=None,
                      wrist_offset_rad: float = 0.0) -> list:
     """armlab.motion's place plan: the held block's bottom centre onto surface_m, then release and retreat."""
-    q_start = station.joints_rad() if q_start_rad is None else np.asarray(q_start_rad, float)
+    q_start = station.start_position() if q_start_rad is None else np.asarray(q_start_rad, float)
     yaw = 0.0 if yaw_rad is None else yaw_rad
     return motion_plan_place(station.model, q_start, np.asarray(surface_m, float), yaw, station.motion_config, held_height_m,
                              tool=station_end_effector(station), q_seed_rad=_wrist_turned(q_start, wrist_offset_rad))
@@ -60,7 +60,7 @@ def run_steps(station: Station, ctx: JobContext, steps: Sequence, replan: Callab
     If the arm is no longer where the plan starts (it moved since planning), `replan()` plans again.
     """
     first = next((step for step in steps if isinstance(step, TrajectoryStep)), None)
-    if replan is not None and first is not None and np.abs(first.trajectory.positions_rad[0] - station.joints_rad()).max() > 0.01:
+    if replan is not None and first is not None and np.abs(first.trajectory.positions_rad[0] - station.start_position()).max() > 0.01:
         steps = replan()
     for index, step in enumerate(steps):
         if progress:
@@ -238,7 +238,7 @@ def plan_pick(station: Station, top_center_m, yaw_rad: float | None, edge_m: flo
     tool = station_end_effector(station)
     grasp_m = top - np.array([0.0, 0.0, tool.held_below_top_m(config, edge_m)])
     grasp_m[2] = max(grasp_m[2], config.board_clearance_m, tool.lowest_grasp_m(config))
-    q_start = station.joints_rad() if q_start is None else q_start
+    q_start = station.start_position() if q_start is None else q_start
     raised_m = 0.0
     while True:
         steps = _transfer_plan(station, q_start, grasp_m, yaw_rad, boxes, None, "grasp", ("move above block", "descend to grasp", "lift"),
@@ -273,7 +273,7 @@ def plan_place(station: Station, surface_m, yaw_rad: float | None, edge_m: float
     surface = np.asarray(surface_m, float)
     held_below_top = station_end_effector(station).held_below_top_m(config, edge_m)
     release_m = surface + np.array([0.0, 0.0, edge_m - held_below_top + config.place_clearance_m])
-    q_start = station.joints_rad() if q_start is None else q_start
+    q_start = station.start_position() if q_start is None else q_start
     return _transfer_plan(station, q_start, release_m, yaw_rad, boxes, edge_m, "release",
                           ("move above place", "descend to place", "retreat"), max_transfer_z_m, finger_axis_rad,
                           min_pitch_rad=config.top_down_pitch_rad - max_tilt_rad, gripper_box=gripper_box)
@@ -296,7 +296,7 @@ def plan_side_place(station: Station, surface_m, edge_m: float, boxes: list, q_s
     beyond = edge_m / 2.0 - config.grasp_depth_for(edge_m)
     release_m = np.array([*(surface[:2] - outward * beyond), surface[2] + edge_m / 2.0 + config.place_clearance_m])
     near_m = release_m + np.array([0.0, 0.0, config.approach_height_m])
-    q_start = station.joints_rad() if q_start is None else np.asarray(q_start, float)
+    q_start = station.start_position() if q_start is None else np.asarray(q_start, float)
     seed = q_start.copy()
     seed[-1] = np.round(seed[-1] / (np.pi / 2)) * (np.pi / 2)
     vertical = dict(speed_m_s=config.vertical_speed_m_s, accel_m_s2=config.vertical_accel_m_s2, rate_hz=config.sample_rate_hz)

@@ -204,7 +204,7 @@ def plan_side_pick(station: Station, top_center_m, edge_m: float, boxes: list, p
     (approach_height_m). boxes: the other objects. Also how the block will sit in the gripper."""
     model = station.model
     config = station.motion_config
-    q_start = station.joints_rad() if q_start is None else np.asarray(q_start, float)
+    q_start = station.start_position() if q_start is None else np.asarray(q_start, float)
     point = grasp_point(station, top_center_m, edge_m, pitch_rad)
     above = point + np.array([0.0, 0.0, config.approach_height_m])
     q_above = model.ik(above, pitch=pitch_rad, yaw=None, q_seed=_seed(q_start))
@@ -280,7 +280,7 @@ def plan_side_place(station: Station, surface_m, edge_m: float, grasp: SideGrasp
     then_rad: where the arm goes next (the park pose): the plan ends where a joint move there is clear."""
     model = station.model
     pitch = grasp.pitch_rad if pitch_rad is None else pitch_rad
-    q_start = station.joints_rad() if q_start is None else np.asarray(q_start, float)
+    q_start = station.start_position() if q_start is None else np.asarray(q_start, float)
     surface = np.asarray(surface_m, float)
     release = release_point(station, surface, edge_m, grasp, pitch)
     support = []

@@ -90,6 +90,11 @@ class StationConfig(StrictModel):
     place_check: bool = False  # off until bench/competition.py shows job success unchanged with it (ideal and real)
     place_corrections: int = Field(2, ge=0, le=5)
     place_correction_max_m: float = Field(0.006, ge=0.0, le=0.02)
+    # Before a pick's last descent (armlab.skills.pick_check): the gripper's tag seen over the block, the descent
+    # shifted by the arm's error there, at most pick_corrections times, each at most pick_correction_max_m.
+    pick_check: bool = False
+    pick_corrections: int = Field(2, ge=0, le=5)
+    pick_correction_max_m: float = Field(0.006, ge=0.0, le=0.02)
     sim: SimStartConfig = SimStartConfig()
     recording: RecordingConfig = RecordingConfig()
     foxglove: FoxgloveConfig = FoxgloveConfig()

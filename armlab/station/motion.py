@@ -33,6 +33,9 @@ from armlab.station.states import JOB_STATES, allowed_commands
 WAIT_CHUNK_S = 0.05  # waits on the devices check cancel/e-stop this often (simulated time in fast mode)
 CHANGE_ABOVE_M = 0.06  # the gripper point this close above a spot's surface can have changed it (fingers, a held block)
 MOTION_MEMORY = 256  # how many recent arm motions the gate remembers for stale-perception checks
+# A job's step waits at most this long after its end time for the arm to arrive (_arrived): the real arm's P-only waist
+# trails a fast long swing (0.03 rad after 2.9 rad, more loaded). Stopped short: slower than this.
+ARRIVE_TIMEOUT_S, ARRIVED_SPEED_RAD_S = 1.0, 0.02
 
 
 class HandoverLate(RuntimeError):
@@ -204,13 +207,13 @@ class MotionGate:
                     raise ArmMoving("move", state.value, allowed_commands(state), f"the new motion does not continue it: {problem}")
         measured, read_s = self.joints_rad(), self.clock_s()
         try:
-            check_start(trajectory, measured, self.motion_config.start_tolerance_rad, self.model.joint_names)
+            self._check_start(trajectory, measured)
         except UnsafeTrajectory:
             if read_s <= now:
                 raise
             # The physics ran on between the check's clock and the reading (a CPU-starved batch): the arm is that much
             # further along the commanded curve, where the trajectory is at the reading's time.
-            check_start(trimmed(trajectory, read_s - now), measured, self.motion_config.start_tolerance_rad, self.model.joint_names)
+            self._check_start(trimmed(trajectory, read_s - now), measured)
         self._command_count += 1
         record = self._commanded = (planned, planned_t0, self._command_count)
         self._paced_motion, self._pace_next = (planned, self._pace_next), None  # speed.py: what a change re-times
@@ -224,6 +227,22 @@ class MotionGate:
         self._motions.append((time.time() + trajectory.duration_s, swept_box))
         del self._motions[:-MOTION_MEMORY]
         return trajectory
+
+    def _check_start(self, trajectory: JointTrajectory, measured: np.ndarray) -> None:
+        """UnsafeTrajectory unless the trajectory starts within start_tolerance_rad of the readings or of the command
+        holding the arm there (model.command_holding): a step chained from the last one's commanded end starts at the
+        latter, the real RX200's readings 0.04-0.05 rad below it at far reach (its servos' steady error)."""
+        tolerance, names = self.motion_config.start_tolerance_rad, self.model.joint_names
+        holding = getattr(self.model, "command_holding", None)
+        try:
+            check_start(trajectory, measured, tolerance, names)
+        except UnsafeTrajectory:
+            if holding is None:
+                raise
+            command = holding(measured)
+            if np.abs(command - measured).max() < 1e-9:
+                raise
+            check_start(trajectory, command, tolerance, names)
 
     def _started_at(self, record: tuple, started_s) -> None:
         """After a motion from rest was sent: remember the arm's own start time of it (a send held up starts
@@ -263,8 +282,9 @@ class MotionGate:
 
     def start_position(self) -> np.ndarray:
         """Where a motion from rest starts: the position the servos were last commanded to hold (the end of the
-        last trajectory sent, also in its last two samples) while the arm is measured within half the start tolerance
-        of it, so the command does not step by the servos' residual error; else (moving, halted, limp, pushed away)
+        last trajectory sent, also in its last two samples) while the command holding the arm where it is measured
+        (model.command_holding: the readings less the servos' steady error under its weight) is within half the start
+        tolerance of it, so the command does not step by the servos' error; else (moving, halted, limp, pushed away)
         the measured joints."""
         measured = self.joints_rad()
         with self._lock:
@@ -276,7 +296,9 @@ class MotionGate:
         if running[0].duration_s - (self.clock_s() - running[1]) > 2.0 / self.motion_config.sample_rate_hz:
             return measured
         held = running[0].positions_rad[-1]
-        if float(np.max(np.abs(held - measured))) > 0.5 * self.motion_config.start_tolerance_rad:
+        holding = getattr(self.model, "command_holding", None)
+        command = measured if holding is None else holding(measured)  # the servos' steady error taken off
+        if float(np.max(np.abs(held - command))) > 0.5 * self.motion_config.start_tolerance_rad:
             return measured
         return held.copy()
 
@@ -473,10 +495,20 @@ class MotionGate:
             if self.latch.is_set():
                 raise JobCancelled("the station was e-stopped")
             raise TimeoutError(f"the arm did not finish a {trajectory.duration_s:.2f} s move in time")
+        self._wait_until(lambda: self._arrived(trajectory.positions_rad[-1]), ARRIVE_TIMEOUT_S, checked)
         with self._lock:
             self._motions[-1] = (time.time(), self._motions[-1][1])
         if checked is not None:
             ctx.check()
+
+    def _arrived(self, command_rad: np.ndarray) -> bool:
+        """The arm stands within half the start tolerance of where command_rad holds it, or has stopped (a contact)."""
+        state = self.arm.read_joint_state()
+        holding = getattr(self.model, "command_holding", None)
+        here = state.position_rad if holding is None else holding(state.position_rad)
+        if float(np.abs(here - command_rad).max()) <= 0.5 * self.motion_config.start_tolerance_rad:
+            return True
+        return float(np.abs(state.velocity_rad_s).max()) < ARRIVED_SPEED_RAD_S
 
     def run_gripper(self, ctx: JobContext, action: str) -> None:
         """Inside a job: grasp or release (only while this job owns the arm) and wait for the fingers."""

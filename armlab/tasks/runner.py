@@ -24,6 +24,7 @@ from armlab.motion.gripper_box import joint_moves_inside
 from armlab.motion.safety import UnsafeTrajectory
 from armlab.skills import side_grasp
 from armlab.skills.manipulate import plan_pick, plan_place, plan_side_place, run_steps
+from armlab.skills.pick_check import PickCheckSettings, pick_summary, run_pick
 from armlab.station.core import Station
 from armlab.station.jobs import JobContext
 from armlab.station.telemetry import block_to_dict
@@ -90,6 +91,8 @@ class TaskRunner:
         config = station.config
         self.place_check = PlaceCheck(config.place_check, config.place_corrections, config.place_correction_max_m,
                                       lambda level, words: station.events.add(level, f"{name}: {words}"))
+        self.pick_check = PickCheckSettings(config.pick_check, config.pick_corrections, config.pick_correction_max_m)
+        self.pick_records: list[dict] = []  # the closed loop before each pick's last descent (job result pick_check)
 
     # Reporting -------------------------------------------------------------------------------------
 
@@ -252,7 +255,7 @@ class TaskRunner:
             self.fail(f"cannot place the {name} at ({to[0] * 1000:.0f}, {to[1] * 1000:.0f}, {to[2] * 1000:.0f}) mm: {error}")
             return False
         self.report(f"picking the {name}: {move.why}")
-        if not self.run_or_fail(pick, f"picking the {name}"):
+        if not self.run_or_fail(pick, f"picking the {name}", self.boxes(objects, block)):
             return False
         if not self.station.gripper.read_state().holding:
             self.fail(f"missed the {name} (nothing in the gripper)")
@@ -276,12 +279,19 @@ class TaskRunner:
             move.on_placed(edge)
         return True
 
-    def run_or_fail(self, steps: list, what: str) -> bool:
-        """Run planned steps; a step the gate refuses (the arm is not where the plan starts, e.g. it
+    def run_or_fail(self, steps: list, what: str, pick_boxes: list | None = None) -> bool:
+        """Run planned steps (a pick's, given its obstacle boxes: with the closed loop before its last descent,
+        armlab.skills.pick_check); a step the gate refuses (the arm is not where the plan starts, e.g. it
         was stopped by a contact) fails the move with the reason, puts down what is held, and the
         job goes on from a fresh look."""
         try:
-            run_steps(self.station, self.ctx, steps, progress=False)
+            if pick_boxes is None:
+                run_steps(self.station, self.ctx, steps, progress=False)
+            else:
+                log = lambda level, words: self.station.events.add(level, f"{self.name}: {words}")  # noqa: E731
+                record = run_pick(self.station, self.ctx, steps, self.pick_check, pick_boxes, what, log)
+                if record is not None:
+                    self.pick_records.append(record)
         except UnsafeTrajectory as error:
             self.fail(f"{what}: the gate refused a step ({error})")
             if self.station.gripper.read_state().holding:
@@ -425,4 +435,4 @@ class TaskRunner:
             self.place_check.check(self.look())
         self.park()
         self.report("finished")
-        return {**self.progress.to_dict(), "place_check": self.place_check.summary()}
+        return {**self.progress.to_dict(), "place_check": self.place_check.summary(), "pick_check": pick_summary(self.pick_records)}

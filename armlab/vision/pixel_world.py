@@ -10,8 +10,10 @@ import numpy as np
 from armlab.errors import InvalidInput
 from armlab.vision.calibration import Calibration, depth_at
 from armlab.vision.geometry import (
+    as_points,
     backproject,
     intersect_rays_with_plane,
+    invert_transform,
     normalized_rays,
     project_points,
     transform_points,
@@ -88,6 +90,29 @@ def pixel_to_world_off_robot(
             camera_point = backproject(np.array([[u, v]], dtype=np.float64), np.array([median_m]), cal.K, cal.dist)
             return transform_points(T_world_depth, camera_point)[0], source
     return board, "board"
+
+
+def depth_points_to_world(cal: Calibration, points_camera_m: np.ndarray) -> np.ndarray:
+    """World points (N, 3) of aligned-depth points (N, 3) (back-projected with K, dist), each kept on its colour
+    pixel's ray (T_world_camera: the tags' pose) at the height the depth gives less the depth board's height at the
+    point's own (x, y) (the plane calibration measured: offset and tilt, see board_plane).
+
+    Why: aligned depth is wrong along each pixel's ray only, so the rigid T_world_depth that puts the board at
+    z = 0 moves points above it sideways by their height times the tilt and by the offset times the ray's slant:
+    the gripper tag 150-220 mm up came out 1-5 mm off on the realistic camera. Without a depth correction this is
+    T_world_camera's mapping."""
+    X = as_points(points_camera_m, 3, "points_camera_m")
+    T_wc, T_wd = np.asarray(cal.T_world_camera, float), np.asarray(cal.T_world_depth, float)
+    seen = transform_points(T_wc, X)  # on the right rays, at the ranges the depth gives
+    plane = T_wd[2] @ invert_transform(T_wc)  # the depth's board, world: plane . (x, y, z, 1) = 0
+    centre = T_wc[:3, 3]
+    ray = seen - centre
+    points = seen
+    for _ in range(3):  # the board's height under the point moves as the point does (a few mm over a tilt of ~1.5 deg)
+        board_z = -(plane[0] * points[:, 0] + plane[1] * points[:, 1] + plane[3]) / plane[2]
+        scale = (seen[:, 2] - board_z - centre[2]) / ray[:, 2]
+        points = centre + ray * scale[:, None]
+    return points
 
 
 def world_to_pixel(cal: Calibration, points_m: np.ndarray) -> np.ndarray:

@@ -27,7 +27,7 @@ SMALL_M = 0.025
 @pytest.fixture
 def station(monkeypatch):
     monkeypatch.setattr(manipulate, "station_end_effector", lambda _station: FINGERS)
-    return SimpleNamespace(model=ARM, motion_config=CONFIG, joints_rad=lambda: np.asarray(ARM.sleep_rad, float),
+    return SimpleNamespace(model=ARM, motion_config=CONFIG, start_position=lambda: np.asarray(ARM.sleep_rad, float),
                            finger_box=lambda: FINGERS.body_box(CONFIG, ARM.config), palm_corners_m=lambda: palm_corners_m(ARM.config.name))
 
 
