@@ -161,7 +161,9 @@ def test_record_continuously_at_a_rate(browser, server):
         page.wait_for_function("document.getElementById('btn-teach-continuous').dataset.recording === 'false'")
         page.wait_for_function("document.querySelectorAll('#draft-table tbody tr').length >= 5", timeout=15_000)
         draft = server.get("/api/teach/draft")
-        assert draft["count"] == rows(page, "draft-table") and draft["count"] >= 5
+        assert draft["count"] >= 5
+        # the page shows every recorded row (its table may be one update behind the draft as the recording stops)
+        page.wait_for_function(f"document.querySelectorAll('#draft-table tbody tr').length === {draft['count']}", timeout=15_000)
         assert np.allclose(draft["waypoints"][-1]["joints_rad"], POSES_RAD[1], atol=0.03)
         page.fill("#teach-name", "continuous-wave")
         page.click("#btn-teach-stop")
