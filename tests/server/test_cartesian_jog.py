@@ -54,7 +54,7 @@ def _beating(beat):
     def run() -> None:
         while not released.is_set():
             beat()
-            released.wait(0.01)
+            released.wait(0.03)  # the page's pace (a faster one queues re-plans behind each other on the server)
 
     thread = threading.Thread(target=run, name="held-down", daemon=True)
     thread.start()

@@ -39,6 +39,7 @@ class ScriptedRunner(TaskRunner):
         self.station = SimpleNamespace(events=EventLog(), clock_s=lambda: self.clock_s)
         self.ctx = SimpleNamespace(progress=lambda *a, **k: None, job=SimpleNamespace(update_extra=lambda **k: None))
         self.place_check = PlaceCheck(False, 2, 0.006, lambda level, words: None)  # the station's default: off
+        self.pick_records = []  # the pick check's records (off, as the station's default)
 
     def look(self) -> list:
         self.looked += 1
