@@ -11,16 +11,11 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from armlab import skills
-from armlab.devices.sim import SimWorkcell, SimWorkcellConfig
 from armlab.motion import TrajectoryStep, plan_joint_move
 from armlab.motion.safety import UnsafeTrajectory
-from armlab.scene import Scene
 from armlab.skills.manipulate import plan_pick
-from armlab.station.config import StationConfig
 from armlab.station.core import Station
-from armlab.store import Store
-from armlab.workcell import load_workcell_arm
+from real_arm_station import calibrated_real_station
 
 pytestmark = pytest.mark.slow
 
@@ -31,15 +26,8 @@ SCENE = {"objects": [{"id": "far", "type": "block", "color": "red", "size": "lar
 
 @pytest.fixture(scope="module")
 def station(tmp_path_factory):
-    with SimWorkcell(SimWorkcellConfig(realtime=False, seed=5, realism="real"), scene=Scene.from_dict(SCENE)) as cell:
-        station = Station(cell.arm, cell.gripper, cell.camera, model=load_workcell_arm(), config=StationConfig(),
-                          store=Store(tmp_path_factory.mktemp("startcheck") / "s.sqlite3"), sim=cell, synchronous=True)
-        station.start()
-        for calibrate in (skills.calibrate, skills.calibrate_arm):
-            job = calibrate(station)
-            assert job.wait(600) and job.state == "succeeded", job.message
-        yield station
-        station.close()
+    with calibrated_real_station(5, SCENE, tmp_path_factory.mktemp("startcheck")) as calibrated:
+        yield calibrated
 
 
 def in_job(station: Station, run) -> object:

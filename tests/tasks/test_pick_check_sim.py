@@ -9,15 +9,10 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from armlab import skills
-from armlab.devices.sim import SimWorkcell, SimWorkcellConfig
-from armlab.scene import Scene
 from armlab.skills.manipulate import plan_pick, plan_place, run_steps
 from armlab.skills.pick_check import PickCheckSettings, run_pick
-from armlab.station.config import StationConfig
 from armlab.station.core import Station
-from armlab.store import Store
-from armlab.workcell import load_workcell_arm
+from real_arm_station import calibrated_real_station
 
 pytestmark = pytest.mark.slow
 
@@ -29,16 +24,8 @@ SCENE = {"objects": [{"id": f"b{i}", "type": "block", "color": color, "size": "l
 
 @pytest.fixture(scope="module")
 def station(tmp_path_factory):
-    with SimWorkcell(SimWorkcellConfig(realtime=False, seed=4, realism="real"), scene=Scene.from_dict(SCENE)) as cell:
-        station = Station(cell.arm, cell.gripper, cell.camera, model=load_workcell_arm(), config=StationConfig(),
-                          store=Store(tmp_path_factory.mktemp("pickcheck") / "s.sqlite3"), sim=cell, synchronous=True)
-        station.start()
-        job = skills.calibrate(station)
-        assert job.wait(60) and job.state == "succeeded", job.message
-        job = skills.calibrate_arm(station)
-        assert job.wait(600) and job.state == "succeeded", job.message
-        yield station
-        station.close()
+    with calibrated_real_station(4, SCENE, tmp_path_factory.mktemp("pickcheck")) as calibrated:
+        yield calibrated
 
 
 def pick_each(station: Station, settings: PickCheckSettings) -> tuple[list[float], list[dict]]:

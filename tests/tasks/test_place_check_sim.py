@@ -11,15 +11,10 @@ import math
 import numpy as np
 import pytest
 
-from armlab import skills
-from armlab.devices.sim import SimWorkcell, SimWorkcellConfig
-from armlab.scene import Scene
-from armlab.station.config import StationConfig
 from armlab.station.core import Station
-from armlab.store import Store
 from armlab.tasks.policy import Move, Plan
 from armlab.tasks.runner import TaskRunner
-from armlab.workcell import load_workcell_arm
+from real_arm_station import calibrated_real_station
 
 pytestmark = pytest.mark.slow
 
@@ -30,16 +25,8 @@ SCENE = {"objects": [{"id": "b", "type": "block", "color": "red", "size": "large
 
 @pytest.fixture(scope="module")
 def station(tmp_path_factory):
-    with SimWorkcell(SimWorkcellConfig(realtime=False, seed=1, realism="real"), scene=Scene.from_dict(SCENE)) as cell:
-        station = Station(cell.arm, cell.gripper, cell.camera, model=load_workcell_arm(), config=StationConfig(),
-                          store=Store(tmp_path_factory.mktemp("placecheck") / "s.sqlite3"), sim=cell, synchronous=True)
-        station.start()
-        job = skills.calibrate(station)
-        assert job.wait(60) and job.state == "succeeded", job.message
-        job = skills.calibrate_arm(station)  # what remains after it is the drift the loop corrects
-        assert job.wait(600) and job.state == "succeeded", job.message
-        yield station
-        station.close()
+    with calibrated_real_station(1, SCENE, tmp_path_factory.mktemp("placecheck")) as calibrated:
+        yield calibrated
 
 
 def shuttle(station: Station, moves: int, place_check: bool) -> tuple[list[tuple[int, float]], dict]:
