@@ -18,7 +18,6 @@ no better than the nominal model.
 
 from __future__ import annotations
 
-import time
 from collections.abc import Sequence
 
 import numpy as np
@@ -26,14 +25,13 @@ import numpy as np
 from armlab.errors import PLAN_REFUSALS
 from armlab.kinematics.arm_calibration import MIN_POSES, ArmCalibration, ArmCalibrationError, fit_arm
 from armlab.motion.clearance import OBJECT_BOX_RADIUS_M, box_around, first_collision
-from armlab.skills.arm_camera import SETTLE_SPEED_RAD_S, CalibrationPose, pose_joints
+from armlab.skills.arm_camera import CalibrationPose, pose_joints, sight_marker_at_rest
 from armlab.skills.perceive import look
 from armlab.station.arm_info import station_end_effector
 from armlab.station.core import Station
 from armlab.station.jobs import Job, JobContext
-from armlab.vision import detect_tags
 from armlab.vision.block import Block
-from armlab.vision.gripper_marker import MarkerNotFound, find_marker
+from armlab.vision.gripper_marker import MarkerNotFound
 from armlab.vision.pixel_world import depth_points_to_world
 from armlab.workcell import load_workcell
 
@@ -89,10 +87,8 @@ def calibrate_arm(station: Station, poses: Sequence[CalibrationPose] | None = No
                 skipped.append({"pose": index, "reason": f"not visited: {problem}"})
                 continue
             station.run_trajectory(ctx, station.plan_move(q))
-            station.wait_in_job(ctx, lambda: float(np.abs(station.arm.read_joint_state().velocity_rad_s).max()) < SETTLE_SPEED_RAD_S, 2.0)
-            frame = station.frame_after(time.time())
             try:
-                sighting = find_marker(detect_tags(frame.color_bgr, station.perception_config), marker.id, frame.depth_mm, K, dist)
+                sighting = sight_marker_at_rest(station, ctx, marker.id, K, dist)
             except MarkerNotFound as error:
                 skipped.append({"pose": index, "reason": str(error)})
                 continue

@@ -33,6 +33,14 @@ SETTLE_SPEED_RAD_S = 0.02  # the arm is still (for a frame) below this joint spe
 AGREE_M, AGREE_DEG = 0.005, 0.5  # tag and arm calibrations further apart than this: a warning in the log
 
 
+def sight_marker_at_rest(station: Station, ctx: JobContext, marker_id: int, K: np.ndarray, dist: np.ndarray):
+    """The gripper's tag (armlab.vision.gripper_marker's sighting) in a frame taken once the arm has settled (its
+    joints slower than SETTLE_SPEED_RAD_S, at most 2 s); MarkerNotFound when the camera does not find it."""
+    station.wait_in_job(ctx, lambda: float(np.abs(station.arm.read_joint_state().velocity_rad_s).max()) < SETTLE_SPEED_RAD_S, 2.0)
+    frame = station.frame_after(time.time())
+    return find_marker(detect_tags(frame.color_bgr, station.perception_config), marker_id, frame.depth_mm, K, dist)
+
+
 @dataclass(frozen=True)
 class CalibrationPose:
     """Where the gripper point goes (world, metres), its pitch below the horizontal and its wrist_rotate
@@ -82,14 +90,12 @@ def calibrate_arm_camera(station: Station, poses: Sequence[CalibrationPose] | No
             except (Unreachable, UnsafeTrajectory) as error:  # planned and checked before moving: nothing moved
                 skipped.append({"pose": index, "reason": f"not visited: {error}"})
                 continue
-            station.wait_in_job(ctx, lambda: float(np.abs(station.arm.read_joint_state().velocity_rad_s).max()) < SETTLE_SPEED_RAD_S, 2.0)
-            frame = station.frame_after(time.time())
-            q = station.joints_rad()
             try:
-                sighting = find_marker(detect_tags(frame.color_bgr, station.perception_config), marker.id, frame.depth_mm, K, dist)
+                sighting = sight_marker_at_rest(station, ctx, marker.id, K, dist)
             except MarkerNotFound as error:
                 skipped.append({"pose": index, "reason": str(error)})
                 continue
+            q = station.joints_rad()
             seen_camera.append(sighting.point_camera_m)
             seen_base.append(transform_points(T_base_world @ station.model.fk(q), np.asarray(marker.position_m))[0])
             pixels.append(sighting.pixel)

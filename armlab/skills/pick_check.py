@@ -15,7 +15,6 @@ armlab.tasks.place_check). Works the same on the real arm with its printed tag.
 
 from __future__ import annotations
 
-import time
 from collections.abc import Callable
 from dataclasses import dataclass
 
@@ -26,13 +25,12 @@ from armlab.motion import GripperStep, TrajectoryStep, check_trajectory, plan_jo
 from armlab.motion.cartesian import plan_vertical_segment
 from armlab.motion.clearance import first_collision
 from armlab.motion.safety import UnsafeTrajectory
-from armlab.skills.arm_camera import SETTLE_SPEED_RAD_S
+from armlab.skills.arm_camera import sight_marker_at_rest
 from armlab.skills.manipulate import run_steps
 from armlab.station.arm_info import station_end_effector
 from armlab.station.core import Station
 from armlab.station.jobs import JobContext
-from armlab.vision import detect_tags
-from armlab.vision.gripper_marker import MarkerNotFound, find_marker
+from armlab.vision.gripper_marker import MarkerNotFound
 from armlab.vision.pixel_world import depth_points_to_world
 from armlab.workcell import load_workcell
 
@@ -164,12 +162,9 @@ def gripper_error(station: Station, ctx: JobContext, q_near, boxes: list) -> np.
         station.run_trajectory(ctx, _checked(station, station.plan_move(q_look), boxes))
     except PLAN_REFUSALS as error:
         return f"the look's wrist turn is refused: {error}"
-    station.wait_in_job(ctx, lambda: float(np.abs(station.arm.read_joint_state().velocity_rad_s).max()) < SETTLE_SPEED_RAD_S, 2.0)
-    frame = station.frame_after(time.time())
     intrinsics = station.intrinsics.current()
     try:
-        sighting = find_marker(detect_tags(frame.color_bgr, station.perception_config), marker.id, frame.depth_mm,
-                               intrinsics.K, np.asarray(intrinsics.dist, float))
+        sighting = sight_marker_at_rest(station, ctx, marker.id, intrinsics.K, np.asarray(intrinsics.dist, float))
     except MarkerNotFound as error:
         return str(error)
     seen = depth_points_to_world(station.calibration, sighting.point_camera_m)[0]
@@ -188,12 +183,9 @@ def _descent_from(station: Station, q_from, grasp_m, near_z_m: float, pitch: flo
     grasp = next(s for s in tail if isinstance(s, GripperStep))
     end = [s for s in tail if isinstance(s, TrajectoryStep)][-1].trajectory.positions_rad[-1]
     back = plan_joint_move(up.positions_rad[-1], end, model, config.move_time_s, config.accel_time_s, config.sample_rate_hz)
-    finger_length_m = station_end_effector(station).finger_length_m
     for trajectory in (up, back):  # the descent itself goes between the neighbours, as the plan's does
         check_trajectory(model, trajectory, clearance_m=config.board_clearance_m)
-        hit = first_collision(model, trajectory, boxes, finger_length_m=finger_length_m)
-        if hit:
-            raise UnsafeTrajectory(f"it would hit {hit}")
+        _checked(station, trajectory, boxes)
     check_trajectory(model, down, clearance_m=config.board_clearance_m)
     return [TrajectoryStep(DESCENT_STEP, down), grasp, TrajectoryStep("lift", up), TrajectoryStep("back to transfer height", back)]
 

@@ -233,16 +233,19 @@ class MotionGate:
         holding the arm there (model.command_holding): a step chained from the last one's commanded end starts at the
         latter, the real RX200's readings 0.04-0.05 rad below it at far reach (its servos' steady error)."""
         tolerance, names = self.motion_config.start_tolerance_rad, self.model.joint_names
-        holding = getattr(self.model, "command_holding", None)
         try:
             check_start(trajectory, measured, tolerance, names)
         except UnsafeTrajectory:
-            if holding is None:
-                raise
-            command = holding(measured)
+            command = self._holding_command(measured)
             if np.abs(command - measured).max() < 1e-9:
                 raise
             check_start(trajectory, command, tolerance, names)
+
+    def _holding_command(self, q_read) -> np.ndarray:
+        """The command holding the arm where it reads q_read (model.command_holding: the readings less the servos'
+        steady error under its weight); the readings themselves where the model knows no such error."""
+        holding = getattr(self.model, "command_holding", None)
+        return np.asarray(q_read, float) if holding is None else holding(q_read)
 
     def _started_at(self, record: tuple, started_s) -> None:
         """After a motion from rest was sent: remember the arm's own start time of it (a send held up starts
@@ -296,8 +299,7 @@ class MotionGate:
         if running[0].duration_s - (self.clock_s() - running[1]) > 2.0 / self.motion_config.sample_rate_hz:
             return measured
         held = running[0].positions_rad[-1]
-        holding = getattr(self.model, "command_holding", None)
-        command = measured if holding is None else holding(measured)  # the servos' steady error taken off
+        command = self._holding_command(measured)  # the servos' steady error taken off
         if float(np.max(np.abs(held - command))) > 0.5 * self.motion_config.start_tolerance_rad:
             return measured
         return held.copy()
@@ -504,8 +506,7 @@ class MotionGate:
     def _arrived(self, command_rad: np.ndarray) -> bool:
         """The arm stands within half the start tolerance of where command_rad holds it, or has stopped (a contact)."""
         state = self.arm.read_joint_state()
-        holding = getattr(self.model, "command_holding", None)
-        here = state.position_rad if holding is None else holding(state.position_rad)
+        here = self._holding_command(state.position_rad)
         if float(np.abs(here - command_rad).max()) <= 0.5 * self.motion_config.start_tolerance_rad:
             return True
         return float(np.abs(state.velocity_rad_s).max()) < ARRIVED_SPEED_RAD_S
