@@ -183,6 +183,27 @@ def serve(app, port: int | None = None):
         thread.join(15)
 
 
+
+@contextlib.contextmanager
+def held_down(beat, pace_s: float = 0.03):
+    """A held jog button: `beat` (a heartbeat over REST or the websocket) every pace_s on a thread of its own while
+    the block runs. A test loop that waited between heartbeats let a late one end the jog on a busy machine (load
+    17-26); a faster pace than the page's 30 ms queues re-plans behind each other on the server."""
+    released = threading.Event()
+
+    def run() -> None:
+        while not released.is_set():
+            beat()
+            released.wait(pace_s)
+
+    thread = threading.Thread(target=run, name="held-down", daemon=True)
+    thread.start()
+    try:
+        yield
+    finally:
+        released.set()
+        thread.join(30)
+
 def wait_for(predicate, timeout_s: float = 10.0, poll_s: float = 0.05):
     """Poll until predicate() is truthy; returns its value, or raises AssertionError on timeout."""
     deadline = time.monotonic() + timeout_s

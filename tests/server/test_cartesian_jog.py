@@ -8,11 +8,9 @@ board it stops above it and says why. No wall-clock figures asserted (bench/cart
 
 from __future__ import annotations
 
-import contextlib
 import json
 import math
 import socket
-import threading
 
 import httpx
 import numpy as np
@@ -45,26 +43,6 @@ def _truth(cell) -> tuple[float, np.ndarray, np.ndarray]:
     return cell.sim_time_s, cell.gripper_point_m(), np.asarray(cell.arm.read_joint_state().position_rad, float)
 
 
-@contextlib.contextmanager
-def _beating(beat):
-    """A held jog button: `beat` (a heartbeat over REST or the websocket) back to back on a thread of its own while
-    the block runs (a test loop that waited between heartbeats let a late one end the jog on a machine at load 17-26)."""
-    released = threading.Event()
-
-    def run() -> None:
-        while not released.is_set():
-            beat()
-            released.wait(0.03)  # the page's pace (a faster one queues re-plans behind each other on the server)
-
-    thread = threading.Thread(target=run, name="held-down", daemon=True)
-    thread.start()
-    try:
-        yield
-    finally:
-        released.set()
-        thread.join(30)
-
-
 def _to_start(http: httpx.Client) -> None:
     live.wait_for(lambda: not http.get("/api/status").json()["moving"], 15)
     reply = http.post("/api/arm/pose", json={"position_m": START_M, "pitch_rad": math.pi / 2, "yaw_rad": 0.0}, params={"wait": "true"})
@@ -81,8 +59,8 @@ def _stop_bound_m(v_m_s: float, window_s: float, hold_s: float = MOTION.jog_hold
 
 
 def _hold(cell, beat, seconds: float) -> None:
-    """Beat (see _beating) for `seconds` of simulation time."""
-    with _beating(beat):
+    """Beat (see live.held_down) for `seconds` of simulation time."""
+    with live.held_down(beat):
         live.wait_sim(cell, seconds)
 
 
@@ -135,7 +113,7 @@ def test_a_websocket_jog_runs_while_held_and_stops_on_release(url, cell, how):
     v_m_s = MOTION.jog_max_speed_m_s
     with httpx.Client(base_url=url, timeout=30, headers=PAGE) as http:
         _to_start(http)
-        with connect(url.replace("http://", "ws://") + f"/ws?token={TOKEN}&controller=pad", compression=None, max_size=None,
+        with connect(url.replace("http://", "ws://") + f"/ws?token={TOKEN}&controller=pad", compression=None, max_size=None, max_queue=None,
                      open_timeout=10) as ws:
             assert json.loads(ws.recv(timeout=5))["type"] == "hello"
             cell.start_path_recording(period_s=0.01)
@@ -219,7 +197,7 @@ def test_bad_jogs_are_refused_with_a_clear_4xx_and_nothing_moves(url, cell):
 def test_a_jog_into_the_board_stops_above_it_and_says_why(url, cell):
     with httpx.Client(base_url=url, timeout=30, headers=PAGE) as http:
         _to_start(http)
-        with httpx.Client(base_url=url, timeout=30, headers=PAGE) as beats, _beating(lambda: beats.post("/api/heartbeat")):
+        with httpx.Client(base_url=url, timeout=30, headers=PAGE) as beats, live.held_down(lambda: beats.post("/api/heartbeat")):
             assert http.post("/api/arm/jog/cartesian", json={"axis": "z", "velocity_m_s": -MOTION.jog_max_speed_m_s}).status_code == 200
             live.wait_for(cell.arm.is_moving, 10, 0.005)
             assert live.wait_for(lambda: not cell.arm.is_moving(), 60, 0.02), "the jog down never stopped"

@@ -29,19 +29,24 @@ def _sim_wait(cell, duration_s: float) -> None:
 def test_websocket_heartbeats_hold_a_jog_and_their_loss_stops_it(url, cell, how):
     with httpx.Client(base_url=url, timeout=30) as http:
         http.post("/api/arm/joints", json={"q_rad": [-1.0, 0, 0, 0, 0], "moving_time_s": 1.0}, params={"wait": "true"}, headers=PAGE)
-        with connect(url.replace("http://", "ws://") + f"/ws?token={TOKEN}&controller=pad", compression=None, max_size=None,
+        with connect(url.replace("http://", "ws://") + f"/ws?token={TOKEN}&controller=pad", compression=None, max_size=None, max_queue=None,
                      open_timeout=10) as ws:
             assert json.loads(ws.recv(timeout=5))["controller"] == "pad"
             q0 = cell.arm.read_joint_state().position_rad[0]
-            assert http.post("/api/arm/jog", json={"velocity_rad_s": VELOCITY}, headers=PAGE).status_code == 200
-            for _ in range(40):  # 1.2 s of sim time with a heartbeat every 0.03 s (the hold is 0.2 s): far longer than one hold
-                _sim_wait(cell, 0.03)
+            beats_at_s = []
+
+            def beat() -> None:
+                beats_at_s.append(cell.sim_time_s)
                 ws.send(json.dumps({"type": "heartbeat"}))
-            live.wait_for(lambda: cell.arm.read_joint_state().position_rad[0] - q0 > 0.8 * 0.4 * 1.2, 5, 0.01)
-            assert cell.arm.is_moving(), "the jog ended although heartbeats arrived"
+
+            assert http.post("/api/arm/jog", json={"velocity_rad_s": VELOCITY}, headers=PAGE).status_code == 200
+            with live.held_down(beat):  # the page's 30 ms heartbeats for 1.2 s of sim time, far longer than one 0.2 s hold
+                _sim_wait(cell, 1.2)
+                live.wait_for(lambda: cell.arm.read_joint_state().position_rad[0] - q0 > 0.8 * 0.4 * 1.2, 5, 0.01)
+                assert cell.arm.is_moving(), "the jog ended although heartbeats arrived"
             if how == "connection drops":
                 ws.close()
-            last_beat_s = cell.sim_time_s
+            last_beat_s = beats_at_s[-1]
             live.wait_for(lambda: not cell.arm.is_moving(), 5, 0.005)
             assert cell.sim_time_s - last_beat_s < 0.3 + 0.4 / 5.0 + 0.6
             q_stop = cell.arm.read_joint_state().position_rad
