@@ -35,9 +35,9 @@ def test_the_route_calibrates_the_arm_and_the_status_shows_it(url):
         refused = http.post("/api/calibrate/arm", params={"wait": "true"}, headers=AUTH).json()["job"]
         assert refused["state"] == "failed" and "camera is not calibrated" in refused["message"]
         tags = http.post("/api/calibrate", params={"wait": "true"}, headers=AUTH).json()["job"]
-        assert tags["state"] == "succeeded", tags
+        assert tags["state"] == "succeeded", tags["message"]
         job = http.post("/api/calibrate/arm", params={"wait": "true"}, headers=AUTH).json()["job"]
-        assert job["state"] == "succeeded", job
+        assert job["state"] == "succeeded", job["message"]
         result = job["result"]
         assert len(result["poses_used"]) >= 12 and result["residual_before_mm"] > 15.0 and result["residual_mm"] < 2.5
         status = http.get("/api/status").json()["arm_calibration"]
