@@ -18,7 +18,8 @@ from functools import lru_cache
 import numpy as np
 
 from armlab.config import read_config_file, resolve_config_path, validate_config
-from armlab.devices.finger_gripper import FingerGripperConfig, load_finger_gripper_config
+from armlab.devices.finger_gripper import FingerGripperConfig, FingerGripperOutline, load_finger_gripper_config
+from armlab.errors import ConfigError
 from armlab.kinematics.arm_config import ArmConfig
 from armlab.kinematics.dh import dh_transform
 from armlab.kinematics.rotations import rotation_taking
@@ -58,9 +59,8 @@ class PlacedBody:
     def indices(self, *shapes: str) -> list[int]:
         return [k for k, part in enumerate(self.parts) if part.shape in shapes]
 
-    def segments(self, shapes=("capsule",)) -> tuple[np.ndarray, np.ndarray]:
-        """((N, C, 2, 3) world ends of the parts' axes, (C,) radii) of the capsules (or cylinders too)."""
-        index = self.indices(*shapes)
+    def segments(self, index: list[int]) -> tuple[np.ndarray, np.ndarray]:
+        """((N, C, 2, 3) world ends of the axes, (C,) radii) of the capsules or cylinders parts[index]."""
         half = np.array([self.parts[k].size_m[1] for k in index]).reshape(-1)
         poses = self.poses[:, index]
         axis = poses[..., :3, 2] * half[None, :, None]
@@ -100,6 +100,24 @@ class ArmBody:
             nxt = np.concatenate([frames[:, 1:-1], frames[:, -1:]], axis=1)
             out[:, 1:-1] = nxt @ self.link_inverse
         return out
+
+    def finger_outline(self) -> FingerGripperOutline:
+        """The palm and open fingers around the finger plane, relative to the gripper point (side grasps' planning
+        and the palm's board check); ConfigError for an arm without a finger gripper."""
+        parts = {part.name: part for part in self.parts}
+        palm, finger = parts.get("palm"), parts.get("left_finger_link")
+        if palm is None or finger is None:
+            raise ConfigError(f"config/arms/{self.arm}.yaml: a finger gripper outline needs a gripper (and the "
+                              "simulation's finger sizes)")
+        palm_x, finger_x = palm.T_frame_part[0, 3], finger.T_frame_part[0, 3]
+        return FingerGripperOutline(
+            palm_half_height_m=palm.size_m[2],
+            palm_front_behind_m=-(palm_x + palm.size_m[0]),
+            palm_back_behind_m=-(palm_x - palm.size_m[0]),
+            finger_half_height_m=finger.size_m[2],
+            finger_tip_beyond_m=finger_x + finger.size_m[0],
+            open_outer_m=palm.size_m[1],
+        )
 
     def place(self, model, positions_rad, finger_offset_m: float | None = None,
               held_edge_m: float | None = None) -> PlacedBody:
@@ -226,6 +244,11 @@ def load_arm_body(arm: str, sim: str = "sim") -> ArmBody:
     path = resolve_config_path(arm, "arms")
     config = validate_config(read_config_file(path), ArmConfig, str(path))
     return arm_body(config, load_finger_gripper_config(sim) if config.gripper is not None else None)
+
+
+def load_finger_gripper_outline(arm: str, sim: str = "sim") -> FingerGripperOutline:
+    """The outline of `arm`'s finger gripper, from its body (config/arms/<arm>.yaml, config/<sim>.yaml gripper)."""
+    return load_arm_body(arm, sim).finger_outline()
 
 
 def body_of(model) -> ArmBody:
