@@ -68,11 +68,9 @@ class PlacedBody:
         radii = np.array([self.parts[k].size_m[0] for k in index]).reshape(-1)
         return np.stack([centre - axis, centre + axis], axis=2), radii
 
-    def boxes(self, with_cylinders: bool = True) -> tuple[np.ndarray, np.ndarray]:
-        """((N, B, 4, 4) poses, (B, 3) half extents) of the boxes (and the boxes around the cylinders)."""
-        index = self.indices("box", "cylinder") if with_cylinders else self.indices("box")
-        half = [part.size_m if part.shape == "box" else (part.size_m[0], part.size_m[0], part.size_m[1])
-                for part in (self.parts[k] for k in index)]
+    def boxes(self, index: list[int]) -> tuple[np.ndarray, np.ndarray]:
+        """((N, B, 4, 4) poses, (B, 3) half extents) of the boxes parts[index] (a cylinder: the box around it)."""
+        half = [_half(self.parts[k]) for k in index]
         return self.poses[:, index], np.array(half, dtype=float).reshape(-1, 3)
 
 
@@ -100,6 +98,21 @@ class ArmBody:
             nxt = np.concatenate([frames[:, 1:-1], frames[:, -1:]], axis=1)
             out[:, 1:-1] = nxt @ self.link_inverse
         return out
+
+    def tool_bounds(self) -> tuple[np.ndarray, np.ndarray]:
+        """(T_tool_box (4, 4), half extents (3,)): the box around the tool's parts (open fingers, palm, cup) in the
+        tool frame, axis-aligned there; zero extents at the tool point for an arm without a tool."""
+        corners = [part.T_frame_part[:3, :3] @ (np.array(c) * _half(part)) + part.T_frame_part[:3, 3]
+                   for part in self.parts if part.frame == self.tool_frame
+                   for c in np.array(np.meshgrid([-1, 1], [-1, 1], [-1, 1])).reshape(3, -1).T]
+        low, high = (np.min(corners, axis=0), np.max(corners, axis=0)) if corners else (np.zeros(3), np.zeros(3))
+        T = np.eye(4)
+        T[:3, 3] = 0.5 * (low + high)
+        return T, 0.5 * (high - low)
+
+    @property
+    def tool_frame(self) -> int:
+        return len(self.link_inverse) + 1
 
     def finger_outline(self) -> FingerGripperOutline:
         """The palm and open fingers around the finger plane, relative to the gripper point (side grasps' planning
@@ -134,6 +147,14 @@ class ArmBody:
             local[:, 1, 3] += np.array([part.finger for part in parts]) * shift
         poses = frames[:, [part.frame for part in parts]] @ local[None]
         return PlacedBody(parts, poses)
+
+
+def _half(part: Part) -> tuple[float, float, float]:
+    """A box part's half extents, or those of the box around a capsule or cylinder (along its z)."""
+    if part.shape == "box":
+        return part.size_m
+    radius, half_length = part.size_m[:2]
+    return radius, radius, half_length + (radius if part.shape == "capsule" else 0.0)
 
 
 def held_block(edge_m: float, tool_frame: int) -> Part:

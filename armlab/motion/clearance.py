@@ -85,12 +85,12 @@ def first_collision(
     capsules = [k for k in moving if placed.parts[k].shape == "capsule"]
     solids = [k for k in moving if placed.parts[k].shape != "capsule"]
     ends, radii = placed.segments(capsules)  # (N, C, 2, 3), (C,)
-    halves = np.array([_box_half(placed.parts[k]) for k in solids]).reshape(-1, 3)
+    poses, halves = placed.boxes(solids)
     tool_margin = min(margin_m, TOOL_CLEARANCE_M)
     for box in boxes:
         centre, half = _obstacle(box)
         hit = np.concatenate([_segments_near_box(ends, radii + margin_m, centre, half),
-                              _boxes_near_box(placed.poses[:, solids], halves, centre, half + tool_margin)], axis=1)
+                              _boxes_near_box(poses, halves, centre, half + tool_margin)], axis=1)
         if hit[0].any():
             continue  # the arm starts this close (e.g. parked beside a block): moving away is the way out
         if hit.any():
@@ -107,11 +107,6 @@ def _obstacle(box: ObstacleBox) -> tuple[np.ndarray, np.ndarray]:
     bottom = -FLOOR_DEPTH_M
     return (np.array([box.center_xy_m[0], box.center_xy_m[1], 0.5 * (box.top_z_m + bottom)]),
             np.array([box.half_xy_m[0], box.half_xy_m[1], 0.5 * (box.top_z_m - bottom)]))
-
-
-def _box_half(part) -> tuple[float, float, float]:
-    """A box part's half extents, or those of the box around a cylinder (along its z)."""
-    return part.size_m if part.shape == "box" else (part.size_m[0], part.size_m[0], part.size_m[1])
 
 
 def _segments_near_box(ends: np.ndarray, reach_m: np.ndarray, centre: np.ndarray, half: np.ndarray) -> np.ndarray:
