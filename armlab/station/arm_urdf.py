@@ -11,7 +11,6 @@ finger's offset from the centre line (metres, the arm file's finger_offset range
 
 from __future__ import annotations
 
-import math
 from dataclasses import dataclass, field
 from pathlib import Path
 from xml.sax.saxutils import quoteattr
@@ -22,27 +21,11 @@ from armlab.config import config_dir, read_config_file
 from armlab.devices.arm_body import arm_body
 from armlab.devices.finger_gripper import load_finger_gripper_config
 from armlab.kinematics.arm_config import ArmConfig
+from armlab.kinematics.rotations import matrix_from_rpy, rpy_from_matrix
 
 TOOL_LINK = "tool_point"
 FINGER_JOINTS = ("left_finger", "right_finger")
 LINK_RADIUS_M = 0.005  # the lines drawn for links the arm's body gives no shape, without meshes
-
-
-def rpy_from_matrix(R: np.ndarray) -> tuple[float, float, float]:
-    """URDF roll, pitch, yaw (R = Rz(yaw) Ry(pitch) Rx(roll))."""
-    pitch = math.asin(max(-1.0, min(1.0, -R[2, 0])))
-    if abs(math.cos(pitch)) > 1e-9:
-        return math.atan2(R[2, 1], R[2, 2]), pitch, math.atan2(R[1, 0], R[0, 0])
-    return math.atan2(-R[1, 2], R[1, 1]), pitch, 0.0
-
-
-def matrix_from_rpy(rpy) -> np.ndarray:
-    r, p, y = rpy
-    cr, sr, cp, sp, cy, sy = math.cos(r), math.sin(r), math.cos(p), math.sin(p), math.cos(y), math.sin(y)
-    Rx = np.array([[1, 0, 0], [0, cr, -sr], [0, sr, cr]])
-    Ry = np.array([[cp, 0, sp], [0, 1, 0], [-sp, 0, cp]])
-    Rz = np.array([[cy, -sy, 0], [sy, cy, 0], [0, 0, 1]])
-    return Rz @ Ry @ Rx
 
 
 def transform(xyz=(0.0, 0.0, 0.0), R=None) -> np.ndarray:

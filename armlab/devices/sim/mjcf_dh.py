@@ -25,6 +25,7 @@ from armlab.devices.sim.mjcf_numbers import fmt_numbers as _fmt
 from armlab.kinematics import load_arm
 from armlab.kinematics.arm_config import ArmConfig
 from armlab.kinematics.rotations import quat_wxyz_from_matrix as _quat
+from armlab.kinematics.rotations import rotation_about
 
 GRIPPER_SITE = "gripper_point"  # same name as the RX200 model's (armlab.devices.sim.mjcf)
 CUP_BODY = "suction_cup"
@@ -39,13 +40,11 @@ ARM_GEOM = 'contype="2" conaffinity="1" group="1"'
 
 
 def _rx(angle: float) -> np.ndarray:
-    c, s = math.cos(angle), math.sin(angle)
-    return np.array([[1.0, 0.0, 0.0], [0.0, c, -s], [0.0, s, c]])
+    return rotation_about((1.0, 0.0, 0.0), angle)
 
 
 def _rz(angle: float) -> np.ndarray:
-    c, s = math.cos(angle), math.sin(angle)
-    return np.array([[c, -s, 0.0], [s, c, 0.0], [0.0, 0.0, 1.0]])
+    return rotation_about((0.0, 0.0, 1.0), angle)
 
 
 @dataclass(frozen=True)
