@@ -188,13 +188,13 @@ class ObjectConfig(StrictModel):
 
 class SelfFilterConfig(StrictModel):
     """The robot self-filter (armlab.vision.self_filter): the arm's volume, inflated, that perception
-    ignores: the arm's body, its links' capsules and housings grown by margin_m, the box around the gripper's
-    parts by gripper_margin_m (it hovers close over blocks that are the scene); a held block a cube between the
-    fingers, grown by held_block_margin_m."""
+    ignores: the arm's body, its links' capsules grown by margin_m, the base's housings and the box around the
+    gripper's parts by box_margin_m (blocks that are the scene stand close beside the base and under a hovering
+    gripper); a held block a cube between the fingers, grown by held_block_margin_m."""
 
     enabled: bool = True
-    margin_m: float = Field(0.022, ge=0.0, lt=0.2)  # the arm's links and housings (armlab.devices.arm_body) grown this much
-    gripper_margin_m: float = Field(0.007, ge=0.0, lt=0.2)  # the box around the gripper's parts grown this much
+    margin_m: float = Field(0.022, ge=0.0, lt=0.2)  # the arm's links' capsules (armlab.devices.arm_body) grown this much
+    box_margin_m: float = Field(0.007, ge=0.0, lt=0.2)  # the base's housings and the box around the gripper's parts
     held_block_edge_m: float = Field(0.038, ge=0.0, lt=0.5)
     held_block_margin_m: float = Field(0.01, ge=0.0, lt=0.1)
     pixel_step: int = Field(2, ge=1, le=8)

@@ -130,11 +130,12 @@ def _in_box(X, Y, Z, T_frame_box: np.ndarray, half_m: np.ndarray) -> np.ndarray:
 
 def robot_volume(model, joints_rad, cfg: SelfFilterConfig, held_block_edge_m: float | None = None) -> RobotVolume:
     """The robot's inflated volume at joints_rad (dof,) of an armlab.kinematics ArmModel: its body
-    (armlab.devices.arm_body, the shapes the simulation builds) grown by cfg.margin_m.
+    (armlab.devices.arm_body, the shapes the simulation builds), grown.
 
-    Capsules: the links' capsules; boxes: the base's housings, the box around the gripper's parts in the tool frame
-    (fingers open: the joints do not say how far) grown by cfg.gripper_margin_m, and a held block of held_block_edge_m (None: cfg's; 0: none),
-    spanning from half an edge behind the gripper point to a full edge beyond it, grown by cfg.held_block_margin_m.
+    Capsules: the links' capsules grown by cfg.margin_m; boxes grown by cfg.box_margin_m: the base's housings, the
+    box around the gripper's parts in the tool frame (fingers open: the joints do not say how far); and a held block
+    of held_block_edge_m (None: cfg's; 0: none), spanning from half an edge behind the gripper point to a full edge
+    beyond it, grown by cfg.held_block_margin_m.
     ValueError for malformed joints or a negative or non-finite edge.
     """
     edge = cfg.held_block_edge_m if held_block_edge_m is None else held_block_edge_m
@@ -149,7 +150,7 @@ def robot_volume(model, joints_rad, cfg: SelfFilterConfig, held_block_edge_m: fl
     poses, halves = placed.boxes(solids)
     T_tool_box, tool_half = body.tool_bounds()
     tool_pose = np.asarray(model.joint_frames(joints_rad))[-1] @ T_tool_box
-    box_poses, box_halves = [*poses[0], tool_pose], [*(halves + cfg.margin_m), tool_half + cfg.gripper_margin_m]
+    box_poses, box_halves = [*poses[0], tool_pose], [*(halves + cfg.box_margin_m), tool_half + cfg.box_margin_m]
     if edge > 0.0:
         (k,) = [k for k, part in enumerate(placed.parts) if part.name == "held block"]
         held_poses, held_half = placed.boxes([k])
