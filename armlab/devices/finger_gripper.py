@@ -1,8 +1,7 @@
 """The finger gripper's shape: its dimensions (config/sim.yaml `gripper:`, the sizes the simulation builds
-its fingers from) and, with the arm's gripper point and finger range (config/arms/<arm>.yaml), the outline
-of its palm and fingers around the finger plane, for planners that keep them clear of things
-(armlab.skills.side_grasp). Below the simulator, which builds the same gripper from the same numbers, so a
-planner needs no simulator to know the gripper's shape."""
+its fingers from) and the outline of its palm and fingers around the finger plane that the arm's body gives
+planners (armlab.devices.arm_body.load_finger_gripper_outline; armlab.skills.side_grasp). Below the simulator,
+which builds the same gripper from the same body, so a planner needs no simulator to know the gripper's shape."""
 
 from __future__ import annotations
 
@@ -13,7 +12,6 @@ from pydantic import Field
 
 from armlab.config import StrictModel, read_config_file, resolve_config_path, validate_config
 from armlab.errors import ConfigError
-from armlab.kinematics.arm_config import ArmConfig
 
 Positive = Annotated[float, Field(gt=0.0)]
 NonNegative = Annotated[float, Field(ge=0.0)]
@@ -54,19 +52,6 @@ class FingerGripperOutline:
     open_outer_m: float  # the palm's and the open fingers' outer faces from the finger plane's centre
 
 
-def finger_gripper_outline(gripper_point_m: float, finger_offset_max_m: float, g: FingerGripperConfig) -> FingerGripperOutline:
-    """The outline of a finger gripper whose gripper point lies gripper_point_m beyond the wrist_rotate joint
-    and whose fingers open to finger_offset_max_m from the centre line, with the dimensions `g`."""
-    return FingerGripperOutline(
-        palm_half_height_m=g.palm_half_height_m,
-        palm_front_behind_m=gripper_point_m - g.palm_depth_m,
-        palm_back_behind_m=gripper_point_m,
-        finger_half_height_m=0.5 * g.pad_width_m + g.finger_link_margin_m,
-        finger_tip_beyond_m=g.tip_beyond_gripper_point_m,
-        open_outer_m=finger_offset_max_m + g.palm_side_margin_m,
-    )
-
-
 def load_finger_gripper_config(name: str = "sim") -> FingerGripperConfig:
     """The `gripper:` section of config/<name>.yaml; ConfigError naming the file and field."""
     path = resolve_config_path(name, ".")
@@ -74,14 +59,3 @@ def load_finger_gripper_config(name: str = "sim") -> FingerGripperConfig:
     if not isinstance(section, dict):
         raise ConfigError(f"{path}: no gripper section")
     return validate_config(section, FingerGripperConfig, f"{path} gripper")
-
-
-def load_finger_gripper_outline(arm: str, sim: str = "sim") -> FingerGripperOutline:
-    """The outline of `arm`'s finger gripper (config/arms/<arm>.yaml gripper and urdf_origins, config/<sim>.yaml
-    gripper); ConfigError when the arm has no finger gripper or no gripper point."""
-    path = resolve_config_path(arm, "arms")
-    config = validate_config(read_config_file(path), ArmConfig, str(path))
-    if config.gripper is None or config.urdf_origins is None:
-        raise ConfigError(f"{path}: a finger gripper outline needs gripper and urdf_origins")
-    return finger_gripper_outline(config.urdf_origins["gripper_point"][0], config.gripper.finger_offset_max_m,
-                                  load_finger_gripper_config(sim))

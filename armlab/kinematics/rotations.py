@@ -1,11 +1,13 @@
 """Rotations, through one library (scipy's Rotation): axis-angle and rotation vectors to matrices, the angle between
-two orientations, the rotation taking one direction onto another, and the yaw quaternions of the scene and the
-simulator. Quaternions here are (w, x, y, z), MuJoCo's order; the kinematics' own screw exponentials
+two orientations, the rotation taking one direction onto another, the yaw quaternions of the scene and the
+simulator, URDF's roll-pitch-yaw and the recordings' quaternions. Quaternions are (w, x, y, z), MuJoCo's order, except
+quat_xyzw_from_matrix (ROS / Foxglove's); the kinematics' own screw exponentials
 (screws.matrix_exp3) stay in the Modern Robotics formulation they implement."""
 
 from __future__ import annotations
 
 import math
+import warnings
 
 import numpy as np
 from scipy.spatial.transform import Rotation
@@ -54,3 +56,23 @@ def yaw_from_quat_wxyz(quat_wxyz) -> float:
     """Heading of the body's x axis projected on the board (world xy), radians in (-pi, pi]."""
     x_world = Rotation.from_quat(np.asarray(quat_wxyz, dtype=float), scalar_first=True).apply(X_AXIS)
     return math.atan2(float(x_world[1]), float(x_world[0]))
+
+
+def quat_xyzw_from_matrix(R) -> tuple[float, float, float, float]:
+    """Unit quaternion (x, y, z, w) of a rotation matrix (the first 3 x 3 of R), as Python floats (ROS / Foxglove order)."""
+    x, y, z, w = Rotation.from_matrix(np.asarray(R, dtype=float)[:3, :3]).as_quat()
+    return float(x), float(y), float(z), float(w)
+
+
+def matrix_from_rpy(rpy_rad) -> np.ndarray:
+    """The rotation R = Rz(yaw) Ry(pitch) Rx(roll) of (roll, pitch, yaw) (URDF's fixed-axis order)."""
+    return Rotation.from_euler("xyz", np.asarray(rpy_rad, dtype=float)).as_matrix()
+
+
+def rpy_from_matrix(R) -> tuple[float, float, float]:
+    """(roll, pitch, yaw) with R = Rz(yaw) Ry(pitch) Rx(roll); at pitch +-90 deg (gimbal lock) one of the equivalent
+    triples (the rotation is what matters)."""
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", UserWarning)  # scipy's "Gimbal lock detected": the triple is still exact
+        roll, pitch, yaw = Rotation.from_matrix(np.asarray(R, dtype=float)[:3, :3]).as_euler("xyz")
+    return float(roll), float(pitch), float(yaw)

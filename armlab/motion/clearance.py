@@ -1,9 +1,9 @@
-"""Clearance between the arm and known objects: sampled link points against boxes around objects.
+"""Clearance between the arm and known objects: the arm's body against boxes around objects.
 
-The arm is modelled by points along its links (joint origins, points between them, the gripper
-point and the finger tips below it) inflated by a radius; objects (blocks, stacks, distractors) by
-axis-aligned boxes from the board up to their top. Boxes around objects are enough (issue 8): a plan
-that keeps every sample point outside every inflated box does not touch them. Pure: no devices.
+The arm is its body (armlab.devices.arm_body, the shapes the simulation builds): the links' capsules and the
+gripper's (or cup's) parts, kept a margin away; objects (blocks, stacks, distractors) are axis-aligned boxes from
+the board up to their top. Boxes around objects are enough (issue 8): a plan that keeps the body outside every
+grown box does not touch them. The self-check (self_collision) still samples points along the links. Pure: no devices.
 """
 
 from __future__ import annotations
@@ -13,6 +13,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from armlab.devices.arm import JointTrajectory
+from armlab.devices.arm_body import body_of
 
 LINK_POINTS_PER_SEGMENT = 4
 
@@ -48,41 +49,99 @@ def arm_points_m(model, positions_rad: np.ndarray, finger_length_m: float, held_
     return np.concatenate(points, axis=1)
 
 
+# How far the links keep from an obstacle box (which is already wider than a block at any yaw): 8 mm beyond the
+# link's surface. The tool's parts (fingers, palm, cup) and a held block are exact boxes that must come close to
+# blocks to grasp them: they keep TOOL_CLEARANCE_M (as fingers_hit's margin).
+CLEARANCE_M = 0.008
+TOOL_CLEARANCE_M = 0.003
+
+
 def first_collision(
     model,
     trajectory: JointTrajectory,
     boxes: list[ObstacleBox],
     *,
-    link_radius_m: float = 0.03,
-    finger_length_m: float = 0.03,
+    margin_m: float = CLEARANCE_M,
     held_edge_m: float | None = None,
     gripper_checked_m: float = 0.0,
 ) -> str | None:
-    """None when every sampled arm point keeps link_radius_m outside every box, else a sentence naming
-    the first box hit and when. gripper_checked_m: link points this close to the gripper point are left out
-    (fingers_hit checks the gripper's own box exactly there); the held block's point never is."""
+    """None when the arm's body (armlab.devices.arm_body: the links' capsules, the gripper's or cup's parts, a held
+    block of held_edge_m) keeps margin_m (the tool and the held block: the smaller of it and TOOL_CLEARANCE_M) from
+    every box at every sample, else a sentence naming the first box hit and when. The fingers stand open, or closed
+    on the held block. gripper_checked_m > 0: the tool's own parts are left out (fingers_hit checks the gripper's
+    box exactly there); the held block never is. The base's housings do not move (a box they touch at the start
+    they touch throughout): the start rule below would leave them out anyway."""
     if not boxes:
         return None
     positions = trajectory.positions_rad[:: max(1, len(trajectory.positions_rad) // 40)]
-    points = arm_points_m(model, positions, finger_length_m, held_edge_m)  # (N, P, 3)
-    if gripper_checked_m > 0.0:
-        gripper = np.asarray(model.fk(np.asarray(positions, float)), float).reshape(-1, 4, 4)[:, None, :3, 3]
-        near = np.linalg.norm(points - gripper, axis=-1) <= gripper_checked_m
-        if held_edge_m is not None:
-            near[:, -1] = False
-        points = np.where(near[..., None], np.inf, points)  # far from every box
+    body = body_of(model)
+    tool = len(model.joint_names) + 1
+    gripper = getattr(model.config, "gripper", None)
+    opening = None if held_edge_m is None or gripper is None else 0.5 * held_edge_m + gripper.pad_thickness_m
+    placed = body.place(model, positions, finger_offset_m=opening, held_edge_m=held_edge_m)
+    moving = [k for k, part in enumerate(placed.parts)
+              if 0 < part.frame < tool and part.shape == "capsule" or part.frame == tool
+              and (gripper_checked_m <= 0.0 or part.name == "held block")]
+    capsules = [k for k in moving if placed.parts[k].shape == "capsule"]
+    solids = [k for k in moving if placed.parts[k].shape != "capsule"]
+    ends, radii = placed.segments(capsules)  # (N, C, 2, 3), (C,)
+    poses, halves = placed.boxes(solids)
+    tool_margin = min(margin_m, TOOL_CLEARANCE_M)
     for box in boxes:
-        dx = np.abs(points[..., 0] - box.center_xy_m[0]) - box.half_xy_m[0]
-        dy = np.abs(points[..., 1] - box.center_xy_m[1]) - box.half_xy_m[1]
-        dz = points[..., 2] - box.top_z_m
-        outside = np.sqrt(np.maximum(dx, 0) ** 2 + np.maximum(dy, 0) ** 2 + np.maximum(dz, 0) ** 2)
-        hit = outside < link_radius_m
+        centre, half = _obstacle(box)
+        hit = np.concatenate([_segments_near_box(ends, radii + margin_m, centre, half),
+                              _boxes_near_box(poses, halves, centre, half + tool_margin)], axis=1)
         if hit[0].any():
             continue  # the arm starts this close (e.g. parked beside a block): moving away is the way out
         if hit.any():
             sample = int(np.argwhere(hit)[0][0])
-            return f"the arm passes within {link_radius_m * 1000:.0f} mm of {box.name} (top {box.top_z_m * 1000:.0f} mm) at sample {sample}"
+            return f"the arm passes within {margin_m * 1000:.0f} mm of {box.name} (top {box.top_z_m * 1000:.0f} mm) at sample {sample}"
     return None
+
+
+FLOOR_DEPTH_M = 1.0  # an obstacle box reaches this far below the board: whatever is under its top is inside it
+
+
+def _obstacle(box: ObstacleBox) -> tuple[np.ndarray, np.ndarray]:
+    """(centre, half extents) of an obstacle box as an axis-aligned box from below the board up to its top."""
+    bottom = -FLOOR_DEPTH_M
+    return (np.array([box.center_xy_m[0], box.center_xy_m[1], 0.5 * (box.top_z_m + bottom)]),
+            np.array([box.half_xy_m[0], box.half_xy_m[1], 0.5 * (box.top_z_m - bottom)]))
+
+
+def _segments_near_box(ends: np.ndarray, reach_m: np.ndarray, centre: np.ndarray, half: np.ndarray) -> np.ndarray:
+    """(N, C) bool: which segments (N, C, 2, 3) meet the box grown by their reach_m (C,) on every side (a slab test;
+    a square-grown box: at its edges and corners up to sqrt(3) times the reach, on the safe side)."""
+    p0, d = ends[:, :, 0] - centre, ends[:, :, 1] - ends[:, :, 0]
+    grown = half[None, None, :] + reach_m[None, :, None]
+    with np.errstate(divide="ignore", invalid="ignore"):
+        t0, t1 = (-grown - p0) / d, (grown - p0) / d
+    parallel = np.abs(d) < 1e-12
+    inside_slab = np.abs(p0) <= grown
+    lo = np.where(parallel, np.where(inside_slab, -np.inf, np.inf), np.minimum(t0, t1)).max(axis=-1)
+    hi = np.where(parallel, np.where(inside_slab, np.inf, -np.inf), np.maximum(t0, t1)).min(axis=-1)
+    return (np.maximum(lo, 0.0) <= np.minimum(hi, 1.0))
+
+
+def _boxes_near_box(poses: np.ndarray, halves: np.ndarray, centre: np.ndarray, half: np.ndarray) -> np.ndarray:
+    """(N, B) bool: which oriented boxes (poses (N, B, 4, 4), half extents (B, 3)) overlap the axis-aligned box
+    (centre, half): the separating-axis test over the 15 axes of two boxes."""
+    R = poses[..., :3, :3]  # columns: the part's axes in the world
+    A = np.abs(R) + 1e-9
+    T = centre - poses[..., :3, 3]  # (N, B, 3)
+    h = halves[None]  # (1, B, 3)
+    separated = np.any(np.abs(T) > half + np.einsum("nbij,nbj->nbi", A, np.broadcast_to(h, T.shape)), axis=-1)
+    along = np.einsum("nbij,nbi->nbj", R, T)
+    separated |= np.any(np.abs(along) > np.einsum("nbij,i->nbj", A, half) + h, axis=-1)
+    for i in range(3):
+        i1, i2 = (i + 1) % 3, (i + 2) % 3
+        for j in range(3):
+            j1, j2 = (j + 1) % 3, (j + 2) % 3
+            t = np.abs(T[..., i2] * R[..., i1, j] - T[..., i1] * R[..., i2, j])
+            ra = half[i1] * A[..., i2, j] + half[i2] * A[..., i1, j]
+            rb = h[..., j1] * A[..., i, j2] + h[..., j2] * A[..., i, j1]
+            separated |= t > ra + rb
+    return ~separated
 
 
 def lowest_corners_m(model, positions_rad: np.ndarray, corners_m: np.ndarray) -> tuple[np.ndarray, np.ndarray]:

@@ -22,7 +22,6 @@ class EndEffector(ABC):
 
     name: ClassVar[str]  # the workcell's gripper.type
     holds_by_sides: ClassVar[bool]  # may hold a block from the side (a tower's upper blocks) and carry it tilted
-    finger_length_m: ClassVar[float]  # tips below the gripper point, for the clearance of the last approach
     release_before_pick: ClassVar[str]  # the plan's first step's name
     missed_grasp: ClassVar[str]  # why a grasp that holds nothing failed, as the operator reads it
     has_palm: ClassVar[bool]  # a palm behind the fingers that the board check keeps off the board
@@ -51,7 +50,6 @@ class EndEffector(ABC):
 class Fingers(EndEffector):
     name = "fingers"
     holds_by_sides = True
-    finger_length_m = 0.03
     release_before_pick = "open before pick"
     missed_grasp = "the fingers closed on nothing"
     has_palm = True
@@ -76,7 +74,6 @@ class Fingers(EndEffector):
 class SuctionCup(EndEffector):
     name = "suction"
     holds_by_sides = False  # the seal holds the top face, which would turn sideways
-    finger_length_m = 0.0
     release_before_pick = "vacuum off before pick"
     missed_grasp = "the suction cup did not seal"
     has_palm = False

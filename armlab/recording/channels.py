@@ -52,6 +52,8 @@ from foxglove.messages import (
     Vector3,
 )
 
+from armlab.kinematics.rotations import quat_xyzw_from_matrix
+
 # topic -> Foxglove schema name (JSON channels: their own schema title). The tests and readers key on these.
 TOPICS = {
     "/joint_states": "foxglove.JointStates",  # measured (rad, rad/s)
@@ -83,6 +85,7 @@ BLOCK_RGBA = {  # a display colour per block colour name; unknown names are grey
 }
 
 
+
 def stamp(time_ns: int) -> Timestamp:
     return Timestamp(sec=int(time_ns // 1_000_000_000), nsec=int(time_ns % 1_000_000_000))
 
@@ -98,24 +101,15 @@ def joint_states(time_ns: int, names, positions_rad, velocities_rad_s=None) -> J
         JointState(name=str(name), position=q, velocity=v) for name, q, v in zip(names, positions, velocities)])
 
 
-def _quaternion_xyzw(R) -> tuple[float, float, float, float]:
-    """R: a rotation matrix's rows as Python floats (3 rows of at least 3)."""
-    w = math.sqrt(max(0.0, 1.0 + R[0][0] + R[1][1] + R[2][2])) / 2.0
-    x = math.copysign(math.sqrt(max(0.0, 1.0 + R[0][0] - R[1][1] - R[2][2])) / 2.0, R[2][1] - R[1][2])
-    y = math.copysign(math.sqrt(max(0.0, 1.0 - R[0][0] + R[1][1] - R[2][2])) / 2.0, R[0][2] - R[2][0])
-    z = math.copysign(math.sqrt(max(0.0, 1.0 - R[0][0] - R[1][1] + R[2][2])) / 2.0, R[1][0] - R[0][1])
-    return x, y, z, w
-
-
 def quaternion(rotation: np.ndarray) -> Quaternion:
     """A rotation matrix as a unit quaternion (x, y, z, w)."""
-    x, y, z, w = _quaternion_xyzw(np.asarray(rotation, dtype=float)[:3, :3].tolist())
+    x, y, z, w = quat_xyzw_from_matrix(rotation)
     return Quaternion(x=x, y=y, z=z, w=w)
 
 
 def _pose_parts(T_parent_child: np.ndarray) -> tuple[Vector3, Quaternion]:
     T = np.asarray(T_parent_child, dtype=float).tolist()  # Python floats once (the same values as T[i, j])
-    x, y, z, w = _quaternion_xyzw(T)
+    x, y, z, w = quat_xyzw_from_matrix(T_parent_child)
     return Vector3(x=T[0][3], y=T[1][3], z=T[2][3]), Quaternion(x=x, y=y, z=z, w=w)
 
 

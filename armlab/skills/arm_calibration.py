@@ -27,7 +27,6 @@ from armlab.kinematics.arm_calibration import MIN_POSES, ArmCalibration, ArmCali
 from armlab.motion.clearance import OBJECT_BOX_RADIUS_M, box_around, first_collision
 from armlab.skills.arm_camera import CalibrationPose, pose_joints, sight_marker_at_rest
 from armlab.skills.perceive import look
-from armlab.station.arm_info import station_end_effector
 from armlab.station.core import Station
 from armlab.station.jobs import Job, JobContext
 from armlab.vision.block import Block
@@ -127,14 +126,13 @@ def obstacle_boxes(objects: list[Block]) -> list:
 def clear_move(station: Station, pose: CalibrationPose, boxes: list) -> tuple[np.ndarray | None, str]:
     """(joints, "") for the pose, or for it raised by the first of CLEAR_RAISES_M whose move from the current joints
     is reachable, passes the gate's checks and keeps clear of boxes; (None, why) when none does."""
-    finger_length_m = station_end_effector(station).finger_length_m
     problem = "no height tried"
     for raise_m in CLEAR_RAISES_M:
         x, y, z = pose.position_m
         raised = CalibrationPose((x, y, z + raise_m), pose.pitch_rad, pose.wrist_rotate_rad)
         try:
             q = pose_joints(station, raised)
-            hit = first_collision(station.model, station.plan_move(q), boxes, finger_length_m=finger_length_m)
+            hit = first_collision(station.model, station.plan_move(q), boxes)
         except PLAN_REFUSALS as error:
             problem = str(error)
             continue

@@ -66,7 +66,7 @@ def path_problem(station: Station, steps: list, boxes: list[ObstacleBox], held_e
         for mask, link_boxes in ((over, tall), (~over, boxes)):
             if mask.sum() >= 2 and problem is None:
                 part = JointTrajectory(trajectory.times_s[mask] - trajectory.times_s[mask][0], trajectory.positions_rad[mask])
-                problem = first_collision(station.model, part, link_boxes, held_edge_m=held_edge_m, finger_length_m=0.0,
+                problem = first_collision(station.model, part, link_boxes, held_edge_m=held_edge_m,
                                           gripper_checked_m=fingers.back_m)
         problem = problem or fingers_hit(station.model, trajectory, fingers, boxes)
         if problem is not None:

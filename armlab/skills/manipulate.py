@@ -135,7 +135,6 @@ def _transfer_plan(station: Station, q_start, point_m, yaw_rad: float | None, bo
     model = station.model
     tool = station_end_effector(station)
     lowest_pitch = tool.lowest_pitch_rad(config)
-    finger_length_m = tool.finger_length_m  # the finger tips below the gripper point (clearance.first_collision)
     point_m = np.asarray(point_m, float)
     carried = 0.0 if held_edge_m is None else held_edge_m
     vertical = dict(speed_m_s=config.vertical_speed_m_s, accel_m_s2=config.vertical_accel_m_s2, rate_hz=config.sample_rate_hz)
@@ -174,7 +173,7 @@ def _transfer_plan(station: Station, q_start, point_m, yaw_rad: float | None, bo
     # The straight descent and rise skip the neighbours the fingers pass beside, but not a tall column:
     # reaching far past one, the stretched arm comes down onto its top.
     tall = [box for box in boxes if box.top_z_m > point_m[2] + TALL_OVER_TARGET_M]
-    down = next((c for c in (first_collision(model, t, tall, held_edge_m=held_edge_m, finger_length_m=finger_length_m)
+    down = next((c for c in (first_collision(model, t, tall, held_edge_m=held_edge_m)
                              for t in (descend, ascend)) if c), None)
     if down is not None:
         raise UnsafeTrajectory(f"no safe way down to ({point_m[0] * 1000:.0f}, {point_m[1] * 1000:.0f}) mm: {down}")
@@ -220,7 +219,7 @@ def _transfer_plan(station: Station, q_start, point_m, yaw_rad: float | None, bo
             (p for p in (gripper_box.first_exit(model, s.trajectory) for s in steps if isinstance(s, TrajectoryStep)) if p), None)
         if outside is not None:
             raise UnsafeTrajectory(f"no transfer to ({point_m[0] * 1000:.0f}, {point_m[1] * 1000:.0f}) mm inside the gripper box: {outside}")
-        collision = next((c for c in (first_collision(model, t, boxes, held_edge_m=held_edge_m, finger_length_m=finger_length_m)
+        collision = next((c for c in (first_collision(model, t, boxes, held_edge_m=held_edge_m)
                                       for t in checked) if c), None)
         if collision is None:
             return steps

@@ -27,7 +27,6 @@ from armlab.motion.clearance import first_collision
 from armlab.motion.safety import UnsafeTrajectory
 from armlab.skills.arm_camera import sight_marker_at_rest
 from armlab.skills.manipulate import run_steps
-from armlab.station.arm_info import station_end_effector
 from armlab.station.core import Station
 from armlab.station.jobs import JobContext
 from armlab.vision.gripper_marker import MarkerNotFound
@@ -192,7 +191,7 @@ def _descent_from(station: Station, q_from, grasp_m, near_z_m: float, pitch: flo
 
 def _checked(station: Station, trajectory, boxes: list):
     """trajectory, once it keeps clear of the obstacle boxes (UnsafeTrajectory naming what it would hit)."""
-    hit = first_collision(station.model, trajectory, boxes, finger_length_m=station_end_effector(station).finger_length_m)
+    hit = first_collision(station.model, trajectory, boxes)
     if hit:
         raise UnsafeTrajectory(f"it would hit {hit}")
     return trajectory

@@ -26,12 +26,12 @@ from functools import lru_cache
 
 import numpy as np
 
-from armlab.devices.finger_gripper import load_finger_gripper_outline
+from armlab.devices.arm_body import load_finger_gripper_outline
 from armlab.errors import PLAN_REFUSALS
 from armlab.kinematics import Unreachable
 from armlab.motion import GripperStep, TrajectoryStep, check_trajectory, plan_joint_move
 from armlab.motion.cartesian import plan_vertical_segment
-from armlab.motion.clearance import box_around, first_collision
+from armlab.motion.clearance import CLEARANCE_M, box_around, first_collision
 from armlab.motion.line import plan_line_segment
 from armlab.motion.safety import UnsafeTrajectory
 from armlab.station.arm_info import station_end_effector
@@ -48,8 +48,7 @@ FINGERS_OFF_M = 0.035  # after releasing, the open fingers slide back along them
 RETREAT_M = 0.07  # ... then down and toward the base to this far from the release point (the park checks the tower)
 RETREAT_DROP_M = 0.02
 BLOCK_MARGIN_M = 0.002  # the held block's corners keep this far from obstacles and the tower under it
-LINK_RADIUS_M = 0.03  # as armlab.motion.clearance: the links keep this far from obstacle boxes
-PARK_LINK_RADIUS_M = 0.015  # as the runner's park: the folded arm passes closer to objects than transfers do
+PARK_MARGIN_M = 0.0  # as the runner's park: the folded arm passes closer to objects than transfers do
 TOWER_BOX_HALF_M = 0.032  # the new tower's box when leaving it (as the runner's boxes around objects)
 EXIT_TURNS_RAD = tuple(np.radians((30.0, 45.0, 60.0, 90.0)))  # waist turns away from a tower before parking
 
@@ -87,8 +86,8 @@ def gripper_rotation(model, pitch_rad: float, bearing: float) -> np.ndarray:
 
 @lru_cache(maxsize=4)
 def gripper_outline(arm: str):
-    """The arm's finger gripper: palm and fingers around the finger plane (armlab.devices.finger_gripper's
-    FingerGripperOutline, from config/arms/<arm>.yaml and config/sim.yaml: the sizes the simulation builds)."""
+    """The arm's finger gripper: palm and fingers around the finger plane (FingerGripperOutline of the arm's body,
+    armlab.devices.arm_body: the parts the simulation builds)."""
     return load_finger_gripper_outline(arm)
 
 
@@ -156,13 +155,13 @@ def gripper_points(model, positions_rad: np.ndarray) -> np.ndarray:
 
 
 def _check(station: Station, trajectories: list, boxes: list, grasp: SideGrasp | None, edge_m: float,
-           block_boxes: list | None = None, link_radius_m: float = LINK_RADIUS_M) -> None:
+           block_boxes: list | None = None, margin_m: float = CLEARANCE_M) -> None:
     """Limits and table for every trajectory; links and the gripper's sides against boxes; the held
     block against block_boxes."""
     model = station.model
     for trajectory in trajectories:
         check_trajectory(model, trajectory, clearance_m=station.motion_config.board_clearance_m)
-        collision = first_collision(model, trajectory, boxes, link_radius_m=link_radius_m)
+        collision = first_collision(model, trajectory, boxes, margin_m=margin_m)
         positions = trajectory.positions_rad[:: max(1, len(trajectory.positions_rad) // 40)]
         if collision is None:
             sides = gripper_points(model, positions)
@@ -261,9 +260,9 @@ def _exit(station: Station, q_from, then_rad: np.ndarray, boxes: list) -> list:
     for q_via in candidates:
         try:
             legs = [] if q_via is None else [_joint_move(station, q_from, q_via)]
-            _check(station, legs, boxes, None, 0.0, link_radius_m=PARK_LINK_RADIUS_M)
+            _check(station, legs, boxes, None, 0.0, margin_m=PARK_MARGIN_M)
             _check(station, [_joint_move(station, q_from if q_via is None else q_via, then_rad)], boxes, None, 0.0,
-                   link_radius_m=PARK_LINK_RADIUS_M)
+                   margin_m=PARK_MARGIN_M)
         except PLAN_REFUSALS as error:
             problem = str(error)
             continue

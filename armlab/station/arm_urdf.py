@@ -11,7 +11,6 @@ finger's offset from the centre line (metres, the arm file's finger_offset range
 
 from __future__ import annotations
 
-import math
 from dataclasses import dataclass, field
 from pathlib import Path
 from xml.sax.saxutils import quoteattr
@@ -19,28 +18,14 @@ from xml.sax.saxutils import quoteattr
 import numpy as np
 
 from armlab.config import config_dir, read_config_file
+from armlab.devices.arm_body import arm_body
+from armlab.devices.finger_gripper import load_finger_gripper_config
 from armlab.kinematics.arm_config import ArmConfig
+from armlab.kinematics.rotations import matrix_from_rpy, rpy_from_matrix
 
 TOOL_LINK = "tool_point"
 FINGER_JOINTS = ("left_finger", "right_finger")
-LINK_RADIUS_M = 0.02  # the cylinders of an arm without meshes
-
-
-def rpy_from_matrix(R: np.ndarray) -> tuple[float, float, float]:
-    """URDF roll, pitch, yaw (R = Rz(yaw) Ry(pitch) Rx(roll))."""
-    pitch = math.asin(max(-1.0, min(1.0, -R[2, 0])))
-    if abs(math.cos(pitch)) > 1e-9:
-        return math.atan2(R[2, 1], R[2, 2]), pitch, math.atan2(R[1, 0], R[0, 0])
-    return math.atan2(-R[1, 2], R[1, 1]), pitch, 0.0
-
-
-def matrix_from_rpy(rpy) -> np.ndarray:
-    r, p, y = rpy
-    cr, sr, cp, sp, cy, sy = math.cos(r), math.sin(r), math.cos(p), math.sin(p), math.cos(y), math.sin(y)
-    Rx = np.array([[1, 0, 0], [0, cr, -sr], [0, sr, cr]])
-    Ry = np.array([[cp, 0, sp], [0, 1, 0], [-sp, 0, cp]])
-    Rz = np.array([[cy, -sy, 0], [sy, cy, 0], [0, 0, 1]])
-    return Rz @ Ry @ Rx
+LINK_RADIUS_M = 0.005  # the lines drawn for links the arm's body gives no shape, without meshes
 
 
 def transform(xyz=(0.0, 0.0, 0.0), R=None) -> np.ndarray:
@@ -100,6 +85,9 @@ class _Chain:
             extra += f'<limit lower="{limits[0]:.9g}" upper="{limits[1]:.9g}" effort="1" velocity="1"/>'
         self.joints.append(f'<joint name={quoteattr(name)} type="{kind}"><parent link={quoteattr(parent)}/>'
                            f'<child link={quoteattr(child)}/>{_origin(T)}{extra}</joint>')
+
+    def collision(self, link: str, name: str, T: np.ndarray, geometry: str) -> None:
+        self.links[link].append(f'<collision name={quoteattr(name)}>{_origin(T)}<geometry>{geometry}</geometry></collision>')
 
     def visual(self, link: str, T: np.ndarray, geometry: str, material: str) -> None:
         self.links[link].append(f'<visual>{_origin(T)}<geometry>{geometry}</geometry>'
@@ -184,6 +172,8 @@ def arm_urdf(config: ArmConfig, T_world_base: np.ndarray, meshes: MeshSet | None
             chain.joint(joint, "prismatic", last, f"{joint}_link", origin, axis=(0.0, sign, 0.0),
                         limits=(g.finger_offset_min_m, g.finger_offset_max_m))
             frames[joint] = (f"{joint}_link", np.eye(4))
+    finger_from_tool = np.linalg.inv(origin) @ tool_T if config.gripper is not None else np.eye(4)
+    drawn = _body(chain, config, names, meshes is None, finger_from_tool)
     if meshes is not None:
         scale = f"{meshes.scale:g} {meshes.scale:g} {meshes.scale:g}"
         for visual in meshes.visuals:
@@ -191,29 +181,57 @@ def arm_urdf(config: ArmConfig, T_world_base: np.ndarray, meshes: MeshSet | None
             T = vendor @ transform(visual.get("xyz", (0.0, 0.0, 0.0)), matrix_from_rpy(visual.get("rpy", (0.0, 0.0, 0.0))))
             chain.visual(link, T, f'<mesh filename={quoteattr(meshes.url + visual["file"])} scale="{scale}"/>', "arm")
     else:
-        _skeleton(chain, names, link_T, tool_T, config)
+        _skeleton(chain, names, link_T, tool_T, config, drawn)
     if config.suction_cup is not None:
         cup = config.suction_cup
-        chain.link(TOOL_LINK)
-        _cylinder(chain, TOOL_LINK, (-cup.body_length_m, 0, 0), (0, 0, 0), cup.body_radius_m, "tool")
-        _cylinder(chain, TOOL_LINK, (-0.004, 0, 0), (0, 0, 0), cup.lip_radius_m + 0.002, "tool")
-    elif config.gripper is not None and not fingers:
-        g = config.gripper
-        for joint in FINGER_JOINTS:
-            _cylinder(chain, f"{joint}_link", (-0.04, 0, 0), (0, 0, 0), g.pad_thickness_m, "tool")
+        _cylinder(chain, TOOL_LINK, (-0.004, 0, 0), (0, 0, 0), cup.lip_radius_m + 0.002, "tool")  # the lip
     color = meshes.color if meshes is not None else (0.15, 0.15, 0.17)
     materials = (f'<material name="arm"><color rgba="{color[0]:g} {color[1]:g} {color[2]:g} 1"/></material>'
                  '<material name="tool"><color rgba="0.25 0.25 0.27 1"/></material>')
     return chain.xml(config.name, materials)
 
 
-def _skeleton(chain: _Chain, names: list[str], link_T: dict, tool_T: np.ndarray, config: ArmConfig) -> None:
-    """Cylinders from each joint to the next (and the last to the tool point): the arm without meshes."""
-    chain.link("base")
-    _cylinder(chain, "base", (0, 0, 0), (0, 0, 0.04), 1.6 * LINK_RADIUS_M, "arm")
+def _body(chain: _Chain, config: ArmConfig, names: list[str], visuals: bool, finger_from_tool: np.ndarray) -> set[str]:
+    """The arm's body (armlab.devices.arm_body, the shapes the simulation and the planning checks use) as each
+    link's collision shapes, and as its visuals when there are no meshes (a capsule: a cylinder and two spheres;
+    a finger's parts on its finger link, open fingers at the full offset; finger_from_tool: the tool point's frame in a
+    finger link's at zero offset). The links that got a shape."""
+    body = arm_body(config, load_finger_gripper_config() if config.gripper is not None else None)
+    frames = ["base", *[f"{name}_link" for name in names], TOOL_LINK]
+    fmax = body.finger_offset_max_m
+    drawn = set()
+    for part in body.parts:
+        link, T = frames[part.frame], part.T_frame_part
+        if part.finger:
+            link, T = f"{FINGER_JOINTS[0 if part.finger > 0 else 1]}_link", T.copy()
+            T[1, 3] -= part.finger * fmax  # the finger link's frame moves with the finger offset
+            T = finger_from_tool @ T
+        chain.link(link)
+        drawn.add(link)
+        if part.shape == "box":
+            shapes = [(T, f'<box size="{" ".join(f"{2 * v:.9g}" for v in part.size_m)}"/>')]
+        else:
+            radius, half = part.size_m[:2]
+            shapes = [(T, f'<cylinder radius="{radius:.9g}" length="{2 * half:.9g}"/>')]
+            if part.shape == "capsule":
+                shapes += [(T @ transform((0.0, 0.0, end)), f'<sphere radius="{radius:.9g}"/>') for end in (-half, half)]
+        for pose, geometry in shapes:
+            chain.collision(link, part.name, pose, geometry)
+            if visuals:
+                chain.visual(link, pose, geometry, "tool" if part.frame == len(frames) - 1 else "arm")
+    return drawn
+
+
+def _skeleton(chain: _Chain, names: list[str], link_T: dict, tool_T: np.ndarray, config: ArmConfig, drawn: set[str]) -> None:
+    """Thin cylinders from each joint to the next (and the last to the tool point) for the links the arm's body
+    gives no shape (a link without a radius in the arm file): the arm without meshes."""
+    if "base" not in drawn:
+        _cylinder(chain, "base", (0, 0, 0), (0, 0, 0.04), 6 * LINK_RADIUS_M, "arm")
     for i, name in enumerate(names):
         nxt = link_T[names[i + 1]][1] if i + 1 < len(names) else tool_T
         link = f"{name}_link"
+        if link in drawn:
+            continue
         if config.dh is not None and config.urdf_origins is None:  # DH: d along z, then a along x
             _o, d, a, _alpha, _s = config.dh.rows[i]
             _cylinder(chain, link, (0, 0, 0), (0, 0, d), LINK_RADIUS_M, "arm")

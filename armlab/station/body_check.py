@@ -8,7 +8,7 @@ from functools import lru_cache
 
 import numpy as np
 
-from armlab.devices.finger_gripper import load_finger_gripper_outline
+from armlab.devices.arm_body import load_finger_gripper_outline
 from armlab.errors import ConfigError
 from armlab.motion.clearance import lowest_corners_m
 from armlab.motion.gripper_step import FingerBox

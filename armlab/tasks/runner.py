@@ -38,7 +38,7 @@ from armlab.vision.geometry import project_points
 MAX_ATTEMPTS_PER_MOVE = 3
 MAX_LOOKS = 200  # a job that has looked this often without finishing stops (no endless loops)
 MAX_CONFIRM_LOOKS = 2  # looks again, at most this often a run, when it would finish seeing fewer blocks than before
-PARK_CLEARANCE_M = 0.015  # the sleep pose is low beside the base: it passes blocks closer than transfers do
+PARK_CLEARANCE_M = 0.0  # the sleep pose is low beside the base: its body may pass right by the boxes around blocks
 PARK_RISE_Z_M = 0.32  # how high the gripper rises before parking when the straight way is blocked
 PARK_FRONT_VIA_M = (0.0, 0.16, 0.16)  # else through here, in front of the base, clear of it and of the board
 REACH_REGION_M = ((-0.34, 0.34), (-0.15, 0.34))  # every board spot free_spot can offer (its reach band cuts it)
@@ -152,7 +152,7 @@ class TaskRunner:
                     self.station.check_body(leg)  # drooping, passes nearer its base than the nominal one
             except PLAN_REFUSALS:  # an IK point a hair outside a limit, or a leg through the arm's base: the next route
                 continue
-            if all(first_collision(model, leg, boxes, link_radius_m=PARK_CLEARANCE_M) is None for leg in legs):
+            if all(first_collision(model, leg, boxes, margin_m=PARK_CLEARANCE_M) is None for leg in legs):
                 for leg in legs:
                     self.station.run_trajectory(self.ctx, leg)
                 return

@@ -188,25 +188,16 @@ class ObjectConfig(StrictModel):
 
 class SelfFilterConfig(StrictModel):
     """The robot self-filter (armlab.vision.self_filter): the arm's volume, inflated, that perception
-    ignores. Links are capsules along the joint frames; the gripper a box in the gripper-point frame
-    (x = approach axis, y = the fingers' closing axis); a held block a cube between the fingers."""
+    ignores: the arm's body, its links' capsules grown by margin_m, the base's housings and the box around the
+    gripper's parts by box_margin_m (blocks that are the scene stand close beside the base and under a hovering
+    gripper); a held block a cube between the fingers, grown by held_block_margin_m."""
 
     enabled: bool = True
-    link_radius_m: float = Field(0.04, gt=0.0, lt=0.5)
-    base_radius_m: float = Field(0.07, gt=0.0, lt=0.5)
-    gripper_x_m: tuple[float, float] = (-0.105, 0.02)
-    gripper_half_width_m: float = Field(0.06, gt=0.0, lt=0.5)
-    gripper_half_height_m: float = Field(0.035, gt=0.0, lt=0.5)
+    margin_m: float = Field(0.022, ge=0.0, lt=0.2)  # the arm's links' capsules (armlab.devices.arm_body) grown this much
+    box_margin_m: float = Field(0.007, ge=0.0, lt=0.2)  # the base's housings and the box around the gripper's parts
     held_block_edge_m: float = Field(0.038, ge=0.0, lt=0.5)
     held_block_margin_m: float = Field(0.01, ge=0.0, lt=0.1)
     pixel_step: int = Field(2, ge=1, le=8)
-
-    @model_validator(mode="after")
-    def _ordered(self) -> SelfFilterConfig:
-        low, high = self.gripper_x_m
-        if not low < high:
-            raise ValueError(f"gripper_x_m: lower bound {low} must be below upper bound {high}")
-        return self
 
 
 class PerceptionConfig(StrictModel):

@@ -1,9 +1,10 @@
 """Robot self-filter: which depth pixels belong to the robot, so perception ignores the arm and the
 block it holds (the point-cloud pipelines' "robot self-filter").
 
-From FK of the measured joints (ArmModel.joint_frames) the robot becomes a simple inflated volume in
-the world frame: capsules along the links, a box for the gripper and fingers, and a cube between
-the fingers for a held block. A depth pixel is the robot when its 3-D point lies inside that volume;
+From FK of the measured joints (ArmModel.joint_frames) the robot's body (armlab.devices.arm_body, the
+shapes the simulation builds) becomes an inflated volume in the world frame: the links' capsules, the
+base's housings, a box around the gripper and its open fingers, and a cube between the fingers for a
+held block. A depth pixel is the robot when its 3-D point lies inside that volume;
 a pixel with no depth reading is the robot when it lies inside the volume's projected silhouette.
 A block on the board under a hovering gripper is not masked (its points are far below the gripper);
 a block held in the gripper is. Only pixels inside each part's projected silhouette are back-projected,
@@ -20,6 +21,7 @@ from dataclasses import dataclass
 import cv2
 import numpy as np
 
+from armlab.devices.arm_body import body_of
 from armlab.vision.calibration import Calibration
 from armlab.vision.config import SelfFilterConfig
 from armlab.vision.geometry import as_points, invert_transform, normalized_rays, project_points_rt, projection_pose
@@ -127,51 +129,39 @@ def _in_box(X, Y, Z, T_frame_box: np.ndarray, half_m: np.ndarray) -> np.ndarray:
 
 
 def robot_volume(model, joints_rad, cfg: SelfFilterConfig, held_block_edge_m: float | None = None) -> RobotVolume:
-    """The robot's inflated volume at joints_rad (dof,) of an armlab.kinematics ArmModel.
+    """The robot's inflated volume at joints_rad (dof,) of an armlab.kinematics ArmModel: its body
+    (armlab.devices.arm_body, the shapes the simulation builds), grown.
 
-    Capsules: base origin -> first joint frame -> ... -> last joint frame (the first two with
-    cfg.base_radius_m, the rest with cfg.link_radius_m); a box for the gripper in the gripper-point
-    frame; a cube between the fingers for a held block of held_block_edge_m (None: cfg's; 0: none),
-    spanning from half an edge above the gripper point to a full edge below it, plus the margin.
+    Capsules: the links' capsules grown by cfg.margin_m; boxes grown by cfg.box_margin_m: the base's housings, the
+    box around the gripper's parts in the tool frame (fingers open: the joints do not say how far); and a held block
+    of held_block_edge_m (None: cfg's; 0: none), spanning from half an edge behind the gripper point to a full edge
+    beyond it, grown by cfg.held_block_margin_m.
     ValueError for malformed joints or a negative or non-finite edge.
     """
-    frames = model.joint_frames(joints_rad)  # (dof + 1, 4, 4): joint origins, then the gripper point
     edge = cfg.held_block_edge_m if held_block_edge_m is None else held_block_edge_m
     if not (isinstance(edge, (int, float)) and math.isfinite(edge) and 0.0 <= edge < 0.5):
         raise ValueError(f"held_block_edge_m must be a finite number in [0, 0.5) m, got {held_block_edge_m!r}")
-    points = np.vstack([np.asarray(model.T_world_base)[:3, 3], frames[:-1, :3, 3]])
-    ends = np.stack([points[:-1], points[1:]], axis=1)
-    radii = np.full(len(ends), cfg.link_radius_m)
-    radii[:2] = cfg.base_radius_m
-    if len(ends) > 2 and _off_segment_m(points[1], points[0], points[2]) < 1e-3:  # base, waist, shoulder in a line
-        ends, radii = np.concatenate([[[points[0], points[2]]], ends[2:]]), radii[1:]
-    T_gripper = frames[-1]
-    x0, x1 = cfg.gripper_x_m
-    boxes = [(_offset(T_gripper, 0.5 * (x0 + x1)), (0.5 * (x1 - x0), cfg.gripper_half_width_m, cfg.gripper_half_height_m))]
+    body = body_of(model)
+    tool = body.tool_frame
+    placed = body.place(model, joints_rad, held_edge_m=edge if edge > 0.0 else None)
+    capsules = placed.indices("capsule")
+    solids = [k for k, part in enumerate(placed.parts) if part.shape != "capsule" and part.frame != tool]
+    ends, radii = placed.segments(capsules)
+    poses, halves = placed.boxes(solids)
+    T_tool_box, tool_half = body.tool_bounds()
+    tool_pose = np.asarray(model.joint_frames(joints_rad))[-1] @ T_tool_box
+    box_poses, box_halves = [*poses[0], tool_pose], [*(halves + cfg.box_margin_m), tool_half + cfg.box_margin_m]
     if edge > 0.0:
-        margin = cfg.held_block_margin_m
-        half_across = 0.5 * edge + margin
-        boxes.append((_offset(T_gripper, 0.25 * edge), (0.75 * edge + margin, half_across, half_across)))
+        (k,) = [k for k, part in enumerate(placed.parts) if part.name == "held block"]
+        held_poses, held_half = placed.boxes([k])
+        box_poses.append(held_poses[0, 0])
+        box_halves.append(held_half[0] + cfg.held_block_margin_m)
     return RobotVolume(
-        capsule_ends_m=ends,
-        capsule_radii_m=radii,
-        box_poses=np.array([T for T, _ in boxes]),
-        box_half_extents_m=np.array([half for _, half in boxes], dtype=float),
+        capsule_ends_m=ends[0],
+        capsule_radii_m=radii + cfg.margin_m,
+        box_poses=np.array(box_poses),
+        box_half_extents_m=np.array(box_halves, dtype=float),
     )
-
-
-def _off_segment_m(p: np.ndarray, a: np.ndarray, b: np.ndarray) -> float:
-    """Distance of point p from the segment a-b."""
-    ab = b - a
-    t = min(max(float((p - a) @ ab) / max(float(ab @ ab), 1e-18), 0.0), 1.0)
-    return float(np.linalg.norm(p - a - t * ab))
-
-
-def _offset(T: np.ndarray, along_x_m: float) -> np.ndarray:
-    """T moved along its own x axis."""
-    moved = T.copy()
-    moved[:3, 3] = T[:3, 3] + along_x_m * T[:3, 0]
-    return moved
 
 
 class _RayGrid:

@@ -8,7 +8,8 @@ import xml.etree.ElementTree as ET
 
 import pytest
 
-from armlab.devices.finger_gripper import load_finger_gripper_config, load_finger_gripper_outline
+from armlab.devices.arm_body import load_finger_gripper_outline
+from armlab.devices.finger_gripper import load_finger_gripper_config
 from armlab.devices.sim.config import load_sim_config
 from armlab.devices.sim.mjcf import GRIPPER_SITE, ArmGeometry
 from armlab.errors import ConfigError

@@ -2,16 +2,20 @@
 
 import math
 
+import mujoco
 import numpy as np
 import pytest
 
 from armlab.kinematics.rotations import (
+    matrix_from_rpy,
     quat_wxyz_from_matrix,
     quat_wxyz_from_yaw,
+    quat_xyzw_from_matrix,
     rotation_about,
     rotation_angle_rad,
     rotation_from_rotvec,
     rotation_taking,
+    rpy_from_matrix,
     yaw_from_quat_wxyz,
 )
 
@@ -54,3 +58,23 @@ def test_quaternions_are_scalar_first_and_yaw_round_trips():
         assert yaw_from_quat_wxyz(quat_wxyz_from_yaw(yaw)) == pytest.approx(yaw)
     pitched = quat_wxyz_from_matrix(rotation_about([0.0, 0.0, 1.0], 0.7) @ rotation_about([0.0, 1.0, 0.0], 0.3))
     assert yaw_from_quat_wxyz(pitched) == pytest.approx(0.7)  # the heading of x projected on the board
+
+
+def test_recording_quaternions_are_mujocos_in_ros_order():
+    """quat_xyzw_from_matrix (the recordings' /tf) against MuJoCo's own conversion, up to the sign of a quaternion."""
+    rng = np.random.default_rng(3)
+    for rotvec in rng.normal(size=(50, 3)) * 2.0:
+        R = rotation_from_rotvec(rotvec)
+        reference = np.zeros(4)
+        mujoco.mju_mat2Quat(reference, R.reshape(-1))
+        x, y, z, w = quat_xyzw_from_matrix(R)
+        mine = np.array([w, x, y, z])
+        assert min(np.abs(mine - reference).max(), np.abs(mine + reference).max()) < 1e-9
+
+
+@pytest.mark.parametrize("rpy", [(0.3, -0.4, 2.0), (0.0, math.pi / 2, 0.0), (0.7, -math.pi / 2, -1.1), (math.pi, 0.2, 0.0)])
+def test_urdf_roll_pitch_yaw_is_rz_ry_rx_and_round_trips_through_gimbal_lock(rpy):
+    roll, pitch, yaw = rpy
+    expected = rotation_about((0, 0, 1), yaw) @ rotation_about((0, 1, 0), pitch) @ rotation_about((1, 0, 0), roll)
+    np.testing.assert_allclose(matrix_from_rpy(rpy), expected, atol=1e-12)
+    np.testing.assert_allclose(matrix_from_rpy(rpy_from_matrix(expected)), expected, atol=1e-9)

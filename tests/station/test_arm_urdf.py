@@ -11,6 +11,7 @@ import xml.etree.ElementTree as ET
 import numpy as np
 import pytest
 
+from armlab.devices.arm_body import body_of
 from armlab.station.arm_urdf import TOOL_LINK, MeshSet, arm_urdf, matrix_from_rpy, part_links, transform
 from armlab.workcell import load_workcell_arm
 
@@ -103,3 +104,35 @@ def test_every_part_a_refusal_names_is_drawn_by_links_of_the_urdf(workcell, with
     tool = {"left_finger_link", "right_finger_link"} if model.config.gripper is not None else {TOOL_LINK}
     assert set(links["fingers"]) == tool and tool <= set(links["gripper point"])
     assert links[names[1]] == [f"{names[1]}_link"]  # a joint at its limit: the link it turns
+
+
+@pytest.mark.parametrize("workcell", ["rx200_armlab", "ur3_suction"])
+@pytest.mark.parametrize("with_meshes", [True, False])
+def test_the_urdf_collision_shapes_are_the_arm_body_where_the_model_puts_it(workcell, with_meshes):
+    """Every part of the arm's body (armlab.devices.arm_body: what the simulation builds and the checks use) is a
+    collision shape of the URDF named after it, and posed by the URDF's joints at random joints and finger offsets
+    it is where the arm model puts the body; without meshes the same shapes are what the panel draws."""
+    model = load_workcell_arm(workcell)
+    meshes = MeshSet.load(model.name) if with_meshes else None
+    urdf = arm_urdf(model.config, np.asarray(model.T_world_base), meshes)
+    body = body_of(model)
+    root = ET.fromstring(urdf)
+    shapes = {}  # part name -> (link, first origin)
+    for link in root.iter("link"):
+        for collision in link.iter("collision"):
+            origin = collision.find("origin")
+            shapes.setdefault(collision.get("name"), (link.get("name"), transform(
+                [float(v) for v in origin.get("xyz").split()], matrix_from_rpy([float(v) for v in origin.get("rpy").split()]))))
+            if not with_meshes:
+                assert link.find("visual") is not None
+    assert set(shapes) == {part.name for part in body.parts} and shapes
+    rng = np.random.default_rng(9)
+    for _ in range(10):
+        q = rng.uniform(np.maximum(model.lower_rad, -math.pi), np.minimum(model.upper_rad, math.pi))
+        offset = rng.uniform(0.016, 0.037) if model.config.gripper is not None else None
+        fingers = {} if offset is None else {"left_finger": offset, "right_finger": offset}
+        poses = urdf_link_poses(urdf, dict(zip(model.joint_names, q.tolist())) | fingers)
+        placed = body.place(model, q, finger_offset_m=offset)
+        for k, part in enumerate(placed.parts):
+            link, T = shapes[part.name]
+            np.testing.assert_allclose(poses[link] @ T, placed.poses[0, k], atol=1e-6, err_msg=part.name)

@@ -11,10 +11,11 @@ import cv2
 import numpy as np
 import pytest
 
+from armlab.devices.arm_body import load_arm_body
 from armlab.devices.camera import Frame
 from armlab.devices.sim import SimWorkcell, SimWorkcellConfig
 from armlab.errors import ConfigError
-from armlab.kinematics.arm_model import load_arm
+from armlab.kinematics.arm_model import ArmModel, load_arm
 from armlab.motion import plan_joint_move
 from armlab.scene import Scene, SceneObject, quat_from_yaw
 from armlab.station.perception import analyse_frame, with_robot_state
@@ -274,6 +275,40 @@ def test_volume_contains_the_links_and_what_is_between_the_fingers_only(arm):
     assert not empty_hand.contains(np.array([gripper + [0, 0, -0.035]])).any()
 
 
+def test_the_volume_is_the_arm_body_grown_by_the_margin(arm):
+    """The self-filter's volume is the arm's body (armlab.devices.arm_body): at random joints every point on the
+    surface of the body's links, housings and gripper parts is inside it; a point a few millimetres beyond the
+    forearm's grown surface is outside, and inside for the same arm with thicker links in its file (a filter with
+    radii of its own answers both the same)."""
+    cfg = SelfFilterConfig()
+    body = load_arm_body("rx200")
+    rng = np.random.default_rng(11)
+    unit = np.array(np.meshgrid([-1, 0, 1], [-1, 0, 1], [-1, 0, 1])).reshape(3, -1).T
+    thick = ArmModel(arm.config.model_copy(update={"link_radii_m": [0.0, 0.03, 0.03, 0.03, 0.0]}))
+    compared = 0
+    for _ in range(10):
+        q = rng.uniform(arm.lower_rad, arm.upper_rad)
+        volume = robot_volume(arm, q, cfg, held_block_edge_m=0.0)
+        placed = body.place(arm, q)
+        for k, part in enumerate(placed.parts):
+            T = placed.poses[0, k]
+            if part.shape == "box":
+                local = unit * np.asarray(part.size_m)
+            else:  # the rim of each end and the middle of a capsule or cylinder
+                radius, half = part.size_m[:2]
+                ring = np.array([[radius * np.cos(a), radius * np.sin(a)] for a in np.linspace(0, 2 * np.pi, 8)])
+                local = np.array([[x, y, z] for x, y in ring for z in (-half, 0.0, half)])
+            assert volume.contains(local @ T[:3, :3].T + T[:3, 3]).all(), part.name
+        (k,) = [k for k, part in enumerate(placed.parts) if part.name == "elbow_capsule"]
+        T, radius = placed.poses[0, k], placed.parts[k].size_m[0]
+        beyond = T[:3, 3] + (radius + cfg.margin_m + 0.004) * T[:3, 0]  # off the forearm's middle, square to it
+        if robot_volume(arm, q, cfg, held_block_edge_m=0.0).contains(beyond[None]).any():
+            continue  # another part (the upper arm folded against it) is there
+        assert robot_volume(thick, q, cfg, held_block_edge_m=0.0).contains(beyond[None]).all()
+        compared += 1
+    assert compared >= 5
+
+
 def test_bad_input_is_refused(run, arm, cfg):
     pose = run["poses"]["lifted"]
     frame, cal = pose["frame"], run["cal"]
@@ -293,9 +328,8 @@ def test_bad_input_is_refused(run, arm, cfg):
 @pytest.mark.parametrize(
     ("change", "field"),
     [
-        ({"gripper_x_m": [0.02, -0.1]}, "gripper_x_m"),
-        ({"link_radius_m": -0.01}, "link_radius_m"),
-        ({"link_radius_m": float("nan")}, "link_radius_m"),
+        ({"margin_m": -0.01}, "margin_m"),
+        ({"margin_m": float("nan")}, "margin_m"),
         ({"pixel_step": 0}, "pixel_step"),
         ({"inflate": 1.0}, "inflate"),
     ],

@@ -11,7 +11,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from armlab.config import read_config_file, resolve_config_path
+from armlab.config import read_config_file, resolve_config_path, validate_config
+from armlab.devices.arm_body import arm_body
 from armlab.devices.sim import textures
 from armlab.devices.sim.arm_realism import GEAR_ARMATURE, GEAR_SUFFIX, RealArm
 from armlab.devices.sim.checkerboard import BODY_NAME as CHECKERBOARD
@@ -22,6 +23,7 @@ from armlab.devices.sim.feeder import FEEDER_PROBE, parked_objects
 from armlab.devices.sim.mjcf_dh import DhArmGeometry
 from armlab.devices.sim.mjcf_numbers import feed_forward_actuator
 from armlab.devices.sim.mjcf_numbers import fmt_numbers as _fmt
+from armlab.kinematics.arm_config import ArmConfig
 from armlab.kinematics.rotations import quat_wxyz_from_matrix
 from armlab.scene import Scene, SceneObject
 from armlab.workcell import Workcell, load_workcell
@@ -58,10 +60,12 @@ class ArmGeometry:
     sleep_rad: np.ndarray
     link_radii_m: tuple[float, ...] = ()  # the arm config's link_radii_m (the links' capsules)
     real: RealArm | None = None  # the real arm (armlab.devices.sim.arm_realism; origins and base already the rig's)
+    config: ArmConfig | None = None  # the validated arm file (its shapes: armlab.devices.arm_body, with origins_m)
 
     @classmethod
     def load(cls, name: str = "rx200") -> ArmGeometry:
-        data = read_config_file(resolve_config_path(name, "arms"))
+        path = resolve_config_path(name, "arms")
+        data = read_config_file(path)
         gripper = data["gripper"]
         return cls(
             joint_names=tuple(data["joint_names"]),
@@ -75,6 +79,7 @@ class ArmGeometry:
             T_world_base=np.asarray(data["T_world_base"], dtype=float),
             sleep_rad=np.asarray(data["poses"]["sleep_rad"], dtype=float),
             link_radii_m=tuple(float(v) for v in data.get("link_radii_m") or ()),
+            config=validate_config(data, ArmConfig, str(path)),
         )
 
 
@@ -118,58 +123,77 @@ def _arm_xml(arm: ArmGeometry, sim: SimConfig, gripper_extras: str = "") -> str:
             f'<joint name="{names[i]}{GEAR_SUFFIX}" axis="{axis}" armature="{GEAR_ARMATURE}"/>'
         )
 
-    # Gripper geometry in the gripper link's frame (origin at the wrist_rotate joint, x = approach axis).
+    # The shapes come from the arm's body (armlab.devices.arm_body): the same parts the planning checks, the
+    # self-filter and the 3-D view read. Tool-frame parts go on the gripper link (origin at the wrist_rotate joint).
+    body = arm_body(arm.config.model_copy(update={"urdf_origins": {k: list(v) for k, v in o.items()},
+                                                  "link_radii_m": list(radii)}), g)
+    T_link_tool = np.eye(4)
+    T_link_tool[:3, :3] = np.asarray(arm.config.pox.M, float)[:3, :3]
+    T_link_tool[:3, 3] = o["gripper_point"]
     gp = o["gripper_point"][0]
-    tip = gp + g.tip_beyond_gripper_point_m
-    pad_x = tip - 0.5 * g.pad_length_m
-    finger_start = g.palm_depth_m
-    finger_len = tip - finger_start
-    pad_t = arm.pad_thickness_m
     fmax = arm.finger_offset_max_m
     fmin = arm.finger_offset_min_m
+    tool = len(names) + 1
     arm_geom = 'contype="2" conaffinity="1" group="1"'
 
-    def finger(side: str, sign: float) -> str:
+    def geoms(frame: int, finger: int = 0) -> str:
+        """The body's parts on frame `frame` (the tool's on the gripper link; a finger's relative to its body)."""
+        out = []
+        for part in body.parts:
+            if part.frame != frame or part.finger != finger:
+                continue
+            T = part.T_frame_part
+            if frame == tool:
+                T = T_link_tool @ T
+                T[1, 3] -= finger * fmax  # a finger's body sits at its open offset
+            size = part.size_m if part.shape == "box" else part.size_m[:2]
+            pad = part.name.endswith("_pad")
+            material = "pad" if pad else "arm" if part.shape == "capsule" else "arm_dark"
+            extra = (f' condim="4" friction="{_fmt(g.pad_friction)}" solref="{_fmt(g.pad_solref)}" '
+                     f'solimp="{_fmt(g.pad_solimp)}" solmix="1000"') if pad else ""
+            out.append(f'<geom name="{part.name}" type="{part.shape}" size="{_fmt(size)}" pos="{_fmt(T[:3, 3])}" '
+                       f'quat="{_fmt(quat_wxyz_from_matrix(T[:3, :3]))}" material="{material}"{extra} {arm_geom}/>')
+        return "".join(out)
+
+    finger_start = g.palm_depth_m
+    finger_len = gp + g.tip_beyond_gripper_point_m - finger_start
+
+    def finger(side: str, sign: int) -> str:
         return f"""
                 <body name="{side}_finger" pos="0 {sign * fmax:.9g} 0" gravcomp="{gravcomp}">
                   <inertial pos="{finger_start + 0.5 * finger_len:.9g} {sign * 0.004:.9g} 0" mass="{g.finger_mass_kg}" diaginertia="4e-6 4e-6 1e-6"/>
                   <joint name="{side}_finger" type="slide" axis="0 {sign:g} 0" range="{fmin} {fmax}" ref="{fmax}"
                          armature="{g.armature_kg}" damping="{g.damping_n_s_m}"/>
-                  <geom name="{side}_finger_link" type="box" size="{0.5 * finger_len:.9g} 0.004 {0.5 * g.pad_width_m + g.finger_link_margin_m:.9g}"
-                        pos="{finger_start + 0.5 * finger_len:.9g} {sign * 0.004:.9g} 0" material="arm_dark" {arm_geom}/>
-                  <geom name="{side}_pad" type="box" size="{0.5 * g.pad_length_m:.9g} {0.5 * pad_t:.9g} {0.5 * g.pad_width_m:.9g}"
-                        pos="{pad_x:.9g} {-sign * 0.5 * pad_t:.9g} 0" material="pad" condim="4" friction="{_fmt(g.pad_friction)}"
-                        solref="{_fmt(g.pad_solref)}" solimp="{_fmt(g.pad_solimp)}" solmix="1000" {arm_geom}/>
+                  {geoms(tool, sign)}
                 </body>"""
 
     return f"""
     <body name="base" pos="{_fmt(arm.T_world_base[:3, 3])}" quat="{_fmt(base_quat)}">
-      <geom name="base_link" type="box" size="0.05 0.05 0.03" pos="-0.01 0 0.03" material="arm_dark" {arm_geom}/>
+      {geoms(0)}
       <body name="waist_link" pos="{_fmt(o['waist'])}" gravcomp="{gravcomp}">
         <inertial pos="0 0 0.02" mass="{m[0]}" diaginertia="3e-4 3e-4 3e-4"/>
         {joint(0, "0 0 1")}
-        <geom name="waist_geom" type="cylinder" size="0.04 0.015" pos="0 0 0.017" material="arm_dark" {arm_geom}/>
+        {geoms(1)}
         <body name="shoulder_link" pos="{_fmt(o['shoulder'])}" gravcomp="{gravcomp}">
           <inertial pos="0.025 0 0.1" mass="{m[1]}" diaginertia="1e-3 1e-3 1e-4"/>
           {joint(1, "0 1 0")}
-          <geom name="upper_arm" type="capsule" size="{radii[1]:.9g}" fromto="0 0 0 {_fmt(o['elbow'])}" material="arm" {arm_geom}/>
+          {geoms(2)}
           <body name="forearm_link" pos="{_fmt(o['elbow'])}" gravcomp="{gravcomp}">
             <inertial pos="0.1 0 0" mass="{m[2]}" diaginertia="1e-4 6e-4 6e-4"/>
             {joint(2, "0 1 0")}
-            <geom name="forearm" type="capsule" size="{radii[2]:.9g}" fromto="0.02 0 0 {_fmt(o['wrist_angle'])}" material="arm" {arm_geom}/>
+            {geoms(3)}
             <body name="wrist_link" pos="{_fmt(o['wrist_angle'])}" gravcomp="{gravcomp}">
               <inertial pos="0.03 0 0" mass="{m[3]}" diaginertia="5e-5 5e-5 5e-5"/>
               {joint(3, "0 1 0")}
-              <geom name="wrist" type="capsule" size="{radii[3]:.9g}" fromto="0.01 0 0 {o['wrist_rotate'][0] - 0.01:.9g} 0 0" material="arm_dark" {arm_geom}/>
+              {geoms(4)}
               <body name="gripper_link" pos="{_fmt(o['wrist_rotate'])}" gravcomp="{gravcomp}">
                 <inertial pos="0.03 0 0" mass="{m[4]}" diaginertia="1e-4 1e-4 1e-4"/>
                 {joint(4, "1 0 0")}
-                <geom name="palm" type="box" size="{0.5 * finger_start:.9g} {fmax + g.palm_side_margin_m:.9g} {g.palm_half_height_m:.9g}"
-                      pos="{0.5 * finger_start:.9g} 0 0" material="arm_dark" {arm_geom}/>
+                {geoms(5)}{geoms(tool)}
                 <site name="{GRIPPER_SITE}" pos="{gp:.9g} 0 0" size="0.003" rgba="1 0 1 0.5" group="4"/>
                 {gripper_extras}
-                {finger("left", 1.0)}
-                {finger("right", -1.0)}
+                {finger("left", 1)}
+                {finger("right", -1)}
               </body>
             </body>
           </body>

@@ -18,11 +18,14 @@ from dataclasses import dataclass
 import numpy as np
 
 from armlab.config import read_config_file, resolve_config_path
+from armlab.devices.arm_body import ArmBody, arm_body
 from armlab.devices.sim.config import ArmServoConfig, SimConfig
 from armlab.devices.sim.mjcf_numbers import feed_forward_actuator
 from armlab.devices.sim.mjcf_numbers import fmt_numbers as _fmt
 from armlab.kinematics import load_arm
+from armlab.kinematics.arm_config import ArmConfig
 from armlab.kinematics.rotations import quat_wxyz_from_matrix as _quat
+from armlab.kinematics.rotations import rotation_about
 
 GRIPPER_SITE = "gripper_point"  # same name as the RX200 model's (armlab.devices.sim.mjcf)
 CUP_BODY = "suction_cup"
@@ -37,13 +40,11 @@ ARM_GEOM = 'contype="2" conaffinity="1" group="1"'
 
 
 def _rx(angle: float) -> np.ndarray:
-    c, s = math.cos(angle), math.sin(angle)
-    return np.array([[1.0, 0.0, 0.0], [0.0, c, -s], [0.0, s, c]])
+    return rotation_about((1.0, 0.0, 0.0), angle)
 
 
 def _rz(angle: float) -> np.ndarray:
-    c, s = math.cos(angle), math.sin(angle)
-    return np.array([[c, -s, 0.0], [s, c, 0.0], [0.0, 0.0, 1.0]])
+    return rotation_about((0.0, 0.0, 1.0), angle)
 
 
 @dataclass(frozen=True)
@@ -69,6 +70,7 @@ class DhArmGeometry:
     T_world_base: np.ndarray
     sleep_rad: np.ndarray
     cup: SuctionCup
+    config: ArmConfig  # the validated arm file (its links' shapes: armlab.devices.arm_body)
 
     @classmethod
     def load(cls, name: str, T_world_base: np.ndarray | None = None) -> DhArmGeometry:
@@ -92,6 +94,7 @@ class DhArmGeometry:
             T_world_base=np.asarray(data["T_world_base"] if T_world_base is None else T_world_base, dtype=float),
             sleep_rad=np.asarray(config.poses.sleep_rad, dtype=float),
             cup=SuctionCup(**config.suction_cup.model_dump()),
+            config=config,
         )
 
     # The RX200 geometry's finger fields, for code that reads them off either geometry: no fingers.
@@ -107,21 +110,18 @@ class DhArmGeometry:
         return _chain_xml(self, servo, sim), _actuators_xml(self, servo, sim)
 
 
-def _link_geoms(index: int, d: float, a: float, radius: float, name: str) -> str:
-    """Capsules along the DH offsets of link `index` (in its body frame): d along z, then a along x;
-    a joint housing (cylinder along z) at the origin."""
-    # The first joint's housing sits on the base's (which spans z = 0 .. 1.1 radius), clear of the board.
-    housing_z = 2.1 * radius if index == 0 else 0.0
-    geoms = [f'<geom name="{name}_housing" type="cylinder" size="{radius:.9g} {radius:.9g}" pos="0 0 {housing_z:.9g}" '
-             f'material="arm_dark" {ARM_GEOM}/>']
-    if abs(d) > 1e-9:
-        start = housing_z if index == 0 else 0.0
-        geoms.append(f'<geom name="{name}_d" type="capsule" size="{0.8 * radius:.9g}" fromto="0 0 {math.copysign(start, d):.9g} 0 0 {d:.9g}" '
-                     f'material="arm" {ARM_GEOM}/>')
-    if abs(a) > 1e-9:
-        geoms.append(f'<geom name="{name}_a" type="capsule" size="{0.8 * radius:.9g}" fromto="0 0 {d:.9g} {a:.9g} 0 {d:.9g}" '
-                     f'material="arm" {ARM_GEOM}/>')
-    return "".join(geoms)
+def _geoms(body: ArmBody, frame: int) -> str:
+    """The arm body's parts on frame `frame` (armlab.devices.arm_body: 0 the base, 1 + i joint i's link) as geoms."""
+    out = []
+    for part in body.parts:
+        if part.frame != frame:
+            continue
+        T = part.T_frame_part
+        size = part.size_m if part.shape == "box" else part.size_m[:2]
+        material = "arm" if part.shape == "capsule" else "arm_dark"
+        out.append(f'<geom name="{part.name}" type="{part.shape}" size="{_fmt(size)}" pos="{_fmt(T[:3, 3])}" '
+                   f'quat="{_fmt(_quat(T[:3, :3]))}" material="{material}" {ARM_GEOM}/>')
+    return "".join(out)
 
 
 def _inertial(d: float, a: float, mass: float, radius: float) -> str:
@@ -161,7 +161,8 @@ def _chain_xml(arm: DhArmGeometry, servo: ArmServoConfig, sim: SimConfig) -> str
     about its z) -> the flange (DH frame n) -> the tool frame ("gripper_link", site at the tool point)."""
     rows = arm.dh_rows
     radii = servo.link_radius_m or [0.03] * len(arm.joint_names)
-    base_radius = radii[0] * 1.1
+    # The links' shapes: the arm body (armlab.devices.arm_body) with the simulated links' radii (config/sim.yaml)
+    body = arm_body(arm.config.model_copy(update={"link_radii_m": list(radii)}))
     opened = []
     for i, name in enumerate(arm.joint_names):
         offset, d, a, alpha, sign = rows[i]
@@ -176,7 +177,7 @@ def _chain_xml(arm: DhArmGeometry, servo: ArmServoConfig, sim: SimConfig) -> str
             f'{_inertial(d, a, servo.link_masses_kg[i], radii[i])}'
             f'<joint name="{name}" axis="0 0 {sign:g}" range="{lo:.9g} {hi:.9g}" armature="{servo.armature[i]}" '
             f'damping="{servo.damping[i]}" actuatorfrcrange="{-servo.force_limit_nm[i]} {servo.force_limit_nm[i]}"/>'
-            f'{_link_geoms(i, d, a, radii[i], name)}'
+            f'{_geoms(body, 1 + i)}'
         )
     last = rows[-1]
     flange = np.array([last[2], 0.0, last[1]])
@@ -190,8 +191,7 @@ def _chain_xml(arm: DhArmGeometry, servo: ArmServoConfig, sim: SimConfig) -> str
     )
     return (
         f'<body name="base" pos="{_fmt(arm.T_world_base[:3, 3])}" quat="{_fmt(_quat(arm.T_world_base[:3, :3]))}">'
-        f'<geom name="base_link" type="cylinder" size="{base_radius:.9g} {0.5 * base_radius:.9g}" pos="0 0 {0.5 * base_radius:.9g}" '
-        f'material="arm_dark" {ARM_GEOM}/>'
+        f'{_geoms(body, 0)}'
         f'{"".join(opened)}{tool}{"</body>" * len(opened)}</body>'
     )
 

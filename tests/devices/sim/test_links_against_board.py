@@ -10,12 +10,13 @@ import numpy as np
 import pytest
 
 from armlab.devices.arm import JointTrajectory
+from armlab.devices.arm_body import load_arm_body
 from armlab.devices.sim import SimWorkcell, SimWorkcellConfig
 from armlab.kinematics import load_arm
 from armlab.motion.safety import UnsafeTrajectory, check_trajectory
 
 ARM = load_arm("rx200")
-LINK_GEOMS = ("upper_arm", "forearm", "wrist")
+LINK_GEOMS = tuple(part.name for part in load_arm_body("rx200").parts if part.shape == "capsule")  # the links
 INTO_THE_BOARD_Q = [-0.4172, 1.8365, -1.8452, -0.58, 1.7884]  # the bench's waypoint
 
 

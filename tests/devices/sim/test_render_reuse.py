@@ -43,7 +43,7 @@ def _move_the_arm(cell):
 
 def _recolour_a_link(cell):
     with cell.lock:
-        cell._model.geom_rgba[cell._model.geom("upper_arm").id] = [1.0, 0.0, 1.0, 1.0]
+        cell._model.geom_rgba[cell._model.geom("shoulder_capsule").id] = [1.0, 0.0, 1.0, 1.0]
 
 
 def _dim_the_light(cell):
