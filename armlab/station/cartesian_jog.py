@@ -78,7 +78,7 @@ class CartesianJog:
                            reported=same_line and running.get("reported") is not None)
             return jog.trajectory if brake is None else joined([brake, jog.trajectory])
 
-        trajectory, _ = self._send_replacing(plan, lambda: self._transition("jog", source=source), "jog")
+        trajectory, _ = self.gate.send_replacing(plan, lambda: self._transition("jog", source=source), "jog")
         reason = outcome["stopped_by"]
         with self._lock:
             self._jog = {"trajectory": trajectory, "start_s": self.clock_s(), "velocity": velocity, "source": source,

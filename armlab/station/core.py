@@ -15,45 +15,45 @@ teach (teach.py), perceiver (perceiving.py), readings (status.py). Skills and ta
 from __future__ import annotations
 
 import logging
-import math
 import threading
 import time
 from typing import Any
 
-import numpy as np
-
 from armlab.devices.arm import Arm
-from armlab.devices.camera import Camera, Frame
+from armlab.devices.camera import Camera
 from armlab.devices.clock import Clock, WallClock
 from armlab.devices.gripper import Gripper
 from armlab.errors import CommandRefused, DeviceLost, InvalidInput, NoArmError, ShuttingDown
 from armlab.kinematics.calibrated_arm import CalibratedArm
 from armlab.station.arm_calibration import ArmCalibrationKeeper
+from armlab.station.arm_info import station_end_effector
 from armlab.station.calibration_trust import SELF_RECALIBRATE_JOB, CalibrationTrust, self_recalibration_job
 from armlab.station.cartesian_jog import CartesianJog
-from armlab.station.checks import NotCalibrated, checked_joints
+from armlab.station.checks import NotCalibrated
 from armlab.station.colors import StationColors
 from armlab.station.config import StationConfig
 from armlab.station.event_history import EventHistory
+from armlab.station.forwarding import forwarded
 from armlab.station.intrinsics import CameraIntrinsics
 from armlab.station.job_control import JobControls
-from armlab.station.jobs import Job, JobContext
+from armlab.station.jobs import Job, JobCancelled, JobContext
 from armlab.station.latch import Latch
 from armlab.station.lease import ControlLease
 from armlab.station.manual import ManualCommands
 from armlab.station.memory import return_freed_memory
-from armlab.station.motion import MOTION_MEMORY, WAIT_CHUNK_S, MotionGate
+from armlab.station.motion import WAIT_CHUNK_S, MotionGate
+from armlab.station.motion_record import MOTION_MEMORY
 from armlab.station.perceiving import Perceiver
-from armlab.station.perception import DEVICE_ERRORS, Perception
+from armlab.station.perception import DEVICE_ERRORS
 from armlab.station.planned_moves import PlannedMoves
 from armlab.station.plans import PlanStore
 from armlab.station.reach import ReachCache
 from armlab.station.slots import EventLog, NewestSlot
 from armlab.station.speed import SpeedOverride
-from armlab.station.states import ARM_COMMANDS, State, after_event, allowed_commands, next_state
+from armlab.station.states import ARM_COMMANDS, JOB_STATES, State, after_event, allowed_commands, next_state
 from armlab.station.status import ArmReadings
 from armlab.station.teach import Teach, TeachLinks
-from armlab.station.telemetry import Detections, TelemetryPublisher
+from armlab.station.telemetry import TelemetryPublisher
 from armlab.station.watch import DeviceWatch, device_problems
 from armlab.store import Owner, Store
 from armlab.vision import detect_tags, load_perception_config
@@ -67,8 +67,8 @@ __all__ = ["DEVICE_ERRORS", "MOTION_MEMORY", "WAIT_CHUNK_S", "NotCalibrated", "S
 _UNLATCHED = ("estop",)  # the only command the latch and the lease never refuse
 
 
-class Station(MotionGate, ManualCommands, CartesianJog, PlannedMoves, JobControls, SpeedOverride, ArmCalibrationKeeper):
-    """The control station's gate: the parts above, and the command groups still mixed in (motion.py: the motion gate;
+class Station(ManualCommands, CartesianJog, PlannedMoves, JobControls, SpeedOverride, ArmCalibrationKeeper):
+    """The control station's gate: the parts above, and the command groups still mixed in (
     manual.py, cartesian_jog.py, planned_moves.py, job_control.py, speed.py, arm_calibration.py). Backends are injected.
 
     model: the armlab.kinematics ArmModel (None: a station with no arm, perception only, every arm command refused
@@ -112,11 +112,13 @@ class Station(MotionGate, ManualCommands, CartesianJog, PlannedMoves, JobControl
         self.backend = backend
         self.synchronous = synchronous
         self._lock = threading.RLock()
-        self._plan_lock = threading.RLock()  # one replacing motion planned at a time (motion.py _send_replacing)
-        self._newest_move = 0  # the ticket of the newest manual move waiting to be planned (motion.py _send_replacing)
-        self._send_lock = threading.Lock()  # one sender of device commands at a time, taken before _lock (motion.py _sending)
-        self._outbox: list | None = None  # device commands queued under the lock, sent after it (motion.py _sending)
-        self.latch = Latch(arm, gripper, on_halt=self._forget_commanded)  # e-stop, device loss, a failed part (latch.py)
+        # e-stop, device loss, a failed part (latch.py); a halt leaves no commanded motion to continue
+        self.latch = Latch(arm, gripper, on_halt=lambda: self.gate.forget_commanded())
+        self.gate = MotionGate(  # the one path of every motion: checks, start, send, waits, pacing, where it went (motion.py)
+            arm, gripper, self.model, self.latch, self.clock, self._lock, motion_config=lambda: self.motion_config,
+            end_effector=lambda: station_end_effector(self), held_edge_m=self._held_edge_m, state=self._effective_state,
+            owns_arm=self._owns_arm, gripper_settle_timeout_s=self.config.gripper_settle_timeout_s,
+            moving_speed_rad_s=self.config.moving_speed_rad_s)
         self._closing = threading.Event()
         self._state = State.IDLE
         self._detail = ""
@@ -124,17 +126,9 @@ class Station(MotionGate, ManualCommands, CartesianJog, PlannedMoves, JobControl
         self._last_job: Job | None = None
         self._jog: dict | None = None  # the running jog: trajectory, start clock, velocity, controller
         self._step_anchor: tuple | None = None  # the last jog step's commanded end and its motion entry (manual.py jog_step)
-        self._speed_percent = 100.0  # the speed override (speed.py)
-        self._paced_motion: tuple | None = None  # (the trajectory object last sent, the override it was paced at) (speed.py)
-        self._pace_next: float | None = None  # the override of the motion being sent (set under the lock just before it)
         self._held_block: dict | None = None
         self._torque_enabled = True  # connect() leaves the arm holding; set_torque() changes it
-        self._motions: list[tuple[float, np.ndarray]] = []  # (end time_s, [xmin, ymin, xmax, ymax, x, y, z of the gripper's sampled path...])
-        self._changed_everywhere_s = -math.inf  # the last change that may have changed any spot (note_change_everywhere)
-        self._commanded: tuple | None = None  # the last trajectory sent: (trajectory, clock_s at its t = 0, count)
-        self._command_count = 0
         self.plans = PlanStore()  # plan, then execute (planned_moves.py)
-        self._speed_lock = threading.Lock()  # one override change at a time (speed.py)
         self.events = EventLog()
         self.event_history = EventHistory(self.events, self.store)  # kept in the database (History panel)
         self.reach = ReachCache()  # where the gripper reaches on the board (the page's reach overlay)
@@ -282,10 +276,6 @@ class Station(MotionGate, ManualCommands, CartesianJog, PlannedMoves, JobControl
 
     # The latch: e-stop, device loss, reset ----------------------------------------------------------
 
-    def _forget_commanded(self) -> None:
-        """Every halt: the arm holds where it is, so there is no commanded motion to continue."""
-        self._commanded = None
-
     def _latch_and_halt(self) -> list[str]:
         """Set the latch first, cancel the job, halt the arm and gripper (before any lock): what fails to stop."""
         self.latch.set()
@@ -422,7 +412,7 @@ class Station(MotionGate, ManualCommands, CartesianJog, PlannedMoves, JobControl
                 return f"the station is {self._effective_state().value}"
             if self._job is not None or self._jog is not None or recording:
                 return "a job or a jog is running"
-        return self.arm_moving()
+        return self.gate.arm_moving()
 
     def _start_self_recalibration(self) -> None:
         self.start_job("calibrate", SELF_RECALIBRATE_JOB, lambda ctx: self_recalibration_job(self, ctx),
@@ -446,6 +436,20 @@ class Station(MotionGate, ManualCommands, CartesianJog, PlannedMoves, JobControl
         with self._lock:
             self._held_block = None if block is None else dict(block)
 
+    def _held_edge_m(self) -> float | None:
+        """The edge of the block in the gripper (the body check keeps it clear of the arm), None when none."""
+        held = self.held_block
+        return float(held["edge_m"]) if held and held.get("edge_m") else None
+
+    def _owns_arm(self, ctx: JobContext) -> None:
+        """Inside a job, under the lock: JobCancelled unless this job may still command the devices
+        (it is current and not cancelled, or it is running its cleanup after a cancel), and never
+        once the latch is set."""
+        if self._job is not ctx.job or self._state not in JOB_STATES or self.latch.is_set():
+            raise JobCancelled("job is no longer current")
+        if not ctx.in_cleanup:
+            ctx.check()
+
     def set_scene(self, scene: Any, source: str | None = None) -> None:
         """Simulation: replace the objects (armlab.scene Scene). Checked (state, lease) under the lock; the
         scene change itself runs outside it, so an e-stop never waits for it."""
@@ -455,7 +459,7 @@ class Station(MotionGate, ManualCommands, CartesianJog, PlannedMoves, JobControl
             self._transition("set_scene", source=source)
         _, version = self.frames.get()
         self.sim.set_scene(scene)
-        self.note_change_everywhere()  # what the arm hides now was seen in the old scene
+        self.gate.record.note_change_everywhere()  # what the arm hides now was seen in the old scene
         self.set_held_block(None)
         if not self.synchronous:  # once a frame of the new scene is drawn, the old model's memory is free
             self.frames.wait_newer(version, timeout_s=1.0)
@@ -470,7 +474,7 @@ class Station(MotionGate, ManualCommands, CartesianJog, PlannedMoves, JobControl
             job = self._job or self._last_job
             state, detail, lease = self._effective_state(), self._detail, self.lease.to_dict()
         perception, _ = self.perception.get()
-        commanded = self.commanded_joints_rad() if self.has_arm else None
+        commanded = self.gate.commanded_joints_rad() if self.has_arm else None
         return {
             "state": state.value, "detail": detail, **readings,
             "commanded_joints_rad": None if commanded is None else [float(v) for v in commanded],
@@ -479,7 +483,7 @@ class Station(MotionGate, ManualCommands, CartesianJog, PlannedMoves, JobControl
             "calibration_state": self.trust.state, "self_recalibrate": self.trust.self_recalibrate,
             "arm_calibration": self.arm_calibration_status if self.has_arm else None,
             "backend": self.backend, "controller": lease["controller"], "controller_since_s": lease["since_s"],
-            "devices_lost": self.latch.lost(), "speed_percent": self.speed_percent,
+            "devices_lost": self.latch.lost(), "speed_percent": self.gate.speed_percent,
             "job": job.to_dict() if job is not None else None, "allowed_commands": allowed_commands(state, self.has_arm),
             "time_s": time.time(),
         }
@@ -490,33 +494,24 @@ class Station(MotionGate, ManualCommands, CartesianJog, PlannedMoves, JobControl
         snapshot["detections"], snapshot["detections_stale"] = detections.to_dict()["data"], detections.stale
         return snapshot
 
-    def detections(self) -> Detections:
-        return self.perceiver.detections()
+    # What the parts answer (the part's method is the one place each is written) ------------------------------------
 
-    def fresh_frame(self, timeout_s: float = 2.0, max_age_s: float = 2.0) -> Frame:
-        return self.perceiver.fresh_frame(timeout_s, max_age_s)
-
-    def frame_after(self, since_s: float, timeout_s: float = 3.0) -> Frame:
-        return self.perceiver.frame_after(since_s, timeout_s)
-
-    def fresh_perception(self, ctx: JobContext | None = None, timeout_s: float = 5.0) -> Perception:
-        return self.perceiver.fresh_perception(ctx, timeout_s)
-
-
-    def joints_rad(self) -> np.ndarray:
-        """The measured joint positions (rad)."""
-        return np.asarray(self.arm.read_joint_state().position_rad, dtype=float)
+    detections, fresh_frame, frame_after, fresh_perception = (forwarded("perceiver") for _ in range(4))
+    clock_s, joints_rad = forwarded("gate"), forwarded("gate")
+    # the motion gate's commands inside a job (skills, tasks) and its waits
+    run_trajectory, start_trajectory, replace_trajectory, wait_in_job = (forwarded("gate") for _ in range(4))
+    run_gripper, brake_to_rest, wait_motion, wait_gripper = (forwarded("gate") for _ in range(4))
+    fingers_still_check, note_gripper_change = forwarded("gate"), forwarded("gate")
+    # the commanded motion, and the speed override it is paced at
+    start_position, motion_handover, commanded_joints_rad = (forwarded("gate") for _ in range(3))
+    commanded_motion_running, arm_moving, speed_percent = (forwarded("gate") for _ in range(3))
+    # the trajectory check (motion_check.py) and where the gripper went (motion_record.py)
+    check_motion, check_pose, check_poses, check_body = (forwarded("gate.check") for _ in range(4))
+    checked_joints, palm_corners_m, finger_box = (forwarded("gate.check") for _ in range(3))
+    moved_over_since, changed_at_since, note_change_everywhere = (forwarded("gate.record") for _ in range(3))
 
     def require_arm(self, what: str) -> None:
         """NoArmError naming `what` on a station without an arm (for work that needs the arm's model, e.g. programs)."""
         if not self.has_arm:
             with self._lock:
                 raise NoArmError(what, self._effective_state().value, allowed_commands(self._effective_state(), False))
-
-    def checked_joints(self, q_rad) -> np.ndarray:
-        """A finite joint vector inside the limits (ValueError naming the joint otherwise)."""
-        return checked_joints(self.model, q_rad)
-
-    def clock_s(self) -> float:
-        """The motion clock's time (self.clock: simulated time on the simulation, else monotonic wall time)."""
-        return self.clock.now_s()

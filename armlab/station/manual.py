@@ -1,6 +1,6 @@
 """Manual commands of the gate: joint and pose moves, hold-to-run jog, torque, gripper (teach: teach.py).
 
-A mixin of core.Station (it uses the station's lock, transition table, lease, `_sending` and `_command_arm`). Every
+A mixin of core.Station (it uses the station's lock, transition table and lease, and the gate's `sending` and `command_arm`). Every
 command is refused before planning (state, latch, lease), planned and checked outside the lock, then
 re-checked and sent under it; nothing slow (IK, planning, SQLite) runs while the lock is held.
 """
@@ -65,17 +65,21 @@ class ManualCommands:
         def plan(handover) -> JointTrajectory:
             pace["speed"] = self.speed_percent
             if handover is None:
-                return self._paced(self.plan_move(q_goal_rad, moving_time_s), pace["speed"], from_rest=True)
-            return self._paced(self.plan_move_from(handover, q_goal_rad, moving_time_s), pace["speed"], from_rest=handover.at_rest)
+                return self.gate.paced(self.plan_move(q_goal_rad, moving_time_s), pace["speed"], from_rest=True)
+            return self.gate.paced(self.plan_move_from(handover, q_goal_rad, moving_time_s), pace["speed"], from_rest=handover.at_rest)
 
         def under_lock() -> None:
-            self._pace_next_send(pace["speed"])  # the override changed meanwhile: planned again
+            self.gate.pace_next_send(pace["speed"])  # the override changed meanwhile: planned again
             self._transition(command, source=source)  # state unchanged: idle/teach stay
             self._jog = None
 
-        trajectory, _ = self._send_replacing(plan, under_lock, command, replaceable=True)
+        trajectory, _ = self.gate.send_replacing(plan, under_lock, command, replaceable=True)
         if wait:
             self.wait_motion(trajectory.duration_s * SPEED_WAIT_FACTOR + 5.0)
+
+    def move_in_job(self, ctx, q_goal_rad, moving_time_s: float | None = None) -> None:
+        """Inside a job: a checked joint move from where the arm is (plan_move), run through the gate and waited for."""
+        self.run_trajectory(ctx, self.plan_move(q_goal_rad, moving_time_s))
 
     def move_joints(self, q_rad, moving_time_s: float | None = None, wait: bool = False, source: str | None = None) -> None:
         self._manual_move("move_joints", q_rad, moving_time_s, wait, source)
@@ -141,7 +145,7 @@ class ManualCommands:
             return plan_jog(q0, v0, velocity, hold_s, self.model.lower_rad, self.model.upper_rad,
                             arm_limits(self.model).accel_rad_s2, config.sample_rate_hz)  # 2 % inside, as the blends
 
-        trajectory, _ = self._send_replacing(plan, lambda: self._transition("jog", source=source), "jog")
+        trajectory, _ = self.gate.send_replacing(plan, lambda: self._transition("jog", source=source), "jog")
         with self._lock:
             self._jog = {"trajectory": trajectory, "start_s": self.clock_s(), "velocity": velocity, "source": source}
         return trajectory
@@ -166,17 +170,17 @@ class ManualCommands:
         q_start = self.joints_rad()
         with self._lock:  # the anchor holds while no other motion was commanded since (nor halted: that replaces the entry)
             anchor = self._step_anchor
-            last_motion = self._motions[-1] if self._motions else None
+            last_motion = self.gate.record.last()
         if anchor is not None and anchor[1] is last_motion and np.max(np.abs(anchor[0] - q_start)) <= STEP_ANCHOR_TOL_RAD:
             q_start = anchor[0]
         trajectory = self._gripper_step(axis, amount, scale, q_start)
         self.check_motion(trajectory)
-        swept_box = self._swept_box(trajectory)
-        with self._sending():
+        swept_box = self.gate.record.swept_box(trajectory)
+        with self.gate.sending():
             self._transition("jog", source=source)
             self._jog = None
-            self._command_arm(trajectory, swept_box)
-            self._step_anchor = (trajectory.positions_rad[-1].copy(), self._motions[-1])
+            self.gate.command_arm(trajectory, swept_box)
+            self._step_anchor = (trajectory.positions_rad[-1].copy(), self.gate.record.last())
         if axis in LINEAR_AXES and abs(turn := yaw_turn_rad(self.model, trajectory.positions_rad)) > ORIENTATION_TOL_RAD:
             self.events.add("info", f"{axis} step: the gripper's yaw turned {math.degrees(turn):+.1f}° with the waist (a 5-joint arm "
                                     "holds its heading only pointing down)")
@@ -219,7 +223,7 @@ class ManualCommands:
     def set_torque(self, enabled: bool, source: str | None = None, confirm: bool = False) -> None:
         """Torque on, or off (limp: the arm falls under gravity unless held), which outside teach needs
         confirm=True (NeedsConfirmation otherwise: nothing changes)."""
-        with self._sending():  # the torque call (a ROS service on the real arm) is made after the lock is released
+        with self.gate.sending():  # the torque call (a ROS service on the real arm) is made after the lock is released
             state = self._check("torque", source)
             if not enabled and state is not State.TEACH and not confirm:
                 raise NeedsConfirmation(
@@ -230,9 +234,9 @@ class ManualCommands:
             self._jog = None
             if self.latch.is_set():
                 raise CommandRefused("torque", self._effective_state().value, allowed_commands(self._effective_state()))
-            self._send_later(lambda: self.arm.set_torque(bool(enabled)))
+            self.gate.send_later(lambda: self.arm.set_torque(bool(enabled)))
         with self._lock:
-            self._commanded = None
+            self.gate.forget_commanded()
             self._torque_enabled = bool(enabled)
         self.events.add("warn" if not enabled else "info", f"torque {'on' if enabled else 'off'}")
 
@@ -240,9 +244,9 @@ class ManualCommands:
         """'grasp' or 'release'."""
         if action not in ("grasp", "release"):
             raise InvalidInput(f"gripper action must be 'grasp' or 'release', not {action!r}")
-        with self._sending():
+        with self.gate.sending():
             self._transition("gripper", source=source)
-            self._send_later(lambda: getattr(self.gripper, action)(wait=False))
+            self.gate.send_later(lambda: getattr(self.gripper, action)(wait=False))
         self.note_gripper_change()  # what is under the gripper may change (a block let go): remembered depth there is stale
         if wait:
             self.wait_gripper()

@@ -88,7 +88,7 @@ class PlannedMoves:
         """What a plan depends on besides the arm's joints (in _WORLD's order), read under the lock."""
         with self._lock:
             held = self._held_block
-            return (self._command_count, self.latch.halts, self._changed_everywhere_s, self.trust.calibration,
+            return (self.gate.command_count, self.latch.halts, self.gate.record.changed_everywhere_s, self.trust.calibration,
                     self._arm_calibration_info, None if held is None else dict(held), self.speed_percent)
 
     def _gripper_command(self) -> str | None:
@@ -107,7 +107,7 @@ class PlannedMoves:
             q_goal_rad = self.solve_pose(*pose)
         self.checked_joints(q_goal_rad)
         context = self._plan_context(command, source)
-        trajectory = self._paced(self.plan_move(q_goal_rad, moving_time_s), context[2], from_rest=True)
+        trajectory = self.gate.paced(self.plan_move(q_goal_rad, moving_time_s), context[2], from_rest=True)
         self.check_motion(trajectory)
         return self._kept_plan(command, source, trajectory, context)
 
@@ -127,7 +127,7 @@ class PlannedMoves:
         shown, goal = [], None
         for step in steps:
             if isinstance(step, TrajectoryStep):
-                shown.append(self._paced(step.trajectory, context[2], from_rest=True))
+                shown.append(self.gate.paced(step.trajectory, context[2], from_rest=True))
                 self.check_motion(shown[-1])
             elif goal is None and shown:  # the gripper acts where the motion before it ends
                 goal = shown[-1].positions_rad[-1].copy()
@@ -221,12 +221,12 @@ class PlannedMoves:
             if not claimed:
                 self.plans.claim(plan.plan_id)  # PlanStale 'executed' when another request just sent it
                 claimed.append(True)
-            self._pace_next_send(plan.speed_percent)
+            self.gate.pace_next_send(plan.speed_percent)
             self._transition(plan.command, source=source)
             self._jog = None
 
         try:
-            trajectory, _ = self._send_replacing(send_as_planned, under_lock, plan.command, replaceable=True)
+            trajectory, _ = self.gate.send_replacing(send_as_planned, under_lock, plan.command, replaceable=True)
         except BaseException:
             if claimed:
                 self.plans.unclaim(plan.plan_id)
