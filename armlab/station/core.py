@@ -6,10 +6,10 @@ and every state change goes through `_transition`, here. The lock guards state o
 halts the arm and gripper, and only then records the state; every command path checks the latch under the lock before
 it reaches a device, and every wait checks it, so after estop() returns no job or manual command can reach the arm
 until reset(). A lost device (watch.py) latches the same way and puts the station in `fault`.
-The parts the gate owns, each with its own state: latch (latch.py), lease (lease.py), trust (calibration_trust.py),
-teach (teach.py), perceiver (perceiving.py), readings (status.py). Skills and tasks use its small public interface:
-`start_job`, `run_trajectory`, `run_gripper`, `fresh_frame`, `fresh_perception`, `joints_rad`, `checked_joints`,
-`held_block`/`set_held_block`, `moved_over_since`, `clock_s`.
+The parts the gate owns, each with its own state: latch (latch.py), lease (lease.py), gate (motion.py: every motion's
+checks, send and waits), trust (calibration_trust.py), arm_calibration, teach (teach.py), perceiver (perceiving.py),
+readings (status.py); and the command objects manual, cartesian, planned, job_commands. Skills, tasks and the server
+call the Station's own methods; those a part answers are forwarded to it in one line (forwarding.py).
 """
 
 from __future__ import annotations
@@ -46,10 +46,9 @@ from armlab.station.motion_record import MOTION_MEMORY
 from armlab.station.perceiving import Perceiver
 from armlab.station.perception import DEVICE_ERRORS
 from armlab.station.planned_moves import PlannedMoves
-from armlab.station.plans import PlanStore
 from armlab.station.reach import ReachCache
+from armlab.station.shutdown import stop_threads
 from armlab.station.slots import EventLog, NewestSlot
-from armlab.station.speed import SpeedOverride
 from armlab.station.states import ARM_COMMANDS, JOB_STATES, State, after_event, allowed_commands, next_state
 from armlab.station.status import ArmReadings
 from armlab.station.teach import Teach, TeachLinks
@@ -67,9 +66,10 @@ __all__ = ["DEVICE_ERRORS", "MOTION_MEMORY", "WAIT_CHUNK_S", "NotCalibrated", "S
 _UNLATCHED = ("estop",)  # the only command the latch and the lease never refuse
 
 
-class Station(ManualCommands, CartesianJog, PlannedMoves, JobControls, SpeedOverride, ArmCalibrationKeeper):
-    """The control station's gate: the parts above, and the command groups still mixed in (
-    manual.py, cartesian_jog.py, planned_moves.py, job_control.py, speed.py, arm_calibration.py). Backends are injected.
+class Station:
+    """The control station's gate: its state, the parts above, and the command objects it owns (station.manual,
+    station.cartesian, station.planned, station.job_commands: manual.py, cartesian_jog.py, planned_moves.py,
+    job_control.py), whose public methods it forwards. Backends are injected.
 
     model: the armlab.kinematics ArmModel (None: a station with no arm, perception only, every arm command refused
     with NoArmError); perception_config: armlab.vision's config; sim: the SimWorkcell when simulated (else None);
@@ -116,7 +116,7 @@ class Station(ManualCommands, CartesianJog, PlannedMoves, JobControls, SpeedOver
         self.latch = Latch(arm, gripper, on_halt=lambda: self.gate.forget_commanded())
         self.gate = MotionGate(  # the one path of every motion: checks, start, send, waits, pacing, where it went (motion.py)
             arm, gripper, self.model, self.latch, self.clock, self._lock, motion_config=lambda: self.motion_config,
-            end_effector=lambda: station_end_effector(self), held_edge_m=self._held_edge_m, state=self._effective_state,
+            end_effector=lambda: station_end_effector(self), held_block=lambda: self.held_block, state=self._effective_state,
             owns_arm=self._owns_arm, gripper_settle_timeout_s=self.config.gripper_settle_timeout_s,
             moving_speed_rad_s=self.config.moving_speed_rad_s)
         self._closing = threading.Event()
@@ -125,10 +125,8 @@ class Station(ManualCommands, CartesianJog, PlannedMoves, JobControls, SpeedOver
         self._job: Job | None = None
         self._last_job: Job | None = None
         self._jog: dict | None = None  # the running jog: trajectory, start clock, velocity, controller
-        self._step_anchor: tuple | None = None  # the last jog step's commanded end and its motion entry (manual.py jog_step)
         self._held_block: dict | None = None
         self._torque_enabled = True  # connect() leaves the arm holding; set_torque() changes it
-        self.plans = PlanStore()  # plan, then execute (planned_moves.py)
         self.events = EventLog()
         self.event_history = EventHistory(self.events, self.store)  # kept in the database (History panel)
         self.reach = ReachCache()  # where the gripper reaches on the board (the page's reach overlay)
@@ -148,6 +146,10 @@ class Station(ManualCommands, CartesianJog, PlannedMoves, JobControls, SpeedOver
             self.allowed_or_raise, self._teach_transition, lambda: self.state is State.TEACH and not self.latch.is_set(),
             self._closing.is_set, lambda: self.joints_rad(), lambda: self.gripper.read_state().command,
             lambda q: self.check_pose(q), lambda poses: self.check_poses(poses), self.component_failed, threads=not synchronous))
+        self.arm_calibration = ArmCalibrationKeeper(self.model, self.store, self.events, self.config.workcell)  # in use, saved
+        # The command objects: each holds its own state and sends through the gate; their public methods are forwarded below.
+        self.manual, self.cartesian = ManualCommands(self), CartesianJog(self)
+        self.planned, self.job_commands = PlannedMoves(self), JobControls(self)
         self._workers: list = []
         self._started = False
 
@@ -169,9 +171,9 @@ class Station(ManualCommands, CartesianJog, PlannedMoves, JobControls, SpeedOver
         if interrupted:
             self.events.add("warn", f"{interrupted} job(s) were cut off when the station last stopped: marked interrupted")
         if self.config.restore_calibration:
-            one_look = (lambda: detect_tags(self.fresh_frame().color_bgr, self.perception_config)) if self.synchronous else None
+            one_look = (lambda: detect_tags(self.fresh_frame().color_bgr, self.perception_config)) if self.perceiver.on_demand else None
             self.trust.restore(self.store.latest_calibration(), one_look)
-            self._restore_arm_calibration()
+            self.arm_calibration.restore()
         self._closing.clear()
         if not self.synchronous:
             self._workers = [
@@ -197,25 +199,10 @@ class Station(ManualCommands, CartesianJog, PlannedMoves, JobControls, SpeedOver
         Returns {"joined": [thread names], "alive": [names still running]} and logs it; the devices (or
         the sim) are closed by their owner."""
         self.begin_shutdown()
-        deadline = time.monotonic() + self.config.close_timeout_s
-        joined, alive = [], []
         job = self._job or self._last_job  # a job cancelled by begin_shutdown may have just ended
-        if job is not None and job.thread is not None:
-            job.thread.join(max(0.0, deadline - time.monotonic()))
-            (alive if job.thread.is_alive() else joined).append(job.thread.name)
-        for worker in self._workers:
-            worker.request_stop()
-        for worker in reversed(self._workers):
-            ended = worker.stop(max(0.05, deadline - time.monotonic()))
-            (joined if ended else alive).append(worker.name)
-        self._workers = []
-        self._started = False
-        (joined if self.event_history.close() else alive).append("event-history")
-        report = {"joined": joined, "alive": alive}
-        if alive:
-            log.warning("station closed; threads still running: %s (joined: %s)", ", ".join(alive), ", ".join(joined) or "none")
-        else:
-            log.info("station closed; threads joined: %s", ", ".join(joined) or "none")
+        report = stop_threads(None if job is None else job.thread, self._workers, self.event_history.close,
+                              self.config.close_timeout_s)
+        self._workers, self._started = [], False
         return report
 
     @property
@@ -348,11 +335,7 @@ class Station(ManualCommands, CartesianJog, PlannedMoves, JobControls, SpeedOver
 
     # Control lease (the part: station.lease, lease.py) ----------------------------------------------
 
-    @property
-    def controller(self) -> str | None:
-        """Who holds the control lease (None: free)."""
-        with self._lock:
-            return self.lease.holder
+    controller = forwarded("lease", "holder")  # who holds the control lease (None: free)
 
     def require_control(self, command: str, source: str | None) -> None:
         """The lease check of a command outside the state table (program edits): NotController naming the
@@ -389,20 +372,8 @@ class Station(ManualCommands, CartesianJog, PlannedMoves, JobControls, SpeedOver
 
     # Calibration (the part: calibration_trust.py) ---------------------------------------------------
 
-    @property
-    def calibration(self) -> Any:
-        return self.trust.calibration
-
-    @property
-    def calibration_info(self) -> dict:
-        return self.trust.info
-
-    def set_calibration(self, calibration: Any, info: dict) -> None:
-        """Install a calibration (armlab.vision Calibration) with its wire summary; publishes it."""
-        self.trust.install(calibration, info)
-
-    def require_trusted_calibration(self, what: str) -> None:
-        self.trust.require_trusted(what)
+    calibration, calibration_info = forwarded("trust", "calibration"), forwarded("trust", "info")
+    set_calibration, require_trusted_calibration = forwarded("trust", "install"), forwarded("trust", "require_trusted")
 
     def _why_not_self_recalibrate(self) -> str | None:
         """None when the station may recalibrate itself now (idle, nothing running, the arm still), else why not."""
@@ -436,11 +407,6 @@ class Station(ManualCommands, CartesianJog, PlannedMoves, JobControls, SpeedOver
         with self._lock:
             self._held_block = None if block is None else dict(block)
 
-    def _held_edge_m(self) -> float | None:
-        """The edge of the block in the gripper (the body check keeps it clear of the arm), None when none."""
-        held = self.held_block
-        return float(held["edge_m"]) if held and held.get("edge_m") else None
-
     def _owns_arm(self, ctx: JobContext) -> None:
         """Inside a job, under the lock: JobCancelled unless this job may still command the devices
         (it is current and not cancelled, or it is running its cleanup after a cancel), and never
@@ -461,8 +427,7 @@ class Station(ManualCommands, CartesianJog, PlannedMoves, JobControls, SpeedOver
         self.sim.set_scene(scene)
         self.gate.record.note_change_everywhere()  # what the arm hides now was seen in the old scene
         self.set_held_block(None)
-        if not self.synchronous:  # once a frame of the new scene is drawn, the old model's memory is free
-            self.frames.wait_newer(version, timeout_s=1.0)
+        self.perceiver.wait_for_new_frame(version, timeout_s=1.0)  # once one of the new scene is drawn, the old model's memory is free
         return_freed_memory()
 
     # Status and what the gate sees (perceiving.py, status.py) ---------------------------------------
@@ -481,7 +446,7 @@ class Station(ManualCommands, CartesianJog, PlannedMoves, JobControls, SpeedOver
             "torque_enabled": self._torque_enabled, "calibrated": self.trust.calibration is not None,
             "camera_warning": perception.camera_warning if self.trust.checked and perception is not None else None,
             "calibration_state": self.trust.state, "self_recalibrate": self.trust.self_recalibrate,
-            "arm_calibration": self.arm_calibration_status if self.has_arm else None,
+            "arm_calibration": self.arm_calibration.status if self.has_arm else None,
             "backend": self.backend, "controller": lease["controller"], "controller_since_s": lease["since_s"],
             "devices_lost": self.latch.lost(), "speed_percent": self.gate.speed_percent,
             "job": job.to_dict() if job is not None else None, "allowed_commands": allowed_commands(state, self.has_arm),
@@ -509,6 +474,16 @@ class Station(ManualCommands, CartesianJog, PlannedMoves, JobControls, SpeedOver
     check_motion, check_pose, check_poses, check_body = (forwarded("gate.check") for _ in range(4))
     checked_joints, palm_corners_m, finger_box = (forwarded("gate.check") for _ in range(3))
     moved_over_since, changed_at_since, note_change_everywhere = (forwarded("gate.record") for _ in range(3))
+    # the operator's commands (manual.py, cartesian_jog.py, planned_moves.py, job_control.py)
+    move_joints, home, sleep, move_to, move_in_job = (forwarded("manual") for _ in range(5))
+    plan_move, plan_move_from, solve_pose, check_move = (forwarded("manual") for _ in range(4))
+    jog, step_gripper, heartbeat, set_torque, gripper_command = (forwarded("manual") for _ in range(5))
+    jog_cartesian, stop_jog = forwarded("cartesian"), forwarded("cartesian")
+    plan_only, plan_motion, plan_steps, plan_job = (forwarded("planned") for _ in range(4))
+    execute_plan, discard_plan, plan_wire = (forwarded("planned") for _ in range(3))
+    start_job, cancel_job, current_job, set_speed = (forwarded("job_commands") for _ in range(4))
+    pause_job, resume_job, step_job, plan_job_step, set_job_speed = (forwarded("job_commands") for _ in range(5))
+    set_arm_calibration, arm_rig_key = forwarded("arm_calibration", "install"), forwarded("arm_calibration", "rig_key")
 
     def require_arm(self, what: str) -> None:
         """NoArmError naming `what` on a station without an arm (for work that needs the arm's model, e.g. programs)."""

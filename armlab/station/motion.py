@@ -25,7 +25,7 @@ from armlab.motion.blend import arm_limits, plan_stop
 from armlab.motion.end_effector import EndEffector
 from armlab.motion.handover import Handover, continuity_problem, reference_velocity, splice, take_over, trimmed
 from armlab.motion.safety import UnsafeTrajectory, check_start
-from armlab.motion.time_warp import paced, retimed
+from armlab.motion.time_warp import paced
 from armlab.station.job_control import SPEED_WAIT_FACTOR
 from armlab.station.jobs import JobCancelled, JobContext
 from armlab.station.latch import Latch
@@ -50,16 +50,16 @@ class MotionGate:
     lock: the station's lock (core.py), so a command's state transition and its send are checked as one step;
     state(): the station's state as commands see it (the caller holds the lock); owns_arm(ctx): JobCancelled unless
     that job may still command the arm (core.py, under the lock); motion_config(): the MotionConfig (read late);
-    end_effector(), held_edge_m(): for the body check (motion_check.py)."""
+    end_effector(), held_block(): for the body check (motion_check.py)."""
 
     def __init__(self, arm: Any, gripper: Any, model: Any, latch: Latch, clock: Clock, lock: threading.RLock, *,
                  motion_config: Callable[[], Any], end_effector: Callable[[], EndEffector],
-                 held_edge_m: Callable[[], float | None], state: Callable[[], State], owns_arm: Callable[[JobContext], None],
+                 held_block: Callable[[], dict | None], state: Callable[[], State], owns_arm: Callable[[JobContext], None],
                  gripper_settle_timeout_s: float, moving_speed_rad_s: float) -> None:
         self.arm, self.gripper, self.model, self.latch, self.clock = arm, gripper, model, latch, clock
         self._lock, self._motion_config, self._state_now, self._owns_arm = lock, motion_config, state, owns_arm
         self._settle_timeout_s, self._moving_speed_rad_s = gripper_settle_timeout_s, moving_speed_rad_s
-        self.check = MotionCheck(model, motion_config, end_effector, held_edge_m)  # check_motion, check_pose, ...
+        self.check = MotionCheck(model, motion_config, end_effector, held_block)  # check_motion, check_pose, ...
         self.record = MotionRecord(model)  # where the gripper went and when (stale perception)
         self._plan_lock = threading.RLock()  # one replacing motion planned at a time (send_replacing)
         self._newest_move = 0  # the ticket of the newest manual move waiting to be planned (send_replacing)
@@ -68,7 +68,7 @@ class MotionGate:
         self._commanded: tuple | None = None  # the last trajectory sent: (trajectory, clock_s at its t = 0, count)
         self._command_count = 0
         self._speed_lock = threading.Lock()  # one override change (or paced send) at a time
-        self._speed_percent = 100.0  # the speed override every motion is paced at (speed.py)
+        self._speed_percent = 100.0  # the speed override every motion is paced at (set by job_control.py set_speed)
         self._paced_motion: tuple | None = None  # (the trajectory object last sent, the override it was paced at)
         self._pace_next: float | None = None  # the override of the motion being sent (set under the lock just before it)
 
@@ -95,7 +95,7 @@ class MotionGate:
         """A halt or the torque switched: the arm holds where it is, so there is no commanded motion to continue."""
         self._commanded = None
 
-    # The speed override (the command: speed.py) ------------------------------------------------------------------
+    # The speed override (the command: job_control.py) ---------------------------------------------------------------
 
     @property
     def speed_percent(self) -> float:
@@ -128,30 +128,10 @@ class MotionGate:
             old, self._speed_percent = self._speed_percent, speed
         return old
 
-    def retime_running(self, speed: float) -> str | None:
-        """Re-time the remainder of the motion in progress to `speed` (when it is one this override paced); the reason
-        when that could not be sent (the motion runs on at its speed), else None."""
-        with self._lock:
-            running, paced_motion = self._commanded, self._paced_motion
-        if running is None or paced_motion is None or running[0] is not paced_motion[0] or paced_motion[1] == speed:
-            return None
-        if self.clock_s() - running[1] >= running[0].duration_s:
-            return None  # it has ended
-        ratio = speed / paced_motion[1]
-
-        def plan(handover: Handover | None) -> JointTrajectory:
-            current = self._commanded
-            if handover is None or current is None or current[2] != handover.source_id:
-                raise InvalidInput("the motion ended or was replaced meanwhile")
-            trajectory, t0 = current[0], current[1]
-            return retimed(trajectory, handover.takes_over_s - t0, 1.0, ratio, self.model.accel_limit_rad_s2,
-                           self._motion_config().sample_rate_hz)
-
-        try:
-            self.send_replacing(plan, lambda: self.pace_next_send(speed), "set_speed")
-        except (*PLAN_REFUSALS, ArmMoving, CommandRefused) as error:
-            return str(error)
-        return None
+    @property
+    def paced_motion(self) -> tuple | None:
+        """(the trajectory object last sent, the override it was paced at), None before any: what a change re-times."""
+        return self._paced_motion
 
     # Waiting and sending -------------------------------------------------------------------------------------------
 
@@ -194,7 +174,6 @@ class MotionGate:
             return now - still["since"] > 0.15
 
         return fingers_still
-
 
     @contextmanager
     def sending(self) -> Iterator[None]:
@@ -273,7 +252,7 @@ class MotionGate:
             self._check_start(trimmed(trajectory, read_s - now), measured)
         self._command_count += 1
         record = self._commanded = (planned, planned_t0, self._command_count)
-        self._paced_motion, self._pace_next = (planned, self._pace_next), None  # speed.py: what a change re-times
+        self._paced_motion, self._pace_next = (planned, self._pace_next), None  # what a change of the override re-times
         if handover is not None:  # the arm samples the splice at its own clock minus this: a late send continues it
             start_s = handover.planned_at_s + max(elapsed, 0.0)  # (before 0: a motion from rest not begun yet, as it will)
             self.send_later(lambda: self.arm.command_trajectory(trajectory, start_time_s=start_s))
@@ -454,7 +433,7 @@ class MotionGate:
     def start_trajectory(self, ctx: JobContext, trajectory: JointTrajectory) -> JointTrajectory:
         """Inside a job: check the trajectory (check_motion) and command it (only while this job owns the
         arm), without waiting; while a motion runs it must continue it (replace_trajectory plans one that does).
-        Paced at the speed override (speed.py) unless the job paces itself (a repeat's RunControl). Returns
+        Paced at the speed override unless the job paces itself (a repeat's RunControl). Returns
         what was sent."""
         paces = getattr(ctx.job, "control", None) is None
         with self._speed_lock:  # a change of the override waits for this send, then re-times it
@@ -491,7 +470,7 @@ class MotionGate:
         and wait for it."""
         trajectory = self.start_trajectory(ctx, trajectory)
         checked = ctx if not ctx.in_cleanup else None
-        # a lower speed override set while it runs stretches it (speed.py): wait as long as the slowest speed takes
+        # a lower speed override set while it runs stretches it (retime_running): wait as long as the slowest speed takes
         if not self.wait_until(lambda: not self.arm.is_moving(), trajectory.duration_s * SPEED_WAIT_FACTOR + 5.0, checked):
             self.latch.halt_devices(gripper=False)
             if self.latch.is_set():

@@ -23,12 +23,12 @@ class MotionCheck:
     """check_motion, check_pose, check_poses and the boxes they keep above the board.
 
     model: the (calibrated) ArmModel; motion_config(): armlab.motion's MotionConfig (read late: loaded on first use);
-    end_effector(): the station's end effector; held_edge_m(): the edge of the block the gripper holds (None: none)."""
+    end_effector(): the station's end effector; held_block(): what the gripper holds (its edge_m), None: nothing."""
 
     def __init__(self, model: Any, motion_config: Callable[[], Any], end_effector: Callable[[], EndEffector],
-                 held_edge_m: Callable[[], float | None]) -> None:
+                 held_block: Callable[[], dict | None]) -> None:
         self.model = model
-        self._motion_config, self._end_effector, self._held_edge_m = motion_config, end_effector, held_edge_m
+        self._motion_config, self._end_effector, self._held_block = motion_config, end_effector, held_block
 
     def checked_joints(self, q_rad) -> np.ndarray:
         """A finite joint vector inside the limits (InvalidInput naming the joint otherwise)."""
@@ -69,8 +69,10 @@ class MotionCheck:
         if (palm := self.palm_corners_m()) is not None:
             parts["palm"] = palm
         check_parts_above_board(self.model, positions, times, parts)
+        held = self._held_block()
+        held_edge_m = float(held["edge_m"]) if held and held.get("edge_m") else None
         hit = self_collision(self.model, positions, base_radius_m=config.base_radius_m, reach_m=config.self_clearance_m,
-                             held_edge_m=self._held_edge_m())
+                             held_edge_m=held_edge_m)
         if hit is not None:
             sample, part, what = hit
             raise UnsafeTrajectory(f"{what} at t = {times[sample]:.3f} s: the arm would hit itself", part=part,

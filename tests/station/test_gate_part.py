@@ -61,7 +61,7 @@ def gate(cell):
     owner = Owner()
     latch = Latch(cell.arm, cell.gripper, on_halt=lambda: gate.forget_commanded())
     gate = MotionGate(cell.arm, cell.gripper, ARM, latch, cell.clock, threading.RLock(), motion_config=lambda: config,
-                      end_effector=lambda: end_effector("fingers"), held_edge_m=lambda: None, state=lambda: State.IDLE,
+                      end_effector=lambda: end_effector("fingers"), held_block=lambda: None, state=lambda: State.IDLE,
                       owns_arm=owner, gripper_settle_timeout_s=1.0, moving_speed_rad_s=0.05)
     gate.owner = owner
     assert gate.wait_until(lambda: not cell.arm.is_moving(), 10.0)
@@ -90,7 +90,7 @@ def test_a_command_reaches_the_arm_only_after_the_lock_is_released_and_the_arm_a
 
 def test_a_device_command_outside_sending_is_refused():
     gate = MotionGate(None, None, ARM, Latch(None, None), None, threading.RLock(), motion_config=lambda: None,
-                      end_effector=lambda: end_effector("fingers"), held_edge_m=lambda: None, state=lambda: State.IDLE,
+                      end_effector=lambda: end_effector("fingers"), held_block=lambda: None, state=lambda: State.IDLE,
                       owns_arm=lambda ctx: None, gripper_settle_timeout_s=1.0, moving_speed_rad_s=0.05)
     with pytest.raises(RuntimeError, match="sending"):
         gate.send_later(lambda: None)
@@ -208,7 +208,7 @@ def test_the_gate_and_the_status_count_the_same_arm_as_moving(speed_rad_s, movin
     refuses a self-recalibration) agree on a joint pushed faster or slower than moving_speed_rad_s."""
     arm = PushedArm(speed_rad_s)
     gate = MotionGate(arm, None, ARM, Latch(arm, None), None, threading.RLock(), motion_config=lambda: None,
-                      end_effector=lambda: end_effector("fingers"), held_edge_m=lambda: None, state=lambda: State.IDLE,
+                      end_effector=lambda: end_effector("fingers"), held_block=lambda: None, state=lambda: State.IDLE,
                       owns_arm=lambda ctx: None, gripper_settle_timeout_s=1.0, moving_speed_rad_s=0.05)
     readings = ArmReadings(arm, StillGripper(), ARM, 0.05)
     assert readings.read()["moving"] is moving
