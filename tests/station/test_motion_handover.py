@@ -215,7 +215,7 @@ def test_a_burst_of_moves_plans_only_the_newest(fast, monkeypatch):
     station, _ = fast
     at_rest(station, [0.0, 0.0, 0.0, 0.0, 0.0])
     held, planned, entered, outcomes = threading.Event(), [], [], {}
-    send_replacing, plan_move, plan_move_from = station.gate.send_replacing, station.plan_move, station.plan_move_from
+    send_replacing, plan_move, plan_move_from = station.gate.send_replacing, station.manual.plan_move, station.manual.plan_move_from
 
     def counting(original):
         def plan(*args, **kwargs):
@@ -229,8 +229,8 @@ def test_a_burst_of_moves_plans_only_the_newest(fast, monkeypatch):
         entered.append(threading.current_thread().name)
         return send_replacing(*args, **kwargs)
 
-    monkeypatch.setattr(station, "plan_move", counting(plan_move))
-    monkeypatch.setattr(station, "plan_move_from", counting(plan_move_from))
+    monkeypatch.setattr(station.manual, "plan_move", counting(plan_move))
+    monkeypatch.setattr(station.manual, "plan_move_from", counting(plan_move_from))
     monkeypatch.setattr(station.gate, "send_replacing", entering)
 
     def move(waist_rad: float) -> None:
