@@ -34,6 +34,7 @@ from armlab.station.colors import StationColors
 from armlab.station.config import StationConfig
 from armlab.station.event_history import EventHistory
 from armlab.station.forwarding import forwarded
+from armlab.station.held import HeldBlock
 from armlab.station.intrinsics import CameraIntrinsics
 from armlab.station.job_control import JobControls
 from armlab.station.jobs import Job, JobCancelled, JobContext
@@ -125,7 +126,7 @@ class Station:
         self._job: Job | None = None
         self._last_job: Job | None = None
         self._jog: dict | None = None  # the running jog: trajectory, start clock, velocity, controller
-        self._held_block: dict | None = None
+        self._held_block: HeldBlock | None = None  # what the last pick put in the gripper (held.py)
         self._torque_enabled = True  # connect() leaves the arm holding; set_torque() changes it
         self.events = EventLog()
         self.event_history = EventHistory(self.events, self.store)  # kept in the database (History panel)
@@ -398,14 +399,17 @@ class Station:
         return self._motion_config
 
     @property
-    def held_block(self) -> dict | None:
-        """What the last pick put in the gripper (block wire dict + "height_m"), or None."""
+    def held_block(self) -> HeldBlock | None:
+        """What the last pick put in the gripper (held.HeldBlock: its edge, colour, size, yaw), or None."""
         with self._lock:
-            return None if self._held_block is None else dict(self._held_block)
+            return self._held_block
 
-    def set_held_block(self, block: dict | None) -> None:
+    def set_held_block(self, block: HeldBlock | None) -> None:
+        """A pick put `block` in the gripper (None: it is empty); TypeError for anything but a HeldBlock."""
+        if block is not None and not isinstance(block, HeldBlock):
+            raise TypeError(f"set_held_block takes a HeldBlock or None, not {type(block).__name__}")
         with self._lock:
-            self._held_block = None if block is None else dict(block)
+            self._held_block = block
 
     def _owns_arm(self, ctx: JobContext) -> None:
         """Inside a job, under the lock: JobCancelled unless this job may still command the devices

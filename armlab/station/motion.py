@@ -26,6 +26,7 @@ from armlab.motion.end_effector import EndEffector
 from armlab.motion.handover import Handover, continuity_problem, reference_velocity, splice, take_over, trimmed
 from armlab.motion.safety import UnsafeTrajectory, check_start
 from armlab.motion.time_warp import paced
+from armlab.station.held import HeldBlock
 from armlab.station.job_control import SPEED_WAIT_FACTOR
 from armlab.station.jobs import JobCancelled, JobContext
 from armlab.station.latch import Latch
@@ -54,7 +55,7 @@ class MotionGate:
 
     def __init__(self, arm: Any, gripper: Any, model: Any, latch: Latch, clock: Clock, lock: threading.RLock, *,
                  motion_config: Callable[[], Any], end_effector: Callable[[], EndEffector],
-                 held_block: Callable[[], dict | None], state: Callable[[], State], owns_arm: Callable[[JobContext], None],
+                 held_block: Callable[[], HeldBlock | None], state: Callable[[], State], owns_arm: Callable[[JobContext], None],
                  gripper_settle_timeout_s: float, moving_speed_rad_s: float) -> None:
         self.arm, self.gripper, self.model, self.latch, self.clock = arm, gripper, model, latch, clock
         self._lock, self._motion_config, self._state_now, self._owns_arm = lock, motion_config, state, owns_arm

@@ -17,6 +17,7 @@ from armlab.motion.end_effector import EndEffector
 from armlab.motion.safety import UnsafeTrajectory
 from armlab.station.body_check import check_parts_above_board, palm_corners_m
 from armlab.station.checks import checked_joints
+from armlab.station.held import HeldBlock
 
 
 class MotionCheck:
@@ -26,7 +27,7 @@ class MotionCheck:
     end_effector(): the station's end effector; held_block(): what the gripper holds (its edge_m), None: nothing."""
 
     def __init__(self, model: Any, motion_config: Callable[[], Any], end_effector: Callable[[], EndEffector],
-                 held_block: Callable[[], dict | None]) -> None:
+                 held_block: Callable[[], HeldBlock | None]) -> None:
         self.model = model
         self._motion_config, self._end_effector, self._held_block = motion_config, end_effector, held_block
 
@@ -70,7 +71,7 @@ class MotionCheck:
             parts["palm"] = palm
         check_parts_above_board(self.model, positions, times, parts)
         held = self._held_block()
-        held_edge_m = float(held["edge_m"]) if held and held.get("edge_m") else None
+        held_edge_m = float(held.edge_m) if held is not None and held.edge_m else None
         hit = self_collision(self.model, positions, base_radius_m=config.base_radius_m, reach_m=config.self_clearance_m,
                              held_edge_m=held_edge_m)
         if hit is not None:
