@@ -107,8 +107,7 @@ class MotionGate:
         unless a commanded motion is still running."""
         if from_rest is None:
             from_rest = not self.commanded_motion_running()
-        config = self._motion_config()
-        return paced(trajectory, percent / 100.0, self.model.accel_limit_rad_s2, from_rest, config.sample_rate_hz)
+        return paced(trajectory, percent / 100.0, self.model.accel_limit_rad_s2, from_rest, self._motion_config().sample_rate_hz)
 
     def pace_next_send(self, percent: float) -> None:
         """Under the lock, just before command_arm: the motion about to be sent was paced at `percent` (a later
