@@ -11,7 +11,7 @@ from armlab.kinematics import load_arm
 from armlab.motion.safety import UnsafeTrajectory
 from armlab.skills.repeat_plan import RepeatSettings, plan_cycle, plan_ease_in
 from armlab.station.checks import checked_joints
-from armlab.station.motion import MotionGate
+from armlab.station.motion_check import MotionCheck
 from armlab.store import Program, Waypoint
 
 ARM = load_arm("rx200")
@@ -33,8 +33,8 @@ class FakeStation:
         if reason:
             raise UnsafeTrajectory(reason)
 
-    check_pose = MotionGate.check_pose  # the station's own: a standing arm through check_motion
-    check_poses = MotionGate.check_poses  # the station's own: naming the waypoint
+    check_pose = MotionCheck.check_pose  # the station's own: a standing arm through check_motion
+    check_poses = MotionCheck.check_poses  # the station's own: naming the waypoint
 
 
 def _through_front_low(trajectory) -> str | None:

@@ -19,6 +19,7 @@ from armlab.skills.perceive import block_near, target_point
 from armlab.station.arm_info import station_end_effector
 from armlab.station.calibration_trust import calibration_summary
 from armlab.station.core import Station
+from armlab.station.held import HeldBlock
 from armlab.station.jobs import Job, JobContext
 from armlab.station.telemetry import block_to_dict
 from armlab.vision import calibrate_extrinsics, detect_tags
@@ -134,7 +135,7 @@ def grab(station: Station, position_m=None, pixel=None, source: str | None = Non
         with_advice("grab", top, lambda: run_steps(station, ctx, steps, replan=replan))
         holding = bool(station.gripper.read_state().holding)
         known = {"color": block.color, "size": block.size} if block is not None else {}
-        station.set_held_block({**known, "edge_m": edge, "yaw_rad": yaw} if holding else None)
+        station.set_held_block(HeldBlock(edge_m=edge, yaw_rad=yaw, **known) if holding else None)
         if not holding:
             raise GripperEmpty(f"nothing in the gripper: {station_end_effector(station).missed_grasp} at {detail}")
         ctx.job.update(message="holding the block")
@@ -174,8 +175,8 @@ def drop(station: Station, position_m=None, pixel=None, source: str | None = Non
         yaw = below.yaw_rad
         on = f"{below.color} block"
     surface[2] = surface[2] if surface[2] > BOARD_NOISE_M else 0.0  # depth noise on the board reads as board
-    held = station.held_block or {}
-    edge = float(held.get("edge_m", station.config.default_block_height_m))
+    held = station.held_block
+    edge = float(held.edge_m if held is not None else station.config.default_block_height_m)
     boxes = known_obstacles(station, surface, *([surface] if below is not None else []))
 
     def plan() -> list:  # clear of every other block and stack the station sees (issue 21)

@@ -397,7 +397,7 @@ class _Runner:
 def repeat(station: Station, program_id: int, cycles: int | None = 1, speed_percent: float | None = None,
            source: str | None = None, settings: RepeatSettings = RepeatSettings(), plan_only: bool = False) -> Job | dict:
     """Start repeating program `program_id` `cycles` times (None: until cancelled) at `speed_percent`: the station's
-    speed override (None: as it is; a number becomes the override once the job has started, station/speed.py).
+    speed override (None: as it is; a number becomes the override once the job has started, station/job_control.py set_speed).
 
     Refused before anything moves (ValueError, UnsafeTrajectory, NotFound, CommandRefused) when the state
     does not allow it, the numbers are out of range, or a waypoint or segment fails the motion check.

@@ -6,54 +6,54 @@ and every state change goes through `_transition`, here. The lock guards state o
 halts the arm and gripper, and only then records the state; every command path checks the latch under the lock before
 it reaches a device, and every wait checks it, so after estop() returns no job or manual command can reach the arm
 until reset(). A lost device (watch.py) latches the same way and puts the station in `fault`.
-The parts the gate owns, each with its own state: latch (latch.py), lease (lease.py), trust (calibration_trust.py),
-teach (teach.py), perceiver (perceiving.py), readings (status.py). Skills and tasks use its small public interface:
-`start_job`, `run_trajectory`, `run_gripper`, `fresh_frame`, `fresh_perception`, `joints_rad`, `checked_joints`,
-`held_block`/`set_held_block`, `moved_over_since`, `clock_s`.
+The parts the gate owns, each with its own state: latch (latch.py), lease (lease.py), gate (motion.py: every motion's
+checks, send and waits), trust (calibration_trust.py), arm_calibration, teach (teach.py), perceiver (perceiving.py),
+readings (status.py); and the command objects manual, cartesian, planned, job_commands. Skills, tasks and the server
+call the Station's own methods; those a part answers are forwarded to it in one line (forwarding.py).
 """
 
 from __future__ import annotations
 
 import logging
-import math
 import threading
 import time
 from typing import Any
 
-import numpy as np
-
 from armlab.devices.arm import Arm
-from armlab.devices.camera import Camera, Frame
+from armlab.devices.camera import Camera
 from armlab.devices.clock import Clock, WallClock
 from armlab.devices.gripper import Gripper
 from armlab.errors import CommandRefused, DeviceLost, InvalidInput, NoArmError, ShuttingDown
 from armlab.kinematics.calibrated_arm import CalibratedArm
 from armlab.station.arm_calibration import ArmCalibrationKeeper
+from armlab.station.arm_info import station_end_effector
 from armlab.station.calibration_trust import SELF_RECALIBRATE_JOB, CalibrationTrust, self_recalibration_job
 from armlab.station.cartesian_jog import CartesianJog
-from armlab.station.checks import NotCalibrated, checked_joints
+from armlab.station.checks import NotCalibrated
 from armlab.station.colors import StationColors
 from armlab.station.config import StationConfig
 from armlab.station.event_history import EventHistory
+from armlab.station.forwarding import forwarded
+from armlab.station.held import HeldBlock
 from armlab.station.intrinsics import CameraIntrinsics
 from armlab.station.job_control import JobControls
-from armlab.station.jobs import Job, JobContext
+from armlab.station.jobs import Job, JobCancelled, JobContext
 from armlab.station.latch import Latch
 from armlab.station.lease import ControlLease
 from armlab.station.manual import ManualCommands
 from armlab.station.memory import return_freed_memory
-from armlab.station.motion import MOTION_MEMORY, WAIT_CHUNK_S, MotionGate
+from armlab.station.motion import WAIT_CHUNK_S, MotionGate
+from armlab.station.motion_record import MOTION_MEMORY
 from armlab.station.perceiving import Perceiver
-from armlab.station.perception import DEVICE_ERRORS, Perception
+from armlab.station.perception import DEVICE_ERRORS
 from armlab.station.planned_moves import PlannedMoves
-from armlab.station.plans import PlanStore
 from armlab.station.reach import ReachCache
+from armlab.station.shutdown import stop_threads
 from armlab.station.slots import EventLog, NewestSlot
-from armlab.station.speed import SpeedOverride
-from armlab.station.states import ARM_COMMANDS, State, after_event, allowed_commands, next_state
+from armlab.station.states import ARM_COMMANDS, JOB_STATES, State, after_event, allowed_commands, next_state
 from armlab.station.status import ArmReadings
 from armlab.station.teach import Teach, TeachLinks
-from armlab.station.telemetry import Detections, TelemetryPublisher
+from armlab.station.telemetry import TelemetryPublisher
 from armlab.station.watch import DeviceWatch, device_problems
 from armlab.store import Owner, Store
 from armlab.vision import detect_tags, load_perception_config
@@ -67,9 +67,10 @@ __all__ = ["DEVICE_ERRORS", "MOTION_MEMORY", "WAIT_CHUNK_S", "NotCalibrated", "S
 _UNLATCHED = ("estop",)  # the only command the latch and the lease never refuse
 
 
-class Station(MotionGate, ManualCommands, CartesianJog, PlannedMoves, JobControls, SpeedOverride, ArmCalibrationKeeper):
-    """The control station's gate: the parts above, and the command groups still mixed in (motion.py: the motion gate;
-    manual.py, cartesian_jog.py, planned_moves.py, job_control.py, speed.py, arm_calibration.py). Backends are injected.
+class Station:
+    """The control station's gate: its state, the parts above, and the command objects it owns (station.manual,
+    station.cartesian, station.planned, station.job_commands: manual.py, cartesian_jog.py, planned_moves.py,
+    job_control.py), whose public methods it forwards. Backends are injected.
 
     model: the armlab.kinematics ArmModel (None: a station with no arm, perception only, every arm command refused
     with NoArmError); perception_config: armlab.vision's config; sim: the SimWorkcell when simulated (else None);
@@ -112,29 +113,21 @@ class Station(MotionGate, ManualCommands, CartesianJog, PlannedMoves, JobControl
         self.backend = backend
         self.synchronous = synchronous
         self._lock = threading.RLock()
-        self._plan_lock = threading.RLock()  # one replacing motion planned at a time (motion.py _send_replacing)
-        self._newest_move = 0  # the ticket of the newest manual move waiting to be planned (motion.py _send_replacing)
-        self._send_lock = threading.Lock()  # one sender of device commands at a time, taken before _lock (motion.py _sending)
-        self._outbox: list | None = None  # device commands queued under the lock, sent after it (motion.py _sending)
-        self.latch = Latch(arm, gripper, on_halt=self._forget_commanded)  # e-stop, device loss, a failed part (latch.py)
+        # e-stop, device loss, a failed part (latch.py); a halt leaves no commanded motion to continue
+        self.latch = Latch(arm, gripper, on_halt=lambda: self.gate.forget_commanded())
+        self.gate = MotionGate(  # the one path of every motion: checks, start, send, waits, pacing, where it went (motion.py)
+            arm, gripper, self.model, self.latch, self.clock, self._lock, motion_config=lambda: self.motion_config,
+            end_effector=lambda: station_end_effector(self), held_block=lambda: self.held_block, state=self._effective_state,
+            owns_arm=self._owns_arm, gripper_settle_timeout_s=self.config.gripper_settle_timeout_s,
+            moving_speed_rad_s=self.config.moving_speed_rad_s)
         self._closing = threading.Event()
         self._state = State.IDLE
         self._detail = ""
         self._job: Job | None = None
         self._last_job: Job | None = None
         self._jog: dict | None = None  # the running jog: trajectory, start clock, velocity, controller
-        self._step_anchor: tuple | None = None  # the last jog step's commanded end and its motion entry (manual.py jog_step)
-        self._speed_percent = 100.0  # the speed override (speed.py)
-        self._paced_motion: tuple | None = None  # (the trajectory object last sent, the override it was paced at) (speed.py)
-        self._pace_next: float | None = None  # the override of the motion being sent (set under the lock just before it)
-        self._held_block: dict | None = None
+        self._held_block: HeldBlock | None = None  # what the last pick put in the gripper (held.py)
         self._torque_enabled = True  # connect() leaves the arm holding; set_torque() changes it
-        self._motions: list[tuple[float, np.ndarray]] = []  # (end time_s, [xmin, ymin, xmax, ymax, x, y, z of the gripper's sampled path...])
-        self._changed_everywhere_s = -math.inf  # the last change that may have changed any spot (note_change_everywhere)
-        self._commanded: tuple | None = None  # the last trajectory sent: (trajectory, clock_s at its t = 0, count)
-        self._command_count = 0
-        self.plans = PlanStore()  # plan, then execute (planned_moves.py)
-        self._speed_lock = threading.Lock()  # one override change at a time (speed.py)
         self.events = EventLog()
         self.event_history = EventHistory(self.events, self.store)  # kept in the database (History panel)
         self.reach = ReachCache()  # where the gripper reaches on the board (the page's reach overlay)
@@ -154,6 +147,10 @@ class Station(MotionGate, ManualCommands, CartesianJog, PlannedMoves, JobControl
             self.allowed_or_raise, self._teach_transition, lambda: self.state is State.TEACH and not self.latch.is_set(),
             self._closing.is_set, lambda: self.joints_rad(), lambda: self.gripper.read_state().command,
             lambda q: self.check_pose(q), lambda poses: self.check_poses(poses), self.component_failed, threads=not synchronous))
+        self.arm_calibration = ArmCalibrationKeeper(self.model, self.store, self.events, self.config.workcell)  # in use, saved
+        # The command objects: each holds its own state and sends through the gate; their public methods are forwarded below.
+        self.manual, self.cartesian = ManualCommands(self), CartesianJog(self)
+        self.planned, self.job_commands = PlannedMoves(self), JobControls(self)
         self._workers: list = []
         self._started = False
 
@@ -175,9 +172,9 @@ class Station(MotionGate, ManualCommands, CartesianJog, PlannedMoves, JobControl
         if interrupted:
             self.events.add("warn", f"{interrupted} job(s) were cut off when the station last stopped: marked interrupted")
         if self.config.restore_calibration:
-            one_look = (lambda: detect_tags(self.fresh_frame().color_bgr, self.perception_config)) if self.synchronous else None
+            one_look = (lambda: detect_tags(self.fresh_frame().color_bgr, self.perception_config)) if self.perceiver.on_demand else None
             self.trust.restore(self.store.latest_calibration(), one_look)
-            self._restore_arm_calibration()
+            self.arm_calibration.restore()
         self._closing.clear()
         if not self.synchronous:
             self._workers = [
@@ -203,25 +200,10 @@ class Station(MotionGate, ManualCommands, CartesianJog, PlannedMoves, JobControl
         Returns {"joined": [thread names], "alive": [names still running]} and logs it; the devices (or
         the sim) are closed by their owner."""
         self.begin_shutdown()
-        deadline = time.monotonic() + self.config.close_timeout_s
-        joined, alive = [], []
         job = self._job or self._last_job  # a job cancelled by begin_shutdown may have just ended
-        if job is not None and job.thread is not None:
-            job.thread.join(max(0.0, deadline - time.monotonic()))
-            (alive if job.thread.is_alive() else joined).append(job.thread.name)
-        for worker in self._workers:
-            worker.request_stop()
-        for worker in reversed(self._workers):
-            ended = worker.stop(max(0.05, deadline - time.monotonic()))
-            (joined if ended else alive).append(worker.name)
-        self._workers = []
-        self._started = False
-        (joined if self.event_history.close() else alive).append("event-history")
-        report = {"joined": joined, "alive": alive}
-        if alive:
-            log.warning("station closed; threads still running: %s (joined: %s)", ", ".join(alive), ", ".join(joined) or "none")
-        else:
-            log.info("station closed; threads joined: %s", ", ".join(joined) or "none")
+        report = stop_threads(None if job is None else job.thread, self._workers, self.event_history.close,
+                              self.config.close_timeout_s)
+        self._workers, self._started = [], False
         return report
 
     @property
@@ -281,10 +263,6 @@ class Station(MotionGate, ManualCommands, CartesianJog, PlannedMoves, JobControl
         return new_state
 
     # The latch: e-stop, device loss, reset ----------------------------------------------------------
-
-    def _forget_commanded(self) -> None:
-        """Every halt: the arm holds where it is, so there is no commanded motion to continue."""
-        self._commanded = None
 
     def _latch_and_halt(self) -> list[str]:
         """Set the latch first, cancel the job, halt the arm and gripper (before any lock): what fails to stop."""
@@ -358,11 +336,7 @@ class Station(MotionGate, ManualCommands, CartesianJog, PlannedMoves, JobControl
 
     # Control lease (the part: station.lease, lease.py) ----------------------------------------------
 
-    @property
-    def controller(self) -> str | None:
-        """Who holds the control lease (None: free)."""
-        with self._lock:
-            return self.lease.holder
+    controller = forwarded("lease", "holder")  # who holds the control lease (None: free)
 
     def require_control(self, command: str, source: str | None) -> None:
         """The lease check of a command outside the state table (program edits): NotController naming the
@@ -399,20 +373,8 @@ class Station(MotionGate, ManualCommands, CartesianJog, PlannedMoves, JobControl
 
     # Calibration (the part: calibration_trust.py) ---------------------------------------------------
 
-    @property
-    def calibration(self) -> Any:
-        return self.trust.calibration
-
-    @property
-    def calibration_info(self) -> dict:
-        return self.trust.info
-
-    def set_calibration(self, calibration: Any, info: dict) -> None:
-        """Install a calibration (armlab.vision Calibration) with its wire summary; publishes it."""
-        self.trust.install(calibration, info)
-
-    def require_trusted_calibration(self, what: str) -> None:
-        self.trust.require_trusted(what)
+    calibration, calibration_info = forwarded("trust", "calibration"), forwarded("trust", "info")
+    set_calibration, require_trusted_calibration = forwarded("trust", "install"), forwarded("trust", "require_trusted")
 
     def _why_not_self_recalibrate(self) -> str | None:
         """None when the station may recalibrate itself now (idle, nothing running, the arm still), else why not."""
@@ -422,7 +384,7 @@ class Station(MotionGate, ManualCommands, CartesianJog, PlannedMoves, JobControl
                 return f"the station is {self._effective_state().value}"
             if self._job is not None or self._jog is not None or recording:
                 return "a job or a jog is running"
-        return self.arm_moving()
+        return self.gate.arm_moving()
 
     def _start_self_recalibration(self) -> None:
         self.start_job("calibrate", SELF_RECALIBRATE_JOB, lambda ctx: self_recalibration_job(self, ctx),
@@ -437,14 +399,26 @@ class Station(MotionGate, ManualCommands, CartesianJog, PlannedMoves, JobControl
         return self._motion_config
 
     @property
-    def held_block(self) -> dict | None:
-        """What the last pick put in the gripper (block wire dict + "height_m"), or None."""
+    def held_block(self) -> HeldBlock | None:
+        """What the last pick put in the gripper (held.HeldBlock: its edge, colour, size, yaw), or None."""
         with self._lock:
-            return None if self._held_block is None else dict(self._held_block)
+            return self._held_block
 
-    def set_held_block(self, block: dict | None) -> None:
+    def set_held_block(self, block: HeldBlock | None) -> None:
+        """A pick put `block` in the gripper (None: it is empty); TypeError for anything but a HeldBlock."""
+        if block is not None and not isinstance(block, HeldBlock):
+            raise TypeError(f"set_held_block takes a HeldBlock or None, not {type(block).__name__}")
         with self._lock:
-            self._held_block = None if block is None else dict(block)
+            self._held_block = block
+
+    def _owns_arm(self, ctx: JobContext) -> None:
+        """Inside a job, under the lock: JobCancelled unless this job may still command the devices
+        (it is current and not cancelled, or it is running its cleanup after a cancel), and never
+        once the latch is set."""
+        if self._job is not ctx.job or self._state not in JOB_STATES or self.latch.is_set():
+            raise JobCancelled("job is no longer current")
+        if not ctx.in_cleanup:
+            ctx.check()
 
     def set_scene(self, scene: Any, source: str | None = None) -> None:
         """Simulation: replace the objects (armlab.scene Scene). Checked (state, lease) under the lock; the
@@ -455,10 +429,9 @@ class Station(MotionGate, ManualCommands, CartesianJog, PlannedMoves, JobControl
             self._transition("set_scene", source=source)
         _, version = self.frames.get()
         self.sim.set_scene(scene)
-        self.note_change_everywhere()  # what the arm hides now was seen in the old scene
+        self.gate.record.note_change_everywhere()  # what the arm hides now was seen in the old scene
         self.set_held_block(None)
-        if not self.synchronous:  # once a frame of the new scene is drawn, the old model's memory is free
-            self.frames.wait_newer(version, timeout_s=1.0)
+        self.perceiver.wait_for_new_frame(version, timeout_s=1.0)  # once one of the new scene is drawn, the old model's memory is free
         return_freed_memory()
 
     # Status and what the gate sees (perceiving.py, status.py) ---------------------------------------
@@ -470,16 +443,16 @@ class Station(MotionGate, ManualCommands, CartesianJog, PlannedMoves, JobControl
             job = self._job or self._last_job
             state, detail, lease = self._effective_state(), self._detail, self.lease.to_dict()
         perception, _ = self.perception.get()
-        commanded = self.commanded_joints_rad() if self.has_arm else None
+        commanded = self.gate.commanded_joints_rad() if self.has_arm else None
         return {
             "state": state.value, "detail": detail, **readings,
             "commanded_joints_rad": None if commanded is None else [float(v) for v in commanded],
             "torque_enabled": self._torque_enabled, "calibrated": self.trust.calibration is not None,
             "camera_warning": perception.camera_warning if self.trust.checked and perception is not None else None,
             "calibration_state": self.trust.state, "self_recalibrate": self.trust.self_recalibrate,
-            "arm_calibration": self.arm_calibration_status if self.has_arm else None,
+            "arm_calibration": self.arm_calibration.status if self.has_arm else None,
             "backend": self.backend, "controller": lease["controller"], "controller_since_s": lease["since_s"],
-            "devices_lost": self.latch.lost(), "speed_percent": self.speed_percent,
+            "devices_lost": self.latch.lost(), "speed_percent": self.gate.speed_percent,
             "job": job.to_dict() if job is not None else None, "allowed_commands": allowed_commands(state, self.has_arm),
             "time_s": time.time(),
         }
@@ -490,33 +463,34 @@ class Station(MotionGate, ManualCommands, CartesianJog, PlannedMoves, JobControl
         snapshot["detections"], snapshot["detections_stale"] = detections.to_dict()["data"], detections.stale
         return snapshot
 
-    def detections(self) -> Detections:
-        return self.perceiver.detections()
+    # What the parts answer (the part's method is the one place each is written) ------------------------------------
 
-    def fresh_frame(self, timeout_s: float = 2.0, max_age_s: float = 2.0) -> Frame:
-        return self.perceiver.fresh_frame(timeout_s, max_age_s)
-
-    def frame_after(self, since_s: float, timeout_s: float = 3.0) -> Frame:
-        return self.perceiver.frame_after(since_s, timeout_s)
-
-    def fresh_perception(self, ctx: JobContext | None = None, timeout_s: float = 5.0) -> Perception:
-        return self.perceiver.fresh_perception(ctx, timeout_s)
-
-
-    def joints_rad(self) -> np.ndarray:
-        """The measured joint positions (rad)."""
-        return np.asarray(self.arm.read_joint_state().position_rad, dtype=float)
+    detections, fresh_frame, frame_after, fresh_perception = (forwarded("perceiver") for _ in range(4))
+    clock_s, joints_rad = forwarded("gate"), forwarded("gate")
+    # the motion gate's commands inside a job (skills, tasks) and its waits
+    run_trajectory, start_trajectory, replace_trajectory, wait_in_job = (forwarded("gate") for _ in range(4))
+    run_gripper, brake_to_rest, wait_motion, wait_gripper = (forwarded("gate") for _ in range(4))
+    fingers_still_check, note_gripper_change = forwarded("gate"), forwarded("gate")
+    # the commanded motion, and the speed override it is paced at
+    start_position, motion_handover, commanded_joints_rad = (forwarded("gate") for _ in range(3))
+    commanded_motion_running, arm_moving, speed_percent = (forwarded("gate") for _ in range(3))
+    # the trajectory check (motion_check.py) and where the gripper went (motion_record.py)
+    check_motion, check_pose, check_poses, check_body = (forwarded("gate.check") for _ in range(4))
+    checked_joints, palm_corners_m, finger_box = (forwarded("gate.check") for _ in range(3))
+    moved_over_since, changed_at_since, note_change_everywhere = (forwarded("gate.record") for _ in range(3))
+    # the operator's commands (manual.py, cartesian_jog.py, planned_moves.py, job_control.py)
+    move_joints, home, sleep, move_to, move_in_job = (forwarded("manual") for _ in range(5))
+    plan_move, plan_move_from, solve_pose, check_move = (forwarded("manual") for _ in range(4))
+    jog, step_gripper, heartbeat, set_torque, gripper_command = (forwarded("manual") for _ in range(5))
+    jog_cartesian, stop_jog = forwarded("cartesian"), forwarded("cartesian")
+    plan_only, plan_motion, plan_steps, plan_job = (forwarded("planned") for _ in range(4))
+    execute_plan, discard_plan, plan_wire = (forwarded("planned") for _ in range(3))
+    start_job, cancel_job, current_job, set_speed = (forwarded("job_commands") for _ in range(4))
+    pause_job, resume_job, step_job, plan_job_step, set_job_speed = (forwarded("job_commands") for _ in range(5))
+    set_arm_calibration, arm_rig_key = forwarded("arm_calibration", "install"), forwarded("arm_calibration", "rig_key")
 
     def require_arm(self, what: str) -> None:
         """NoArmError naming `what` on a station without an arm (for work that needs the arm's model, e.g. programs)."""
         if not self.has_arm:
             with self._lock:
                 raise NoArmError(what, self._effective_state().value, allowed_commands(self._effective_state(), False))
-
-    def checked_joints(self, q_rad) -> np.ndarray:
-        """A finite joint vector inside the limits (ValueError naming the joint otherwise)."""
-        return checked_joints(self.model, q_rad)
-
-    def clock_s(self) -> float:
-        """The motion clock's time (self.clock: simulated time on the simulation, else monotonic wall time)."""
-        return self.clock.now_s()

@@ -144,5 +144,5 @@ def make_offline_station(config: StationConfig | None = None, db_path: str | Pat
     station = Station(NoArm(), NoGripper(), None, model=load_workcell_arm(config.workcell), config=config, store=store,
                       backend="offline")
     if config.restore_calibration:
-        station._restore_arm_calibration()
+        station.arm_calibration.restore()
     return station

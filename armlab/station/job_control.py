@@ -1,11 +1,20 @@
 """The station's job commands: start a job, cancel it, and the controls beyond cancel: pause, resume, step,
-speed override (the repeat job has them).
+speed (the repeat job has them); and the station's speed override (set_speed).
 
-`JobControls` is a mixin of core.Station. start_job enters the job's state and runs it on its own thread
+`JobControls` is a command object core.Station owns (station.job_commands; the station forwards its public methods);
+the job slots and the state it changes are the station's (core.py). start_job enters the job's state and runs it on its own thread
 (jobs.py); its end returns the station to idle and records it. Each control is an operator command of the
 transition table (allowed only in `repeat`, from the controller holding the lease), forwarded to the job's `RunControl`.
 `RunControl` is the thread-safe mailbox between the request threads and the job's thread: the job
 reads it at its waits and reacts (brake to rest on pause, re-plan on a speed change).
+
+The speed override: one percentage (10-100 %) for every motion the station plans, jobs, manual moves and repeats
+alike, shown in the status (`speed_percent`). The gate holds it and paces each motion as it sends it (motion.py:
+planned at full speed, time-scaled along the same path by armlab.motion.time_warp). A repeat plans its own runs at
+the override (its RunControl holds the same number: a change goes to it, and it re-plans the rest of its run,
+skills/repeat.py). Any other motion running when the override changes has its remainder re-timed from a handover of
+the running command (checked like every motion); when that cannot be sent, the motion runs on at its speed and the
+new one applies from the next motion (the event log says so). Jogs keep their own speed (the operator's velocity).
 """
 
 from __future__ import annotations
@@ -19,7 +28,9 @@ from typing import Any
 import numpy as np
 
 from armlab.devices.arm import JointTrajectory
-from armlab.errors import CommandRefused, InvalidInput, PlanStale
+from armlab.errors import PLAN_REFUSALS, ArmMoving, CommandRefused, InvalidInput, PlanStale
+from armlab.motion.handover import Handover
+from armlab.motion.time_warp import retimed
 from armlab.station.jobs import Job, JobContext, start_job_thread
 from armlab.station.perception import DEVICE_ERRORS
 from armlab.station.states import JOB_STATES
@@ -177,30 +188,81 @@ class StepTaken:
 
 class JobControls:
     """start_job, cancel_job, current_job; pause_job, resume_job, step_job, set_job_speed: table-checked, the
-    controls forwarded to the job's RunControl."""
+    controls forwarded to the job's RunControl; set_speed, the station's override. station: the core.Station."""
+
+    def __init__(self, station) -> None:
+        self._station = station
+
+    def set_speed(self, speed_percent, source: str | None = None) -> float:
+        """Set the override (InvalidInput outside 10-100 % or not a finite number: nothing changes). A running repeat
+        takes it (its own check may refuse it: InvalidInput, nothing changes); any other motion in progress is re-timed
+        from now on. Returns the override now in force."""
+        speed = checked_speed_percent(speed_percent)
+        station, gate = self._station, self._station.gate
+        station.require_control("set_speed", source)
+        refused = None
+        with gate.speed_change():
+            job = self.current_job()
+            control = getattr(job, "control", None) if job is not None and not job.done else None
+            if isinstance(control, RunControl) and control.speed_percent != speed:
+                control.set_speed(speed)  # InvalidInput: the repeat's reason, nothing changes
+            old = gate.set_speed_percent(speed)
+            if not isinstance(control, RunControl) and speed != old:
+                refused = self._retime_running(speed)
+        if refused is not None:
+            station.events.add("warn", f"speed {speed:g} % applies from the next motion: the one in progress runs on ({refused})")
+        if speed != old:
+            station.events.add("info", f"speed override set to {speed:g} %")
+        return speed
+
+    def _retime_running(self, speed: float) -> str | None:
+        """Re-time the remainder of the motion in progress to `speed` (when it is one the override paced) through the
+        gate; the reason when that could not be sent (the motion runs on at its speed), else None."""
+        station, gate = self._station, self._station.gate
+        with station._lock:
+            running, paced_motion = gate.commanded, gate.paced_motion
+        if running is None or paced_motion is None or running[0] is not paced_motion[0] or paced_motion[1] == speed:
+            return None
+        if gate.clock_s() - running[1] >= running[0].duration_s:
+            return None  # it has ended
+        ratio = speed / paced_motion[1]
+
+        def plan(handover: Handover | None) -> JointTrajectory:
+            current = gate.commanded
+            if handover is None or current is None or current[2] != handover.source_id:
+                raise InvalidInput("the motion ended or was replaced meanwhile")
+            trajectory, t0 = current[0], current[1]
+            return retimed(trajectory, handover.takes_over_s - t0, 1.0, ratio, station.model.accel_limit_rad_s2,
+                           station.motion_config.sample_rate_hz)
+
+        try:
+            gate.send_replacing(plan, lambda: gate.pace_next_send(speed), "set_speed")
+        except (*PLAN_REFUSALS, ArmMoving, CommandRefused) as error:
+            return str(error)
+        return None
 
     def _run_control(self, command: str, source: str | None, transition: bool = True) -> RunControl:
         """The running job's RunControl once `command` is allowed (CommandRefused: not allowed, or a job without
         controls); transition=False for a command that changes nothing (a plan)."""
-        with self._lock:
-            self._check(command, source)
-            job = self._job
+        with self._station._lock:
+            self._station._check(command, source)
+            job = self._station._job
             control = getattr(job, "control", None)
             if not isinstance(control, RunControl):
-                state = self._effective_state().value
+                state = self._station._effective_state().value
                 raise CommandRefused(command, f"{state} (the job '{getattr(job, 'name', '')}' has no {command})", ["cancel", "estop"])
             if transition:
-                self._transition(command, source=source)  # repeat stays repeat; a free lease goes to `source`
+                self._station._transition(command, source=source)  # repeat stays repeat; a free lease goes to `source`
         return control
 
     def pause_job(self, source: str | None = None):
         self._run_control("pause", source).pause()
-        self.events.add("info", "job paused")
+        self._station.events.add("info", "job paused")
         return self.current_job()
 
     def resume_job(self, source: str | None = None):
         self._run_control("resume", source).resume()
-        self.events.add("info", "job resumed")
+        self._station.events.add("info", "job resumed")
         return self.current_job()
 
     def step_job(self, source: str | None = None):
@@ -218,7 +280,7 @@ class JobControls:
             planner, version = control.step_offer()
             run, name = planner()
             if run is None:  # a gripper step or a dwell: the arm stays where it is
-                trajectory = JointTrajectory(np.zeros(1), np.asarray(self.start_position(), float)[None, :])
+                trajectory = JointTrajectory(np.zeros(1), np.asarray(self._station.start_position(), float)[None, :])
             else:
                 trajectory = run.trajectory
 
@@ -227,10 +289,10 @@ class JobControls:
 
             return [trajectory], [name], start
 
-        return self.plan_job("step", make, source)
+        return self._station.plan_job("step", make, source)
 
     def set_job_speed(self, speed_percent: float, source: str | None = None):
-        """The running repeat's speed: the station's one speed override (speed.py set_speed), refused (CommandRefused)
+        """The running repeat's speed: the station's one speed override (set_speed, above), refused (CommandRefused)
         when no job with controls runs."""
         speed = checked_speed_percent(speed_percent)
         self._run_control("set_speed", source)
@@ -244,19 +306,19 @@ class JobControls:
 
         A job that registered a cleanup (e.g. put a held block down) runs it on its own thread after the
         cancel; the station stays in the job's state until that ends."""
-        with self._lock:
-            self._check("cancel", source)
-            job = self._job
+        with self._station._lock:
+            self._station._check("cancel", source)
+            job = self._station._job
             assert job is not None, "a job state without a job"
             job.cancel()  # under the lock: any command the job is sending has finished or will see it
             if not job.has_cleanup:
-                self._transition("cancel", source=source, detail="")
-        self.latch.halt_devices(gripper=False)
+                self._station._transition("cancel", source=source, detail="")
+        self._station.latch.halt_devices(gripper=False)
         return job  # the job's end logs "job '<name>' cancelled: ..." once
 
     def current_job(self) -> Job | None:
-        with self._lock:
-            return self._job or self._last_job
+        with self._station._lock:
+            return self._station._job or self._station._last_job
 
     def start_job(
         self,
@@ -273,16 +335,16 @@ class JobControls:
 
         cleanup(ctx), if given, runs after a cancel (not after an e-stop) with the arm still the job's,
         e.g. to put a held block down; the station returns to idle when it ends."""
-        with self._lock:
-            self._check(command, source)
+        with self._station._lock:
+            self._station._check(command, source)
             if command not in ("calibrate", "grab", "drop", "repeat", "auto"):
                 raise InvalidInput(f"'{command}' does not start a job")
             job = Job(name=name, detail=detail, has_cleanup=cleanup is not None, control=control)
-            self._transition(command, source=source, detail=detail or name)
-            self._job = job
-            self._jog = None
+            self._station._transition(command, source=source, detail=detail or name)
+            self._station._job = job
+            self._station._jog = None
             start_job_thread(job, self._after_rest(function), self._on_job_end, cleanup=cleanup)
-        self.events.add("info", f"job '{name}' started" + (f": {detail}" if detail else ""))
+        self._station.events.add("info", f"job '{name}' started" + (f": {detail}" if detail else ""))
         return job
 
     def _after_rest(self, function: Callable[[JobContext], Any]) -> Callable[[JobContext], Any]:
@@ -291,9 +353,9 @@ class JobControls:
         own thread: a locked database delays the job, never the request that started it."""
 
         def run(ctx: JobContext) -> Any:
-            self.brake_to_rest(ctx)
+            self._station.brake_to_rest(ctx)
             try:  # on disk while it runs: a station killed mid-job shows it 'interrupted' after the restart
-                self.store.record_job_start(ctx.job.to_dict())
+                self._station.store.record_job_start(ctx.job.to_dict())
             except Exception as store_error:  # noqa: BLE001 - the job matters more than its record
                 log.warning("could not record the start of job %s: %s", ctx.job.id, store_error)
             return function(ctx)
@@ -301,16 +363,16 @@ class JobControls:
         return run
 
     def _on_job_end(self, job: Job, error: BaseException | None) -> None:
-        if isinstance(error, DEVICE_ERRORS) and self._job is job:
-            self.device_failed(f"a device in job '{job.name}'", f"{type(error).__name__}: {error}")
-        with self._lock:
-            if self._job is job:
-                self._job, self._last_job = None, job
-                if self._state in JOB_STATES:
-                    self._transition("job_ended", event=True)
+        if isinstance(error, DEVICE_ERRORS) and self._station._job is job:
+            self._station.device_failed(f"a device in job '{job.name}'", f"{type(error).__name__}: {error}")
+        with self._station._lock:
+            if self._station._job is job:
+                self._station._job, self._station._last_job = None, job
+                if self._station._state in JOB_STATES:
+                    self._station._transition("job_ended", event=True)
         try:
-            self.store.record_job(job.to_dict())
+            self._station.store.record_job(job.to_dict())
         except Exception as store_error:  # noqa: BLE001 - the job's outcome matters more than its record
             log.warning("could not record job %s: %s", job.id, store_error)
         level = {"succeeded": "info", "cancelled": "warn"}.get(job.state, "error")
-        self.events.add(level, f"job '{job.name}' {job.state}: {job.message}")
+        self._station.events.add(level, f"job '{job.name}' {job.state}: {job.message}")

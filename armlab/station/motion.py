@@ -1,38 +1,41 @@
-"""The motion gate: waiting on the devices, sending trajectories, and the motion commands of jobs.
+"""The motion gate: the one path every motion takes to the arm, owned by core.Station (station.gate).
 
-A mixin of core.Station. Every trajectory from any source (manual, jog, jobs) passes `check_motion`
-(limits, velocity and acceleration, the table, the workspace box, the per-step jump) outside the lock and
-`_command_arm` (latch, start at the measured joints) under it, inside `_sending()`, which sends to the
-device once the lock is released (on the real arm a ROS service call: status and telemetry never wait for
-it) and halts again if the latch went up meanwhile. Waits return at once when the latch is set
-and, in fast mode, never let the physics run more than one control period past it.
+Every trajectory from any source (manual, jog, jobs) passes `check_motion` (motion_check.py: limits, velocity and
+acceleration, the table, the workspace box, the per-step jump, the body) outside the lock and `command_arm` (latch,
+start at the measured joints, continuity with the motion it replaces) under it, inside `sending()`, which sends to the
+device once the lock is released (on the real arm a ROS service call: status and telemetry never wait for it) and
+halts again if the latch went up meanwhile. Waits are on the injected Clock, return at once when the latch is set and,
+in fast mode, never let the physics run more than one control period past it. The gate also paces what it sends at the
+station's speed override (armlab.motion.time_warp) and records where the gripper went (motion_record.py).
 """
 
 from __future__ import annotations
 
-import math
-import time
+import threading
 from collections.abc import Callable, Iterator
 from contextlib import contextmanager
+from typing import Any
 
 import numpy as np
 
 from armlab.devices.arm import JointTrajectory
+from armlab.devices.clock import Clock
 from armlab.errors import PLAN_REFUSALS, ArmMoving, CommandRefused, InvalidInput
-from armlab.motion import check_trajectory
 from armlab.motion.blend import arm_limits, plan_stop
-from armlab.motion.clearance import self_collision
+from armlab.motion.end_effector import EndEffector
 from armlab.motion.handover import Handover, continuity_problem, reference_velocity, splice, take_over, trimmed
 from armlab.motion.safety import UnsafeTrajectory, check_start
-from armlab.station.arm_info import station_end_effector
-from armlab.station.body_check import check_parts_above_board, palm_corners_m
+from armlab.motion.time_warp import paced
+from armlab.station.held import HeldBlock
 from armlab.station.job_control import SPEED_WAIT_FACTOR
 from armlab.station.jobs import JobCancelled, JobContext
-from armlab.station.states import JOB_STATES, allowed_commands
+from armlab.station.latch import Latch
+from armlab.station.motion_check import MotionCheck
+from armlab.station.motion_record import MotionRecord
+from armlab.station.states import State, allowed_commands
+from armlab.station.status import arm_turning
 
 WAIT_CHUNK_S = 0.05  # waits on the devices check cancel/e-stop this often (simulated time in fast mode)
-CHANGE_ABOVE_M = 0.06  # the gripper point this close above a spot's surface can have changed it (fingers, a held block)
-MOTION_MEMORY = 256  # how many recent arm motions the gate remembers for stale-perception checks
 # A job's step waits at most this long after its end time for the arm to arrive (_arrived): the real arm's P-only waist
 # trails a fast long swing (0.03 rad after 2.9 rad, more loaded). Stopped short: slower than this.
 ARRIVE_TIMEOUT_S, ARRIVED_SPEED_RAD_S = 1.0, 0.02
@@ -43,9 +46,96 @@ class HandoverLate(RuntimeError):
 
 
 class MotionGate:
-    """Waiting on the devices and sending motion."""
+    """Waiting on the devices and sending motion: the commanded motion, the send queue, the speed override.
 
-    def _wait_until(self, predicate: Callable[[], bool], timeout_s: float, ctx: JobContext | None = None) -> bool:
+    lock: the station's lock (core.py), so a command's state transition and its send are checked as one step;
+    state(): the station's state as commands see it (the caller holds the lock); owns_arm(ctx): JobCancelled unless
+    that job may still command the arm (core.py, under the lock); motion_config(): the MotionConfig (read late);
+    end_effector(), held_block(): for the body check (motion_check.py)."""
+
+    def __init__(self, arm: Any, gripper: Any, model: Any, latch: Latch, clock: Clock, lock: threading.RLock, *,
+                 motion_config: Callable[[], Any], end_effector: Callable[[], EndEffector],
+                 held_block: Callable[[], HeldBlock | None], state: Callable[[], State], owns_arm: Callable[[JobContext], None],
+                 gripper_settle_timeout_s: float, moving_speed_rad_s: float) -> None:
+        self.arm, self.gripper, self.model, self.latch, self.clock = arm, gripper, model, latch, clock
+        self._lock, self._motion_config, self._state_now, self._owns_arm = lock, motion_config, state, owns_arm
+        self._settle_timeout_s, self._moving_speed_rad_s = gripper_settle_timeout_s, moving_speed_rad_s
+        self.check = MotionCheck(model, motion_config, end_effector, held_block)  # check_motion, check_pose, ...
+        self.record = MotionRecord(model)  # where the gripper went and when (stale perception)
+        self._plan_lock = threading.RLock()  # one replacing motion planned at a time (send_replacing)
+        self._newest_move = 0  # the ticket of the newest manual move waiting to be planned (send_replacing)
+        self._send_lock = threading.Lock()  # one sender of device commands at a time, taken before the lock (sending)
+        self._outbox: list | None = None  # device commands queued under the lock, sent after it (sending)
+        self._commanded: tuple | None = None  # the last trajectory sent: (trajectory, clock_s at its t = 0, count)
+        self._command_count = 0
+        self._speed_lock = threading.Lock()  # one override change (or paced send) at a time
+        self._speed_percent = 100.0  # the speed override every motion is paced at (set by job_control.py set_speed)
+        self._paced_motion: tuple | None = None  # (the trajectory object last sent, the override it was paced at)
+        self._pace_next: float | None = None  # the override of the motion being sent (set under the lock just before it)
+
+    def clock_s(self) -> float:
+        """The motion clock's time (simulated time on the simulation, else monotonic wall time)."""
+        return self.clock.now_s()
+
+    def joints_rad(self) -> np.ndarray:
+        """The measured joint positions (rad)."""
+        return np.asarray(self.arm.read_joint_state().position_rad, dtype=float)
+
+    @property
+    def commanded(self) -> tuple | None:
+        """The last trajectory sent: (trajectory, clock_s at its t = 0, its count), or None (nothing sent, or halted)."""
+        return self._commanded  # one attribute read: atomic; the tuple is never changed in place
+
+    @property
+    def command_count(self) -> int:
+        """How many motions were commanded (a new revision of a motion's start counts too)."""
+        with self._lock:
+            return self._command_count
+
+    def forget_commanded(self) -> None:
+        """A halt or the torque switched: the arm holds where it is, so there is no commanded motion to continue."""
+        self._commanded = None
+
+    # The speed override (the command: job_control.py) ---------------------------------------------------------------
+
+    @property
+    def speed_percent(self) -> float:
+        return self._speed_percent
+
+    def paced(self, trajectory: JointTrajectory, percent: float, from_rest: bool | None = None) -> JointTrajectory:
+        """A newly planned motion at `percent` (armlab.motion.time_warp.paced); from_rest None: it starts from rest
+        unless a commanded motion is still running."""
+        if from_rest is None:
+            from_rest = not self.commanded_motion_running()
+        return paced(trajectory, percent / 100.0, self.model.accel_limit_rad_s2, from_rest, self._motion_config().sample_rate_hz)
+
+    def pace_next_send(self, percent: float) -> None:
+        """Under the lock, just before command_arm: the motion about to be sent was paced at `percent` (a later
+        change re-times it); HandoverLate (plan again) when the override has changed since it was planned."""
+        if percent != self._speed_percent:
+            raise HandoverLate(f"the speed override changed to {self._speed_percent:g} % while this motion was planned")
+        self._pace_next = percent
+
+    @contextmanager
+    def speed_change(self) -> Iterator[None]:
+        """`with gate.speed_change():` one override change at a time; paced sends wait for it."""
+        with self._speed_lock:
+            yield
+
+    def set_speed_percent(self, speed: float) -> float:
+        """The new override (caller is inside speed_change()); returns the old one."""
+        with self._lock:
+            old, self._speed_percent = self._speed_percent, speed
+        return old
+
+    @property
+    def paced_motion(self) -> tuple | None:
+        """(the trajectory object last sent, the override it was paced at), None before any: what a change re-times."""
+        return self._paced_motion
+
+    # Waiting and sending -------------------------------------------------------------------------------------------
+
+    def wait_until(self, predicate: Callable[[], bool], timeout_s: float, ctx: JobContext | None = None) -> bool:
         """Block until predicate() holds (False after timeout_s of motion-clock time, or at once when the
         latch is set). On the simulation this lets fast mode advance the physics, never beyond one
         control period after the latch; a job's cancel is checked every WAIT_CHUNK_S."""
@@ -65,11 +155,11 @@ class MotionGate:
 
     def wait_motion(self, timeout_s: float) -> bool:
         """Block until the arm stops; False on timeout."""
-        return self._wait_until(lambda: not self.arm.is_moving(), timeout_s)
+        return self.wait_until(lambda: not self.arm.is_moving(), timeout_s)
 
     def wait_gripper(self, ctx: JobContext | None = None) -> None:
         """Wait until the fingers stop moving (≤ gripper_settle_timeout_s of motion-clock time)."""
-        self._wait_until(self.fingers_still_check(), self.config.gripper_settle_timeout_s, ctx)
+        self.wait_until(self.fingers_still_check(), self._settle_timeout_s, ctx)
 
     def fingers_still_check(self) -> Callable[[], bool]:
         """A fresh predicate, true once the fingers' width stayed within 0.2 mm for 0.15 s (motion clock)
@@ -85,37 +175,10 @@ class MotionGate:
 
         return fingers_still
 
-
-    def check_motion(self, trajectory: JointTrajectory) -> None:
-        """The full safety check of a trajectory (UnsafeTrajectory says why): joint, velocity and
-        acceleration limits, the table, the workspace box, the per-step jump. No lock needed (pure)."""
-        config = self.motion_config
-        # The table itself (no clearance): planners keep their own board_clearance_m; the straight joint-space
-        # move from the sleep pose home passes the gripper point within 1 mm of the board.
-        check_trajectory(self.model, trajectory, workspace_m=config.workspace_m, max_step_rad=config.max_step_rad)
-        self.check_body(trajectory)
-
-    def check_pose(self, q_rad) -> np.ndarray:
-        """The arm standing at q_rad passes the trajectory check (limits, the table, the workspace box, the fingers
-        against the board, the arm against itself): returns the joints; ValueError / UnsafeTrajectory say why."""
-        q = self.checked_joints(q_rad)
-        self.check_motion(JointTrajectory(np.array([0.0, 0.01]), np.vstack([q, q])))
-        return q
-
-    def check_poses(self, poses_rad) -> None:
-        """check_pose of every pose, the error naming the 1-based waypoint (programs, drafts)."""
-        for index, q in enumerate(poses_rad, start=1):
-            try:
-                self.check_pose(q)
-            except UnsafeTrajectory as error:
-                raise UnsafeTrajectory(f"waypoint {index}: {error}") from None
-            except InvalidInput as error:
-                raise InvalidInput(f"waypoint {index}: {error}") from None
-
     @contextmanager
-    def _sending(self) -> Iterator[None]:
-        """`with self._sending():` instead of `with self._lock:` around checks that end in device commands: the
-        body runs under the lock and queues its commands (_send_later), which are sent after the lock is
+    def sending(self) -> Iterator[None]:
+        """`with self.sending():` instead of `with self._lock:` around checks that end in device commands: the
+        body runs under the lock and queues its commands (send_later), which are sent after the lock is
         released, in order, one sender at a time (so the device sees commands in the order they were checked).
         The latch and a cancel still win: a command checked before a halt (e-stop, fault, cancel) and sent after
         it is halted again here (e-stop sets the latch before it halts, so either its halt comes after this send
@@ -134,43 +197,16 @@ class MotionGate:
             if outbox and (self.latch.is_set() or self.latch.halts != halts):
                 self.latch.halt_devices(gripper=self.latch.is_set())
 
-    def _send_later(self, send: Callable[[], object]) -> None:
-        """Queue a device command for when the lock is released (caller is inside `_sending()`)."""
+    def send_later(self, send: Callable[[], object]) -> None:
+        """Queue a device command for when the lock is released (caller is inside `sending()`)."""
         if self._outbox is None:
-            raise RuntimeError("device commands are sent from inside Station._sending(), never under the bare lock")
+            raise RuntimeError("device commands are sent from inside MotionGate.sending(), never under the bare lock")
         self._outbox.append(send)
 
-    def check_body(self, trajectory: JointTrajectory) -> None:
-        """UnsafeTrajectory (with the reason and when) if the fingers (a box around them, or the suction cup's
-        body) go into the board, or the gripper end of the arm (gripper point, finger tips, the held block) into
-        the arm's own base or upper arm, at any sample (armlab.motion.clearance). No lock needed (pure)."""
-        config, positions, times = self.motion_config, trajectory.positions_rad, trajectory.times_s
-        parts = {"fingers": self.finger_box().corners_m()}
-        if (palm := self.palm_corners_m()) is not None:
-            parts["palm"] = palm
-        check_parts_above_board(self.model, positions, times, parts)
-        held = self.held_block
-        held_edge_m = float(held["edge_m"]) if held and held.get("edge_m") else None
-        hit = self_collision(self.model, positions, base_radius_m=config.base_radius_m, reach_m=config.self_clearance_m,
-                             held_edge_m=held_edge_m)
-        if hit is not None:
-            sample, part, what = hit
-            raise UnsafeTrajectory(f"{what} at t = {times[sample]:.3f} s: the arm would hit itself", part=part,
-                                   at_q_rad=positions[sample])
-
-    def palm_corners_m(self) -> np.ndarray | None:
-        """(8, 3) corners of a finger gripper's palm in the gripper frame; None for a suction cup."""
-        return palm_corners_m(self.model.config.name) if station_end_effector(self).has_palm else None
-
-    def finger_box(self):
-        """The box the gripper occupies beyond the wrist (armlab.motion.gripper_step.FingerBox): the open fingers
-        from config, or the suction cup's body."""
-        return station_end_effector(self).body_box(self.motion_config, self.model.config)
-
-    def _command_arm(self, trajectory: JointTrajectory, swept_box: np.ndarray, handover: Handover | None = None,
+    def command_arm(self, trajectory: JointTrajectory, swept_box: np.ndarray, handover: Handover | None = None,
                      planned_after: int | None = None) -> JointTrajectory:
         """Send a checked trajectory and remember it and where the gripper sweeps; returns what was sent.
-        Caller is inside `_sending()` (holds the lock; the trajectory reaches the arm once the lock is released)
+        Caller is inside `sending()` (holds the lock; the trajectory reaches the arm once the lock is released)
         and has checked the state; checked here: the latch, the start (no jump from the
         measured joints) and, while a commanded motion runs, that this one continues it: a splice from
         `handover` (taken from that very motion; trimmed to now: HandoverLate when now is past the handover)
@@ -178,7 +214,7 @@ class MotionGate:
         with its start on the arm's clock (Arm.command_trajectory's start_time_s: the station's clock is the arm's),
         so a send held up after the check still continues the running curve; a motion from rest starts when the
         arm takes it, and the record follows (_started_at)."""
-        state = self._effective_state()
+        state = self._state_now()
         if self.latch.is_set():
             raise CommandRefused("move", state.value, allowed_commands(state))
         now = self.clock_s()
@@ -198,7 +234,7 @@ class MotionGate:
         elif running is not None and now - running[1] < running[0].duration_s:
             velocity = reference_velocity(running[0], now - running[1])
             # Slower than one sample's worth of acceleration from rest, a plan from rest continues it as well.
-            slow_rad_s = np.asarray(self.model.accel_limit_rad_s2, float) / self.motion_config.sample_rate_hz
+            slow_rad_s = np.asarray(self.model.accel_limit_rad_s2, float) / self._motion_config().sample_rate_hz
             if np.any(np.abs(velocity) > slow_rad_s):
                 continues = True
                 position = running[0].sample(now - running[1])
@@ -216,23 +252,22 @@ class MotionGate:
             self._check_start(trimmed(trajectory, read_s - now), measured)
         self._command_count += 1
         record = self._commanded = (planned, planned_t0, self._command_count)
-        self._paced_motion, self._pace_next = (planned, self._pace_next), None  # speed.py: what a change re-times
+        self._paced_motion, self._pace_next = (planned, self._pace_next), None  # what a change of the override re-times
         if handover is not None:  # the arm samples the splice at its own clock minus this: a late send continues it
             start_s = handover.planned_at_s + max(elapsed, 0.0)  # (before 0: a motion from rest not begun yet, as it will)
-            self._send_later(lambda: self.arm.command_trajectory(trajectory, start_time_s=start_s))
+            self.send_later(lambda: self.arm.command_trajectory(trajectory, start_time_s=start_s))
         elif continues:  # it starts at the running reference now: the same, from now
-            self._send_later(lambda: self.arm.command_trajectory(trajectory, start_time_s=now))
+            self.send_later(lambda: self.arm.command_trajectory(trajectory, start_time_s=now))
         else:  # from rest: a late send starts late without a jump, and the record follows the arm's start
-            self._send_later(lambda: self._started_at(record, self.arm.command_trajectory(trajectory)))
-        self._motions.append((time.time() + trajectory.duration_s, swept_box))
-        del self._motions[:-MOTION_MEMORY]
+            self.send_later(lambda: self._started_at(record, self.arm.command_trajectory(trajectory)))
+        self.record.add(trajectory.duration_s, swept_box)
         return trajectory
 
     def _check_start(self, trajectory: JointTrajectory, measured: np.ndarray) -> None:
         """UnsafeTrajectory unless the trajectory starts within start_tolerance_rad of the readings or of the command
         holding the arm there (model.command_holding): a step chained from the last one's commanded end starts at the
         latter, the real RX200's readings 0.04-0.05 rad below it at far reach (its servos' steady error)."""
-        tolerance, names = self.motion_config.start_tolerance_rad, self.model.joint_names
+        tolerance, names = self._motion_config().start_tolerance_rad, self.model.joint_names
         try:
             check_start(trajectory, measured, tolerance, names)
         except UnsafeTrajectory:
@@ -260,14 +295,10 @@ class MotionGate:
 
     def arm_moving(self) -> str | None:
         """'the arm is moving' (a commanded motion not yet over, or joints turning), a read failure, else None."""
-        with self._lock:
-            last_motion_end_s = self._motions[-1][0] if self._motions else -math.inf
-        if time.time() < last_motion_end_s:
+        if self.record.last_end_s() > self.record.now_s():
             return "the arm is moving"
         try:
-            joint_state = self.arm.read_joint_state()
-            speed = np.abs(np.asarray(joint_state.velocity_rad_s, dtype=float))
-            if self.arm.is_moving() or (speed.size and speed.max() > self.config.moving_speed_rad_s):
+            if arm_turning(self.arm, self.arm.read_joint_state(), self._moving_speed_rad_s):
                 return "the arm is moving"
         except (ConnectionError, TimeoutError, OSError) as error:
             return f"the arm cannot be read ({error})"
@@ -296,11 +327,11 @@ class MotionGate:
             return measured
         # A motion in its last two samples is as good as at rest there: the measured joints trail the command by the
         # servos' lag, and a run planned from them stepped the command by that lag (1.9 mrad in one 4 ms tick).
-        if running[0].duration_s - (self.clock_s() - running[1]) > 2.0 / self.motion_config.sample_rate_hz:
+        if running[0].duration_s - (self.clock_s() - running[1]) > 2.0 / self._motion_config().sample_rate_hz:
             return measured
         held = running[0].positions_rad[-1]
         command = self._holding_command(measured)  # the servos' steady error taken off
-        if float(np.max(np.abs(held - command))) > 0.5 * self.motion_config.start_tolerance_rad:
+        if float(np.max(np.abs(held - command))) > 0.5 * self._motion_config().start_tolerance_rad:
             return measured
         return held.copy()
 
@@ -317,11 +348,11 @@ class MotionGate:
             running = self._commanded
         if running is None:
             return None
-        config = self.motion_config
+        config = self._motion_config()
         lead = config.handover_lead_s if lead_s is None else lead_s
         return take_over(running[0], running[1], self.clock_s(), lead, config.sample_rate_hz, running[2])
 
-    def _send_replacing(self, plan: Callable, under_lock: Callable[[], None] | None = None, command: str = "move",
+    def send_replacing(self, plan: Callable, under_lock: Callable[[], None] | None = None, command: str = "move",
                         replaceable: bool = False) -> tuple[JointTrajectory, Handover | None]:
         """Plan (plan(handover) -> the new trajectory, from the handover's state, or from the measured joints
         when it is None), check and send a motion that replaces whatever runs, continuously. under_lock() runs
@@ -333,14 +364,14 @@ class MotionGate:
         by side, each from a handover the next one makes late, and the CPU-bound planners starve status, the waits
         and the physics. A replaceable one (a manual move) that a newer manual move overtook while it waited its
         turn is refused unplanned (ArmMoving): it would be replaced as soon as it started."""
-        lead = self.motion_config.handover_lead_s
+        lead = self._motion_config().handover_lead_s
         if replaceable:
             with self._lock:
                 self._newest_move += 1
                 ticket = self._newest_move
         with self._plan_lock:
             with self._lock:
-                state = self._effective_state()
+                state = self._state_now()
                 overtaken = replaceable and ticket != self._newest_move
             if self.latch.is_set():  # e-stopped while this waited its turn: refused at once, as it would be after planning
                 raise CommandRefused(command, state.value, allowed_commands(state))
@@ -353,17 +384,18 @@ class MotionGate:
                 handover = self.motion_handover(lead)
                 new = plan(handover)
                 trajectory = splice(handover, new) if handover is not None else new
-                self.check_motion(trajectory)
-                swept_box = self._swept_box(trajectory)
+                self.check.check_motion(trajectory)
+                swept_box = self.record.swept_box(trajectory)
                 try:
-                    with self._sending():
+                    with self.sending():
                         if under_lock is not None:
                             under_lock()
-                        self._command_arm(trajectory, swept_box, handover, planned_after=seen)
+                        self.command_arm(trajectory, swept_box, handover, planned_after=seen)
                     return trajectory, handover
                 except HandoverLate:
                     lead *= 2.0
-        state = self.state
+        with self._lock:
+            state = self._state_now()
         raise ArmMoving(command, state.value, allowed_commands(state), "planning could not keep up with the motion in progress")
 
     def brake_to_rest(self, ctx: JobContext | None = None) -> None:
@@ -374,7 +406,7 @@ class MotionGate:
             return
         if handover is not None and not handover.at_rest:
             limits = arm_limits(self.model)
-            rate = self.motion_config.sample_rate_hz
+            rate = self._motion_config().sample_rate_hz
 
             def stop(handover: Handover | None) -> JointTrajectory:
                 if handover is None:
@@ -383,60 +415,10 @@ class MotionGate:
 
             owns = (lambda: self._owns_arm(ctx)) if ctx is not None else None
             try:
-                self._send_replacing(stop, owns, "stop")
+                self.send_replacing(stop, owns, "stop")
             except (HandoverLate, *PLAN_REFUSALS):  # the motion ended meanwhile, or the stop fails its check: it runs out
                 pass
-        self._wait_until(lambda: not self.arm.is_moving(), 30.0, ctx)
-
-    def _swept_box(self, trajectory: JointTrajectory) -> np.ndarray:
-        """[xmin, ymin, xmax, ymax] of the gripper point along a trajectory, then the sampled points' x, y, z
-        (for changed_at_since; sampled, no lock needed)."""
-        positions = trajectory.positions_rad
-        tips = self.model.fk(positions[:: max(1, len(positions) // 40)])[:, :3, 3]
-        tips = np.vstack([tips, self.model.fk(positions[-1])[:3, 3]])
-        return np.concatenate([tips[:, :2].min(axis=0), tips[:, :2].max(axis=0), tips.ravel()])
-
-    def _owns_arm(self, ctx: JobContext) -> None:
-        """Inside a job, under the lock: JobCancelled unless this job may still command the devices
-        (it is current and not cancelled, or it is running its cleanup after a cancel), and never
-        once the latch is set."""
-        if self._job is not ctx.job or self._state not in JOB_STATES or self.latch.is_set():
-            raise JobCancelled("job is no longer current")
-        if not ctx.in_cleanup:
-            ctx.check()
-
-    def moved_over_since(self, point_m, since_s: float, radius_m: float = 0.06) -> bool:
-        """True if a motion that ended after `since_s` (wall time, like frame timestamps) swept the gripper
-        within radius_m of point_m in x-y: a detection seen at since_s may be stale there."""
-        x, y = float(point_m[0]), float(point_m[1])
-        with self._lock:
-            motions = list(self._motions)
-        for end_s, box in motions:
-            xmin, ymin, xmax, ymax = box[:4]
-            if end_s > since_s and xmin - radius_m <= x <= xmax + radius_m and ymin - radius_m <= y <= ymax + radius_m:
-                return True
-        return False
-
-    def changed_at_since(self, point_m, since_s: float, radius_m: float = 0.06, above_m: float = CHANGE_ABOVE_M) -> bool:
-        """True if after `since_s` the gripper came down within above_m of point_m's height within radius_m of it
-        in x-y (a motion through the spot, a drop or a grab there, a gripper opened or closed over it), or a change
-        everywhere was noted (note_change_everywhere): what was seen there at since_s may have changed."""
-        spot = np.asarray(point_m[:3], float)
-        with self._lock:
-            if self._changed_everywhere_s > since_s:
-                return True
-            motions = list(self._motions)
-        for end_s, box in motions:
-            points = np.asarray(box[4:], float).reshape(-1, 3)  # the gripper's sampled path
-            if end_s > since_s and np.any((np.linalg.norm(points[:, :2] - spot[:2], axis=1) <= radius_m) & (points[:, 2] < spot[2] + above_m)):
-                return True
-        return False
-
-    def note_change_everywhere(self) -> None:
-        """A change that may have changed any spot (a new scene, a checkerboard held up or put away, the camera
-        knocked): for changed_at_since, what was seen before it and is hidden since is unknown everywhere."""
-        with self._lock:
-            self._changed_everywhere_s = time.time()
+        self.wait_until(lambda: not self.arm.is_moving(), 30.0, ctx)
 
     def note_gripper_change(self) -> None:
         """A grasp or release where the gripper is: a change there for changed_at_since (no motion of the arm)."""
@@ -446,36 +428,33 @@ class MotionGate:
             point = np.asarray(self.model.fk(self.joints_rad()), float)[:3, 3]
         except (ConnectionError, TimeoutError, OSError):  # the arm not answering: its own fault path reports that
             return
-        with self._lock:
-            # whatever it held falls straight down: every spot below the gripper may have changed
-            self._motions.append((time.time(), np.array([point[0], point[1], point[0], point[1], point[0], point[1], -np.inf])))
-            del self._motions[:-MOTION_MEMORY]
+        self.record.note_gripper_change_at(point)
 
     def start_trajectory(self, ctx: JobContext, trajectory: JointTrajectory) -> JointTrajectory:
         """Inside a job: check the trajectory (check_motion) and command it (only while this job owns the
         arm), without waiting; while a motion runs it must continue it (replace_trajectory plans one that does).
-        Paced at the speed override (speed.py) unless the job paces itself (a repeat's RunControl). Returns
+        Paced at the speed override unless the job paces itself (a repeat's RunControl). Returns
         what was sent."""
         paces = getattr(ctx.job, "control", None) is None
         with self._speed_lock:  # a change of the override waits for this send, then re-times it
-            speed = self.speed_percent
+            speed = self._speed_percent
             if paces:
-                trajectory = self._paced(trajectory, speed)
-            self.check_motion(trajectory)
-            swept_box = self._swept_box(trajectory)
-            with self._sending():
+                trajectory = self.paced(trajectory, speed)
+            self.check.check_motion(trajectory)
+            swept_box = self.record.swept_box(trajectory)
+            with self.sending():
                 self._owns_arm(ctx)
                 if paces:
-                    self._pace_next_send(speed)
-                self._command_arm(trajectory, swept_box)
+                    self.pace_next_send(speed)
+                self.command_arm(trajectory, swept_box)
         return trajectory
 
     def replace_trajectory(self, ctx: JobContext, plan: Callable) -> tuple[JointTrajectory, float, float]:
-        """Inside a job: replace the motion in progress by plan(handover) (see _send_replacing), continuously.
+        """Inside a job: replace the motion in progress by plan(handover) (see send_replacing), continuously.
         Returns (the command as spliced, the clock time of its t = 0, the clock time the new plan starts).
         ValueError / UnsafeTrajectory when the plan cannot be made or fails the check: nothing changes, the
         motion in progress goes on."""
-        trajectory, handover = self._send_replacing(plan, lambda: self._owns_arm(ctx))
+        trajectory, handover = self.send_replacing(plan, lambda: self._owns_arm(ctx))
         if handover is None:
             start = self._commanded[1]
             return trajectory, start, start
@@ -484,22 +463,21 @@ class MotionGate:
     def wait_in_job(self, ctx: JobContext, predicate: Callable[[], bool], timeout_s: float) -> bool:
         """Inside a job: block until predicate() holds (False after timeout_s of motion-clock time); raises
         JobCancelled on cancel or e-stop. In fast mode the physics advances meanwhile."""
-        return self._wait_until(predicate, timeout_s, ctx)
+        return self.wait_until(predicate, timeout_s, ctx)
 
     def run_trajectory(self, ctx: JobContext, trajectory: JointTrajectory) -> None:
         """Inside a job: check the trajectory (check_motion), command it (only while this job owns the arm)
         and wait for it."""
         trajectory = self.start_trajectory(ctx, trajectory)
         checked = ctx if not ctx.in_cleanup else None
-        # a lower speed override set while it runs stretches it (speed.py): wait as long as the slowest speed takes
-        if not self._wait_until(lambda: not self.arm.is_moving(), trajectory.duration_s * SPEED_WAIT_FACTOR + 5.0, checked):
+        # a lower speed override set while it runs stretches it (retime_running): wait as long as the slowest speed takes
+        if not self.wait_until(lambda: not self.arm.is_moving(), trajectory.duration_s * SPEED_WAIT_FACTOR + 5.0, checked):
             self.latch.halt_devices(gripper=False)
             if self.latch.is_set():
                 raise JobCancelled("the station was e-stopped")
             raise TimeoutError(f"the arm did not finish a {trajectory.duration_s:.2f} s move in time")
-        self._wait_until(lambda: self._arrived(trajectory.positions_rad[-1]), ARRIVE_TIMEOUT_S, checked)
-        with self._lock:
-            self._motions[-1] = (time.time(), self._motions[-1][1])
+        self.wait_until(lambda: self._arrived(trajectory.positions_rad[-1]), ARRIVE_TIMEOUT_S, checked)
+        self.record.ended_now()
         if checked is not None:
             ctx.check()
 
@@ -507,7 +485,7 @@ class MotionGate:
         """The arm stands within half the start tolerance of where command_rad holds it, or has stopped (a contact)."""
         state = self.arm.read_joint_state()
         here = self._holding_command(state.position_rad)
-        if float(np.abs(here - command_rad).max()) <= 0.5 * self.motion_config.start_tolerance_rad:
+        if float(np.abs(here - command_rad).max()) <= 0.5 * self._motion_config().start_tolerance_rad:
             return True
         return float(np.abs(state.velocity_rad_s).max()) < ARRIVED_SPEED_RAD_S
 
@@ -515,10 +493,8 @@ class MotionGate:
         """Inside a job: grasp or release (only while this job owns the arm) and wait for the fingers."""
         if action not in ("grasp", "release"):
             raise InvalidInput(f"gripper action must be 'grasp' or 'release', not {action!r}")
-        with self._sending():
+        with self.sending():
             self._owns_arm(ctx)
-            self._send_later(lambda: getattr(self.gripper, action)(wait=False))
+            self.send_later(lambda: getattr(self.gripper, action)(wait=False))
         self.wait_gripper(ctx if not ctx.in_cleanup else None)
 
-    def move_in_job(self, ctx: JobContext, q_goal_rad, moving_time_s: float | None = None) -> None:
-        self.run_trajectory(ctx, self.plan_move(q_goal_rad, moving_time_s))

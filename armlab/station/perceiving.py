@@ -50,6 +50,17 @@ class Perceiver:
             get_check_calibration=get_check_calibration, on_check=on_check, get_color_model=self._color_model,
         )]
 
+    @property
+    def on_demand(self) -> bool:
+        """Frames are captured when asked (capture_now): no camera thread draws them."""
+        return self._capture_now is not None
+
+    def wait_for_new_frame(self, version: int, timeout_s: float) -> None:
+        """Wait up to timeout_s for the camera thread to publish a frame newer than `version` (frames.get()'s
+        version); at once with frames on demand (the next one asked for is new)."""
+        if not self.on_demand:
+            self.frames.wait_newer(version, timeout_s=timeout_s)
+
     def camera_problem(self) -> str | None:
         """Why the camera thread gets no frames (it raised, or none for camera_timeout_s), else None (also without one)."""
         return None if self._frame_source is None else self._frame_source.health(self._camera_timeout_s)

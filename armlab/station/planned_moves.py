@@ -1,7 +1,8 @@
 """Plan, then execute (issue 22 item 2): a manual move planned and checked exactly as the real one would be, kept
 (plans.PlanStore) and shown, moving nothing; Execute sends exactly that trajectory through the gate, or refuses.
 
-A mixin of core.Station. plan_only() refuses what the move would refuse (state, latch, lease, limits, the board,
+A command object core.Station owns (station.planned; the station forwards its public methods), holding the kept plans
+(plans.PlanStore). plan_only() refuses what the move would refuse (state, latch, lease, limits, the board,
 the body and self-collision checks, reach, the start at the measured joints) and also a plan while the arm moves
 (a plan starts from the arm at rest). execute_plan() refuses an unknown id (PlanNotFound), a plan executed already,
 expired, or made before the arm or its world changed (PlanStale naming what changed), a plan another controller
@@ -20,7 +21,7 @@ from armlab.errors import ArmMoving, PlanNotYours, PlanStale
 from armlab.motion.pick_place import TrajectoryStep
 from armlab.motion.safety import check_start
 from armlab.station.perception import DEVICE_ERRORS
-from armlab.station.plans import PLAN_LIFETIME_S, MovePlan, new_plan_id
+from armlab.station.plans import PLAN_LIFETIME_S, MovePlan, PlanStore, new_plan_id
 from armlab.station.states import allowed_commands
 from armlab.station.telemetry import gripper_pose_from_matrix
 
@@ -82,18 +83,22 @@ def decimated_indices(count: int, most: int = PLAN_SHOWN_SAMPLES) -> np.ndarray:
 
 
 class PlannedMoves:
-    """plan_only, execute_plan, discard_plan and the plans' wire form."""
+    """plan_only, execute_plan, discard_plan and the plans' wire form. station: the core.Station that owns it."""
+
+    def __init__(self, station) -> None:
+        self._station = station
+        self.plans = PlanStore()  # the plans made and not yet executed, discarded or expired
 
     def _world_snapshot(self) -> tuple:
         """What a plan depends on besides the arm's joints (in _WORLD's order), read under the lock."""
-        with self._lock:
-            held = self._held_block
-            return (self._command_count, self.latch.halts, self._changed_everywhere_s, self.trust.calibration,
-                    self._arm_calibration_info, None if held is None else dict(held), self.speed_percent)
+        station, gate = self._station, self._station.gate
+        with station._lock:
+            return (gate.command_count, station.latch.halts, gate.record.changed_everywhere_s, station.trust.calibration,
+                    station.arm_calibration.info, station.held_block, gate.speed_percent)
 
     def _gripper_command(self) -> str | None:
         try:
-            return self.gripper.read_state().command
+            return self._station.gripper.read_state().command
         except DEVICE_ERRORS:
             return None
 
@@ -101,14 +106,14 @@ class PlannedMoves:
                   source: str | None = None) -> dict:
         """The move `command` (move_joints: q_goal_rad; move_to: pose = (position_m, pitch_rad, yaw_rad)) would make,
         planned and checked as the move itself, kept as a plan and returned in its wire form; nothing moves."""
-        self.require_arm(command)
-        self.allowed_or_raise(command, source)  # state, latch, lease: as the move would be refused, before any IK
+        self._station.require_arm(command)
+        self._station.allowed_or_raise(command, source)  # state, latch, lease: as the move would be refused, before any IK
         if pose is not None:
-            q_goal_rad = self.solve_pose(*pose)
-        self.checked_joints(q_goal_rad)
+            q_goal_rad = self._station.solve_pose(*pose)
+        self._station.checked_joints(q_goal_rad)
         context = self._plan_context(command, source)
-        trajectory = self._paced(self.plan_move(q_goal_rad, moving_time_s), context[2], from_rest=True)
-        self.check_motion(trajectory)
+        trajectory = self._station.gate.paced(self._station.plan_move(q_goal_rad, moving_time_s), context[2], from_rest=True)
+        self._station.check_motion(trajectory)
         return self._kept_plan(command, source, trajectory, context)
 
     def plan_motion(self, command: str, make: Callable[[], JointTrajectory], source: str | None = None) -> dict:
@@ -116,7 +121,7 @@ class PlannedMoves:
         returned in its wire form; nothing moves. The same refusals as plan_only before make() runs."""
         context = self._plan_context(command, source)
         trajectory = make()
-        self.check_motion(trajectory)
+        self._station.check_motion(trajectory)
         return self._kept_plan(command, source, trajectory, context)
 
     def plan_steps(self, command: str, steps: Sequence, start: Callable[[], object], source: str | None = None) -> dict:
@@ -127,8 +132,8 @@ class PlannedMoves:
         shown, goal = [], None
         for step in steps:
             if isinstance(step, TrajectoryStep):
-                shown.append(self._paced(step.trajectory, context[2], from_rest=True))
-                self.check_motion(shown[-1])
+                shown.append(self._station.gate.paced(step.trajectory, context[2], from_rest=True))
+                self._station.check_motion(shown[-1])
             elif goal is None and shown:  # the gripper acts where the motion before it ends
                 goal = shown[-1].positions_rad[-1].copy()
         if not shown:
@@ -147,29 +152,29 @@ class PlannedMoves:
     def _plan_context(self, command: str, source: str | None) -> tuple:
         """The refusals every plan gets (an arm, the state, latch and lease, the arm at rest), then what it depends
         on, read before it is planned: (world snapshot, the gripper's last command, the speed override)."""
-        self.require_arm(command)
-        self.allowed_or_raise(command, source)
+        self._station.require_arm(command)
+        self._station.allowed_or_raise(command, source)
         self._refuse_while_moving(command)
-        return self._world_snapshot(), self._gripper_command(), self.speed_percent
+        return self._world_snapshot(), self._gripper_command(), self._station.speed_percent
 
     def _kept_plan(self, command: str, source: str | None, trajectory: JointTrajectory, context: tuple, **job) -> dict:
         """The checked trajectory kept as a plan from the measured joints (it must start there; job: a job's start,
         goal_rad and steps, see MovePlan); its wire form."""
         world, gripper_command, speed = context
-        measured = self.joints_rad()
-        check_start(trajectory, measured, self.motion_config.start_tolerance_rad, self.model.joint_names)
+        measured = self._station.joints_rad()
+        check_start(trajectory, measured, self._station.motion_config.start_tolerance_rad, self._station.model.joint_names)
         plan = self.plans.add(MovePlan(new_plan_id(), command, source, trajectory, measured, gripper_command, world, speed,
                                        **job))
         return self.plan_wire(plan)
 
     def _arm_busy(self) -> bool:
         """The arm moves, or a motion sent to it has yet to end on the station's clock."""
-        return self.arm.is_moving() or self.commanded_motion_running()
+        return self._station.arm.is_moving() or self._station.commanded_motion_running()
 
     def _refuse_while_moving(self, command: str) -> None:
         """ArmMoving: a plan starts from the arm at rest."""
         if self._arm_busy():
-            state = self.state
+            state = self._station.state
             raise ArmMoving(command, state.value, allowed_commands(state),
                             "a plan starts from the arm at rest: plan again once it has stopped")
 
@@ -179,11 +184,11 @@ class PlannedMoves:
         if time.time() > plan.expires_s:
             raise PlanStale(f"the plan expired {time.time() - plan.expires_s:.0f} s ago (plans last "
                             f"{plan.lifetime_s:.0f} s): plan again", "expired")
-        measured = self.joints_rad()
+        measured = self._station.joints_rad()
         error = np.abs(measured - plan.measured_rad)
         joint = int(np.argmax(error))
-        if error[joint] > self.motion_config.start_tolerance_rad:
-            raise PlanStale(f"the plan is stale: the arm moved since it was made ({self.model.joint_names[joint]} is "
+        if error[joint] > self._station.motion_config.start_tolerance_rad:
+            raise PlanStale(f"the plan is stale: the arm moved since it was made ({self._station.model.joint_names[joint]} is "
                             f"{error[joint]:.3f} rad from where it was); plan again", "arm_moved")
         if self._gripper_command() != plan.gripper_command:
             raise PlanStale("the plan is stale: the gripper was opened or closed since the plan was made; plan again",
@@ -198,7 +203,7 @@ class PlannedMoves:
         if source is not None and plan.controller != source:
             raise PlanNotYours(f"plan {plan_id!r} was made by {plan.controller or 'the station itself'!r}, not by "
                                f"{source!r}: each controller executes only its own plans; plan it again")
-        self.allowed_or_raise(plan.command, source)
+        self._station.allowed_or_raise(plan.command, source)
         self._refuse_if_stale(plan)
         if plan.start is not None:
             return self._start_planned_job(plan)
@@ -221,12 +226,12 @@ class PlannedMoves:
             if not claimed:
                 self.plans.claim(plan.plan_id)  # PlanStale 'executed' when another request just sent it
                 claimed.append(True)
-            self._pace_next_send(plan.speed_percent)
-            self._transition(plan.command, source=source)
-            self._jog = None
+            self._station.gate.pace_next_send(plan.speed_percent)
+            self._station._transition(plan.command, source=source)
+            self._station._jog = None
 
         try:
-            trajectory, _ = self._send_replacing(send_as_planned, under_lock, plan.command, replaceable=True)
+            trajectory, _ = self._station.gate.send_replacing(send_as_planned, under_lock, plan.command, replaceable=True)
         except BaseException:
             if claimed:
                 self.plans.unclaim(plan.plan_id)
@@ -260,13 +265,13 @@ class PlannedMoves:
         index = decimated_indices(len(trajectory.times_s))
         q = trajectory.positions_rad[index]
         goal = trajectory.positions_rad[-1] if plan.goal_rad is None else plan.goal_rad
-        path = np.asarray(self.model.fk(q), float)[:, :3, 3]
-        base = np.asarray(self.model.T_world_base)[:3, 3]
+        path = np.asarray(self._station.model.fk(q), float)[:, :3, 3]
+        base = np.asarray(self._station.model.T_world_base)[:3, 3]
         return {
             "plan_id": plan.plan_id, "command": plan.command, "controller": plan.controller,
             "goal_q_rad": [float(v) for v in goal], "duration_s": float(trajectory.duration_s),
             "times_s": [float(t) for t in trajectory.times_s[index]], "q_rad": q.tolist(),
-            "gripper_path_m": path.tolist(), "gripper_pose": gripper_pose_from_matrix(self.model.fk(goal), base),
+            "gripper_path_m": path.tolist(), "gripper_pose": gripper_pose_from_matrix(self._station.model.fk(goal), base),
             "speed_percent": float(plan.speed_percent), "created_s": plan.created_s, "expires_s": plan.expires_s,
             "stale_when": list(STALE_WHEN), "steps": list(plan.steps),
         }

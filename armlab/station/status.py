@@ -14,6 +14,13 @@ from armlab.station.perception import DEVICE_ERRORS
 from armlab.station.telemetry import gripper_pose_from_matrix
 
 
+def arm_turning(arm: Any, joint_state: Any, moving_speed_rad_s: float) -> bool:
+    """What counts as the arm moving, read from the devices: the arm says it is moving (a trajectory running), or a
+    joint in `joint_state` (a JointState just read) turns faster than moving_speed_rad_s (pushed, falling limp)."""
+    speed = np.abs(np.asarray(joint_state.velocity_rad_s, dtype=float))
+    return bool(arm.is_moving()) or bool(speed.size and speed.max() > moving_speed_rad_s)
+
+
 class ArmReadings:
     """Reads the arm and gripper for the status; keeps the last joints read (shown while the arm cannot be read).
 
@@ -31,8 +38,7 @@ class ArmReadings:
             joint_state = self._arm.read_joint_state()
             q = np.asarray(joint_state.position_rad, dtype=float)
             self._last_joints = q
-            speed = np.abs(np.asarray(joint_state.velocity_rad_s, dtype=float))
-            moving = bool(self._arm.is_moving()) or bool(speed.size and speed.max() > self._moving_speed_rad_s)
+            moving = arm_turning(self._arm, joint_state, self._moving_speed_rad_s)
         except DEVICE_ERRORS:
             q = self._last_joints if self._last_joints is not None else np.asarray(model.home_rad if has_arm else [], dtype=float)
         try:

@@ -26,6 +26,7 @@ from armlab.skills import side_grasp
 from armlab.skills.manipulate import plan_pick, plan_place, plan_side_place, run_steps
 from armlab.skills.pick_check import PickCheckSettings, pick_summary, run_pick
 from armlab.station.core import Station
+from armlab.station.held import HeldBlock
 from armlab.station.jobs import JobContext
 from armlab.station.telemetry import block_to_dict
 from armlab.tasks.look_poses import look_pose, park_pose
@@ -260,7 +261,7 @@ class TaskRunner:
         if not self.station.gripper.read_state().holding:
             self.fail(f"missed the {name} (nothing in the gripper)")
             return False
-        self.station.set_held_block({"color": block.color, "size": block.size, "edge_m": edge})
+        self.station.set_held_block(HeldBlock(edge_m=edge, color=block.color, size=block.size))
         try:
             place = plan_the_place()
         except PLAN_REFUSALS as error:
@@ -306,7 +307,7 @@ class TaskRunner:
         if not self.station.gripper.read_state().holding:
             self.station.set_held_block(None)
             return "nothing in the gripper"
-        edge = float((held or {}).get("edge_m", self.edges_m["large"]))
+        edge = float(held.edge_m if held is not None else self.edges_m["large"])
         spot = self.free_spot(objects or [], edge)
         place = plan_place(self.station, (spot[0], spot[1], 0.0), 0.0, edge, self.boxes(objects or []),
                            max_transfer_z_m=self.max_transfer_z_m, gripper_box=self.gripper_box)

@@ -1,5 +1,5 @@
 """The station's global speed override (10-100 %): every motion it plans, jobs, manual moves and repeats, runs at it;
-a change re-times the motion in progress continuously (armlab/station/speed.py). PATCH /api/jobs/current sets the
+a change re-times the motion in progress continuously (armlab/station/job_control.py set_speed, motion.py). PATCH /api/jobs/current sets the
 same override for a running repeat."""
 
 from __future__ import annotations

@@ -36,7 +36,7 @@ def test_a_station_times_motion_on_the_simulation_clock_and_on_the_wall_clock_wi
             before_s = cell.sim_time_s
             assert station.clock_s() == before_s
             assert station.wait_motion(0.5)  # still: true at once, by the simulation's clock
-            assert station._wait_until(lambda: False, 0.25) is False  # a timeout of 0.25 simulated seconds ...
+            assert station.gate.wait_until(lambda: False, 0.25) is False  # a timeout of 0.25 simulated seconds ...
             assert cell.sim_time_s - before_s == pytest.approx(0.25, abs=0.06)  # ... advanced the physics that far
         finally:
             station.close()

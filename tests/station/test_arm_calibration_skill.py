@@ -77,8 +77,8 @@ def test_calibrated_installed_saved_and_restored(real):
 
     again = Station(cell.arm, cell.gripper, cell.camera, model=load_workcell_arm(), config=StationConfig(database_path=str(db)),
                     sim=cell, backend="sim", synchronous=True)
-    again._restore_arm_calibration()
-    assert again.model.calibration is not None and again.arm_calibration_status["calibrated"]
+    again.arm_calibration.restore()
+    assert again.model.calibration is not None and again.arm_calibration.status["calibrated"]
     np.testing.assert_allclose(again.model.fk(q), station.model.fk(q), atol=1e-9)
     with sqlite3.connect(db) as connection:
         row_id, data = connection.execute("SELECT id, data_json FROM arm_calibrations ORDER BY id DESC LIMIT 1").fetchone()
@@ -88,7 +88,7 @@ def test_calibrated_installed_saved_and_restored(real):
     moved = Station(cell.arm, cell.gripper, cell.camera, model=load_workcell_arm(), config=StationConfig(database_path=str(db)),
                     sim=cell, backend="sim", synchronous=True)
     seq = moved.events.last_seq
-    moved._restore_arm_calibration()
+    moved.arm_calibration.restore()
     assert moved.model.calibration is None
     assert any("not restored" in e["message"] for e in moved.events.since(seq))
 

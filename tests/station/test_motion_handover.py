@@ -103,13 +103,13 @@ def test_a_takeover_whose_start_check_reads_the_arm_late_is_not_refused(fast, mo
     at_rest(station, [-1.5, 0.0, 0.0, 0.0, 0.0])
     station.move_joints([1.5, 0.0, 0.0, 0.0, 0.0])
     cell.step(0.8)  # the waist turns at ~3 rad/s
-    joints_rad = station.joints_rad
+    joints_rad = station.gate.joints_rad
 
     def late_reading():
         cell.step(0.04)
         return joints_rad()
 
-    monkeypatch.setattr(station, "joints_rad", late_reading)
+    monkeypatch.setattr(station.gate, "joints_rad", late_reading)
     cell.start_joint_recording()
     station.move_joints([-1.0, 0.0, 0.0, 0.0, 0.0])  # reverse
     monkeypatch.undo()
@@ -215,7 +215,7 @@ def test_a_burst_of_moves_plans_only_the_newest(fast, monkeypatch):
     station, _ = fast
     at_rest(station, [0.0, 0.0, 0.0, 0.0, 0.0])
     held, planned, entered, outcomes = threading.Event(), [], [], {}
-    send_replacing, plan_move, plan_move_from = station._send_replacing, station.plan_move, station.plan_move_from
+    send_replacing, plan_move, plan_move_from = station.gate.send_replacing, station.manual.plan_move, station.manual.plan_move_from
 
     def counting(original):
         def plan(*args, **kwargs):
@@ -229,9 +229,9 @@ def test_a_burst_of_moves_plans_only_the_newest(fast, monkeypatch):
         entered.append(threading.current_thread().name)
         return send_replacing(*args, **kwargs)
 
-    monkeypatch.setattr(station, "plan_move", counting(plan_move))
-    monkeypatch.setattr(station, "plan_move_from", counting(plan_move_from))
-    monkeypatch.setattr(station, "_send_replacing", entering)
+    monkeypatch.setattr(station.manual, "plan_move", counting(plan_move))
+    monkeypatch.setattr(station.manual, "plan_move_from", counting(plan_move_from))
+    monkeypatch.setattr(station.gate, "send_replacing", entering)
 
     def move(waist_rad: float) -> None:
         try:

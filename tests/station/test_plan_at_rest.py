@@ -38,7 +38,7 @@ def test_a_plan_overtaken_by_a_move_is_stale_even_while_that_move_ends(fast):
     plan = station.plan_only("move_joints", q_goal_rad=GOAL_RAD)
     nearby = np.asarray(START_RAD) + [0.0, 0.0, 0.0, 0.03, 0.0]  # within start_tolerance_rad (0.05) of the plan's start
     station.move_joints(nearby, moving_time_s=1.0)
-    trajectory, started_s = station._commanded[:2]
+    trajectory, started_s = station.gate.commanded[:2]
     ends_s = started_s + trajectory.duration_s
     assert cell.wait_for(lambda: station.clock_s() >= ends_s - 0.5 * station.motion_config.handover_lead_s, 10.0)
     assert station.clock_s() < ends_s  # the move still runs on the station's clock (its last, still samples)

@@ -89,7 +89,7 @@ def test_a_change_during_a_move_retimes_it_continuously_within_the_limits(fast, 
     station.move_joints(FAR_Q)
     start = cell.sim_time_s
     # a third of the way: cruising, not braking at the limit (physics runs in the wait)
-    station._wait_until(lambda: cell.sim_time_s >= start + _moving_span_s(alone) / 3, 10.0)
+    station.gate.wait_until(lambda: cell.sim_time_s >= start + _moving_span_s(alone) / 3, 10.0)
     station.set_speed(then)
     station.wait_motion(60.0)
     trace = cell.stop_joint_recording()

@@ -17,7 +17,7 @@ def test_a_motion_in_its_last_ticks_starts_the_next_where_the_command_rests(fast
     station.home(wait=True)
     station.move_joints(GOAL_Q, moving_time_s=1.0)
     with station._lock:
-        trajectory, started_s, _ = station._commanded
+        trajectory, started_s, _ = station.gate.commanded
     end_s = started_s + trajectory.duration_s
     cell.step(end_s - 0.006 - station.clock_s())  # inside its last sample period, still moving slowly
     assert station.clock_s() < end_s
@@ -38,7 +38,7 @@ def test_a_motion_midway_still_reads_the_measured_joints(fast):
     station.home(wait=True)
     station.move_joints(GOAL_Q, moving_time_s=1.0)
     with station._lock:
-        trajectory = station._commanded[0]
+        trajectory = station.gate.commanded[0]
     cell.step(0.3)
     start = station.start_position()
     assert np.max(np.abs(start - trajectory.positions_rad[-1])) > 0.05
