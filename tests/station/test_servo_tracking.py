@@ -94,13 +94,12 @@ def test_a_jog_from_rest_sent_between_two_control_ticks_is_followed_within_the_a
 
 def test_a_reversed_jog_is_followed_within_the_acceleration_limit_and_on_its_position_reference(fast):
     """wrist_rotate (the lightest joint: the servos' corrections move it most) turning at ~2.5 rad/s, taken over by a jog
-    the other way: the jog has no jerk limit, so its acceleration steps to the limit at once (bench seed 1's worst case). The
-    position reference was the samples' straight lines while the velocity reference ran smoothly between their
-    midpoints: a joint on its velocity reference bowed off the lines by up to a*dt^2/8, and the position servo pulled it
-    back at every sample (a +-2 % wobble of the acceleration that moved with each change of it: bench seed 1 measured
-    1.0022x in its worst case, command 0.9986x). Now the position reference is the velocity reference's integral and the
-    joints stay
-    on it: 7.8e-5 rad off before, 4.9e-6 now."""
+    the other way: the jog has no jerk limit, so its acceleration steps to the limit at once. The position reference
+    was the samples' straight lines while the velocity reference ran smoothly between their midpoints: a joint on its
+    velocity reference bowed off the lines by up to a*dt^2/8, and the position servo pulled it back at every sample (a
+    +-2 % wobble of the acceleration that moved with each change of it; bench seed 1 measured 1.0022x on its worst
+    replacement, a home: the next test). Now the position reference is the velocity reference's integral and the
+    joints stay on it: 7.8e-5 rad off before, 4.9e-6 now."""
     station, cell = fast
     at_rest(station, [0.0, 0.0, 0.0, 0.0, -2.5])
     station.move_joints([0.0, 0.0, 0.0, 0.0, 2.5])
