@@ -96,7 +96,7 @@ class SimWorkcell(SimClock, SimCameraRig, SimTruth):
         else:
             self.gripper = SimGripper(self, self._geometry.finger_offset_min_m, self._geometry.finger_offset_max_m,
                                       self._geometry.pad_thickness_m, self._sim.gripper.stop_speed_m_s,
-                                      self._sim.gripper.stop_time_s)
+                                      self._sim.gripper.stop_time_s, self._sim.gripper.open_preload_m)
         real = None
         if camera_is_real(self.realism) and self._camera_config.realism is not None:
             real = RealCamera(self._camera_config, self._camera_config.realism, real_rng, self.config.depth_noise)
@@ -178,7 +178,7 @@ class SimWorkcell(SimClock, SimCameraRig, SimTruth):
             data.qpos[self._arm_qpos] = np.clip(self._geometry.sleep_rad, self._geometry.lower_rad, self._geometry.upper_rad)
             data.qpos[self._finger_qpos] = self._geometry.finger_offset_max_m
             data.ctrl[self._pos_act] = data.qpos[self._arm_qpos]
-            data.ctrl[self._finger_act] = self._geometry.finger_offset_max_m
+            data.ctrl[self._finger_act] = self._geometry.finger_offset_max_m + self._sim.gripper.open_preload_m
             self._next_control_s = 0.0
         else:
             data.time = previous["time"]
