@@ -87,6 +87,7 @@ class SimArm(SimDevice, Arm):
         self._taken_over: tuple[JointTrajectory, float] | None = None  # the running trajectory a new one replaced, its start
         # what the ideal servos follow between control ticks, as the last tick took it: the trajectory, the one it took over
         self._servo: tuple[Followed, Followed | None] | None = None
+        self._hold_next_step = False  # the ideal servos braked a trajectory's end to rest this tick: hold from the next step
         self._hold_rad: np.ndarray | None = None
         self._torque = True
         self._halt_requested = threading.Event()  # set by stop() without the lock; applied under it
@@ -248,6 +249,7 @@ class SimArm(SimDevice, Arm):
         the position goal once per tick."""
         self._apply_halt()
         self._last_reading = self._measure()
+        self._hold_next_step = False
         trajectory = self._trajectory
         if trajectory is None or not self._torque:
             self._servo = None
@@ -255,6 +257,7 @@ class SimArm(SimDevice, Arm):
         t = sim_time_s - self._start_s
         if self._taken_over is not None and not (len(trajectory.times_s) >= 3 and t < _middle(trajectory.times_s, 0)):
             self._taken_over = None
+        moving = bool(np.any(self._cell.arm_reference_velocity()))  # the step before this tick's (see below)
         if self._cell.ideal_servos:
             self._servo = self._take(trajectory, sim_time_s)
             position = self._feed(sim_time_s)
@@ -272,12 +275,20 @@ class SimArm(SimDevice, Arm):
                 if self._servo is not None:  # the ideal servos hold at rest at the last sample, no acceleration fed
                     # forward (the last one fed was a bit of the braking: left on, it pushed the held arm ~1.3 mrad away)
                     self._servo = None
-                    self._cell.apply_arm_reference(position, np.zeros_like(position), np.zeros_like(position))
+                    if moving:  # the step before still moved (a joint moves over a step with the velocity at its middle:
+                        # a*h/2 at a braking trajectory's end): this tick's feed brakes it to rest and the next step holds
+                        # (released at once, the joint crept on for ~6 ticks and the next move's servos took that out)
+                        self._hold_next_step = True
+                    else:
+                        self._cell.apply_arm_reference(position, np.zeros_like(position), np.zeros_like(position))
 
     def servo_step(self, sim_time_s: float) -> None:
         """The ideal servos between control ticks (called by the workcell under its lock at every other physics step):
         follow the trajectory the last tick took."""
-        if self._servo is not None and self._torque and not self._halt_requested.is_set():
+        if self._hold_next_step:
+            self._hold_next_step = False
+            self._cell.apply_arm_reference(self._hold_rad, np.zeros_like(self._hold_rad), np.zeros_like(self._hold_rad))
+        elif self._servo is not None and self._torque and not self._halt_requested.is_set():
             self._feed(sim_time_s)
 
     def _take(self, trajectory: JointTrajectory, sim_time_s: float) -> tuple[Followed, Followed | None]:
