@@ -148,3 +148,22 @@ def test_open_fingers_stay_on_their_stops_while_the_arm_accelerates(fast):
         cell.step(cell.timestep_s)
         lowest_m = min(lowest_m, *cell.finger_positions())
     assert lowest_m >= stop_m, f"a finger left its stop by {stop_m - lowest_m:.2e} m"
+
+
+@pytest.mark.parametrize("before_end_s", [0.002, 0.006, 0.03])  # bench seed 5's worst replacement: 2 ms; held out 6, 30 ms
+@pytest.mark.parametrize("jog_rad_s", [0.8, -0.8])  # on along the move (seed 5's), back
+def test_a_jog_that_takes_over_a_move_in_its_last_samples_is_followed_within_the_acceleration_limit(fast, before_end_s, jog_rad_s):
+    """A jog sent as a move brakes onto its last sample (bench seed 5: the joints at 1.32x the limit). The handover lay
+    at the move's last sample, less than the handover lead ahead, and the jog went on from the last segment's slope
+    (a*h/2); but the servos' velocity reference runs down to rest at a trajectory's end, and the jog's first segment,
+    whose midpoint lay before the tick that took it, had the servos jump from that to the jog's: wrist_angle 0.0037 ->
+    0.0477 rad/s in one physics step. Now a move that ends inside the lead is taken over at rest after its end."""
+    station, cell = fast
+    at_rest(station, [0.0, 0.0, 0.0, -0.4, 0.0])
+    station.move_joints([0.0, 0.0, 0.0, 0.2, 0.0])
+    trajectory, start_s, _ = station._commanded
+    cell.step(max(round((start_s + trajectory.duration_s - before_end_s - cell.sim_time_s) / cell.timestep_s), 0) * cell.timestep_s)
+    cell.start_joint_recording()
+    station.jog([0.0, 0.0, 0.0, jog_rad_s, 0.0], source="pad")
+    _, measured = _ratios(cell, 0.6)
+    assert measured <= MEASURED_MAX, f"a joint accelerates at {measured:.4f}x the limit"
