@@ -15,6 +15,7 @@ from __future__ import annotations
 from armlab.devices.arm import JointTrajectory
 from armlab.errors import PLAN_REFUSALS, ArmMoving, CommandRefused, InvalidInput
 from armlab.motion.handover import Handover
+from armlab.motion.planning_limits import planning_accel_rad_s2
 from armlab.motion.time_warp import paced, retimed
 from armlab.station.job_control import RunControl, checked_speed_percent
 from armlab.station.motion import HandoverLate
@@ -35,7 +36,7 @@ class SpeedOverride:
             with self._lock:
                 running = self._commanded
             from_rest = running is None or self.clock_s() - running[1] >= running[0].duration_s
-        return paced(trajectory, percent / 100.0, self.model.accel_limit_rad_s2, from_rest, self.motion_config.sample_rate_hz)
+        return paced(trajectory, percent / 100.0, planning_accel_rad_s2(self.model), from_rest, self.motion_config.sample_rate_hz)
 
     def _pace_next_send(self, percent: float) -> None:
         """Under the lock, just before _command_arm: the motion about to be sent was paced at `percent` (a later
@@ -79,7 +80,7 @@ class SpeedOverride:
             if handover is None or current is None or current[2] != handover.source_id:
                 raise InvalidInput("the motion ended or was replaced meanwhile")
             trajectory, t0 = current[0], current[1]
-            return retimed(trajectory, handover.takes_over_s - t0, 1.0, ratio, self.model.accel_limit_rad_s2,
+            return retimed(trajectory, handover.takes_over_s - t0, 1.0, ratio, planning_accel_rad_s2(self.model),
                            self.motion_config.sample_rate_hz)
 
         try:
