@@ -88,6 +88,7 @@ class SimArm(SimDevice, Arm):
         # what the ideal servos follow between control ticks, as the last tick took it: the trajectory, the one it took over
         self._servo: tuple[Followed, Followed | None] | None = None
         self._hold_next_step = False  # the ideal servos braked a trajectory's end to rest this tick: hold from the next step
+        self._took_over = False  # the trajectory commanded last took over one still running (bench seed 10: one ended did not)
         self._hold_rad: np.ndarray | None = None
         self._torque = True
         self._halt_requested = threading.Event()  # set by stop() without the lock; applied under it
@@ -154,6 +155,7 @@ class SimArm(SimDevice, Arm):
             now_s = self._cell.sim_time_s
             running = self._trajectory
             self._taken_over = (running, self._start_s) if running is not None and now_s - self._start_s < running.duration_s else None
+            self._took_over = self._taken_over is not None  # (_taken_over is let go at the handover; this stays)
             self._trajectory = trajectory
             if start_time_s is not None:
                 self._start_s = float(start_time_s)
@@ -309,8 +311,9 @@ class SimArm(SimDevice, Arm):
             if taken_over is None:  # replaced before a tick took it
                 taken_over = Followed(TrajectoryReference(self._taken_over[0]), self._taken_over[1])
                 taken_over = taken_over if before is None else self._continuing(taken_over, before, sim_time_s)
-        if current is None:
-            current = Followed(TrajectoryReference(trajectory, from_rest=before is None), self._start_s)
+        if current is None:  # from rest unless it took over one still running when commanded (one that had ended since
+            # the last tick: from rest; taken as moving, a first segment that holds had its velocity extrapolated back)
+            current = Followed(TrajectoryReference(trajectory, from_rest=before is None or not self._took_over), self._start_s)
             if taken_over is not None:
                 handover_s = current.handover_s()
                 current = current.continuing(taken_over, taken_over.position(handover_s), handover_s)

@@ -43,3 +43,24 @@ def test_a_braking_trajectory_ends_at_rest(cell, samples):
     cell.step(cell.control_period_s)
     speed = abs(float(cell.arm_velocities()[0]))
     assert speed < 1e-4, f"the waist still moves at {speed:.2e} rad/s a control tick after its trajectory ended"
+
+
+def test_a_trajectory_sent_after_the_last_one_ended_but_before_the_next_tick_starts_from_rest(cell):
+    """Sent after the last trajectory's end but before the servos' next tick let go of it (the station hands over then
+    with a hold of the last sample, then the plan), the new one was taken as a takeover of a moving arm: its velocity
+    reference before the hold's end extrapolated the plan's first change back, and the joint was driven the other way
+    (bench seed 10: wrist_angle at -0.12 rad/s, its position reference stepping 0.5 mrad). Nothing runs on: it starts
+    at rest."""
+    braking = _bang_bang(cell.arm.read_joint_state().position_rad, 41, -0.99 * ACCEL_RAD_S2)  # ends 2 ms before a tick
+    end_s = cell.arm.command_trajectory(braking) + braking.duration_s
+    while cell.sim_time_s < end_s + 1e-9 or cell.next_control_s > cell.sim_time_s + 1e-9:
+        cell.step(cell.timestep_s)  # to the first tick after the end, not yet run
+    plan = _bang_bang(braking.positions_rad[-1], 40, 0.99 * ACCEL_RAD_S2)
+    hold_s = 0.058
+    after = JointTrajectory(np.concatenate([[0.0], hold_s + plan.times_s]), np.vstack([plan.positions_rad[:1], plan.positions_rad]))
+    cell.start_joint_recording()
+    cell.arm.command_trajectory(after, start_time_s=cell.sim_time_s)
+    cell.step(0.2)
+    trace = cell.stop_joint_recording()
+    backwards = float(-np.min(trace["reference_velocity_rad_s"][:, 0]))
+    assert backwards < 1e-6, f"the waist is driven back at {backwards:.3f} rad/s"
