@@ -299,7 +299,7 @@ class SimWorkcell(SimClock, SimCameraRig, SimTruth):
         if self._publisher is not None:  # the real firmware: no velocity feed-forward (its velocity actuator is the motor's damping)
             self._commanded_velocity = np.clip(np.asarray(velocity_rad_s, dtype=float), -10.0, 10.0)
             return
-        self._data.ctrl[self._vel_act] = np.clip(velocity_rad_s, -10.0, 10.0)
+        self._data.ctrl[self._vel_act] = np.minimum(np.maximum(velocity_rad_s, -10.0), 10.0)  # np.clip: 3x the time, every step
         self._feed_forward = None if accel_rad_s2 is None else (np.asarray(accel_rad_s2, float), np.asarray(velocity_rad_s, float))
 
     def _apply_feed_forward(self) -> None:
