@@ -22,7 +22,8 @@ references consistent with MuJoCo's integrator (updated only every 4 ms control 
 the servos corrected offsets that moved with every change of the commanded acceleration: 1.02-1.03x; a position
 reference on the samples' straight lines: up to 1.0022x; open fingers resting on their stops: up to 1.0008x; a jog
 handed over at a move's last sample, less than the lead ahead: 1.32x; a joint left creeping at a*h/2 after a braking
-end: 1.0108x). What is left, the servos' tracking of a profile whose acceleration changes at once (a few 1e-4 of it),
+end: 1.0108x; a move sent after the last one ended but before the servos let go of it, taken as moving: the joint
+driven back at 0.12 rad/s, a 0.5 mrad command step). What is left, the servos' tracking of a profile whose acceleration changes at once (a few 1e-4 of it),
 is the planning margin's: plans take 0.99x of each joint's limit (armlab/motion/planning_limits.py); the figures here
 are against the hardware limit. The station is synchronous: physics advances only in waits and in this script's steps, so wall-clock load does not
 enter (part 2's moments come from a polling thread, so its runs vary).
