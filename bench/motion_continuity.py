@@ -13,14 +13,20 @@ Figures, from the servo references and the measured joints at every control tick
 recording, armlab/motion/measure.py): peak acceleration of the command (second difference over 20 ms) and of
 the measured joints (velocity difference over 20 ms) against the limit, the largest command step (change of
 one tick's motion from the tick before; a planned-from-rest takeover shows up here), refusals, failed jobs,
-and the jog's time and distance from the last heartbeat to rest against v*hold + v^2/2a. The measured joints
-follow the command to ~0.2 %: the ideal servos feed the commanded acceleration forward through the model's inverse
-dynamics (before, they overshot every change of it: a lone trapezoid 1.14x, a jog ~1.4x, these replacements
-1.49-1.73x) and follow the trajectory at every physics step with references consistent with MuJoCo's integrator
-(armlab/devices/sim/servo_reference.py; updated only every 4 ms control tick and sampled at the step's start, the
-servos corrected offsets that moved with every change of the commanded acceleration: 1.02-1.03x). The station is
-synchronous: physics advances only in waits and in this script's steps, so wall-clock load does not enter (part 2's
-moments come from a polling thread, so its runs vary).
+and the jog's time and distance from the last heartbeat to rest against v*hold + v^2/2a. The command is the servos'
+position reference: the integral of their velocity reference plus a blend that ends each trajectory on its last
+sample (armlab/devices/sim/servo_reference.py). The measured joints follow it to ~0.01 %: the ideal servos feed the
+commanded acceleration forward through the model's inverse dynamics (before, they overshot every change of it: a lone
+trapezoid 1.14x, a jog ~1.4x, these replacements 1.49-1.73x) and follow the trajectory at every physics step with
+references consistent with MuJoCo's integrator (updated only every 4 ms control tick and sampled at the step's start,
+the servos corrected offsets that moved with every change of the commanded acceleration: 1.02-1.03x; a position
+reference on the samples' straight lines: up to 1.0022x; open fingers resting on their stops: up to 1.0008x; a jog
+handed over at a move's last sample, less than the lead ahead: 1.32x; a joint left creeping at a*h/2 after a braking
+end: 1.0108x; a move sent after the last one ended but before the servos let go of it, taken as moving: the joint
+driven back at 0.12 rad/s, a 0.5 mrad command step). What is left, the servos' tracking of a profile whose acceleration changes at once (a few 1e-4 of it),
+is the planning margin's: plans take 0.99x of each joint's limit (armlab/motion/planning_limits.py); the figures here
+are against the hardware limit. The station is synchronous: physics advances only in waits and in this script's steps, so wall-clock load does not
+enter (part 2's moments come from a polling thread, so its runs vary).
 """
 
 from __future__ import annotations

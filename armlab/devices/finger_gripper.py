@@ -37,6 +37,7 @@ class FingerGripperConfig(StrictModel):
     pad_solimp: list[float] = Field(min_length=3, max_length=5)
     stop_speed_m_s: Positive
     stop_time_s: Positive
+    open_preload_m: NonNegative = 0.001  # open: the fingers are driven this far beyond their stop (sim.yaml says why)
 
 
 @dataclass(frozen=True)

@@ -20,6 +20,7 @@ import numpy as np
 
 from armlab.devices.arm import JointTrajectory
 from armlab.errors import InvalidInput, PlanRefused
+from armlab.motion.planning_limits import planning_accel_rad_s2
 
 DEFAULT_JERK_FACTOR_PER_S = 30.0  # jerk limit = acceleration limit × this (rad/s³ per rad/s²)
 DEFAULT_RATE_HZ = 100.0
@@ -42,10 +43,11 @@ class Limits:
 
 
 def arm_limits(model, margin: float = 0.98, jerk_factor_per_s: float = DEFAULT_JERK_FACTOR_PER_S) -> Limits:
-    """The arm model's velocity and acceleration limits (× margin, so sampled finite differences stay inside
-    them) and a jerk limit of jerk_factor_per_s × the acceleration limit."""
+    """The arm model's velocity limits × margin (so sampled finite differences stay inside them), the acceleration it
+    is planned at (armlab.motion.planning_limits, × margin when that is smaller) and a jerk limit of jerk_factor_per_s
+    × that acceleration."""
     velocity = np.asarray(model.velocity_limit_rad_s, dtype=float) * margin
-    accel = np.asarray(model.accel_limit_rad_s2, dtype=float) * margin
+    accel = planning_accel_rad_s2(model, margin)
     return Limits(velocity, accel, accel * jerk_factor_per_s)
 
 

@@ -88,11 +88,13 @@ def take_over(running: JointTrajectory, running_start_s: float, now_s: float, le
     acceleration from the last second difference. rate_hz: the fallback sample rate of a two-sample trajectory."""
     times, positions = running.times_s, running.positions_rad
     t_now = now_s - running_start_s
-    if t_now >= running.duration_s:
-        return _hold_after_end(running, running_start_s, t_now, lead_s, rate_hz, source_id)
     index = int(np.searchsorted(times, t_now + lead_s - 1e-9))
-    at_end = index >= len(times) - 1 or len(times) < 3
-    index = min(max(index, 2), len(times) - 1)
+    if t_now >= running.duration_s or index >= len(times) - 1 or len(times) < 3:
+        # It ends inside the lead: taken over at rest after its end (handed over at its last sample instead, less than
+        # the lead ahead, the new plan's first segment began before the servos took it, at the last segment's slope
+        # where their reference had run down to rest: a jog on from there, 1.3-1.4x the limit; bench seed 5).
+        return _hold_after_end(running, running_start_s, t_now, lead_s, rate_hz, source_id)
+    index = max(index, 2)
     # The prefix starts at the running trajectory's sample at or before now (its t = 0 is in the past: the gate
     # trims it to the moment it is sent), so its sample spacing stays the running trajectory's own.
     # (A motion from rest starts at the control tick that takes it, up to one control period after it was sent: taken
@@ -100,10 +102,6 @@ def take_over(running: JointTrajectory, running_start_s: float, now_s: float, le
     before = max(min(int(np.searchsorted(times, t_now, side="right")) - 1, index - 1), 0)
     prefix = JointTrajectory(times[before : index + 1] - times[before], positions[before : index + 1].copy())
     planned_at_s = running_start_s + float(times[before])
-    if at_end:  # the running trajectory ends inside the lead: at rest on its last sample
-        zeros = np.zeros(positions.shape[1])
-        period = float(times[-1] - times[-2]) if len(times) > 1 else 1.0 / rate_hz
-        return Handover(planned_at_s, prefix, positions[-1].copy(), zeros, zeros.copy(), source_id, period)
     period = float(times[index] - times[index - 1])
     period_before = float(times[index - 1] - times[index - 2])
     v_last = (positions[index] - positions[index - 1]) / period
@@ -115,11 +113,13 @@ def take_over(running: JointTrajectory, running_start_s: float, now_s: float, le
 
 def _hold_after_end(running: JointTrajectory, running_start_s: float, t_now: float, lead_s: float, rate_hz: float,
                     source_id: int) -> Handover | None:
-    """None once the running trajectory ended a sample period or more ago. Inside that period its last segment
-    still moved (a·h/2 after a braking ramp): a plan from rest starting now would step the command by its own
-    first step plus that, so the replacement takes over after holding the last sample whole periods, at rest."""
+    """The handover of a running trajectory that ends inside the lead (t_now before its end) or ended less than a sample
+    period ago; None once it ended a period or more ago. Its last segment still moved (a·h/2 after a braking ramp): a
+    plan from rest starting at once would step the command by its own first step plus that, so the replacement takes
+    over after holding the last sample whole periods, at rest, at least lead_s from now (the handover's t = 0 is the
+    end, in the future when it has yet to come: the gate starts the command there and the running one runs out)."""
     times, positions = running.times_s, running.positions_rad
-    period = float(times[-1] - times[-2]) if len(times) > 1 else 1.0 / rate_hz
+    period = float(times[-1] - times[-2]) if len(times) > 2 else 1.0 / rate_hz  # (two samples: a hold of any length)
     since_end_s = t_now - running.duration_s
     if since_end_s >= period or period <= 0.0:
         return None

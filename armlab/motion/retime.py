@@ -9,6 +9,7 @@ import numpy as np
 
 from armlab.devices.arm import JointTrajectory
 from armlab.errors import PlanRefused
+from armlab.motion.planning_limits import planning_accel_rad_s2
 from armlab.motion.trajectory import DEFAULT_RATE_HZ, LIMIT_MARGIN, retime_path, sample_times, trapezoid_profile
 
 # Largest joint change between two 100 Hz samples that is still one continuous IK branch (radians).
@@ -33,7 +34,7 @@ def plan_retimed(arm, solve_at, duration_s: float, ramp_s: float, label: str, ra
     its velocity or acceleration limit (near a singularity). PlanRefused naming `label` when
     _MAX_RETIMES stretches are not enough."""
     velocity_limit = np.asarray(arm.velocity_limit_rad_s, float) * LIMIT_MARGIN
-    accel_limit = np.asarray(arm.accel_limit_rad_s2, float) * LIMIT_MARGIN
+    accel_limit = planning_accel_rad_s2(arm)
     for _ in range(_MAX_RETIMES):
         times = sample_times(duration_s, rate_hz)
         s = trapezoid_profile(times, duration_s, ramp_s)

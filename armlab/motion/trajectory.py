@@ -16,13 +16,15 @@ import numpy as np
 
 from armlab.devices.arm import JointTrajectory
 from armlab.errors import InvalidInput
+from armlab.motion.planning_limits import planning_accel_rad_s2
 
 DEFAULT_RATE_HZ = 100.0
 # Relative slack when deciding whether a requested timing already satisfies the limits.
 _FEASIBILITY_RTOL = 1e-9
 # A measured start this close outside a position limit is moved onto the limit (noted), not refused.
 START_TOLERANCE_RAD = 0.01
-# Plans use limits shrunk by this factor so rounding never lets a sampled trajectory touch the true limit.
+# Plans use velocity limits shrunk by this factor so rounding never lets a sampled trajectory touch the true limit (the
+# acceleration: armlab.motion.planning_limits).
 LIMIT_MARGIN = 1.0 - 1e-6
 
 
@@ -252,7 +254,7 @@ def plan_joint_move_timed(
     timing = time_joint_move(
         delta,
         np.asarray(arm.velocity_limit_rad_s, float) * LIMIT_MARGIN,
-        np.asarray(arm.accel_limit_rad_s2, float) * LIMIT_MARGIN,
+        planning_accel_rad_s2(arm),
         moving_time_s,
         accel_time_s,
     )

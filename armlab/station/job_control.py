@@ -30,6 +30,7 @@ import numpy as np
 from armlab.devices.arm import JointTrajectory
 from armlab.errors import PLAN_REFUSALS, ArmMoving, CommandRefused, InvalidInput, PlanStale
 from armlab.motion.handover import Handover
+from armlab.motion.planning_limits import planning_accel_rad_s2
 from armlab.motion.time_warp import retimed
 from armlab.station.jobs import Job, JobContext, start_job_thread
 from armlab.station.perception import DEVICE_ERRORS
@@ -232,7 +233,7 @@ class JobControls:
             if handover is None or current is None or current[2] != handover.source_id:
                 raise InvalidInput("the motion ended or was replaced meanwhile")
             trajectory, t0 = current[0], current[1]
-            return retimed(trajectory, handover.takes_over_s - t0, 1.0, ratio, station.model.accel_limit_rad_s2,
+            return retimed(trajectory, handover.takes_over_s - t0, 1.0, ratio, planning_accel_rad_s2(station.model),
                            station.motion_config.sample_rate_hz)
 
         try:

@@ -5,8 +5,8 @@ acceleration, the table, the workspace box, the per-step jump, the body) outside
 start at the measured joints, continuity with the motion it replaces) under it, inside `sending()`, which sends to the
 device once the lock is released (on the real arm a ROS service call: status and telemetry never wait for it) and
 halts again if the latch went up meanwhile. Waits are on the injected Clock, return at once when the latch is set and,
-in fast mode, never let the physics run more than one control period past it. The gate also paces what it sends at the
-station's speed override (armlab.motion.time_warp) and records where the gripper went (motion_record.py).
+in fast mode, never let the physics run more than one control period past it. It paces what it sends at the speed
+override (armlab.motion.time_warp, within planning_limits) and records where the gripper went (motion_record.py).
 """
 
 from __future__ import annotations
@@ -24,6 +24,7 @@ from armlab.errors import PLAN_REFUSALS, ArmMoving, CommandRefused, InvalidInput
 from armlab.motion.blend import arm_limits, plan_stop
 from armlab.motion.end_effector import EndEffector
 from armlab.motion.handover import Handover, continuity_problem, reference_velocity, splice, take_over, trimmed
+from armlab.motion.planning_limits import planning_accel_rad_s2
 from armlab.motion.safety import UnsafeTrajectory, check_start
 from armlab.motion.time_warp import paced
 from armlab.station.held import HeldBlock
@@ -36,8 +37,7 @@ from armlab.station.states import State, allowed_commands
 from armlab.station.status import arm_turning
 
 WAIT_CHUNK_S = 0.05  # waits on the devices check cancel/e-stop this often (simulated time in fast mode)
-# A job's step waits at most this long after its end time for the arm to arrive (_arrived): the real arm's P-only waist
-# trails a fast long swing (0.03 rad after 2.9 rad, more loaded). Stopped short: slower than this.
+# The longest a job's step waits past its end for the arm to arrive (_arrived): a P-only waist trails a long swing.
 ARRIVE_TIMEOUT_S, ARRIVED_SPEED_RAD_S = 1.0, 0.02
 
 
@@ -107,7 +107,7 @@ class MotionGate:
         unless a commanded motion is still running."""
         if from_rest is None:
             from_rest = not self.commanded_motion_running()
-        return paced(trajectory, percent / 100.0, self.model.accel_limit_rad_s2, from_rest, self._motion_config().sample_rate_hz)
+        return paced(trajectory, percent / 100.0, planning_accel_rad_s2(self.model), from_rest, self._motion_config().sample_rate_hz)
 
     def pace_next_send(self, percent: float) -> None:
         """Under the lock, just before command_arm: the motion about to be sent was paced at `percent` (a later

@@ -10,6 +10,7 @@ from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
 from armlab.kinematics import load_arm
+from armlab.motion.planning_limits import PLANNING_ACCEL_FRACTION
 from armlab.motion.trajectory import plan_joint_move, plan_joint_move_timed, trapezoid_profile
 
 ARM = load_arm("rx200")
@@ -82,9 +83,11 @@ def test_fastest_move_touches_a_limit_and_the_shoulder_is_the_slow_joint():
     q_start = np.zeros(5)
     q_goal = np.array([0.0, 1.5, 0.0, 0.0, 0.0])  # shoulder only: 1 rad/s, 5 rad/s²
     trajectory, timing = plan_joint_move_timed(q_start, q_goal, ARM)
-    # Trapezoid at the limits: ramp 1/5 s, cruise at 1 rad/s: T = 1.5/1 + 1/5 = 1.7 s.
-    assert math.isclose(timing.moving_time_s, 1.7, rel_tol=1e-4)
-    assert math.isclose(timing.accel_time_s, 0.2, rel_tol=1e-4)
+    # Trapezoid at the limits (the acceleration at the planning fraction f of 5 rad/s²): ramp 1/5f s, cruise at
+    # 1 rad/s: T = 1.5/1 + 1/5f (1.702 s at f = 0.99), lengthened to whole 10 ms samples.
+    ramp_s = 1.0 / (5.0 * PLANNING_ACCEL_FRACTION)
+    assert math.isclose(timing.moving_time_s, math.ceil((1.5 + ramp_s) * 100 - 1e-9) / 100, rel_tol=1e-4)
+    assert math.isclose(timing.accel_time_s, ramp_s, rel_tol=1e-4)
     velocity, accel = _rates_from_rest(trajectory)
     assert np.abs(velocity[:, 1]).max() > 0.99  # reaches its velocity limit: as fast as allowed
     assert timing.clamped == ()
@@ -92,9 +95,10 @@ def test_fastest_move_touches_a_limit_and_the_shoulder_is_the_slow_joint():
 
 def test_too_short_moving_time_is_stretched_and_reported():
     trajectory, timing = plan_joint_move_timed(np.zeros(5), np.array([2.0, 0.0, 0.0, 0.0, 0.0]), ARM, moving_time_s=0.2)
-    # waist 2 rad at π rad/s and 5 rad/s²: triangle would peak above π, so trapezoid: 2/π + π/5 ≈ 1.2649 s,
-    # lengthened to whole 10 ms sample periods (a fastest move ends on the sample grid): 1.27 s
-    assert math.isclose(trajectory.duration_s, math.ceil((2 / 3.14159 + 3.14159 / 5) * 100) / 100, rel_tol=1e-4)
+    # waist 2 rad at π rad/s and 5f rad/s² (f the planning fraction): triangle would peak above π, so trapezoid:
+    # 2/π + π/5f ≈ 1.2713 s at f = 0.99, lengthened to whole 10 ms sample periods (a fastest move ends on the grid): 1.28 s
+    expected_s = math.ceil((2 / 3.14159 + 3.14159 / (5 * PLANNING_ACCEL_FRACTION)) * 100) / 100
+    assert math.isclose(trajectory.duration_s, expected_s, rel_tol=1e-4)
     assert len(timing.clamped) == 1 and "moving_time_s 0.200 →" in timing.clamped[0]
 
 

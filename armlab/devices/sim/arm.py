@@ -15,7 +15,13 @@ import numpy as np
 
 from armlab.devices.arm import Arm, JointState, JointTrajectory
 from armlab.devices.sim.device import SimDevice
-from armlab.devices.sim.servo_reference import TrajectoryReference, segment_middle_s, servo_reference
+from armlab.devices.sim.servo_reference import (
+    Followed,
+    TrajectoryReference,
+    followed_at,
+    segment_middle_s,
+    servo_reference,
+)
 from armlab.errors import InvalidInput
 
 if TYPE_CHECKING:
@@ -79,9 +85,10 @@ class SimArm(SimDevice, Arm):
         self._trajectory: JointTrajectory | None = None
         self._start_s = 0.0
         self._taken_over: tuple[JointTrajectory, float] | None = None  # the running trajectory a new one replaced, its start
-        # what the ideal servos follow between control ticks, as the last tick took it: (the trajectory's references, its
-        # start, those of the trajectory it took over and its start)
-        self._servo: tuple[TrajectoryReference, float, tuple[TrajectoryReference, float] | None] | None = None
+        # what the ideal servos follow between control ticks, as the last tick took it: the trajectory, the one it took over
+        self._servo: tuple[Followed, Followed | None] | None = None
+        self._hold_next_step = False  # the ideal servos braked a trajectory's end to rest this tick: hold from the next step
+        self._took_over = False  # the trajectory commanded last took over one still running (bench seed 10: one ended did not)
         self._hold_rad: np.ndarray | None = None
         self._torque = True
         self._halt_requested = threading.Event()  # set by stop() without the lock; applied under it
@@ -148,6 +155,7 @@ class SimArm(SimDevice, Arm):
             now_s = self._cell.sim_time_s
             running = self._trajectory
             self._taken_over = (running, self._start_s) if running is not None and now_s - self._start_s < running.duration_s else None
+            self._took_over = self._taken_over is not None  # (_taken_over is let go at the handover; this stays)
             self._trajectory = trajectory
             if start_time_s is not None:
                 self._start_s = float(start_time_s)
@@ -243,6 +251,7 @@ class SimArm(SimDevice, Arm):
         the position goal once per tick."""
         self._apply_halt()
         self._last_reading = self._measure()
+        self._hold_next_step = False
         trajectory = self._trajectory
         if trajectory is None or not self._torque:
             self._servo = None
@@ -250,8 +259,9 @@ class SimArm(SimDevice, Arm):
         t = sim_time_s - self._start_s
         if self._taken_over is not None and not (len(trajectory.times_s) >= 3 and t < _middle(trajectory.times_s, 0)):
             self._taken_over = None
+        moving = bool(np.any(self._cell.arm_reference_velocity()))  # the step before this tick's (see below)
         if self._cell.ideal_servos:
-            self._servo = self._take(trajectory)
+            self._servo = self._take(trajectory, sim_time_s)
             position = self._feed(sim_time_s)
         else:
             position, velocity, accel = sample_trajectory(trajectory, t)
@@ -267,33 +277,64 @@ class SimArm(SimDevice, Arm):
                 if self._servo is not None:  # the ideal servos hold at rest at the last sample, no acceleration fed
                     # forward (the last one fed was a bit of the braking: left on, it pushed the held arm ~1.3 mrad away)
                     self._servo = None
-                    self._cell.apply_arm_reference(position, np.zeros_like(position), np.zeros_like(position))
+                    if moving:  # the step before still moved (a joint moves over a step with the velocity at its middle:
+                        # a*h/2 at a braking trajectory's end): this tick's feed brakes it to rest and the next step holds
+                        # (released at once, the joint crept on for ~6 ticks and the next move's servos took that out)
+                        self._hold_next_step = True
+                    else:
+                        self._cell.apply_arm_reference(position, np.zeros_like(position), np.zeros_like(position))
 
     def servo_step(self, sim_time_s: float) -> None:
         """The ideal servos between control ticks (called by the workcell under its lock at every other physics step):
         follow the trajectory the last tick took."""
-        if self._servo is not None and self._torque and not self._halt_requested.is_set():
+        if self._hold_next_step:
+            self._hold_next_step = False
+            self._cell.apply_arm_reference(self._hold_rad, np.zeros_like(self._hold_rad), np.zeros_like(self._hold_rad))
+        elif self._servo is not None and self._torque and not self._halt_requested.is_set():
             self._feed(sim_time_s)
 
-    def _take(self, trajectory: JointTrajectory) -> tuple:
-        """The ideal servos' _servo for the current trajectory (references computed once, when a trajectory is first
-        taken: the one taken over is the one followed until now)."""
-        known = () if self._servo is None else (self._servo[0], *(self._servo[2] or ())[:1])
+    def _take(self, trajectory: JointTrajectory, sim_time_s: float) -> tuple[Followed, Followed | None]:
+        """The ideal servos' _servo for the current trajectory at the tick at sim_time_s (references computed once, when a
+        trajectory is first taken; the one taken over is the one followed until now). A trajectory taken while the servos
+        follow another carries on from the position reference they have reached: from the one it took over at the
+        handover (its first midpoint), else from the one followed at this tick."""
+        before = self._servo
+        known = () if before is None else tuple(f for f in before if f is not None)
 
-        def reference(of: JointTrajectory, from_rest: bool = False) -> TrajectoryReference:
-            return next((ref for ref in known if ref.trajectory is of), None) or TrajectoryReference(of, from_rest)
+        def followed(of: JointTrajectory, start_s: float) -> Followed | None:
+            return next((f for f in known if f.reference.trajectory is of and f.start_s == start_s), None)
 
-        taken_over = None if self._taken_over is None else (reference(self._taken_over[0]), self._taken_over[1])
-        return reference(trajectory, from_rest=self._servo is None), self._start_s, taken_over
+        current = followed(trajectory, self._start_s)
+        taken_over = None
+        if self._taken_over is not None:
+            taken_over = followed(*self._taken_over)
+            if taken_over is None:  # replaced before a tick took it
+                taken_over = Followed(TrajectoryReference(self._taken_over[0]), self._taken_over[1])
+                taken_over = taken_over if before is None else self._continuing(taken_over, before, sim_time_s)
+        if current is None:  # from rest unless it took over one still running when commanded (one that had ended since
+            # the last tick: from rest; taken as moving, a first segment that holds had its velocity extrapolated back)
+            current = Followed(TrajectoryReference(trajectory, from_rest=before is None or not self._took_over), self._start_s)
+            if taken_over is not None:
+                handover_s = current.handover_s()
+                current = current.continuing(taken_over, taken_over.position(handover_s), handover_s)
+            elif before is not None:
+                current = self._continuing(current, before, sim_time_s)
+        return current, taken_over
+
+    @staticmethod
+    def _continuing(new: Followed, servo: tuple[Followed, Followed | None], sim_time_s: float) -> Followed:
+        """`new` going on at sim_time_s from the references of the servos following `servo`."""
+        before = followed_at(*servo, sim_time_s)
+        return new.continuing(before, before.position(sim_time_s), sim_time_s)
 
     def _feed(self, sim_time_s: float) -> np.ndarray:
         """Under the lock: the ideal servos' references for the physics step starting at sim_time_s (servo_reference),
         and the acceleration fed forward: the change from the velocity reference of the step before to this one's over
         a step, the velocity change the integrator must make (the instantaneous acceleration was up to one 10 ms
         sample's change early or late at a sample's corner). Returns the position reference."""
-        trajectory, start_s, taken_over = self._servo
+        followed, taken_over = self._servo
         timestep_s = self._cell.timestep_s
-        position, velocity = servo_reference(trajectory, start_s, taken_over, sim_time_s, timestep_s)
+        position, velocity = servo_reference(followed, taken_over, sim_time_s, timestep_s)
         accel = (velocity - self._cell.arm_reference_velocity()) / timestep_s
         self._cell.apply_arm_reference(position, velocity, accel)
         return position

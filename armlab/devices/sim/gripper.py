@@ -24,18 +24,19 @@ class SimGripper(SimDevice, Gripper):
     """The simulated parallel gripper; width_m is the span between the pad faces."""
 
     def __init__(self, cell: SimWorkcell, offset_min_m: float, offset_max_m: float, pad_thickness_m: float,
-                 stop_speed_m_s: float, stop_time_s: float) -> None:
+                 stop_speed_m_s: float, stop_time_s: float, open_preload_m: float) -> None:
         self._cell = cell
         self._offset_min_m = offset_min_m
         self._offset_max_m = offset_max_m
         self._pad_thickness_m = pad_thickness_m
         self._stop_speed_m_s = stop_speed_m_s
         self._stop_time_s = stop_time_s
+        self._open_reference_m = offset_max_m + open_preload_m  # open: held against the stop (config/sim.yaml says why)
         self._command = "release"
         self._command_s = 0.0
         self._still_since_s: float | None = None
         self._held_since_command = False  # the gripper has read holding since its last command (a grasp)
-        self._reference_m = offset_max_m  # where the fingers are driven (per-finger offset)
+        self._reference_m = self._open_reference_m  # where the fingers are driven (per-finger offset)
         self._stop_requested = threading.Event()
 
     def __str__(self) -> str:
@@ -73,7 +74,7 @@ class SimGripper(SimDevice, Gripper):
 
     def release(self, wait: bool = True) -> None:
         self._require()
-        self._set_command("release", self._offset_max_m)
+        self._set_command("release", self._open_reference_m)
         if wait:
             self._cell.wait_for(
                 lambda: self._stopped() or min(self._cell.finger_positions()) >= self._offset_max_m - 5e-4,
@@ -101,7 +102,8 @@ class SimGripper(SimDevice, Gripper):
         if self._held_since_command or self._measure().holding:
             return
         left, right = self._cell.finger_positions()
-        self._reference_m = 0.5 * (left + right)
+        at_stop = min(left, right) >= self._offset_max_m - 1e-4  # open on its stop: stays held against it
+        self._reference_m = self._open_reference_m if at_stop else 0.5 * (left + right)
         self._cell.apply_finger_reference(self._reference_m)
 
     def _stopped(self) -> bool:

@@ -244,7 +244,7 @@ def _finger_arm_actuators(arm: ArmGeometry, sim: SimConfig) -> str:
     for side in ("left", "right"):
         actuators.append(
             f'<position name="{side}_finger" joint="{side}_finger" kp="{sim.gripper.kp_n_m}" '
-            f'ctrlrange="{arm.finger_offset_min_m} {arm.finger_offset_max_m}" '
+            f'ctrlrange="{arm.finger_offset_min_m} {arm.finger_offset_max_m + sim.gripper.open_preload_m:.9g}" '
             f'forcerange="{-arm.grasp_effort_n} {arm.grasp_effort_n}"/>'
         )
     return "".join(actuators)

@@ -96,7 +96,7 @@ class SimWorkcell(SimClock, SimCameraRig, SimTruth):
         else:
             self.gripper = SimGripper(self, self._geometry.finger_offset_min_m, self._geometry.finger_offset_max_m,
                                       self._geometry.pad_thickness_m, self._sim.gripper.stop_speed_m_s,
-                                      self._sim.gripper.stop_time_s)
+                                      self._sim.gripper.stop_time_s, self._sim.gripper.open_preload_m)
         real = None
         if camera_is_real(self.realism) and self._camera_config.realism is not None:
             real = RealCamera(self._camera_config, self._camera_config.realism, real_rng, self.config.depth_noise)
@@ -178,7 +178,7 @@ class SimWorkcell(SimClock, SimCameraRig, SimTruth):
             data.qpos[self._arm_qpos] = np.clip(self._geometry.sleep_rad, self._geometry.lower_rad, self._geometry.upper_rad)
             data.qpos[self._finger_qpos] = self._geometry.finger_offset_max_m
             data.ctrl[self._pos_act] = data.qpos[self._arm_qpos]
-            data.ctrl[self._finger_act] = self._geometry.finger_offset_max_m
+            data.ctrl[self._finger_act] = self._geometry.finger_offset_max_m + self._sim.gripper.open_preload_m
             self._next_control_s = 0.0
         else:
             data.time = previous["time"]
@@ -299,7 +299,7 @@ class SimWorkcell(SimClock, SimCameraRig, SimTruth):
         if self._publisher is not None:  # the real firmware: no velocity feed-forward (its velocity actuator is the motor's damping)
             self._commanded_velocity = np.clip(np.asarray(velocity_rad_s, dtype=float), -10.0, 10.0)
             return
-        self._data.ctrl[self._vel_act] = np.clip(velocity_rad_s, -10.0, 10.0)
+        self._data.ctrl[self._vel_act] = np.minimum(np.maximum(velocity_rad_s, -10.0), 10.0)  # np.clip: 3x the time, every step
         self._feed_forward = None if accel_rad_s2 is None else (np.asarray(accel_rad_s2, float), np.asarray(velocity_rad_s, float))
 
     def _apply_feed_forward(self) -> None:
