@@ -161,7 +161,7 @@ def test_a_jog_that_takes_over_a_move_in_its_last_samples_is_followed_within_the
     station, cell = fast
     at_rest(station, [0.0, 0.0, 0.0, -0.4, 0.0])
     station.move_joints([0.0, 0.0, 0.0, 0.2, 0.0])
-    trajectory, start_s, _ = station._commanded
+    trajectory, start_s, _ = station.gate.commanded
     cell.step(max(round((start_s + trajectory.duration_s - before_end_s - cell.sim_time_s) / cell.timestep_s), 0) * cell.timestep_s)
     cell.start_joint_recording()
     station.jog([0.0, 0.0, 0.0, jog_rad_s, 0.0], source="pad")
