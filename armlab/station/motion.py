@@ -28,14 +28,12 @@ from armlab.station.arm_info import station_end_effector
 from armlab.station.body_check import check_parts_above_board, palm_corners_m
 from armlab.station.job_control import SPEED_WAIT_FACTOR
 from armlab.station.jobs import JobCancelled, JobContext
+from armlab.station.settle import ARRIVE_TIMEOUT_S, arrived, settle
 from armlab.station.states import JOB_STATES, allowed_commands
 
 WAIT_CHUNK_S = 0.05  # waits on the devices check cancel/e-stop this often (simulated time in fast mode)
 CHANGE_ABOVE_M = 0.06  # the gripper point this close above a spot's surface can have changed it (fingers, a held block)
 MOTION_MEMORY = 256  # how many recent arm motions the gate remembers for stale-perception checks
-# A job's step waits at most this long after its end time for the arm to arrive (_arrived): the real arm's P-only waist
-# trails a fast long swing (0.03 rad after 2.9 rad, more loaded). Stopped short: slower than this.
-ARRIVE_TIMEOUT_S, ARRIVED_SPEED_RAD_S = 1.0, 0.02
 
 
 class HandoverLate(RuntimeError):
@@ -497,19 +495,13 @@ class MotionGate:
             if self.latch.is_set():
                 raise JobCancelled("the station was e-stopped")
             raise TimeoutError(f"the arm did not finish a {trajectory.duration_s:.2f} s move in time")
-        self._wait_until(lambda: self._arrived(trajectory.positions_rad[-1]), ARRIVE_TIMEOUT_S, checked)
+        self._wait_until(lambda: arrived(self, trajectory.positions_rad[-1]), ARRIVE_TIMEOUT_S, checked)
+        if checked is not None:  # (settle.py: the real arm's unloaded joints corrected from their readings)
+            settle(self, ctx, trajectory.positions_rad[-1])
         with self._lock:
             self._motions[-1] = (time.time(), self._motions[-1][1])
         if checked is not None:
             ctx.check()
-
-    def _arrived(self, command_rad: np.ndarray) -> bool:
-        """The arm stands within half the start tolerance of where command_rad holds it, or has stopped (a contact)."""
-        state = self.arm.read_joint_state()
-        here = self._holding_command(state.position_rad)
-        if float(np.abs(here - command_rad).max()) <= 0.5 * self.motion_config.start_tolerance_rad:
-            return True
-        return float(np.abs(state.velocity_rad_s).max()) < ARRIVED_SPEED_RAD_S
 
     def run_gripper(self, ctx: JobContext, action: str) -> None:
         """Inside a job: grasp or release (only while this job owns the arm) and wait for the fingers."""

@@ -1,0 +1,91 @@
+"""A job's step ends with the arm where it was sent (MotionGate.run_trajectory, after the trajectory's end time).
+
+On the real RX200 the servos run P-only (the firmware's I and feed-forward gains are 0):
+- arrival: the waist trails a fast long swing (0.03 rad after 2.9 rad, more loaded); the step waits until the arm
+  stands within half the start tolerance of where the command holds it, or has stopped (a contact);
+- settling: a joint gravity does not load (the waist; wrist_rotate and wrist_angle with the gripper pointing down)
+  is held by its servo against the link's friction alone. After a short fast move the waist still swings when the
+  step returns (2.9 deg 0.1 s after the end of a 16 deg turn) and stands up to ~0.2 deg short of its goal once
+  still: 6 mm at the gripper 300 mm out (bench/arm_accuracy.py's worst point). Real arm software corrects from the
+  joint readings: wait until those joints stand still, and move each one's command by minus what its reading
+  still misses, at most SETTLE_CORRECTIONS times (an integral step the firmware does not take).
+The ideal arm stands at its command at the end time: neither wait nor correction costs it anything.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from armlab.motion import plan_joint_move
+
+ARRIVE_TIMEOUT_S, ARRIVED_SPEED_RAD_S = 1.0, 0.02  # stopped short of arriving: slower than this (a contact)
+UNLOADED_NM = 0.01  # gravity's torque about a joint below this: its servo's steady error is under one encoder count
+SETTLE_DEADBAND_RAD = 0.002  # a reading within this of its command is left alone (an encoder count is 0.0015 rad)
+SETTLE_MAX_RAD = 0.02  # further off than this, something holds the joint (a contact, a push): not corrected
+SETTLE_CORRECTIONS = 2
+STILL_S, STILL_RAD = 0.1, 0.001  # still: the readings moved less than this (under one count) for this long
+SETTLE_TIMEOUT_S = 1.5  # the most a step waits for its joints to stand still (the waist rings ~0.5 s)
+CORRECTION_TIME_S = 0.3  # a correction's move: slow enough not to ring again
+
+
+def arrived(station, command_rad: np.ndarray) -> bool:
+    """The arm stands within half the start tolerance of where command_rad holds it, or has stopped (a contact)."""
+    state = station.arm.read_joint_state()
+    here = station._holding_command(state.position_rad)
+    if float(np.abs(here - command_rad).max()) <= 0.5 * station.motion_config.start_tolerance_rad:
+        return True
+    return float(np.abs(state.velocity_rad_s).max()) < ARRIVED_SPEED_RAD_S
+
+
+def unloaded_joints(model, q_rad: np.ndarray) -> np.ndarray:
+    """Indices of the joints gravity hardly loads at q_rad (friction, not the arm's weight, decides where they stop)."""
+    torques = getattr(model, "gravity_torques", None)
+    if torques is None:
+        return np.array([0])
+    return np.flatnonzero(np.abs(np.asarray(torques(q_rad), float)) < UNLOADED_NM)
+
+
+def settle(station, ctx, target_rad: np.ndarray) -> int:
+    """After a step to target_rad (at rest there): wait until its unloaded joints stand still and correct their
+    commands from the readings (see the module). Returns how many corrections it sent."""
+    joints = unloaded_joints(station.model, target_rad)
+    if not joints.size:
+        return 0
+    state = station.arm.read_joint_state()
+    miss = _miss(station, target_rad, state.position_rad, joints)
+    if np.abs(miss).max() <= SETTLE_DEADBAND_RAD and np.all(np.abs(state.velocity_rad_s[joints]) < ARRIVED_SPEED_RAD_S):
+        return 0  # there, and not swinging through
+    command = np.asarray(target_rad, float)
+    for count in range(SETTLE_CORRECTIONS + 1):
+        station.wait_in_job(ctx, _still_check(station, joints), SETTLE_TIMEOUT_S)
+        miss = _miss(station, target_rad, station.joints_rad(), joints)
+        # within the deadband: done; beyond SETTLE_MAX_RAD something holds the joint (a contact, a push): not ours
+        if not SETTLE_DEADBAND_RAD < np.abs(miss).max() <= SETTLE_MAX_RAD or count == SETTLE_CORRECTIONS:
+            return count
+        goal = command.copy()  # from the command holding the arm (not its readings: the loaded joints droop below it)
+        goal[joints] -= np.where(np.abs(miss) > SETTLE_DEADBAND_RAD, miss, 0.0)
+        step = plan_joint_move(command, goal, station.model, moving_time_s=CORRECTION_TIME_S,
+                               rate_hz=station.motion_config.sample_rate_hz)
+        station.start_trajectory(ctx, step)
+        command = goal
+        station.wait_in_job(ctx, lambda: not station.arm.is_moving(), step.duration_s + 1.0)
+    return SETTLE_CORRECTIONS
+
+
+def _miss(station, target_rad: np.ndarray, reading_rad: np.ndarray, joints: np.ndarray) -> np.ndarray:
+    """Where the command holding the joints now misses the target (rad, per joint)."""
+    return (station._holding_command(reading_rad) - np.asarray(target_rad, float))[joints]
+
+
+def _still_check(station, joints: np.ndarray):
+    """A fresh predicate, true once the joints' readings stayed within STILL_RAD for STILL_S (motion clock)."""
+    still = {"at": None, "since": station.clock_s()}
+
+    def is_still() -> bool:
+        here, now = station.joints_rad()[joints], station.clock_s()
+        if still["at"] is None or np.abs(here - still["at"]).max() > STILL_RAD:
+            still["at"], still["since"] = here, now
+            return False
+        return now - still["since"] >= STILL_S
+
+    return is_still
