@@ -13,9 +13,9 @@ the base shift, and the calibration's simulated seconds (target <= 90 s).
 
 Each target is solved by the station's nominal kinematics (armlab.kinematics, the workcell's base pose; top-down
 where reachable), sent as a smooth joint move from the measured joints (uncalibrated: straight to the arm; after arm
-calibration: as a station job's step, station.plan_move + run_trajectory, with the station's arrival wait and
-settling), and measured once the arm has rested `--settle-s` after it. Printed per rig: mean and max error (3-D,
-and its vertical part), by height, and how much of it the
+calibration: as a station job's step, station.plan_move + run_trajectory, then station.settle_arm, what the station
+does before it uses the position: a grasp, a release, a sighting), and measured once the arm has rested
+`--settle-s` after it. Printed per rig: mean and max error (3-D, and its vertical part), by height, and how much of it the
 joint readings show (FK of the readings against the target: what the station could see without a camera). The
 real arm must miss by >= 15 mm on average uncalibrated, or it is not the real arm. Prints figures; asserts nothing.
 
@@ -167,7 +167,11 @@ def measure_rig(seed: int, points, realism: str, settle_s: float, calibrate: boo
         if station is None:
             visit(lambda q: smooth_move(cell, q))
         else:  # the station's own moves, as a job sends them (its arrival wait and settling, armlab.station.settle)
-            job = station.start_job("auto", "arm-accuracy", lambda ctx: visit(lambda q: station.run_trajectory(ctx, station.plan_move(q))))
+            def step(ctx, q) -> None:  # a job's step, then what the station does before it uses the position (a grasp)
+                station.run_trajectory(ctx, station.plan_move(q))
+                station.settle_arm(ctx)
+
+            job = station.start_job("auto", "arm-accuracy", lambda ctx: visit(lambda q: step(ctx, q)))
             assert job.wait(3600), "the calibrated pass did not end"
             if job.state != "succeeded":
                 raise RuntimeError(f"calibrated pass {job.state}: {job.message}")

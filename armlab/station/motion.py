@@ -28,7 +28,7 @@ from armlab.station.arm_info import station_end_effector
 from armlab.station.body_check import check_parts_above_board, palm_corners_m
 from armlab.station.job_control import SPEED_WAIT_FACTOR
 from armlab.station.jobs import JobCancelled, JobContext
-from armlab.station.settle import ARRIVE_TIMEOUT_S, arrived, settle
+from armlab.station.settle import ARRIVE_TIMEOUT_S, arrived, settle_at_rest
 from armlab.station.states import JOB_STATES, allowed_commands
 
 WAIT_CHUNK_S = 0.05  # waits on the devices check cancel/e-stop this often (simulated time in fast mode)
@@ -496,17 +496,22 @@ class MotionGate:
                 raise JobCancelled("the station was e-stopped")
             raise TimeoutError(f"the arm did not finish a {trajectory.duration_s:.2f} s move in time")
         self._wait_until(lambda: arrived(self, trajectory.positions_rad[-1]), ARRIVE_TIMEOUT_S, checked)
-        if checked is not None:  # (settle.py: the real arm's unloaded joints corrected from their readings)
-            settle(self, ctx, trajectory.positions_rad[-1])
         with self._lock:
             self._motions[-1] = (time.time(), self._motions[-1][1])
         if checked is not None:
             ctx.check()
 
+    def settle_arm(self, ctx: JobContext) -> int:
+        """Inside a job, before the arm's position is used (a grasp, a release, a sighting of the gripper): the real
+        arm's unloaded joints still and corrected from their readings (settle.settle_at_rest); the corrections sent."""
+        return settle_at_rest(self, ctx)
+
     def run_gripper(self, ctx: JobContext, action: str) -> None:
-        """Inside a job: grasp or release (only while this job owns the arm) and wait for the fingers."""
+        """Inside a job: grasp or release (only while this job owns the arm; the arm settled first, settle_arm) and
+        wait for the fingers."""
         if action not in ("grasp", "release"):
             raise InvalidInput(f"gripper action must be 'grasp' or 'release', not {action!r}")
+        self.settle_arm(ctx)
         with self._sending():
             self._owns_arm(ctx)
             self._send_later(lambda: getattr(self.gripper, action)(wait=False))

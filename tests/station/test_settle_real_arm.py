@@ -2,8 +2,8 @@
 RX200's waist is held by its P-only servo against the link's friction alone (gravity does not load it): after a
 move it still swings, or stands short of its goal, by up to ~0.6 deg when the step returns (rig 0, camera and arm
 calibrated: bench/arm_accuracy.py's worst point, (-301, 42, 150) mm after (-304, 127, 150) mm, 6.4 mm off by the
-truth). A step now waits for those joints to stand still and corrects them from their readings; measured here
-against MuJoCo's truth the moment the step returns."""
+truth). Before the position is used (here a release; a grasp, a sighting) the station now waits for those joints to
+stand still and corrects them from their readings; measured against MuJoCo's truth the moment the release returns."""
 
 from __future__ import annotations
 
@@ -43,6 +43,7 @@ def test_a_step_returns_with_the_gripper_where_it_was_sent(station):
         for a, b in MOVES:
             station.run_trajectory(ctx, station.plan_move(model.ik(np.array(a), pitch=np.pi / 2, yaw=0.0, q_seed=station.joints_rad())))
             station.run_trajectory(ctx, station.plan_move(model.ik(np.array(b), pitch=np.pi / 2, yaw=0.0, q_seed=station.joints_rad())))
+            station.run_gripper(ctx, "release")  # where the position is used (the fingers are open: nothing else moves)
             misses.append(float(np.linalg.norm(station.sim.gripper_point_m() - np.array(b))))
 
     job = station.start_job("auto", "settle", run)
@@ -67,6 +68,7 @@ def test_uncalibrated_the_correction_moves_only_the_joints_it_corrects(tmp_path)
                     for point in (a, b):
                         q = model.ik(np.array(point), pitch=np.pi / 2, yaw=0.0, q_seed=station.joints_rad())
                         station.run_trajectory(ctx, station.plan_move(q))
+                        station.run_gripper(ctx, "release")
                         ends.append((q, station.commanded_joints_rad(), station.joints_rad()))
 
             job = station.start_job("auto", "settle", run)

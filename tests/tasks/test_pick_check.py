@@ -56,8 +56,11 @@ def test_an_arm_that_does_not_follow_gets_two_corrections_each_looked_at_and_no_
     # The first correction moves the hover by minus what was seen; the second by what remained after it.
     model = station.model
     hover_m = model.fk(q_hover)[:3, 3]
-    assert np.allclose(model.fk(station.sent[0])[:3, 3], hover_m - [0.003, 0.0, 0.0], atol=2e-5)
-    assert np.allclose(model.fk(station.sent[1])[:3, 3], hover_m - [0.006, 0.0, 0.0], atol=2e-5)
+    # Each goes straight to the corrected hover's look: its wrist turned up, the rest as for the corrected hover.
+    for sent, wanted in zip(station.sent, ([0.003, 0.0, 0.0], [0.006, 0.0, 0.0])):
+        corrected = model.ik(hover_m - wanted, pitch=np.pi / 2, yaw=0.0, q_seed=q_hover)
+        assert np.allclose(model.fk(corrected)[:3, 3], hover_m - wanted, atol=2e-5)
+        assert np.allclose(sent[:3], corrected[:3]) and np.allclose(sent[3:], [corrected[3] - pick_check.LOOK_TILT_RAD, 0.0])
     assert loop.looks_mm == pytest.approx([3.0, 3.0, 3.0], abs=0.01)
 
 
