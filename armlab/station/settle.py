@@ -94,12 +94,16 @@ def _miss(station, target_rad: np.ndarray, reading_rad: np.ndarray, joints: np.n
 
 
 def _still_check(station, joints: np.ndarray):
-    """A fresh predicate, true once the joints' readings stayed within STILL_RAD for STILL_S (motion clock)."""
+    """A fresh predicate, true once the joints' readings stayed within STILL_RAD, their velocities reading under
+    ARRIVED_SPEED_RAD_S, for STILL_S (motion clock): the velocities rule out the turn of a swing, where the position
+    alone stands still that long (the waist swings at ~2 Hz)."""
     still = {"at": None, "since": station.clock_s()}
 
     def is_still() -> bool:
-        here, now = station.joints_rad()[joints], station.clock_s()
-        if still["at"] is None or np.abs(here - still["at"]).max() > STILL_RAD:
+        state, now = station.arm.read_joint_state(), station.clock_s()
+        here = np.asarray(state.position_rad, float)[joints]
+        moving = np.abs(np.asarray(state.velocity_rad_s, float)[joints]).max() >= ARRIVED_SPEED_RAD_S
+        if still["at"] is None or moving or np.abs(here - still["at"]).max() > STILL_RAD:
             still["at"], still["since"] = here, now
             return False
         return now - still["since"] >= STILL_S
