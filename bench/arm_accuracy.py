@@ -12,8 +12,10 @@ station's calibrated arm model. Printed per rig: the same figures, the fitted of
 the base shift, and the calibration's simulated seconds (target <= 90 s).
 
 Each target is solved by the station's nominal kinematics (armlab.kinematics, the workcell's base pose; top-down
-where reachable), sent as a smooth joint move from the measured joints, and measured once the arm has rested
-`--settle-s`. Printed per rig: mean and max error (3-D, and its vertical part), by height, and how much of it the
+where reachable), sent as a smooth joint move from the measured joints (uncalibrated: straight to the arm; after arm
+calibration: as a station job's step, station.plan_move + run_trajectory, then station.settle_arm, what the station
+does before it uses the position: a grasp, a release, a sighting), and measured once the arm has rested
+`--settle-s` after it. Printed per rig: mean and max error (3-D, and its vertical part), by height, and how much of it the
 joint readings show (FK of the readings against the target: what the station could see without a camera). The
 real arm must miss by >= 15 mm on average uncalibrated, or it is not the real arm. Prints figures; asserts nothing.
 
@@ -150,16 +152,29 @@ def measure_rig(seed: int, points, realism: str, settle_s: float, calibrate: boo
             found = loop_targets(cell, station, points, settle_s)
             station.close()
             return {**found, "seen": found["errors"], "rig": cell.rig, "fit": fit, "targets": None}
-        for x, y in points:
-            q_seed = cell.arm.read_joint_state().position_rad
-            for z in sorted(HEIGHTS_M, reverse=True):  # down from the carry height...
-                target = np.array([x, y, z])
-                smooth_move(cell, model.ik(target, pitch=np.pi / 2, yaw=0.0, q_seed=q_seed))
-                cell.step(settle_s)
-                errors[z].append(cell.gripper_point_m() - target)
-                targets[z].append(target)
-                seen[z].append(getattr(model, "fk_measured", model.fk)(cell.arm.read_joint_state().position_rad)[:3, 3] - target)
-            smooth_move(cell, model.ik([x, y, max(HEIGHTS_M)], pitch=np.pi / 2, yaw=0.0, q_seed=q_seed))  # ...and back up
+        def visit(move) -> None:
+            for x, y in points:
+                q_seed = cell.arm.read_joint_state().position_rad
+                for z in sorted(HEIGHTS_M, reverse=True):  # down from the carry height...
+                    target = np.array([x, y, z])
+                    move(model.ik(target, pitch=np.pi / 2, yaw=0.0, q_seed=q_seed))
+                    cell.step(settle_s)
+                    errors[z].append(cell.gripper_point_m() - target)
+                    targets[z].append(target)
+                    seen[z].append(getattr(model, "fk_measured", model.fk)(cell.arm.read_joint_state().position_rad)[:3, 3] - target)
+                move(model.ik([x, y, max(HEIGHTS_M)], pitch=np.pi / 2, yaw=0.0, q_seed=q_seed))  # ...and back up
+
+        if station is None:
+            visit(lambda q: smooth_move(cell, q))
+        else:  # the station's own moves, as a job sends them (its arrival wait and settling, armlab.station.settle)
+            def step(ctx, q) -> None:  # a job's step, then what the station does before it uses the position (a grasp)
+                station.run_trajectory(ctx, station.plan_move(q))
+                station.settle_arm(ctx)
+
+            job = station.start_job("auto", "arm-accuracy", lambda ctx: visit(lambda q: step(ctx, q)))
+            assert job.wait(3600), "the calibrated pass did not end"
+            if job.state != "succeeded":
+                raise RuntimeError(f"calibrated pass {job.state}: {job.message}")
         rig = cell.rig
         if station is not None:
             station.close()

@@ -118,14 +118,14 @@ def seconds(value, digits: int = 1) -> str:
 
 
 def run_cell(cell: Cell, seeds: list[int], workers: int, ray_address: str | None, realism: str | None = None,
-             arm_calibration: bool = True) -> None:
+             arm_calibration: bool = True, pick_check: bool | None = None) -> None:
     reason = episode_unsupported(cell.job, cell.level, cell.workcell)
     if reason:
         cell.skipped = f"not run: {reason}"
         return
     cell.started_utc = now_utc()
     for run in evaluate(cell.job, cell.level, seeds, workers=workers, ray_address=ray_address, workcell=cell.workcell,
-                        realism=realism, arm_calibration=arm_calibration):
+                        realism=realism, arm_calibration=arm_calibration, pick_check=pick_check):
         cell.runs.append(run)
         print(".", end="", flush=True)
 
@@ -263,6 +263,9 @@ def main() -> int:
     parser.add_argument("--no-arm-calibration", action="store_true",
                         help="on the real arm, run the jobs without calibrating the arm from the camera first (issue 19's "
                              "table beside the calibrated run)")
+    parser.add_argument("--pick-check", choices=("on", "off"), default=None,
+                        help="the closed loop before each pick's last descent (armlab.skills.pick_check; it runs on an arm "
+                             "calibrated from the camera) on or off (default: StationConfig's pick_check)")
     parser.add_argument("--workcells", default=DEFAULT_WORKCELL,
                         help=f"comma-separated workcells (config/workcells; default {DEFAULT_WORKCELL}): each job runs on each")
     parser.add_argument("--json-out", metavar="FILE",
@@ -295,7 +298,8 @@ def main() -> int:
     print(f"seeds ({len(seeds)}): {', '.join(map(str, seeds))}")
     print(f"jobs in armlab.tasks.JOBS: {', '.join(f'{n} L{min(s.levels)}-{max(s.levels)}' if s.levels else n for n, s in JOBS.items())}")
     print(f"workcells: {', '.join(workcells)}; realism: {args.realism or 'config/sim.yaml'}"
-          + ("; arm calibration OFF" if args.no_arm_calibration else ""))
+          + ("; arm calibration OFF" if args.no_arm_calibration else "")
+          + (f"; pick check {args.pick_check}" if args.pick_check else ""))
     print(f"running on {where}; one dot per run", flush=True)
 
     cells: dict[tuple[str, str, int | None], Cell] = {}
@@ -308,7 +312,8 @@ def main() -> int:
                     continue  # none of its levels asked for
                 cell = cells[(workcell, name, level)] = Cell(name, level, workcell=workcell)
                 print(f"{cell.name}: ", end="", flush=True)
-                run_cell(cell, seeds, args.workers, args.ray, args.realism, not args.no_arm_calibration)
+                run_cell(cell, seeds, args.workers, args.ray, args.realism, not args.no_arm_calibration,
+                         None if args.pick_check is None else args.pick_check == "on")
                 print(f" {cell.skipped or 'done'}", flush=True)
     elapsed_s = time.monotonic() - started
 

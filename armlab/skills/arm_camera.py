@@ -34,8 +34,10 @@ AGREE_M, AGREE_DEG = 0.005, 0.5  # tag and arm calibrations further apart than t
 
 
 def sight_marker_at_rest(station: Station, ctx: JobContext, marker_id: int, K: np.ndarray, dist: np.ndarray):
-    """The gripper's tag (armlab.vision.gripper_marker's sighting) in a frame taken once the arm has settled (its
-    joints slower than SETTLE_SPEED_RAD_S, at most 2 s); MarkerNotFound when the camera does not find it."""
+    """The gripper's tag (armlab.vision.gripper_marker's sighting) in a frame taken once the arm has settled (the real
+    arm's unloaded joints corrected, Station.settle_arm; its joints slower than SETTLE_SPEED_RAD_S, at most 2 s);
+    MarkerNotFound when the camera does not find it."""
+    station.settle_arm(ctx)
     station.wait_in_job(ctx, lambda: float(np.abs(station.arm.read_joint_state().velocity_rad_s).max()) < SETTLE_SPEED_RAD_S, 2.0)
     frame = station.frame_after(time.time())
     return find_marker(detect_tags(frame.color_bgr, station.perception_config), marker_id, frame.depth_mm, K, dist)

@@ -469,7 +469,7 @@ class Station:
     clock_s, joints_rad = forwarded("gate"), forwarded("gate")
     # the motion gate's commands inside a job (skills, tasks) and its waits
     run_trajectory, start_trajectory, replace_trajectory, wait_in_job = (forwarded("gate") for _ in range(4))
-    run_gripper, brake_to_rest, wait_motion, wait_gripper = (forwarded("gate") for _ in range(4))
+    run_gripper, brake_to_rest, wait_motion, wait_gripper, settle_arm = (forwarded("gate") for _ in range(5))
     fingers_still_check, note_gripper_change = forwarded("gate"), forwarded("gate")
     # the commanded motion, and the speed override it is paced at
     start_position, motion_handover, commanded_joints_rad = (forwarded("gate") for _ in range(3))

@@ -33,12 +33,11 @@ from armlab.station.jobs import JobCancelled, JobContext
 from armlab.station.latch import Latch
 from armlab.station.motion_check import MotionCheck
 from armlab.station.motion_record import MotionRecord
+from armlab.station.settle import ARRIVE_TIMEOUT_S, arrived, settle_at_rest
 from armlab.station.states import State, allowed_commands
 from armlab.station.status import arm_turning
 
 WAIT_CHUNK_S = 0.05  # waits on the devices check cancel/e-stop this often (simulated time in fast mode)
-# The longest a job's step waits past its end for the arm to arrive (_arrived): a P-only waist trails a long swing.
-ARRIVE_TIMEOUT_S, ARRIVED_SPEED_RAD_S = 1.0, 0.02
 
 
 class HandoverLate(RuntimeError):
@@ -58,7 +57,7 @@ class MotionGate:
                  held_block: Callable[[], HeldBlock | None], state: Callable[[], State], owns_arm: Callable[[JobContext], None],
                  gripper_settle_timeout_s: float, moving_speed_rad_s: float) -> None:
         self.arm, self.gripper, self.model, self.latch, self.clock = arm, gripper, model, latch, clock
-        self._lock, self._motion_config, self._state_now, self._owns_arm = lock, motion_config, state, owns_arm
+        self._lock, self.motion_config, self._state_now, self._owns_arm = lock, motion_config, state, owns_arm
         self._settle_timeout_s, self._moving_speed_rad_s = gripper_settle_timeout_s, moving_speed_rad_s
         self.check = MotionCheck(model, motion_config, end_effector, held_block)  # check_motion, check_pose, ...
         self.record = MotionRecord(model)  # where the gripper went and when (stale perception)
@@ -67,6 +66,7 @@ class MotionGate:
         self._send_lock = threading.Lock()  # one sender of device commands at a time, taken before the lock (sending)
         self._outbox: list | None = None  # device commands queued under the lock, sent after it (sending)
         self._commanded: tuple | None = None  # the last trajectory sent: (trajectory, clock_s at its t = 0, count)
+        self.settled_toward: tuple | None = None  # settle.settle_at_rest's last: (command count, the step's end it corrected to)
         self._command_count = 0
         self._speed_lock = threading.Lock()  # one override change (or paced send) at a time
         self._speed_percent = 100.0  # the speed override every motion is paced at (set by job_control.py set_speed)
@@ -107,7 +107,7 @@ class MotionGate:
         unless a commanded motion is still running."""
         if from_rest is None:
             from_rest = not self.commanded_motion_running()
-        return paced(trajectory, percent / 100.0, planning_accel_rad_s2(self.model), from_rest, self._motion_config().sample_rate_hz)
+        return paced(trajectory, percent / 100.0, planning_accel_rad_s2(self.model), from_rest, self.motion_config().sample_rate_hz)
 
     def pace_next_send(self, percent: float) -> None:
         """Under the lock, just before command_arm: the motion about to be sent was paced at `percent` (a later
@@ -234,7 +234,7 @@ class MotionGate:
         elif running is not None and now - running[1] < running[0].duration_s:
             velocity = reference_velocity(running[0], now - running[1])
             # Slower than one sample's worth of acceleration from rest, a plan from rest continues it as well.
-            slow_rad_s = np.asarray(self.model.accel_limit_rad_s2, float) / self._motion_config().sample_rate_hz
+            slow_rad_s = np.asarray(self.model.accel_limit_rad_s2, float) / self.motion_config().sample_rate_hz
             if np.any(np.abs(velocity) > slow_rad_s):
                 continues = True
                 position = running[0].sample(now - running[1])
@@ -267,16 +267,16 @@ class MotionGate:
         """UnsafeTrajectory unless the trajectory starts within start_tolerance_rad of the readings or of the command
         holding the arm there (model.command_holding): a step chained from the last one's commanded end starts at the
         latter, the real RX200's readings 0.04-0.05 rad below it at far reach (its servos' steady error)."""
-        tolerance, names = self._motion_config().start_tolerance_rad, self.model.joint_names
+        tolerance, names = self.motion_config().start_tolerance_rad, self.model.joint_names
         try:
             check_start(trajectory, measured, tolerance, names)
         except UnsafeTrajectory:
-            command = self._holding_command(measured)
+            command = self.holding_command(measured)
             if np.abs(command - measured).max() < 1e-9:
                 raise
             check_start(trajectory, command, tolerance, names)
 
-    def _holding_command(self, q_read) -> np.ndarray:
+    def holding_command(self, q_read) -> np.ndarray:
         """The command holding the arm where it reads q_read (model.command_holding: the readings less the servos'
         steady error under its weight); the readings themselves where the model knows no such error."""
         holding = getattr(self.model, "command_holding", None)
@@ -327,11 +327,11 @@ class MotionGate:
             return measured
         # A motion in its last two samples is as good as at rest there: the measured joints trail the command by the
         # servos' lag, and a run planned from them stepped the command by that lag (1.9 mrad in one 4 ms tick).
-        if running[0].duration_s - (self.clock_s() - running[1]) > 2.0 / self._motion_config().sample_rate_hz:
+        if running[0].duration_s - (self.clock_s() - running[1]) > 2.0 / self.motion_config().sample_rate_hz:
             return measured
         held = running[0].positions_rad[-1]
-        command = self._holding_command(measured)  # the servos' steady error taken off
-        if float(np.max(np.abs(held - command))) > 0.5 * self._motion_config().start_tolerance_rad:
+        command = self.holding_command(measured)  # the servos' steady error taken off
+        if float(np.max(np.abs(held - command))) > 0.5 * self.motion_config().start_tolerance_rad:
             return measured
         return held.copy()
 
@@ -348,7 +348,7 @@ class MotionGate:
             running = self._commanded
         if running is None:
             return None
-        config = self._motion_config()
+        config = self.motion_config()
         lead = config.handover_lead_s if lead_s is None else lead_s
         return take_over(running[0], running[1], self.clock_s(), lead, config.sample_rate_hz, running[2])
 
@@ -364,7 +364,7 @@ class MotionGate:
         by side, each from a handover the next one makes late, and the CPU-bound planners starve status, the waits
         and the physics. A replaceable one (a manual move) that a newer manual move overtook while it waited its
         turn is refused unplanned (ArmMoving): it would be replaced as soon as it started."""
-        lead = self._motion_config().handover_lead_s
+        lead = self.motion_config().handover_lead_s
         if replaceable:
             with self._lock:
                 self._newest_move += 1
@@ -406,7 +406,7 @@ class MotionGate:
             return
         if handover is not None and not handover.at_rest:
             limits = arm_limits(self.model)
-            rate = self._motion_config().sample_rate_hz
+            rate = self.motion_config().sample_rate_hz
 
             def stop(handover: Handover | None) -> JointTrajectory:
                 if handover is None:
@@ -476,23 +476,22 @@ class MotionGate:
             if self.latch.is_set():
                 raise JobCancelled("the station was e-stopped")
             raise TimeoutError(f"the arm did not finish a {trajectory.duration_s:.2f} s move in time")
-        self.wait_until(lambda: self._arrived(trajectory.positions_rad[-1]), ARRIVE_TIMEOUT_S, checked)
+        self.wait_until(lambda: arrived(self, trajectory.positions_rad[-1]), ARRIVE_TIMEOUT_S, checked)
         self.record.ended_now()
         if checked is not None:
             ctx.check()
 
-    def _arrived(self, command_rad: np.ndarray) -> bool:
-        """The arm stands within half the start tolerance of where command_rad holds it, or has stopped (a contact)."""
-        state = self.arm.read_joint_state()
-        here = self._holding_command(state.position_rad)
-        if float(np.abs(here - command_rad).max()) <= 0.5 * self._motion_config().start_tolerance_rad:
-            return True
-        return float(np.abs(state.velocity_rad_s).max()) < ARRIVED_SPEED_RAD_S
+    def settle_arm(self, ctx: JobContext) -> int:
+        """Inside a job, before the arm's position is used (a grasp, a release, a sighting of the gripper): the real
+        arm's unloaded joints still and corrected from their readings (settle.settle_at_rest); the corrections sent."""
+        return settle_at_rest(self, ctx)
 
     def run_gripper(self, ctx: JobContext, action: str) -> None:
-        """Inside a job: grasp or release (only while this job owns the arm) and wait for the fingers."""
+        """Inside a job: grasp or release (only while this job owns the arm; the arm settled first, settle_arm) and
+        wait for the fingers."""
         if action not in ("grasp", "release"):
             raise InvalidInput(f"gripper action must be 'grasp' or 'release', not {action!r}")
+        self.settle_arm(ctx)
         with self.sending():
             self._owns_arm(ctx)
             self.send_later(lambda: getattr(self.gripper, action)(wait=False))

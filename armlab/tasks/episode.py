@@ -49,7 +49,8 @@ def score_run(event: str, level: int | None, truth: dict, sim_time_s: float, gri
 
 
 def run_episode(event: str, level: int | None, seed: int, *, keep_truth: bool = False, workcell: str | None = None,
-                realism: str | None = None, arm_calibration: bool = True, record_dir: str | Path | None = None) -> dict:
+                realism: str | None = None, arm_calibration: bool = True, record_dir: str | Path | None = None,
+                pick_check: bool | None = None) -> dict:
     """Run job `event` at `level` on the scene of `seed` on `workcell` (config/workcells/<name>.yaml: its
     arm, gripper, board and scene; None = the default, the RX200); return the judged result as a
     JSON-ready dict: {event, level, seed, workcell, realism (the one that ran), points, max_points, sim_time_s, wall_time_s, breakdown,
@@ -57,7 +58,8 @@ def run_episode(event: str, level: int | None, seed: int, *, keep_truth: bool = 
     simulation (None: config/sim.yaml's). arm_calibration: on the real arm (a drawn rig), calibrate it from the
     camera after the camera and before the job's clock starts, as a team does before its run (False: skip).
     record_dir: record the run (calibrations and job) to <event>-L<level>-seed<seed>-<id>.mcap there (its path in the
-    result's "recording"); the simulation runs in fast mode, so the recording samples it in wall time."""
+    result's "recording"); the simulation runs in fast mode, so the recording samples it in wall time. pick_check: the
+    closed loop before each pick's last descent (armlab.skills.pick_check) on or off; None: StationConfig's."""
     from armlab.devices.sim import (  # MuJoCo only when simulating (tests/test_layering.py)
         SimWorkcell,
         SimWorkcellConfig,
@@ -65,7 +67,8 @@ def run_episode(event: str, level: int | None, seed: int, *, keep_truth: bool = 
 
     checked_request(event, level, None)
     wall_start = time.monotonic()
-    config = StationConfig() if workcell is None else StationConfig(workcell=workcell)
+    config = StationConfig(**({} if workcell is None else {"workcell": workcell}),
+                           **({} if pick_check is None else {"pick_check": pick_check}))
     with tempfile.TemporaryDirectory(prefix="armlab-eval-") as tmp, SimWorkcell(
         SimWorkcellConfig(realtime=False, seed=int(seed), workcell=config.workcell, realism=realism),
         scene=episode_scene(event, level, seed, config.workcell),
@@ -101,7 +104,8 @@ def run_episode(event: str, level: int | None, seed: int, *, keep_truth: bool = 
             station.close()
     gripper_path_m = None if path is None else [list(map(float, row[1:4])) for row in path]
     score = score_run(event, level, truth, sim_time_s, _after_first_motion(path), config.workcell)
-    failures = list((job.to_dict().get("extra", {}).get("task") or {}).get("failures", []))
+    task = job.to_dict().get("extra", {}).get("task") or {}
+    failures = list(task.get("failures", []))
     if job.state != "succeeded":
         failures.append(f"job {job.state}: {job.message}")
     result = {
@@ -109,12 +113,24 @@ def run_episode(event: str, level: int | None, seed: int, *, keep_truth: bool = 
         **{k: v for k, v in score.to_dict().items() if k != "breakdown"},
         "sim_time_s": round(sim_time_s, 3), "wall_time_s": round(time.monotonic() - wall_start, 3),
         "breakdown": score.to_dict()["breakdown"], "failures": failures,
+        "pick_check": _pick_check_figures(job.result) if config.pick_check else None,
     }
     if recording is not None:
         result["recording"] = str(recording.path)
     if keep_truth:
         result["truth"] = {**jsonable(truth), "gripper_path_m": gripper_path_m}
     return result
+
+
+def _pick_check_figures(result) -> dict:
+    """The job result's pick_check summary without its per-pick records (armlab.skills.pick_check.pick_summary), and
+    each pick's first look (mm) and how many were refused."""
+    summary = (result or {}).get("pick_check") if isinstance(result, dict) else None
+    if not summary:
+        return {}
+    first = [r["looks_mm"][0] for r in summary.get("records", []) if r.get("looks_mm")]
+    return {**{k: v for k, v in summary.items() if k != "records"}, "first_looks_mm": first,
+            "refused": sum(bool(r.get("refused")) for r in summary.get("records", []))}
 
 
 def _start_recording(station: Station, record_dir, event: str, level: int | None, seed: int) -> Recording | None:

@@ -105,13 +105,14 @@ def episode_unsupported(event: str, level: int | None, workcell: str | None = No
 
 
 def run_one(event: str, level: int | None, seed: int, keep_truth: bool = False, workcell: str | None = None,
-            realism: str | None = None, arm_calibration: bool = True, record_dir: str | None = None) -> dict:
+            realism: str | None = None, arm_calibration: bool = True, record_dir: str | None = None,
+            pick_check: bool | None = None) -> dict:
     """One episode, in whichever process runs it; an exception becomes a crashed run with no points."""
     os.environ.setdefault("MUJOCO_GL", "egl")
     started, cpu_started = time.monotonic(), time.process_time()
     try:
         result = run_episode(event, level, seed, keep_truth=keep_truth, workcell=workcell, realism=realism,
-                             arm_calibration=arm_calibration, record_dir=record_dir)
+                             arm_calibration=arm_calibration, record_dir=record_dir, pick_check=pick_check)
         # CPU seconds of this process (all its threads): a speed figure that other load on the machine
         # does not inflate, unlike wall time.
         result["cpu_time_s"] = round(time.process_time() - cpu_started, 3)
@@ -129,32 +130,34 @@ def run_one(event: str, level: int | None, seed: int, keep_truth: bool = False, 
 
 def evaluate(event: str, level: int | None, seeds: Sequence[int], *, workers: int = 1,
              ray_address: str | None = None, keep_truth: bool = False, workcell: str | None = None,
-             realism: str | None = None, arm_calibration: bool = True, record_dir: str | None = None) -> Iterator[dict]:
+             realism: str | None = None, arm_calibration: bool = True, record_dir: str | None = None,
+             pick_check: bool | None = None) -> Iterator[dict]:
     """Run every seed and yield the results in seed order as they become available. workers = 1 runs in
     this process; more use a spawn-context process pool (MuJoCo's GL context and threads do not survive
     fork); ray_address ("auto" or host:port) runs each seed as a Ray task on that cluster instead.
     workcell: config/workcells/<name>.yaml to run on (None = the default, the RX200); realism: real or
     ideal simulation (None: the simulation config's); arm_calibration: calibrate the real arm from the camera before
     the job's clock starts (False: run it uncalibrated); record_dir: record each run to an MCAP file there (on the
-    machine that runs it)."""
+    machine that runs it); pick_check: the closed loop before each pick's last descent on or off (None: StationConfig's)."""
     seeds = sorted(int(s) for s in seeds)
     if isinstance(workers, bool) or not isinstance(workers, int) or not 1 <= workers <= MAX_WORKERS:
         raise EvalError(f"workers must be an integer in 1..{MAX_WORKERS}, not {workers!r}")
     if ray_address is not None:
-        return _over_ray(event, level, seeds, ray_address, keep_truth, workcell, realism, arm_calibration, record_dir)
+        return _over_ray(event, level, seeds, ray_address, keep_truth, workcell, realism, arm_calibration, record_dir, pick_check)
     if workers == 1 or len(seeds) <= 1:
-        return (run_one(event, level, seed, keep_truth, workcell, realism, arm_calibration, record_dir) for seed in seeds)
-    return _over_processes(event, level, seeds, min(workers, len(seeds)), keep_truth, workcell, realism, arm_calibration, record_dir)
+        return (run_one(event, level, seed, keep_truth, workcell, realism, arm_calibration, record_dir, pick_check) for seed in seeds)
+    return _over_processes(event, level, seeds, min(workers, len(seeds)), keep_truth, workcell, realism, arm_calibration, record_dir,
+                           pick_check)
 
 
 def _over_processes(event, level, seeds, workers, keep_truth, workcell=None, realism=None, arm_calibration=True,
-                    record_dir=None) -> Iterator[dict]:
+                    record_dir=None, pick_check=None) -> Iterator[dict]:
     import multiprocessing
     from concurrent.futures import ProcessPoolExecutor
 
     executor = ProcessPoolExecutor(max_workers=workers, mp_context=multiprocessing.get_context("spawn"))
     try:
-        futures = [executor.submit(run_one, event, level, seed, keep_truth, workcell, realism, arm_calibration, record_dir)
+        futures = [executor.submit(run_one, event, level, seed, keep_truth, workcell, realism, arm_calibration, record_dir, pick_check)
                    for seed in seeds]
         for future in futures:
             yield future.result()
@@ -163,7 +166,7 @@ def _over_processes(event, level, seeds, workers, keep_truth, workcell=None, rea
 
 
 def _over_ray(event, level, seeds, address, keep_truth, workcell=None, realism=None, arm_calibration=True,
-              record_dir=None) -> Iterator[dict]:
+              record_dir=None, pick_check=None) -> Iterator[dict]:
     try:
         import ray
     except ImportError:
@@ -174,7 +177,8 @@ def _over_ray(event, level, seeds, address, keep_truth, workcell=None, realism=N
         ray.init(address=address, log_to_driver=False, logging_level="warning")
     try:
         task = ray.remote(num_cpus=1, max_retries=0)(run_one)
-        refs = [task.remote(event, level, seed, keep_truth, workcell, realism, arm_calibration, record_dir) for seed in seeds]
+        refs = [task.remote(event, level, seed, keep_truth, workcell, realism, arm_calibration, record_dir, pick_check)
+                for seed in seeds]
         for ref in refs:
             yield ray.get(ref)
     finally:

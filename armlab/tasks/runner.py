@@ -290,7 +290,7 @@ class TaskRunner:
                 run_steps(self.station, self.ctx, steps, progress=False)
             else:
                 log = lambda level, words: self.station.events.add(level, f"{self.name}: {words}")  # noqa: E731
-                record = run_pick(self.station, self.ctx, steps, self.pick_check, pick_boxes, what, log)
+                record = run_pick(self.station, self.ctx, steps, self.pick_check, pick_boxes, what, log, self.gripper_box)
                 if record is not None:
                     self.pick_records.append(record)
         except UnsafeTrajectory as error:

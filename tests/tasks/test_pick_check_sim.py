@@ -35,6 +35,7 @@ def pick_each(station: Station, settings: PickCheckSettings) -> tuple[list[float
 
     def measured_grip(ctx, action):
         if action == "grasp":
+            station.settle_arm(ctx)  # the grasp's own first step (settle.py): where the fingers close
             block = next(o for o in station.sim.truth()["objects"] if o["id"] == current["id"])
             errors.append(1000 * float(np.linalg.norm(station.sim.gripper_point_m()[:2] - np.asarray(block["position_m"][:2]))))
         grip(ctx, action)
@@ -68,7 +69,8 @@ def test_a_pick_with_the_loop_lands_closer_to_the_block_than_without(station):
     assert max(with_loop) < 1.5
     assert np.mean(with_loop) < 0.7 * np.mean(without)
     assert all(r["looks_mm"] and r["refused"] is None for r in records)
-    assert sum(len(r["corrections_mm"]) for r in records) >= 2  # the drift is there to correct...
+    # the drift is there to correct (2+ corrections before the waist was settled before a grasp or look, 1 since)...
+    assert sum(len(r["corrections_mm"]) for r in records) >= 1
     assert all(len(r["corrections_mm"]) <= 2 for r in records)  # ...at most twice a pick
     logged = [e["message"] for e in station.events.since(before) if e["message"].startswith("pick check, ")]
     assert len(logged) == 3 and all("mm" in words for words in logged)
