@@ -19,6 +19,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from armlab.kinematics.arm_calibration import ArmCalibrationError
 from armlab.motion import plan_joint_move
 
 ARRIVE_TIMEOUT_S, ARRIVED_SPEED_RAD_S = 1.0, 0.02  # stopped short of arriving: slower than this (a contact)
@@ -43,9 +44,10 @@ def arrived(gate, command_rad: np.ndarray) -> bool:
 def unloaded_joints(model, q_rad: np.ndarray) -> np.ndarray:
     """Indices of the joints gravity hardly loads at q_rad (friction, not the arm's weight, decides where they stop)."""
     torques = getattr(model, "gravity_torques", None)
-    if torques is None:
+    try:
+        return np.array([0]) if torques is None else np.flatnonzero(np.abs(np.asarray(torques(q_rad), float)) < UNLOADED_NM)
+    except ArmCalibrationError:  # no load model for this arm (outside the RX200 family, e.g. the UR3): the waist
         return np.array([0])
-    return np.flatnonzero(np.abs(np.asarray(torques(q_rad), float)) < UNLOADED_NM)
 
 
 def settle_at_rest(gate, ctx) -> int:
