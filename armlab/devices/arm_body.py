@@ -273,16 +273,31 @@ def load_finger_gripper_outline(arm: str, sim: str = "sim") -> FingerGripperOutl
 
 
 def body_of(model) -> ArmBody:
-    """The body of an arm model (ArmModel or CalibratedArm): its config's, with config/sim.yaml's gripper sizes."""
+    """The body of an arm model (ArmModel or CalibratedArm): its config's, with config/sim.yaml's gripper sizes (and
+    a DH arm's simulated link radii: simulated_link_radii_m)."""
     return _body_of_config(model.config)
 
 
 _BODIES: dict[int, tuple[ArmConfig, ArmBody]] = {}
 
 
+DEFAULT_DH_LINK_RADIUS_M = 0.03  # a DH arm's link capsule when neither its arm file nor config/sim.yaml gives one
+
+
+def simulated_link_radii_m(config: ArmConfig, sim: str = "sim") -> list[float]:
+    """A DH arm's link radii as the simulation builds its links (armlab/devices/sim/mjcf_dh.py): the arm file's
+    link_radii_m, else config/<sim>.yaml's arms.<name>.link_radius_m, else DEFAULT_DH_LINK_RADIUS_M each."""
+    if config.link_radii_m is not None:
+        return list(config.link_radii_m)
+    section = read_config_file(resolve_config_path(sim, ".")).get("arms") or {}
+    radii = (section.get(config.name) or {}).get("link_radius_m") if isinstance(section, dict) else None
+    return [float(r) for r in radii] if radii else [DEFAULT_DH_LINK_RADIUS_M] * len(config.joint_names)
+
+
 def _body_of_config(config: ArmConfig) -> ArmBody:
     cached = _BODIES.get(id(config))
     if cached is None or cached[0] is not config:
-        cached = (config, arm_body(config, load_finger_gripper_config() if config.gripper is not None else None))
+        shaped = config if config.urdf_origins is not None else config.model_copy(update={"link_radii_m": simulated_link_radii_m(config)})
+        cached = (config, arm_body(shaped, load_finger_gripper_config() if config.gripper is not None else None))
         _BODIES[id(config)] = cached
     return cached[1]

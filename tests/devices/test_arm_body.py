@@ -8,7 +8,7 @@ import mujoco
 import numpy as np
 import pytest
 
-from armlab.devices.arm_body import arm_body, load_arm_body
+from armlab.devices.arm_body import arm_body, body_of, load_arm_body
 from armlab.devices.sim import SimWorkcell, SimWorkcellConfig
 from armlab.devices.sim.config import load_sim_config
 from armlab.kinematics import load_arm
@@ -74,6 +74,16 @@ def test_the_simulated_ur3_is_the_arm_body_at_random_joints(ur3_cell):
     body = arm_body(arm.config.model_copy(update={"link_radii_m": list(radii)}))
     assert sum(part.shape == "capsule" for part in body.parts) >= 6
     assert_sim_is_body(ur3_cell._model, arm, body, fingers=False, seed=21)
+
+
+def test_the_body_a_ur3_model_gives_its_users_is_the_simulated_one(ur3_cell):
+    """What the self-filter, the planning checks and the side grasp read (body_of the station's model) is the body the
+    simulation builds, links included: with only the cup (the UR3's file has no link radii) the self-filter left the
+    UR3's links in the depth, and the standing arm was detected as a 423 mm stack at its base (the browser's reach
+    state over 'the first block' said out of reach)."""
+    arm = load_workcell_arm(UR3_WORKCELL)
+    assert sum(part.shape == "capsule" for part in body_of(arm).parts) >= 6
+    assert_sim_is_body(ur3_cell._model, arm, body_of(arm), fingers=False, seed=22)
 
 
 def test_every_simulated_arm_geom_that_collides_is_a_part_of_the_body(cell):

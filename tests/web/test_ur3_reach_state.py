@@ -7,6 +7,7 @@ made: the simulated arm does not move."""
 from __future__ import annotations
 
 import pytest
+from playwright.sync_api import TimeoutError as PlaywrightTimeout
 
 from browser_helpers import canvas_point, enter_click_mode, open_page, ready_idle, wait_frames
 
@@ -38,7 +39,10 @@ def test_the_reach_state_shows_before_a_click_on_the_ur3(browser, ur3_server):
 
         block = server.get("/api/detections")["data"][0]
         page.mouse.move(*canvas_point(page, *block["center_px"]))
-        page.wait_for_function("document.getElementById('reach-state').dataset.ok === 'true'", timeout=60_000)
+        try:
+            page.wait_for_function("document.getElementById('reach-state').dataset.ok === 'true'", timeout=60_000)
+        except PlaywrightTimeout:  # say what the page showed instead
+            raise AssertionError((page.text_content("#reach-state"), page.text_content("#hover-world"), block)) from None
         text = page.text_content("#reach-state")
         assert f"{block['color']} block" in text, (text, block)
         page.mouse.move(1, 1)  # leaving the view hides it
