@@ -273,9 +273,8 @@ def load_finger_gripper_outline(arm: str, sim: str = "sim") -> FingerGripperOutl
 
 
 def body_of(model) -> ArmBody:
-    """The body of an arm model (ArmModel or CalibratedArm): its config's, with config/sim.yaml's gripper sizes (and
-    a DH arm's simulated link radii: simulated_link_radii_m)."""
-    return _body_of_config(model.config)
+    """The body of an arm model (ArmModel or CalibratedArm): body_of_config of its config."""
+    return body_of_config(model.config)
 
 
 _BODIES: dict[int, tuple[ArmConfig, ArmBody]] = {}
@@ -294,7 +293,8 @@ def simulated_link_radii_m(config: ArmConfig, sim: str = "sim") -> list[float]:
     return [float(r) for r in radii] if radii else [DEFAULT_DH_LINK_RADIUS_M] * len(config.joint_names)
 
 
-def _body_of_config(config: ArmConfig) -> ArmBody:
+def body_of_config(config: ArmConfig) -> ArmBody:
+    """The body of an arm config with config/sim.yaml's gripper sizes (and a DH arm's simulated link radii)."""
     cached = _BODIES.get(id(config))
     if cached is None or cached[0] is not config:
         shaped = config if config.urdf_origins is not None else config.model_copy(update={"link_radii_m": simulated_link_radii_m(config)})

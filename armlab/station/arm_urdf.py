@@ -18,8 +18,7 @@ from xml.sax.saxutils import quoteattr
 import numpy as np
 
 from armlab.config import config_dir, read_config_file
-from armlab.devices.arm_body import arm_body
-from armlab.devices.finger_gripper import load_finger_gripper_config
+from armlab.devices.arm_body import body_of_config
 from armlab.kinematics.arm_config import ArmConfig
 from armlab.kinematics.rotations import matrix_from_rpy, rpy_from_matrix
 
@@ -196,7 +195,7 @@ def _body(chain: _Chain, config: ArmConfig, names: list[str], visuals: bool, fin
     link's collision shapes, and as its visuals when there are no meshes (a capsule: a cylinder and two spheres;
     a finger's parts on its finger link, open fingers at the full offset; finger_from_tool: the tool point's frame in a
     finger link's at zero offset). The links that got a shape."""
-    body = arm_body(config, load_finger_gripper_config() if config.gripper is not None else None)
+    body = body_of_config(config)
     frames = ["base", *[f"{name}_link" for name in names], TOOL_LINK]
     fmax = body.finger_offset_max_m
     drawn = set()
