@@ -283,14 +283,19 @@ _BODIES: dict[int, tuple[ArmConfig, ArmBody]] = {}
 DEFAULT_DH_LINK_RADIUS_M = 0.03  # a DH arm's link capsule when neither its arm file nor config/sim.yaml gives one
 
 
-def simulated_link_radii_m(config: ArmConfig, sim: str = "sim") -> list[float]:
-    """A DH arm's link radii as the simulation builds its links (armlab/devices/sim/mjcf_dh.py): the arm file's
-    link_radii_m, else config/<sim>.yaml's arms.<name>.link_radius_m, else DEFAULT_DH_LINK_RADIUS_M each."""
+def dh_link_radii_m(config: ArmConfig, simulated_m=None) -> list[float]:
+    """A DH arm's link radii, the one rule the simulation (mjcf_dh) and body_of share: the arm file's link_radii_m,
+    else the simulation's (`simulated_m`: config/sim.yaml's arms.<name>.link_radius_m), else DEFAULT_DH_LINK_RADIUS_M."""
     if config.link_radii_m is not None:
         return list(config.link_radii_m)
+    return [float(r) for r in simulated_m] if simulated_m else [DEFAULT_DH_LINK_RADIUS_M] * len(config.joint_names)
+
+
+def simulated_link_radii_m(config: ArmConfig, sim: str = "sim") -> list[float]:
+    """dh_link_radii_m with config/<sim>.yaml's arms.<name>.link_radius_m: the radii the simulation builds with."""
     section = read_config_file(resolve_config_path(sim, ".")).get("arms") or {}
     radii = (section.get(config.name) or {}).get("link_radius_m") if isinstance(section, dict) else None
-    return [float(r) for r in radii] if radii else [DEFAULT_DH_LINK_RADIUS_M] * len(config.joint_names)
+    return dh_link_radii_m(config, radii)
 
 
 def body_of_config(config: ArmConfig) -> ArmBody:

@@ -18,7 +18,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from armlab.config import read_config_file, resolve_config_path
-from armlab.devices.arm_body import ArmBody, arm_body
+from armlab.devices.arm_body import ArmBody, arm_body, dh_link_radii_m
 from armlab.devices.sim.config import ArmServoConfig, SimConfig
 from armlab.devices.sim.mjcf_numbers import feed_forward_actuator
 from armlab.devices.sim.mjcf_numbers import fmt_numbers as _fmt
@@ -160,9 +160,9 @@ def _chain_xml(arm: DhArmGeometry, servo: ArmServoConfig, sim: SimConfig) -> str
     """Base (static) -> one body per joint (frame = DH frame i-1 turned by theta_offset_i; the joint turns
     about its z) -> the flange (DH frame n) -> the tool frame ("gripper_link", site at the tool point)."""
     rows = arm.dh_rows
-    radii = servo.link_radius_m or [0.03] * len(arm.joint_names)
-    # The links' shapes: the arm body (armlab.devices.arm_body) with the simulated links' radii (config/sim.yaml)
-    body = arm_body(arm.config.model_copy(update={"link_radii_m": list(radii)}))
+    radii = dh_link_radii_m(arm.config, servo.link_radius_m)  # the same rule as the stations' body_of
+    # The links' shapes: the arm body (armlab.devices.arm_body) with those radii
+    body = arm_body(arm.config.model_copy(update={"link_radii_m": radii}))
     opened = []
     for i, name in enumerate(arm.joint_names):
         offset, d, a, alpha, sign = rows[i]
